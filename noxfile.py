@@ -1,0 +1,36 @@
+"""Developer sessions: ``nox -s tests``, ``mypy``, ``lint``, ``bench``, ``docs``."""
+
+from __future__ import annotations
+
+import nox
+
+nox.options.sessions = ["tests", "mypy", "lint"]
+
+
+@nox.session
+def tests(session: nox.Session) -> None:
+    """Run the test suite."""
+    session.install("-e", ".[dev]")
+    session.run("python", "-m", "pytest", *session.posargs)
+
+
+@nox.session
+def mypy(session: nox.Session) -> None:
+    """Type-check the library and the examples strictly."""
+    session.install("-e", ".[dev]")
+    session.run("python", "-m", "mypy", "--strict", "snr", "examples")
+
+
+@nox.session
+def lint(session: nox.Session) -> None:
+    """Lint with ruff."""
+    session.install("ruff")
+    session.run("ruff", "check", "snr", "tests", "examples", "bench")
+
+
+@nox.session
+def bench(session: nox.Session) -> None:
+    """Run every benchmark in bench/ and print their tables."""
+    session.install("-e", ".[dev]")
+    for script in sorted(__import__("glob").glob("bench/bench_*.py")):
+        session.run("python", script, *session.posargs)

@@ -1,0 +1,174 @@
+"""`Component`: what `Endpoint` and `ThreadLoop` share.
+
+A component belongs to one node (its ``parent``), has a unique ``name`` there,
+remembers the ``factory`` that built it, and registers ``task_handlers``. It
+talks to the rest of the node only through tasks and pages.
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Any, Optional
+
+from snr.core.dispatch import HandlerMap
+from snr.prelude import (
+    AbstractComponent,
+    AbstractFactory,
+    AbstractNode,
+    ComponentError,
+    ComponentName,
+    DataKey,
+    Page,
+    SomeTasks,
+    Task,
+    TaskHandlerMap,
+)
+from snr.prelude.errors import describe_class
+
+__all__ = ["Component"]
+
+
+class Component(AbstractComponent):
+    """Base of every endpoint and loop; use `Endpoint` or `ThreadLoop`.
+
+    Example::
+
+        class Beeper(Endpoint):
+            def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+                super().__init__(factory, parent, "beeper")
+                self.task_handlers = {(TaskType.event, "beep"): self.beep}
+    """
+
+    def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:
+        self._check_constructor_args(factory, parent, name)
+        self.factory = factory
+        self.parent = parent
+        self.name = name
+        self.log: logging.Logger = parent.log.getChild(name)
+        self._task_handlers = HandlerMap(owner_class=type(self), on_change=self._handlers_changed)
+
+    def _check_constructor_args(self, factory: Any, parent: Any, name: Any) -> None:
+        expected = "super().__init__(factory, parent, name)"
+        me = describe_class(type(self))
+        if not isinstance(factory, AbstractFactory):
+            raise ComponentError(
+                f"{me} passed {factory!r} as its factory. The first argument of {expected} "
+                "must be the factory that builds it (inside a factory's get(), pass "
+                "`self`). Check the order of the arguments."
+            )
+        if not isinstance(parent, AbstractNode):
+            raise ComponentError(
+                f"{me} passed {parent!r} as its parent node. The second argument of "
+                f"{expected} must be the node (the `parent` given to the factory's "
+                "get()). Check the order of the arguments."
+            )
+        if not isinstance(name, str) or not name:
+            raise ComponentError(
+                f"{me} passed {name!r} as its name. The third argument of {expected} "
+                "must be a non-empty string that is unique in the node, such as "
+                "'depth_filter'."
+            )
+
+    # -- handlers ---------------------------------------------------------
+    @property
+    def task_handlers(self) -> TaskHandlerMap:
+        """Which handler runs for which task id; assign a dict in ``__init__``.
+
+        Example::
+
+            self.task_handlers = {(TaskType.store_page, "depth"): self.on_depth}
+        """
+        return self._task_handlers
+
+    @task_handlers.setter
+    def task_handlers(self, handlers: TaskHandlerMap) -> None:
+        self._task_handlers = HandlerMap(
+            handlers, owner_class=type(self), on_change=self._handlers_changed
+        )
+        self._handlers_changed()
+
+    def _handlers_changed(self) -> None:
+        notify = getattr(self.parent, "_component_handlers_changed", None)
+        if notify is not None:
+            notify(self)
+
+    # -- life cycle hooks (documented no-ops: override what you need) -------
+    def begin(self) -> None:
+        """Runs once when the node starts; override to start things up."""
+
+    def halt(self) -> None:
+        """The component is about to stop or be reloaded: save state on the factory."""
+
+    def terminate(self) -> None:
+        """The component will not come back: close files, sockets and devices."""
+
+    def join(self, timeout_s: Optional[float] = None) -> None:
+        """Wait for the component's threads to end (endpoints have none)."""
+
+    # -- talking to the node ------------------------------------------------
+    def schedule(self, t: SomeTasks) -> None:
+        """Queue tasks on the node; safe from any thread.
+
+        Example::
+
+            self.schedule(tasks.event("beep"))
+        """
+        self.parent.schedule(t)
+
+    def page(self, key: DataKey, data: Any, process: bool = True) -> Page:
+        """A new page stamped with this node's role and the time."""
+        return self.parent.page(key, data, process)
+
+    def store_page(self, page: Page) -> None:
+        """Queue storing ``page`` on the node; safe from any thread."""
+        self.parent.schedule(self.parent.task_store_page(page))
+
+    def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
+        """Queue storing ``data`` under ``key``; safe from any thread.
+
+        Example::
+
+            self.store_data("depth_m", 3.2)
+        """
+        self.parent.store_data(key, data, process)
+
+    def store_data_task(self, key: DataKey, data: Any, process: bool = True) -> Task:
+        """A task that stores ``data`` under ``key``: return it from a handler.
+
+        Example::
+
+            return self.store_data_task("speed", 0.5)
+        """
+        return self.parent.task_store_data(key, data, process)
+
+    def get_page(self, key: DataKey) -> Optional[Page]:
+        """The newest page under ``key``, or None. Read-only; any thread."""
+        return self.parent.get_page(key)
+
+    def get_data(self, key: DataKey) -> Optional[Any]:
+        """The newest data under ``key``, or None. Read-only; any thread."""
+        return self.parent.get_data(key)
+
+    # -- logging (``self.warn("bad value %s", value)``) ----------------------
+    def dbg(self, msg: str, *args: Any) -> None:
+        """Log a debug message, e.g. ``self.dbg("got %s", value)``."""
+        self.log.debug(msg, *args)
+
+    def info(self, msg: str, *args: Any) -> None:
+        """Log an informational message."""
+        self.log.info(msg, *args)
+
+    def warn(self, msg: str, *args: Any) -> None:
+        """Log a warning, e.g. ``self.warn("Invalid data from %s", task)``."""
+        self.log.warning(msg, *args)
+
+    def err(self, msg: str, *args: Any) -> None:
+        """Log an error."""
+        self.log.error(msg, *args)
+
+    def fatal(self, msg: str, *args: Any) -> None:
+        """Log a critical error (the component cannot go on)."""
+        self.log.critical(msg, *args)
+
+    def __repr__(self) -> str:
+        return f"<{type(self).__name__} {self.name!r}>"

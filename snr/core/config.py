@@ -1,0 +1,105 @@
+"""`Config`: the blueprint of a system, one factory list per role."""
+
+from __future__ import annotations
+
+from typing import List, Optional
+
+from snr.core.profiler import Profiler
+from snr.prelude import (
+    AbstractConfig,
+    AbstractFactory,
+    AbstractProfiler,
+    ComponentsByRole,
+    ConfigError,
+    Mode,
+    Role,
+)
+from snr.prelude.errors import closest_match
+
+__all__ = ["Config"]
+
+
+class Config(AbstractConfig):
+    """Which components each role's node gets, and how strict nodes are.
+
+    Args:
+        factories: for every role, the factories of its components.
+        mode: ``Mode.DEBUG`` (default), ``Mode.TEST`` or ``Mode.DEPLOYED``.
+        profile: time every handler; defaults to on in DEBUG mode only.
+
+    Example::
+
+        config = snr.Config(factories={
+            "lunar_module": [RadarSensorLoopFactory(100), ControllerFactory()],
+        })
+        snr.SynchronousRunner("lunar_module", config).run()
+    """
+
+    def __init__(
+        self,
+        factories: Optional[ComponentsByRole] = None,
+        mode: Mode = Mode.DEBUG,
+        profile: Optional[bool] = None,
+    ) -> None:
+        if factories is None:
+            factories = {}
+        if not isinstance(factories, dict):
+            raise ConfigError(
+                f"Config(factories=...) got {type(factories).__name__}; it needs a dict "
+                'from role to a list of factories, e.g. {"robot": [MyFactory()]}.'
+            )
+        if not isinstance(mode, Mode):
+            raise ConfigError(
+                f"Config(mode=...) got {mode!r}; use Mode.DEBUG, Mode.TEST or Mode.DEPLOYED."
+            )
+        for role, facs in factories.items():
+            if not isinstance(facs, (list, tuple)):
+                raise ConfigError(
+                    f"Role {role!r} maps to {type(facs).__name__}, not a list of "
+                    f"factories. Write {role!r}: [MyFactory(), ...]."
+                )
+            for fac in list[object](facs):
+                if not isinstance(fac, AbstractFactory):
+                    hint = (
+                        " It looks like a class: add () to make a factory object."
+                        if isinstance(fac, type)
+                        else ""
+                    )
+                    raise ConfigError(
+                        f"Role {role!r} lists {fac!r}, which is not a factory (an "
+                        f"EndpointFactory or LoopFactory object).{hint}"
+                    )
+        self.factories: ComponentsByRole = {role: list(f) for role, f in factories.items()}
+        self.mode = mode
+        self.profile = (mode is Mode.DEBUG) if profile is None else profile
+
+    def roles(self) -> List[Role]:
+        """Every role in the config, in the order written."""
+        return list(self.factories)
+
+    def get(self, role: Role) -> List[AbstractFactory]:
+        """The factories for ``role``.
+
+        Raises:
+            ConfigError: the role is unknown (the message lists the known ones
+                and the closest match) or has no factories.
+        """
+        if role not in self.factories:
+            known = ", ".join(repr(r) for r in self.factories) or "(none)"
+            guess = closest_match(role, self.factories)
+            hint = f" Did you mean {guess!r}?" if guess else ""
+            raise ConfigError(f"Unknown role {role!r}. This config has roles: {known}.{hint}")
+        facs = self.factories[role]
+        if not facs:
+            raise ConfigError(
+                f"Role {role!r} has no components: its factory list is empty. Add at "
+                "least one factory, e.g. snr.TimeoutLoopFactory(seconds=5)."
+            )
+        return list(facs)
+
+    def get_profiler(self) -> Optional[AbstractProfiler]:
+        """A new `Profiler` when profiling is on, else None."""
+        return Profiler() if self.profile else None
+
+    def __repr__(self) -> str:
+        return f"Config(roles={self.roles()!r}, mode={self.mode})"

@@ -1,0 +1,264 @@
+"""The node's handler table: which handlers run for a task, found in O(1).
+
+Thesis 4.4.1 matches a task against every endpoint in turn: first by
+``(type, name)``, then by ``type``. That costs time for every endpoint on every
+task. Here the same answer is computed ahead of time (thesis 8.1): for every
+task id that any component registered, the table holds the list of handlers
+that the two-phase match would find, in component order. A task then needs one
+or two dict look-ups, however many components the node has.
+
+The table is rebuilt when a component is removed or reloaded or changes its
+``task_handlers`` (the mapping is a :class:`HandlerMap` that reports changes),
+and extended in place when a component is added at the end.
+
+Example::
+
+    table = HandlerTable()
+    table.rebuild(node.components.values())
+    table.lookup(tasks.event("ping"))   # [(handler, key, component), ...]
+"""
+
+from __future__ import annotations
+
+import inspect
+from types import CodeType
+from typing import (
+    Any,
+    Callable,
+    Dict,
+    Hashable,
+    Iterable,
+    List,
+    Mapping,
+    Optional,
+    Set,
+    Tuple,
+)
+
+from snr.prelude import (
+    AbstractComponent,
+    ComponentError,
+    TaskHandler,
+    TaskId,
+    TaskType,
+)
+from snr.prelude.errors import closest_match, describe_callable, describe_class
+
+__all__ = ["Entry", "HandlerMap", "HandlerTable", "check_handler", "check_task_id"]
+
+Entry = Tuple[TaskHandler, TaskId, AbstractComponent]
+"""One matched handler: the function, the id it matched under, its component."""
+
+SpecificId = Tuple[TaskType, str]
+
+
+class HandlerMap(Dict[TaskId, TaskHandler]):
+    """A ``task_handlers`` dict that checks its entries and reports changes.
+
+    Endpoints store their handlers in one of these, so a student can keep
+    writing ``self.task_handlers = {...}`` or ``self.task_handlers[id] = f``
+    and the node still hears about every change.
+
+    Example::
+
+        handlers = HandlerMap(owner_class=MyEndpoint, on_change=print)
+        handlers[(TaskType.event, "go")] = my_handler    # checked, then reported
+    """
+
+    def __init__(
+        self,
+        items: Optional[Mapping[TaskId, TaskHandler]] = None,
+        *,
+        owner_class: type = object,
+        on_change: Optional[Callable[[], None]] = None,
+    ) -> None:
+        super().__init__()
+        self._owner_class = owner_class
+        self._on_change = on_change
+        if items:
+            for key, handler in items.items():
+                self._check(key, handler)
+                super().__setitem__(key, handler)
+
+    def _check(self, key: Any, handler: Any) -> None:
+        check_task_id(key, self._owner_class)
+        check_handler(handler, key, self._owner_class)
+
+    def _changed(self) -> None:
+        if self._on_change is not None:
+            self._on_change()
+
+    def __setitem__(self, key: TaskId, handler: TaskHandler) -> None:
+        self._check(key, handler)
+        super().__setitem__(key, handler)
+        self._changed()
+
+    def __delitem__(self, key: TaskId) -> None:
+        super().__delitem__(key)
+        self._changed()
+
+    def update(self, *args: Any, **kwargs: Any) -> None:
+        for key, handler in dict(*args, **kwargs).items():
+            self[key] = handler
+
+    def pop(self, key: TaskId, *default: Any) -> Any:
+        result = super().pop(key, *default)
+        self._changed()
+        return result
+
+    def popitem(self) -> Tuple[TaskId, TaskHandler]:
+        result = super().popitem()
+        self._changed()
+        return result
+
+    def setdefault(self, key: TaskId, default: Any = None) -> Any:
+        if key not in self:
+            self[key] = default
+        return self[key]
+
+    def clear(self) -> None:
+        super().clear()
+        self._changed()
+
+
+_TASK_TYPE_NAMES = [t.name for t in TaskType]
+
+
+def check_task_id(key: Any, owner_class: type = object) -> None:
+    """Raise a ComponentError unless ``key`` is a TaskType or (TaskType, str).
+
+    Example::
+
+        check_task_id((TaskType.event, "go"))   # fine
+        check_task_id("go")                     # ComponentError explaining why
+    """
+    if isinstance(key, TaskType):
+        return
+    if (
+        isinstance(key, tuple)
+        and len(key) == 2
+        and isinstance(key[0], TaskType)
+        and isinstance(key[1], str)
+    ):
+        return
+    owner = describe_class(owner_class)
+    hint = ""
+    if isinstance(key, str):
+        guess = closest_match(key, _TASK_TYPE_NAMES)
+        if guess is not None:
+            hint = f" Did you mean TaskType.{guess}?"
+        else:
+            hint = (
+                f" To run on pages stored under {key!r}, use "
+                f"(TaskType.store_page, {key!r}); for an event called {key!r}, "
+                f"use (TaskType.event, {key!r})."
+            )
+    raise ComponentError(
+        f"{owner} registers a task handler under {key!r} ({type(key).__name__}), "
+        "but task_handlers keys must be a TaskType, such as TaskType.terminate, or "
+        f"a (TaskType, str) pair, such as (TaskType.store_page, 'depth').{hint}"
+    )
+
+
+_checked_code: Set[CodeType] = set()
+
+
+def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None:
+    """Raise a ComponentError unless ``handler`` can be called as ``f(task, key)``.
+
+    Checked once per function, when it is registered (at start-up), so a wrong
+    signature is found before the robot moves rather than mid-run.
+
+    Example::
+
+        def on_go(self, task: Task, key: TaskId) -> SomeTasks: ...   # fine
+        def on_go(self, task: Task) -> SomeTasks: ...                # error
+    """
+    owner = describe_class(owner_class)
+    if not callable(handler):
+        raise ComponentError(
+            f"{owner} registers {handler!r} ({type(handler).__name__}) for {key!r}, "
+            "but a task handler must be a method, such as self.on_data. Did you "
+            "call it (self.on_data()) instead of naming it (self.on_data)?"
+        )
+    code = getattr(getattr(handler, "__func__", handler), "__code__", None)
+    if code is not None and code in _checked_code:
+        return
+    try:
+        signature = inspect.signature(handler)
+    except (TypeError, ValueError):  # builtins without signatures: trust them
+        return
+    try:
+        signature.bind(object(), object())
+    except TypeError:
+        where = describe_callable(handler)
+        raise ComponentError(
+            f"Task handler {where} for {key!r} has the signature "
+            f"{handler.__name__ if hasattr(handler, '__name__') else handler}"
+            f"{signature}, but SNR calls handlers with two arguments: the task and "
+            "the task id it matched. Write it as "
+            "`def handler(self, task: Task, key: TaskId) -> SomeTasks:`."
+        ) from None
+    if code is not None:
+        _checked_code.add(code)
+
+
+class HandlerTable:
+    """Precomputed two-phase matches for every registered task id.
+
+    Example::
+
+        table.rebuild(components)
+        for handler, key, component in table.lookup(task): ...
+    """
+
+    def __init__(self) -> None:
+        self.table: Dict[Hashable, List[Entry]] = {}
+        self._specific_by_type: Dict[TaskType, Set[SpecificId]] = {}
+
+    def lookup(self, task_type: TaskType, name: str) -> List[Entry]:
+        """The handlers to run for a task, in component order (maybe empty)."""
+        entries = self.table.get((task_type, name))
+        if entries is None:
+            entries = self.table.get(task_type, [])
+        return entries
+
+    def rebuild(self, components: Iterable[AbstractComponent]) -> None:
+        """Recompute the whole table from the components, in order.
+
+        The dict is refilled in place, so a caller holding ``table`` sees the
+        new contents; lists are new, so a pass iterating an old list is safe.
+        """
+        self.table.clear()
+        self._specific_by_type = {}
+        ordered = list(components)
+        for component in ordered:
+            for key in component.task_handlers:
+                if isinstance(key, tuple):
+                    self._specific_by_type.setdefault(key[0], set()).add(key)
+        for component in ordered:
+            self._extend(component, create_missing=False)
+
+    def add(self, component: AbstractComponent) -> None:
+        """Extend the table for a component added after all the others."""
+        self._extend(component, create_missing=True)
+
+    def _extend(self, component: AbstractComponent, create_missing: bool) -> None:
+        handlers = component.task_handlers
+        table = self.table
+        if create_missing:
+            for key in handlers:
+                if isinstance(key, tuple) and key not in table:
+                    # A new specific id first inherits every earlier component's
+                    # type-level handler, exactly as the two-phase match would.
+                    table[key] = list(table.get(key[0], []))
+                    self._specific_by_type.setdefault(key[0], set()).add(key)
+        for key, handler in handlers.items():
+            entry: Entry = (handler, key, component)
+            table.setdefault(key, []).append(entry)
+            if isinstance(key, TaskType):
+                # Fallback: this type-level handler also serves every specific
+                # id of its type that this component did not register itself.
+                for specific in self._specific_by_type.get(key, ()):
+                    if specific not in handlers:
+                        table.setdefault(specific, []).append(entry)

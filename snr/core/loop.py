@@ -1,0 +1,163 @@
+"""`ThreadLoop`: user code that runs over and over in its own thread."""
+
+from __future__ import annotations
+
+import enum
+import threading
+import time
+from typing import Optional
+
+from snr.core.component import Component
+from snr.prelude import (
+    AbstractFactory,
+    AbstractLoop,
+    AbstractNode,
+    ComponentError,
+    ComponentName,
+    NodeStateError,
+)
+from snr.prelude.errors import describe_class
+
+__all__ = ["LoopState", "ThreadLoop"]
+
+
+class LoopState(enum.Enum):
+    """Where a loop is in its life: NEW → RUNNING → STOPPED.
+
+    Example::
+
+        loop.state is LoopState.RUNNING
+    """
+
+    NEW = "new"
+    RUNNING = "running"
+    STOPPED = "stopped"
+
+
+class ThreadLoop(Component, AbstractLoop):
+    """Subclass this to run code continuously beside the node (thesis 4.4.3).
+
+    Write ``loop()`` (required) and, if needed, ``setup()``, ``halt()`` and
+    ``terminate()``. ``loop()`` is called again and again on the loop's own
+    thread, at most ``max_tick_rate_hz`` times a second (0: no limit, so
+    ``loop()`` must block on I/O itself). From the thread, talk to the node
+    only with ``self.schedule(...)``, ``self.store_data(...)``,
+    ``self.get_page(...)`` and ``self.get_data(...)``; they are thread-safe.
+
+    Example::
+
+        class Clock(ThreadLoop):
+            def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+                super().__init__(factory, parent, "clock", max_tick_rate_hz=10)
+
+            def loop(self) -> None:
+                self.store_data("time_s", self.parent.get_time_s())
+    """
+
+    def __init__(
+        self,
+        factory: AbstractFactory,
+        parent: AbstractNode,
+        name: ComponentName,
+        max_tick_rate_hz: float = 0.0,
+    ) -> None:
+        super().__init__(factory, parent, name)
+        if type(self).loop is ThreadLoop.loop:
+            raise ComponentError(
+                f"{describe_class(type(self))} is a ThreadLoop but has no loop() method. "
+                "Add `def loop(self) -> None:` with the work to repeat, or make it an "
+                "Endpoint if it only reacts to tasks."
+            )
+        if max_tick_rate_hz < 0:
+            raise ComponentError(
+                f"{describe_class(type(self))} asked for max_tick_rate_hz="
+                f"{max_tick_rate_hz}; use a positive rate, or 0 for no limit."
+            )
+        self.max_tick_rate_hz = max_tick_rate_hz
+        self.state = LoopState.NEW
+        self.terminate_reason = ""
+        self._stop_event = threading.Event()
+        self._thread: Optional[threading.Thread] = None
+
+    # -- what students write ------------------------------------------------
+    def setup(self) -> None:
+        """Runs once on the loop's thread before the first ``loop()``."""
+
+    def loop(self) -> None:
+        """One pass of the work; override this (required)."""
+
+    # -- stopping -----------------------------------------------------------
+    def set_terminate_flag(self, reason: str = "") -> None:
+        """Stop this loop after the current pass (the node keeps running).
+
+        Example::
+
+            if done:
+                self.set_terminate_flag("replayed every line")
+        """
+        if not self._stop_event.is_set():
+            self.terminate_reason = reason
+            self._stop_event.set()
+
+    def is_terminated(self) -> bool:
+        """True once the loop has been asked to stop."""
+        return self._stop_event.is_set()
+
+    def wait_s(self, seconds: float) -> bool:
+        """Sleep up to ``seconds``, waking early when the loop is stopped.
+
+        Use it instead of ``time.sleep`` inside ``loop()`` so shutdown is quick.
+        Returns True if the loop was stopped while waiting.
+        """
+        return self._stop_event.wait(seconds)
+
+    # -- driven by the node -------------------------------------------------
+    def _snr_start(self) -> None:
+        if self.state is not LoopState.NEW:
+            raise NodeStateError(
+                f"Cannot start loop {self.name!r} twice: it is {self.state.value}. "
+                "Reloading builds a new loop from its factory instead."
+            )
+        self.begin()
+        self.state = LoopState.RUNNING
+        self._thread = threading.Thread(
+            target=self._run, name=f"snr-{self.parent.role}-{self.name}", daemon=True
+        )
+        self._thread.start()
+
+    def _snr_stop(self) -> None:
+        self.set_terminate_flag(self.terminate_reason or "node stopping")
+        self.halt()
+
+    def join(self, timeout_s: Optional[float] = None) -> None:
+        """Wait (up to ``timeout_s``) for the loop's thread to end."""
+        thread = self._thread
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(timeout_s)
+
+    def is_alive(self) -> bool:
+        """True while the loop's thread is running."""
+        return self._thread is not None and self._thread.is_alive()
+
+    def _run(self) -> None:
+        profiler = self.parent.profiler
+        period_s = 1.0 / self.max_tick_rate_hz if self.max_tick_rate_hz > 0 else 0.0
+        stop = self._stop_event
+        try:
+            self.setup()
+            while not stop.is_set():
+                started = time.perf_counter()
+                self.loop()
+                took = time.perf_counter() - started
+                if profiler is not None:
+                    profiler.log_loop(self.name, took)
+                if period_s and period_s > took and stop.wait(period_s - took):
+                    break
+        except Exception as error:  # report and stop this loop; never kill the process
+            report = getattr(self.parent, "_loop_failed", None)
+            if report is not None:
+                report(self, error)
+            else:
+                self.log.exception("Loop %r stopped by an exception", self.name)
+        finally:
+            self.state = LoopState.STOPPED

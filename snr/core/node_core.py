@@ -1,0 +1,96 @@
+"""The node core endpoint: the node's own handlers (thesis 4.3.2).
+
+It is the first component of every node, named ``node_core``. It stores pages
+(then sends ``process_data`` when asked), adds, removes and reloads
+components, and stops the node on a terminate task.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from typing import TYPE_CHECKING, Any, cast
+
+from snr.core import tasks
+from snr.core.endpoint import Endpoint
+from snr.core.factory import EndpointFactory
+from snr.prelude import AbstractFactory, AbstractNode, Page, SomeTasks, Task, TaskId, TaskType
+
+if TYPE_CHECKING:  # pragma: no cover
+    from snr.core.node import Node
+
+__all__ = ["NODE_CORE_NAME", "NodeCoreEndpoint", "NodeCoreFactory"]
+
+NODE_CORE_NAME = "node_core"
+"""The component name of every node's core endpoint."""
+
+
+class NodeCoreEndpoint(Endpoint):
+    """Stores pages and manages components for its node.
+
+    Example (what it does for you)::
+
+        node.schedule(tasks.store_data("depth", 3.0))   # → datastore["depth"]
+        node.schedule(tasks.terminate("done"))          # → node stops
+    """
+
+    def __init__(self, factory: AbstractFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, NODE_CORE_NAME)
+        self.node = cast("Node", parent)
+        self.task_handlers = {
+            TaskType.store_page: self.store_page_handler,
+            (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
+            (TaskType.event, tasks.REMOVE_COMPONENT): self.remove_component_handler,
+            TaskType.reload: self.reload_handler,
+            TaskType.terminate: self.terminate_handler,
+        }
+
+    def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Put the task's page in the datastore; then process_data if asked."""
+        page: Any = task.val_list[0] if task.val_list else None
+        if not isinstance(page, Page):
+            self.err(
+                "A store_page task for %r carries %r instead of a Page; dropped it. "
+                "Make these tasks with tasks.store_page(page) or self.store_data_task().",
+                task.name,
+                page,
+            )
+            return None
+        if not page.origin:  # made by tasks.store_data(), which has no node
+            page = dataclasses.replace(page, origin=self.node.role)
+            task.val_list[0] = page
+        self.node.write_page(page)
+        return tasks.process_data(page) if page.process else None
+
+    def add_component_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Build a component with the factory in the task and add it."""
+        factory = task.val_list[0] if task.val_list else None
+        if not isinstance(factory, AbstractFactory):
+            self.err("add_component needs a factory, got %r", factory)
+            return None
+        component = self.node._build(factory)
+        if component is not None:
+            self.node.add_component(component)
+        return None
+
+    def remove_component_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Remove the component named in the task."""
+        for name in task.val_list:
+            self.node.remove_component(str(name))
+        return None
+
+    def reload_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Reload the component named by the task (or ``"all"``)."""
+        self.node.reload_component(task.name or "all")
+        return None
+
+    def terminate_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Stop the node once this task has been handled by everyone."""
+        self.node.set_terminate_flag(task.name)
+        return None
+
+
+class NodeCoreFactory(EndpointFactory):
+    """Builds the node core endpoint (every node makes one itself)."""
+
+    def get(self, parent: AbstractNode) -> NodeCoreEndpoint:
+        return NodeCoreEndpoint(self, parent)

@@ -1,0 +1,105 @@
+"""Helpers that build the common tasks, so handlers read like sentences.
+
+Example::
+
+    from snr import tasks
+
+    def on_button(self, task: Task, key: TaskId) -> SomeTasks:
+        return [tasks.event("beep"), tasks.terminate("user pressed stop")]
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, List, Optional
+
+from snr.prelude import (
+    AbstractFactory,
+    ComponentName,
+    DataKey,
+    Page,
+    Task,
+    TaskName,
+    TaskPriority,
+    TaskType,
+)
+
+__all__ = [
+    "ADD_COMPONENT",
+    "REMOVE_COMPONENT",
+    "add_component",
+    "event",
+    "process_data",
+    "reload_component",
+    "remove_component",
+    "store_data",
+    "store_page",
+    "terminate",
+]
+
+ADD_COMPONENT: TaskName = "add_component"
+"""Name of the event task that adds a component built by a factory."""
+
+REMOVE_COMPONENT: TaskName = "remove_component"
+"""Name of the event task that removes a component by name."""
+
+
+def event(name: TaskName, val_list: Optional[List[Any]] = None) -> Task:
+    """An event task, e.g. ``tasks.event("button_pressed", ["A"])``."""
+    return Task(TaskType.event, name, [] if val_list is None else val_list)
+
+
+def store_page(page: Page) -> Task:
+    """A task that stores ``page`` in the node's datastore.
+
+    Example::
+
+        return tasks.store_page(self.page("depth_m", 3.2))
+    """
+    return Task(TaskType.store_page, page.key, [page])
+
+
+def store_data(key: DataKey, data: Any, process: bool = True) -> Task:
+    """A task that stores ``data`` under ``key``; the node stamps its role.
+
+    Example::
+
+        return tasks.store_data("thruster_data", 2)
+    """
+    page = Page(key, data, origin="", created_at_s=time.time(), process=process)
+    return Task(TaskType.store_page, key, [page])
+
+
+def process_data(page: Page) -> Task:
+    """The task that follows a stored page whose ``process`` flag is set."""
+    return Task(TaskType.process_data, page.key, [page])
+
+
+def reload_component(name: ComponentName = "all") -> Task:
+    """Reload one component's source code, or ``"all"`` of them.
+
+    Example::
+
+        node.schedule(tasks.reload_component("depth_filter"))
+    """
+    return Task(TaskType.reload, name)
+
+
+def terminate(reason: str) -> Task:
+    """Stop the node; runs before any task already waiting.
+
+    Example::
+
+        return tasks.terminate("Landed Safely")
+    """
+    return Task(TaskType.terminate, reason, priority=TaskPriority.high)
+
+
+def add_component(factory: AbstractFactory) -> Task:
+    """Build a component with ``factory`` and add it to the running node."""
+    return Task(TaskType.event, ADD_COMPONENT, [factory])
+
+
+def remove_component(name: ComponentName) -> Task:
+    """Halt, terminate and remove the component called ``name``."""
+    return Task(TaskType.event, REMOVE_COMPONENT, [name])

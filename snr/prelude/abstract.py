@@ -1,0 +1,320 @@
+"""The interfaces of SNR (thesis 6.2.4-6.2.10) as abstract base classes.
+
+Students rarely use these directly: they subclass ``Endpoint``, ``ThreadLoop``,
+``EndpointFactory`` and ``LoopFactory`` from ``snr``, which implement them.
+They are here so that the parts of SNR depend on *interfaces*, not on each
+other, and so that type annotations such as ``parent: AbstractNode`` work.
+
+Example::
+
+    class MyEndpoint(Endpoint):
+        def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+            super().__init__(factory, parent, "my_endpoint")
+"""
+
+from __future__ import annotations
+
+import logging
+from abc import ABC, abstractmethod
+from types import ModuleType
+from typing import Any, Dict, List, Optional
+
+from snr.prelude.names import (
+    ComponentName,
+    DataKey,
+    Mode,
+    Role,
+    SomeTasks,
+    TaskHandler,
+    TaskHandlerMap,
+    TaskId,
+)
+from snr.prelude.page import Page
+from snr.prelude.task import Task
+
+__all__ = [
+    "AbstractComponent",
+    "AbstractConfig",
+    "AbstractEndpoint",
+    "AbstractFactory",
+    "AbstractLoop",
+    "AbstractMultiRunner",
+    "AbstractNode",
+    "AbstractProfiler",
+    "AbstractRunner",
+    "AbstractTaskQueue",
+]
+
+
+class AbstractProfiler(ABC):
+    """Collects how often and how long each handler and loop ran.
+
+    Example::
+
+        print(node.profiler.dump())
+    """
+
+    @abstractmethod
+    def log_task(self, task_id: TaskId, where: str, runtime_s: float) -> None:
+        """Record one handler run for ``task_id`` in module ``where``."""
+
+    @abstractmethod
+    def log_loop(self, name: ComponentName, runtime_s: float) -> None:
+        """Record one pass of a loop's ``loop()`` method."""
+
+    @abstractmethod
+    def dump(self) -> str:
+        """The table of thesis listing 5.2, as text."""
+
+
+class AbstractTaskQueue(ABC):
+    """A thread-safe FIFO of tasks; high-priority tasks jump ahead.
+
+    Example::
+
+        queue.schedule(tasks.event("go"))
+        queue.get(timeout_s=0.1)   # Task(TaskType.event, 'go', ...)
+    """
+
+    @abstractmethod
+    def schedule(self, t: SomeTasks) -> None:
+        """Queue a task or a list of tasks (from any thread)."""
+
+    @abstractmethod
+    def get(self, timeout_s: Optional[float] = None) -> Optional[Task]:
+        """The next task, waiting up to ``timeout_s``; None if there is none."""
+
+    @abstractmethod
+    def __len__(self) -> int:
+        """How many tasks are waiting."""
+
+
+class AbstractNode(ABC):
+    """The interface components see of their node (thesis 6.2.6).
+
+    Attributes:
+        role: this node's role, e.g. ``"urov"``.
+        config: the config it was built from.
+        mode: DEBUG, TEST or DEPLOYED.
+        components: every endpoint and loop, by name, in start order.
+        log: the node's logger (``logging.Logger``).
+        profiler: the profiler, or None when profiling is off.
+
+    Example::
+
+        node = Node("robot", config)
+        node.loop()                 # runs until a terminate task
+    """
+
+    role: Role
+    config: AbstractConfig
+    mode: Mode
+    components: Dict[ComponentName, AbstractComponent]
+    log: logging.Logger
+    profiler: Optional[AbstractProfiler]
+
+    # -- control flow (listing 6.1) -------------------------------------
+    @abstractmethod
+    def loop(self) -> None:
+        """Begin every component, then run tasks until terminated."""
+
+    @abstractmethod
+    def set_terminate_flag(self, reason: str) -> None:
+        """Ask the node to stop after the current task (any thread)."""
+
+    @abstractmethod
+    def terminate(self) -> None:
+        """Stop every component and join every thread; safe to call twice."""
+
+    @abstractmethod
+    def is_terminated(self) -> bool:
+        """True once the node has been asked to stop."""
+
+    # -- task execution (listing 6.2) -----------------------------------
+    @abstractmethod
+    def get_task_handlers(self, task: Task) -> List[tuple[TaskHandler, TaskId]]:
+        """Every handler that matches ``task``, in component order."""
+
+    @abstractmethod
+    def handle_task(self, handler: TaskHandler, task: Task, key: TaskId) -> Optional[List[Task]]:
+        """Run one handler, with profiling and error reporting."""
+
+    @abstractmethod
+    def execute_task(self, t: Task) -> None:
+        """Run every matching handler for ``t`` and queue what they return."""
+
+    # -- scheduling (listing 6.3) ----------------------------------------
+    @abstractmethod
+    def schedule(self, t: SomeTasks) -> None:
+        """Queue tasks (thread-safe)."""
+
+    @abstractmethod
+    def task_store_page(self, page: Page) -> Task:
+        """A task that stores ``page`` when it runs."""
+
+    @abstractmethod
+    def task_store_data(self, key: DataKey, data: Any, process: bool = True) -> Task:
+        """A task that stores ``data`` under ``key`` when it runs."""
+
+    # -- datastore (listing 6.4) ------------------------------------------
+    @abstractmethod
+    def page(self, key: DataKey, data: Any, process: bool = True) -> Page:
+        """A new page stamped with this node's role and the time."""
+
+    @abstractmethod
+    def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
+        """Queue storing ``data`` under ``key`` (thread-safe)."""
+
+    @abstractmethod
+    def get_page(self, key: DataKey) -> Optional[Page]:
+        """The newest page stored under ``key``, or None."""
+
+    @abstractmethod
+    def get_data(self, key: DataKey) -> Optional[Any]:
+        """The newest data stored under ``key``, or None."""
+
+    @abstractmethod
+    def get_time_s(self) -> float:
+        """Seconds since this node was created."""
+
+
+class AbstractComponent(ABC):
+    """What endpoints and loops have in common (thesis 6.2.5).
+
+    Example::
+
+        isinstance(my_endpoint, AbstractComponent)   # True
+    """
+
+    factory: AbstractFactory
+    parent: AbstractNode
+    name: ComponentName
+
+    @property
+    @abstractmethod
+    def task_handlers(self) -> TaskHandlerMap:
+        """Which handler runs for which task id."""
+
+    @task_handlers.setter
+    @abstractmethod
+    def task_handlers(self, handlers: TaskHandlerMap) -> None: ...
+
+    @abstractmethod
+    def begin(self) -> None:
+        """Called once when the node starts running (or the component is added)."""
+
+    @abstractmethod
+    def join(self, timeout_s: Optional[float] = None) -> None:
+        """Wait (up to ``timeout_s``) for any thread the component runs to end."""
+
+    @abstractmethod
+    def halt(self) -> None:
+        """The component is about to be removed: save state on the factory."""
+
+    @abstractmethod
+    def terminate(self) -> None:
+        """The component will not be reloaded: release files, sockets, devices."""
+
+    @abstractmethod
+    def store_page(self, page: Page) -> None:
+        """Queue storing a page on the parent node."""
+
+
+class AbstractEndpoint(AbstractComponent):
+    """A component whose code runs only in task handlers, on the node's thread.
+
+    Example: subclass ``snr.Endpoint``.
+    """
+
+
+class AbstractLoop(AbstractComponent):
+    """A component with its own thread that calls ``loop()`` over and over.
+
+    Example: subclass ``snr.ThreadLoop``.
+    """
+
+    @abstractmethod
+    def setup(self) -> None:
+        """Runs once on the loop's thread before the first ``loop()``."""
+
+    @abstractmethod
+    def loop(self) -> None:
+        """One pass of the loop's work; called repeatedly on its thread."""
+
+    @abstractmethod
+    def set_terminate_flag(self, reason: str = "") -> None:
+        """Stop this loop after the current pass."""
+
+    @abstractmethod
+    def is_terminated(self) -> bool:
+        """True once this loop has been asked to stop."""
+
+
+class AbstractFactory(ABC):
+    """Builds a component for a node, and can reload the component's code.
+
+    Example::
+
+        class MyFactory(EndpointFactory):
+            def get(self, parent: AbstractNode) -> MyEndpoint:
+                return MyEndpoint(self, parent)
+    """
+
+    reload_targets: List[ModuleType]
+
+    @abstractmethod
+    def get(self, parent: AbstractNode) -> Optional[AbstractComponent]:
+        """A new component for ``parent``, or None to add nothing."""
+
+    @abstractmethod
+    def reload(self) -> None:
+        """Re-read the source of ``reload_targets`` (``importlib.reload``)."""
+
+
+class AbstractConfig(ABC):
+    """The blueprint of a whole system: which factories each role gets.
+
+    Example::
+
+        config.get("urov")   # [SocketsServerFactory(...), ...]
+    """
+
+    mode: Mode
+
+    @abstractmethod
+    def get(self, role: Role) -> List[AbstractFactory]:
+        """The factories for ``role``; a clear ConfigError for unknown roles."""
+
+    @abstractmethod
+    def get_profiler(self) -> Optional[AbstractProfiler]:
+        """A fresh profiler for a node, or None when profiling is off."""
+
+    @abstractmethod
+    def roles(self) -> List[Role]:
+        """Every role the config knows, in the order written."""
+
+
+class AbstractRunner(ABC):
+    """Builds a node from a config and runs it until it stops.
+
+    Example::
+
+        snr.SynchronousRunner("robot", config).run()
+    """
+
+    @abstractmethod
+    def run(self) -> None:
+        """Run until the node terminates or Ctrl-C."""
+
+
+class AbstractMultiRunner(ABC):
+    """Runs several nodes (roles) at once, e.g. one process each.
+
+    Example::
+
+        snr.MultiProcRunner(["topside", "urov"], config).run()
+    """
+
+    @abstractmethod
+    def run(self) -> None:
+        """Run every node until all have stopped, or Ctrl-C."""

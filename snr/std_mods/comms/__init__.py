@@ -1,0 +1,1 @@
+"""Communication between nodes: pipes, TCP sockets, serial links."""

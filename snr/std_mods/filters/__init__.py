@@ -1,0 +1,20 @@
+"""Filters for noisy sensor data.
+
+Example::
+
+    from snr.std_mods.filters import MovingAvgFilterFactory
+"""
+
+from snr.std_mods.filters.moving_average import (
+    DEFAULT_FILTER_LENGTH,
+    MovingAvgEndpoint,
+    MovingAvgFilter,
+    MovingAvgFilterFactory,
+)
+
+__all__ = [
+    "DEFAULT_FILTER_LENGTH",
+    "MovingAvgEndpoint",
+    "MovingAvgFilter",
+    "MovingAvgFilterFactory",
+]

@@ -1,0 +1,128 @@
+"""Moving average filter endpoint and factory (thesis listings A.1, A.2).
+
+The filter's samples live on the factory, so they survive a hot reload of
+this module: the rebuilt endpoint picks up where the old one stopped.
+"""
+
+from __future__ import annotations
+
+import collections
+import sys
+from typing import Deque, Optional
+
+from snr.core import Endpoint, EndpointFactory, tasks
+from snr.prelude import (
+    AbstractNode,
+    ComponentError,
+    DataKey,
+    Page,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskType,
+)
+
+__all__ = [
+    "DEFAULT_FILTER_LENGTH",
+    "MovingAvgEndpoint",
+    "MovingAvgFilter",
+    "MovingAvgFilterFactory",
+]
+
+DEFAULT_FILTER_LENGTH: int = 3
+"""How many samples the filter averages when no length is given."""
+
+
+class MovingAvgFilter:
+    """The mean of the last ``maxlen`` samples of a deque.
+
+    Example::
+
+        f = MovingAvgFilter(collections.deque(maxlen=2))
+        f.update(1); f.update(3); f.avg()   # 2.0
+    """
+
+    def __init__(self, backing_deque: Deque[float]) -> None:
+        self.samples = backing_deque
+
+    def update(self, value: float) -> None:
+        """Add a sample (the oldest drops out when full)."""
+        self.samples.append(value)
+
+    def avg(self) -> float:
+        """The mean of the samples held (0.0 when there are none)."""
+        return sum(self.samples) / len(self.samples) if self.samples else 0.0
+
+
+class MovingAvgEndpoint(Endpoint):
+    """Averages numbers stored under ``input``; stores the mean under ``output``.
+
+    Example::
+
+        MovingAvgFilterFactory("depth_raw", "depth", length=5)
+    """
+
+    def __init__(
+        self,
+        factory: EndpointFactory,
+        parent: AbstractNode,
+        name: str,
+        input: DataKey,
+        output: DataKey,
+        filter: MovingAvgFilter,
+    ) -> None:
+        super().__init__(factory, parent, name)
+        self.input = input
+        self.output = output
+        self.task_handlers = {(TaskType.store_page, self.input): self.update_filter}
+        self.filter = filter
+
+    def update_filter(self, task: Task, key: TaskId) -> SomeTasks:
+        """Add the stored number to the filter and store the new mean."""
+        page = task.val_list[0] if task.val_list else None
+        if not (
+            task.name == self.input
+            and isinstance(page, Page)
+            and isinstance(page.data, (int, float))
+            and not isinstance(page.data, bool)
+        ):
+            self.warn("Invalid data from %s: expected a number", task)
+            return None
+        self.filter.update(page.data)
+        return tasks.store_page(self.page(self.output, self.filter.avg()))
+
+
+class MovingAvgFilterFactory(EndpointFactory):
+    """Builds a `MovingAvgEndpoint`; keeps the samples across reloads.
+
+    Args:
+        input: the data key to read numbers from.
+        output: the data key to store the average under.
+        length: how many samples to average.
+        name: the endpoint's name (default ``"moving_avg_filter"``).
+
+    Example::
+
+        MovingAvgFilterFactory("input_data", "filtered_data", 2)
+    """
+
+    def __init__(
+        self,
+        input: DataKey,
+        output: DataKey,
+        length: int = DEFAULT_FILTER_LENGTH,
+        name: Optional[str] = None,
+    ) -> None:
+        super().__init__(sys.modules[__name__])
+        if length < 1:
+            raise ComponentError(
+                f"MovingAvgFilterFactory(length={length}): length must be at least 1."
+            )
+        self.input = input
+        self.output = output
+        self.name = name or "moving_avg_filter"
+        self.backing_deque: Deque[float] = collections.deque(maxlen=length)
+
+    def get(self, parent: AbstractNode) -> MovingAvgEndpoint:
+        filter = MovingAvgFilter(self.backing_deque)
+        return MovingAvgEndpoint(self, parent, self.name, self.input, self.output, filter)

@@ -1,0 +1,1 @@
+"""Input and output: console, recorder, replayer, controller."""

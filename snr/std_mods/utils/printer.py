@@ -1,0 +1,67 @@
+"""`PrinterEndpointFactory`: print chosen tasks as they are handled."""
+
+from __future__ import annotations
+
+import sys
+from typing import List, Optional, TextIO
+
+from snr.core import Endpoint, EndpointFactory
+from snr.prelude import AbstractNode, SomeTasks, Task, TaskId
+
+__all__ = ["PrinterEndpoint", "PrinterEndpointFactory", "format_task"]
+
+
+def format_task(task: Task) -> str:
+    """``(event, 'button_pressed'): ['A']``, as in thesis figure 5.4."""
+    return f"({task.type.name}, {task.name!r}): {task.val_list!r}"
+
+
+class PrinterEndpoint(Endpoint):
+    """Prints one line per watched task.
+
+    Example output::
+
+        (event, 'button_pressed'): ['A']
+    """
+
+    def __init__(
+        self,
+        factory: PrinterEndpointFactory,
+        parent: AbstractNode,
+        task_ids: List[TaskId],
+        stream: Optional[TextIO],
+    ) -> None:
+        super().__init__(factory, parent, factory.name)
+        self.stream = stream
+        self.task_handlers = {task_id: self.print_task for task_id in task_ids}
+
+    def print_task(self, task: Task, key: TaskId) -> SomeTasks:
+        """Print ``task`` on one line."""
+        print(format_task(task), file=self.stream or sys.stdout, flush=True)
+        return None
+
+
+class PrinterEndpointFactory(EndpointFactory):
+    """Builds a `PrinterEndpoint` for the given task ids.
+
+    Example::
+
+        snr.PrinterEndpointFactory([
+            (snr.TaskType.event, "button_pressed"),
+            (snr.TaskType.event, "button_released"),
+        ])
+    """
+
+    def __init__(
+        self,
+        task_ids: List[TaskId],
+        stream: Optional[TextIO] = None,
+        name: Optional[str] = None,
+    ) -> None:
+        super().__init__()
+        self.task_ids = list(task_ids)
+        self.stream = stream
+        self.name = name or "printer_endpoint"
+
+    def get(self, parent: AbstractNode) -> PrinterEndpoint:
+        return PrinterEndpoint(self, parent, self.task_ids, self.stream)

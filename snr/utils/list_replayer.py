@@ -1,0 +1,70 @@
+"""`ListReplayerFactory`: store the values of a list, one by one, under a key."""
+
+from __future__ import annotations
+
+from typing import Any, Optional, Sequence
+
+from snr.core import LoopFactory, ThreadLoop
+from snr.prelude import AbstractNode, DataKey
+
+__all__ = ["ListReplayerFactory", "ListReplayerLoop"]
+
+
+class ListReplayerLoop(ThreadLoop):
+    """Stores each value under ``key`` in order, then stops (the node runs on).
+
+    Example::
+
+        ListReplayerFactory([0, 1, 2, 4], "input_data")
+    """
+
+    def __init__(
+        self,
+        factory: ListReplayerFactory,
+        parent: AbstractNode,
+        values: Sequence[Any],
+        key: DataKey,
+        period_s: float,
+    ) -> None:
+        rate = 1.0 / period_s if period_s > 0 else 0.0
+        super().__init__(factory, parent, factory.name, max_tick_rate_hz=rate)
+        self.values = list(values)
+        self.key = key
+        self.index = 0
+
+    def loop(self) -> None:
+        if self.index >= len(self.values):
+            self.set_terminate_flag("replayed every value")
+            return
+        self.store_data(self.key, self.values[self.index])
+        self.index += 1
+
+
+class ListReplayerFactory(LoopFactory):
+    """Builds a `ListReplayerLoop` (thesis listing A.3).
+
+    Args:
+        values: what to store, in order.
+        key: the data key to store them under.
+        period_s: seconds between values (0: as fast as possible).
+
+    Example::
+
+        ListReplayerFactory([0.5, 0.7, 0.6], "depth_m", period_s=0.1)
+    """
+
+    def __init__(
+        self,
+        values: Sequence[Any],
+        key: DataKey,
+        period_s: float = 0.0,
+        name: Optional[str] = None,
+    ) -> None:
+        super().__init__()
+        self.values = list(values)
+        self.key = key
+        self.period_s = period_s
+        self.name = name or f"list_replayer_{key}"
+
+    def get(self, parent: AbstractNode) -> ListReplayerLoop:
+        return ListReplayerLoop(self, parent, self.values, self.key, self.period_s)
