@@ -44,11 +44,14 @@ class Component(AbstractComponent):
         self.factory = factory
         self.parent = parent
         self.name = name
-        self.log: logging.Logger = parent.log.getChild(name)
+        self._log: Optional[logging.Logger] = None
         self._task_handlers = HandlerMap(owner_class=type(self), on_change=self._handlers_changed)
 
     def _check_constructor_args(self, factory: Any, parent: Any, name: Any) -> None:
         expected = "super().__init__(factory, parent, name)"
+        if isinstance(factory, AbstractFactory) and isinstance(parent, AbstractNode):
+            if isinstance(name, str) and name:
+                return  # the common case: no need to look up the source file
         me = describe_class(type(self))
         if not isinstance(factory, AbstractFactory):
             raise ComponentError(
@@ -68,6 +71,17 @@ class Component(AbstractComponent):
                 "must be a non-empty string that is unique in the node, such as "
                 "'depth_filter'."
             )
+
+    @property
+    def log(self) -> logging.Logger:
+        """This component's logger, ``snr.<role>.<name>``.
+
+        Made on first use: creating a logger is slow and never freed, and
+        most components of a busy node never log.
+        """
+        if self._log is None:
+            self._log = self.parent.log.getChild(self.name)
+        return self._log
 
     # -- handlers ---------------------------------------------------------
     @property

@@ -174,10 +174,9 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
         def on_go(self, task: Task, key: TaskId) -> SomeTasks: ...   # fine
         def on_go(self, task: Task) -> SomeTasks: ...                # error
     """
-    owner = describe_class(owner_class)
     if not callable(handler):
         raise ComponentError(
-            f"{owner} registers {handler!r} ({type(handler).__name__}) for {key!r}, "
+            f"{describe_class(owner_class)} registers {handler!r} ({type(handler).__name__}) for {key!r}, "
             "but a task handler must be a method, such as self.on_data. Did you "
             "call it (self.on_data()) instead of naming it (self.on_data)?"
         )
