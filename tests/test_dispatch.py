@@ -1,0 +1,151 @@
+"""Two-phase matching (thesis 4.4.1) and the O(1) handler table (8.1)."""
+
+import random
+import unittest
+from typing import Any, Dict, List, Tuple
+
+from snr import (
+    Config,
+    Mode,
+    Node,
+    SNRTestCase,
+    Task,
+    TaskId,
+    TaskType,
+    TimeoutLoopFactory,
+    tasks,
+)
+from snr.core import HandlerTable
+from snr.utils import DummyEndpointFactory
+
+from tests.helpers import Log, RecorderFactory
+
+EV = TaskType.event
+
+
+def naive_match(components: List[Any], task: Task) -> List[Tuple[str, TaskId]]:
+    """The thesis algorithm: ask every endpoint, specific id first, then type."""
+    found = []
+    for component in components:
+        for key in ((task.type, task.name), task.type):
+            if key in component.task_handlers:
+                found.append((component.name, key))
+                break
+    return found
+
+
+class TestTwoPhaseMatching(SNRTestCase):
+    def run_node(self, factories: List[Any], first: List[Task]) -> None:
+        node = Node("test", self.get_config([*factories, TimeoutLoopFactory(seconds=0.3)]))
+        node.schedule(first)
+        node.loop()
+
+    def test_specific_beats_type_per_endpoint_and_all_endpoints_run(self) -> None:
+        log: Log = []
+        self.run_node(
+            [
+                RecorderFactory("both", [(EV, "go"), EV], log),
+                RecorderFactory("type_only", [EV], log),
+                RecorderFactory("specific_only", [(EV, "go")], log),
+                RecorderFactory("other", [(EV, "stop")], log),
+            ],
+            [tasks.event("go")],
+        )
+        self.assertEqual(
+            [(name, key) for name, (_, _, key) in log if name != "timeout_loop"],
+            [("both", (EV, "go")), ("type_only", EV), ("specific_only", (EV, "go"))],
+        )
+
+    def test_returned_tasks_are_queued_after_all_handlers_in_order(self) -> None:
+        log: Log = []
+
+        def reply(prefix: str) -> Any:
+            return lambda task, key: (
+                [tasks.event(f"{prefix}1"), tasks.event(f"{prefix}2")] if task.name == "go" else None
+            )
+
+        self.run_node(
+            [
+                RecorderFactory("a", [(EV, "go")], log, reply("a")),
+                RecorderFactory("b", [(EV, "go")], log, reply("b")),
+                RecorderFactory("watch", [EV], log),
+            ],
+            [tasks.event("go")],
+        )
+        order = [(n, t[1]) for n, t in log]
+        self.assertEqual(order[:3], [("a", "go"), ("b", "go"), ("watch", "go")])
+        self.assertEqual(
+            [name for who, name in order if who == "watch"], ["go", "a1", "a2", "b1", "b2"]
+        )
+
+    def test_handlers_changed_at_run_time_take_effect(self) -> None:
+        log: Log = []
+        switch = RecorderFactory("switch", [(EV, "flip")], log)
+
+        def flip(task: Task, key: TaskId) -> Any:
+            endpoint = switch.built["switch"]
+            endpoint.task_handlers[(EV, "second")] = endpoint.record
+            del endpoint.task_handlers[(EV, "first")]
+            return None
+
+        switch.reply = lambda t, k: flip(t, k) if t.name == "flip" else None
+        switch.keys = [(EV, "flip"), (EV, "first")]
+        self.run_node(
+            [switch],
+            [tasks.event("first"), tasks.event("flip"), tasks.event("first"), tasks.event("second")],
+        )
+        self.assertEqual([t[1] for _, t in log], ["first", "flip", "second"])
+
+    def test_reassigning_task_handlers_is_seen(self) -> None:
+        log: Log = []
+        factory = RecorderFactory("r", [(EV, "a")], log)
+
+        def swap(task: Task, key: TaskId) -> Any:
+            endpoint = factory.built["r"]
+            endpoint.task_handlers = {(EV, "b"): endpoint.record}
+            return None
+
+        factory.reply = swap
+        self.run_node([factory], [tasks.event("a"), tasks.event("a"), tasks.event("b")])
+        self.assertEqual([t[1] for _, t in log], ["a", "b"])
+
+
+class TestHandlerTable(unittest.TestCase):
+    def test_matches_the_naive_algorithm_on_random_systems(self) -> None:
+        rng = random.Random(42)
+        names = ["a", "b", "c", "d"]
+        types = [TaskType.event, TaskType.store_page, TaskType.process_data]
+        for trial in range(60):
+            config = Config({"r": [DummyEndpointFactory("x")]}, mode=Mode.TEST)
+            node = Node("r", config)
+            components = list(node.components.values())
+            table = HandlerTable()
+            table.rebuild(components)
+            for i in range(rng.randint(1, 8)):
+                keys: List[TaskId] = []
+                for _ in range(rng.randint(0, 4)):
+                    t = rng.choice(types)
+                    keys.append(t if rng.random() < 0.3 else (t, rng.choice(names)))
+                factory = DummyEndpointFactory(f"e{i}", keys)
+                component = factory.get(node)
+                components.append(component)
+                if rng.random() < 0.5:
+                    table.add(component)  # incremental, as when the node adds one
+                else:
+                    table.rebuild(components)
+            for t in types:
+                for n in [*names, "zzz"]:
+                    task = Task(t, n)
+                    got = [(c.name, k) for _, k, c in table.lookup(t, n)]
+                    self.assertEqual(got, naive_match(components, task), f"trial {trial}: {task}")
+
+    def test_idle_endpoints_do_not_grow_the_lookup(self) -> None:
+        node = Node("r", Config({"r": [DummyEndpointFactory("ping", [(EV, "ping")])]}, mode=Mode.TEST))
+        for i in range(1000):
+            node.add_component(DummyEndpointFactory(f"idle{i}", [(EV, f"idle{i}")]).get(node))
+        entries = node.get_task_handlers(tasks.event("ping"))
+        self.assertEqual(len(entries), 1)  # one dict look-up, one handler: not 1000 checks
+
+
+if __name__ == "__main__":
+    unittest.main()

@@ -1,0 +1,325 @@
+"""Node life cycle, pages, errors in handlers, shutdown and idling."""
+
+import resource
+import threading
+import time
+import unittest
+from typing import Any, List
+
+from snr import (
+    AbstractNode,
+    Config,
+    Endpoint,
+    EndpointFactory,
+    HandlerError,
+    LoopError,
+    LoopFactory,
+    Mode,
+    Node,
+    NodeStateError,
+    Page,
+    SNRTestCase,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskType,
+    ThreadLoop,
+    ThreadSafetyError,
+    TimeoutLoopFactory,
+    tasks,
+)
+from snr.core import NodeState
+
+from tests.helpers import Log, RecorderFactory
+
+EV = TaskType.event
+
+
+class Boom(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode, returns: Any = None) -> None:
+        super().__init__(factory, parent, "boom")
+        self.returns = returns
+        self.calls = 0
+        self.task_handlers = {(EV, "boom"): self.explode, (EV, "bad_return"): self.bad_return}
+
+    def explode(self, task: Task, key: TaskId) -> SomeTasks:
+        self.calls += 1
+        raise ValueError("sensor unplugged")
+
+    def bad_return(self, task: Task, key: TaskId) -> SomeTasks:
+        return self.returns  # type: ignore[no-any-return]
+
+
+class BoomFactory(EndpointFactory):
+    def __init__(self, returns: Any = None) -> None:
+        super().__init__()
+        self.returns = returns
+        self.endpoint: Any = None
+
+    def get(self, parent: AbstractNode) -> Boom:
+        self.endpoint = Boom(self, parent, self.returns)
+        return self.endpoint
+
+
+class Ticker(ThreadLoop):
+    def __init__(self, factory: "TickerFactory", parent: AbstractNode) -> None:
+        super().__init__(factory, parent, factory.name, max_tick_rate_hz=factory.rate)
+        self.factory_ = factory
+
+    def setup(self) -> None:
+        self.factory_.events.append("setup")
+
+    def loop(self) -> None:
+        self.factory_.ticks += 1
+        if self.factory_.crash_after and self.factory_.ticks >= self.factory_.crash_after:
+            raise RuntimeError("High velocity impact")
+        if self.factory_.block:
+            threading.Event().wait(0.05)  # "blocking I/O" that ignores halt
+
+    def halt(self) -> None:
+        self.factory_.events.append("halt")
+
+    def terminate(self) -> None:
+        self.factory_.events.append("terminate")
+
+
+class TickerFactory(LoopFactory):
+    def __init__(self, rate: float = 100, name: str = "ticker", crash_after: int = 0,
+                 block: bool = False) -> None:
+        super().__init__()
+        self.rate, self.name, self.crash_after, self.block = rate, name, crash_after, block
+        self.ticks = 0
+        self.events: List[str] = []
+
+    def get(self, parent: AbstractNode) -> Ticker:
+        return Ticker(self, parent)
+
+
+def snr_threads() -> List[str]:
+    return [t.name for t in threading.enumerate() if t.name.startswith("snr-")]
+
+
+class TestPages(SNRTestCase):
+    def test_store_then_process_after_page_is_in_datastore(self) -> None:
+        seen: List[Any] = []
+
+        def check(task: Task, key: TaskId) -> SomeTasks:
+            stored = node.get_page(task.name)
+            seen.append((task.type, stored is not None and stored == task.val_list[0]))
+            return None
+
+        log: Log = []
+        node = Node("test", self.get_config([
+            RecorderFactory("watch", [TaskType.store_page, TaskType.process_data], log, check),
+            TimeoutLoopFactory(seconds=0.2),
+        ]))
+        node.store_data("depth", 3.5)
+        node.store_data("quiet", 1, process=False)
+        node.loop()
+        # FIFO: both stores were queued first; process_data follows its page.
+        self.assertEqual(seen, [(TaskType.store_page, True), (TaskType.store_page, True),
+                                (TaskType.process_data, True)])
+        self.assertPage(node.get_page("depth"), "depth", 3.5, origin="test")
+        self.assertEqual(node.get_data("quiet"), 1)
+        self.assertIsNone(node.get_data("never_stored"))
+
+    def test_tasks_store_data_is_stamped_with_the_node_role(self) -> None:
+        node = Node("rover", Config({"rover": [TimeoutLoopFactory(seconds=0.1)]}, mode=Mode.TEST))
+        node.schedule(tasks.store_data("speed", 2.0))
+        node.loop()
+        page = node.get_page("speed")
+        assert page is not None
+        self.assertEqual((page.origin, page.data), ("rover", 2.0))
+
+    def test_pages_are_stored_in_order(self) -> None:
+        node = Node("test", self.get_config([TimeoutLoopFactory(seconds=0.2)]))
+        log: Log = []
+        node.add_component(RecorderFactory("r", [(TaskType.store_page, "n")], log).get(node))
+        for i in range(100):
+            node.store_data("n", i)
+        node.loop()
+        self.assertEqual(node.get_data("n"), 99)
+        self.assertEqual(len(log), 100)
+
+
+class TestLifeCycle(SNRTestCase):
+    def test_terminate_task_stops_node_and_jumps_queue(self) -> None:
+        log: Log = []
+        node = Node("test", self.get_config([RecorderFactory("r", [EV, TaskType.terminate], log)]))
+        node.schedule([tasks.event("late"), tasks.terminate("now")])
+        node.loop()
+        self.assertEqual(node.terminate_reason, "now")
+        self.assertEqual([t[1] for _, t in log], ["now"])  # "late" never ran
+        self.assertIs(node.state, NodeState.TERMINATED)
+        self.assertTrue(node.is_terminated())
+
+    def test_orderly_shutdown_halts_joins_and_terminates_every_loop(self) -> None:
+        loops = [TickerFactory(name=f"t{i}", rate=200) for i in range(3)]
+        slow = TickerFactory(name="slow", rate=0, block=True)  # ignores halt for ~50 ms
+        node = Node("test", self.get_config([*loops, slow, TimeoutLoopFactory(seconds=0.2)]))
+        node.loop()
+        for factory in [*loops, slow]:
+            self.assertEqual(factory.events, ["setup", "halt", "terminate"])
+        self.assertEqual(snr_threads(), [])
+
+    def test_shutdown_of_a_stuck_loop_is_bounded(self) -> None:
+        class Stuck(ThreadLoop):
+            def loop(self) -> None:
+                gate.wait(3)
+
+        class StuckFactory(LoopFactory):
+            def get(self, parent: AbstractNode) -> Stuck:
+                return Stuck(self, parent, "stuck")
+
+        gate = threading.Event()
+        node = Node("test", self.get_config([StuckFactory(), TimeoutLoopFactory(seconds=0.05)]))
+        node.join_timeout_s = 0.2
+        started = time.monotonic()
+        with self.assertLogs("snr.test", "WARNING") as logs:
+            node.loop()
+        self.assertLess(time.monotonic() - started, 2.5)
+        self.assertIn("did not stop within", "\n".join(logs.output))
+        gate.set()
+
+    def test_loop_twice_is_refused_and_terminate_twice_is_safe(self) -> None:
+        node = Node("test", self.get_config([TimeoutLoopFactory(seconds=0.01)]))
+        node.loop()
+        node.terminate()
+        with self.assertRaises(NodeStateError) as ctx:
+            node.loop()
+        self.assertIn("terminated", str(ctx.exception))
+
+    def test_terminate_flag_before_loop_stops_at_once(self) -> None:
+        ticker = TickerFactory()
+        node = Node("test", self.get_config([ticker]))
+        node.set_terminate_flag("changed my mind")
+        node.loop()
+        self.assertEqual(node.terminate_reason, "changed my mind")
+
+    def test_loop_tick_rate_is_honoured(self) -> None:
+        ticker = TickerFactory(rate=50)
+        self.run_test_node([ticker, TimeoutLoopFactory(seconds=0.3)])
+        self.assertGreater(ticker.ticks, 3)
+        self.assertLessEqual(ticker.ticks, 17)  # 50 Hz × 0.3 s = 15, plus one
+
+    def test_loop_cannot_execute_tasks_directly(self) -> None:
+        errors: List[Exception] = []
+
+        class Rogue(ThreadLoop):
+            def loop(self) -> None:
+                try:
+                    self.parent.execute_task(tasks.event("x"))
+                except ThreadSafetyError as e:
+                    errors.append(e)
+                self.set_terminate_flag()
+
+        class RogueFactory(LoopFactory):
+            def get(self, parent: AbstractNode) -> Rogue:
+                return Rogue(self, parent, "rogue")
+
+        self.run_test_node([RogueFactory(), TimeoutLoopFactory(seconds=0.2)])
+        self.assertEqual(len(errors), 1)
+        self.assertIn("self.schedule", str(errors[0]))
+
+    def test_idle_node_does_not_spin(self) -> None:
+        node = Node("test", self.get_config([TickerFactory(rate=2)]))
+        thread = threading.Thread(target=node.loop)
+        before = resource.getrusage(resource.RUSAGE_SELF)
+        wall = time.monotonic()
+        thread.start()
+        time.sleep(3.0)
+        node.set_terminate_flag("done")
+        thread.join(5)
+        after = resource.getrusage(resource.RUSAGE_SELF)
+        cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
+        self.assertLess(cpu / (time.monotonic() - wall), 0.02, f"{cpu:.3f} s CPU")
+
+
+class TestHandlerFailures(SNRTestCase):
+    def test_test_mode_fails_naming_endpoint_handler_and_task(self) -> None:
+        factory = BoomFactory()
+        node = Node("test", self.get_config([factory, TimeoutLoopFactory(seconds=2)]))
+        node.schedule(tasks.event("boom", [7]))
+        with self.assertRaises(HandlerError) as ctx:
+            node.loop()
+        text = str(ctx.exception)
+        for part in ("Boom.explode", "'boom'", "ValueError: sensor unplugged", "test_node.py",
+                     "(event, 'boom')", "[7]"):
+            self.assertIn(part, text)
+        self.assertIsInstance(ctx.exception.__cause__, ValueError)
+        self.assertEqual(snr_threads(), [])
+
+    def test_deployed_mode_logs_and_keeps_running(self) -> None:
+        factory = BoomFactory()
+        node = Node("test", Config({"test": [factory, TimeoutLoopFactory(seconds=0.2)]},
+                                   mode=Mode.DEPLOYED))
+        node.schedule([tasks.event("boom"), tasks.event("boom")])
+        with self.assertLogs("snr.test", "ERROR") as logs:
+            node.loop()
+        self.assertEqual(factory.endpoint.calls, 2)
+        self.assertEqual(node.terminate_reason, "Timeout")
+        self.assertIn("Boom.explode", logs.output[0])
+
+    def test_wrong_return_type_is_reported(self) -> None:
+        for bad in (5, "text", [tasks.event("ok"), 3]):
+            with self.subTest(bad=bad):
+                node = Node("test", self.get_config([BoomFactory(bad), TimeoutLoopFactory(seconds=2)]))
+                node.schedule(tasks.event("bad_return"))
+                with self.assertRaises(HandlerError) as ctx:
+                    node.loop()
+                self.assertIn("Boom.bad_return", str(ctx.exception))
+                self.assertIn("must return a Task, a list of Tasks, or None", str(ctx.exception))
+
+    def test_loop_exception_stops_node_in_test_mode(self) -> None:
+        crasher = TickerFactory(rate=100, crash_after=2)
+        node = Node("test", self.get_config([crasher, TimeoutLoopFactory(seconds=2)]))
+        with self.assertRaises(LoopError) as ctx:
+            node.loop()
+        self.assertIn("High velocity impact", str(ctx.exception))
+        self.assertIn("ticker", str(ctx.exception))
+
+    def test_slow_handler_is_reported_in_debug_mode(self) -> None:
+        class Sleepy(Endpoint):
+            def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+                super().__init__(factory, parent, "sleepy")
+                self.task_handlers = {(EV, "nap"): self.nap}
+
+            def nap(self, task: Task, key: TaskId) -> SomeTasks:
+                time.sleep(0.15)
+                return None
+
+        class SleepyFactory(EndpointFactory):
+            def get(self, parent: AbstractNode) -> Sleepy:
+                return Sleepy(self, parent)
+
+        node = Node("test", self.get_config([SleepyFactory(), TimeoutLoopFactory(seconds=0.5)],
+                                            Mode.DEBUG))
+        node.schedule([tasks.event("nap"), tasks.event("nap")])
+        with self.assertLogs("snr.test", "WARNING") as logs:
+            node.loop()
+        slow = [line for line in logs.output if "Sleepy.nap" in line]
+        self.assertEqual(len(slow), 1)  # reported once, not for every call
+        self.assertIn("ThreadLoop", slow[0])
+
+
+class TestProfiler(SNRTestCase):
+    def test_dump_lists_task_ids_and_loops(self) -> None:
+        node = Node("test", self.get_config([TickerFactory(rate=100),
+                                             TimeoutLoopFactory(seconds=0.1)], Mode.DEBUG))
+        node.store_data("x", 1)
+        node.loop()
+        assert node.profiler is not None
+        dump = node.profiler.dump()
+        self.assertTrue(dump.startswith("Times called,"))
+        self.assertIn("TaskType.store_page:snr.core.node_core", dump)
+        self.assertIn("TaskType.terminate:snr.core.node_core", dump)
+        self.assertIn("Loop(ticker)", dump)
+        self.assertRegex(dump, r"\n +1 x +[\d.]+ us -> +[\d.]+%: TaskType.store_page")
+
+    def test_no_profiler_when_deployed(self) -> None:
+        node = Node("t", Config({"t": [TimeoutLoopFactory(seconds=0.01)]}, mode=Mode.DEPLOYED))
+        self.assertIsNone(node.profiler)
+
+
+if __name__ == "__main__":
+    unittest.main()

@@ -1,0 +1,67 @@
+"""Page, Task, TaskType and the Serializable protocol."""
+
+import unittest
+
+from snr import Page, Serializable, Task, TaskPriority, TaskType, tasks
+
+
+class TestPage(unittest.TestCase):
+    def test_round_trip(self) -> None:
+        page = Page("depth", {"m": [1.5, 2]}, origin="urov", created_at_s=12.5, process=False)
+        self.assertEqual(Page.deserialize(page.serialize()), page)
+
+    def test_equality_compares_every_field(self) -> None:
+        page = Page("k", 1, "a", 1.0)
+        self.assertEqual(page, Page("k", 1, "a", 1.0))
+        self.assertNotEqual(page, Page("k", 2, "a", 1.0))
+        self.assertNotEqual(page, Page("k", 1, "b", 1.0))
+        self.assertNotEqual(page, Page("k", 1, "a", 2.0))
+        self.assertNotEqual(page, Page("other", 1, "a", 1.0))
+        self.assertNotEqual(page, Page("k", 1, "a", 1.0, process=False))
+
+    def test_is_serializable(self) -> None:
+        self.assertIsInstance(Page("k", 1, "a", 1.0), Serializable)
+        self.assertIsInstance(tasks.event("x"), Serializable)
+
+
+class TestTask(unittest.TestCase):
+    def test_round_trip(self) -> None:
+        task = Task(TaskType.event, "button_pressed", ["A", 2], TaskPriority.high)
+        again = Task.deserialize(task.serialize())
+        self.assertEqual(again, task)
+        self.assertIs(again.type, TaskType.event)
+        self.assertIs(again.priority, TaskPriority.high)
+
+    def test_default_val_list_is_not_shared(self) -> None:
+        a, b = Task(TaskType.event, "a"), Task(TaskType.event, "b")
+        a.val_list.append(1)
+        self.assertEqual(b.val_list, [])
+
+    def test_equality(self) -> None:
+        self.assertEqual(tasks.event("x", [1]), tasks.event("x", [1]))
+        self.assertNotEqual(tasks.event("x", [1]), tasks.event("x", [2]))
+        self.assertNotEqual(tasks.event("x"), tasks.event("y"))
+
+    def test_id(self) -> None:
+        self.assertEqual(tasks.event("go").id(), (TaskType.event, "go"))
+
+    def test_str_matches_thesis_figure(self) -> None:
+        self.assertEqual(str(tasks.event("button_pressed", ["A"])), "(event, 'button_pressed'): ['A']")
+
+
+class TestTaskType(unittest.TestCase):
+    def test_store_data_is_store_page(self) -> None:
+        self.assertIs(TaskType.store_data, TaskType.store_page)
+        self.assertEqual({(TaskType.store_data, "k"): 1}[(TaskType.store_page, "k")], 1)
+
+    def test_members(self) -> None:
+        names = {t.name for t in TaskType}
+        self.assertLessEqual({"event", "store_page", "process_data", "reload", "terminate"}, names)
+
+    def test_terminate_is_urgent(self) -> None:
+        self.assertIs(tasks.terminate("bye").priority, TaskPriority.high)
+        self.assertIs(tasks.event("x").priority, TaskPriority.normal)
+
+
+if __name__ == "__main__":
+    unittest.main()
