@@ -96,7 +96,6 @@ from snr.utils import (
 __version__ = "0.1.0"
 
 __all__ = [
-    "DEFAULT_FILTER_LENGTH",
     "AbstractComponent",
     "AbstractConfig",
     "AbstractEndpoint",
@@ -115,6 +114,7 @@ __all__ = [
     "ComponentsByRole",
     "Config",
     "ConfigError",
+    "DEFAULT_FILTER_LENGTH",
     "DataDict",
     "DataKey",
     "DummyEndpoint",

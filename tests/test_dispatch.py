@@ -2,7 +2,7 @@
 
 import random
 import unittest
-from typing import Any, Dict, List, Tuple
+from typing import Any, List, Tuple
 
 from snr import (
     Config,
@@ -17,7 +17,6 @@ from snr import (
 )
 from snr.core import HandlerTable
 from snr.utils import DummyEndpointFactory
-
 from tests.helpers import Log, RecorderFactory
 
 EV = TaskType.event
@@ -61,7 +60,9 @@ class TestTwoPhaseMatching(SNRTestCase):
 
         def reply(prefix: str) -> Any:
             return lambda task, key: (
-                [tasks.event(f"{prefix}1"), tasks.event(f"{prefix}2")] if task.name == "go" else None
+                [tasks.event(f"{prefix}1"), tasks.event(f"{prefix}2")]
+                if task.name == "go"
+                else None
             )
 
         self.run_node(
@@ -92,7 +93,12 @@ class TestTwoPhaseMatching(SNRTestCase):
         switch.keys = [(EV, "flip"), (EV, "first")]
         self.run_node(
             [switch],
-            [tasks.event("first"), tasks.event("flip"), tasks.event("first"), tasks.event("second")],
+            [
+                tasks.event("first"),
+                tasks.event("flip"),
+                tasks.event("first"),
+                tasks.event("second"),
+            ],
         )
         self.assertEqual([t[1] for _, t in log], ["first", "flip", "second"])
 
@@ -140,7 +146,9 @@ class TestHandlerTable(unittest.TestCase):
                     self.assertEqual(got, naive_match(components, task), f"trial {trial}: {task}")
 
     def test_idle_endpoints_do_not_grow_the_lookup(self) -> None:
-        node = Node("r", Config({"r": [DummyEndpointFactory("ping", [(EV, "ping")])]}, mode=Mode.TEST))
+        node = Node(
+            "r", Config({"r": [DummyEndpointFactory("ping", [(EV, "ping")])]}, mode=Mode.TEST)
+        )
         for i in range(1000):
             node.add_component(DummyEndpointFactory(f"idle{i}", [(EV, f"idle{i}")]).get(node))
         entries = node.get_task_handlers(tasks.event("ping"))

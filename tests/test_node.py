@@ -17,7 +17,6 @@ from snr import (
     Mode,
     Node,
     NodeStateError,
-    Page,
     SNRTestCase,
     SomeTasks,
     Task,
@@ -29,7 +28,6 @@ from snr import (
     tasks,
 )
 from snr.core import NodeState
-
 from tests.helpers import Log, RecorderFactory
 
 EV = TaskType.event
@@ -84,8 +82,9 @@ class Ticker(ThreadLoop):
 
 
 class TickerFactory(LoopFactory):
-    def __init__(self, rate: float = 100, name: str = "ticker", crash_after: int = 0,
-                 block: bool = False) -> None:
+    def __init__(
+        self, rate: float = 100, name: str = "ticker", crash_after: int = 0, block: bool = False
+    ) -> None:
         super().__init__()
         self.rate, self.name, self.crash_after, self.block = rate, name, crash_after, block
         self.ticks = 0
@@ -109,16 +108,29 @@ class TestPages(SNRTestCase):
             return None
 
         log: Log = []
-        node = Node("test", self.get_config([
-            RecorderFactory("watch", [TaskType.store_page, TaskType.process_data], log, check),
-            TimeoutLoopFactory(seconds=0.2),
-        ]))
+        node = Node(
+            "test",
+            self.get_config(
+                [
+                    RecorderFactory(
+                        "watch", [TaskType.store_page, TaskType.process_data], log, check
+                    ),
+                    TimeoutLoopFactory(seconds=0.2),
+                ]
+            ),
+        )
         node.store_data("depth", 3.5)
         node.store_data("quiet", 1, process=False)
         node.loop()
         # FIFO: both stores were queued first; process_data follows its page.
-        self.assertEqual(seen, [(TaskType.store_page, True), (TaskType.store_page, True),
-                                (TaskType.process_data, True)])
+        self.assertEqual(
+            seen,
+            [
+                (TaskType.store_page, True),
+                (TaskType.store_page, True),
+                (TaskType.process_data, True),
+            ],
+        )
         self.assertPage(node.get_page("depth"), "depth", 3.5, origin="test")
         self.assertEqual(node.get_data("quiet"), 1)
         self.assertIsNone(node.get_data("never_stored"))
@@ -243,16 +255,23 @@ class TestHandlerFailures(SNRTestCase):
         with self.assertRaises(HandlerError) as ctx:
             node.loop()
         text = str(ctx.exception)
-        for part in ("Boom.explode", "'boom'", "ValueError: sensor unplugged", "test_node.py",
-                     "(event, 'boom')", "[7]"):
+        for part in (
+            "Boom.explode",
+            "'boom'",
+            "ValueError: sensor unplugged",
+            "test_node.py",
+            "(event, 'boom')",
+            "[7]",
+        ):
             self.assertIn(part, text)
         self.assertIsInstance(ctx.exception.__cause__, ValueError)
         self.assertEqual(snr_threads(), [])
 
     def test_deployed_mode_logs_and_keeps_running(self) -> None:
         factory = BoomFactory()
-        node = Node("test", Config({"test": [factory, TimeoutLoopFactory(seconds=0.2)]},
-                                   mode=Mode.DEPLOYED))
+        node = Node(
+            "test", Config({"test": [factory, TimeoutLoopFactory(seconds=0.2)]}, mode=Mode.DEPLOYED)
+        )
         node.schedule([tasks.event("boom"), tasks.event("boom")])
         with self.assertLogs("snr.test", "ERROR") as logs:
             node.loop()
@@ -263,7 +282,9 @@ class TestHandlerFailures(SNRTestCase):
     def test_wrong_return_type_is_reported(self) -> None:
         for bad in (5, "text", [tasks.event("ok"), 3]):
             with self.subTest(bad=bad):
-                node = Node("test", self.get_config([BoomFactory(bad), TimeoutLoopFactory(seconds=2)]))
+                node = Node(
+                    "test", self.get_config([BoomFactory(bad), TimeoutLoopFactory(seconds=2)])
+                )
                 node.schedule(tasks.event("bad_return"))
                 with self.assertRaises(HandlerError) as ctx:
                     node.loop()
@@ -292,8 +313,9 @@ class TestHandlerFailures(SNRTestCase):
             def get(self, parent: AbstractNode) -> Sleepy:
                 return Sleepy(self, parent)
 
-        node = Node("test", self.get_config([SleepyFactory(), TimeoutLoopFactory(seconds=0.5)],
-                                            Mode.DEBUG))
+        node = Node(
+            "test", self.get_config([SleepyFactory(), TimeoutLoopFactory(seconds=0.5)], Mode.DEBUG)
+        )
         node.schedule([tasks.event("nap"), tasks.event("nap")])
         with self.assertLogs("snr.test", "WARNING") as logs:
             node.loop()
@@ -304,8 +326,10 @@ class TestHandlerFailures(SNRTestCase):
 
 class TestProfiler(SNRTestCase):
     def test_dump_lists_task_ids_and_loops(self) -> None:
-        node = Node("test", self.get_config([TickerFactory(rate=100),
-                                             TimeoutLoopFactory(seconds=0.1)], Mode.DEBUG))
+        node = Node(
+            "test",
+            self.get_config([TickerFactory(rate=100), TimeoutLoopFactory(seconds=0.1)], Mode.DEBUG),
+        )
         node.store_data("x", 1)
         node.loop()
         assert node.profiler is not None

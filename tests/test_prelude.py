@@ -46,7 +46,9 @@ class TestTask(unittest.TestCase):
         self.assertEqual(tasks.event("go").id(), (TaskType.event, "go"))
 
     def test_str_matches_thesis_figure(self) -> None:
-        self.assertEqual(str(tasks.event("button_pressed", ["A"])), "(event, 'button_pressed'): ['A']")
+        self.assertEqual(
+            str(tasks.event("button_pressed", ["A"])), "(event, 'button_pressed'): ['A']"
+        )
 
 
 class TestTaskType(unittest.TestCase):

@@ -49,9 +49,9 @@ class Component(AbstractComponent):
 
     def _check_constructor_args(self, factory: Any, parent: Any, name: Any) -> None:
         expected = "super().__init__(factory, parent, name)"
-        if isinstance(factory, AbstractFactory) and isinstance(parent, AbstractNode):
-            if isinstance(name, str) and name:
-                return  # the common case: no need to look up the source file
+        valid_name = isinstance(name, str) and bool(name)
+        if isinstance(factory, AbstractFactory) and isinstance(parent, AbstractNode) and valid_name:
+            return  # the common case: no need to look up the source file
         me = describe_class(type(self))
         if not isinstance(factory, AbstractFactory):
             raise ComponentError(

@@ -2,14 +2,13 @@
 
 from __future__ import annotations
 
-from typing import List, Optional
+from typing import Dict, List, Mapping, Optional, Sequence
 
 from snr.core.profiler import Profiler
 from snr.prelude import (
     AbstractConfig,
     AbstractFactory,
     AbstractProfiler,
-    ComponentsByRole,
     ConfigError,
     Mode,
     Role,
@@ -37,13 +36,13 @@ class Config(AbstractConfig):
 
     def __init__(
         self,
-        factories: Optional[ComponentsByRole] = None,
+        factories: Optional[Mapping[Role, Sequence[AbstractFactory]]] = None,
         mode: Mode = Mode.DEBUG,
         profile: Optional[bool] = None,
     ) -> None:
         if factories is None:
             factories = {}
-        if not isinstance(factories, dict):
+        if not isinstance(factories, Mapping):
             raise ConfigError(
                 f"Config(factories=...) got {type(factories).__name__}; it needs a dict "
                 'from role to a list of factories, e.g. {"robot": [MyFactory()]}.'
@@ -69,7 +68,9 @@ class Config(AbstractConfig):
                         f"Role {role!r} lists {fac!r}, which is not a factory (an "
                         f"EndpointFactory or LoopFactory object).{hint}"
                     )
-        self.factories: ComponentsByRole = {role: list(f) for role, f in factories.items()}
+        self.factories: Dict[Role, List[AbstractFactory]] = {
+            role: list(f) for role, f in factories.items()
+        }
         self.mode = mode
         self.profile = (mode is Mode.DEBUG) if profile is None else profile
 

@@ -176,7 +176,8 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
     """
     if not callable(handler):
         raise ComponentError(
-            f"{describe_class(owner_class)} registers {handler!r} ({type(handler).__name__}) for {key!r}, "
+            f"{describe_class(owner_class)} registers {handler!r} "
+            f"({type(handler).__name__}) for {key!r}, "
             "but a task handler must be a method, such as self.on_data. Did you "
             "call it (self.on_data()) instead of naming it (self.on_data)?"
         )

@@ -432,7 +432,8 @@ class Node(AbstractNode):
     def _build(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
         if not hasattr(factory, "reload_targets"):
             raise ComponentError(
-                f"{describe_class(type(factory))} did not call super().__init__() in its __init__. Add "
+                f"{describe_class(type(factory))} did not call super().__init__() in its "
+                "__init__. Add "
                 "`super().__init__()` (or `super().__init__(my_module)` to hot-reload "
                 "my_module) as its first line."
             )
@@ -441,7 +442,8 @@ class Node(AbstractNode):
             return None
         if not isinstance(component, AbstractComponent):
             raise ComponentError(
-                f"{describe_class(type(factory))}.get() returned {component!r} ({type(component).__name__}), "
+                f"{describe_class(type(factory))}.get() returned {component!r} "
+                f"({type(component).__name__}), "
                 "not an endpoint or loop. get() must build and return the component, "
                 "e.g. `return MyEndpoint(self, parent)`."
             )

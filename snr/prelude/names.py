@@ -14,7 +14,7 @@ layer cake).
 from __future__ import annotations
 
 import enum
-from typing import TYPE_CHECKING, Any, Callable, Dict, List, Tuple, Union
+from typing import TYPE_CHECKING, Any, Callable, Dict, List, Sequence, Tuple, Union
 
 if TYPE_CHECKING:  # pragma: no cover - only for the type checker
     from snr.prelude.abstract import AbstractFactory
@@ -136,7 +136,7 @@ TaskScheduler = Callable[[SomeTasks], None]
 DataDict = Dict[DataKey, "Page"]
 """A node's datastore: the newest page for every data key."""
 
-ComponentsByRole = Dict[Role, List["AbstractFactory"]]
+ComponentsByRole = Dict[Role, Sequence["AbstractFactory"]]
 """A whole system: for every role, the factories that build its components."""
 
 JsonValue = Any

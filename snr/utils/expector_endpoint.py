@@ -20,6 +20,10 @@ class ExpectorEndpoint(Endpoint):
 
     With ``exit_when_satisfied`` it stops the node as soon as every
     expectation has been reached.
+
+    Example::
+
+        ExpectorEndpointFactory(expector, exit_when_satisfied=True).get(node)
     """
 
     def __init__(

@@ -1,1 +1,5 @@
 """Input and output: console, recorder, replayer, controller."""
+
+from typing import List
+
+__all__: List[str] = []

@@ -12,7 +12,13 @@ __all__ = ["PrinterEndpoint", "PrinterEndpointFactory", "format_task"]
 
 
 def format_task(task: Task) -> str:
-    """``(event, 'button_pressed'): ['A']``, as in thesis figure 5.4."""
+    """One line for a task, as in thesis figure 5.4.
+
+    Example::
+
+        format_task(tasks.event("button_pressed", ["A"]))
+        # "(event, 'button_pressed'): ['A']"
+    """
     return f"({task.type.name}, {task.name!r}): {task.val_list!r}"
 
 

@@ -1,0 +1,163 @@
+"""Config, roles on the command line, Ctrl-C, and running several roles."""
+
+import contextlib
+import io
+import os
+import signal
+import subprocess
+import sys
+import textwrap
+import time
+import unittest
+
+from snr import (
+    CliRunner,
+    Config,
+    ConfigError,
+    Mode,
+    MultiProcExpector,
+    MultiProcRunner,
+    SNRTestCase,
+    SynchronousRunner,
+    TaskType,
+    TestRunner,
+    TimeoutLoopFactory,
+)
+from snr.utils import DummyEndpointFactory, ExpectorEndpointFactory, ListReplayerFactory
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+class TestConfig(unittest.TestCase):
+    def test_get_and_roles(self) -> None:
+        fac = TimeoutLoopFactory(seconds=1)
+        config = Config({"urov": [fac], "topside": [fac]})
+        self.assertEqual(config.roles(), ["urov", "topside"])
+        self.assertEqual(config.get("urov"), [fac])
+        self.assertIs(config.mode, Mode.DEBUG)
+        self.assertIsNotNone(config.get_profiler())
+        self.assertIsNone(Config({}, mode=Mode.DEPLOYED).get_profiler())
+
+    def test_unknown_role_lists_roles_and_closest(self) -> None:
+        config = Config({"urov": [TimeoutLoopFactory(seconds=1)], "topside": []})
+        with self.assertRaises(ConfigError) as ctx:
+            config.get("urv")
+        self.assertIn("'urov', 'topside'", str(ctx.exception))
+        self.assertIn("Did you mean 'urov'?", str(ctx.exception))
+
+    def test_empty_role(self) -> None:
+        with self.assertRaises(ConfigError) as ctx:
+            Config({"robot": []}).get("robot")
+        self.assertIn("no components", str(ctx.exception))
+
+    def test_not_a_factory(self) -> None:
+        with self.assertRaises(ConfigError) as ctx:
+            Config({"robot": [TimeoutLoopFactory]})  # type: ignore[list-item]
+        self.assertIn("add ()", str(ctx.exception))
+        with self.assertRaises(ConfigError):
+            Config({"robot": TimeoutLoopFactory(seconds=1)})  # type: ignore[dict-item]
+
+
+class TestCliRunner(unittest.TestCase):
+    components = {
+        "urov": [TimeoutLoopFactory(seconds=0.05)],
+        "topside": [TimeoutLoopFactory(seconds=0.05)],
+    }
+
+    def run_cli(self, argv: list) -> tuple:
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), self.assertRaises(SystemExit) as ctx:
+            CliRunner(self.components, argv).run()
+        return ctx.exception.code, err.getvalue()
+
+    def test_no_role(self) -> None:
+        code, err = self.run_cli(["main.py"])
+        self.assertEqual(code, 2)
+        self.assertIn("no role given", err)
+        self.assertIn("urov, topside", err)
+
+    def test_unknown_role(self) -> None:
+        code, err = self.run_cli(["main.py", "urv"])
+        self.assertEqual(code, 2)
+        self.assertIn("Unknown role 'urv'", err)
+        self.assertIn("Did you mean 'urov'?", err)
+
+    def test_runs_the_role(self) -> None:
+        CliRunner(self.components, ["main.py", "urov", "--mode", "test"]).run()
+
+    def test_ctrl_c_exits_cleanly(self) -> None:
+        script = textwrap.dedent(
+            """
+            import sys
+            import snr
+            components = {"robot": [snr.TimeoutLoopFactory(seconds=20)]}
+            print("ready", flush=True)
+            snr.CliRunner(components, sys.argv).run()
+            """
+        )
+        env = dict(os.environ, PYTHONPATH=ROOT)
+        proc = subprocess.Popen(
+            [sys.executable, "-c", script, "robot"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        try:
+            assert proc.stdout is not None
+            self.assertEqual(proc.stdout.readline().strip(), "ready")
+            time.sleep(0.3)
+            proc.send_signal(signal.SIGINT)
+            out, err = proc.communicate(timeout=10)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.communicate()
+        self.assertEqual(proc.returncode, 0, err)
+        self.assertIn("Interrupted by user, exiting", out)
+        self.assertNotIn("Traceback", err)
+
+
+class TestRunners(SNRTestCase):
+    def test_synchronous_runner(self) -> None:
+        runner = SynchronousRunner(
+            "r", Config({"r": [TimeoutLoopFactory(seconds=0.05)]}, mode=Mode.TEST)
+        )
+        runner.run()
+        assert runner.node is not None
+        self.assertEqual(runner.node.terminate_reason, "Timeout")
+
+    def test_test_runner_time_limit(self) -> None:
+        runner = TestRunner("test", self.get_config([DummyEndpointFactory()]), timeout_s=0.1)
+        runner.run()
+        self.assertTrue(runner.timed_out)
+
+    def test_multiproc_runner_runs_every_role(self) -> None:
+        expector = MultiProcExpector({(TaskType.store_page, "a"): 3, (TaskType.store_page, "b"): 2})
+        config = Config(
+            {
+                "one": [
+                    ListReplayerFactory([1, 2, 3], "a"),
+                    ExpectorEndpointFactory(expector),
+                    TimeoutLoopFactory(seconds=0.5),
+                ],
+                "two": [
+                    ListReplayerFactory([1, 2], "b"),
+                    ExpectorEndpointFactory(expector),
+                    TimeoutLoopFactory(seconds=0.5),
+                ],
+            },
+            mode=Mode.TEST,
+        )
+        with expector:
+            runner = MultiProcRunner(["one", "two"], config)
+            runner.run()
+        self.assertEqual(runner.exitcodes, [0, 0])
+
+    def test_multiproc_runner_unknown_role(self) -> None:
+        with self.assertRaises(ConfigError):
+            MultiProcRunner(["nope"], Config({"a": [TimeoutLoopFactory(seconds=1)]}))
+
+
+if __name__ == "__main__":
+    unittest.main()
