@@ -15,6 +15,19 @@ from snr.std_mods.filters import (
     MovingAvgFilter,
     MovingAvgFilterFactory,
 )
+from snr.std_mods.io import (
+    STEAM_CONTROLLER_BUTTONS,
+    STEAM_CONTROLLER_MAPPING,
+    ControllerLoop,
+    ControllerLoopFactory,
+    ControlProcessorEndpoint,
+    ControlProcessorFactory,
+    InputMappingEndpoint,
+    InputMappingFactory,
+    Joystick,
+    JoystickStep,
+    SimulatedJoystick,
+)
 from snr.std_mods.utils import (
     PrinterEndpoint,
     PrinterEndpointFactory,
@@ -27,11 +40,22 @@ from snr.std_mods.utils import (
 
 __all__ = [
     "DEFAULT_FILTER_LENGTH",
+    "STEAM_CONTROLLER_BUTTONS",
+    "STEAM_CONTROLLER_MAPPING",
+    "ControlProcessorEndpoint",
+    "ControlProcessorFactory",
+    "ControllerLoop",
+    "ControllerLoopFactory",
+    "InputMappingEndpoint",
+    "InputMappingFactory",
+    "Joystick",
+    "JoystickStep",
     "MovingAvgEndpoint",
     "MovingAvgFilter",
     "MovingAvgFilterFactory",
     "PrinterEndpoint",
     "PrinterEndpointFactory",
+    "SimulatedJoystick",
     "StopwatchEndpoint",
     "StopwatchEndpointFactory",
     "TimeoutLoop",
