@@ -67,6 +67,7 @@ from snr.prelude import (
 )
 from snr.std_mods import (
     DEFAULT_FILTER_LENGTH,
+    DEFAULT_JOYSTICK_SCRIPT,
     STEAM_CONTROLLER_BUTTONS,
     STEAM_CONTROLLER_MAPPING,
     ControllerLoop,
@@ -108,6 +109,7 @@ __version__ = "0.1.0"
 
 __all__ = [
     "DEFAULT_FILTER_LENGTH",
+    "DEFAULT_JOYSTICK_SCRIPT",
     "STEAM_CONTROLLER_BUTTONS",
     "STEAM_CONTROLLER_MAPPING",
     "AbstractComponent",

@@ -13,7 +13,7 @@ import importlib
 import os
 import sys
 import unittest
-from typing import Any, Optional
+from typing import Any, Dict, Optional
 
 os.environ["SDL_VIDEODRIVER"] = "dummy"  # before pygame is imported
 os.environ["SDL_AUDIODRIVER"] = "dummy"
@@ -157,11 +157,11 @@ class TestControllerLoopOnPygame(SNRTestCase):
                 ],
                 timeout_s=5,
             )
-        raw = node.get_data("raw")
+        raw: Dict[str, Any] = node.get_data("raw") or {}
         self.assertEqual(len(raw), 4 + 21 + 2)
         self.assertAlmostEqual(raw["axis_0"], 0.5, places=3)
         self.assertEqual((raw["button_2"], raw["dhat_1"]), (0, [0, 0]))
-        self.assertEqual(node.get_data("controller_data")["A"], 0)
+        self.assertEqual((node.get_data("controller_data") or {}).get("A"), 0)
 
     def test_unplugged_pad_stops_the_loop_with_a_message(self) -> None:
         sdl = loaded_sdl_library()

@@ -16,6 +16,7 @@ from snr.std_mods.filters import (
     MovingAvgFilterFactory,
 )
 from snr.std_mods.io import (
+    DEFAULT_JOYSTICK_SCRIPT,
     STEAM_CONTROLLER_BUTTONS,
     STEAM_CONTROLLER_MAPPING,
     ControllerLoop,
@@ -40,6 +41,7 @@ from snr.std_mods.utils import (
 
 __all__ = [
     "DEFAULT_FILTER_LENGTH",
+    "DEFAULT_JOYSTICK_SCRIPT",
     "STEAM_CONTROLLER_BUTTONS",
     "STEAM_CONTROLLER_MAPPING",
     "ControlProcessorEndpoint",

@@ -16,9 +16,15 @@ from snr.std_mods.io.input_mapping import (
     InputMappingEndpoint,
     InputMappingFactory,
 )
-from snr.std_mods.io.joystick import Joystick, JoystickStep, SimulatedJoystick
+from snr.std_mods.io.joystick import (
+    DEFAULT_JOYSTICK_SCRIPT,
+    Joystick,
+    JoystickStep,
+    SimulatedJoystick,
+)
 
 __all__ = [
+    "DEFAULT_JOYSTICK_SCRIPT",
     "STEAM_CONTROLLER_BUTTONS",
     "STEAM_CONTROLLER_MAPPING",
     "ControlProcessorEndpoint",

@@ -23,12 +23,12 @@ from snr.prelude import (
     AbstractNode,
     ComponentError,
     DataKey,
-    Page,
     SomeTasks,
     Task,
     TaskId,
     TaskType,
 )
+from snr.std_mods.io.input_mapping import stored_dict
 
 __all__ = [
     "BUTTON_PRESSED",
@@ -104,15 +104,14 @@ class ControlProcessorEndpoint(Endpoint):
 
     def process_input(self, task: Task, key: TaskId) -> SomeTasks:
         """Compare the new input with the previous one; one event per change."""
-        page = task.val_list[0] if task.val_list else None
-        if not isinstance(page, Page) or not isinstance(page.data, dict):
+        data = stored_dict(task)
+        if data is None:
             self.warn(
                 "Ignoring %s: expected a page whose data is a dict of buttons such as "
                 "{'A': 1, 'B': 0}, as InputMappingFactory stores.",
                 task,
             )
             return None
-        data: Dict[str, Any] = page.data
         self.check_watched_buttons_present(data)
         previous = dict(self.previous_input)
         # Update in place: the dict is shared with the factory (kept over reloads).

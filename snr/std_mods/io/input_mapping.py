@@ -29,7 +29,12 @@ from snr.prelude import (
     TaskType,
 )
 
-__all__ = ["STEAM_CONTROLLER_MAPPING", "InputMappingEndpoint", "InputMappingFactory"]
+__all__ = [
+    "STEAM_CONTROLLER_MAPPING",
+    "InputMappingEndpoint",
+    "InputMappingFactory",
+    "stored_dict",
+]
 
 STEAM_CONTROLLER_MAPPING: Dict[str, str] = {
     "button_0": "d_pad_tap",
@@ -57,6 +62,19 @@ Copy and extend it for your pad, e.g.
 """
 
 
+def stored_dict(task: Task) -> Optional[Dict[str, Any]]:
+    """The dict a store_page task carries, or None if it carries anything else.
+
+    Example::
+
+        stored_dict(tasks.store_data("controller_input", {"A": 1}))   # {'A': 1}
+    """
+    page = task.val_list[0] if task.val_list else None
+    if isinstance(page, Page) and isinstance(page.data, dict):
+        return page.data
+    return None
+
+
 class InputMappingEndpoint(Endpoint):
     """Renames the controls of each raw controller page; drops unmapped ones.
 
@@ -81,8 +99,8 @@ class InputMappingEndpoint(Endpoint):
 
     def map_raw_input(self, task: Task, key: TaskId) -> SomeTasks:
         """Store the named version of the raw controller dict."""
-        page = task.val_list[0] if task.val_list else None
-        if not isinstance(page, Page) or not isinstance(page.data, dict):
+        raw = stored_dict(task)
+        if raw is None:
             self.warn(
                 "Ignoring %s: expected a page whose data is a dict of controls such as "
                 "{'button_2': 1}, as ControllerLoop stores.",
@@ -91,7 +109,7 @@ class InputMappingEndpoint(Endpoint):
             return None
         data: Dict[str, Any] = {
             self.mapping[control]: value
-            for control, value in page.data.items()
+            for control, value in raw.items()
             if control in self.mapping
         }
         return self.store_data_task(self.output_data, data)
