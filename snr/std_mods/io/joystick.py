@@ -159,7 +159,7 @@ class SimulatedJoystick:
     21 buttons and 2 hats.
 
     Args:
-        script: the changes to play, as `JoystickStep` s or plain
+        script: the changes to play, as `JoystickStep` objects or plain
             ``(at_s, control, value)`` tuples; default `DEFAULT_JOYSTICK_SCRIPT`.
         repeat_after_s: start the script again (all controls at rest) this
             many seconds after it started; None plays it once.
