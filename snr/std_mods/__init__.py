@@ -15,6 +15,20 @@ from snr.std_mods.filters import (
     MovingAvgFilter,
     MovingAvgFilterFactory,
 )
+from snr.std_mods.io import (
+    ControlProcessorEndpoint,
+    ControlProcessorFactory,
+    ControllerLoop,
+    ControllerLoopFactory,
+    DEFAULT_JOYSTICK_SCRIPT,
+    InputMappingEndpoint,
+    InputMappingFactory,
+    Joystick,
+    JoystickStep,
+    STEAM_CONTROLLER_BUTTONS,
+    STEAM_CONTROLLER_MAPPING,
+    SimulatedJoystick,
+)
 from snr.std_mods.utils import (
     PrinterEndpoint,
     PrinterEndpointFactory,
@@ -26,12 +40,24 @@ from snr.std_mods.utils import (
 )
 
 __all__ = [
+    "ControlProcessorEndpoint",
+    "ControlProcessorFactory",
+    "ControllerLoop",
+    "ControllerLoopFactory",
     "DEFAULT_FILTER_LENGTH",
+    "DEFAULT_JOYSTICK_SCRIPT",
+    "InputMappingEndpoint",
+    "InputMappingFactory",
+    "Joystick",
+    "JoystickStep",
     "MovingAvgEndpoint",
     "MovingAvgFilter",
     "MovingAvgFilterFactory",
     "PrinterEndpoint",
     "PrinterEndpointFactory",
+    "STEAM_CONTROLLER_BUTTONS",
+    "STEAM_CONTROLLER_MAPPING",
+    "SimulatedJoystick",
     "StopwatchEndpoint",
     "StopwatchEndpointFactory",
     "TimeoutLoop",

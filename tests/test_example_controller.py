@@ -1,0 +1,124 @@
+"""examples/controller: the game controller over sockets (thesis 5.4.1, listing 5.3)."""
+
+from __future__ import annotations
+
+import contextlib
+import importlib.util
+import io
+import os
+import signal
+import socket
+import subprocess
+import sys
+import time
+import unittest
+from types import ModuleType
+from typing import Callable, List
+
+import snr
+from snr import ExpectorEndpointFactory, SimulatedJoystick, SNRTestCase, TaskType
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+EXAMPLE = os.path.join(ROOT, "examples", "controller", "main.py")
+PRESSED = (TaskType.event, "button_pressed")
+RELEASED = (TaskType.event, "button_released")
+FIGURE_5_4_LINES = [  # what the default simulated script makes the receiver print
+    f"(event, '{change}'): ['{button}']"
+    for button in ["A", "B", "X", "Y", "left_trigger", "right_trigger"]
+    for change in ["button_pressed", "button_released"]
+]
+
+
+def load_example() -> ModuleType:
+    spec = importlib.util.spec_from_file_location("controller_example", EXAMPLE)
+    assert spec is not None and spec.loader is not None
+    module = importlib.util.module_from_spec(spec)
+    spec.loader.exec_module(module)
+    return module
+
+
+def stepping_clock(step_s: float) -> Callable[[], float]:
+    """Moves ``step_s`` per read, so the script plays in a fixed number of passes."""
+    now = [0.0]
+
+    def clock() -> float:
+        now[0] += step_s
+        return now[0]
+
+    return clock
+
+
+def free_port() -> int:
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        port: int = probe.getsockname()[1]
+        return port
+
+
+class TestControllerExample(SNRTestCase):
+    def setUp(self) -> None:
+        self.example = load_example()
+
+    def test_options_go_to_the_example_and_the_role_to_the_runner(self) -> None:
+        options, rest = self.example.parse_options(
+            ["main.py", "input_device", "--simulated", "--port", "9123", "--mode", "test"]
+        )
+        self.assertEqual((options.simulated, options.port, options.seconds), (True, 9123, None))
+        self.assertEqual(rest, ["input_device", "--mode", "test"])
+
+    def test_both_pipelines_in_one_node_print_figure_5_4_lines(self) -> None:
+        # Without sockets: the input device's parts feed the receiver's directly.
+        pad = SimulatedJoystick(clock=stepping_clock(0.005))  # 0.135 s of script a pass
+        out = io.StringIO()
+        with self.expector({PRESSED: 6, RELEASED: 6}) as expector, contextlib.redirect_stdout(out):
+            self.run_test_node([
+                *self.example.input_device_parts(pad),
+                *self.example.receiver_parts(),
+                ExpectorEndpointFactory(expector, exit_when_satisfied=True),
+            ])  # fmt: skip
+        self.assertEqual(out.getvalue().splitlines(), FIGURE_5_4_LINES)
+
+    @unittest.skipUnless(hasattr(snr, "SocketsPair"), "snr.SocketsPair is not built yet")
+    def test_two_nodes_over_sockets(self) -> None:
+        """Listing 5.3 as a student runs it: two processes, as in two terminals."""
+        port = str(free_port())
+        env = dict(os.environ, PYTHONPATH=ROOT, SDL_VIDEODRIVER="dummy", SDL_AUDIODRIVER="dummy")
+        command = [sys.executable, EXAMPLE]
+        receiver = subprocess.Popen(
+            [*command, "receiver", "--port", port, "--seconds", "30"],
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env,
+        )
+        try:
+            time.sleep(0.5)  # let the server start listening first, as a student would
+            sender = subprocess.run(
+                [*command, "input_device", "--simulated", "--port", port, "--seconds", "2.2"],
+                capture_output=True,
+                text=True,
+                env=env,
+                timeout=20,
+            )
+            time.sleep(0.3)  # the last pages are on their way
+            # Stop the receiver with Ctrl-C, as in thesis figure 5.4.
+            receiver.send_signal(signal.SIGINT if os.name == "posix" else signal.SIGTERM)
+            out, err = receiver.communicate(timeout=10)
+        finally:
+            if receiver.poll() is None:
+                receiver.kill()
+                receiver.communicate()
+        self.assertEqual(sender.returncode, 0, sender.stderr)
+        self.assertEqual(receiver.returncode, 0, err)
+        printed: List[str] = [line for line in out.splitlines() if line.startswith("(event")]
+        # Presses made before the client had connected may be missed; the rest
+        # arrive in order, each printed exactly once.
+        self.assertIn("(event, 'button_pressed'): ['Y']", printed)
+        self.assertIn("(event, 'button_released'): ['Y']", printed)
+        start = FIGURE_5_4_LINES.index(printed[0])
+        self.assertEqual(printed, FIGURE_5_4_LINES[start : start + len(printed)])
+        self.assertIn("Interrupted by user, exiting", out)
+
+
+if __name__ == "__main__":
+    unittest.main()
