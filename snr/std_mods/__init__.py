@@ -16,17 +16,17 @@ from snr.std_mods.filters import (
     MovingAvgFilterFactory,
 )
 from snr.std_mods.io import (
-    ControlProcessorEndpoint,
-    ControlProcessorFactory,
+    DEFAULT_JOYSTICK_SCRIPT,
+    STEAM_CONTROLLER_BUTTONS,
+    STEAM_CONTROLLER_MAPPING,
     ControllerLoop,
     ControllerLoopFactory,
-    DEFAULT_JOYSTICK_SCRIPT,
+    ControlProcessorEndpoint,
+    ControlProcessorFactory,
     InputMappingEndpoint,
     InputMappingFactory,
     Joystick,
     JoystickStep,
-    STEAM_CONTROLLER_BUTTONS,
-    STEAM_CONTROLLER_MAPPING,
     SimulatedJoystick,
 )
 from snr.std_mods.utils import (
