@@ -9,11 +9,25 @@ Example::
     from snr.std_mods import TimeoutLoopFactory
 """
 
+from snr.std_mods.comms import SerialLinkFactory, SerialLinkLoop
 from snr.std_mods.filters import (
     DEFAULT_FILTER_LENGTH,
+    KalmanFilter,
+    KalmanFilterEndpoint,
+    KalmanFilterFactory,
     MovingAvgEndpoint,
     MovingAvgFilter,
     MovingAvgFilterFactory,
+)
+from snr.std_mods.io import (
+    PageReader,
+    RecorderEndpoint,
+    RecorderEndpointFactory,
+    ReplayerLoop,
+    ReplayerLoopFactory,
+    TextReader,
+    TextReplayerFactory,
+    TextReplayerLoop,
 )
 from snr.std_mods.utils import (
     PrinterEndpoint,
@@ -27,13 +41,26 @@ from snr.std_mods.utils import (
 
 __all__ = [
     "DEFAULT_FILTER_LENGTH",
+    "KalmanFilter",
+    "KalmanFilterEndpoint",
+    "KalmanFilterFactory",
     "MovingAvgEndpoint",
     "MovingAvgFilter",
     "MovingAvgFilterFactory",
+    "PageReader",
     "PrinterEndpoint",
     "PrinterEndpointFactory",
+    "RecorderEndpoint",
+    "RecorderEndpointFactory",
+    "ReplayerLoop",
+    "ReplayerLoopFactory",
+    "SerialLinkFactory",
+    "SerialLinkLoop",
     "StopwatchEndpoint",
     "StopwatchEndpointFactory",
+    "TextReader",
+    "TextReplayerFactory",
+    "TextReplayerLoop",
     "TimeoutLoop",
     "TimeoutLoopFactory",
     "format_task",
