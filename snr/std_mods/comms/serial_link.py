@@ -363,6 +363,9 @@ class SerialLinkLoop(ThreadLoop):
                 )
             return
         self.lines_sent += 1
+        if self._reported_send_failure:
+            self._reported_send_failure = False
+            self.info("Writing to serial port %r works again", self.link.port)
 
 
 class SerialLinkFactory(LoopFactory):
