@@ -10,7 +10,6 @@ import select
 import sys
 import threading
 import time
-import tty
 import unittest
 from typing import Any, List, Optional, Sequence
 from unittest import mock
@@ -105,6 +104,8 @@ class PtyPair:
     """A pseudo-terminal: the node opens ``path``; the test uses ``master``."""
 
     def __init__(self) -> None:
+        import tty  # POSIX only (imports termios)
+
         self.master, self.slave = os.openpty()
         tty.setraw(self.slave)  # no echo, no line editing, even before pyserial opens it
         self.path = os.ttyname(self.slave)

@@ -22,7 +22,7 @@ import collections
 import errno
 import json
 import sys
-from typing import Any, Dict, List, Optional, Sequence
+from typing import Any, List, Optional, Sequence
 
 from snr.core import LoopFactory, ThreadLoop
 from snr.prelude import (
@@ -180,7 +180,7 @@ class SerialLinkLoop(ThreadLoop):
         self._buffer = bytearray()
         self._bad_lines = 0
         self._send_keys = set(factory.send_keys)
-        self._received: Dict[int, Page] = collections.OrderedDict()
+        self._received: collections.OrderedDict[int, Page] = collections.OrderedDict()
         self._reported_send_failure = False
         self.task_handlers = {
             (TaskType.store_page, key): self.send_page for key in factory.send_keys
@@ -270,7 +270,7 @@ class SerialLinkLoop(ThreadLoop):
         if page.key in self._send_keys:  # do not send it straight back
             self._received[id(page)] = page
             if len(self._received) > _ECHO_GUARD_SIZE:
-                self._received.pop(next(iter(self._received)))
+                self._received.popitem(last=False)  # one call: safe beside pop()
         self.store_page(page)
 
     def _bad_line(self, text: str, why: str) -> None:

@@ -176,17 +176,24 @@ class RecorderEndpointFactory(EndpointFactory):
             # Kept open between pages (closed in terminate), hence no `with`.
             file = open(self.filename, mode, encoding="utf-8", newline="\n")  # noqa: SIM115
         except OSError as error:
-            folder = os.path.dirname(os.path.abspath(self.filename))
-            raise ConfigError(
-                f"{type(self).__name__} cannot open {self.filename!r} for writing: "
-                f"{error.strerror or error}. Check that the folder {folder!r} exists and "
-                "that you may write there, or choose another filename."
-            ) from error
+            raise self._cannot_write(error) from error
         if not self._started:
-            file.write(header_line() + "\n")
-            file.flush()
+            try:
+                file.write(header_line() + "\n")
+                file.flush()
+            except OSError as error:
+                file.close()
+                raise self._cannot_write(error) from error
             self._started = True
         return file
+
+    def _cannot_write(self, error: OSError) -> ConfigError:
+        folder = os.path.dirname(os.path.abspath(self.filename))
+        return ConfigError(
+            f"{type(self).__name__} cannot open {self.filename!r} for writing: "
+            f"{error.strerror or error}. Check that the folder {folder!r} exists and "
+            "that you may write there, or choose another filename."
+        )
 
     def get(self, parent: AbstractNode) -> RecorderEndpoint:
         return RecorderEndpoint(self, parent)
