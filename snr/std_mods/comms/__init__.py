@@ -1,5 +1,13 @@
-"""Communication between nodes: pipes, TCP sockets, serial links."""
+"""Communication between nodes: pipes, TCP sockets, serial links.
 
-from typing import List
+Example::
 
-__all__: List[str] = []
+    from snr.std_mods.comms import SerialLinkFactory
+"""
+
+from snr.std_mods.comms.serial_link import SerialLinkFactory, SerialLinkLoop
+
+__all__ = [
+    "SerialLinkFactory",
+    "SerialLinkLoop",
+]

@@ -2,9 +2,10 @@
 
 Example::
 
-    from snr.std_mods.filters import MovingAvgFilterFactory
+    from snr.std_mods.filters import KalmanFilterFactory, MovingAvgFilterFactory
 """
 
+from snr.std_mods.filters.kalman import KalmanFilter, KalmanFilterEndpoint, KalmanFilterFactory
 from snr.std_mods.filters.moving_average import (
     DEFAULT_FILTER_LENGTH,
     MovingAvgEndpoint,
@@ -14,6 +15,9 @@ from snr.std_mods.filters.moving_average import (
 
 __all__ = [
     "DEFAULT_FILTER_LENGTH",
+    "KalmanFilter",
+    "KalmanFilterEndpoint",
+    "KalmanFilterFactory",
     "MovingAvgEndpoint",
     "MovingAvgFilter",
     "MovingAvgFilterFactory",

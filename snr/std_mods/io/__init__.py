@@ -10,7 +10,10 @@ from snr.std_mods.io.control_processor import (
     ControlProcessorEndpoint,
     ControlProcessorFactory,
 )
-from snr.std_mods.io.controller import ControllerLoop, ControllerLoopFactory
+from snr.std_mods.io.controller import (
+    ControllerLoop,
+    ControllerLoopFactory,
+)
 from snr.std_mods.io.input_mapping import (
     STEAM_CONTROLLER_MAPPING,
     InputMappingEndpoint,
@@ -22,18 +25,38 @@ from snr.std_mods.io.joystick import (
     JoystickStep,
     SimulatedJoystick,
 )
+from snr.std_mods.io.recorder import (
+    RecorderEndpoint,
+    RecorderEndpointFactory,
+)
+from snr.std_mods.io.replayer import (
+    PageReader,
+    ReplayerLoop,
+    ReplayerLoopFactory,
+    TextReader,
+    TextReplayerFactory,
+    TextReplayerLoop,
+)
 
 __all__ = [
-    "DEFAULT_JOYSTICK_SCRIPT",
-    "STEAM_CONTROLLER_BUTTONS",
-    "STEAM_CONTROLLER_MAPPING",
     "ControlProcessorEndpoint",
     "ControlProcessorFactory",
     "ControllerLoop",
     "ControllerLoopFactory",
+    "DEFAULT_JOYSTICK_SCRIPT",
     "InputMappingEndpoint",
     "InputMappingFactory",
     "Joystick",
     "JoystickStep",
+    "PageReader",
+    "RecorderEndpoint",
+    "RecorderEndpointFactory",
+    "ReplayerLoop",
+    "ReplayerLoopFactory",
+    "STEAM_CONTROLLER_BUTTONS",
+    "STEAM_CONTROLLER_MAPPING",
     "SimulatedJoystick",
+    "TextReader",
+    "TextReplayerFactory",
+    "TextReplayerLoop",
 ]

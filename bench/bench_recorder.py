@@ -1,0 +1,125 @@
+"""What recording costs: the page codec, and a node storing pages with a recorder.
+
+1. Encoding and decoding one page: the recorder's stdlib-json lines
+   (``page_to_line`` / ``page_from_line``) against the dataclasses-json
+   ``Page.serialize()`` / ``Page.deserialize()`` baseline.
+2. A node storing N pages: without a recorder (the baseline), with a
+   recorder (one write + flush per page), and with ``sync=True`` (an fsync
+   per page; on a laptop SSD this is the slow one).
+
+Run: ``python bench/bench_recorder.py [--pages N]`` (or ``nox -s bench``).
+"""
+
+from __future__ import annotations
+
+import argparse
+import logging
+import os
+import tempfile
+import time
+from typing import Callable, List, Optional
+
+from snr import (
+    AbstractFactory,
+    AbstractNode,
+    Config,
+    Endpoint,
+    EndpointFactory,
+    Mode,
+    Node,
+    Page,
+    RecorderEndpointFactory,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskType,
+    tasks,
+)
+from snr.std_mods.io.page_lines import page_from_line, page_to_line
+
+SAMPLE = Page("imu", {"ax": 0.01, "ay": -9.81, "az": 0.2, "ok": True}, "urov", 1.7e9)
+
+
+def per_second(action: Callable[[], object], repeat: int) -> float:
+    started = time.perf_counter()
+    for _ in range(repeat):
+        action()
+    return repeat / (time.perf_counter() - started)
+
+
+class Burst(Endpoint):
+    """Schedules ``count`` pages at start; stops the node when the last is stored."""
+
+    def __init__(self, factory: BurstFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "burst")
+        self.burst = factory
+        self.task_handlers = {(TaskType.store_page, "imu"): self.on_page}
+        self.seen = 0
+
+    def begin(self) -> None:
+        self.burst.started = time.perf_counter()
+        self.schedule([self.store_data_task("imu", SAMPLE.data) for _ in range(self.burst.count)])
+
+    def on_page(self, task: Task, key: TaskId) -> SomeTasks:
+        self.seen += 1
+        if self.seen < self.burst.count:
+            return None
+        self.burst.finished = time.perf_counter()
+        return tasks.terminate("burst stored")
+
+
+class BurstFactory(EndpointFactory):
+    def __init__(self, count: int) -> None:
+        super().__init__()
+        self.count = count
+        self.started = 0.0
+        self.finished = 0.0
+
+    def get(self, parent: AbstractNode) -> Burst:
+        return Burst(self, parent)
+
+
+def node_pages_per_second(count: int, recorder: Optional[AbstractFactory]) -> float:
+    burst = BurstFactory(count)
+    factories: List[AbstractFactory] = [burst] + ([recorder] if recorder else [])
+    Node("bench", Config({"bench": factories}, mode=Mode.DEPLOYED, profile=False)).loop()
+    return count / (burst.finished - burst.started)
+
+
+def main() -> None:
+    parser = argparse.ArgumentParser(description=__doc__)
+    parser.add_argument("--pages", type=int, default=20_000)
+    args, _ = parser.parse_known_args()
+    logging.getLogger("snr.bench").setLevel(logging.WARNING)  # no "terminated" lines
+    n = args.pages
+    line = page_to_line(SAMPLE)
+    text = SAMPLE.serialize()
+
+    print(f"Page codec, {n} pages (higher is better)")
+    base_enc = per_second(SAMPLE.serialize, n)
+    base_dec = per_second(lambda: Page.deserialize(text), n)
+    enc = per_second(lambda: page_to_line(SAMPLE), n)
+    dec = per_second(lambda: page_from_line(line), n)
+    print(f"  {'':34} {'pages/s':>10} {'ratio':>7}")
+    print(f"  {'Page.serialize (baseline)':34} {base_enc:10,.0f} {1.0:7.1f}")
+    print(f"  {'page_to_line':34} {enc:10,.0f} {enc / base_enc:7.1f}")
+    print(f"  {'Page.deserialize (baseline)':34} {base_dec:10,.0f} {1.0:7.1f}")
+    print(f"  {'page_from_line':34} {dec:10,.0f} {dec / base_dec:7.1f}")
+
+    folder = tempfile.mkdtemp(prefix="snr-bench-")
+    path = os.path.join(folder, "bench.jsonl")
+    sync_n = max(1, n // 20)  # fsync is slow: fewer pages
+    print(f"\nA node storing pages, DEPLOYED mode ({n} pages; {sync_n} with fsync)")
+    plain = node_pages_per_second(n, None)
+    recorded = node_pages_per_second(n, RecorderEndpointFactory(path, ["imu"]))
+    synced = node_pages_per_second(sync_n, RecorderEndpointFactory(path, ["imu"], sync=True))
+    print(f"  {'':34} {'pages/s':>10} {'ratio':>7}")
+    print(f"  {'no recorder (baseline)':34} {plain:10,.0f} {1.0:7.2f}")
+    print(f"  {'recorder (write + flush per page)':34} {recorded:10,.0f} {recorded / plain:7.2f}")
+    print(f"  {'recorder, sync=True (fsync)':34} {synced:10,.0f} {synced / plain:7.3f}")
+    os.remove(path)
+    os.rmdir(folder)
+
+
+if __name__ == "__main__":
+    main()
