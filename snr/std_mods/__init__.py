@@ -16,9 +16,13 @@ from snr.std_mods.filters import (
     MovingAvgFilterFactory,
 )
 from snr.std_mods.io import (
+    DEFAULT_CONSOLE_PORT,
     DEFAULT_JOYSTICK_SCRIPT,
     STEAM_CONTROLLER_BUTTONS,
     STEAM_CONTROLLER_MAPPING,
+    CommandProcessorEndpoint,
+    CommandReceiverFactory,
+    CommandReceiverLoop,
     ControllerLoop,
     ControllerLoopFactory,
     ControlProcessorEndpoint,
@@ -27,6 +31,9 @@ from snr.std_mods.io import (
     InputMappingFactory,
     Joystick,
     JoystickStep,
+    LocalConsole,
+    LocalConsoleFactory,
+    RemoteConsole,
     SimulatedJoystick,
 )
 from snr.std_mods.utils import (
@@ -40,21 +47,28 @@ from snr.std_mods.utils import (
 )
 
 __all__ = [
+    "CommandProcessorEndpoint",
+    "CommandReceiverFactory",
+    "CommandReceiverLoop",
     "ControlProcessorEndpoint",
     "ControlProcessorFactory",
     "ControllerLoop",
     "ControllerLoopFactory",
+    "DEFAULT_CONSOLE_PORT",
     "DEFAULT_FILTER_LENGTH",
     "DEFAULT_JOYSTICK_SCRIPT",
     "InputMappingEndpoint",
     "InputMappingFactory",
     "Joystick",
     "JoystickStep",
+    "LocalConsole",
+    "LocalConsoleFactory",
     "MovingAvgEndpoint",
     "MovingAvgFilter",
     "MovingAvgFilterFactory",
     "PrinterEndpoint",
     "PrinterEndpointFactory",
+    "RemoteConsole",
     "STEAM_CONTROLLER_BUTTONS",
     "STEAM_CONTROLLER_MAPPING",
     "SimulatedJoystick",

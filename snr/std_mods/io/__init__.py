@@ -5,6 +5,14 @@ Example::
     from snr.std_mods.io import ControllerLoopFactory, SimulatedJoystick
 """
 
+from snr.std_mods.io.console import (
+    CommandReceiverFactory,
+    CommandReceiverLoop,
+    LocalConsole,
+    LocalConsoleFactory,
+)
+from snr.std_mods.io.console_commands import CommandProcessorEndpoint
+from snr.std_mods.io.console_protocol import DEFAULT_CONSOLE_PORT
 from snr.std_mods.io.control_processor import (
     STEAM_CONTROLLER_BUTTONS,
     ControlProcessorEndpoint,
@@ -22,11 +30,16 @@ from snr.std_mods.io.joystick import (
     JoystickStep,
     SimulatedJoystick,
 )
+from snr.std_mods.io.remote_console import RemoteConsole
 
 __all__ = [
+    "DEFAULT_CONSOLE_PORT",
     "DEFAULT_JOYSTICK_SCRIPT",
     "STEAM_CONTROLLER_BUTTONS",
     "STEAM_CONTROLLER_MAPPING",
+    "CommandProcessorEndpoint",
+    "CommandReceiverFactory",
+    "CommandReceiverLoop",
     "ControlProcessorEndpoint",
     "ControlProcessorFactory",
     "ControllerLoop",
@@ -35,5 +48,8 @@ __all__ = [
     "InputMappingFactory",
     "Joystick",
     "JoystickStep",
+    "LocalConsole",
+    "LocalConsoleFactory",
+    "RemoteConsole",
     "SimulatedJoystick",
 ]
