@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import os
+import pickle
 import socket
 import subprocess
 import sys
@@ -13,12 +14,19 @@ from unittest import mock
 
 from snr import (
     CommandReceiverFactory,
+    CommsError,
+    Config,
     ConfigError,
+    LocalConsoleFactory,
+    MockNode,
+    Mode,
+    Node,
     NodeState,
     RemoteConsole,
     TimeoutLoopFactory,
 )
 from snr.std_mods.io.console import MAX_CONSOLES
+from snr.std_mods.io.console_commands import CommandProcessorFactory
 from snr.std_mods.io.console_protocol import (
     MAX_LINE_BYTES,
     MAX_REPLY_BYTES,
@@ -177,6 +185,7 @@ class TestCommands(unittest.TestCase):
             "reload": "Usage: reload all|<component>",
             "reload timeout_lop": "Did you mean 'timeout_loop'?",
             "reload command_receiver": "part of the console",
+            "task reload command_receiver_commands": "part of the console",
             "help relaod": "Did you mean 'reload'?",
             "exit now": "takes no arguments",
             "frobnicate": "Type 'help'",
@@ -225,14 +234,18 @@ class TestRobustness(unittest.TestCase):
             # One hangs up in the middle of a command.
             with socket.create_connection((run.host, run.port), timeout=5) as rude:
                 rude.sendall(b"dump datastore\nhelp\n")
-            # One sends bytes that are not UTF-8 and a line that is far too long.
+            # One sends bytes that are not UTF-8 and a line that is far too long,
+            # between commands: every line still gets its reply, in order.
             with socket.create_connection((run.host, run.port), timeout=5) as noisy:
-                noisy.sendall(b"\xff\xfe\n" + b"x" * (MAX_LINE_BYTES * 3) + b"\nhelp\n")
-                replies = read_replies(noisy, 4)
+                too_long = b"x" * (MAX_LINE_BYTES * 3)
+                noisy.sendall(b"help\n\xff\xfe\n" + too_long + b"\n\nlist commands\n")
+                replies = read_replies(noisy, 6)
             self.assertEqual(replies[0].status, Status.HELLO)
-            self.assertIn("not UTF-8", replies[1].text)
-            self.assertIn("longer than", replies[2].text)
-            self.assertEqual(replies[3].status, Status.OK)  # help, after the garbage
+            self.assertIn("Commands (type", replies[1].text)
+            self.assertIn("not UTF-8", replies[2].text)
+            self.assertIn("longer than", replies[3].text)
+            self.assertEqual(replies[4], Reply(Status.OK, ""))
+            self.assertIn("task <type> <name>", replies[5].text)
             with run.console() as console:
                 self.assertEqual(console.send("help").status, Status.OK)
             self.assertIs(run.node.state, NodeState.RUNNING)
@@ -257,6 +270,43 @@ def _try_connect(run: NodeInThread) -> bool:
     except ConsoleConnectionError:
         return False
     return True
+
+
+class TestReceiverSetup(unittest.TestCase):
+    def test_port_in_use_is_explained(self) -> None:
+        with NodeInThread([]) as run:
+            clash = Config({"b": [CommandReceiverFactory(port=run.port)]}, mode=Mode.TEST)
+            with self.assertRaisesRegex(CommsError, "already uses this port"):
+                Node("b", clash).loop()
+
+    def test_port_in_use_when_deployed_keeps_the_node_running(self) -> None:
+        with NodeInThread([]) as run:
+            factories = [CommandReceiverFactory(port=run.port), TimeoutLoopFactory(ms=100)]
+            node = Node("b", Config({"b": factories}, mode=Mode.DEPLOYED))
+            with self.assertLogs("snr.b", "ERROR") as logs:
+                node.loop()
+            self.assertEqual(node.terminate_reason, "Timeout")
+            self.assertIn("runs on without a console", "\n".join(logs.output))
+
+    def test_factories_survive_pickling(self) -> None:
+        receiver = pickle.loads(pickle.dumps(CommandReceiverFactory(port=0)))
+        with self.assertRaisesRegex(CommsError, "not listening"):
+            receiver.wait_until_listening(0.01)
+        local = pickle.loads(pickle.dumps(LocalConsoleFactory(io.StringIO("help"))))
+        self.assertIsNone(local.stream)
+
+    def test_processor_runs_commands_without_a_real_node(self) -> None:
+        node = MockNode()
+        processor = CommandProcessorFactory("commands", "console_command:test").get(node)
+        node.components["commands"] = processor
+        self.assertIn(
+            "commands  endpoint  CommandProcessorEndpoint", processor.execute("list endpoints").text
+        )
+        reply = processor.execute("reload all")
+        self.assertEqual(reply.status, Status.ERROR)
+        self.assertIn("needs a running snr.Node", reply.text)
+        self.assertEqual(processor.execute("task event go 1").status, Status.OK)
+        self.assertEqual([str(t) for t in node.scheduled], ["(event, 'go'): [1]"])
 
 
 class TestToken(unittest.TestCase):

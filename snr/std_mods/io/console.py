@@ -21,8 +21,7 @@ import selectors
 import socket
 import sys
 import threading
-from collections import deque
-from typing import IO, Any, Deque, Dict, List, Optional, Tuple
+from typing import IO, Any, Dict, List, Optional, Tuple
 
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, CommsError, ComponentName, Mode
@@ -53,67 +52,88 @@ _POLL_S = 0.5  # the selector wakes at least this often (halt() wakes it at once
 _READ_CHUNK = 4096
 
 
-class _RemoteSession(ConsoleSession):
-    """One TCP console. The node's thread queues replies; the loop's thread sends them."""
+class _RemoteSession:
+    """One TCP console, served by the receiver loop's thread.
+
+    Every request line gets a numbered `_ReplySlot`; whoever answers it (the
+    node's thread for commands, the loop's thread for a refused line) fills
+    the slot, and replies go out in request order, so a console always knows
+    which reply answers which line.
+    """
 
     def __init__(self, sock: socket.socket, peer: str, wake: socket.socket) -> None:
         self.sock = sock
         self.peer = peer
         self.authenticated = False
         self.closed = False
-        self._bye_queued = False
+        self.leaving = False  # a BYE is due: run no more of this console's lines
         self._inbox = bytearray()
         self._skipping_long_line = False
-        self._outbox: Deque[Tuple[bytes, bool]] = deque()  # (frame, is it a BYE)
+        self._next_slot = 0  # numbers handed to requests (loop thread)
+        self._next_to_send = 0  # the reply the console waits for next (loop thread)
+        self._ready: Dict[int, Reply] = {}  # filled from any thread
         self._wake = wake
 
-    @property
-    def leaving(self) -> bool:
-        """True once a BYE is queued: no more commands run for this console."""
-        return self._bye_queued or self.closed
+    def slot(self) -> _ReplySlot:
+        """A place for the reply to the next request, in order."""
+        slot = _ReplySlot(self, self._next_slot)
+        self._next_slot += 1
+        return slot
 
-    def send(self, reply: Reply) -> None:
-        """Queue a reply (any thread; never blocks); a BYE closes after it."""
-        if self.leaving:
-            return  # a console that left, or is leaving, needs no more replies
-        self._bye_queued = reply.status is Status.BYE
-        self._outbox.append((reply.encode(), self._bye_queued))
+    def answer(self, reply: Reply) -> None:
+        """Answer the next request here, on the loop's thread."""
+        self.slot().send(reply)
+
+    def fill(self, number: int, reply: Reply) -> None:
+        """Store the reply for request ``number`` (any thread; never blocks)."""
+        if self.closed:
+            return  # the console has gone; nobody waits for this reply
+        if reply.status is Status.BYE:
+            self.leaving = True
+        self._ready[number] = reply
         try:
             self._wake.send(b"\0")
         except OSError:
-            pass  # the receiver is shutting down; it sends what is queued then
+            pass  # the receiver is shutting down (it sends what is ready then)
 
-    def take_lines(self, data: bytes) -> Tuple[List[bytes], bool]:
-        """Complete lines in ``data``, and whether an over-long line was dropped."""
+    def take_lines(self, data: bytes) -> List[Optional[bytes]]:
+        """The complete lines in ``data``, in order; None stands for a line too long."""
         self._inbox += data
-        lines: List[bytes] = []
-        dropped = False
+        lines: List[Optional[bytes]] = []
         while True:
             newline = self._inbox.find(b"\n")
             if newline < 0:
                 if len(self._inbox) > MAX_LINE_BYTES:
                     self._inbox.clear()
-                    dropped = dropped or not self._skipping_long_line
+                    if not self._skipping_long_line:
+                        lines.append(None)
                     self._skipping_long_line = True
-                return lines, dropped
+                return lines
             line = bytes(self._inbox[:newline])
             del self._inbox[: newline + 1]
             if self._skipping_long_line:  # the tail of a line already refused
                 self._skipping_long_line = False
-            elif len(line) > MAX_LINE_BYTES:
-                dropped = True
             else:
-                lines.append(line)
+                lines.append(line if len(line) <= MAX_LINE_BYTES else None)
 
     def flush(self, timeout_s: float) -> bool:
-        """Send every queued reply; False when the console is gone or has left."""
+        """Send the replies that are ready, in order; False once the console is done."""
         self.sock.settimeout(timeout_s)
-        while self._outbox:
-            frame, is_bye = self._outbox.popleft()
-            self.sock.sendall(frame)
-            if is_bye:
+        while self._next_to_send in self._ready:
+            reply = self._ready.pop(self._next_to_send)
+            self._next_to_send += 1
+            self.sock.sendall(reply.encode())
+            if reply.status is Status.BYE:
                 return False
         return not self.closed
+
+    def goodbye(self, reply: Reply, timeout_s: float) -> None:
+        """Send what is ready, then ``reply`` even if other replies never came."""
+        try:
+            if self.flush(timeout_s):
+                self.sock.sendall(reply.encode())
+        except OSError:
+            pass  # it had gone already
 
     def close(self) -> None:
         self.closed = True
@@ -121,6 +141,20 @@ class _RemoteSession(ConsoleSession):
 
     def __repr__(self) -> str:
         return f"console {self.peer}"
+
+
+class _ReplySlot(ConsoleSession):
+    """Where the reply to one request of a remote console goes."""
+
+    def __init__(self, session: _RemoteSession, number: int) -> None:
+        self.session = session
+        self.number = number
+
+    def send(self, reply: Reply) -> None:
+        self.session.fill(self.number, reply)
+
+    def __repr__(self) -> str:
+        return repr(self.session)
 
 
 class CommandReceiverLoop(ConsoleLoop):
@@ -160,6 +194,7 @@ class CommandReceiverLoop(ConsoleLoop):
             return
         self._listener = listener
         self._wake_in, self._wake_out = socket.socketpair()
+        self._wake_out.setblocking(False)  # a wake-up must never block the node's thread
         self._selector = selectors.DefaultSelector()
         self._selector.register(listener, selectors.EVENT_READ, None)
         self._selector.register(self._wake_in, selectors.EVENT_READ, None)
@@ -193,11 +228,9 @@ class CommandReceiverLoop(ConsoleLoop):
     def terminate(self) -> None:
         """Send what is queued and a goodbye to every console, then close all sockets."""
         for session in list(self._sessions.values()):
-            session.send(Reply(Status.BYE, f"Node {self.parent.role!r} is stopping."))
-            try:
-                session.flush(_GOODBYE_TIMEOUT_S)
-            except OSError:
-                pass
+            session.goodbye(
+                Reply(Status.BYE, f"Node {self.parent.role!r} is stopping."), _GOODBYE_TIMEOUT_S
+            )
             session.close()
         self._sessions.clear()
         for closable in (self._selector, self._listener, self._wake_in, self._wake_out):
@@ -239,7 +272,7 @@ class CommandReceiverLoop(ConsoleLoop):
         session = _RemoteSession(sock, f"{address[0]}:{address[1]}", self._wake_out)
         if len(self._sessions) >= MAX_CONSOLES:
             self.warn("Turned away console %s: %d are connected.", session.peer, MAX_CONSOLES)
-            session.send(Reply(Status.BYE, f"Too many consoles ({MAX_CONSOLES}) are open."))
+            session.answer(Reply(Status.BYE, f"Too many consoles ({MAX_CONSOLES}) are open."))
             self._flush(session)
             return
         self._sessions[sock] = session
@@ -248,9 +281,9 @@ class CommandReceiverLoop(ConsoleLoop):
         self.info("Console %s connected", session.peer)
         if self._token is None:
             session.authenticated = True
-            session.send(Reply(Status.HELLO, self._greeting()))
+            session.answer(Reply(Status.HELLO, self._greeting()))
         else:
-            session.send(
+            session.answer(
                 Reply(Status.AUTH, "This node needs a console token: send `auth <token>`.")
             )
 
@@ -275,36 +308,37 @@ class CommandReceiverLoop(ConsoleLoop):
         if not data:
             self._drop(session, "disconnected")
             return
-        lines, dropped = session.take_lines(data)
-        if dropped:
-            session.send(Reply(Status.ERROR, f"Ignored a line longer than {MAX_LINE_BYTES} bytes."))
-        for raw in lines:
+        for raw in session.take_lines(data):
             self._on_line(session, raw)
 
-    def _on_line(self, session: _RemoteSession, raw: bytes) -> None:
+    def _on_line(self, session: _RemoteSession, raw: Optional[bytes]) -> None:
         if session.leaving:
             return  # after `exit` or a refused token, later lines are not run
+        if raw is None:
+            message = f"Ignored a line longer than {MAX_LINE_BYTES} bytes."
+            session.answer(Reply(Status.ERROR, message))
+            return
         try:
             line = raw.decode("utf-8").strip()
         except UnicodeDecodeError:
-            session.send(Reply(Status.ERROR, "Ignored a line that is not UTF-8 text."))
+            session.answer(Reply(Status.ERROR, "Ignored a line that is not UTF-8 text."))
             return
         if not session.authenticated:
             self._authenticate(session, line)
         elif not line:
-            session.send(Reply(Status.OK, ""))
+            session.answer(Reply(Status.OK, ""))
         else:
-            self.submit(line, session)
+            self.submit(line, session.slot())
 
     def _authenticate(self, session: _RemoteSession, line: str) -> None:
         assert self._token is not None
         word, _, given = line.partition(" ")
         if word == "auth" and tokens_match(self._token, given.strip()):
             session.authenticated = True
-            session.send(Reply(Status.HELLO, self._greeting()))
+            session.answer(Reply(Status.HELLO, self._greeting()))
             return
         self.warn("Console %s gave a wrong or no token; disconnected it.", session.peer)
-        session.send(
+        session.answer(
             Reply(
                 Status.BYE,
                 "Wrong or missing console token. Give the node's token with "
@@ -508,6 +542,9 @@ class LocalConsole(ConsoleLoop):
         line, newline, self._pending = self._pending.partition("\n")
         if not newline:
             self._pending = line
+            if len(line) > MAX_LINE_BYTES:  # not a command: binary data piped in?
+                self._pending = ""
+                self.session.send(Reply(Status.ERROR, "Ignored an over-long line."))
             return ""
         return line[:MAX_LINE_BYTES]
 

@@ -242,6 +242,8 @@ class CommandProcessorEndpoint(Endpoint):
         if task_type is TaskType.terminate:
             return tasks.terminate(f"{name} {rest}".strip())
         if task_type is TaskType.reload:
+            if name != "all":
+                self._check_reloadable(self._full_node("task reload"), name)
             return tasks.reload_component(name)
         values = parse_values(rest)
         if task_type is TaskType.event:
@@ -325,7 +327,7 @@ class CommandProcessorEndpoint(Endpoint):
         if choice == "commands":
             return _ok(_commands_table())
         lines = [f"Components of node {self.parent.role!r} ({len(self.parent.components)}):"]
-        width = max(len(name) for name in self.parent.components)
+        width = max((len(name) for name in self.parent.components), default=0)
         for name, component in self.parent.components.items():
             lines.append(f"  {name:<{width}}  {_describe_component(component)}")
         return _ok("\n".join(lines))

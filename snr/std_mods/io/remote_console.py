@@ -33,7 +33,14 @@ from snr.std_mods.io.console_protocol import (
     parse_address,
 )
 
-__all__ = ["EXIT_CONNECTION", "EXIT_OK", "EXIT_USAGE", "RemoteConsole", "main"]
+__all__ = [
+    "EXIT_CONNECTION",
+    "EXIT_INTERRUPTED",
+    "EXIT_OK",
+    "EXIT_USAGE",
+    "RemoteConsole",
+    "main",
+]
 
 EXIT_OK = 0
 """Exit code: the session ended normally (``quit``, end of input, or ``exit``)."""
@@ -43,6 +50,9 @@ EXIT_CONNECTION = 1
 
 EXIT_USAGE = 2
 """Exit code: the command line was wrong."""
+
+EXIT_INTERRUPTED = 130
+"""Exit code: Ctrl-C while waiting for the node (the shell's convention)."""
 
 _LEAVE_WORDS = ("quit", "q")
 
@@ -356,6 +366,9 @@ def main(
     except ConsoleConnectionError as error:
         _say(err, f"snr-console: {error}")
         return EXIT_CONNECTION
+    except KeyboardInterrupt:  # while waiting for a reply: leave (the node keeps running)
+        _say(err, "\nsnr-console: interrupted.")
+        return EXIT_INTERRUPTED
     finally:
         console.close()
 
