@@ -3,6 +3,7 @@
 Commands::
 
     python -m snr demo [--seconds N]   run the demo system (no hardware needed)
+    python -m snr console HOST:PORT    type commands into a running node (snr-console)
     python -m snr version              print the installed version
 """
 
@@ -15,6 +16,7 @@ import sys
 from typing import List, Optional, Sequence
 
 import snr
+import snr.console
 
 __all__ = ["main"]
 
@@ -50,8 +52,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     demo_parser = sub.add_parser("demo", help="run the demo system of nodes")
     demo_parser.add_argument("--seconds", type=float, default=15.0, help="how long to run")
+    sub.add_parser("console", help="type commands into a running node (same as snr-console)")
     sub.add_parser("version", help="print the SNR version")
-    args = parser.parse_args(argv)
+    words = list(sys.argv[1:] if argv is None else argv)
+    if words[:1] == ["console"]:  # its own options, e.g. --token, go to snr-console
+        return snr.console.main(words[1:])
+    args = parser.parse_args(words)
     if args.command == "demo":
         return demo(args.seconds)
     if args.command == "version":

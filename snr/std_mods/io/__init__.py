@@ -5,6 +5,18 @@ Example::
     from snr.std_mods.io import ControllerLoopFactory, SimulatedJoystick
 """
 
+from snr.std_mods.io.console import (
+    CommandReceiverFactory,
+    CommandReceiverLoop,
+    LocalConsole,
+    LocalConsoleFactory,
+)
+from snr.std_mods.io.console_commands import (
+    CommandProcessorEndpoint,
+)
+from snr.std_mods.io.console_protocol import (
+    DEFAULT_CONSOLE_PORT,
+)
 from snr.std_mods.io.control_processor import (
     STEAM_CONTROLLER_BUTTONS,
     ControlProcessorEndpoint,
@@ -29,6 +41,9 @@ from snr.std_mods.io.recorder import (
     RecorderEndpoint,
     RecorderEndpointFactory,
 )
+from snr.std_mods.io.remote_console import (
+    RemoteConsole,
+)
 from snr.std_mods.io.replayer import (
     PageReader,
     ReplayerLoop,
@@ -39,18 +54,25 @@ from snr.std_mods.io.replayer import (
 )
 
 __all__ = [
+    "CommandProcessorEndpoint",
+    "CommandReceiverFactory",
+    "CommandReceiverLoop",
     "ControlProcessorEndpoint",
     "ControlProcessorFactory",
     "ControllerLoop",
     "ControllerLoopFactory",
+    "DEFAULT_CONSOLE_PORT",
     "DEFAULT_JOYSTICK_SCRIPT",
     "InputMappingEndpoint",
     "InputMappingFactory",
     "Joystick",
     "JoystickStep",
+    "LocalConsole",
+    "LocalConsoleFactory",
     "PageReader",
     "RecorderEndpoint",
     "RecorderEndpointFactory",
+    "RemoteConsole",
     "ReplayerLoop",
     "ReplayerLoopFactory",
     "STEAM_CONTROLLER_BUTTONS",

@@ -1,0 +1,515 @@
+"""`CommandProcessorEndpoint`: runs console commands on the node's own thread.
+
+A console (remote over TCP, or local on stdin) never touches the node itself:
+it turns each line the user typed into a command task, and this endpoint runs
+the command in a task handler, on the node's thread, then hands the reply to
+the console's `ConsoleSession`. Thesis 6.4.3 lists the commands::
+
+    exit                            stop the node (and the console)
+    task <type> <name> [values...]  schedule a task
+    reload all|<component>          reload source code from disk, keep factory state
+    list commands|endpoints         what you can type / what the node runs
+    dump profiler|datastore         handler timings / the newest page of every key
+    help [command]                  the commands, or one command in detail
+
+Consoles are `ConsoleLoop` subclasses: each adds its own processor when it
+begins, so several consoles never run one command twice.
+
+Example::
+
+    config = Config({"robot": [MyFactory(), CommandReceiverFactory()]})
+"""
+
+from __future__ import annotations
+
+import contextlib
+import logging
+import time
+from abc import ABC, abstractmethod
+from dataclasses import dataclass
+from typing import Any, Callable, Dict, Iterator, List, Tuple
+
+from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, tasks
+from snr.prelude import (
+    AbstractComponent,
+    AbstractFactory,
+    AbstractNode,
+    ComponentName,
+    Page,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskName,
+    TaskType,
+)
+from snr.prelude.errors import closest_match
+from snr.std_mods.io.console_protocol import Reply, Status, parse_values, split_command
+
+__all__ = [
+    "COMMANDS",
+    "CommandProcessorEndpoint",
+    "CommandProcessorFactory",
+    "ConsoleLoop",
+    "ConsoleSession",
+]
+
+
+@dataclass(frozen=True)
+class CommandHelp:
+    """How to type one command, and what it does (for ``help``)."""
+
+    usage: str
+    summary: str
+    details: str = ""
+
+
+COMMANDS: Dict[str, CommandHelp] = {
+    "exit": CommandHelp("exit", "Stop the node and close this console."),
+    "task": CommandHelp(
+        "task <type> <name> [values...]",
+        "Schedule a task on the node.",
+        "Types: event, store_page (alias store_data), process_data, reload, terminate.\n"
+        'Values are JSON where they parse (1, 2.5, true, null, "two words", [1, 2],\n'
+        '{"k": 1}), otherwise plain words (A, hello). Examples:\n'
+        "  task event button_pressed A\n"
+        "  task store_page depth_m 3.2\n"
+        "  task terminate done",
+    ),
+    "reload": CommandHelp(
+        "reload all|<component>",
+        "Reload a component's code from disk; its factory's state is kept.",
+        "`reload all` reloads every component whose factory names modules to reload\n"
+        "(super().__init__(my_module)). If the new code fails to load (a syntax error,\n"
+        "an exception), the old version keeps running and the reply says why.",
+    ),
+    "list": CommandHelp(
+        "list commands|endpoints", "List these commands, or the node's components."
+    ),
+    "dump": CommandHelp(
+        "dump profiler|datastore",
+        "Show handler timings, or the newest page of every key.",
+    ),
+    "help": CommandHelp("help [command]", "Show the commands, or one command in detail."),
+}
+"""Every console command, in the order ``help`` lists them."""
+
+_LIST_CHOICES = ["commands", "endpoints"]
+_DUMP_CHOICES = ["profiler", "datastore"]
+_VALUE_PREVIEW_CHARS = 120
+
+
+class ConsoleSession(ABC):
+    """One console the node is talking to: where a command's reply goes.
+
+    ``send`` is called on the node's thread, so it must be quick and must
+    never block or raise, even when the console has gone away.
+
+    Example::
+
+        class PrintSession(ConsoleSession):
+            def send(self, reply: Reply) -> None:
+                print(reply.text)
+    """
+
+    @abstractmethod
+    def send(self, reply: Reply) -> None:
+        """Deliver ``reply`` to the console (a ``BYE`` reply also closes it)."""
+
+
+@dataclass
+class _Outcome:
+    status: Status
+    text: str
+    tasks: SomeTasks = None
+
+
+class _CommandFailed(Exception):
+    """A command cannot run as typed; the message is the reply."""
+
+
+def _ok(text: str, follow_up: SomeTasks = None) -> _Outcome:
+    return _Outcome(Status.OK, text, follow_up)
+
+
+class CommandProcessorEndpoint(Endpoint):
+    """Runs console command lines in a task handler and replies to the console.
+
+    Its consoles schedule ``Task(TaskType.event, <its task name>, [line,
+    session])``; you do not build it yourself: `CommandReceiverFactory` and
+    `LocalConsoleFactory` add one to the node. A failing command is reported
+    to the console and logged; it never stops the node.
+
+    Example::
+
+        processor.execute("task event beep")   # Reply(Status.OK, "Scheduled ...")
+    """
+
+    def __init__(
+        self, factory: CommandProcessorFactory, parent: AbstractNode, task_name: TaskName
+    ) -> None:
+        super().__init__(factory, parent, factory.name)
+        self.task_handlers = {(TaskType.event, task_name): self.on_command}
+        self._commands: Dict[str, Callable[[str], _Outcome]] = {
+            "exit": self.cmd_exit,
+            "task": self.cmd_task,
+            "reload": self.cmd_reload,
+            "list": self.cmd_list,
+            "dump": self.cmd_dump,
+            "help": self.cmd_help,
+        }
+        self._current_session = "console"
+
+    # -- the task handler ---------------------------------------------------
+    def on_command(self, task: Task, key: TaskId) -> SomeTasks:
+        """Run the command line in the task and send the reply to its session."""
+        if len(task.val_list) != 2 or not isinstance(task.val_list[1], ConsoleSession):
+            self.warn(
+                "Dropped a console command task with values %r: expected [line, session]. "
+                "Consoles build these tasks; to run a command yourself, type it in "
+                "snr-console.",
+                task.val_list,
+            )
+            return None
+        line, session = task.val_list
+        self._current_session = str(session)
+        outcome = self._run(str(line))
+        session.send(Reply(outcome.status, outcome.text))
+        return outcome.tasks
+
+    def execute(self, line: str) -> Reply:
+        """Run one command line now and return the reply (on the node's thread).
+
+        Tasks the command asks for (e.g. ``task event go``) are scheduled.
+        """
+        outcome = self._run(line)
+        self.schedule(outcome.tasks)
+        return Reply(outcome.status, outcome.text)
+
+    def _run(self, line: str) -> _Outcome:
+        word, args = split_command(line)
+        if not word:
+            return _ok("")
+        command = self._commands.get(word)
+        if command is None:
+            guess = closest_match(word, self._commands)
+            hint = f" Did you mean {guess!r}?" if guess else ""
+            return _Outcome(
+                Status.ERROR,
+                f"Unknown command {word!r}.{hint} Type 'help' to see the commands.",
+            )
+        try:
+            return command(args)
+        except _CommandFailed as refused:
+            return _Outcome(Status.ERROR, str(refused))
+        except Exception as error:  # a broken command must not stop the robot
+            self.log.exception("Console command %r failed", line)
+            return _Outcome(
+                Status.ERROR,
+                f"{word!r} failed inside the node: {type(error).__name__}: {error}. "
+                "The node keeps running; its log has the details.",
+            )
+
+    # -- commands -------------------------------------------------------------
+    def cmd_exit(self, args: str) -> _Outcome:
+        """``exit``: stop the node; the console is closed after the reply."""
+        _no_arguments("exit", args)
+        reason = f"exit command from {self._current_session}"
+        return _Outcome(
+            Status.BYE,
+            f"Stopping node {self.parent.role!r}. Bye.",
+            tasks.terminate(reason),
+        )
+
+    def cmd_task(self, args: str) -> _Outcome:
+        """``task <type> <name> [values...]``: schedule a task."""
+        words = args.split(None, 2)
+        if len(words) < 2:
+            raise _CommandFailed(
+                f"Usage: {COMMANDS['task'].usage}, e.g. `task event button_pressed A`. "
+                f"Types: {', '.join(TaskType.__members__)}."
+            )
+        task = self._build_task(words[0], words[1], words[2] if len(words) == 3 else "")
+        return _ok(f"Scheduled {_describe_task(task)}", task)
+
+    def _build_task(self, type_word: str, name: str, rest: str) -> Task:
+        task_type = TaskType.__members__.get(type_word.lower())
+        if task_type is None:
+            guess = closest_match(type_word.lower(), TaskType.__members__)
+            hint = f" Did you mean {guess!r}?" if guess else ""
+            raise _CommandFailed(
+                f"Unknown task type {type_word!r}.{hint} Types: {', '.join(TaskType.__members__)}."
+            )
+        if task_type is TaskType.terminate:
+            return tasks.terminate(f"{name} {rest}".strip())
+        if task_type is TaskType.reload:
+            if name != "all":
+                self._check_reloadable(self._full_node("task reload"), name)
+            return tasks.reload_component(name)
+        values = parse_values(rest)
+        if task_type is TaskType.event:
+            return tasks.event(name, values)
+        if len(values) != 1:
+            raise _CommandFailed(
+                f"`task {type_word} {name}` needs exactly one value (the data), got "
+                f"{len(values)}. Write e.g. `task {type_word} {name} 3.2`, or "
+                f"`task {type_word} {name} [1, 2]` for a list."
+            )
+        if task_type is TaskType.store_page:
+            return tasks.store_data(name, values[0])
+        return tasks.process_data(self.parent.page(name, values[0]))
+
+    def cmd_reload(self, args: str) -> _Outcome:
+        """``reload all|<component>``: hot-reload source code, keep factory state."""
+        target = args.strip()
+        if not target or len(target.split()) != 1:
+            raise _CommandFailed(
+                f"Usage: {COMMANDS['reload'].usage}. Components: {self._component_names()}."
+            )
+        node = self._full_node("reload")
+        if target == "all":
+            names = [
+                name
+                for name, component in node.components.items()
+                if component.factory.reload_targets and not _is_console_part(component)
+            ]
+            if not names:
+                return _ok(
+                    "Nothing to reload: no component's factory names modules to reload. "
+                    "Pass the module to the factory, e.g. `super().__init__(my_module)`."
+                )
+        else:
+            self._check_reloadable(node, target)
+            names = [target]
+        results = [self._reload_one(node, name) for name in names]
+        failed = [message for ok, message in results if not ok]
+        if len(results) == 1:
+            text = results[0][1]
+        else:
+            text = f"Reloaded {len(results) - len(failed)} of {len(results)} components:\n"
+            text += "\n".join("  " + message for _, message in results)
+        return _Outcome(Status.ERROR if failed else Status.OK, text)
+
+    def _check_reloadable(self, node: Node, name: ComponentName) -> None:
+        component = node.components.get(name)
+        if component is None:
+            guess = closest_match(name, node.components)
+            hint = f" Did you mean {guess!r}?" if guess else ""
+            raise _CommandFailed(
+                f"No component named {name!r} in node {node.role!r}.{hint} "
+                f"Components: {self._component_names()}."
+            )
+        if _is_console_part(component):
+            raise _CommandFailed(
+                f"{name!r} is part of the console, which cannot reload itself while it "
+                "carries this command. Restart the node to load new console code."
+            )
+
+    def _reload_one(self, node: Node, name: ComponentName) -> Tuple[bool, str]:
+        has_modules = bool(node.components[name].factory.reload_targets)
+        with _logged_errors(node.log) as errors:
+            rebuilt = node.reload_component(name)
+        if not rebuilt:
+            return False, "\n".join(errors) or (
+                f"Reloading {name!r} failed, so the old version keeps running. "
+                "The node's log says why."
+            )
+        if not has_modules:
+            return True, (
+                f"Rebuilt {name!r} from its factory, but the factory names no modules to "
+                "reload, so the code is unchanged. To hot-reload it, pass its module to the "
+                "factory: `super().__init__(my_module)`."
+            )
+        return True, f"Reloaded {name!r}; its factory (and the state it keeps) is the same."
+
+    def cmd_list(self, args: str) -> _Outcome:
+        """``list commands|endpoints``."""
+        choice = _one_choice("list", args, _LIST_CHOICES)
+        if choice == "commands":
+            return _ok(_commands_table())
+        lines = [f"Components of node {self.parent.role!r} ({len(self.parent.components)}):"]
+        width = max((len(name) for name in self.parent.components), default=0)
+        for name, component in self.parent.components.items():
+            lines.append(f"  {name:<{width}}  {_describe_component(component)}")
+        return _ok("\n".join(lines))
+
+    def cmd_dump(self, args: str) -> _Outcome:
+        """``dump profiler|datastore``."""
+        choice = _one_choice("dump", args, _DUMP_CHOICES)
+        if choice == "profiler":
+            profiler = self.parent.profiler
+            if profiler is None:
+                return _ok(
+                    f"Profiling is off for node {self.parent.role!r}. Turn it on with "
+                    "Config(..., profile=True); it is on by default in Mode.DEBUG."
+                )
+            return _ok(profiler.dump())
+        datastore = self._full_node("dump datastore").datastore
+        if not datastore:
+            return _ok(f"The datastore of node {self.parent.role!r} is empty.")
+        now = time.time()
+        width = max(len(key) for key in datastore)
+        count = f"{len(datastore)} key{'s' if len(datastore) != 1 else ''}"
+        lines = [f"Datastore of node {self.parent.role!r} ({count}):"]
+        for key in sorted(datastore):
+            page = datastore[key]
+            age_s = max(0.0, now - page.created_at_s)
+            lines.append(
+                f"  {key:<{width}} = {_preview(page.data)}  "
+                f"(from {page.origin!r}, {age_s:.1f} s ago)"
+            )
+        return _ok("\n".join(lines))
+
+    def cmd_help(self, args: str) -> _Outcome:
+        """``help [command]``."""
+        topic = args.strip().lower()
+        if not topic:
+            return _ok("Commands (type `help <command>` for details):\n" + _commands_table())
+        entry = COMMANDS.get(topic)
+        if entry is None:
+            guess = closest_match(topic, COMMANDS)
+            hint = f" Did you mean {guess!r}?" if guess else ""
+            raise _CommandFailed(
+                f"There is no command {topic!r}.{hint} Commands: {', '.join(COMMANDS)}."
+            )
+        text = f"{entry.usage}\n  {entry.summary}"
+        if entry.details:
+            text += "\n" + "\n".join("  " + line for line in entry.details.splitlines())
+        return _ok(text)
+
+    # -- helpers ----------------------------------------------------------------
+    def _full_node(self, command: str) -> Node:
+        if not isinstance(self.parent, Node):
+            raise _CommandFailed(
+                f"{command!r} needs a running snr.Node; this component's parent is a "
+                f"{type(self.parent).__name__}."
+            )
+        return self.parent
+
+    def _component_names(self) -> str:
+        return ", ".join(self.parent.components)
+
+
+class CommandProcessorFactory(EndpointFactory):
+    """Builds a `CommandProcessorEndpoint` (consoles add one for themselves).
+
+    Example::
+
+        tasks.add_component(CommandProcessorFactory("console_commands", "console:console"))
+    """
+
+    def __init__(self, name: ComponentName, task_name: TaskName) -> None:
+        super().__init__()
+        self.name = name
+        self.task_name = task_name
+
+    def get(self, parent: AbstractNode) -> CommandProcessorEndpoint:
+        return CommandProcessorEndpoint(self, parent, self.task_name)
+
+
+class ConsoleLoop(ThreadLoop):
+    """Base of the consoles: adds a processor at ``begin`` and submits lines to it.
+
+    Subclasses read lines in ``loop()`` and call ``self.submit(line, session)``.
+
+    Example::
+
+        class MyConsole(ConsoleLoop):
+            def loop(self) -> None:
+                self.submit(read_a_line(), self.session)
+    """
+
+    def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:
+        super().__init__(factory, parent, name)
+        self.processor_name = f"{name}_commands"
+        self.command_task_name = f"console_command:{name}"
+
+    def begin(self) -> None:
+        """Ask the node to add this console's processor (if it has none yet).
+
+        The add task is queued before any command this loop can submit, so
+        the processor exists by the time the first command runs.
+        """
+        if self.processor_name not in self.parent.components:
+            factory = CommandProcessorFactory(self.processor_name, self.command_task_name)
+            self.schedule(tasks.add_component(factory))
+
+    def submit(self, line: str, session: ConsoleSession) -> None:
+        """Queue a command line; the processor replies to ``session``."""
+        self.schedule(Task(TaskType.event, self.command_task_name, [line, session]))
+
+
+# -- module helpers ---------------------------------------------------------------
+def _is_console_part(component: AbstractComponent) -> bool:
+    return isinstance(component, (ConsoleLoop, CommandProcessorEndpoint))
+
+
+def _no_arguments(command: str, args: str) -> None:
+    if args.strip():
+        raise _CommandFailed(f"{command!r} takes no arguments; got {args.strip()!r}.")
+
+
+def _one_choice(command: str, args: str, choices: List[str]) -> str:
+    choice = args.strip().lower()
+    if choice in choices:
+        return choice
+    usage = f"Usage: {command} {'|'.join(choices)}."
+    if not choice:
+        raise _CommandFailed(usage)
+    guess = closest_match(choice, choices)
+    hint = f" Did you mean `{command} {guess}`?" if guess else ""
+    raise _CommandFailed(f"{command!r} cannot show {choice!r}.{hint} {usage}")
+
+
+def _commands_table() -> str:
+    width = max(len(entry.usage) for entry in COMMANDS.values())
+    return "\n".join(f"  {e.usage:<{width}}  {e.summary}" for e in COMMANDS.values())
+
+
+def _describe_component(component: AbstractComponent) -> str:
+    kind = "loop" if isinstance(component, ThreadLoop) else "endpoint"
+    text = f"{kind:<8}  {type(component).__name__}"
+    if isinstance(component, ThreadLoop):
+        text += f" ({component.state.value})"
+    modules = [m.__name__ for m in component.factory.reload_targets]
+    if modules:
+        text += f"  reloads: {', '.join(modules)}"
+    return text
+
+
+def _describe_task(task: Task) -> str:
+    """A task as typed: ``(store_page, 'depth'): 3.2`` rather than a whole Page."""
+    if task.val_list and isinstance(task.val_list[0], Page):
+        return f"({task.type.name}, {task.name!r}): {_preview(task.val_list[0].data)}"
+    return str(task)
+
+
+def _preview(data: Any) -> str:
+    text = repr(data)
+    if len(text) > _VALUE_PREVIEW_CHARS:
+        text = text[: _VALUE_PREVIEW_CHARS - 3] + "..."
+    return text
+
+
+class _ErrorCollector(logging.Handler):
+    def __init__(self, into: List[str]) -> None:
+        super().__init__(logging.ERROR)
+        self.into = into
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.into.append(record.getMessage())
+
+
+@contextlib.contextmanager
+def _logged_errors(log: logging.Logger) -> Iterator[List[str]]:
+    """The error messages ``log`` (and its children) emit inside the block.
+
+    The node reports a failed reload in its log; this lets the console quote
+    the reason back to the user without changing the node.
+    """
+    messages: List[str] = []
+    collector = _ErrorCollector(messages)
+    log.addHandler(collector)
+    try:
+        yield messages
+    finally:
+        log.removeHandler(collector)

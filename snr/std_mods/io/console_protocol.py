@@ -1,0 +1,326 @@
+"""The console protocol: how a console and a node talk, and who may talk.
+
+Shared by the node side (`CommandReceiverFactory`) and the client
+(`RemoteConsole`); the full description is in ``docs/console.md``.
+
+* Console → node: one request per line of UTF-8 text ending in ``\\n``, at
+  most `MAX_LINE_BYTES` bytes.
+* Node → console: a *reply frame*: a header line
+  ``snr-console/1 <status> <length>\\n`` and then exactly ``<length>`` bytes of
+  UTF-8 text. The status is one of `Status`; ``bye`` means the node closes
+  the connection after this frame.
+
+Example::
+
+    Reply(Status.OK, "pong").encode()      # b'snr-console/1 ok 4\\npong'
+    decoder = ReplyDecoder()
+    decoder.feed(b"snr-console/1 ok 4\\npong")   # [Reply(Status.OK, 'pong')]
+"""
+
+from __future__ import annotations
+
+import enum
+import hmac
+import ipaddress
+import json
+from dataclasses import dataclass
+from typing import Any, List, Optional, Tuple
+
+from snr.prelude import CommsError, ConfigError, WireFormatError
+
+__all__ = [
+    "DEFAULT_CONSOLE_PORT",
+    "MAX_LINE_BYTES",
+    "MAX_REPLY_BYTES",
+    "PROTOCOL",
+    "TOKEN_ENV_VAR",
+    "ConsoleConnectionError",
+    "Reply",
+    "ReplyDecoder",
+    "Status",
+    "check_listen_policy",
+    "is_loopback",
+    "parse_address",
+    "parse_values",
+    "split_command",
+    "tokens_match",
+]
+
+PROTOCOL = "snr-console/1"
+"""Name and version of the protocol; the first word of every reply header."""
+
+DEFAULT_CONSOLE_PORT = 9123
+"""The TCP port a `CommandReceiverFactory` listens on unless told otherwise."""
+
+MAX_LINE_BYTES = 4096
+"""Longest request line the node accepts (without its ``\\n``)."""
+
+MAX_REPLY_BYTES = 1 << 20
+"""Longest reply body the node sends; longer replies are cut with a note."""
+
+_MAX_HEADER_BYTES = 64
+_TRUNCATION_ROOM = 256  # the "(reply cut)" note added to a reply at the limit
+
+TOKEN_ENV_VAR = "SNR_CONSOLE_TOKEN"
+"""Environment variable holding the shared console token (node and console)."""
+
+
+class ConsoleConnectionError(CommsError):
+    """A console could not connect to a node, lost it, or was turned away.
+
+    Example::
+
+        try:
+            RemoteConsole("127.0.0.1", 9123).connect()
+        except ConsoleConnectionError as e:
+            print(e)     # "Could not connect ... connection refused. Is the node running..."
+    """
+
+
+class Status(enum.Enum):
+    """What kind of reply a frame is.
+
+    Example::
+
+        Reply(Status.ERROR, "Unknown command 'relaod'.")
+
+    Members:
+        HELLO: greeting after connecting; commands may follow.
+        AUTH: greeting of a node that needs a token: send ``auth <token>`` first.
+        OK: the command worked; the text says what happened.
+        ERROR: the command was refused or failed; the text says why.
+        BYE: the node closes the connection after this frame.
+    """
+
+    HELLO = "hello"
+    AUTH = "auth"
+    OK = "ok"
+    ERROR = "error"
+    BYE = "bye"
+
+
+@dataclass(frozen=True)
+class Reply:
+    """One reply frame: a status and readable text.
+
+    Example::
+
+        Reply(Status.OK, "Reloaded 'counter'.").encode()
+    """
+
+    status: Status
+    text: str
+
+    def encode(self) -> bytes:
+        """The frame's bytes; a body over `MAX_REPLY_BYTES` is cut with a note."""
+        body = self.text.encode("utf-8")
+        if len(body) > MAX_REPLY_BYTES:
+            kept = body[:MAX_REPLY_BYTES].decode("utf-8", errors="ignore")
+            cut = len(body) - len(kept.encode("utf-8"))
+            body = f"{kept}\n... (reply cut: {cut} more bytes)".encode()
+        return f"{PROTOCOL} {self.status.value} {len(body)}\n".encode("ascii") + body
+
+
+class ReplyDecoder:
+    """Turns the bytes a console receives into `Reply` frames.
+
+    Feed it whatever ``recv`` returned; it keeps partial frames until the rest
+    arrives.
+
+    Example::
+
+        decoder = ReplyDecoder()
+        decoder.feed(b"snr-console/1 ok 5\\nhel")   # [] (waiting for the rest)
+        decoder.feed(b"lo")                          # [Reply(Status.OK, 'hello')]
+    """
+
+    def __init__(self) -> None:
+        self._buffer = bytearray()
+        self._header: Optional[Tuple[Status, int]] = None
+
+    def feed(self, data: bytes) -> List[Reply]:
+        """Every reply completed by ``data``.
+
+        Raises:
+            WireFormatError: the bytes are not this protocol (wrong header,
+                unknown status, oversized frame, or text that is not UTF-8).
+        """
+        self._buffer += data
+        replies: List[Reply] = []
+        while True:
+            if self._header is None:
+                newline = self._buffer.find(b"\n", 0, _MAX_HEADER_BYTES + 1)
+                if newline < 0:
+                    if len(self._buffer) > _MAX_HEADER_BYTES:
+                        raise WireFormatError(self._bad_header(bytes(self._buffer)))
+                    return replies
+                self._header = self._parse_header(bytes(self._buffer[:newline]))
+                del self._buffer[: newline + 1]
+            status, length = self._header
+            if len(self._buffer) < length:
+                return replies
+            body = bytes(self._buffer[:length])
+            del self._buffer[:length]
+            self._header = None
+            try:
+                replies.append(Reply(status, body.decode("utf-8")))
+            except UnicodeDecodeError as error:
+                raise WireFormatError(
+                    f"A {status.value} reply is not UTF-8 text: {error}"
+                ) from None
+
+    def _parse_header(self, header: bytes) -> Tuple[Status, int]:
+        words = header.split()
+        if len(words) != 3 or words[0] != PROTOCOL.encode() or not words[2].isdigit():
+            raise WireFormatError(self._bad_header(header))
+        try:
+            status = Status(words[1].decode("ascii"))
+        except (UnicodeDecodeError, ValueError):
+            raise WireFormatError(self._bad_header(header)) from None
+        length = int(words[2])
+        if length > MAX_REPLY_BYTES + _TRUNCATION_ROOM:
+            raise WireFormatError(
+                f"A reply announced {length} bytes, more than the {MAX_REPLY_BYTES} "
+                "a node sends; the stream is corrupt."
+            )
+        return status, length
+
+    @staticmethod
+    def _bad_header(header: bytes) -> str:
+        return (
+            f"Expected a reply header like '{PROTOCOL} ok 12', got {header[:40]!r}. "
+            "Is this port an SNR console receiver (CommandReceiverFactory)?"
+        )
+
+
+def split_command(line: str) -> Tuple[str, str]:
+    """The command word (lower case) and the rest of the line.
+
+    Example::
+
+        split_command("  Task event go 1 ")   # ('task', 'event go 1')
+    """
+    parts = line.strip().split(None, 1)
+    if not parts:
+        return "", ""
+    return parts[0].lower(), parts[1] if len(parts) > 1 else ""
+
+
+_json_decoder = json.JSONDecoder()
+
+
+def parse_values(text: str) -> List[Any]:
+    """Values typed after a task's name: JSON literals where they parse, else words.
+
+    Nothing is ever evaluated as Python: ``1`` is a number, ``[1, 2]`` a list,
+    ``"a b"`` one string with a space, ``true``/``null`` are True/None, and
+    any other word (``A``, ``3abc``) is a string.
+
+    Example::
+
+        parse_values('1 2.5 true "a b" [1, 2] {"k": 3} hello')
+        # [1, 2.5, True, 'a b', [1, 2], {'k': 3}, 'hello']
+    """
+    values: List[Any] = []
+    position, end = 0, len(text)
+    while True:
+        while position < end and text[position].isspace():
+            position += 1
+        if position >= end:
+            return values
+        try:
+            value, stop = _json_decoder.raw_decode(text, position)
+        except ValueError:
+            stop = -1
+        if stop == end or (stop > position and text[stop].isspace()):
+            values.append(value)
+            position = stop
+            continue
+        word_end = position
+        while word_end < end and not text[word_end].isspace():
+            word_end += 1
+        values.append(text[position:word_end])
+        position = word_end
+
+
+def parse_address(text: str, default_host: str = "127.0.0.1") -> Tuple[str, int]:
+    """``"HOST:PORT"`` (or ``"PORT"``, or ``"[::1]:PORT"``) as ``(host, port)``.
+
+    Raises:
+        ValueError: with a sentence saying what a valid address looks like.
+
+    Example::
+
+        parse_address("robot.local:9123")   # ('robot.local', 9123)
+        parse_address("9123")               # ('127.0.0.1', 9123)
+    """
+    host, sep, port_text = text.strip().rpartition(":")
+    if not sep:
+        host, port_text = default_host, text.strip()
+    host = host.strip("[]") or default_host
+    if not port_text.isdigit() or not 0 < int(port_text) < 65536:
+        raise ValueError(
+            f"{text!r} is not a console address. Write HOST:PORT, e.g. 127.0.0.1:"
+            f"{DEFAULT_CONSOLE_PORT}, with a port from 1 to 65535."
+        )
+    return host, int(port_text)
+
+
+def is_loopback(host: str) -> bool:
+    """True when ``host`` is reachable only from this machine.
+
+    ``""`` and ``"0.0.0.0"`` mean every network interface, so they are not.
+
+    Example::
+
+        is_loopback("127.0.0.1"), is_loopback("0.0.0.0")   # (True, False)
+    """
+    if host.lower() == "localhost":
+        return True
+    try:
+        return ipaddress.ip_address(host).is_loopback
+    except ValueError:
+        return False  # a host name (or ""): it may be reachable from outside
+
+
+def check_listen_policy(host: str, token: Optional[str]) -> None:
+    """Refuse to listen beyond this machine without a token; check the token.
+
+    Raises:
+        ConfigError: the host is not loopback and there is no token, or the
+            token is empty, too long or has spaces.
+
+    Example::
+
+        check_listen_policy("127.0.0.1", None)         # fine
+        check_listen_policy("0.0.0.0", None)           # ConfigError
+        check_listen_policy("0.0.0.0", "s3cret-word")  # fine
+    """
+    if token is not None:
+        if not token or len(token) > 256 or any(ch.isspace() for ch in token):
+            raise ConfigError(
+                "The console token must be 1 to 256 characters with no spaces "
+                f"(it is sent as `auth <token>` on one line); got {len(token)} "
+                "characters. Pick a long random word, e.g. from "
+                '`python -c "import secrets; print(secrets.token_urlsafe())"`.'
+            )
+        return
+    if not is_loopback(host):
+        raise ConfigError(
+            f"CommandReceiverFactory(host={host!r}) would let anyone who can reach this "
+            "machine control the node: run tasks, reload code, stop it. Keep the default "
+            "host='127.0.0.1' (reach it from another computer with `ssh -L`), or set a "
+            f"shared secret: CommandReceiverFactory(host={host!r}, token='...') or the "
+            f"environment variable {TOKEN_ENV_VAR}, and give the same token to "
+            "`snr-console HOST:PORT --token ...`."
+        )
+
+
+def tokens_match(expected: str, given: str) -> bool:
+    """Compare tokens in constant time, so timing does not leak the token.
+
+    Example::
+
+        tokens_match("s3cret", "s3cret"), tokens_match("s3cret", "guess")  # (True, False)
+    """
+    return hmac.compare_digest(expected.encode("utf-8"), given.encode("utf-8"))

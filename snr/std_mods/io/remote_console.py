@@ -1,0 +1,391 @@
+"""`RemoteConsole`: type commands into a running node from another terminal.
+
+Run it as ``snr-console HOST:PORT`` (or ``python -m snr.console HOST:PORT``)
+against a node whose config has a `CommandReceiverFactory`. With readline
+(Linux, macOS) you get line editing, history and Tab completion of commands.
+
+Example::
+
+    $ snr-console 127.0.0.1:9123
+    Connected to node 'robot'. Type 'help' for the commands, 'exit' to stop the node.
+    127.0.0.1:9123> task event beep
+    Scheduled (event, 'beep'): []
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import socket
+import sys
+from typing import IO, Callable, Iterable, List, Optional, Sequence
+
+from snr.prelude import WireFormatError
+from snr.std_mods.io.console_commands import COMMANDS
+from snr.std_mods.io.console_protocol import (
+    DEFAULT_CONSOLE_PORT,
+    MAX_LINE_BYTES,
+    TOKEN_ENV_VAR,
+    ConsoleConnectionError,
+    Reply,
+    ReplyDecoder,
+    Status,
+    parse_address,
+)
+
+__all__ = [
+    "EXIT_CONNECTION",
+    "EXIT_INTERRUPTED",
+    "EXIT_OK",
+    "EXIT_USAGE",
+    "RemoteConsole",
+    "main",
+]
+
+EXIT_OK = 0
+"""Exit code: the session ended normally (``quit``, end of input, or ``exit``)."""
+
+EXIT_CONNECTION = 1
+"""Exit code: could not connect, was refused, lost the node, or a command failed."""
+
+EXIT_USAGE = 2
+"""Exit code: the command line was wrong."""
+
+EXIT_INTERRUPTED = 130
+"""Exit code: Ctrl-C while waiting for the node (the shell's convention)."""
+
+_LEAVE_WORDS = ("quit", "q")
+
+
+class RemoteConsole:
+    """A client of a node's `CommandReceiverFactory`.
+
+    Use it as a program (``snr-console``), or from Python, e.g. in a test.
+
+    Example::
+
+        with RemoteConsole("127.0.0.1", 9123) as console:
+            print(console.send("list endpoints").text)
+
+    Args:
+        host: the node's address.
+        port: the receiver's port.
+        token: the shared token, if the node needs one (default: the
+            ``SNR_CONSOLE_TOKEN`` environment variable).
+        timeout_s: how long to wait to connect, and for each reply.
+    """
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = DEFAULT_CONSOLE_PORT,
+        token: Optional[str] = None,
+        timeout_s: float = 10.0,
+    ) -> None:
+        self.host = host
+        self.port = port
+        self.token = token if token is not None else os.environ.get(TOKEN_ENV_VAR) or None
+        self.timeout_s = timeout_s
+        self.greeting: Optional[Reply] = None
+        self._sock: Optional[socket.socket] = None
+        self._decoder = ReplyDecoder()
+        self._ready: List[Reply] = []
+
+    @property
+    def where(self) -> str:
+        """``"host:port"``, for messages and the prompt."""
+        return f"{self.host}:{self.port}"
+
+    # -- connecting --------------------------------------------------------------
+    def connect(self) -> Reply:
+        """Connect (and present the token if asked); returns the node's greeting.
+
+        Raises:
+            ConsoleConnectionError: refused, unreachable, wrong token, or not
+                an SNR console at that address. The message says what to try.
+        """
+        try:
+            self._sock = socket.create_connection((self.host, self.port), self.timeout_s)
+        except ConnectionRefusedError:
+            raise ConsoleConnectionError(
+                f"Could not connect to an SNR node at {self.where}: connection refused. "
+                "Is the node running, and does its config include "
+                f"CommandReceiverFactory(port={self.port})?"
+            ) from None
+        except socket.gaierror as error:
+            raise ConsoleConnectionError(
+                f"Could not connect to {self.where}: unknown host {self.host!r} "
+                f"({error.strerror}). Check the spelling, or use its IP address."
+            ) from None
+        except OSError as error:
+            raise ConsoleConnectionError(
+                f"Could not connect to an SNR node at {self.where}: "
+                f"{error.strerror or error}. Check the address, and that no firewall "
+                "blocks the port."
+            ) from None
+        greeting = self._receive()
+        if greeting.status is Status.AUTH:
+            greeting = self._authenticate()
+        if greeting.status is not Status.HELLO:
+            self.close()
+            raise ConsoleConnectionError(
+                f"The node at {self.where} turned the console away: {greeting.text}"
+            )
+        self.greeting = greeting
+        return greeting
+
+    def _authenticate(self) -> Reply:
+        if self.token is None:
+            self.close()
+            raise ConsoleConnectionError(
+                f"The node at {self.where} needs a console token. Give it with "
+                f"`--token TOKEN` or the {TOKEN_ENV_VAR} environment variable."
+            )
+        self._send_line(f"auth {self.token}")
+        return self._receive()
+
+    # -- talking -------------------------------------------------------------------
+    def send(self, line: str) -> Reply:
+        """Send one command line and wait for its reply.
+
+        Raises:
+            ConsoleConnectionError: not connected, or the node went away.
+            ValueError: the line is longer than the node accepts or has a newline.
+        """
+        if "\n" in line or "\r" in line:
+            raise ValueError("A console command is one line: remove the line breaks.")
+        if len(line.encode("utf-8")) > MAX_LINE_BYTES:
+            raise ValueError(f"A console command may be at most {MAX_LINE_BYTES} bytes long.")
+        self._send_line(line)
+        return self._receive()
+
+    def _send_line(self, line: str) -> None:
+        sock = self._connected()
+        try:
+            sock.sendall(line.encode("utf-8") + b"\n")
+        except OSError as error:
+            raise self._lost(error) from None
+
+    def _receive(self) -> Reply:
+        sock = self._connected()
+        while not self._ready:
+            try:
+                data = sock.recv(65536)
+            except socket.timeout:
+                raise ConsoleConnectionError(
+                    f"No reply from the node at {self.where} within {self.timeout_s} s. "
+                    "It may be busy in a slow handler; try again, or use a longer "
+                    "--timeout."
+                ) from None
+            except OSError as error:
+                raise self._lost(error) from None
+            if not data:
+                raise self._lost(None)
+            try:
+                self._ready.extend(self._decoder.feed(data))
+            except WireFormatError as error:
+                self.close()
+                raise ConsoleConnectionError(f"{self.where}: {error}") from None
+        reply = self._ready.pop(0)
+        if reply.status is Status.BYE:
+            self.close()
+        return reply
+
+    def _connected(self) -> socket.socket:
+        if self._sock is None:
+            raise ConsoleConnectionError(
+                f"The console is not connected to {self.where}: call connect() first "
+                "(a node that said bye has closed the connection)."
+            )
+        return self._sock
+
+    def _lost(self, error: Optional[OSError]) -> ConsoleConnectionError:
+        self.close()
+        why = f" ({error.strerror or error})" if error is not None else ""
+        return ConsoleConnectionError(
+            f"Lost the connection to the node at {self.where}{why}. The node may have "
+            "stopped; its terminal says why."
+        )
+
+    def close(self) -> None:
+        """Hang up (the node keeps running). Safe to call twice."""
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+
+    def is_connected(self) -> bool:
+        """True until the console or the node closed the connection."""
+        return self._sock is not None
+
+    def __enter__(self) -> RemoteConsole:
+        if not self.is_connected():
+            self.connect()
+        return self
+
+    def __exit__(self, *exc: object) -> None:
+        self.close()
+
+    # -- the interactive program ------------------------------------------------
+    def interact(
+        self,
+        read_line: Optional[Callable[[str], str]] = None,
+        output: Optional[IO[str]] = None,
+    ) -> int:
+        """Read commands until ``quit``, end of input, or the node says bye.
+
+        ``read_line(prompt)`` defaults to ``input`` (with readline if there is
+        one). Returns an exit code: `EXIT_OK`, or `EXIT_CONNECTION` when the
+        node went away unasked.
+        """
+        out = output if output is not None else sys.stdout
+        if read_line is None:
+            _enable_line_editing()
+            read_line = input
+        _say(out, "Type 'quit' or Ctrl-D to leave (the node keeps running).")
+        while self.is_connected():
+            try:
+                line = read_line(f"{self.where}> ").strip()
+            except EOFError:
+                out.write("\n")  # so the shell's prompt starts on a new line
+                return EXIT_OK
+            except KeyboardInterrupt:
+                _say(out, "\n(Ctrl-C) Type 'quit' to leave.")
+                continue
+            if line.lower() in _LEAVE_WORDS:
+                return EXIT_OK
+            if not line:
+                continue
+            code = self.run_command(line, out)
+            if not self.is_connected():
+                return code
+        return EXIT_OK
+
+    def run_command(self, line: str, output: IO[str]) -> int:
+        """Send ``line``, print the reply; an exit code for this command.
+
+        Raises:
+            ConsoleConnectionError: the node went away.
+        """
+        try:
+            reply = self.send(line)
+        except ValueError as error:
+            _say(output, f"error: {error}")
+            return EXIT_CONNECTION
+        _say(output, reply.text)
+        if reply.status is Status.ERROR:
+            return EXIT_CONNECTION
+        if reply.status is Status.BYE and line.split()[0].lower() != "exit":
+            return EXIT_CONNECTION  # the node left without being asked
+        return EXIT_OK
+
+
+def _say(output: IO[str], text: str) -> None:
+    if text:
+        output.write(text + "\n")
+        output.flush()
+
+
+def _enable_line_editing() -> None:
+    """Line editing, history and Tab completion where readline exists."""
+    try:
+        import readline  # optional: absent on Windows
+    except ImportError:
+        return
+    words = [*COMMANDS, *_LEAVE_WORDS]
+
+    def complete(text: str, state: int) -> Optional[str]:
+        matches = [w + " " for w in words if w.startswith(text)]
+        return matches[state] if state < len(matches) else None
+
+    readline.set_completer(complete)
+    readline.parse_and_bind("tab: complete")
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="snr-console",
+        description="Send commands to a running SNR node (one with a CommandReceiverFactory).",
+        epilog="Inside the console, type 'help' for the node's commands.",
+    )
+    parser.add_argument(
+        "address",
+        metavar="HOST:PORT",
+        nargs="?",
+        default=f"127.0.0.1:{DEFAULT_CONSOLE_PORT}",
+        help=f"the node's console address (default 127.0.0.1:{DEFAULT_CONSOLE_PORT})",
+    )
+    parser.add_argument(
+        "--token", default=None, help=f"the node's console token (default: ${TOKEN_ENV_VAR})"
+    )
+    parser.add_argument(
+        "-c",
+        "--command",
+        action="append",
+        default=[],
+        metavar="COMMAND",
+        help="run this command and exit (may be repeated)",
+    )
+    parser.add_argument(
+        "--timeout", type=float, default=10.0, help="seconds to wait for the node (default 10)"
+    )
+    return parser
+
+
+def main(
+    argv: Optional[Sequence[str]] = None,
+    stdin: Optional[IO[str]] = None,
+    stdout: Optional[IO[str]] = None,
+    stderr: Optional[IO[str]] = None,
+) -> int:
+    """Entry point of ``snr-console``; returns the exit code.
+
+    Example::
+
+        main(["127.0.0.1:9123", "-c", "list endpoints"])   # prints the list, returns 0
+    """
+    err = stderr if stderr is not None else sys.stderr
+    out = stdout if stdout is not None else sys.stdout
+    parser = _parser()
+    args = parser.parse_args(argv)
+    try:
+        host, port = parse_address(args.address)
+    except ValueError as error:
+        parser.print_usage(err)
+        _say(err, f"snr-console: error: {error}")
+        return EXIT_USAGE
+    console = RemoteConsole(host, port, args.token, args.timeout)
+    try:
+        greeting = console.connect()
+        if args.command:
+            return _run_commands(console, args.command, out)
+        _say(out, greeting.text)
+        source = stdin if stdin is not None else sys.stdin
+        if source.isatty() and stdin is None:
+            return console.interact(output=out)
+        return _run_commands(console, (line.strip() for line in source), out)
+    except ConsoleConnectionError as error:
+        _say(err, f"snr-console: {error}")
+        return EXIT_CONNECTION
+    except KeyboardInterrupt:  # while waiting for a reply: leave (the node keeps running)
+        _say(err, "\nsnr-console: interrupted.")
+        return EXIT_INTERRUPTED
+    finally:
+        console.close()
+
+
+def _run_commands(console: RemoteConsole, lines: Iterable[str], out: IO[str]) -> int:
+    """Run commands from ``-c`` or a pipe; the exit code of the worst one."""
+    worst = EXIT_OK
+    for line in lines:
+        if not line:
+            continue
+        if line.lower() in _LEAVE_WORDS:
+            break
+        worst = max(worst, console.run_command(line, out))
+        if not console.is_connected():
+            break
+    return worst
+
+
+if __name__ == "__main__":  # pragma: no cover
+    sys.exit(main())
