@@ -9,12 +9,12 @@ read-only ``get_page``/``get_data``.
 
 from __future__ import annotations
 
+import dis
 import enum
 import logging
 import threading
 import time
-import traceback
-from typing import Any, Dict, List, Optional, Set
+from typing import Any, Callable, Dict, List, Optional, Set
 
 from snr.core.dispatch import HandlerTable
 from snr.core.logs import ensure_log_handler, level_for_mode
@@ -45,7 +45,16 @@ from snr.prelude import (
     TaskType,
     ThreadSafetyError,
 )
-from snr.prelude.errors import describe_callable, describe_class
+from snr.prelude.abstract import AbstractLoop, explain_abstract_error
+from snr.prelude.errors import (
+    caller_location,
+    closest_match,
+    describe_callable,
+    describe_class,
+    short_repr,
+    student_frames,
+    trim_runtime_frames,
+)
 
 __all__ = ["Node", "NodeState"]
 
@@ -68,6 +77,97 @@ def _task_label(task: Task) -> str:
     return f"({task.type.name}, {task.name!r})"
 
 
+def _describe_bad_result(result: Any) -> str:
+    if isinstance(result, list):
+        index, bad = next((i, t) for i, t in enumerate(result) if not isinstance(t, Task))
+        return (
+            f"returned a list whose item {index} is {short_repr(bad)} ({type(bad).__name__}),"
+            " not a Task,"
+        )
+    return f"returned {short_repr(result)} ({type(result).__name__})"
+
+
+def _bad_result_hint(result: Any) -> str:
+    items = result if isinstance(result, (list, tuple)) else []
+    if isinstance(result, tuple) and all(isinstance(t, Task) for t in items):
+        return " Return a list, [task1, task2], not a tuple."
+    if isinstance(result, Page):
+        return " To store a page, return tasks.store_page(page)."
+    if isinstance(result, bool):
+        return " Return None when there is nothing to do."
+    if any(t is None for t in items):
+        return " Leave None out of the list."
+    if any(isinstance(t, (list, tuple)) for t in items):
+        return " Return one flat list of Tasks (join lists with + or extend)."
+    return ""
+
+
+def _only_returns_none(func: Any) -> bool:
+    """True if ``func``'s code has no ``return <value>``: it can only give None.
+
+    Read from the bytecode, not the source (which may not be on the robot).
+    """
+    code = getattr(getattr(func, "__func__", func), "__code__", None)
+    if code is None:
+        return False
+    previous: Optional[dis.Instruction] = None
+    for instruction in dis.get_instructions(code):
+        if instruction.opname == "RETURN_CONST" and instruction.argval is not None:
+            return False
+        if instruction.opname == "RETURN_VALUE" and not (
+            previous is not None and previous.opname == "LOAD_CONST" and previous.argval is None
+        ):
+            return False
+        previous = instruction
+    return True
+
+
+# What a loop thread should call instead of a method that changes node state.
+_THREAD_SAFE_INSTEAD = {
+    "execute_task": "self.schedule(task)",
+    "handle_task": "self.schedule(task)",
+    "add_component": "self.schedule(tasks.add_component(factory))",
+    "remove_component": "self.schedule(tasks.remove_component(name))",
+    "reload_component": "self.schedule(tasks.reload_component(name))",
+    "write_page": "self.store_page(page) or self.store_data(key, value)",
+    "datastore": "self.store_data(key, value)",
+    "terminate": "self.schedule(tasks.terminate(reason))",
+}
+
+
+class _GuardedDatastore(Dict[DataKey, Page]):
+    """A node's datastore: reads are plain dict reads; writes check the thread.
+
+    The node itself writes with ``dict.__setitem__`` (no check, no cost); a
+    loop thread writing ``self.parent.datastore[key] = page`` gets a
+    ThreadSafetyError telling it to use ``self.store_data``.
+    """
+
+    def __init__(self, check_thread: Callable[[str], None]) -> None:
+        super().__init__()
+        self._check_thread = check_thread
+
+    def __setitem__(self, key: DataKey, page: Page) -> None:
+        self._check_thread("datastore")
+        super().__setitem__(key, page)
+
+    def __delitem__(self, key: DataKey) -> None:
+        self._check_thread("datastore")
+        super().__delitem__(key)
+
+    def update(self, *args: Any, **kwargs: Any) -> None:
+        self._check_thread("datastore")
+        super().update(*args, **kwargs)
+
+    def clear(self) -> None:
+        self._check_thread("datastore")
+        super().clear()
+
+    def pop(self, key: DataKey, *default: Any) -> Any:
+        self._check_thread("datastore")
+        return super().pop(key, *default)
+
+
 class Node(AbstractNode):
     """Builds its components from the config's factories for ``role`` and runs them.
 
@@ -88,11 +188,17 @@ class Node(AbstractNode):
         terminate_reason: why the node stopped, once it has.
         join_timeout_s: how long shutdown waits for each loop's thread.
         slow_handler_s: in DEBUG/TEST mode, handlers slower than this are reported.
+        missing_key_hint_s: in DEBUG mode, a data key read for this long without
+            anything storing it gets a hint (once per key).
+        typo_key_hint_s: ... or after this long, when a stored key is spelled
+            almost the same (a likely typo).
     """
 
     join_timeout_s: float = 1.0
     slow_handler_s: float = 0.1
     idle_wake_s: float = 1.0
+    missing_key_hint_s: float = 5.0
+    typo_key_hint_s: float = 0.5
 
     def __init__(self, role: Role, config: AbstractConfig) -> None:
         if not isinstance(role, str) or not role:
@@ -112,7 +218,7 @@ class Node(AbstractNode):
             self.log.setLevel(level_for_mode(self.mode))
         self.profiler = config.get_profiler()
         self.timer = Timer()
-        self.datastore: DataDict = {}
+        self.datastore: DataDict = _GuardedDatastore(self._check_owner_thread)
         self.queue = TaskQueue()
         self.components: Dict[ComponentName, AbstractComponent] = {}
         self.state = NodeState.CREATED
@@ -127,19 +233,33 @@ class Node(AbstractNode):
         self._pending_adds: List[AbstractComponent] = []
         self._timed = self.profiler is not None or self.mode is not Mode.DEPLOYED
         self._slow_reported: Set[Any] = set()
+        self._hint_missing_keys = self.mode is Mode.DEBUG
+        self._missing_reads: Dict[DataKey, List[float]] = {}
+        self._missing_hinted: Set[DataKey] = set()
+        self._missing_lock = threading.Lock()
 
         self.add_component(NodeCoreFactory().get(self), start=False)
         for factory in config.get(role):
             component = self._build(factory)
             if component is None:
-                self.log.warning(
-                    "%s.get() returned None, so role %r gets no component from it. If "
-                    "you meant to add one, return it: `return MyEndpoint(self, parent)`.",
-                    type(factory).__name__,
-                    role,
-                )
+                self._got_none(factory)
                 continue
             self.add_component(component, start=False)
+
+    def _got_none(self, factory: AbstractFactory) -> None:
+        get = type(factory).get
+        if _only_returns_none(get):
+            raise ComponentError(
+                f"{describe_callable(get)} returned None: it has no `return` with a "
+                f"value, so role {self.role!r} can never get a component from it. Return "
+                "what it builds: `return MyEndpoint(self, parent)`."
+            )
+        self.log.warning(
+            "%s returned None this time, so role %r gets no component from it. If you "
+            "meant to add one, check the conditions before its `return`.",
+            describe_callable(get),
+            self.role,
+        )
 
     # ------------------------------------------------------------------
     # Control flow (thesis listing 6.1)
@@ -184,9 +304,14 @@ class Node(AbstractNode):
         return self._stop_requested
 
     def terminate(self) -> None:
-        """Halt, join and terminate every component, newest first. Idempotent."""
+        """Halt, join and terminate every component, newest first. Idempotent.
+
+        Only the node's thread may call it while the node runs; other threads
+        use ``set_terminate_flag`` or schedule ``tasks.terminate(reason)``.
+        """
         if self.state in (NodeState.TERMINATING, NodeState.TERMINATED):
             return
+        self._check_owner_thread("terminate")
         if not self._stop_requested:
             self.set_terminate_flag("terminate() called")
         self._running = False
@@ -263,6 +388,7 @@ class Node(AbstractNode):
 
     def handle_task(self, handler: TaskHandler, task: Task, key: TaskId) -> Optional[List[Task]]:
         """Run one handler with timing and error reporting; its tasks as a list."""
+        self._check_owner_thread("handle_task")
         owner = getattr(handler, "__self__", None)
         component = owner if isinstance(owner, AbstractComponent) else None
         return self.handle_task_entry(handler, task, key, component)
@@ -306,13 +432,10 @@ class Node(AbstractNode):
             return [result]
         if isinstance(result, list) and all(isinstance(t, Task) for t in result):
             return result
-        bad = result
-        if isinstance(result, list):
-            bad = next(t for t in result if not isinstance(t, Task))
         error = HandlerError(
-            f"Task handler {describe_callable(handler)} returned {bad!r} "
-            f"({type(bad).__name__}) while handling {_task_label(task)}. A handler must "
-            "return a Task, a list of Tasks, or None. To store a value, return "
+            f"Task handler {describe_callable(handler)} {_describe_bad_result(result)} "
+            f"while handling {_task_label(task)}. A handler must return a Task, a list of "
+            f"Tasks, or None.{_bad_result_hint(result)} To store a value, return "
             "self.store_data_task(key, value); to announce something, return "
             "tasks.event('name', [value])."
         )
@@ -332,17 +455,25 @@ class Node(AbstractNode):
         component: Optional[AbstractComponent],
         error: Exception,
     ) -> None:
-        where = f" of endpoint {component.name!r}" if component is not None else ""
-        student_frames = "".join(traceback.format_tb(error.__traceback__)[1:])
+        where = ""
+        if component is not None:
+            kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
+            where = f" of {kind} {component.name!r}"
+        frames = student_frames(error.__traceback__)
         message = (
             f"Task handler {describe_callable(handler)}{where} raised "
-            f"{type(error).__name__}: {error} while handling {_task_label(task)} "
-            f"with values {task.val_list!r}."
+            f"{type(error).__name__}: {error}\nwhile handling the task {_task_label(task)} "
+            f"with values {short_repr(task.val_list, 200)}.\n"
+            f"Where it happened (most recent call last):\n{frames}"
         )
         if self.mode is Mode.DEPLOYED:
-            self.log.error("%s The node keeps running.\n%s", message, student_frames.rstrip())
+            self.log.error("%s\nThe node keeps running.", message)
             return
-        failure = HandlerError(f"{message}\nWhere it happened:\n{student_frames.rstrip()}")
+        failure = HandlerError(
+            f"{message}\nFix the handler, or catch the error in it if it can happen in "
+            "normal use (in Mode.DEPLOYED the node logs it and keeps running)."
+        )
+        trim_runtime_frames(error)
         failure.__cause__ = error
         self._record_failure(failure)
 
@@ -350,21 +481,32 @@ class Node(AbstractNode):
         if self.mode is Mode.DEPLOYED:
             self.log.error("%s The node keeps running.", error)
             return
-        self.log.error("%s", error)
         if self._failure is None:
+            # loop() raises this error once the node has stopped, so the log
+            # gets one line now (shutdown can take a moment), not a duplicate.
             self._failure = error
-        self.set_terminate_flag(f"{type(error).__name__} (see the error above)")
+            first_line = str(error).split("\n", 1)[0]
+            self.log.error("Stopping node %r: %s", self.role, first_line)
+        else:
+            self.log.error("%s", error)
+        self.set_terminate_flag(f"stopped by a {type(error).__name__}")
 
     def _loop_failed(self, loop: AbstractComponent, error: Exception) -> None:
-        frames = "".join(traceback.format_tb(error.__traceback__)[1:]).rstrip()
+        frames = student_frames(error.__traceback__)
         message = (
             f"Loop {loop.name!r} ({describe_class(type(loop))}) stopped: it raised "
-            f"{type(error).__name__}: {error}\nWhere it happened:\n{frames}"
+            f"{type(error).__name__}: {error}\nWhere it happened (most recent call last):"
+            f"\n{frames}"
         )
         if self.mode is Mode.DEPLOYED:
             self.log.error("%s\nThe node keeps running without this loop.", message)
             return
-        failure = LoopError(message)
+        failure = LoopError(
+            f"{message}\nFix loop() (or setup()), or catch the error there if it can "
+            "happen in normal use (in Mode.DEPLOYED the node keeps running without "
+            "the loop)."
+        )
+        trim_runtime_frames(error)
         failure.__cause__ = error
         self._record_failure(failure)
 
@@ -409,13 +551,81 @@ class Node(AbstractNode):
         self.queue.schedule(self.task_store_data(key, data, process))
 
     def get_page(self, key: DataKey) -> Optional[Page]:
-        """The newest page under ``key``, or None; safe from any thread."""
-        return self.datastore.get(key)
+        """The newest page under ``key``, or None; safe from any thread.
+
+        In DEBUG mode, a key that stays missing gets one hint in the log (the
+        keys that exist, the closest match); see ``missing_key_hint_s``.
+        """
+        page = self.datastore.get(key)
+        if page is None and self._hint_missing_keys:
+            self._missing_key_read(key)
+        return page
 
     def get_data(self, key: DataKey) -> Optional[Any]:
         """The newest data under ``key``, or None; safe from any thread."""
         page = self.datastore.get(key)
-        return None if page is None else page.data
+        if page is None:
+            if self._hint_missing_keys:
+                self._missing_key_read(key)
+            return None
+        return page.data
+
+    def _missing_key_read(self, key: DataKey) -> None:
+        """Hint once per key when reading a missing key looks like a mistake.
+
+        Reading a key before its first page arrives is normal (listing A.7
+        does), so there is no hint at first. After ``typo_key_hint_s`` a key
+        spelled almost like a stored one is reported (a likely typo); after
+        ``missing_key_hint_s`` any key still missing is. Checks are spaced
+        out, so a loop polling a missing key costs almost nothing.
+        """
+        if self.state is not NodeState.RUNNING or key in self._missing_hinted:
+            return
+        now = self.timer.current_s()
+        with self._missing_lock:
+            times = self._missing_reads.get(key)
+            if times is None:
+                if len(self._missing_reads) < 1000:
+                    self._missing_reads[key] = [now, now + self.typo_key_hint_s]
+                return
+            first_read_s, next_check_s = times
+            if now < next_check_s:
+                return
+            times[1] = min(now + 0.25, first_read_s + self.missing_key_hint_s)
+            waited_s = now - first_read_s
+            stored = [k for k in list(self.datastore) if isinstance(k, str)]
+            guess = closest_match(key, stored) if isinstance(key, str) else None
+            if guess is None and waited_s < self.missing_key_hint_s:
+                return
+            self._missing_hinted.add(key)
+            del self._missing_reads[key]
+        shown = ", ".join(repr(k) for k in stored[:20]) or "none yet"
+        where = caller_location()
+        footer = (
+            "get_data/get_page return None until something stores the key. (This hint "
+            "shows once per key, in DEBUG mode only.)"
+        )
+        if guess is not None:
+            self.log.warning(
+                "Nothing is stored under data key %r (read at %s). Did you mean %r? "
+                "Stored keys: %s. %s",
+                key,
+                where,
+                guess,
+                shown,
+                footer,
+            )
+        else:
+            self.log.info(
+                "Data key %r has been read for %.1f s (at %s) but nothing has stored it. "
+                "Stored keys: %s. If a component should store it, check that it runs "
+                "and spells the key the same way. %s",
+                key,
+                waited_s,
+                where,
+                shown,
+                footer,
+            )
 
     def get_time_s(self) -> float:
         """Seconds since this node was created."""
@@ -424,7 +634,7 @@ class Node(AbstractNode):
     def write_page(self, page: Page) -> None:
         """Put ``page`` in the datastore (the node core's store_page handler)."""
         self._check_owner_thread("write_page")
-        self.datastore[page.key] = page
+        dict.__setitem__(self.datastore, page.key, page)  # checked above; skip the guard
 
     # ------------------------------------------------------------------
     # Components
@@ -437,7 +647,17 @@ class Node(AbstractNode):
                 "`super().__init__()` (or `super().__init__(my_module)` to hot-reload "
                 "my_module) as its first line."
             )
-        component = factory.get(self)
+        try:
+            component = factory.get(self)
+        except SNRError:
+            raise
+        except TypeError as error:
+            explained = explain_abstract_error(error)
+            if explained is not None:
+                raise explained from None  # Python's "abstract class" text only confuses
+            raise self._get_failed(factory, error) from error
+        except Exception as error:
+            raise self._get_failed(factory, error) from error
         if component is None:
             return None
         if not isinstance(component, AbstractComponent):
@@ -448,6 +668,15 @@ class Node(AbstractNode):
                 "e.g. `return MyEndpoint(self, parent)`."
             )
         return component
+
+    def _get_failed(self, factory: AbstractFactory, error: Exception) -> ComponentError:
+        frames = student_frames(error.__traceback__)
+        trim_runtime_frames(error)
+        return ComponentError(
+            f"{describe_callable(type(factory).get)} raised {type(error).__name__}: "
+            f"{error}\nwhile building a component for node {self.role!r}.\n"
+            f"Where it happened (most recent call last):\n{frames}"
+        )
 
     def add_component(self, component: AbstractComponent, start: bool = True) -> None:
         """Add a component; it begins at once if the node is running.
@@ -467,11 +696,18 @@ class Node(AbstractNode):
             )
         name = component.name
         if name in self.components:
+            other = self.components[name]
+            same_factory = getattr(other, "factory", None) is getattr(component, "factory", 0)
+            hint = (
+                " The same factory object built both: is it listed twice in the config?"
+                if same_factory
+                else ""
+            )
             raise ConfigError(
                 f"Node {self.role!r} already has a component named {name!r} "
-                f"({describe_class(type(self.components[name]))}); "
+                f"({describe_class(type(other))}); "
                 f"{describe_class(type(component))} wants the same name. Give each "
-                "component a unique name (e.g. pass a name to its factory)."
+                f"component a unique name (e.g. pass a name to its factory).{hint}"
             )
         self.components[name] = component
         if self._table_stale:
@@ -575,9 +811,12 @@ class Node(AbstractNode):
         except SNRError:
             raise
         except Exception as error:
+            frames = student_frames(error.__traceback__)
+            trim_runtime_frames(error)
             raise ComponentError(
                 f"{describe_class(type(component))} {component.name!r} failed to start: "
-                f"{type(error).__name__}: {error}"
+                f"{type(error).__name__}: {error}\n"
+                f"Where it happened (most recent call last):\n{frames}"
             ) from error
 
     def _stop(self, component: AbstractComponent) -> None:
@@ -628,11 +867,17 @@ class Node(AbstractNode):
             and self._thread_id is not None
             and threading.get_ident() != self._thread_id
         ):
+            what = "node.datastore was changed" if method == "datastore" else f"{method}()"
+            if method != "datastore":
+                what += " was called"
+            instead = _THREAD_SAFE_INSTEAD.get(method, "self.schedule(task)")
             raise ThreadSafetyError(
-                f"{method}() was called on node {self.role!r} from thread "
-                f"{threading.current_thread().name!r}, but only the node's own thread may "
-                "change its state. From a loop, use self.schedule(task) or "
-                "self.store_data(key, value): they queue the work for the node's thread."
+                f"{what} on node {self.role!r} from thread "
+                f"{threading.current_thread().name!r} (at {caller_location()}), but only "
+                "the node's own thread may change the node: a loop runs on a thread of "
+                f"its own. Use {instead} instead: it queues the work for the node's "
+                "thread and is safe from any thread (self.schedule(task) and "
+                "self.store_data(key, value) always are)."
             )
 
     def __repr__(self) -> str:
