@@ -402,6 +402,12 @@ class TestFactoryGet(SNRTestCase):
         for part in ("ReturnsAFactory", HERE, "not an endpoint or loop", "return MyEndpoint("):
             self.assertIn(part, str(ctx.exception))
 
+    def test_returns_the_class_instead_of_an_object(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryOf(lambda factory, parent: OnlyAHandler)]))
+        for part in ("FactoryOf.get", HERE, "the class OnlyAHandler itself", "OnlyAHandler(self"):
+            self.assertIn(part, str(ctx.exception))
+
     def test_forgets_to_return(self) -> None:
         for mode in Mode:
             with self.subTest(mode=mode), self.assertRaises(ComponentError) as ctx:
@@ -467,11 +473,17 @@ class TestRolesAndNames(SNRTestCase):
         self.assertIn("Role 'topside' has no components", err)
         self.assertIn("Add at least one factory", err)
 
-    def test_duplicate_component_names(self) -> None:
+    def test_same_factory_listed_twice(self) -> None:
         timeout = TimeoutLoopFactory(seconds=1)
         with self.assertRaises(ConfigError) as ctx:
             Node("test", self.get_config([timeout, timeout]))
-        for part in ("'timeout_loop'", "TimeoutLoop", "unique name", "listed twice"):
+        for part in ("'timeout_loop'", "TimeoutLoopFactory", "listed twice", "List it once"):
+            self.assertIn(part, str(ctx.exception))
+
+    def test_two_components_with_one_name(self) -> None:
+        with self.assertRaises(ConfigError) as ctx:
+            Node("test", self.get_config([FactoryOf(OnlyAHandler), FactoryOf(OnlyAHandler)]))
+        for part in ("'only_a_handler'", "OnlyAHandler", HERE, "unique name"):
             self.assertIn(part, str(ctx.exception))
 
 
@@ -558,7 +570,8 @@ class Rogue(ThreadLoop):
             "execute_task": lambda: node.execute_task(tasks.event("x")),
             "add_component": lambda: node.add_component(OnlyAHandler(FactoryOf(print), node)),
             "write_page": lambda: node.write_page(self.page("x", 1)),
-            "datastore": lambda: node.datastore.__setitem__("x", self.page("x", 1)),
+            "remove_component": lambda: node.remove_component("node_core"),
+            "handle_task": lambda: node.handle_task(print, tasks.event("x"), EV),
             "terminate": node.terminate,
         }
         for name, attempt in attempts.items():
@@ -579,14 +592,15 @@ class TestThreadSafety(SNRTestCase):
             "execute_task": "self.schedule(task)",
             "add_component": "self.schedule(tasks.add_component(factory))",
             "write_page": "self.store_page(page) or self.store_data(key, value)",
-            "datastore": "self.store_data(key, value)",
+            "remove_component": "self.schedule(tasks.remove_component(name))",
+            "handle_task": "self.schedule(task)",
             "terminate": "self.schedule(tasks.terminate(reason))",
         }
         self.assertEqual(set(rogue.errors), set(fixes))
         for method, fix in fixes.items():
             with self.subTest(method=method):
                 message = str(rogue.errors[method])
-                for part in (fix, HERE, "Rogue.loop", "snr-test-rogue"):
+                for part in (fix, HERE, "Rogue.loop", "snr-test-rogue", f"{method}()"):
                     self.assertIn(part, message)
         self.assertNotIn("x", node.datastore)
         self.assertEqual(node.terminate_reason, "Timeout")
@@ -768,7 +782,7 @@ class TestHandlerExceptions(SNRTestCase):
             "Crasher.on_depth",
             "endpoint 'crasher'",
             "ZeroDivisionError: division by zero",
-            "(store_page, 'depth')",
+            "(store_page, 'depth') carrying the page 'depth' with data 0",
             HERE,
             "1 / task.val_list[0].data",
             "Fix the handler",
@@ -779,6 +793,21 @@ class TestHandlerExceptions(SNRTestCase):
         cause = ctx.exception.__cause__
         assert cause is not None and cause.__traceback__ is not None
         self.assertTrue(cause.__traceback__.tb_frame.f_code.co_filename.endswith(HERE))
+
+    def test_unsafe_call_stops_the_loop_with_the_fix(self) -> None:
+        class Clock(ThreadLoop):
+            def loop(self) -> None:
+                self.parent.execute_task(tasks.event("tick"))
+
+        factory = LoopFactoryOf(lambda f, p: Clock(f, p, "clock"))
+        node = Node("test", self.get_config([factory, TimeoutLoopFactory(seconds=2)]))
+        with self.assertRaises(LoopError) as ctx:
+            node.loop()
+        message = str(ctx.exception)
+        for part in ("'clock'", "ThreadSafetyError", "self.schedule(task)", "Clock.loop", HERE):
+            self.assertIn(part, message)
+        self.assertNotIn("node.py", message)
+        self.assertNotIn("catch the error", message)  # the fix is the schedule call
 
     def test_loop_exception(self) -> None:
         node = Node("test", self.get_config([LoopFactoryOf(CrashingLoop)]))

@@ -14,7 +14,7 @@ import enum
 import logging
 import threading
 import time
-from typing import Any, Callable, Dict, List, Optional, Set
+from typing import Any, Dict, List, Optional, Set
 
 from snr.core.dispatch import HandlerTable
 from snr.core.logs import ensure_log_handler, level_for_mode
@@ -77,6 +77,14 @@ def _task_label(task: Task) -> str:
     return f"({task.type.name}, {task.name!r})"
 
 
+def _task_values(task: Task) -> str:
+    values = task.val_list
+    if len(values) == 1 and isinstance(values[0], Page):
+        page = values[0]
+        return f"carrying the page {page.key!r} with data {short_repr(page.data, 200)}"
+    return f"with values {short_repr(values, 200)}"
+
+
 def _describe_bad_result(result: Any) -> str:
     if isinstance(result, list):
         index, bad = next((i, t) for i, t in enumerate(result) if not isinstance(t, Task))
@@ -130,42 +138,8 @@ _THREAD_SAFE_INSTEAD = {
     "remove_component": "self.schedule(tasks.remove_component(name))",
     "reload_component": "self.schedule(tasks.reload_component(name))",
     "write_page": "self.store_page(page) or self.store_data(key, value)",
-    "datastore": "self.store_data(key, value)",
     "terminate": "self.schedule(tasks.terminate(reason))",
 }
-
-
-class _GuardedDatastore(Dict[DataKey, Page]):
-    """A node's datastore: reads are plain dict reads; writes check the thread.
-
-    The node itself writes with ``dict.__setitem__`` (no check, no cost); a
-    loop thread writing ``self.parent.datastore[key] = page`` gets a
-    ThreadSafetyError telling it to use ``self.store_data``.
-    """
-
-    def __init__(self, check_thread: Callable[[str], None]) -> None:
-        super().__init__()
-        self._check_thread = check_thread
-
-    def __setitem__(self, key: DataKey, page: Page) -> None:
-        self._check_thread("datastore")
-        super().__setitem__(key, page)
-
-    def __delitem__(self, key: DataKey) -> None:
-        self._check_thread("datastore")
-        super().__delitem__(key)
-
-    def update(self, *args: Any, **kwargs: Any) -> None:
-        self._check_thread("datastore")
-        super().update(*args, **kwargs)
-
-    def clear(self) -> None:
-        self._check_thread("datastore")
-        super().clear()
-
-    def pop(self, key: DataKey, *default: Any) -> Any:
-        self._check_thread("datastore")
-        return super().pop(key, *default)
 
 
 class Node(AbstractNode):
@@ -218,7 +192,7 @@ class Node(AbstractNode):
             self.log.setLevel(level_for_mode(self.mode))
         self.profiler = config.get_profiler()
         self.timer = Timer()
-        self.datastore: DataDict = _GuardedDatastore(self._check_owner_thread)
+        self.datastore: DataDict = {}
         self.queue = TaskQueue()
         self.components: Dict[ComponentName, AbstractComponent] = {}
         self.state = NodeState.CREATED
@@ -463,16 +437,19 @@ class Node(AbstractNode):
         message = (
             f"Task handler {describe_callable(handler)}{where} raised "
             f"{type(error).__name__}: {error}\nwhile handling the task {_task_label(task)} "
-            f"with values {short_repr(task.val_list, 200)}.\n"
+            f"{_task_values(task)}.\n"
             f"Where it happened (most recent call last):\n{frames}"
         )
         if self.mode is Mode.DEPLOYED:
             self.log.error("%s\nThe node keeps running.", message)
             return
-        failure = HandlerError(
-            f"{message}\nFix the handler, or catch the error in it if it can happen in "
-            "normal use (in Mode.DEPLOYED the node logs it and keeps running)."
+        fix = (
+            "Fix the handler as the message above says."
+            if isinstance(error, SNRError)
+            else "Fix the handler, or catch the error in it if it can happen in normal use "
+            "(in Mode.DEPLOYED the node logs it and keeps running)."
         )
+        failure = HandlerError(f"{message}\n{fix}")
         trim_runtime_frames(error)
         failure.__cause__ = error
         self._record_failure(failure)
@@ -501,11 +478,13 @@ class Node(AbstractNode):
         if self.mode is Mode.DEPLOYED:
             self.log.error("%s\nThe node keeps running without this loop.", message)
             return
-        failure = LoopError(
-            f"{message}\nFix loop() (or setup()), or catch the error there if it can "
-            "happen in normal use (in Mode.DEPLOYED the node keeps running without "
-            "the loop)."
+        fix = (
+            "Fix the loop as the message above says."
+            if isinstance(error, SNRError)
+            else "Fix loop() (or setup()), or catch the error there if it can happen in "
+            "normal use (in Mode.DEPLOYED the node keeps running without the loop)."
         )
+        failure = LoopError(f"{message}\n{fix}")
         trim_runtime_frames(error)
         failure.__cause__ = error
         self._record_failure(failure)
@@ -634,7 +613,7 @@ class Node(AbstractNode):
     def write_page(self, page: Page) -> None:
         """Put ``page`` in the datastore (the node core's store_page handler)."""
         self._check_owner_thread("write_page")
-        dict.__setitem__(self.datastore, page.key, page)  # checked above; skip the guard
+        self.datastore[page.key] = page
 
     # ------------------------------------------------------------------
     # Components
@@ -647,6 +626,7 @@ class Node(AbstractNode):
                 "`super().__init__()` (or `super().__init__(my_module)` to hot-reload "
                 "my_module) as its first line."
             )
+        component: Any  # get() is typed, but a student's get() may return anything
         try:
             component = factory.get(self)
         except SNRError:
@@ -661,9 +641,15 @@ class Node(AbstractNode):
         if component is None:
             return None
         if not isinstance(component, AbstractComponent):
+            get = describe_callable(type(factory).get)
+            if isinstance(component, type):
+                raise ComponentError(
+                    f"{get} returned the class {component.__name__} itself, not a "
+                    f"component made from it. Call the class: `return "
+                    f"{component.__name__}(self, parent)`."
+                )
             raise ComponentError(
-                f"{describe_class(type(factory))}.get() returned {component!r} "
-                f"({type(component).__name__}), "
+                f"{get} returned {short_repr(component)} ({type(component).__name__}), "
                 "not an endpoint or loop. get() must build and return the component, "
                 "e.g. `return MyEndpoint(self, parent)`."
             )
@@ -690,24 +676,26 @@ class Node(AbstractNode):
             not hasattr(component, "_task_handlers") and not hasattr(component, "parent")
         ):
             raise ComponentError(
-                f"{describe_class(type(component))}.__init__ did not call "
+                f"{describe_class(type(component))}: its __init__ did not call "
                 "super().__init__(factory, parent, name). Add that line first in "
                 "__init__ so SNR can give the component its name and task handlers."
             )
         name = component.name
         if name in self.components:
             other = self.components[name]
-            same_factory = getattr(other, "factory", None) is getattr(component, "factory", 0)
-            hint = (
-                " The same factory object built both: is it listed twice in the config?"
-                if same_factory
-                else ""
-            )
+            factory = getattr(component, "factory", None)
+            if getattr(other, "factory", None) is factory:
+                raise ConfigError(
+                    f"Node {self.role!r} got two components named {name!r} from the same "
+                    f"{type(factory).__name__} object: it is listed twice in the config, "
+                    "or its get() gives every component the same name. List it once, or "
+                    "add another factory object that uses another name."
+                )
             raise ConfigError(
                 f"Node {self.role!r} already has a component named {name!r} "
                 f"({describe_class(type(other))}); "
                 f"{describe_class(type(component))} wants the same name. Give each "
-                f"component a unique name (e.g. pass a name to its factory).{hint}"
+                "component a unique name (e.g. pass a name to its factory)."
             )
         self.components[name] = component
         if self._table_stale:
@@ -867,17 +855,13 @@ class Node(AbstractNode):
             and self._thread_id is not None
             and threading.get_ident() != self._thread_id
         ):
-            what = "node.datastore was changed" if method == "datastore" else f"{method}()"
-            if method != "datastore":
-                what += " was called"
             instead = _THREAD_SAFE_INSTEAD.get(method, "self.schedule(task)")
             raise ThreadSafetyError(
-                f"{what} on node {self.role!r} from thread "
+                f"{method}() was called on node {self.role!r} from thread "
                 f"{threading.current_thread().name!r} (at {caller_location()}), but only "
-                "the node's own thread may change the node: a loop runs on a thread of "
-                f"its own. Use {instead} instead: it queues the work for the node's "
-                "thread and is safe from any thread (self.schedule(task) and "
-                "self.store_data(key, value) always are)."
+                "the node's own thread may change the node, and a loop runs on a thread "
+                f"of its own. Use {instead} instead: it hands the work to the node's "
+                "thread and is safe from any thread."
             )
 
     def __repr__(self) -> str:

@@ -117,7 +117,10 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
     """
     by_requirer: Dict[type, List[str]] = {}
     for name in sorted(getattr(cls, "__abstractmethods__", ())):
-        by_requirer.setdefault(_requirer_of(cls, name), []).append(name)
+        requirer = _requirer_of(cls, name)
+        if requirer.__module__ == __name__:  # one of SNR's: name the one cls subclasses
+            requirer = _snr_interface(cls) or requirer
+        by_requirer.setdefault(requirer, []).append(name)
     lacks = "; and ".join(
         f"that {requirer.__name__} requires: {', '.join(names)}"
         for requirer, names in by_requirer.items()

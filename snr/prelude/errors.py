@@ -34,7 +34,6 @@ import enum
 import errno
 import inspect
 import os
-import socket
 import sys
 import traceback
 from types import FrameType, TracebackType
@@ -175,6 +174,8 @@ def describe_class(cls: type) -> str:
 
         describe_class(MovingAvgEndpoint)  # 'MovingAvgEndpoint (filters.py:40)'
     """
+    if cls.__module__.split(".", 1)[0] == "snr":
+        return f"{cls.__qualname__} (part of SNR)"  # not the student's file: no path
     try:
         path = inspect.getsourcefile(cls)
         line = inspect.getsourcelines(cls)[1]
@@ -230,7 +231,7 @@ def is_runtime_file(filename: str) -> bool:
 
 
 def student_frames(tb: Optional[TracebackType]) -> str:
-    """A traceback as text, starting at the first frame outside SNR's runtime.
+    """A traceback as text, with the frames of SNR's runtime left out.
 
     Example::
 
@@ -240,12 +241,12 @@ def student_frames(tb: Optional[TracebackType]) -> str:
             #     return 1 / 0
     """
     frames = traceback.extract_tb(tb)
-    start = 0
-    while start < len(frames) and is_runtime_file(frames[start].filename):
-        start += 1
-    if start == len(frames):  # nothing but SNR: show it all (a bug in SNR itself)
-        start = 0
-    return "".join(traceback.format_list(frames[start:])).rstrip()
+    theirs = traceback.StackSummary.from_list(
+        [f for f in frames if not is_runtime_file(f.filename)]
+    )
+    if not theirs:  # nothing but SNR: show it all (a bug in SNR itself)
+        theirs = frames
+    return "".join(theirs.format()).rstrip()
 
 
 def trim_runtime_frames(error: BaseException) -> None:
@@ -344,6 +345,8 @@ def _errno_of(error: OSError) -> Optional[int]:
 
 def _os_problem(action: OsAction, target: str, error: OSError) -> Tuple[str, str]:
     """(what is wrong, what to do) for an OSError, in plain words."""
+    import socket  # only needed here; keeps `import snr` light
+
     code = _errno_of(error)
     if isinstance(error, socket.gaierror):
         return (
