@@ -366,6 +366,7 @@ class TestHandlers(SNRTestCase):
         for key, hint in (
             ("depth", "(TaskType.store_page, 'depth')"),
             ("event", "Did you mean TaskType.event?"),
+            (("depth", TaskType.store_page), "(TaskType.store_page, 'depth')"),
         ):
             with self.subTest(key=key), self.assertRaises(ComponentError) as ctx:
                 Node("test", self.get_config([FactoryOf(partial(BareStringKey, key=key))]))
@@ -472,6 +473,15 @@ class TestRolesAndNames(SNRTestCase):
         err = self.run_cli(["main.py", "topside"])
         self.assertIn("Role 'topside' has no components", err)
         self.assertIn("Add at least one factory", err)
+
+    def test_factory_class_instead_of_object(self) -> None:
+        err = io.StringIO()
+        components: Any = {"robot": [TimeoutLoopFactory]}
+        with contextlib.redirect_stderr(err), self.assertRaises(SystemExit) as ctx:
+            CliRunner(components, ["main.py", "robot"]).run()
+        self.assertEqual(ctx.exception.code, 1)
+        for part in ("ConfigError", "Role 'robot' lists", "add () to make a factory object"):
+            self.assertIn(part, err.getvalue())
 
     def test_same_factory_listed_twice(self) -> None:
         timeout = TimeoutLoopFactory(seconds=1)

@@ -143,7 +143,9 @@ def check_task_id(key: Any, owner_class: type = object) -> None:
         return
     owner = describe_class(owner_class)
     hint = ""
-    if isinstance(key, str):
+    if isinstance(key, tuple) and len(key) == 2 and isinstance(key[1], TaskType):
+        hint = f" Put the TaskType first: ({key[1]!r}, {key[0]!r})."
+    elif isinstance(key, str):
         guess = closest_match(key, _TASK_TYPE_NAMES)
         if guess is not None:
             hint = f" Did you mean TaskType.{guess}?"

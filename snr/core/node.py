@@ -462,8 +462,8 @@ class Node(AbstractNode):
             # loop() raises this error once the node has stopped, so the log
             # gets one line now (shutdown can take a moment), not a duplicate.
             self._failure = error
-            first_line = str(error).split("\n", 1)[0]
-            self.log.error("Stopping node %r: %s", self.role, first_line)
+            first_sentence = str(error).split("\n", 1)[0].split(". ", 1)[0].rstrip(".")
+            self.log.error("Stopping node %r: %s.", self.role, first_sentence)
         else:
             self.log.error("%s", error)
         self.set_terminate_flag(f"stopped by a {type(error).__name__}")

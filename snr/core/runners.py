@@ -61,6 +61,19 @@ def _as_config(components_or_config: Union[AbstractConfig, ComponentsByRole]) ->
     return Config(components_or_config)
 
 
+def _config_or_exit(
+    components_or_config: Union[AbstractConfig, ComponentsByRole], exit_on_error: bool
+) -> AbstractConfig:
+    """The config; a wrong one is reported without a traceback (the runner is top level)."""
+    try:
+        return _as_config(components_or_config)
+    except ConfigError as error:
+        if not exit_on_error:
+            raise
+        report_error(error)
+        raise SystemExit(1) from None
+
+
 class SynchronousRunner(AbstractRunner):
     """Runs the node for one role in this process until it stops.
 
@@ -85,7 +98,7 @@ class SynchronousRunner(AbstractRunner):
         exit_on_error: bool = True,
     ) -> None:
         self.role = role
-        self.config = _as_config(config)
+        self.config = _config_or_exit(config, exit_on_error)
         self.exit_on_error = exit_on_error
         self.node: Optional[Node] = None
 
@@ -222,7 +235,9 @@ class CliRunner(AbstractRunner):
 
     ``python main.py urov`` runs the ``urov`` node; ``python main.py topside
     urov`` runs both, each in its own process. ``--mode deployed`` overrides
-    the config's mode. An unknown or missing role prints the known roles.
+    the config's mode. An unknown or missing role prints the known roles; a
+    wrong config or an SNR error while running prints its message (no
+    traceback through SNR) and exits with status 1.
 
     Example::
 
@@ -235,7 +250,7 @@ class CliRunner(AbstractRunner):
         components_or_config: Union[AbstractConfig, ComponentsByRole],
         argv: Optional[Sequence[str]] = None,
     ) -> None:
-        self.config = _as_config(components_or_config)
+        self.config = _config_or_exit(components_or_config, exit_on_error=True)
         self.argv = list(sys.argv if argv is None else argv)
 
     def parse(self) -> argparse.Namespace:

@@ -378,8 +378,8 @@ def _os_problem(action: OsAction, target: str, error: OSError) -> Tuple[str, str
         if code == errno.ECONNREFUSED:
             return (
                 "the connection was refused: nothing is listening there",
-                "Start the node that serves on that port (SNR keeps retrying), and check "
-                "that both sides of the link use the same host and port.",
+                "Start the node that serves on that port, and check that both sides of "
+                "the link use the same host and port.",
             )
         if code in _UNREACHABLE:
             return (
@@ -390,8 +390,7 @@ def _os_problem(action: OsAction, target: str, error: OSError) -> Tuple[str, str
     if code in _CLOSED:
         return (
             "the other side closed the connection",
-            "The other node probably stopped or crashed: look at its output. SNR "
-            "reconnects when it is back.",
+            "The other node probably stopped or crashed: look at its output.",
         )
     if action == "serial":
         if code in _NO_DEVICE:
