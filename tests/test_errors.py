@@ -50,6 +50,7 @@ from snr import (
     TimeoutLoopFactory,
     tasks,
 )
+from snr.core import MissingKeyHints
 from snr.prelude import MissingSuperInitError
 from snr.prelude.errors import (
     check_serializable,
@@ -520,7 +521,8 @@ class TestMissingDataKey(SNRTestCase):
                 Mode.DEBUG,
             ),
         )
-        node.typo_key_hint_s, node.missing_key_hint_s = typo_s, missing_s
+        assert node.key_hints is not None
+        node.key_hints.typo_s, node.key_hints.missing_s = typo_s, missing_s
         records: List[str] = []
         handler = _ListHandler(records)
         level = node.log.level
@@ -551,9 +553,28 @@ class TestMissingDataKey(SNRTestCase):
     def test_no_hint_before_the_grace_period(self) -> None:
         self.assertEqual(self.run_reader("speed", typo_s=0.02, missing_s=60), [])
 
+    def test_hints_with_a_fake_clock(self) -> None:
+        now = [0.0]
+        log = logging.getLogger("snr.test.key_hints")
+        hints = MissingKeyHints(log, lambda: now[0], typo_s=0.5, missing_s=5.0)
+        stored = ["depth", "speed"]
+        with self.assertLogs(log, "INFO") as logs:
+            for step in range(200):  # 20 s of reads at 10 Hz
+                now[0] = step * 0.1
+                hints.missed("depht", stored)  # a typo: hinted after 0.5 s
+                hints.missed("heading", stored)  # nothing like it: hinted after 5 s
+                if now[0] < 1.0:
+                    hints.missed("later", stored)  # stored after 1 s: never hinted
+            log.info("end")
+        self.assertEqual(len(logs.output), 3, logs.output)
+        typo, missing, _ = logs.output
+        self.assertIn("'depht'", typo)
+        self.assertIn("Did you mean 'depth'?", typo)
+        self.assertIn("'heading' has been read for 5.0 s", missing)
+
     def test_no_hint_outside_debug_mode(self) -> None:
         node = Node("test", self.get_config([TimeoutLoopFactory(seconds=1)], Mode.TEST))
-        self.assertFalse(node._hint_missing_keys)
+        self.assertIsNone(node.key_hints)
 
 
 class _ListHandler(logging.Handler):

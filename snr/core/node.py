@@ -17,6 +17,7 @@ import time
 from typing import Any, Dict, List, Optional, Set
 
 from snr.core.dispatch import HandlerTable
+from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.node_core import NodeCoreFactory
 from snr.core.task_queue import TaskQueue
@@ -48,7 +49,6 @@ from snr.prelude import (
 from snr.prelude.abstract import AbstractLoop, explain_abstract_error
 from snr.prelude.errors import (
     caller_location,
-    closest_match,
     describe_callable,
     describe_class,
     short_repr,
@@ -162,17 +162,13 @@ class Node(AbstractNode):
         terminate_reason: why the node stopped, once it has.
         join_timeout_s: how long shutdown waits for each loop's thread.
         slow_handler_s: in DEBUG/TEST mode, handlers slower than this are reported.
-        missing_key_hint_s: in DEBUG mode, a data key read for this long without
-            anything storing it gets a hint (once per key).
-        typo_key_hint_s: ... or after this long, when a stored key is spelled
-            almost the same (a likely typo).
+        key_hints: in DEBUG mode, the `MissingKeyHints` that log a hint for a
+            data key read but never stored (None in other modes).
     """
 
     join_timeout_s: float = 1.0
     slow_handler_s: float = 0.1
     idle_wake_s: float = 1.0
-    missing_key_hint_s: float = 5.0
-    typo_key_hint_s: float = 0.5
 
     def __init__(self, role: Role, config: AbstractConfig) -> None:
         if not isinstance(role, str) or not role:
@@ -207,10 +203,9 @@ class Node(AbstractNode):
         self._pending_adds: List[AbstractComponent] = []
         self._timed = self.profiler is not None or self.mode is not Mode.DEPLOYED
         self._slow_reported: Set[Any] = set()
-        self._hint_missing_keys = self.mode is Mode.DEBUG
-        self._missing_reads: Dict[DataKey, List[float]] = {}
-        self._missing_hinted: Set[DataKey] = set()
-        self._missing_lock = threading.Lock()
+        self.key_hints: Optional[MissingKeyHints] = (
+            MissingKeyHints(self.log, self.timer.current_s) if self.mode is Mode.DEBUG else None
+        )
 
         self.add_component(NodeCoreFactory().get(self), start=False)
         for factory in config.get(role):
@@ -533,78 +528,21 @@ class Node(AbstractNode):
         """The newest page under ``key``, or None; safe from any thread.
 
         In DEBUG mode, a key that stays missing gets one hint in the log (the
-        keys that exist, the closest match); see ``missing_key_hint_s``.
+        keys that exist, the closest match); see `MissingKeyHints`.
         """
         page = self.datastore.get(key)
-        if page is None and self._hint_missing_keys:
-            self._missing_key_read(key)
+        if page is None and self.key_hints is not None and self.state is NodeState.RUNNING:
+            self.key_hints.missed(key, self.datastore)
         return page
 
     def get_data(self, key: DataKey) -> Optional[Any]:
         """The newest data under ``key``, or None; safe from any thread."""
         page = self.datastore.get(key)
         if page is None:
-            if self._hint_missing_keys:
-                self._missing_key_read(key)
+            if self.key_hints is not None and self.state is NodeState.RUNNING:
+                self.key_hints.missed(key, self.datastore)
             return None
         return page.data
-
-    def _missing_key_read(self, key: DataKey) -> None:
-        """Hint once per key when reading a missing key looks like a mistake.
-
-        Reading a key before its first page arrives is normal (listing A.7
-        does), so there is no hint at first. After ``typo_key_hint_s`` a key
-        spelled almost like a stored one is reported (a likely typo); after
-        ``missing_key_hint_s`` any key still missing is. Checks are spaced
-        out, so a loop polling a missing key costs almost nothing.
-        """
-        if self.state is not NodeState.RUNNING or key in self._missing_hinted:
-            return
-        now = self.timer.current_s()
-        with self._missing_lock:
-            times = self._missing_reads.get(key)
-            if times is None:
-                if len(self._missing_reads) < 1000:
-                    self._missing_reads[key] = [now, now + self.typo_key_hint_s]
-                return
-            first_read_s, next_check_s = times
-            if now < next_check_s:
-                return
-            times[1] = min(now + 0.25, first_read_s + self.missing_key_hint_s)
-            waited_s = now - first_read_s
-            stored = [k for k in list(self.datastore) if isinstance(k, str)]
-            guess = closest_match(key, stored) if isinstance(key, str) else None
-            if guess is None and waited_s < self.missing_key_hint_s:
-                return
-            self._missing_hinted.add(key)
-            del self._missing_reads[key]
-        shown = ", ".join(repr(k) for k in stored[:20]) or "none yet"
-        where = caller_location()
-        footer = (
-            "get_data/get_page return None until something stores the key. (This hint "
-            "shows once per key, in DEBUG mode only.)"
-        )
-        if guess is not None:
-            self.log.warning(
-                "Nothing is stored under data key %r (read at %s). Did you mean %r? "
-                "Stored keys: %s. %s",
-                key,
-                where,
-                guess,
-                shown,
-                footer,
-            )
-        else:
-            self.log.info(
-                "Data key %r has been read for %.1f s (at %s) but nothing has stored it. "
-                "Stored keys: %s. If a component should store it, check that it runs "
-                "and spells the key the same way. %s",
-                key,
-                waited_s,
-                where,
-                shown,
-                footer,
-            )
 
     def get_time_s(self) -> float:
         """Seconds since this node was created."""
