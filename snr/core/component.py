@@ -8,7 +8,7 @@ talks to the rest of the node only through tasks and pages.
 from __future__ import annotations
 
 import logging
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from snr.core.dispatch import HandlerMap
 from snr.prelude import (
@@ -203,18 +203,24 @@ class Component(AbstractComponent):
         """Log a critical error (the component cannot go on)."""
         self.log.critical(msg, *args)
 
-    def __getattr__(self, attribute: str) -> Any:
-        # Only reached when normal lookup fails. Before Component.__init__ has
-        # run, every missing attribute means "super().__init__ was forgotten":
-        # say so instead of a bare AttributeError deep inside SNR.
-        if "_task_handlers" in self.__dict__ or attribute.startswith("__"):
-            raise AttributeError(f"{type(self).__name__!r} object has no attribute {attribute!r}")
-        raise MissingSuperInitError(
-            f"{describe_class(type(self))} has no {attribute!r} yet: its __init__ did "
-            "not call super().__init__(factory, parent, name), or used the component "
-            'before calling it. Make `super().__init__(factory, parent, "my_name")` '
-            "the first line of __init__."
-        )
+    if not TYPE_CHECKING:  # hidden from mypy, which would let any misspelt attribute pass
+
+        def __getattr__(self, attribute: str) -> Any:
+            # Only reached when normal lookup fails. Before Component.__init__ has
+            # run, every missing attribute means "super().__init__ was forgotten":
+            # say so instead of a bare AttributeError deep inside SNR.
+            if "_task_handlers" in self.__dict__ or attribute.startswith("__"):
+                error = AttributeError(
+                    f"{type(self).__name__!r} object has no attribute {attribute!r}"
+                )
+                error.name, error.obj = attribute, self  # Python's "Did you mean" uses these
+                raise error
+            raise MissingSuperInitError(
+                f"{describe_class(type(self))} has no {attribute!r} yet: its __init__ did "
+                "not call super().__init__(factory, parent, name), or used the component "
+                'before calling it. Make `super().__init__(factory, parent, "my_name")` '
+                "the first line of __init__."
+            )
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.__dict__.get('name', '?')!r}>"
