@@ -138,6 +138,18 @@ class DepthSensor(Sensor, Endpoint):
         super().__init__(factory, parent, "depth_sensor")
 
 
+class PressureSensor(Sensor):
+    """A plain (non-SNR) class that forgets read()."""
+
+    def calibrate(self) -> None:
+        pass
+
+
+def build_with_plain_sensor(factory: Any, parent: AbstractNode) -> OnlyAHandler:
+    PressureSensor()  # type: ignore[abstract]
+    return OnlyAHandler(factory, parent)
+
+
 class FactoryWithoutReload(AbstractFactory):
     def get(self, parent: AbstractNode) -> Any:
         return None
@@ -180,6 +192,14 @@ class TestForgottenMethods(SNRTestCase):
         message = str(ctx.exception)
         self.assertMessage(ctx.exception, "DepthSensor", HERE, "read")
         self.assertIn("Sensor requires", message)
+        self.assertNotIn("abstract class", message)
+
+    def test_plain_abstract_class_built_in_get_is_explained(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryOf(build_with_plain_sensor)]))
+        message = str(ctx.exception)
+        for part in ("PressureSensor", HERE, "Sensor requires: read", "build_with_plain_sensor"):
+            self.assertIn(part, message)
         self.assertNotIn("abstract class", message)
 
     def test_factory_implementing_interface_directly(self) -> None:

@@ -132,8 +132,8 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
             fixes.append("Easiest fix: " + _EASY_FIX[interface.__name__] + " Or add them.")
         else:
             fixes.append(
-                f"Add {', '.join(names)} to {cls.__name__}, with the arguments "
-                f"{requirer.__name__} gives them."
+                f"Add {', '.join(names)} to {cls.__name__}, with the same arguments as "
+                f"in {requirer.__name__}."
             )
     where = f" (It was being created at {created_at}.)" if created_at else ""
     return ComponentError(
