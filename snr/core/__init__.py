@@ -11,6 +11,7 @@ from snr.core.config import Config
 from snr.core.dispatch import HandlerMap, HandlerTable
 from snr.core.endpoint import Endpoint
 from snr.core.factory import EndpointFactory, Factory, LoopFactory
+from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler
 from snr.core.loop import LoopState, ThreadLoop
 from snr.core.node import Node, NodeState
@@ -32,6 +33,7 @@ __all__ = [
     "HandlerTable",
     "LoopFactory",
     "LoopState",
+    "MissingKeyHints",
     "MultiProcRunner",
     "Node",
     "NodeCoreEndpoint",

@@ -8,7 +8,7 @@ talks to the rest of the node only through tasks and pages.
 from __future__ import annotations
 
 import logging
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from snr.core.dispatch import HandlerMap
 from snr.prelude import (
@@ -18,12 +18,13 @@ from snr.prelude import (
     ComponentError,
     ComponentName,
     DataKey,
+    MissingSuperInitError,
     Page,
     SomeTasks,
     Task,
     TaskHandlerMap,
 )
-from snr.prelude.errors import describe_class
+from snr.prelude.errors import describe_class, short_repr
 
 __all__ = ["Component"]
 
@@ -53,6 +54,18 @@ class Component(AbstractComponent):
         if isinstance(factory, AbstractFactory) and isinstance(parent, AbstractNode) and valid_name:
             return  # the common case: no need to look up the source file
         me = describe_class(type(self))
+        if isinstance(factory, AbstractNode) and isinstance(parent, AbstractFactory):
+            raise ComponentError(
+                f"{me} passed the node as its factory and the factory as its parent: the "
+                f"arguments are swapped. Write {expected}, in that order (check the "
+                "order in your __init__ and in the factory's get() call too)."
+            )
+        if isinstance(factory, str) or isinstance(parent, str):
+            raise ComponentError(
+                f"{me} passed its arguments in the wrong order: {short_repr(factory, 40)}, "
+                f"{short_repr(parent, 40)}, {short_repr(name, 40)}. Write {expected}: "
+                "the factory first, then the parent node, then the name."
+            )
         if not isinstance(factory, AbstractFactory):
             raise ComponentError(
                 f"{me} passed {factory!r} as its factory. The first argument of {expected} "
@@ -96,6 +109,12 @@ class Component(AbstractComponent):
 
     @task_handlers.setter
     def task_handlers(self, handlers: TaskHandlerMap) -> None:
+        if "_task_handlers" not in self.__dict__:
+            raise MissingSuperInitError(
+                f"{describe_class(type(self))} sets self.task_handlers before calling "
+                "super().__init__(factory, parent, name). Call super().__init__(...) "
+                "first in __init__, then set task_handlers."
+            )
         self._task_handlers = HandlerMap(
             handlers, owner_class=type(self), on_change=self._handlers_changed
         )
@@ -184,5 +203,24 @@ class Component(AbstractComponent):
         """Log a critical error (the component cannot go on)."""
         self.log.critical(msg, *args)
 
+    if not TYPE_CHECKING:  # hidden from mypy, which would let any misspelt attribute pass
+
+        def __getattr__(self, attribute: str) -> Any:
+            # Only reached when normal lookup fails. Before Component.__init__ has
+            # run, every missing attribute means "super().__init__ was forgotten":
+            # say so instead of a bare AttributeError deep inside SNR.
+            if "_task_handlers" in self.__dict__ or attribute.startswith("__"):
+                error = AttributeError(
+                    f"{type(self).__name__!r} object has no attribute {attribute!r}"
+                )
+                error.name, error.obj = attribute, self  # Python's "Did you mean" uses these
+                raise error
+            raise MissingSuperInitError(
+                f"{describe_class(type(self))} has no {attribute!r} yet: its __init__ did "
+                "not call super().__init__(factory, parent, name), or used the component "
+                'before calling it. Make `super().__init__(factory, parent, "my_name")` '
+                "the first line of __init__."
+            )
+
     def __repr__(self) -> str:
-        return f"<{type(self).__name__} {self.name!r}>"
+        return f"<{type(self).__name__} {self.__dict__.get('name', '?')!r}>"

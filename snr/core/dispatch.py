@@ -143,7 +143,9 @@ def check_task_id(key: Any, owner_class: type = object) -> None:
         return
     owner = describe_class(owner_class)
     hint = ""
-    if isinstance(key, str):
+    if isinstance(key, tuple) and len(key) == 2 and isinstance(key[1], TaskType):
+        hint = f" Put the TaskType first: ({key[1]!r}, {key[0]!r})."
+    elif isinstance(key, str):
         guess = closest_match(key, _TASK_TYPE_NAMES)
         if guess is not None:
             hint = f" Did you mean TaskType.{guess}?"
@@ -161,6 +163,14 @@ def check_task_id(key: Any, owner_class: type = object) -> None:
 
 
 _checked_code: Set[CodeType] = set()
+
+
+def _param_text(param: inspect.Parameter) -> str:
+    if param.kind is inspect.Parameter.VAR_POSITIONAL:
+        return "*" + param.name
+    if param.kind is inspect.Parameter.VAR_KEYWORD:
+        return "**" + param.name
+    return param.name
 
 
 def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None:
@@ -192,12 +202,16 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
         signature.bind(object(), object())
     except TypeError:
         where = describe_callable(handler)
+        name = getattr(handler, "__name__", "handler")
+        params = [_param_text(p) for p in signature.parameters.values()]
+        self_ = "self, " if hasattr(handler, "__self__") else ""
+        if hasattr(handler, "__self__"):
+            params.insert(0, "self")
         raise ComponentError(
-            f"Task handler {where} for {key!r} has the signature "
-            f"{handler.__name__ if hasattr(handler, '__name__') else handler}"
-            f"{signature}, but SNR calls handlers with two arguments: the task and "
-            "the task id it matched. Write it as "
-            "`def handler(self, task: Task, key: TaskId) -> SomeTasks:`."
+            f"Task handler {where} for {key!r} is written as "
+            f"`def {name}({', '.join(params)})`, but SNR calls a handler with two "
+            "arguments: the task and the task id it matched. Write it as "
+            f"`def {name}({self_}task: Task, key: TaskId) -> SomeTasks:`."
         ) from None
     if code is not None:
         _checked_code.add(code)

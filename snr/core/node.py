@@ -9,14 +9,15 @@ read-only ``get_page``/``get_data``.
 
 from __future__ import annotations
 
+import dis
 import enum
 import logging
 import threading
 import time
-import traceback
 from typing import Any, Dict, List, Optional, Set
 
 from snr.core.dispatch import HandlerTable
+from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.node_core import NodeCoreFactory
 from snr.core.task_queue import TaskQueue
@@ -45,7 +46,15 @@ from snr.prelude import (
     TaskType,
     ThreadSafetyError,
 )
-from snr.prelude.errors import describe_callable, describe_class
+from snr.prelude.abstract import AbstractLoop, explain_abstract_error
+from snr.prelude.errors import (
+    caller_location,
+    describe_callable,
+    describe_class,
+    short_repr,
+    student_frames,
+    trim_runtime_frames,
+)
 
 __all__ = ["Node", "NodeState"]
 
@@ -68,6 +77,71 @@ def _task_label(task: Task) -> str:
     return f"({task.type.name}, {task.name!r})"
 
 
+def _task_values(task: Task) -> str:
+    values = task.val_list
+    if len(values) == 1 and isinstance(values[0], Page):
+        page = values[0]
+        return f"carrying the page {page.key!r} with data {short_repr(page.data, 200)}"
+    return f"with values {short_repr(values, 200)}"
+
+
+def _describe_bad_result(result: Any) -> str:
+    if isinstance(result, list):
+        index, bad = next((i, t) for i, t in enumerate(result) if not isinstance(t, Task))
+        return (
+            f"returned a list whose item {index} is {short_repr(bad)} ({type(bad).__name__}),"
+            " not a Task,"
+        )
+    return f"returned {short_repr(result)} ({type(result).__name__})"
+
+
+def _bad_result_hint(result: Any) -> str:
+    items = result if isinstance(result, (list, tuple)) else []
+    if isinstance(result, tuple) and all(isinstance(t, Task) for t in items):
+        return " Return a list, [task1, task2], not a tuple."
+    if isinstance(result, Page):
+        return " To store a page, return tasks.store_page(page)."
+    if isinstance(result, bool):
+        return " Return None when there is nothing to do."
+    if any(t is None for t in items):
+        return " Leave None out of the list."
+    if any(isinstance(t, (list, tuple)) for t in items):
+        return " Return one flat list of Tasks (join lists with + or extend)."
+    return ""
+
+
+def _only_returns_none(func: Any) -> bool:
+    """True if ``func``'s code has no ``return <value>``: it can only give None.
+
+    Read from the bytecode, not the source (which may not be on the robot).
+    """
+    code = getattr(getattr(func, "__func__", func), "__code__", None)
+    if code is None:
+        return False
+    previous: Optional[dis.Instruction] = None
+    for instruction in dis.get_instructions(code):
+        if instruction.opname == "RETURN_CONST" and instruction.argval is not None:
+            return False
+        if instruction.opname == "RETURN_VALUE" and not (
+            previous is not None and previous.opname == "LOAD_CONST" and previous.argval is None
+        ):
+            return False
+        previous = instruction
+    return True
+
+
+# What a loop thread should call instead of a method that changes node state.
+_THREAD_SAFE_INSTEAD = {
+    "execute_task": "self.schedule(task)",
+    "handle_task": "self.schedule(task)",
+    "add_component": "self.schedule(tasks.add_component(factory))",
+    "remove_component": "self.schedule(tasks.remove_component(name))",
+    "reload_component": "self.schedule(tasks.reload_component(name))",
+    "write_page": "self.store_page(page) or self.store_data(key, value)",
+    "terminate": "self.schedule(tasks.terminate(reason))",
+}
+
+
 class Node(AbstractNode):
     """Builds its components from the config's factories for ``role`` and runs them.
 
@@ -88,6 +162,8 @@ class Node(AbstractNode):
         terminate_reason: why the node stopped, once it has.
         join_timeout_s: how long shutdown waits for each loop's thread.
         slow_handler_s: in DEBUG/TEST mode, handlers slower than this are reported.
+        key_hints: in DEBUG mode, the `MissingKeyHints` that log a hint for a
+            data key read but never stored (None in other modes).
     """
 
     join_timeout_s: float = 1.0
@@ -127,19 +203,32 @@ class Node(AbstractNode):
         self._pending_adds: List[AbstractComponent] = []
         self._timed = self.profiler is not None or self.mode is not Mode.DEPLOYED
         self._slow_reported: Set[Any] = set()
+        self.key_hints: Optional[MissingKeyHints] = (
+            MissingKeyHints(self.log, self.timer.current_s) if self.mode is Mode.DEBUG else None
+        )
 
         self.add_component(NodeCoreFactory().get(self), start=False)
         for factory in config.get(role):
             component = self._build(factory)
             if component is None:
-                self.log.warning(
-                    "%s.get() returned None, so role %r gets no component from it. If "
-                    "you meant to add one, return it: `return MyEndpoint(self, parent)`.",
-                    type(factory).__name__,
-                    role,
-                )
+                self._got_none(factory)
                 continue
             self.add_component(component, start=False)
+
+    def _got_none(self, factory: AbstractFactory) -> None:
+        get = type(factory).get
+        if _only_returns_none(get):
+            raise ComponentError(
+                f"{describe_callable(get)} returned None: it has no `return` with a "
+                f"value, so role {self.role!r} can never get a component from it. Return "
+                "what it builds: `return MyEndpoint(self, parent)`."
+            )
+        self.log.warning(
+            "%s returned None this time, so role %r gets no component from it. If you "
+            "meant to add one, check the conditions before its `return`.",
+            describe_callable(get),
+            self.role,
+        )
 
     # ------------------------------------------------------------------
     # Control flow (thesis listing 6.1)
@@ -184,9 +273,14 @@ class Node(AbstractNode):
         return self._stop_requested
 
     def terminate(self) -> None:
-        """Halt, join and terminate every component, newest first. Idempotent."""
+        """Halt, join and terminate every component, newest first. Idempotent.
+
+        Only the node's thread may call it while the node runs; other threads
+        use ``set_terminate_flag`` or schedule ``tasks.terminate(reason)``.
+        """
         if self.state in (NodeState.TERMINATING, NodeState.TERMINATED):
             return
+        self._check_owner_thread("terminate")
         if not self._stop_requested:
             self.set_terminate_flag("terminate() called")
         self._running = False
@@ -263,6 +357,7 @@ class Node(AbstractNode):
 
     def handle_task(self, handler: TaskHandler, task: Task, key: TaskId) -> Optional[List[Task]]:
         """Run one handler with timing and error reporting; its tasks as a list."""
+        self._check_owner_thread("handle_task")
         owner = getattr(handler, "__self__", None)
         component = owner if isinstance(owner, AbstractComponent) else None
         return self.handle_task_entry(handler, task, key, component)
@@ -306,13 +401,10 @@ class Node(AbstractNode):
             return [result]
         if isinstance(result, list) and all(isinstance(t, Task) for t in result):
             return result
-        bad = result
-        if isinstance(result, list):
-            bad = next(t for t in result if not isinstance(t, Task))
         error = HandlerError(
-            f"Task handler {describe_callable(handler)} returned {bad!r} "
-            f"({type(bad).__name__}) while handling {_task_label(task)}. A handler must "
-            "return a Task, a list of Tasks, or None. To store a value, return "
+            f"Task handler {describe_callable(handler)} {_describe_bad_result(result)} "
+            f"while handling {_task_label(task)}. A handler must return a Task, a list of "
+            f"Tasks, or None.{_bad_result_hint(result)} To store a value, return "
             "self.store_data_task(key, value); to announce something, return "
             "tasks.event('name', [value])."
         )
@@ -332,17 +424,28 @@ class Node(AbstractNode):
         component: Optional[AbstractComponent],
         error: Exception,
     ) -> None:
-        where = f" of endpoint {component.name!r}" if component is not None else ""
-        student_frames = "".join(traceback.format_tb(error.__traceback__)[1:])
+        where = ""
+        if component is not None:
+            kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
+            where = f" of {kind} {component.name!r}"
+        frames = student_frames(error.__traceback__)
         message = (
             f"Task handler {describe_callable(handler)}{where} raised "
-            f"{type(error).__name__}: {error} while handling {_task_label(task)} "
-            f"with values {task.val_list!r}."
+            f"{type(error).__name__}: {error}\nwhile handling the task {_task_label(task)} "
+            f"{_task_values(task)}.\n"
+            f"Where it happened (most recent call last):\n{frames}"
         )
         if self.mode is Mode.DEPLOYED:
-            self.log.error("%s The node keeps running.\n%s", message, student_frames.rstrip())
+            self.log.error("%s\nThe node keeps running.", message)
             return
-        failure = HandlerError(f"{message}\nWhere it happened:\n{student_frames.rstrip()}")
+        fix = (
+            "Fix the handler as the message above says."
+            if isinstance(error, SNRError)
+            else "Fix the handler, or catch the error in it if it can happen in normal use "
+            "(in Mode.DEPLOYED the node logs it and keeps running)."
+        )
+        failure = HandlerError(f"{message}\n{fix}")
+        trim_runtime_frames(error)
         failure.__cause__ = error
         self._record_failure(failure)
 
@@ -350,21 +453,34 @@ class Node(AbstractNode):
         if self.mode is Mode.DEPLOYED:
             self.log.error("%s The node keeps running.", error)
             return
-        self.log.error("%s", error)
         if self._failure is None:
+            # loop() raises this error once the node has stopped, so the log
+            # gets one line now (shutdown can take a moment), not a duplicate.
             self._failure = error
-        self.set_terminate_flag(f"{type(error).__name__} (see the error above)")
+            first_sentence = str(error).split("\n", 1)[0].split(". ", 1)[0].rstrip(".")
+            self.log.error("Stopping node %r: %s.", self.role, first_sentence)
+        else:
+            self.log.error("%s", error)
+        self.set_terminate_flag(f"stopped by a {type(error).__name__}")
 
     def _loop_failed(self, loop: AbstractComponent, error: Exception) -> None:
-        frames = "".join(traceback.format_tb(error.__traceback__)[1:]).rstrip()
+        frames = student_frames(error.__traceback__)
         message = (
             f"Loop {loop.name!r} ({describe_class(type(loop))}) stopped: it raised "
-            f"{type(error).__name__}: {error}\nWhere it happened:\n{frames}"
+            f"{type(error).__name__}: {error}\nWhere it happened (most recent call last):"
+            f"\n{frames}"
         )
         if self.mode is Mode.DEPLOYED:
             self.log.error("%s\nThe node keeps running without this loop.", message)
             return
-        failure = LoopError(message)
+        fix = (
+            "Fix the loop as the message above says."
+            if isinstance(error, SNRError)
+            else "Fix loop() (or setup()), or catch the error there if it can happen in "
+            "normal use (in Mode.DEPLOYED the node keeps running without the loop)."
+        )
+        failure = LoopError(f"{message}\n{fix}")
+        trim_runtime_frames(error)
         failure.__cause__ = error
         self._record_failure(failure)
 
@@ -409,13 +525,24 @@ class Node(AbstractNode):
         self.queue.schedule(self.task_store_data(key, data, process))
 
     def get_page(self, key: DataKey) -> Optional[Page]:
-        """The newest page under ``key``, or None; safe from any thread."""
-        return self.datastore.get(key)
+        """The newest page under ``key``, or None; safe from any thread.
+
+        In DEBUG mode, a key that stays missing gets one hint in the log (the
+        keys that exist, the closest match); see `MissingKeyHints`.
+        """
+        page = self.datastore.get(key)
+        if page is None and self.key_hints is not None and self.state is NodeState.RUNNING:
+            self.key_hints.missed(key, self.datastore)
+        return page
 
     def get_data(self, key: DataKey) -> Optional[Any]:
         """The newest data under ``key``, or None; safe from any thread."""
         page = self.datastore.get(key)
-        return None if page is None else page.data
+        if page is None:
+            if self.key_hints is not None and self.state is NodeState.RUNNING:
+                self.key_hints.missed(key, self.datastore)
+            return None
+        return page.data
 
     def get_time_s(self) -> float:
         """Seconds since this node was created."""
@@ -437,17 +564,43 @@ class Node(AbstractNode):
                 "`super().__init__()` (or `super().__init__(my_module)` to hot-reload "
                 "my_module) as its first line."
             )
-        component = factory.get(self)
+        component: Any  # get() is typed, but a student's get() may return anything
+        try:
+            component = factory.get(self)
+        except SNRError:
+            raise
+        except TypeError as error:
+            explained = explain_abstract_error(error)
+            if explained is not None:
+                raise explained from None  # Python's "abstract class" text only confuses
+            raise self._get_failed(factory, error) from error
+        except Exception as error:
+            raise self._get_failed(factory, error) from error
         if component is None:
             return None
         if not isinstance(component, AbstractComponent):
+            get = describe_callable(type(factory).get)
+            if isinstance(component, type):
+                raise ComponentError(
+                    f"{get} returned the class {component.__name__} itself, not a "
+                    f"component made from it. Call the class: `return "
+                    f"{component.__name__}(self, parent)`."
+                )
             raise ComponentError(
-                f"{describe_class(type(factory))}.get() returned {component!r} "
-                f"({type(component).__name__}), "
+                f"{get} returned {short_repr(component)} ({type(component).__name__}), "
                 "not an endpoint or loop. get() must build and return the component, "
                 "e.g. `return MyEndpoint(self, parent)`."
             )
         return component
+
+    def _get_failed(self, factory: AbstractFactory, error: Exception) -> ComponentError:
+        frames = student_frames(error.__traceback__)
+        trim_runtime_frames(error)
+        return ComponentError(
+            f"{describe_callable(type(factory).get)} raised {type(error).__name__}: "
+            f"{error}\nwhile building a component for node {self.role!r}.\n"
+            f"Where it happened (most recent call last):\n{frames}"
+        )
 
     def add_component(self, component: AbstractComponent, start: bool = True) -> None:
         """Add a component; it begins at once if the node is running.
@@ -461,15 +614,24 @@ class Node(AbstractNode):
             not hasattr(component, "_task_handlers") and not hasattr(component, "parent")
         ):
             raise ComponentError(
-                f"{describe_class(type(component))}.__init__ did not call "
+                f"{describe_class(type(component))}: its __init__ did not call "
                 "super().__init__(factory, parent, name). Add that line first in "
                 "__init__ so SNR can give the component its name and task handlers."
             )
         name = component.name
         if name in self.components:
+            other = self.components[name]
+            factory = getattr(component, "factory", None)
+            if getattr(other, "factory", None) is factory:
+                raise ConfigError(
+                    f"Node {self.role!r} got two components named {name!r} from the same "
+                    f"{type(factory).__name__} object: it is listed twice in the config, "
+                    "or its get() gives every component the same name. List it once, or "
+                    "add another factory object that uses another name."
+                )
             raise ConfigError(
                 f"Node {self.role!r} already has a component named {name!r} "
-                f"({describe_class(type(self.components[name]))}); "
+                f"({describe_class(type(other))}); "
                 f"{describe_class(type(component))} wants the same name. Give each "
                 "component a unique name (e.g. pass a name to its factory)."
             )
@@ -575,9 +737,12 @@ class Node(AbstractNode):
         except SNRError:
             raise
         except Exception as error:
+            frames = student_frames(error.__traceback__)
+            trim_runtime_frames(error)
             raise ComponentError(
                 f"{describe_class(type(component))} {component.name!r} failed to start: "
-                f"{type(error).__name__}: {error}"
+                f"{type(error).__name__}: {error}\n"
+                f"Where it happened (most recent call last):\n{frames}"
             ) from error
 
     def _stop(self, component: AbstractComponent) -> None:
@@ -628,11 +793,13 @@ class Node(AbstractNode):
             and self._thread_id is not None
             and threading.get_ident() != self._thread_id
         ):
+            instead = _THREAD_SAFE_INSTEAD.get(method, "self.schedule(task)")
             raise ThreadSafetyError(
                 f"{method}() was called on node {self.role!r} from thread "
-                f"{threading.current_thread().name!r}, but only the node's own thread may "
-                "change its state. From a loop, use self.schedule(task) or "
-                "self.store_data(key, value): they queue the work for the node's thread."
+                f"{threading.current_thread().name!r} (at {caller_location()}), but only "
+                "the node's own thread may change the node, and a loop runs on a thread "
+                f"of its own. Use {instead} instead: it hands the work to the node's "
+                "thread and is safe from any thread."
             )
 
     def __repr__(self) -> str:

@@ -33,10 +33,26 @@ __all__ = [
     "MultiProcRunner",
     "SynchronousRunner",
     "TestRunner",
+    "report_error",
 ]
 
 INTERRUPTED_MESSAGE = "Interrupted by user, exiting"
 """What a runner prints when Ctrl-C stops it (as in thesis figure 5.4)."""
+
+
+def report_error(error: SNRError, role: Optional[Role] = None) -> None:
+    """Print an SNR error for a person: its message, without a framework traceback.
+
+    The message already names the student's file, class or handler and shows
+    their traceback frames; SNR's own frames would only hide it.
+
+    Example::
+
+        except SNRError as error:
+            report_error(error, "urov")   # HandlerError in node 'urov': Task handler ...
+    """
+    where = f" in node {role!r}" if role else ""
+    print(f"{type(error).__name__}{where}: {error}", file=sys.stderr, flush=True)
 
 
 def _as_config(components_or_config: Union[AbstractConfig, ComponentsByRole]) -> AbstractConfig:
@@ -45,8 +61,27 @@ def _as_config(components_or_config: Union[AbstractConfig, ComponentsByRole]) ->
     return Config(components_or_config)
 
 
+def _config_or_exit(
+    components_or_config: Union[AbstractConfig, ComponentsByRole], exit_on_error: bool
+) -> AbstractConfig:
+    """The config; a wrong one is reported without a traceback (the runner is top level)."""
+    try:
+        return _as_config(components_or_config)
+    except ConfigError as error:
+        if not exit_on_error:
+            raise
+        report_error(error)
+        raise SystemExit(1) from None
+
+
 class SynchronousRunner(AbstractRunner):
     """Runs the node for one role in this process until it stops.
+
+    It is the top of a student's program, so when the node stops with an
+    SNR error (a handler raised, a component is written wrongly, ...) it
+    prints the error's message, which points at the student's code, and
+    exits with status 1, instead of a traceback through SNR's internals.
+    Pass ``exit_on_error=False`` to get the exception instead.
 
     Example::
 
@@ -56,18 +91,33 @@ class SynchronousRunner(AbstractRunner):
         node: the node, once ``run()`` has built it.
     """
 
-    def __init__(self, role: Role, config: Union[AbstractConfig, ComponentsByRole]) -> None:
+    def __init__(
+        self,
+        role: Role,
+        config: Union[AbstractConfig, ComponentsByRole],
+        exit_on_error: bool = True,
+    ) -> None:
         self.role = role
-        self.config = _as_config(config)
+        self.config = _config_or_exit(config, exit_on_error)
+        self.exit_on_error = exit_on_error
         self.node: Optional[Node] = None
 
     def run(self) -> None:
-        """Build the node and run it; Ctrl-C stops it cleanly."""
+        """Build the node and run it; Ctrl-C stops it cleanly.
+
+        Raises:
+            SystemExit: with status 1 after printing an SNR error (see above).
+        """
         try:
             self.node = Node(self.role, self.config)
             self.node.loop()
         except KeyboardInterrupt:
             print(INTERRUPTED_MESSAGE, flush=True)
+        except SNRError as error:
+            if not self.exit_on_error:
+                raise
+            report_error(error, self.role)
+            raise SystemExit(1) from None
 
 
 class TestRunner(AbstractRunner):
@@ -112,11 +162,7 @@ class TestRunner(AbstractRunner):
 
 def _run_role(role: Role, config: AbstractConfig) -> None:
     """Entry point of each MultiProcRunner child process."""
-    try:
-        SynchronousRunner(role, config).run()
-    except SNRError as error:
-        print(f"[{role}] {type(error).__name__}: {error}", file=sys.stderr, flush=True)
-        sys.exit(1)
+    SynchronousRunner(role, config).run()  # prints an SNR error and exits with 1
 
 
 def _start_method(requested: Optional[str]) -> str:
@@ -189,7 +235,9 @@ class CliRunner(AbstractRunner):
 
     ``python main.py urov`` runs the ``urov`` node; ``python main.py topside
     urov`` runs both, each in its own process. ``--mode deployed`` overrides
-    the config's mode. An unknown or missing role prints the known roles.
+    the config's mode. An unknown or missing role prints the known roles; a
+    wrong config or an SNR error while running prints its message (no
+    traceback through SNR) and exits with status 1.
 
     Example::
 
@@ -202,7 +250,7 @@ class CliRunner(AbstractRunner):
         components_or_config: Union[AbstractConfig, ComponentsByRole],
         argv: Optional[Sequence[str]] = None,
     ) -> None:
-        self.config = _as_config(components_or_config)
+        self.config = _config_or_exit(components_or_config, exit_on_error=True)
         self.argv = list(sys.argv if argv is None else argv)
 
     def parse(self) -> argparse.Namespace:
@@ -254,5 +302,5 @@ class CliRunner(AbstractRunner):
             else:
                 MultiProcRunner(args.roles, config).run()
         except SNRError as error:
-            print(f"{type(error).__name__}: {error}", file=sys.stderr, flush=True)
+            report_error(error)
             raise SystemExit(1) from None

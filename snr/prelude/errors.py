@@ -16,6 +16,7 @@ The tree::
     SNRError
      +-- ConfigError          a config, role or factory list is wrong
      +-- ComponentError       an endpoint, loop or factory is written wrongly
+     |    +-- MissingSuperInitError  __init__ did not call super().__init__(...)
      +-- HandlerError         a task handler raised or returned a wrong value
      +-- LoopError            a loop's setup() or loop() raised
      +-- NodeStateError       a node was used in the wrong life-cycle state
@@ -27,10 +28,16 @@ The tree::
 
 from __future__ import annotations
 
+import dataclasses
 import difflib
+import enum
+import errno
 import inspect
 import os
-from typing import Any, Iterable, List, Optional
+import sys
+import traceback
+from types import FrameType, TracebackType
+from typing import Any, Iterable, List, Literal, Optional, Set, Tuple
 
 __all__ = [
     "CommsError",
@@ -38,14 +45,25 @@ __all__ = [
     "ConfigError",
     "HandlerError",
     "LoopError",
+    "MissingSuperInitError",
     "NodeStateError",
     "NotSerializableError",
     "SNRError",
     "ThreadSafetyError",
     "WireFormatError",
+    "caller_location",
+    "check_serializable",
     "closest_match",
     "describe_callable",
     "describe_class",
+    "explain_os_error",
+    "find_unserializable",
+    "frame_location",
+    "is_runtime_file",
+    "not_serializable_error",
+    "short_repr",
+    "student_frames",
+    "trim_runtime_frames",
 ]
 
 
@@ -71,6 +89,21 @@ class ComponentError(SNRError):
     """An endpoint, loop or factory is written in a way SNR cannot use.
 
     Example: a handler registered under a bare string key instead of a TaskType.
+    """
+
+
+class MissingSuperInitError(ComponentError, AttributeError):
+    """A component's ``__init__`` used the component before ``super().__init__``.
+
+    It is also an ``AttributeError``, so ``hasattr`` and ``getattr(obj, name,
+    default)`` keep working on a half-built component.
+
+    Example::
+
+        class Beeper(Endpoint):
+            def __init__(self, factory, parent):
+                self.task_handlers = {}          # MissingSuperInitError: too early
+                super().__init__(factory, parent, "beeper")
     """
 
 
@@ -141,6 +174,8 @@ def describe_class(cls: type) -> str:
 
         describe_class(MovingAvgEndpoint)  # 'MovingAvgEndpoint (filters.py:40)'
     """
+    if cls.__module__.split(".", 1)[0] == "snr":
+        return f"{cls.__qualname__} (part of SNR)"  # not the student's file: no path
     try:
         path = inspect.getsourcefile(cls)
         line = inspect.getsourcelines(cls)[1]
@@ -173,3 +208,369 @@ def closest_match(word: str, choices: Iterable[str]) -> Optional[str]:
     """
     found: List[str] = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
     return found[0] if found else None
+
+
+# ---------------------------------------------------------------------------
+# Pointing at the student's code, not SNR's
+# ---------------------------------------------------------------------------
+_SNR_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+_RUNTIME_DIRS = tuple(os.path.join(_SNR_DIR, sub) + os.sep for sub in ("core", "prelude"))
+
+
+def is_runtime_file(filename: str) -> bool:
+    """True for files of SNR's runtime (``snr/core``, ``snr/prelude``).
+
+    Frames from these files are framework plumbing: the student did not write
+    them, so reports skip them. ``snr/std_mods`` is component code and stays.
+
+    Example::
+
+        is_runtime_file(snr.core.node.__file__)   # True
+    """
+    return filename.startswith(_RUNTIME_DIRS)
+
+
+def student_frames(tb: Optional[TracebackType]) -> str:
+    """A traceback as text, with the frames of SNR's runtime left out.
+
+    Example::
+
+        except Exception as error:
+            print(student_frames(error.__traceback__))
+            #   File "robot.py", line 30, in on_depth
+            #     return 1 / 0
+    """
+    frames = traceback.extract_tb(tb)
+    theirs = traceback.StackSummary.from_list(
+        [f for f in frames if not is_runtime_file(f.filename)]
+    )
+    if not theirs:  # nothing but SNR: show it all (a bug in SNR itself)
+        theirs = frames
+    return "".join(theirs.format()).rstrip()
+
+
+def trim_runtime_frames(error: BaseException) -> None:
+    """Drop SNR's leading frames from ``error``'s traceback, in place.
+
+    Python's own report of the error (e.g. as the cause of a HandlerError)
+    then starts at the student's code.
+
+    Example::
+
+        trim_runtime_frames(error)
+        raise HandlerError("...") from error
+    """
+    tb = error.__traceback__
+    while tb is not None and is_runtime_file(tb.tb_frame.f_code.co_filename):
+        tb = tb.tb_next
+    if tb is not None:
+        error.__traceback__ = tb
+
+
+def caller_location(skip: int = 1) -> str:
+    """``"robot.py:42 in Rogue.loop"``: the nearest caller outside SNR's runtime.
+
+    Example::
+
+        raise ThreadSafetyError(f"... called from {caller_location()} ...")
+    """
+    frame: Optional[FrameType] = sys._getframe(skip)
+    while frame is not None and is_runtime_file(frame.f_code.co_filename):
+        frame = frame.f_back
+    if frame is None:
+        return "<unknown place>"
+    return frame_location(frame)
+
+
+def frame_location(frame: FrameType, line: Optional[int] = None) -> str:
+    """``"robot.py:12 in MyFactory.get"``: where a frame is (at ``line``, or now).
+
+    Example::
+
+        frame_location(sys._getframe())
+    """
+    code = frame.f_code
+    name = getattr(code, "co_qualname", code.co_name)
+    return f"{_short_path(code.co_filename)}:{frame.f_lineno if line is None else line} in {name}"
+
+
+def short_repr(value: Any, limit: int = 120) -> str:
+    """``repr(value)``, cut to ``limit`` characters so messages stay readable.
+
+    Example::
+
+        short_repr(list(range(1000)), 20)   # '[0, 1, 2, 3, 4, 5, …'
+    """
+    try:
+        text = repr(value)
+    except Exception as error:  # a broken __repr__ must not hide the real error
+        return f"<{type(value).__name__} whose repr() raised {type(error).__name__}>"
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
+# ---------------------------------------------------------------------------
+# Ports, connections and serial devices
+# ---------------------------------------------------------------------------
+OsAction = Literal["bind", "connect", "serial"]
+
+_VERBS = {"bind": "serve on", "connect": "connect to", "serial": "open serial port"}
+_UNREACHABLE = {
+    errno.ETIMEDOUT,
+    errno.EHOSTUNREACH,
+    errno.ENETUNREACH,
+    getattr(errno, "EHOSTDOWN", errno.EHOSTUNREACH),
+}
+_CLOSED = {errno.ECONNRESET, errno.EPIPE, errno.ECONNABORTED}
+_NO_DEVICE = {errno.ENOENT, errno.ENODEV, errno.ENXIO}
+_DENIED = {errno.EACCES, errno.EPERM}
+
+
+def _port_of(target: str) -> str:
+    port = target.rsplit(":", 1)[-1]
+    return port if port.isdigit() else "PORT"
+
+
+def _errno_of(error: OSError) -> Optional[int]:
+    if isinstance(error.errno, int):
+        return error.errno
+    # pyserial on some systems wraps the OS error in text only.
+    text = str(error)
+    if isinstance(error, FileNotFoundError) or "No such file" in text:
+        return errno.ENOENT
+    denied = "Permission denied" in text or "Access is denied" in text
+    if isinstance(error, PermissionError) or denied:
+        return errno.EACCES
+    return None
+
+
+def _os_problem(action: OsAction, target: str, error: OSError) -> Tuple[str, str]:
+    """(what is wrong, what to do) for an OSError, in plain words."""
+    import socket  # only needed here; keeps `import snr` light
+
+    code = _errno_of(error)
+    if isinstance(error, socket.gaierror):
+        return (
+            "the host name cannot be found",
+            "Check its spelling, or use the other machine's IP address, e.g. 192.168.1.20.",
+        )
+    if action == "bind":
+        if code == errno.EADDRINUSE:
+            port = _port_of(target)
+            return (
+                "the port is already in use",
+                "Another program has it: often an earlier run of this node that is still "
+                "running, or two components in the config serving on the same port. Stop "
+                f"the other program (find it with `lsof -i :{port}` on Linux and macOS, "
+                "`netstat -ano` on Windows) or choose another port in the config.",
+            )
+        if code == errno.EADDRNOTAVAIL:
+            return (
+                "that address does not belong to this machine",
+                "Serve on '0.0.0.0' (every network interface) or on this machine's own "
+                "IP address; check the host in the config.",
+            )
+        if code in _DENIED:
+            return (
+                "permission denied",
+                "Ports below 1024 need administrator rights: use a port from 1024 to 65535.",
+            )
+    if action == "connect":
+        if code == errno.ECONNREFUSED:
+            return (
+                "the connection was refused: nothing is listening there",
+                "Start the node that serves on that port, and check that both sides of "
+                "the link use the same host and port.",
+            )
+        if code in _UNREACHABLE:
+            return (
+                "the other machine did not answer",
+                "Check that it is switched on and on the same network, and that the IP "
+                "address in the config is right (try `ping` with it).",
+            )
+    if code in _CLOSED:
+        return (
+            "the other side closed the connection",
+            "The other node probably stopped or crashed: look at its output.",
+        )
+    if action == "serial":
+        if code in _NO_DEVICE:
+            return (
+                "there is no such serial port",
+                "Is the device plugged in and powered? List the ports with "
+                "`python -m serial.tools.list_ports`: on Linux they look like "
+                "/dev/ttyUSB0 or /dev/ttyACM0, on macOS /dev/cu.usbmodem..., on "
+                "Windows COM3. Put the right one in the config.",
+            )
+        if code in _DENIED:
+            return (
+                "permission denied",
+                "On Linux, add your user to the dialout group "
+                "(`sudo usermod -aG dialout $USER`), then log out and back in. On "
+                "Windows, close any other program that has the port open.",
+            )
+        if code == errno.EBUSY:
+            return (
+                "another program is using the port",
+                "Close it (an Arduino serial monitor, screen, minicom, another node) "
+                "and try again.",
+            )
+    reason = os.strerror(code) if code is not None else str(error)
+    return (reason[:1].lower() + reason[1:], "Check the host, port or device name in the config.")
+
+
+def explain_os_error(
+    error: OSError,
+    *,
+    action: OsAction,
+    target: str,
+    role: str = "",
+    component: str = "",
+) -> CommsError:
+    """Turn an OSError from bind, connect or a serial open into a CommsError.
+
+    The message says what failed (port or device, node, component), what is
+    wrong in plain words, and what to do. The OSError becomes its ``__cause__``.
+
+    Args:
+        error: what ``socket.bind``/``connect`` or ``serial.Serial()`` raised.
+        action: ``"bind"`` (serving), ``"connect"`` or ``"serial"`` (opening a port).
+        target: ``"127.0.0.1:9000"`` or ``"/dev/ttyUSB0"``.
+        role: the node's role, e.g. ``parent.role``.
+        component: the component's name.
+
+    Example::
+
+        try:
+            server.bind((host, port))
+        except OSError as error:
+            raise explain_os_error(
+                error, action="bind", target=f"{host}:{port}", role=self.parent.role,
+                component=self.name,
+            ) from error
+    """
+    what, fix = _os_problem(action, target, error)
+    where = f" for node {role!r}" if role else ""
+    if component:
+        where += f" (component {component!r})"
+    original = f"{type(error).__name__}: {error}"
+    comms_error = CommsError(f"Cannot {_VERBS[action]} {target}{where}: {what}. {fix} ({original})")
+    comms_error.__cause__ = error
+    return comms_error
+
+
+# ---------------------------------------------------------------------------
+# Data that cannot cross between nodes
+# ---------------------------------------------------------------------------
+_JSON_SCALARS = (str, int, float, bool, type(None))
+_MAX_DEPTH = 100
+_KEY_PROBLEM = "key"
+_LOOP_PROBLEM = "loop"
+_TYPE_PROBLEM = "type"
+_Found = Tuple[str, Any, str]  # (path, offending value, which problem)
+
+
+def find_unserializable(value: Any, path: str = "data") -> Optional[Tuple[str, Any]]:
+    """Where JSON cannot hold ``value``: ``(path, the offending part)``, or None.
+
+    JSON holds dicts (with str, int, float, bool or None keys), lists,
+    tuples, str, int, float, bool and None.
+
+    Example::
+
+        find_unserializable({"pose": [1.0, 2.0, {3}]})
+        # ("data['pose'][2]", {3})
+
+    For a dict key JSON cannot hold, the path is the dict's and the part is the key.
+    """
+    found = _find(value, path, set(), 0)
+    return None if found is None else (found[0], found[1])
+
+
+def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optional[_Found]:
+    if isinstance(value, _JSON_SCALARS):
+        return None
+    if not isinstance(value, (list, tuple, dict)):
+        return path, value, _TYPE_PROBLEM
+    if id(value) in open_containers or depth > _MAX_DEPTH:
+        return path, value, _LOOP_PROBLEM
+    open_containers.add(id(value))
+    try:
+        if isinstance(value, dict):
+            for key, item in value.items():
+                if not isinstance(key, _JSON_SCALARS):
+                    return path, key, _KEY_PROBLEM
+                found = _find(item, f"{path}[{key!r}]", open_containers, depth + 1)
+                if found is not None:
+                    return found
+        else:
+            for index, item in enumerate(value):
+                found = _find(item, f"{path}[{index}]", open_containers, depth + 1)
+                if found is not None:
+                    return found
+        return None
+    finally:
+        open_containers.discard(id(value))
+
+
+def _serializable_hint(value: Any, problem: str) -> str:
+    if problem == _LOOP_PROBLEM:
+        return "It contains itself (or nests too deep); send a copy without the loop."
+    if problem == _KEY_PROBLEM:
+        return "Dict keys sent between nodes must be str (or numbers): use str(key)."
+    if isinstance(value, (set, frozenset)):
+        return "Send a list instead: list(value), or sorted(value) for a stable order."
+    if isinstance(value, (bytes, bytearray)):
+        return "Send text or numbers instead: value.hex(), or list(value)."
+    if isinstance(value, enum.Enum):
+        return "Send value.name or value.value instead."
+    if isinstance(value, complex):
+        return "Send [value.real, value.imag] instead."
+    if hasattr(value, "tolist"):
+        return "Convert it with value.tolist() (numpy arrays and numbers)."
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        return "Convert it with dataclasses.asdict(value)."
+    return "Send a dict or list of plain values instead, e.g. built from the object's fields."
+
+
+def not_serializable_error(key: str, data: Any, where: str = "") -> NotSerializableError:
+    """A NotSerializableError naming the key, the path inside the data and the type.
+
+    Args:
+        key: the data key of the page.
+        data: the page's data.
+        where: extra context, e.g. ``" by component 'sockets_client'"``.
+
+    Example::
+
+        not_serializable_error("pose", {"pose": [1, 2, {3}]})
+        # "Cannot send the page stored under 'pose' to another node: data['pose'][2]
+        #  is a set ({3}), which JSON cannot hold. Send a list instead: ..."
+    """
+    found = _find(data, "data", set(), 0)
+    head = f"Cannot send the page stored under {key!r}{where} to another node"
+    allowed = (
+        "Data sent between nodes may only hold dicts, lists, tuples, str, int, "
+        "float, bool and None."
+    )
+    if found is None:
+        return NotSerializableError(f"{head}: it cannot be written as JSON. {allowed}")
+    path, bad, problem = found
+    if problem == _KEY_PROBLEM:
+        what = f"{path} has a key that is a {type(bad).__name__} ({short_repr(bad, 60)})"
+    else:
+        what = f"{path} is a {type(bad).__name__} ({short_repr(bad, 60)})"
+    return NotSerializableError(
+        f"{head}: {what}, which JSON cannot hold. {_serializable_hint(bad, problem)} {allowed}"
+    )
+
+
+def check_serializable(key: str, data: Any, where: str = "") -> None:
+    """Raise a NotSerializableError unless ``data`` can be sent as JSON.
+
+    Example::
+
+        check_serializable("pose", {"x": 1.0})      # fine
+        check_serializable("pose", {"x": {1.0}})    # NotSerializableError: data['x'] is a set
+    """
+    if find_unserializable(data) is not None:
+        raise not_serializable_error(key, data, where)

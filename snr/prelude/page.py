@@ -7,6 +7,7 @@ from typing import Any
 
 from dataclasses_json import DataClassJsonMixin
 
+from snr.prelude.errors import not_serializable_error
 from snr.prelude.names import DataKey
 
 __all__ = ["Page"]
@@ -42,8 +43,16 @@ class Page(DataClassJsonMixin):
     process: bool = True
 
     def serialize(self) -> str:
-        """This page as JSON text (the data must be JSON-able)."""
-        return self.to_json()
+        """This page as JSON text (the data must be JSON-able).
+
+        Raises:
+            NotSerializableError: naming the key and where in the data the
+                part JSON cannot hold is, e.g. ``data['pose'][2] is a set``.
+        """
+        try:
+            return self.to_json()
+        except (TypeError, ValueError, OverflowError, RecursionError) as error:
+            raise not_serializable_error(self.key, self.data) from error
 
     @classmethod
     def deserialize(cls, text: str) -> Page:

@@ -1,0 +1,114 @@
+"""`MissingKeyHints`: one log hint per data key that is read but never stored.
+
+``get_data``/``get_page`` return None for a key nothing has stored: that is
+the thesis API, and reading a key before its first page arrives is normal
+(listing A.7 does). A misspelled key looks exactly the same, though, so in
+DEBUG mode the node asks this helper to watch the misses and say something
+when one looks like a mistake:
+
+* after ``typo_s`` a missing key spelled almost like a stored one (warning,
+  with the closest match), or
+* after ``missing_s`` any key still missing (info).
+
+Each key is reported at most once, and the closest-match search runs at most
+every ``CHECK_EVERY_S`` per key, so a loop polling a missing key stays cheap.
+"""
+
+from __future__ import annotations
+
+import logging
+import threading
+from typing import Callable, Dict, Iterable, List, Optional, Set
+
+from snr.prelude import DataKey
+from snr.prelude.errors import caller_location, closest_match
+
+__all__ = ["MissingKeyHints"]
+
+
+class MissingKeyHints:
+    """Watches reads of missing data keys and logs a hint when one looks wrong.
+
+    Args:
+        log: where hints go (the node's logger).
+        clock: seconds, e.g. ``node.timer.current_s``.
+
+    Example::
+
+        hints = MissingKeyHints(node.log, node.timer.current_s)
+        if page is None:
+            hints.missed("depht", node.datastore)   # may log "Did you mean 'depth'?"
+    """
+
+    CHECK_EVERY_S = 0.25
+    MAX_WATCHED_KEYS = 1000
+
+    def __init__(
+        self,
+        log: logging.Logger,
+        clock: Callable[[], float],
+        typo_s: float = 0.5,
+        missing_s: float = 5.0,
+    ) -> None:
+        self.log = log
+        self.clock = clock
+        self.typo_s = typo_s
+        self.missing_s = missing_s
+        self._first_and_next_check: Dict[DataKey, List[float]] = {}
+        self._reported: Set[DataKey] = set()
+        self._lock = threading.Lock()  # loops read keys from their own threads
+
+    def missed(self, key: DataKey, stored_keys: Iterable[DataKey]) -> None:
+        """Note a read of ``key`` that found nothing; maybe log a hint."""
+        if key in self._reported:
+            return
+        now = self.clock()
+        with self._lock:
+            times = self._first_and_next_check.get(key)
+            if times is None:
+                if len(self._first_and_next_check) < self.MAX_WATCHED_KEYS:
+                    self._first_and_next_check[key] = [now, now + self.typo_s]
+                return
+            first_read_s, next_check_s = times
+            if now < next_check_s:
+                return
+            times[1] = min(now + self.CHECK_EVERY_S, first_read_s + self.missing_s)
+            waited_s = now - first_read_s
+            stored = [k for k in list(stored_keys) if isinstance(k, str)]
+            guess = closest_match(key, stored) if isinstance(key, str) else None
+            if guess is None and waited_s < self.missing_s:
+                return
+            self._reported.add(key)
+            del self._first_and_next_check[key]
+        self._report(key, guess, stored, waited_s)
+
+    def _report(
+        self, key: DataKey, guess: Optional[str], stored: List[str], waited_s: float
+    ) -> None:
+        shown = ", ".join(repr(k) for k in stored[:20]) or "none yet"
+        where = caller_location()
+        footer = (
+            "get_data/get_page return None until something stores the key. (This hint "
+            "shows once per key, in DEBUG mode only.)"
+        )
+        if guess is not None:
+            self.log.warning(
+                "Nothing is stored under data key %r (read at %s). Did you mean %r? "
+                "Stored keys: %s. %s",
+                key,
+                where,
+                guess,
+                shown,
+                footer,
+            )
+        else:
+            self.log.info(
+                "Data key %r has been read for %.1f s (at %s) but nothing has stored it. "
+                "Stored keys: %s. If a component should store it, check that it runs "
+                "and spells the key the same way. %s",
+                key,
+                waited_s,
+                where,
+                shown,
+                footer,
+            )

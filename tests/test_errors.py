@@ -1,0 +1,918 @@
+"""Errors that teach: one test per entry of docs/errors.md.
+
+Each test makes the mistake as a student would write it and checks the
+message names their class or handler, their file, and the fix.
+"""
+
+from __future__ import annotations
+
+import contextlib
+import errno
+import io
+import logging
+import os
+import socket
+import subprocess
+import sys
+import textwrap
+import time
+import unittest
+from abc import ABC, abstractmethod
+from functools import partial
+from typing import Any, Callable, Dict, List, Optional
+
+from snr import (
+    AbstractEndpoint,
+    AbstractFactory,
+    AbstractNode,
+    CliRunner,
+    CommsError,
+    ComponentError,
+    ComponentsByRole,
+    ConfigError,
+    Endpoint,
+    EndpointFactory,
+    HandlerError,
+    LoopError,
+    LoopFactory,
+    Mode,
+    Node,
+    NotSerializableError,
+    Page,
+    SNRTestCase,
+    SomeTasks,
+    SynchronousRunner,
+    Task,
+    TaskId,
+    TaskType,
+    ThreadLoop,
+    ThreadSafetyError,
+    TimeoutLoopFactory,
+    tasks,
+)
+from snr.core import MissingKeyHints
+from snr.prelude import MissingSuperInitError
+from snr.prelude.errors import (
+    check_serializable,
+    explain_os_error,
+    find_unserializable,
+    not_serializable_error,
+)
+
+HERE = "test_errors.py"
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+EV = TaskType.event
+
+
+class FactoryOf(EndpointFactory):
+    """Builds whatever ``build(factory, parent)`` returns: one factory for many mistakes."""
+
+    def __init__(self, build: Callable[[Any, AbstractNode], Any]) -> None:
+        super().__init__()
+        self.build = build
+
+    def get(self, parent: AbstractNode) -> Any:
+        return self.build(self, parent)
+
+
+class LoopFactoryOf(LoopFactory):
+    def __init__(self, build: Callable[[Any, AbstractNode], Any]) -> None:
+        super().__init__()
+        self.build = build
+
+    def get(self, parent: AbstractNode) -> Any:
+        return self.build(self, parent)
+
+
+# -- 1. forgotten methods -----------------------------------------------------
+class OnlyAHandler(Endpoint):
+    """Writes no begin/halt/terminate: they are optional."""
+
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "only_a_handler")
+        self.task_handlers = {(EV, "ping"): self.on_ping}
+        self.pings = 0
+
+    def on_ping(self, task: Task, key: TaskId) -> SomeTasks:
+        self.pings += 1
+        return None
+
+
+class OnlyALoop(ThreadLoop):
+    """Writes no setup/halt/terminate: they are optional."""
+
+    def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "only_a_loop", max_tick_rate_hz=100)
+
+    def loop(self) -> None:
+        self.schedule(tasks.event("ping"))
+
+
+class NoLoopMethod(ThreadLoop):
+    def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "sensor")
+
+    def lop(self) -> None:  # typo: should be loop
+        pass
+
+
+class HalfEndpoint(AbstractEndpoint):
+    """Implements the interface directly and forgets most of it."""
+
+    def __init__(self, factory: AbstractFactory, parent: AbstractNode) -> None:
+        self.factory, self.parent, self.name = factory, parent, "half"
+
+    def begin(self) -> None:
+        pass
+
+
+class Sensor(ABC):
+    """A student's own abstract base class."""
+
+    @abstractmethod
+    def read(self) -> float: ...
+
+
+class DepthSensor(Sensor, Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "depth_sensor")
+
+
+class PressureSensor(Sensor):
+    """A plain (non-SNR) class that forgets read()."""
+
+    def calibrate(self) -> None:
+        pass
+
+
+def build_with_plain_sensor(factory: Any, parent: AbstractNode) -> OnlyAHandler:
+    PressureSensor()  # type: ignore[abstract]
+    return OnlyAHandler(factory, parent)
+
+
+class FactoryWithoutReload(AbstractFactory):
+    def get(self, parent: AbstractNode) -> Any:
+        return None
+
+
+class TestForgottenMethods(SNRTestCase):
+    def test_lifecycle_hooks_are_optional(self) -> None:
+        endpoint = FactoryOf(OnlyAHandler)
+        node = self.run_test_node(
+            [endpoint, LoopFactoryOf(OnlyALoop), TimeoutLoopFactory(seconds=0.1)]
+        )
+        handler = node.components["only_a_handler"]
+        assert isinstance(handler, OnlyAHandler)
+        self.assertGreater(handler.pings, 0)
+
+    def test_missing_loop_method(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([LoopFactoryOf(NoLoopMethod)]))
+        self.assertMessage(ctx.exception, "NoLoopMethod", HERE, "def loop(self) -> None:")
+
+    def test_interface_implemented_directly_names_missing_methods(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryOf(HalfEndpoint)]))
+        message = str(ctx.exception)
+        self.assertMessage(ctx.exception, "HalfEndpoint", HERE, "subclass snr.Endpoint")
+        self.assertIn("halt, join, store_page, task_handlers, terminate", message)
+        self.assertIn("FactoryOf.get", message)  # where it was being created
+        self.assertNotIn("abstract class", message)
+
+    def test_direct_construction_is_explained_too(self) -> None:
+        # Thesis listing 7.1 built the class straight from a test.
+        with self.assertRaises(ComponentError) as ctx:
+            HalfEndpoint(FactoryOf(OnlyAHandler), self.mock_node())  # type: ignore[abstract]
+        self.assertIn("test_direct_construction_is_explained_too", str(ctx.exception))
+        self.assertNotIn("abstract class", str(ctx.exception))
+
+    def test_students_own_abstract_base_is_explained(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryOf(DepthSensor)]))
+        message = str(ctx.exception)
+        self.assertMessage(ctx.exception, "DepthSensor", HERE, "read")
+        self.assertIn("Sensor requires", message)
+        self.assertNotIn("abstract class", message)
+
+    def test_plain_abstract_class_built_in_get_is_explained(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryOf(build_with_plain_sensor)]))
+        message = str(ctx.exception)
+        for part in ("PressureSensor", HERE, "Sensor requires: read", "build_with_plain_sensor"):
+            self.assertIn(part, message)
+        self.assertNotIn("abstract class", message)
+
+    def test_factory_implementing_interface_directly(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            FactoryWithoutReload()  # type: ignore[abstract]
+        self.assertMessage(ctx.exception, "FactoryWithoutReload", HERE, "snr.EndpointFactory")
+        self.assertIn("reload", str(ctx.exception))
+
+    def test_factory_without_get(self) -> None:
+        class NoGetFactory(EndpointFactory):
+            pass
+
+        with self.assertRaises(ComponentError) as ctx:
+            NoGetFactory()
+        self.assertMessage(ctx.exception, "NoGetFactory", HERE, "def get(self, parent")
+
+    def assertMessage(self, error: BaseException, *parts: str) -> None:
+        for part in parts:
+            self.assertIn(part, str(error))
+
+
+# -- 2. super().__init__ forgotten or given the wrong arguments -------------------
+class HandlersTooEarly(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        self.task_handlers = {(EV, "go"): self.go}
+        super().__init__(factory, parent, "too_early")
+
+    def go(self, task: Task, key: TaskId) -> SomeTasks:
+        return None
+
+
+class LogsTooEarly(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        self.info("starting")
+        super().__init__(factory, parent, "logs_too_early")
+
+
+class NoSuperInit(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        self.factory = factory
+
+
+class SwappedArguments(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(parent, factory, "swapped")  # type: ignore[arg-type]
+
+
+class NameFirst(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__("name_first", factory, parent)  # type: ignore[arg-type]
+
+
+class FactoryNoSuperInit(EndpointFactory):
+    def __init__(self) -> None:
+        self.settings = 1
+
+    def get(self, parent: AbstractNode) -> OnlyAHandler:
+        return OnlyAHandler(self, parent)
+
+
+class TestSuperInit(SNRTestCase):
+    def build(self, cls: Callable[[Any, AbstractNode], Any]) -> BaseException:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryOf(cls)]))
+        return ctx.exception
+
+    def test_task_handlers_set_before_super_init(self) -> None:
+        error = self.build(HandlersTooEarly)
+        self.assertIsInstance(error, MissingSuperInitError)
+        for part in ("HandlersTooEarly", HERE, "before calling super().__init__"):
+            self.assertIn(part, str(error))
+
+    def test_component_used_before_super_init(self) -> None:
+        error = self.build(LogsTooEarly)
+        self.assertIsInstance(error, MissingSuperInitError)
+        for part in ("LogsTooEarly", HERE, "super().__init__(factory, parent"):
+            self.assertIn(part, str(error))
+        self.assertIsInstance(error, AttributeError)  # hasattr() still works
+
+    def test_super_init_never_called(self) -> None:
+        error = self.build(NoSuperInit)
+        for part in ("NoSuperInit", HERE, "did not call super().__init__(factory, parent, name)"):
+            self.assertIn(part, str(error))
+
+    def test_swapped_arguments(self) -> None:
+        error = self.build(SwappedArguments)
+        for part in ("SwappedArguments", HERE, "swapped", "super().__init__(factory, parent"):
+            self.assertIn(part, str(error))
+
+    def test_name_first(self) -> None:
+        error = self.build(NameFirst)
+        for part in ("NameFirst", HERE, "wrong order", "the factory first"):
+            self.assertIn(part, str(error))
+
+    def test_factory_without_super_init(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryNoSuperInit()]))
+        for part in ("FactoryNoSuperInit", HERE, "super().__init__()"):
+            self.assertIn(part, str(ctx.exception))
+
+
+# -- 3, 4, 5. handlers: signature, return value, key ----------------------------
+class OneArgumentHandler(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "one_arg")
+        self.task_handlers = {(EV, "go"): self.go}  # type: ignore[dict-item]
+
+    def go(self, task: Task) -> SomeTasks:
+        return None
+
+
+class CalledHandler(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "called")
+        self.task_handlers = {(EV, "go"): self.go()}  # type: ignore[dict-item]
+
+    def go(self) -> SomeTasks:
+        return None
+
+
+class Returns(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode, value: Any) -> None:
+        super().__init__(factory, parent, "returns")
+        self.value = value
+        self.task_handlers = {(EV, "go"): self.go}
+
+    def go(self, task: Task, key: TaskId) -> SomeTasks:
+        return self.value  # type: ignore[no-any-return]
+
+
+class BareStringKey(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode, key: Any) -> None:
+        super().__init__(factory, parent, "bare_key")
+        self.task_handlers = {key: self.on_depth}
+
+    def on_depth(self, task: Task, key: TaskId) -> SomeTasks:
+        return None
+
+
+class TestHandlers(SNRTestCase):
+    def test_wrong_signature_found_at_start_up(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryOf(OneArgumentHandler)]))
+        for part in (
+            "OneArgumentHandler.go",
+            HERE,
+            "`def go(self, task)`",
+            "`def go(self, task: Task, key: TaskId) -> SomeTasks:`",
+        ):
+            self.assertIn(part, str(ctx.exception))
+
+    def test_handler_called_instead_of_named(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryOf(CalledHandler)]))
+        for part in ("CalledHandler", HERE, "instead of naming it"):
+            self.assertIn(part, str(ctx.exception))
+
+    def run_returning(self, value: Any) -> str:
+        factory = FactoryOf(lambda f, p: Returns(f, p, value))
+        node = Node("test", self.get_config([factory, TimeoutLoopFactory(seconds=2)]))
+        node.schedule(tasks.event("go", [1]))
+        with self.assertRaises(HandlerError) as ctx:
+            node.loop()
+        message = str(ctx.exception)
+        for part in ("Returns.go", HERE, "(event, 'go')", "a Task, a list of Tasks, or None"):
+            self.assertIn(part, message)
+        return message
+
+    def test_wrong_return_value(self) -> None:
+        self.assertIn("returned 5 (int)", self.run_returning(5))
+
+    def test_wrong_return_value_hints(self) -> None:
+        cases = {
+            "not a tuple": (tasks.event("a"), tasks.event("b")),
+            "Leave None out": [tasks.event("a"), None],
+            "one flat list": [tasks.event("a"), [tasks.event("b")]],
+            "tasks.store_page(page)": Page("k", 1, "test", 0.0),
+            "Return None when": True,
+        }
+        for hint, value in cases.items():
+            with self.subTest(hint=hint):
+                self.assertIn(hint, self.run_returning(value))
+
+    def test_bare_string_key(self) -> None:
+        for key, hint in (
+            ("depth", "(TaskType.store_page, 'depth')"),
+            ("event", "Did you mean TaskType.event?"),
+            (("depth", TaskType.store_page), "(TaskType.store_page, 'depth')"),
+        ):
+            with self.subTest(key=key), self.assertRaises(ComponentError) as ctx:
+                Node("test", self.get_config([FactoryOf(partial(BareStringKey, key=key))]))
+            for part in ("BareStringKey", HERE, hint):
+                self.assertIn(part, str(ctx.exception))
+
+
+# -- 6. factories whose get() returns the wrong thing ------------------------------
+class ReturnsAFactory(EndpointFactory):
+    def get(self, parent: AbstractNode) -> Any:
+        return self
+
+
+class ForgetsToReturn(EndpointFactory):
+    def get(self, parent: AbstractNode) -> Any:
+        OnlyAHandler(self, parent)
+
+
+class SometimesNothing(EndpointFactory):
+    def __init__(self, enabled: bool) -> None:
+        super().__init__()
+        self.enabled = enabled
+
+    def get(self, parent: AbstractNode) -> Optional[OnlyAHandler]:
+        if self.enabled:
+            return OnlyAHandler(self, parent)
+        return None
+
+
+class TestFactoryGet(SNRTestCase):
+    def test_returns_something_that_is_not_a_component(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([ReturnsAFactory()]))
+        for part in ("ReturnsAFactory", HERE, "not an endpoint or loop", "return MyEndpoint("):
+            self.assertIn(part, str(ctx.exception))
+
+    def test_returns_the_class_instead_of_an_object(self) -> None:
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryOf(lambda factory, parent: OnlyAHandler)]))
+        for part in ("FactoryOf.get", HERE, "the class OnlyAHandler itself", "OnlyAHandler(self"):
+            self.assertIn(part, str(ctx.exception))
+
+    def test_forgets_to_return(self) -> None:
+        for mode in Mode:
+            with self.subTest(mode=mode), self.assertRaises(ComponentError) as ctx:
+                Node("test", self.get_config([ForgetsToReturn()], mode))
+            for part in ("ForgetsToReturn.get", HERE, "no `return` with a value"):
+                self.assertIn(part, str(ctx.exception))
+
+    def test_none_this_time_is_a_warning_not_an_error(self) -> None:
+        with self.assertLogs("snr.test", "WARNING") as logs:
+            node = Node("test", self.get_config([SometimesNothing(False)]))
+        self.assertIn("SometimesNothing.get", logs.output[0])
+        self.assertIn("returned None this time", logs.output[0])
+        self.assertEqual(list(node.components), ["node_core"])
+
+    def test_get_that_raises_shows_student_frames(self) -> None:
+        def broken(factory: Any, parent: AbstractNode) -> Any:
+            settings: Dict[str, Any] = {}
+            return settings["missing"]
+
+        with self.assertRaises(ComponentError) as ctx:
+            Node("test", self.get_config([FactoryOf(broken)]))
+        message = str(ctx.exception)
+        for part in ("FactoryOf.get", "KeyError", HERE, "in broken", "node 'test'"):
+            self.assertIn(part, message)
+        self.assertNotIn("node.py", message)
+
+
+# -- 7, 8. roles and names ---------------------------------------------------------
+class TestRolesAndNames(SNRTestCase):
+    components: ComponentsByRole = {
+        "urov": [TimeoutLoopFactory(seconds=0.05)],
+        "topside": [],
+    }
+
+    def run_cli(self, argv: List[str]) -> str:
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), self.assertRaises(SystemExit) as ctx:
+            CliRunner(self.components, argv).run()
+        self.assertNotEqual(ctx.exception.code, 0)
+        return err.getvalue()
+
+    def test_unknown_role_on_command_line(self) -> None:
+        err = self.run_cli(["main.py", "urv"])
+        for part in ("Unknown role 'urv'", "'urov', 'topside'", "Did you mean 'urov'?"):
+            self.assertIn(part, err)
+        self.assertNotIn("Traceback", err)
+
+    def test_no_role_on_command_line(self) -> None:
+        err = self.run_cli(["main.py"])
+        for part in ("no role given", "urov, topside", "python main.py urov"):
+            self.assertIn(part, err)
+
+    def test_unknown_role_in_synchronous_runner(self) -> None:
+        err = io.StringIO()
+        with contextlib.redirect_stderr(err), self.assertRaises(SystemExit) as ctx:
+            SynchronousRunner("urv", self.components).run()
+        self.assertEqual(ctx.exception.code, 1)
+        self.assertIn("ConfigError", err.getvalue())
+        self.assertIn("Did you mean 'urov'?", err.getvalue())
+
+    def test_empty_role(self) -> None:
+        err = self.run_cli(["main.py", "topside"])
+        self.assertIn("Role 'topside' has no components", err)
+        self.assertIn("Add at least one factory", err)
+
+    def test_factory_class_instead_of_object(self) -> None:
+        err = io.StringIO()
+        components: Any = {"robot": [TimeoutLoopFactory]}
+        with contextlib.redirect_stderr(err), self.assertRaises(SystemExit) as ctx:
+            CliRunner(components, ["main.py", "robot"]).run()
+        self.assertEqual(ctx.exception.code, 1)
+        for part in ("ConfigError", "Role 'robot' lists", "add () to make a factory object"):
+            self.assertIn(part, err.getvalue())
+
+    def test_same_factory_listed_twice(self) -> None:
+        timeout = TimeoutLoopFactory(seconds=1)
+        with self.assertRaises(ConfigError) as ctx:
+            Node("test", self.get_config([timeout, timeout]))
+        for part in ("'timeout_loop'", "TimeoutLoopFactory", "listed twice", "List it once"):
+            self.assertIn(part, str(ctx.exception))
+
+    def test_two_components_with_one_name(self) -> None:
+        with self.assertRaises(ConfigError) as ctx:
+            Node("test", self.get_config([FactoryOf(OnlyAHandler), FactoryOf(OnlyAHandler)]))
+        for part in ("'only_a_handler'", "OnlyAHandler", HERE, "unique name"):
+            self.assertIn(part, str(ctx.exception))
+
+
+# -- 9. reading a data key nothing has stored ---------------------------------------
+class Reader(ThreadLoop):
+    def __init__(self, factory: LoopFactory, parent: AbstractNode, key: str) -> None:
+        super().__init__(factory, parent, "reader", max_tick_rate_hz=200)
+        self.key = key
+        self.seen: List[Any] = []
+
+    def setup(self) -> None:
+        self.store_data("depth", 1.5)
+
+    def loop(self) -> None:
+        self.seen.append(self.get_data(self.key))
+
+
+class TestMissingDataKey(SNRTestCase):
+    def run_reader(self, key: str, typo_s: float, missing_s: float) -> List[str]:
+        node = Node(
+            "test",
+            self.get_config(
+                [LoopFactoryOf(lambda f, p: Reader(f, p, key)), TimeoutLoopFactory(seconds=0.3)],
+                Mode.DEBUG,
+            ),
+        )
+        assert node.key_hints is not None
+        node.key_hints.typo_s, node.key_hints.missing_s = typo_s, missing_s
+        records: List[str] = []
+        handler = _ListHandler(records)
+        level = node.log.level
+        node.log.setLevel(logging.INFO)  # the "snr.test" logger is shared with other tests
+        node.log.addHandler(handler)
+        try:
+            node.loop()
+        finally:
+            node.log.removeHandler(handler)
+            node.log.setLevel(level)
+        reader = node.components["reader"]
+        assert isinstance(reader, Reader)
+        self.assertIn(None, reader.seen)  # get_data keeps returning None
+        return [r for r in records if "get_data/get_page return None" in r]
+
+    def test_typo_gets_one_hint_with_the_closest_key(self) -> None:
+        hints = self.run_reader("depht", typo_s=0.02, missing_s=60)
+        self.assertEqual(len(hints), 1, hints)  # once, though read ~50 times
+        for part in ("'depht'", "Did you mean 'depth'?", "'depth'", HERE, "Reader.loop"):
+            self.assertIn(part, hints[0])
+
+    def test_key_never_stored_gets_one_hint_after_a_while(self) -> None:
+        hints = self.run_reader("speed", typo_s=0.02, missing_s=0.1)
+        self.assertEqual(len(hints), 1, hints)
+        for part in ("'speed'", "nothing has stored it", "'depth'", "Reader.loop"):
+            self.assertIn(part, hints[0])
+
+    def test_no_hint_before_the_grace_period(self) -> None:
+        self.assertEqual(self.run_reader("speed", typo_s=0.02, missing_s=60), [])
+
+    def test_hints_with_a_fake_clock(self) -> None:
+        now = [0.0]
+        log = logging.getLogger("snr.test.key_hints")
+        hints = MissingKeyHints(log, lambda: now[0], typo_s=0.5, missing_s=5.0)
+        stored = ["depth", "speed"]
+        with self.assertLogs(log, "INFO") as logs:
+            for step in range(200):  # 20 s of reads at 10 Hz
+                now[0] = step * 0.1
+                hints.missed("depht", stored)  # a typo: hinted after 0.5 s
+                hints.missed("heading", stored)  # nothing like it: hinted after 5 s
+                if now[0] < 1.0:
+                    hints.missed("later", stored)  # stored after 1 s: never hinted
+            log.info("end")
+        self.assertEqual(len(logs.output), 3, logs.output)
+        typo, missing, _ = logs.output
+        self.assertIn("'depht'", typo)
+        self.assertIn("Did you mean 'depth'?", typo)
+        self.assertIn("'heading' has been read for 5.0 s", missing)
+
+    def test_no_hint_outside_debug_mode(self) -> None:
+        node = Node("test", self.get_config([TimeoutLoopFactory(seconds=1)], Mode.TEST))
+        self.assertIsNone(node.key_hints)
+
+
+class _ListHandler(logging.Handler):
+    def __init__(self, records: List[str]) -> None:
+        super().__init__(logging.INFO)
+        self.records = records
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.records.append(record.getMessage())
+
+
+# -- 10. changing node state from a loop thread -------------------------------------
+class Rogue(ThreadLoop):
+    """Tries every unsafe call once from its own thread, recording the errors."""
+
+    def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "rogue")
+        self.errors: Dict[str, ThreadSafetyError] = {}
+
+    def loop(self) -> None:
+        node = self.parent
+        assert isinstance(node, Node)
+        attempts: Dict[str, Callable[[], Any]] = {
+            "execute_task": lambda: node.execute_task(tasks.event("x")),
+            "add_component": lambda: node.add_component(OnlyAHandler(FactoryOf(print), node)),
+            "write_page": lambda: node.write_page(self.page("x", 1)),
+            "remove_component": lambda: node.remove_component("node_core"),
+            "handle_task": lambda: node.handle_task(print, tasks.event("x"), EV),
+            "terminate": node.terminate,
+        }
+        for name, attempt in attempts.items():
+            try:
+                attempt()
+            except ThreadSafetyError as error:
+                self.errors[name] = error
+        self.set_terminate_flag("tried everything")
+
+
+class TestThreadSafety(SNRTestCase):
+    def test_loop_thread_cannot_change_node_state(self) -> None:
+        factory = LoopFactoryOf(Rogue)
+        node = self.run_test_node([factory, TimeoutLoopFactory(seconds=0.3)])
+        rogue = node.components["rogue"]
+        assert isinstance(rogue, Rogue)
+        fixes = {
+            "execute_task": "self.schedule(task)",
+            "add_component": "self.schedule(tasks.add_component(factory))",
+            "write_page": "self.store_page(page) or self.store_data(key, value)",
+            "remove_component": "self.schedule(tasks.remove_component(name))",
+            "handle_task": "self.schedule(task)",
+            "terminate": "self.schedule(tasks.terminate(reason))",
+        }
+        self.assertEqual(set(rogue.errors), set(fixes))
+        for method, fix in fixes.items():
+            with self.subTest(method=method):
+                message = str(rogue.errors[method])
+                for part in (fix, HERE, "Rogue.loop", "snr-test-rogue", f"{method}()"):
+                    self.assertIn(part, message)
+        self.assertNotIn("x", node.datastore)
+        self.assertEqual(node.terminate_reason, "Timeout")
+
+
+# -- 11. a blocking call in a handler -------------------------------------------------
+class Sleepy(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "sleepy")
+        self.task_handlers = {(EV, "nap"): self.nap}
+
+    def nap(self, task: Task, key: TaskId) -> SomeTasks:
+        time.sleep(0.05)
+        return None
+
+
+class TestBlockingHandler(SNRTestCase):
+    def test_slow_handler_is_named_with_its_time(self) -> None:
+        for mode in (Mode.DEBUG, Mode.TEST):
+            with self.subTest(mode=mode):
+                node = Node(
+                    "test",
+                    self.get_config([FactoryOf(Sleepy), TimeoutLoopFactory(seconds=0.3)], mode),
+                )
+                node.slow_handler_s = 0.01
+                node.schedule([tasks.event("nap"), tasks.event("nap")])
+                with self.assertLogs("snr.test", "WARNING") as logs:
+                    node.loop()
+                slow = [line for line in logs.output if "Sleepy.nap" in line]
+                self.assertEqual(len(slow), 1)  # once per handler, not per call
+                for part in (HERE, "took 0.0", "(event, 'nap')", "ThreadLoop", "time.sleep"):
+                    self.assertIn(part, slow[0])
+
+
+# -- 12. ports and serial devices -----------------------------------------------------
+class TestOsErrors(unittest.TestCase):
+    def test_port_in_use(self) -> None:
+        with socket.socket() as first, socket.socket() as second:
+            first.bind(("127.0.0.1", 0))
+            first.listen()
+            port = first.getsockname()[1]
+            with self.assertRaises(OSError) as ctx:
+                second.bind(("127.0.0.1", port))
+        error = explain_os_error(
+            ctx.exception,
+            action="bind",
+            target=f"127.0.0.1:{port}",
+            role="urov",
+            component="server",
+        )
+        self.assertIsInstance(error, CommsError)
+        message = str(error)
+        for part in (
+            f"Cannot serve on 127.0.0.1:{port}",
+            "node 'urov'",
+            "'server'",
+            "already in use",
+            f"lsof -i :{port}",
+            "choose another port",
+        ):
+            self.assertIn(part, message)
+        self.assertIs(error.__cause__, ctx.exception)
+
+    def test_connection_refused(self) -> None:
+        with socket.socket() as probe:
+            probe.bind(("127.0.0.1", 0))
+            port = probe.getsockname()[1]
+        with socket.socket() as client, self.assertRaises(OSError) as ctx:
+            client.connect(("127.0.0.1", port))
+        message = str(explain_os_error(ctx.exception, action="connect", target=f"127.0.0.1:{port}"))
+        for part in (f"Cannot connect to 127.0.0.1:{port}", "refused", "Start the node"):
+            self.assertIn(part, message)
+
+    def test_serial_port_missing(self) -> None:
+        path = "/dev/snr-no-such-port"
+        with self.assertRaises(OSError) as ctx:
+            open(path, "rb").close()
+        message = str(explain_os_error(ctx.exception, action="serial", target=path, role="urov"))
+        for part in (
+            f"Cannot open serial port {path}",
+            "no such serial port",
+            "plugged in",
+            "serial.tools.list_ports",
+        ):
+            self.assertIn(part, message)
+
+    def test_serial_port_missing_from_pyserial(self) -> None:
+        try:
+            import serial
+        except ImportError:  # pragma: no cover - pyserial is an extra
+            self.skipTest("pyserial is not installed")
+        with self.assertRaises(OSError) as ctx:
+            serial.Serial("/dev/snr-no-such-port", 9600, timeout=0.1)
+        path = "/dev/snr-no-such-port"
+        message = str(explain_os_error(ctx.exception, action="serial", target=path))
+        self.assertIn("no such serial port", message)
+
+    def test_serial_permission_denied(self) -> None:
+        denied = PermissionError(errno.EACCES, "Permission denied", "/dev/ttyUSB0")
+        message = str(explain_os_error(denied, action="serial", target="/dev/ttyUSB0"))
+        for part in ("permission denied", "dialout", "usermod"):
+            self.assertIn(part, message)
+
+    def test_low_port_needs_rights(self) -> None:
+        denied = PermissionError(errno.EACCES, "Permission denied")
+        message = str(explain_os_error(denied, action="bind", target="0.0.0.0:80"))
+        self.assertIn("1024", message)
+
+    def test_unknown_host(self) -> None:
+        error = socket.gaierror(socket.EAI_NONAME, "Name or service not known")
+        message = str(explain_os_error(error, action="connect", target="robto.local:9000"))
+        self.assertIn("host name cannot be found", message)
+
+
+# -- 13. data that cannot be sent between nodes -----------------------------------------
+class TestNotSerializable(unittest.TestCase):
+    def test_path_to_the_bad_part(self) -> None:
+        self.assertEqual(find_unserializable({"pose": [1.0, 2.0, {3}]}), ("data['pose'][2]", {3}))
+        self.assertIsNone(find_unserializable({"pose": (1.0, 2.0), "ok": [None, True, "x"]}))
+
+    def test_message_names_key_path_type_and_fix(self) -> None:
+        message = str(not_serializable_error("pose", {"pose": [1.0, 2.0, {3}]}))
+        for part in ("'pose'", "data['pose'][2] is a set", "list(value)"):
+            self.assertIn(part, message)
+
+    def test_other_kinds(self) -> None:
+        class Pose:
+            pass
+
+        loop: List[Any] = []
+        loop.append(loop)
+        for data, part in (
+            ({(1, 2): "a"}, "has a key that is a tuple"),
+            ({"raw": b"\x00"}, "value.hex()"),
+            ({"mode": Mode.DEBUG}, "value.name or value.value"),
+            ({"pose": Pose()}, "data['pose'] is a Pose"),
+            (loop, "contains itself"),
+        ):
+            with self.subTest(part=part), self.assertRaises(NotSerializableError) as ctx:
+                check_serializable("k", data)
+            self.assertIn(part, str(ctx.exception))
+
+    def test_page_serialize_names_the_path(self) -> None:
+        class Pose:
+            pass
+
+        page = Page("pose", {"history": [1, Pose()]}, "urov", 0.0)
+        with self.assertRaises(NotSerializableError) as ctx:
+            page.serialize()
+        self.assertIn("data['history'][1] is a Pose", str(ctx.exception))
+
+
+# -- 14. an exception inside a handler ---------------------------------------------------
+class Crasher(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "crasher")
+        self.task_handlers = {(TaskType.store_page, "depth"): self.on_depth}
+
+    def on_depth(self, task: Task, key: TaskId) -> SomeTasks:
+        return self.store_data_task("speed", 1 / task.val_list[0].data)
+
+
+class CrashingLoop(ThreadLoop):
+    def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "crashing_loop")
+
+    def loop(self) -> None:
+        raise RuntimeError("High velocity impact")
+
+
+class TestHandlerExceptions(SNRTestCase):
+    def test_message_shows_student_frames_and_task(self) -> None:
+        node = Node("test", self.get_config([FactoryOf(Crasher), TimeoutLoopFactory(seconds=2)]))
+        node.schedule(tasks.store_data("depth", 0))
+        with self.assertRaises(HandlerError) as ctx:
+            node.loop()
+        message = str(ctx.exception)
+        for part in (
+            "Crasher.on_depth",
+            "endpoint 'crasher'",
+            "ZeroDivisionError: division by zero",
+            "(store_page, 'depth') carrying the page 'depth' with data 0",
+            HERE,
+            "1 / task.val_list[0].data",
+            "Fix the handler",
+        ):
+            self.assertIn(part, message)
+        self.assertNotIn("node.py", message)
+        # The chained original error's traceback starts in the student's code too.
+        cause = ctx.exception.__cause__
+        assert cause is not None and cause.__traceback__ is not None
+        self.assertTrue(cause.__traceback__.tb_frame.f_code.co_filename.endswith(HERE))
+
+    def test_unsafe_call_stops_the_loop_with_the_fix(self) -> None:
+        class Clock(ThreadLoop):
+            def loop(self) -> None:
+                self.parent.execute_task(tasks.event("tick"))
+
+        factory = LoopFactoryOf(lambda f, p: Clock(f, p, "clock"))
+        node = Node("test", self.get_config([factory, TimeoutLoopFactory(seconds=2)]))
+        with self.assertRaises(LoopError) as ctx:
+            node.loop()
+        message = str(ctx.exception)
+        for part in ("'clock'", "ThreadSafetyError", "self.schedule(task)", "Clock.loop", HERE):
+            self.assertIn(part, message)
+        self.assertNotIn("node.py", message)
+        self.assertNotIn("catch the error", message)  # the fix is the schedule call
+
+    def test_loop_exception(self) -> None:
+        node = Node("test", self.get_config([LoopFactoryOf(CrashingLoop)]))
+        with self.assertRaises(LoopError) as ctx:
+            node.loop()
+        message = str(ctx.exception)
+        for part in ("'crashing_loop'", "CrashingLoop", HERE, "High velocity impact", "Fix loop()"):
+            self.assertIn(part, message)
+        self.assertNotIn("loop.py", message)
+
+    def test_runner_prints_no_framework_traceback(self) -> None:
+        script = textwrap.dedent(
+            """
+            from snr import *
+
+            class Crasher(Endpoint):
+                def __init__(self, factory, parent):
+                    super().__init__(factory, parent, "crasher")
+                    self.task_handlers = {(TaskType.event, "go"): self.go}
+
+                def begin(self):
+                    self.schedule(tasks.event("go", [0]))
+
+                def go(self, task, key):
+                    return 1 / task.val_list[0]
+
+            class CrasherFactory(EndpointFactory):
+                def get(self, parent):
+                    return Crasher(self, parent)
+
+            CliRunner({"robot": [CrasherFactory(), TimeoutLoopFactory(seconds=5)]}).run()
+            """
+        )
+        main = self.temp_file("_main.py", script)
+        env = dict(os.environ, PYTHONPATH=ROOT)
+        proc = subprocess.run(
+            [sys.executable, main, "robot"],
+            capture_output=True,
+            text=True,
+            env=env,
+            timeout=30,
+        )
+        self.assertEqual(proc.returncode, 1)
+        self.assertNotIn("Traceback", proc.stderr)
+        self.assertNotIn("snr/core", proc.stderr)
+        for part in (
+            "HandlerError in node 'robot'",
+            "Crasher.go",
+            "(event, 'go') with values [0]",
+            '_main.py", line 13, in go',
+            "return 1 / task.val_list[0]",
+        ):
+            self.assertIn(part, proc.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
