@@ -141,7 +141,15 @@ class TestStepsWithProcesses(unittest.TestCase):
     @unittest.skipUnless(hasattr(snr, "SocketsPair"), "snr.SocketsPair is not built yet")
     def test_step04_two_nodes(self) -> None:
         port = str(free_port())
-        args = [step("step04_two_nodes.py"), "display", "sensor", "--port", port, "--seconds", "1.5"]
+        args = [
+            step("step04_two_nodes.py"),
+            "display",
+            "sensor",
+            "--port",
+            port,
+            "--seconds",
+            "1.5",
+        ]
         done = run_script(args, cwd=self.folder, timeout_s=30)
         self.assertEqual(done.returncode, 0, done.stderr)
         received = [line for line in done.stdout.splitlines() if "measured by sensor" in line]

@@ -135,10 +135,7 @@ class Lander:
         details = f"at {speed:.2f} m/s after {self.time_s:.1f} s, {self.fuel} fuel left"
         if self.landed_safely():
             return f"Landed safely {details}"
-        return (
-            f"Crashed {details} (a safe landing is at most "
-            f"{SAFE_LANDING_SPEED_M_S:.1f} m/s)"
-        )
+        return f"Crashed {details} (a safe landing is at most {SAFE_LANDING_SPEED_M_S:.1f} m/s)"
 
 
 def fly(policy: Policy, lander: Optional[Lander] = None) -> Lander:
