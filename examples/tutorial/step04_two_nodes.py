@@ -1,7 +1,8 @@
 """Tutorial step 4: two nodes talking.
 
-One node per computer: a ``sensor`` node (on the robot) measures depth and
-sends it to a ``display`` node (on the laptop) over TCP. The nodes know nothing
+One node per computer: a ``sensor`` node (on the robot) measures depth with
+step 3's sensor loop and sends it to a ``display`` node (on the laptop) over
+TCP. The nodes know nothing
 of the network; a `SocketsPair` adds a loop to each that forwards pages by
 key. Run the display in one terminal and the sensor in another:
 
@@ -17,9 +18,11 @@ On two computers, change ``127.0.0.1`` to the display computer's address.
 """
 
 import argparse
-import math
 import sys
 from typing import List, Sequence, Tuple
+
+# The sensor of step 3, unchanged: components do not know about the network.
+from step03_a_loop import DepthSensorFactory
 
 from snr import (
     AbstractNode,
@@ -27,32 +30,13 @@ from snr import (
     ComponentsByRole,
     Endpoint,
     EndpointFactory,
-    LoopFactory,
     SocketsPair,
     SomeTasks,
     Task,
     TaskId,
     TaskType,
-    ThreadLoop,
     TimeoutLoopFactory,
 )
-
-
-class DepthSensorLoop(ThreadLoop):
-    """Stores a (simulated) depth reading five times a second."""
-
-    def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
-        super().__init__(factory, parent, "depth_sensor", max_tick_rate_hz=5)
-        self.readings = 0
-
-    def loop(self) -> None:
-        self.store_data("depth_m", round(2.0 + math.sin(self.readings / 3), 2))
-        self.readings += 1
-
-
-class DepthSensorFactory(LoopFactory):
-    def get(self, parent: AbstractNode) -> DepthSensorLoop:
-        return DepthSensorLoop(self, parent)
 
 
 class DepthDisplay(Endpoint):
@@ -78,7 +62,7 @@ def make_components(port: int = 9010, seconds: float = 10.0) -> ComponentsByRole
     link = SocketsPair(server_tuple=("127.0.0.1", port))
     return {
         "sensor": [
-            DepthSensorFactory(),
+            DepthSensorFactory(rate_hz=5),
             link.client(["depth_m"]),  # sends every page stored under depth_m
             TimeoutLoopFactory(seconds=seconds),
         ],
