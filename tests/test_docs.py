@@ -4,6 +4,7 @@ import contextlib
 import io
 import os
 import shutil
+import sys
 import tempfile
 import threading
 import time
@@ -11,6 +12,7 @@ import types
 import unittest
 import urllib.request
 from pathlib import Path
+from unittest import mock
 
 import snr.docsite
 from snr.__main__ import main
@@ -84,6 +86,12 @@ class TestDocsBuild(unittest.TestCase):
 
 
 class TestDocsChecks(unittest.TestCase):
+    def test_without_pdoc_the_error_says_what_to_install(self) -> None:
+        with mock.patch.dict(sys.modules, {"pdoc": None, "pdoc.render": None}):
+            with self.assertRaises(snr.docsite.DocsBuildError) as caught:
+                snr.docsite.build(Path(tempfile.mkdtemp(prefix="snr-docs-")), None)
+        self.assertIn("pip install 'snr[docs]'", str(caught.exception))
+
     def test_a_misspelt_name_in_a_docstring_is_reported(self) -> None:
         module = types.ModuleType("student_module")
 

@@ -228,7 +228,7 @@ class RadarSensorLoop(ThreadLoop):
         """No answer from the controller yet: wait a little, or give up."""
         if time.monotonic() - self.waiting_since > self.command_timeout_s:
             reason = (
-                f"No thruster_data for {self.command_timeout_s:.0f} s: is a controller "
+                f"No thruster_data for {self.command_timeout_s:g} s: is a controller "
                 "endpoint storing 'thruster_data' when 'radar_data' is stored?"
             )
             self.schedule(tasks.terminate(reason))
