@@ -34,3 +34,10 @@ def bench(session: nox.Session) -> None:
     session.install("-e", ".[dev]")
     for script in sorted(__import__("glob").glob("bench/bench_*.py")):
         session.run("python", script, *session.posargs)
+
+
+@nox.session
+def docs(session: nox.Session) -> None:
+    """Build the API reference and the guide into docs/api/; fail on any warning."""
+    session.install("-e", ".[dev]")
+    session.run("python", "-m", "snr", "docs", "--build-only", *session.posargs)

@@ -4,6 +4,7 @@ Commands::
 
     python -m snr demo [--seconds N]   run the demo system (no hardware needed)
     python -m snr console HOST:PORT    type commands into a running node (snr-console)
+    python -m snr docs [--serve]       build (if needed) and open the docs, offline
     python -m snr version              print the installed version
 """
 
@@ -17,6 +18,7 @@ from typing import List, Optional, Sequence
 
 import snr
 import snr.console
+import snr.docsite
 
 __all__ = ["main"]
 
@@ -53,6 +55,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     demo_parser = sub.add_parser("demo", help="run the demo system of nodes")
     demo_parser.add_argument("--seconds", type=float, default=15.0, help="how long to run")
     sub.add_parser("console", help="type commands into a running node (same as snr-console)")
+    docs_parser = sub.add_parser("docs", help="build (if needed) and open the docs offline")
+    snr.docsite.add_arguments(docs_parser)
     sub.add_parser("version", help="print the SNR version")
     words = list(sys.argv[1:] if argv is None else argv)
     if words[:1] == ["console"]:  # its own options, e.g. --token, go to snr-console
@@ -60,6 +64,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     args = parser.parse_args(words)
     if args.command == "demo":
         return demo(args.seconds)
+    if args.command == "docs":
+        return snr.docsite.run(args)
     if args.command == "version":
         print(snr.__version__)
         return 0

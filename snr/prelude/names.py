@@ -8,7 +8,9 @@ Students mostly meet these names in annotations::
 
 Aliases that mention `Task`, `Page` or the ABCs are written as strings so that
 this module has no imports from the rest of the package (it is the bottom of the
-layer cake).
+layer cake). The strings are full dotted names, so tools that read annotations
+at run time (the API docs, ``typing.get_type_hints``) resolve them from any
+module.
 """
 
 from __future__ import annotations
@@ -17,9 +19,9 @@ import enum
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Sequence, Tuple, Union
 
 if TYPE_CHECKING:  # pragma: no cover - only for the type checker
-    from snr.prelude.abstract import AbstractFactory
-    from snr.prelude.page import Page
-    from snr.prelude.task import Task
+    import snr.prelude.abstract
+    import snr.prelude.page
+    import snr.prelude.task
 
 __all__ = [
     "ComponentName",
@@ -121,10 +123,10 @@ TaskId = Union[TaskType, Tuple[TaskType, TaskName]]
 """How a handler is registered: ``(TaskType.store_page, "depth")`` for one
 task name, or a bare ``TaskType.terminate`` for every task of that type."""
 
-SomeTasks = Union["Task", List["Task"], None]
+SomeTasks = Union["snr.prelude.task.Task", List["snr.prelude.task.Task"], None]
 """What a task handler returns: one task, a list of tasks, or ``None``."""
 
-TaskHandler = Callable[["Task", TaskId], SomeTasks]
+TaskHandler = Callable[["snr.prelude.task.Task", TaskId], SomeTasks]
 """A handler: ``def handler(self, task: Task, key: TaskId) -> SomeTasks``."""
 
 TaskHandlerMap = Dict[TaskId, TaskHandler]
@@ -133,10 +135,10 @@ TaskHandlerMap = Dict[TaskId, TaskHandler]
 TaskScheduler = Callable[[SomeTasks], None]
 """Something that queues tasks on a node, such as ``endpoint.schedule``."""
 
-DataDict = Dict[DataKey, "Page"]
+DataDict = Dict[DataKey, "snr.prelude.page.Page"]
 """A node's datastore: the newest page for every data key."""
 
-ComponentsByRole = Dict[Role, Sequence["AbstractFactory"]]
+ComponentsByRole = Dict[Role, Sequence["snr.prelude.abstract.AbstractFactory"]]
 """A whole system: for every role, the factories that build its components."""
 
 JsonValue = Any

@@ -12,12 +12,22 @@ import multiprocessing
 import threading
 import unittest
 from types import TracebackType
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Type
+from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Type, Union
 
 from snr.core.profiler import format_task_id
-from snr.prelude import TaskId
+from snr.prelude import TaskId, TaskName, TaskType
 
-__all__ = ["Expector", "MultiProcExpector", "OrderedExpector"]
+__all__ = ["Expectations", "Expector", "MultiProcExpector", "OrderedExpector"]
+
+Expectations = Union[
+    Mapping[TaskId, int],
+    Mapping[Tuple[TaskType, TaskName], int],
+    Mapping[TaskType, int],
+]
+"""How many times each task id is expected, e.g. ``{(TaskType.event, "go"): 2}``.
+
+A dict whose keys are all ``(type, name)`` pairs (as in thesis listing A.3)
+type-checks as well as one that mixes pairs and bare task types."""
 
 
 def _fail(testcase: Optional[unittest.TestCase], message: str) -> None:
@@ -38,10 +48,10 @@ class Expector:
 
     def __init__(
         self,
-        expectations: Mapping[TaskId, int],
+        expectations: Expectations,
         testcase: Optional[unittest.TestCase] = None,
     ) -> None:
-        self.expectations: Dict[TaskId, int] = dict(expectations)
+        self.expectations: Dict[TaskId, int] = {k: n for k, n in expectations.items()}
         self.counts: Dict[TaskId, int] = {key: 0 for key in self.expectations}
         self.testcase = testcase
         self._lock = threading.Lock()
@@ -153,7 +163,7 @@ class MultiProcExpector(Expector):
 
     def __init__(
         self,
-        expectations: Mapping[TaskId, int],
+        expectations: Expectations,
         testcase: Optional[unittest.TestCase] = None,
         context: Any = None,
     ) -> None:

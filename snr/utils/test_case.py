@@ -6,11 +6,11 @@ import os
 import shutil
 import tempfile
 import unittest
-from typing import Any, Mapping, Optional, Sequence
+from typing import Any, Optional, Sequence
 
 from snr.core import Config, Node, TestRunner
 from snr.prelude import AbstractFactory, DataKey, Mode, Page, TaskId
-from snr.utils.expector import Expector, OrderedExpector
+from snr.utils.expector import Expectations, Expector, OrderedExpector
 from snr.utils.mock_node import MockNode
 
 __all__ = ["SNRTestCase"]
@@ -36,7 +36,7 @@ class SNRTestCase(unittest.TestCase):
     role = "test"
     """The role of nodes built by ``get_config`` and ``run_test_node``."""
 
-    def expector(self, expectations: Mapping[TaskId, int]) -> Expector:
+    def expector(self, expectations: Expectations) -> Expector:
         """An `Expector` that fails this test when unmet."""
         return Expector(expectations, self)
 

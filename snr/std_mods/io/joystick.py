@@ -10,8 +10,6 @@ Example::
     ControllerLoopFactory("raw_controller_input", joystick=pad)
 """
 
-from __future__ import annotations
-
 import re
 import time
 from typing import Any, Callable, Dict, List, NamedTuple, Optional, Sequence, Tuple

@@ -1,16 +1,28 @@
-"""Thesis listing A.5 (the stress benchmark), as printed but for its typos.
+"""The stress benchmark (thesis section 5.4, listing A.5).
 
-Deviations (docs/deviations.md): test methods are annotated for mypy, and
-the listing's print of ``node.profiler.dump()`` prints the returned table.
+A stressor endpoint schedules a "stress" task; handling it adds another
+stressor endpoint built by the same factory, which does the same, and so on,
+until the time target. The output is that of thesis listing 5.2: how many
+endpoints were made, when the terminate task was handled, the profiler's table
+and the time each test took.
+
+    python bench_stress_endpoint_fac.py
+    SNR_BENCH_SECONDS=0.5 python bench_stress_endpoint_fac.py   # a shorter run
+
+As printed in the thesis, but for its typos; see docs/deviations.md.
 """
 
 import logging
+import os
 import unittest
 from typing import List, Optional
 
 from snr import *
 
 STRESS_TASK_NAME: TaskName = "stress"
+
+TIME_TARGET_S: float = float(os.environ.get("SNR_BENCH_SECONDS", "2.0"))
+"""How long test_stress_endpoint stresses the node (the thesis used 2 s)."""
 
 
 class StressorEndpoint(Endpoint):
@@ -64,6 +76,13 @@ class StressorEndpointFactory(EndpointFactory):
 
 
 class BenchStressEndpointFac(SNRTestCase):
+    def setUp(self) -> None:
+        self.test_timer = Timer()
+
+    def tearDown(self) -> None:
+        # The last lines of listing 5.2: how long each test took.
+        print(f"{self.test_timer.current_s() * 1000:.2f} ms: {self.id()}")
+
     def test_stress_endpoint_init(self) -> None:
         stressor_fac = StressorEndpointFactory(max_endpoints=1, time_limit_s=0.050)
 
@@ -85,7 +104,7 @@ class BenchStressEndpointFac(SNRTestCase):
         self.assertEqual(len(times), 1)
 
     def test_stress_endpoint(self) -> None:
-        time_target_s: float = 0.500  # the thesis ran 2 s; shortened for the suite
+        time_target_s: float = TIME_TARGET_S
         stressor_fac = StressorEndpointFactory(max_endpoints=10000, time_limit_s=time_target_s)
         times: List[float] = []
         timer = Timer()
@@ -113,10 +132,6 @@ class BenchStressEndpointFac(SNRTestCase):
         )
         if node.profiler:
             print(node.profiler.dump())
-        # Beyond the listing: the run really stressed the node and stopped on time.
-        self.assertGreater(stressor_fac.num_children, 10)
-        self.assertEqual(len(times), 1)
-        self.assertGreaterEqual(times[0], time_target_s)
 
 
 if __name__ == "__main__":
