@@ -9,6 +9,18 @@ Example::
     from snr.std_mods import TimeoutLoopFactory
 """
 
+from snr.std_mods.comms import (
+    COMMS_CONNECTED,
+    COMMS_DISCONNECTED,
+    CommsLoop,
+    PipeLoop,
+    PipeLoopFactory,
+    SocketsClientFactory,
+    SocketsClientLoop,
+    SocketsPair,
+    SocketsServerFactory,
+    SocketsServerLoop,
+)
 from snr.std_mods.filters import (
     DEFAULT_FILTER_LENGTH,
     MovingAvgEndpoint,
@@ -40,6 +52,9 @@ from snr.std_mods.utils import (
 )
 
 __all__ = [
+    "COMMS_CONNECTED",
+    "COMMS_DISCONNECTED",
+    "CommsLoop",
     "ControlProcessorEndpoint",
     "ControlProcessorFactory",
     "ControllerLoop",
@@ -53,11 +68,18 @@ __all__ = [
     "MovingAvgEndpoint",
     "MovingAvgFilter",
     "MovingAvgFilterFactory",
+    "PipeLoop",
+    "PipeLoopFactory",
     "PrinterEndpoint",
     "PrinterEndpointFactory",
     "STEAM_CONTROLLER_BUTTONS",
     "STEAM_CONTROLLER_MAPPING",
     "SimulatedJoystick",
+    "SocketsClientFactory",
+    "SocketsClientLoop",
+    "SocketsPair",
+    "SocketsServerFactory",
+    "SocketsServerLoop",
     "StopwatchEndpoint",
     "StopwatchEndpointFactory",
     "TimeoutLoop",
