@@ -127,6 +127,13 @@ class TestNotSerializable(unittest.TestCase):
                 encode_page(Page("depth", value, "urov", 1.0))
             self.assertIn("NaN", str(ctx.exception))
 
+    def test_too_deep(self) -> None:
+        deep: Any = []
+        for _ in range(100000):
+            deep = [deep]
+        with self.assertRaises(NotSerializableError):
+            encode_page(Page("tree", deep, "urov", 1.0))
+
     def test_too_big(self) -> None:
         with self.assertRaises(NotSerializableError) as ctx:
             encode_page(Page("image", "x" * (MAX_FRAME_BYTES + 1), "camera", 1.0))
@@ -160,6 +167,8 @@ class TestBadFrames(unittest.TestCase):
             (body(**{**good, "origin": None}), "'origin'"),
             (body(**{**good, "created_at_s": "yesterday"}), "must be a number"),
             (body(**{**good, "created_at_s": True}), "must be a number"),
+            (body(**{**good, "created_at_s": 10**400}), "too large"),
+            (b"[" * 100000, "too deeply"),
             (body(**{**good, "process": "yes"}), "'process'"),
             (body(v=1, kind="hello"), "no 'role'"),
             (body(v=1, kind="hello", role=""), "must not be empty"),

@@ -84,6 +84,7 @@ Keys = Union[DataKey, Sequence[DataKey], None]
 """What a comms factory takes as ``keys``: one data key, a list of them, or None."""
 
 _MAX_CHUNK_BYTES = 1024 * 1024  # the writer joins queued frames into chunks up to this size
+_BUSY_QUEUE_LENGTH = 8  # tasks waiting on the node above which frames are batched
 _SHOWN_BAD_FRAMES = 5  # per link, log the first few bad frames in full, then every 100th
 
 
@@ -146,14 +147,16 @@ class Transport(Protocol):
 class Outbox:
     """Frames waiting to be written to one peer, in the order they were queued.
 
-    ``put`` runs on the node's thread. When nothing is waiting it tries to
-    write the frame straight away without blocking (saving a thread switch
-    per page); otherwise, or when the OS buffer is full, the frame is queued
-    and the link's writer thread sends it. Either way frames leave in order.
+    ``put`` runs on the node's thread. With ``now=True`` and nothing waiting,
+    it writes the frame straight away without blocking (no thread switch: the
+    lowest latency). Otherwise, or when the OS buffer is full, the frame is
+    queued and the link's writer thread sends everything queued in one call
+    (the highest throughput when many pages come at once). Either way frames
+    leave in the order they were put.
 
     Example::
 
-        outbox.put(frame)     # False when the backlog limit is reached
+        outbox.put(frame, now=True)     # False when the backlog limit is reached
     """
 
     def __init__(self, transport: Transport, max_bytes: int) -> None:
@@ -165,12 +168,12 @@ class Outbox:
         self._closed = False
         self._changed = threading.Condition(threading.Lock())
 
-    def put(self, frame: bytes) -> bool:
-        """Send or queue ``frame``; False if closed or the backlog is full."""
+    def put(self, frame: bytes, now: bool = False) -> bool:
+        """Send (if ``now``) or queue ``frame``; False if closed or backlog full."""
         with self._changed:
             if self._closed:
                 return False
-            if not self._frames and not self._writing and self.transport.can_try_send:
+            if now and not self._frames and not self._writing and self.transport.can_try_send:
                 try:
                     sent = self.transport.try_send(frame)
                 except OSError:  # full (BlockingIOError) or broken: the writer deals with it
@@ -256,7 +259,7 @@ class Link:
         self.state = LinkState.OPEN
         self.bad_frames = 0
         self.outbox = Outbox(transport, owner.max_backlog_bytes)
-        self.outbox.put(encode_hello(owner.parent.role))
+        self.outbox.put(encode_hello(owner.parent.role), now=False)
         self._closed = threading.Event()
         thread_name = f"snr-{owner.parent.role}-{owner.name}-{transport.peer}"
         self._reader = threading.Thread(target=self._read, name=thread_name + "-r", daemon=True)
@@ -274,9 +277,9 @@ class Link:
         self._writer.start()
         self._reader.start()
 
-    def send(self, frame: bytes) -> bool:
-        """Queue ``frame`` (node thread); False if the link is closing or backed up."""
-        return self.state is LinkState.OPEN and self.outbox.put(frame)
+    def send(self, frame: bytes, now: bool = True) -> bool:
+        """Send or queue ``frame`` (node thread); False if closing or backed up."""
+        return self.state is LinkState.OPEN and self.outbox.put(frame, now)
 
     def close(self) -> None:
         """Send what is queued, then end the connection (graceful)."""
@@ -456,10 +459,17 @@ class CommsLoop(ThreadLoop):
         except NotSerializableError as error:
             self._report_unsendable(page, error)
             return None
+        now = self._node_is_nearly_idle()
         for link in targets:
-            if not link.send(frame) and link.state is LinkState.OPEN:
+            if not link.send(frame, now) and link.state is LinkState.OPEN:
                 self._report_backlog(link, page)
         return None
+
+    def _node_is_nearly_idle(self) -> bool:
+        # A long task queue means more pages are probably coming: let the
+        # writer thread batch them into few large writes. Otherwise send now.
+        queue = getattr(self.parent, "queue", None)
+        return queue is None or len(queue) < _BUSY_QUEUE_LENGTH
 
     def _report_unsent(self, page: Page) -> None:
         if not self._unsent_reported:

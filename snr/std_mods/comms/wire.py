@@ -122,7 +122,7 @@ def encode_page(page: Page) -> bytes:
     }
     try:
         return _encode(fields, f"the page under key {page.key!r}")
-    except (TypeError, ValueError) as error:
+    except (TypeError, ValueError, RecursionError) as error:
         raise NotSerializableError(
             f"Cannot send the page under key {page.key!r} from {page.origin!r}: its data "
             f"is a {type(page.data).__name__} that JSON cannot carry ({error}). Only "
@@ -152,7 +152,10 @@ def _field(obj: Dict[str, Any], name: str, kind: type, what: str) -> Any:
                 f"field {name!r} of a {what} frame must be a number, "
                 f"not {type(value).__name__} {value!r:.40}"
             )
-        return float(value)
+        try:
+            return float(value)
+        except OverflowError:
+            raise WireFormatError(f"field {name!r} of a {what} frame is too large") from None
     if not isinstance(value, kind):
         raise WireFormatError(
             f"field {name!r} of a {what} frame must be a JSON "
@@ -187,6 +190,8 @@ def decode_body(body: bytes) -> Message:
         obj = _DECODER.decode(text)
     except ValueError as error:  # json.JSONDecodeError and NaN/Infinity
         raise WireFormatError(f"the body is not JSON ({error}): {text[:60]!r}") from None
+    except RecursionError:
+        raise WireFormatError("the body nests lists or objects too deeply") from None
     if not isinstance(obj, dict):
         raise WireFormatError(f"the body is a JSON {type(obj).__name__}, not an object")
     version = obj.get("v")
@@ -204,6 +209,19 @@ def decode_body(body: bytes) -> Message:
 
 
 def _decode_page(obj: Dict[str, Any]) -> Page:
+    key, origin = obj.get("key"), obj.get("origin")
+    created, process = obj.get("created_at_s"), obj.get("process", True)
+    # The common case, checked in one go; the slow path below names the problem.
+    if (
+        type(key) is str
+        and key
+        and type(origin) is str
+        and origin
+        and type(created) is float
+        and type(process) is bool
+        and "data" in obj
+    ):
+        return Page(key, obj["data"], origin, float(created), process)
     if "data" not in obj:
         raise WireFormatError("a page frame has no 'data' field")
     return Page(
