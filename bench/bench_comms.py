@@ -21,15 +21,17 @@ Run: ``python bench/bench_comms.py [--pages N] [--round-trips N]`` (or ``nox -s 
 from __future__ import annotations
 
 import argparse
+import collections
 import json
 import logging
 import multiprocessing
 import socket
 import statistics
 import sys
+import threading
 import time
 from multiprocessing.connection import Connection
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from typing import Any, Callable, Deque, Dict, List, Optional, Tuple
 
 from snr import (
     COMMS_CONNECTED,
@@ -267,6 +269,58 @@ def bare_pinger(port: int, count: int, report: Connection) -> None:
     report.send(("round_trips", round_trips))
 
 
+class HandOver:
+    """Frames read on a reader thread and handed to the main thread by an Event.
+
+    The bare loop with the one extra step every SNR node has: the thread that
+    reads the socket is not the thread that handles the data.
+    """
+
+    def __init__(self, stream: Any) -> None:
+        self.frames: Deque[Dict[str, Any]] = collections.deque()
+        self.ready = threading.Event()
+        threading.Thread(target=self._read, args=(stream,), daemon=True).start()
+
+    def _read(self, stream: Any) -> None:
+        while True:
+            try:
+                frame = read_frame(stream)
+            except (ValueError, OSError):  # end of stream
+                return
+            self.frames.append(frame)
+            self.ready.set()
+
+    def get(self) -> Dict[str, Any]:
+        while True:
+            if self.frames:
+                return self.frames.popleft()
+            self.ready.clear()
+            if not self.frames:
+                self.ready.wait()
+
+
+def handover_echo(listener: socket.socket, count: int) -> None:
+    with bare_accept(listener) as sock, sock.makefile("rb") as stream:
+        inbox = HandOver(stream)
+        for _ in range(count):
+            ping = inbox.get()
+            sock.sendall(page_frame(ping["data"]["seq"], "pong"))
+        sock.shutdown(socket.SHUT_RDWR)  # ends the reader thread, which holds the stream
+
+
+def handover_pinger(port: int, count: int, report: Connection) -> None:
+    round_trips: List[float] = []
+    with bare_connect(port) as sock, sock.makefile("rb") as stream:
+        inbox = HandOver(stream)
+        for i in range(count):
+            started = time.perf_counter()
+            sock.sendall(page_frame(i, "ping"))
+            inbox.get()
+            round_trips.append(time.perf_counter() - started)
+        sock.shutdown(socket.SHUT_RDWR)
+    report.send(("round_trips", round_trips))
+
+
 # -- running a measurement in two fresh processes -------------------------------------
 Target = Tuple[Callable[..., None], Tuple[Any, ...]]
 
@@ -343,6 +397,15 @@ def bare_round_trips(count: int) -> List[float]:
     return trips
 
 
+def handover_round_trips(count: int) -> List[float]:
+    def make(port: int, report: Connection) -> Tuple[Target, Target]:
+        listener = bare_listen(port)
+        return (handover_echo, (listener, count)), (handover_pinger, (port, count, report))
+
+    trips: List[float] = in_processes(make, "round_trips")["round_trips"]
+    return trips
+
+
 def percentile(values: List[float], fraction: float) -> float:
     ordered = sorted(values)
     return ordered[min(len(ordered) - 1, int(fraction * len(ordered)))]
@@ -365,7 +428,8 @@ def main(argv: Optional[List[str]] = None) -> None:
     warm_up = min(100, trips // 10)
 
     # Interleaved, so a busy moment on the machine hits every variant alike.
-    names = ["bare", "SNR DEPLOYED", "SNR DEBUG"]
+    names = ["bare", "handover", "SNR DEPLOYED", "SNR DEBUG"]
+    labels = {"bare": "bare TCP + json loop", "handover": "  + reader thread handoff"}
     modes = {"SNR DEPLOYED": Mode.DEPLOYED, "SNR DEBUG": Mode.DEBUG}
     rate_runs: Dict[str, List[float]] = {name: [] for name in names}
     trip_runs: Dict[str, List[List[float]]] = {name: [] for name in names}
@@ -374,10 +438,12 @@ def main(argv: Optional[List[str]] = None) -> None:
             if name == "bare":
                 rate_runs[name].append(bare_throughput(pages))
                 trip_runs[name].append(bare_round_trips(trips))
+            elif name == "handover":
+                trip_runs[name].append(handover_round_trips(trips))
             else:
                 rate_runs[name].append(snr_throughput(pages, modes[name]))
                 trip_runs[name].append(snr_round_trips(trips, modes[name]))
-    rates = {name: statistics.median(runs) for name, runs in rate_runs.items()}
+    rates = {name: statistics.median(runs) for name, runs in rate_runs.items() if runs}
     latency = {name: summarize_trips(runs, warm_up) for name, runs in trip_runs.items()}
 
     bare_rate, (bare_p50, bare_p99) = rates["bare"], latency["bare"]
@@ -387,11 +453,13 @@ def main(argv: Optional[List[str]] = None) -> None:
     header = f"{'':26}" + "".join(f"{title:>{width}}" for title, width in columns) + f"{'ratio':>8}"
     print(header)
     print("-" * len(header))
-    for name in rates:
+    for name in names:
         p50, p99 = latency[name]
-        label = "bare TCP + json loop" if name == "bare" else name
+        rate = (
+            f"{rates[name]:>10,.0f}{rates[name] / bare_rate:>8.2f}" if name in rates else " " * 18
+        )
         print(
-            f"{label:26}{rates[name]:>10,.0f}{rates[name] / bare_rate:>8.2f}"
+            f"{labels.get(name, name):26}{rate}"
             f"{p50:>10.3f}{p50 / bare_p50:>8.2f}{p99:>10.3f}{p99 / bare_p99:>8.2f}"
         )
     deployed_rate = rates["SNR DEPLOYED"] / bare_rate

@@ -162,6 +162,21 @@ class TestFaults(SocketsProcessTest):
         self.assertEqual(len(lost), 1, lost)
         self.assertIn("Reconnecting", lost[0][3])
 
+    def test_server_survives_a_killed_client_and_takes_the_next(self) -> None:
+        writer = self.reports.writer
+        server = self.node("receiver", self.pair.server(), ReporterFactory(writer, ["tick"]))
+        first = self.node("sender", self.pair.client(["tick"]), TickerFactory("tick", hz=50))
+        self.collect("receiver", "tick", 3)
+        first.kill()
+        time.sleep(0.2)
+        before = len(pages_of(self.reports.seen, "receiver", "tick"))
+        self.node("sender", self.pair.client(["tick"]), TickerFactory("tick", hz=50))
+        ticks = self.collect("receiver", "tick", before + 3)
+        self.assertTrue(server.process.is_alive())
+        new = ticks[before:]  # a new sender counts from 0 (the first ticks may precede the link)
+        self.assertEqual(new, list(range(new[0], new[0] + len(new))))
+        self.assertLess(new[0], 10)
+
     def test_20000_pages_all_arrive_in_order_at_a_slow_receiver(self) -> None:
         count = 20000
         writer = self.reports.writer
