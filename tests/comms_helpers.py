@@ -358,13 +358,17 @@ def field_dict(report: Any) -> Dict[str, Any]:
 
 
 class StopAfter(Endpoint):
-    """After ``count`` pages under ``key``: store ``then_store`` (True) or stop."""
+    """After ``count`` pages under ``key``: store ``then_store`` (True) or stop.
+
+    Counts ``process_data`` tasks, or ``store_page`` ones with ``on_store``.
+    """
 
     def __init__(self, factory: StopAfterFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, f"stop_after_{factory.key}")
         self.spec = factory
         self.seen = 0
-        self.task_handlers = {(TaskType.process_data, factory.key): self.count}
+        kind = TaskType.store_page if factory.on_store else TaskType.process_data
+        self.task_handlers = {(kind, factory.key): self.count}
 
     def count(self, task: Task, key: TaskId) -> SomeTasks:
         self.seen += 1
@@ -372,13 +376,19 @@ class StopAfter(Endpoint):
             return None
         if self.spec.then_store:
             return self.store_data_task(self.spec.then_store, True)
-        return tasks.terminate(f"{self.seen} pages under {self.spec.key!r}")
+        return tasks.terminate(f"got {self.spec.key}")
 
 
 class StopAfterFactory(EndpointFactory):
-    def __init__(self, key: str, count: int = 1, then_store: Optional[str] = None) -> None:
+    def __init__(
+        self,
+        key: str,
+        count: int = 1,
+        then_store: Optional[str] = None,
+        on_store: bool = False,
+    ) -> None:
         super().__init__()
-        self.key, self.count, self.then_store = key, count, then_store
+        self.key, self.count, self.then_store, self.on_store = key, count, then_store, on_store
 
     def get(self, parent: AbstractNode) -> StopAfter:
         return StopAfter(self, parent)

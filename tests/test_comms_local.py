@@ -28,7 +28,7 @@ from snr import (
     TimeoutLoopFactory,
     tasks,
 )
-from tests.comms_helpers import free_port
+from tests.comms_helpers import StopAfterFactory, free_port
 
 PAGE = Page("pose", {"x": 1.5, "tags": ["a", "b"]}, "robot", 1234.5, process=False)
 
@@ -53,26 +53,6 @@ class StoreOnConnectFactory(EndpointFactory):
 
     def get(self, parent: AbstractNode) -> StoreOnConnect:
         return StoreOnConnect(self, parent)
-
-
-class StopWhenStored(Endpoint):
-    """Stops the node once a page is stored under ``key``."""
-
-    def __init__(self, factory: StopWhenStoredFactory, parent: AbstractNode) -> None:
-        super().__init__(factory, parent, f"stop_when_{factory.key}")
-        self.task_handlers = {(TaskType.store_page, factory.key): self.stop}
-
-    def stop(self, task: Task, key: TaskId) -> SomeTasks:
-        return tasks.terminate(f"got {task.name}")
-
-
-class StopWhenStoredFactory(EndpointFactory):
-    def __init__(self, key: str) -> None:
-        super().__init__()
-        self.key = key
-
-    def get(self, parent: AbstractNode) -> StopWhenStored:
-        return StopWhenStored(self, parent)
 
 
 def snr_threads() -> List[str]:
@@ -139,7 +119,7 @@ class TestLocalSockets(SNRTestCase):
 
     def test_the_stored_page_arrives_exactly_with_its_fields(self) -> None:
         nodes = self.run_pair(
-            [self.pair.server(), StopWhenStoredFactory("pose")],
+            [self.pair.server(), StopAfterFactory("pose", on_store=True)],
             [self.pair.client(["pose"]), StoreOnConnectFactory([tasks.store_page(PAGE)])],
         )
         receiver = nodes.wait_first()
@@ -152,7 +132,7 @@ class TestLocalSockets(SNRTestCase):
         bad = tasks.store_page(Page("pose", {1, 2}, "robot", 1.0))
         with self.assertLogs("snr.sender", "ERROR") as logs:
             nodes = self.run_pair(
-                [self.pair.server(), StopWhenStoredFactory("pose")],
+                [self.pair.server(), StopAfterFactory("pose", on_store=True)],
                 [self.pair.client("pose"), StoreOnConnectFactory([bad, tasks.store_page(PAGE)])],
             )
             nodes.wait_first()
@@ -165,7 +145,7 @@ class TestLocalSockets(SNRTestCase):
 
     def test_shutdown_closes_every_socket_and_thread(self) -> None:
         nodes = self.run_pair(
-            [self.pair.server(["b"]), StopWhenStoredFactory("a")],
+            [self.pair.server(["b"]), StopAfterFactory("a", on_store=True)],
             [self.pair.client(["a"]), StoreOnConnectFactory([tasks.store_data("a", 1)])],
         )
         self.assertTrue(nodes.wait_first().is_terminated())
@@ -218,7 +198,7 @@ class TestLocalSockets(SNRTestCase):
                 ],
                 "receiver": [
                     sockets.server(),
-                    StopWhenStoredFactory("controller_data"),
+                    StopAfterFactory("controller_data", on_store=True),
                     TimeoutLoopFactory(seconds=8),
                 ],
             },

@@ -10,8 +10,9 @@ are the same as over TCP (docs/wire-format.md), sent as bytes messages::
     }
     snr.MultiProcRunner(["topside", "urov"], components).run()
 
-A pipe cannot be reconnected: when the other process ends, the loop logs it
-and stops; the node keeps running.
+A pipe cannot be reconnected: once its other end is closed in every process,
+the loop logs it and stops; the node keeps running. (A process that still holds
+the other end, such as the parent, keeps the pipe open.)
 """
 
 from __future__ import annotations

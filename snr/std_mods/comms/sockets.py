@@ -285,17 +285,19 @@ class SocketsClientLoop(CommsLoop):
 
 
 class _SocketsFactory(LoopFactory):
+    side = "side"  # "server" or "client": part of the default component name
+
     def __init__(
         self,
         address: Address,
-        keys: Keys,
-        name: str,
-        max_backlog_bytes: int,
+        keys: Keys = None,
+        name: Optional[str] = None,
+        max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
     ) -> None:
         super().__init__()
         self.address = address
         self.keys = normalize_keys(keys, f"{type(self).__name__} for {_describe(address)}")
-        self.name = name
+        self.name = name or f"sockets_{self.side}_{address[1]}"
         self.max_backlog_bytes = max_backlog_bytes
 
     def __repr__(self) -> str:
@@ -310,14 +312,7 @@ class SocketsServerFactory(_SocketsFactory):
         SocketsServerFactory(("localhost", 9000), keys=["sensor_data"])
     """
 
-    def __init__(
-        self,
-        address: Address,
-        keys: Keys = None,
-        name: Optional[str] = None,
-        max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
-    ) -> None:
-        super().__init__(address, keys, name or f"sockets_server_{address[1]}", max_backlog_bytes)
+    side = "server"
 
     def get(self, parent: AbstractNode) -> SocketsServerLoop:
         return SocketsServerLoop(self, parent)
@@ -331,14 +326,7 @@ class SocketsClientFactory(_SocketsFactory):
         SocketsClientFactory(("localhost", 9000), keys=["controller_data"])
     """
 
-    def __init__(
-        self,
-        address: Address,
-        keys: Keys = None,
-        name: Optional[str] = None,
-        max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
-    ) -> None:
-        super().__init__(address, keys, name or f"sockets_client_{address[1]}", max_backlog_bytes)
+    side = "client"
 
     def get(self, parent: AbstractNode) -> SocketsClientLoop:
         return SocketsClientLoop(self, parent)
