@@ -301,6 +301,10 @@ class Link:
         """Wait up to ``timeout_s`` for the link to close; True if it has."""
         return self._closed.wait(timeout_s)
 
+    def is_alive(self) -> bool:
+        """True while the reader or the writer thread runs."""
+        return self._reader.is_alive() or self._writer.is_alive()
+
     def join(self, timeout_s: Optional[float]) -> None:
         """Wait for both threads to end."""
         deadline = None if timeout_s is None else time.monotonic() + timeout_s
@@ -428,6 +432,7 @@ class CommsLoop(ThreadLoop):
         self.max_backlog_bytes = max_backlog_bytes
         self.links: Tuple[Link, ...] = ()
         self._links_lock = threading.Lock()
+        self._started: List[Link] = []  # every link whose threads may still run
         self._forwarded = frozenset(self.keys)
         # Pages a link delivered under a forwarded key, until forward_page sees
         # them: {id(page): (page, link)} so they are not sent back to that link.
@@ -516,6 +521,7 @@ class CommsLoop(ThreadLoop):
         link = Link(self, transport)
         with self._links_lock:
             self.links = (*self.links, link)
+            self._started = [old for old in self._started if old.is_alive()] + [link]
         self._unsent_reported = False
         link.start()
         self.schedule(tasks.event(COMMS_CONNECTED, [self.name, transport.peer]))
@@ -550,5 +556,7 @@ class CommsLoop(ThreadLoop):
         for link in self.links:
             if not link.wait_closed(max(0.0, deadline - time.monotonic())):
                 link.abort()
-        for link in self.links:
+        with self._links_lock:
+            started = list(self._started)
+        for link in started:  # closed links too: their threads may be finishing
             link.join(max(0.1, deadline - time.monotonic()))

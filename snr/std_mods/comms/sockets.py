@@ -240,16 +240,15 @@ class SocketsClientLoop(CommsLoop):
         self._retry_s = _FIRST_RETRY_S
         self._waiting_reported = False
         self._ever_connected = False
+        self._loss_reported = False  # the current outage has been logged
 
     def loop(self) -> None:
         """Watch the current link, or try to connect once (then back off)."""
         if self.link is not None and not self.link.is_closed():
             self.link.wait_closed(_ACCEPT_WAKE_S)
             return
-        try:
-            sock = socket.create_connection(self.address, timeout=_CONNECT_TIMEOUT_S)
-        except OSError as error:
-            self._report_waiting(error)
+        sock = self._connect()
+        if sock is None:
             self.wait_s(self._retry_s)
             self._retry_s = min(self._retry_s * 2, _MAX_RETRY_S)
             return
@@ -259,23 +258,46 @@ class SocketsClientLoop(CommsLoop):
         self._retry_s = _FIRST_RETRY_S
         self._waiting_reported = False
         self.link = self.open_link(SocketTransport(sock, _describe(self.address)))
-        verb = "Reconnected" if self._ever_connected else "Connected"
-        self._ever_connected = True
-        self.info("%s to the sockets server at %s", verb, _describe(self.address))
+        self.dbg("TCP connection to %s made", _describe(self.address))
+
+    def _connect(self) -> Optional[socket.socket]:
+        try:
+            sock = socket.create_connection(self.address, timeout=_CONNECT_TIMEOUT_S)
+        except OSError as error:
+            self._report_waiting(error.strerror or str(error))
+            return None
+        if sock.getsockname() == sock.getpeername():
+            # With no server up, a connection to a port of this machine can
+            # meet itself (TCP "simultaneous open"); that is not a server.
+            sock.close()
+            self._report_waiting("connected to itself")
+            return None
+        return sock
 
     def on_hello(self, link: Link) -> None:
-        self.dbg("The sockets server is node %r", link.peer_role)
+        verb = "Reconnected" if self._ever_connected else "Connected"
+        self._ever_connected = True
+        self._loss_reported = False
+        self.info(
+            "%s to the sockets server, node %r at %s", verb, link.peer_role, link.transport.peer
+        )
 
-    def _report_waiting(self, error: OSError) -> None:
+    def _report_waiting(self, reason: str) -> None:
         if not self._waiting_reported and not self._ever_connected:
             self._waiting_reported = True
             self.info(
                 "Waiting for the sockets server at %s (%s); retrying until it is up.",
                 _describe(self.address),
-                error.strerror or error,
+                reason,
             )
 
     def on_link_lost(self, link: Link, reason: str) -> None:
+        if self._loss_reported and link.peer_role is None:
+            # A connection that failed before the server said hello, while the
+            # outage is already reported (e.g. a dying server's backlog).
+            self.dbg("Connection to %s failed again: %s", link.label, reason)
+            return
+        self._loss_reported = True
         self.warn(
             "Lost the link to the sockets server %s: %s. Reconnecting in the background; "
             "pages stored meanwhile are not sent.",
