@@ -10,8 +10,18 @@ Example::
 """
 
 from snr.std_mods.comms import (
+    COMMS_CONNECTED,
+    COMMS_DISCONNECTED,
+    CommsLoop,
+    PipeLoop,
+    PipeLoopFactory,
     SerialLinkFactory,
     SerialLinkLoop,
+    SocketsClientFactory,
+    SocketsClientLoop,
+    SocketsPair,
+    SocketsServerFactory,
+    SocketsServerLoop,
 )
 from snr.std_mods.filters import (
     DEFAULT_FILTER_LENGTH,
@@ -62,9 +72,12 @@ from snr.std_mods.utils import (
 )
 
 __all__ = [
+    "COMMS_CONNECTED",
+    "COMMS_DISCONNECTED",
     "CommandProcessorEndpoint",
     "CommandReceiverFactory",
     "CommandReceiverLoop",
+    "CommsLoop",
     "ControlProcessorEndpoint",
     "ControlProcessorFactory",
     "ControllerLoop",
@@ -85,6 +98,8 @@ __all__ = [
     "MovingAvgFilter",
     "MovingAvgFilterFactory",
     "PageReader",
+    "PipeLoop",
+    "PipeLoopFactory",
     "PrinterEndpoint",
     "PrinterEndpointFactory",
     "RecorderEndpoint",
@@ -97,6 +112,11 @@ __all__ = [
     "SerialLinkFactory",
     "SerialLinkLoop",
     "SimulatedJoystick",
+    "SocketsClientFactory",
+    "SocketsClientLoop",
+    "SocketsPair",
+    "SocketsServerFactory",
+    "SocketsServerLoop",
     "StopwatchEndpoint",
     "StopwatchEndpointFactory",
     "TextReader",

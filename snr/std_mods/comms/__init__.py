@@ -5,9 +5,38 @@ Example::
     from snr.std_mods.comms import SerialLinkFactory
 """
 
-from snr.std_mods.comms.serial_link import SerialLinkFactory, SerialLinkLoop
+from snr.std_mods.comms.link import (
+    COMMS_CONNECTED,
+    COMMS_DISCONNECTED,
+    CommsLoop,
+)
+from snr.std_mods.comms.pipe import (
+    PipeLoop,
+    PipeLoopFactory,
+)
+from snr.std_mods.comms.serial_link import (
+    SerialLinkFactory,
+    SerialLinkLoop,
+)
+from snr.std_mods.comms.sockets import (
+    SocketsClientFactory,
+    SocketsClientLoop,
+    SocketsPair,
+    SocketsServerFactory,
+    SocketsServerLoop,
+)
 
 __all__ = [
+    "COMMS_CONNECTED",
+    "COMMS_DISCONNECTED",
+    "CommsLoop",
+    "PipeLoop",
+    "PipeLoopFactory",
     "SerialLinkFactory",
     "SerialLinkLoop",
+    "SocketsClientFactory",
+    "SocketsClientLoop",
+    "SocketsPair",
+    "SocketsServerFactory",
+    "SocketsServerLoop",
 ]

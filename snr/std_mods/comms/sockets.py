@@ -1,0 +1,417 @@
+"""TCP comms: `SocketsPair` and its server and client loops (thesis 5.1, 5.4.1).
+
+One `SocketsPair` names a server address; its ``server()`` goes in one
+role's config and its ``client(keys)`` in another's (listing 5.3)::
+
+    sockets = snr.SocketsPair(server_tuple=("localhost", 9000))
+    components = {
+        "input_device": [..., sockets.client(["controller_data"])],
+        "receiver": [sockets.server(), ...],
+    }
+
+The client connects to the server (retrying with backoff until it is up, and
+again whenever the link drops) and forwards every page stored under its keys.
+The server accepts any number of clients and stores what they send; given
+keys of its own (``sockets.server(["sensor_data"])``) it forwards those to
+every client over the same connections.
+"""
+
+from __future__ import annotations
+
+import errno
+import os
+import socket
+from typing import Optional, Tuple
+
+from snr.core import LoopFactory
+from snr.prelude import AbstractNode, CommsError, ConfigError
+from snr.std_mods.comms.link import (
+    DEFAULT_MAX_BACKLOG_BYTES,
+    CommsLoop,
+    Keys,
+    Link,
+    normalize_keys,
+)
+
+__all__ = [
+    "SocketTransport",
+    "SocketsClientFactory",
+    "SocketsClientLoop",
+    "SocketsPair",
+    "SocketsServerFactory",
+    "SocketsServerLoop",
+]
+
+Address = Tuple[str, int]
+
+_RECV_BYTES = 256 * 1024
+_ACCEPT_WAKE_S = 0.5  # how often a waiting server checks whether it should stop
+_CONNECT_TIMEOUT_S = 0.5
+_FIRST_RETRY_S = 0.05
+_MAX_RETRY_S = 1.0
+_DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)  # not on Windows: the writer thread sends
+
+
+def _describe(address: Address) -> str:
+    return f"{address[0]}:{address[1]}"
+
+
+def _enable_keepalive(sock: socket.socket) -> None:
+    """Notice a peer that vanished without a word (cable pulled) in ~10 s, not hours."""
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
+    for option, value in (("TCP_KEEPIDLE", 5), ("TCP_KEEPINTVL", 2), ("TCP_KEEPCNT", 3)):
+        if hasattr(socket, option):  # Linux; other systems keep their defaults
+            try:
+                sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, option), value)
+            except OSError:
+                pass
+
+
+class SocketTransport:
+    """A connected TCP socket as a link `Transport` (``TCP_NODELAY`` on).
+
+    Example::
+
+        SocketTransport(socket.create_connection(("localhost", 9000)), "localhost:9000")
+    """
+
+    can_try_send = bool(_DONTWAIT)
+
+    def __init__(self, sock: socket.socket, peer: str) -> None:
+        sock.settimeout(None)
+        # Every frame is written in one call; without this, Nagle's algorithm
+        # holds small frames back for up to ~40-200 ms.
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        _enable_keepalive(sock)
+        self.sock = sock
+        self.peer = peer
+        # recv(n) allocates n bytes each call, and a big allocation costs an
+        # mmap: reading into one reused buffer is ~5x faster for small frames.
+        self._buffer = bytearray(_RECV_BYTES)
+        self._view = memoryview(self._buffer)
+
+    def send_all(self, data: bytes) -> None:
+        """Write all of ``data`` (blocks while the peer's buffers are full)."""
+        self.sock.sendall(data)
+
+    def try_send(self, data: bytes) -> int:
+        """Write what fits now; raises BlockingIOError if nothing does."""
+        return self.sock.send(data, _DONTWAIT)
+
+    def receive(self) -> Optional[bytes]:
+        """Bytes as they come; ``b""`` when the peer closed (blocks until then)."""
+        count = self.sock.recv_into(self._buffer)
+        return bytes(self._view[:count])
+
+    def end_writing(self) -> None:
+        """Half-close: the peer reads to the end, then sees end of stream."""
+        try:
+            self.sock.shutdown(socket.SHUT_WR)
+        except OSError:
+            pass
+
+    def interrupt(self) -> None:
+        """Wake a blocked ``receive``/``send_all`` on another thread."""
+        try:
+            self.sock.shutdown(socket.SHUT_RDWR)
+        except OSError:
+            pass
+
+    def close(self) -> None:
+        """Release the socket."""
+        self.sock.close()
+
+
+def _listen(address: Address, role: str) -> socket.socket:
+    """A listening socket on ``address``, or a CommsError saying what to do."""
+    where = f"The sockets server of node {role!r} cannot listen on {_describe(address)}"
+    try:
+        infos = socket.getaddrinfo(address[0], address[1], type=socket.SOCK_STREAM)
+    except OSError as error:
+        raise CommsError(
+            f"{where}: the host name {address[0]!r} is unknown ({error}). Use an address "
+            "of this machine, e.g. ('localhost', 9000) or ('0.0.0.0', 9000) for all."
+        ) from error
+    family, _, _, _, sockaddr = infos[0]
+    listener = socket.socket(family, socket.SOCK_STREAM)
+    try:
+        if os.name != "nt":  # lets a restarted server reuse the port at once
+            listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
+        listener.bind(sockaddr)
+        listener.listen()
+    except OSError as error:
+        listener.close()
+        if error.errno in (errno.EADDRINUSE, getattr(errno, "WSAEADDRINUSE", -1)):
+            raise CommsError(
+                f"{where}: port {address[1]} is in use. Another program, or another SNR "
+                "node still running (check your other terminals), is listening there. "
+                "Stop it, or give both sides another port in "
+                "SocketsPair(server_tuple=(host, port))."
+            ) from error
+        raise CommsError(
+            f"{where}: {error}. Is {address[0]!r} an address of this machine? The server "
+            "side listens on its own address; the client side connects to it."
+        ) from error
+    listener.settimeout(_ACCEPT_WAKE_S)
+    return listener
+
+
+class SocketsServerLoop(CommsLoop):
+    """Accepts clients and links to each; built by ``SocketsPair.server()``.
+
+    It listens as soon as the node starts (a port in use stops the node with
+    a `CommsError` naming the port and the role).
+
+    Example::
+
+        sockets = SocketsPair(server_tuple=("localhost", 9000))
+        {"receiver": [sockets.server(), ...]}
+    """
+
+    def __init__(self, factory: SocketsServerFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, factory.name, factory.keys, factory.max_backlog_bytes)
+        self.address = factory.address
+        self._listener: Optional[socket.socket] = None
+
+    def begin(self) -> None:
+        """Start listening (on the node's thread, so errors stop the node)."""
+        self._listener = _listen(self.address, self.parent.role)
+        self.info("Listening for sockets clients on %s", _describe(self.address))
+
+    def loop(self) -> None:
+        """Accept one client, or return after a short wait to check for stop."""
+        listener = self._listener
+        if listener is None:
+            return
+        try:
+            sock, peer = listener.accept()
+        except socket.timeout:
+            return
+        except OSError as error:
+            if not self.is_terminated():
+                self.warn("Accepting a client failed: %s; still listening.", error)
+                self.wait_s(0.1)
+            return
+        if self.is_terminated():
+            sock.close()
+            return
+        link = self.open_link(SocketTransport(sock, _describe(peer[:2])))
+        self.dbg("Accepted a connection from %s", link.transport.peer)
+
+    def on_hello(self, link: Link) -> None:
+        self.info("Client node %r connected from %s", link.peer_role, link.transport.peer)
+
+    def on_link_lost(self, link: Link, reason: str) -> None:
+        self.info("Client %s disconnected: %s. Still listening.", link.label, reason)
+
+    def halt(self) -> None:
+        """Stop accepting, then flush and close every client link."""
+        if self._listener is not None:
+            try:
+                self._listener.shutdown(socket.SHUT_RDWR)  # wakes a blocked accept()
+            except OSError:
+                pass
+        super().halt()
+
+    def terminate(self) -> None:
+        """Close the listening socket and every link."""
+        super().terminate()
+        if self._listener is not None:
+            self._listener.close()
+
+
+class SocketsClientLoop(CommsLoop):
+    """Connects to a sockets server and keeps connecting; built by ``client()``.
+
+    Until the server is up, and after a link drops, it retries with backoff
+    (0.05 s, doubling, at most 1 s between tries). It logs once when it starts
+    waiting and once when it (re)connects.
+
+    Example::
+
+        sockets = SocketsPair(server_tuple=("localhost", 9000))
+        {"input_device": [..., sockets.client(["controller_data"])]}
+    """
+
+    def __init__(self, factory: SocketsClientFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, factory.name, factory.keys, factory.max_backlog_bytes)
+        self.address = factory.address
+        self.link: Optional[Link] = None
+        self._retry_s = _FIRST_RETRY_S
+        self._waiting_reported = False
+        self._ever_connected = False
+        self._loss_reported = False  # the current outage has been logged
+
+    def loop(self) -> None:
+        """Watch the current link, or try to connect once (then back off)."""
+        if self.link is not None and not self.link.is_closed():
+            self.link.wait_closed(_ACCEPT_WAKE_S)
+            return
+        sock = self._connect()
+        if sock is None:
+            self.wait_s(self._retry_s)
+            self._retry_s = min(self._retry_s * 2, _MAX_RETRY_S)
+            return
+        if self.is_terminated():
+            sock.close()
+            return
+        self._retry_s = _FIRST_RETRY_S
+        self._waiting_reported = False
+        self.link = self.open_link(SocketTransport(sock, _describe(self.address)))
+        self.dbg("TCP connection to %s made", _describe(self.address))
+
+    def _connect(self) -> Optional[socket.socket]:
+        try:
+            sock = socket.create_connection(self.address, timeout=_CONNECT_TIMEOUT_S)
+        except OSError as error:
+            self._report_waiting(error.strerror or str(error))
+            return None
+        if sock.getsockname() == sock.getpeername():
+            # With no server up, a connection to a port of this machine can
+            # meet itself (TCP "simultaneous open"); that is not a server.
+            sock.close()
+            self._report_waiting("connected to itself")
+            return None
+        return sock
+
+    def on_hello(self, link: Link) -> None:
+        verb = "Reconnected" if self._ever_connected else "Connected"
+        self._ever_connected = True
+        self._loss_reported = False
+        self.info(
+            "%s to the sockets server, node %r at %s", verb, link.peer_role, link.transport.peer
+        )
+
+    def _report_waiting(self, reason: str) -> None:
+        if not self._waiting_reported and not self._ever_connected:
+            self._waiting_reported = True
+            self.info(
+                "Waiting for the sockets server at %s (%s); retrying until it is up.",
+                _describe(self.address),
+                reason,
+            )
+
+    def on_link_lost(self, link: Link, reason: str) -> None:
+        if self._loss_reported and link.peer_role is None:
+            # A connection that failed before the server said hello, while the
+            # outage is already reported (e.g. a dying server's backlog).
+            self.dbg("Connection to %s failed again: %s", link.label, reason)
+            return
+        self._loss_reported = True
+        self.warn(
+            "Lost the link to the sockets server %s: %s. Reconnecting in the background; "
+            "pages stored meanwhile are not sent.",
+            link.label,
+            reason,
+        )
+
+
+class _SocketsFactory(LoopFactory):
+    side = "side"  # "server" or "client": part of the default component name
+
+    def __init__(
+        self,
+        address: Address,
+        keys: Keys = None,
+        name: Optional[str] = None,
+        max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
+    ) -> None:
+        super().__init__()
+        self.address = address
+        self.keys = normalize_keys(keys, f"{type(self).__name__} for {_describe(address)}")
+        self.name = name or f"sockets_{self.side}_{address[1]}"
+        self.max_backlog_bytes = max_backlog_bytes
+
+    def __repr__(self) -> str:
+        return f"{type(self).__name__}({_describe(self.address)}, keys={list(self.keys)})"
+
+
+class SocketsServerFactory(_SocketsFactory):
+    """Builds a `SocketsServerLoop`; usually made by ``SocketsPair.server()``.
+
+    Example::
+
+        SocketsServerFactory(("localhost", 9000), keys=["sensor_data"])
+    """
+
+    side = "server"
+
+    def get(self, parent: AbstractNode) -> SocketsServerLoop:
+        return SocketsServerLoop(self, parent)
+
+
+class SocketsClientFactory(_SocketsFactory):
+    """Builds a `SocketsClientLoop`; usually made by ``SocketsPair.client(keys)``.
+
+    Example::
+
+        SocketsClientFactory(("localhost", 9000), keys=["controller_data"])
+    """
+
+    side = "client"
+
+    def get(self, parent: AbstractNode) -> SocketsClientLoop:
+        return SocketsClientLoop(self, parent)
+
+
+class SocketsPair:
+    """The two ends of one TCP connection between nodes (thesis listings 5.1, 5.3).
+
+    Args:
+        server_tuple: ``(host, port)`` the server listens on and clients
+            connect to, e.g. ``("192.168.1.10", 9000)`` or ``("localhost", 9000)``.
+        max_backlog_bytes: how much may wait for a slow peer before new pages
+            are dropped (and a warning logged).
+
+    Example::
+
+        sockets = snr.SocketsPair(server_tuple=("localhost", 9000))
+        components = {
+            "input_device": [..., sockets.client(["controller_data"])],
+            "receiver": [sockets.server(), ...],
+        }
+    """
+
+    def __init__(
+        self,
+        server_tuple: Address,
+        max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
+    ) -> None:
+        if (
+            not isinstance(server_tuple, tuple)
+            or len(server_tuple) != 2
+            or not isinstance(server_tuple[0], str)
+            or isinstance(server_tuple[1], bool)
+            or not isinstance(server_tuple[1], int)
+            or not 0 < server_tuple[1] < 65536
+        ):
+            raise ConfigError(
+                f"SocketsPair(server_tuple={server_tuple!r}) needs a (host, port) tuple: "
+                "a host name or IP address string and a port from 1 to 65535, e.g. "
+                '("localhost", 9000).'
+            )
+        self.server_tuple: Address = server_tuple
+        self.max_backlog_bytes = max_backlog_bytes
+
+    def server(self, keys: Keys = None, name: Optional[str] = None) -> SocketsServerFactory:
+        """The factory for the listening side; ``keys`` it forwards to clients.
+
+        Example::
+
+            sockets.server()                  # only receives
+            sockets.server(["sensor_data"])   # also sends sensor_data to clients
+        """
+        return SocketsServerFactory(self.server_tuple, keys, name, self.max_backlog_bytes)
+
+    def client(self, keys: Keys = None, name: Optional[str] = None) -> SocketsClientFactory:
+        """The factory for the connecting side; ``keys`` (one or a list) it forwards.
+
+        Example::
+
+            sockets.client(["controller_data"])
+            sockets.client("controller_input")
+        """
+        return SocketsClientFactory(self.server_tuple, keys, name, self.max_backlog_bytes)
+
+    def __repr__(self) -> str:
+        return f"SocketsPair(server_tuple={self.server_tuple!r})"
