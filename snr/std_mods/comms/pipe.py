@@ -36,7 +36,7 @@ _POLL_S = 0.25  # how often a waiting reader checks whether it should stop
 
 
 class PipeTransport:
-    """One end of a ``multiprocessing.Pipe()`` as a link `Transport`.
+    """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``.
 
     Example::
 

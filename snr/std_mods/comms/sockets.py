@@ -68,7 +68,7 @@ def _enable_keepalive(sock: socket.socket) -> None:
 
 
 class SocketTransport:
-    """A connected TCP socket as a link `Transport` (``TCP_NODELAY`` on).
+    """A connected TCP socket as a link ``Transport`` (``TCP_NODELAY`` on).
 
     Example::
 

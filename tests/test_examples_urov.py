@@ -1,0 +1,107 @@
+"""The UROV example (thesis 5.1) and `python -m snr demo`, which runs it."""
+
+import re
+import sys
+import unittest
+from typing import Any, List
+
+from snr import Mode, SNRTestCase, TimeoutLoopFactory, tasks
+from snr.utils import ListReplayerFactory
+from tests.examples_support import example_path, load_module, run_script
+
+TELEMETRY = re.compile(r"t=\s*([\d.]+) s \| depth\s+([\d.]+) m \| heading\s+([\d.]+)°")
+
+
+def telemetry_lines(output: str) -> List[Any]:
+    return [tuple(float(v) for v in m.groups()) for m in TELEMETRY.finditer(output)]
+
+
+class TestUrovParts(SNRTestCase):
+    @classmethod
+    def setUpClass(cls) -> None:
+        load_module(example_path("urov", "main.py"), "urov_example_main")
+        cls.urov: Any = sys.modules["urov"]
+
+    def test_mixing_of_surge_yaw_heave(self) -> None:
+        node = self.mock_node()
+        mixer = self.urov.ControlsProcessorFactory("cmd", "speed").get(node)
+        out = mixer.mix(tasks.store_data("cmd", {"surge": 0.5, "yaw": 0.25, "heave": -1}), None)
+        self.assertEqual(out.val_list[0].data, {"left": 75, "right": 25, "vertical": -100})
+        with self.assertLogs("snr.mock", "WARNING"):
+            self.assertIsNone(mixer.mix(tasks.store_data("cmd", [1, 2]), None))
+
+    def test_motor_board_parses_lines_and_ignores_garbage(self) -> None:
+        vehicle = self.urov.Vehicle()
+        board = self.urov.MotorBoard(vehicle)
+        for line in ["M,10,-20,300", "garbage", "M,1,2", "M,a,b,c", ""]:
+            board.handle_line(line)
+        self.assertEqual(board.commands, 1)
+        self.assertEqual(board.bad_lines, 4)
+        self.assertEqual(vehicle.thrusters, {"left": 10, "right": -20, "vertical": 100})
+
+    def test_vehicle_dives_and_turns(self) -> None:
+        vehicle = self.urov.Vehicle()
+        vehicle.set_thrusters(100, 0, -100)
+        for _ in range(250):  # 5 s
+            vehicle.step(0.02)
+        self.assertGreater(vehicle.depth_m, 0.5)
+        self.assertGreater(vehicle.heading_deg, 100)
+
+    def test_one_node_with_both_pipelines_over_a_real_pty(self) -> None:
+        """The whole data flow without sockets: sticks to thrusters to sensors."""
+        u = self.urov
+        node = self.run_test_node(
+            [
+                ListReplayerFactory(
+                    [{"axis_1": 0.0, "axis_2": 0.0, "axis_3": 1.0}], "raw", period_s=0.05
+                ),
+                u.InputProcessorFactory("raw", "controller_input"),
+                u.ControlsProcessorFactory("controller_input", "motor_speed"),
+                u.SerialConnectionFactory("motor_speed"),
+                u.SensorReaderFactory(),
+                TimeoutLoopFactory(seconds=1.5),
+            ],
+            mode=Mode.TEST,
+        )
+        self.assertEqual(node.get_data("motor_speed"), {"left": 0, "right": 0, "vertical": -100})
+        self.assertGreaterEqual(u.motor_board.commands, 1)
+        self.assertEqual(u.motor_board.bad_lines, 0)
+        self.assertGreater(u.vehicle.depth_m, 0.05)  # the motor board got the command
+
+
+class TestUrovSystem(unittest.TestCase):
+    def test_two_processes_show_telemetry(self) -> None:
+        from snr.__main__ import _free_port_pair
+
+        port = _free_port_pair()
+        result = run_script(
+            [
+                example_path("urov", "main.py"),
+                "topside",
+                "urov",
+                "--seconds",
+                "2.5",
+                "--port",
+                str(port),
+                "--mode",
+                "deployed",
+            ],
+            timeout_s=40,
+        )
+        self.assertEqual(result.returncode, 0, result.stderr)
+        lines = telemetry_lines(result.stdout)
+        self.assertGreaterEqual(len(lines), 2, result.stdout + result.stderr)
+        self.assertGreater(lines[-1][1], lines[0][1])  # the pilot script dives
+        self.assertNotIn("Traceback", result.stderr)
+
+    def test_snr_demo(self) -> None:
+        result = run_script(["-m", "snr", "demo", "--seconds", "2"], timeout_s=40)
+        self.assertEqual(result.returncode, 0, result.stderr)
+        self.assertIn("SNR demo", result.stdout)
+        self.assertGreaterEqual(len(telemetry_lines(result.stdout)), 1, result.stdout)
+        self.assertIn("terminated: Timeout", result.stderr)
+        self.assertNotIn("Traceback", result.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
