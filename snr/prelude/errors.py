@@ -290,7 +290,15 @@ def frame_location(frame: FrameType, line: Optional[int] = None) -> str:
         frame_location(sys._getframe())
     """
     code = frame.f_code
-    name = getattr(code, "co_qualname", code.co_name)
+    name = getattr(code, "co_qualname", None)  # Python 3.11+
+    if name is None:
+        # Older Pythons know only the function's name: add the class of
+        # `self` (or `cls`) when the frame has one, as co_qualname would.
+        owner = frame.f_locals.get("self", frame.f_locals.get("cls"))
+        owner_class = owner if isinstance(owner, type) else type(owner)
+        name = code.co_name
+        if owner is not None and code.co_name in vars(owner_class):
+            name = f"{owner_class.__qualname__}.{code.co_name}"
     return f"{_short_path(code.co_filename)}:{frame.f_lineno if line is None else line} in {name}"
 
 
