@@ -35,7 +35,7 @@ def naive_match(components: List[Any], task: Task) -> List[Tuple[str, TaskId]]:
 
 class TestTwoPhaseMatching(SNRTestCase):
     def run_node(self, factories: List[Any], first: List[Task]) -> None:
-        node = Node("test", self.get_config([*factories, TimeoutLoopFactory(seconds=0.3)]))
+        node = Node("test", self.get_config([*factories, TimeoutLoopFactory(seconds=0.1)]))
         node.schedule(first)
         node.loop()
 

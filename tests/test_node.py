@@ -115,7 +115,7 @@ class TestPages(SNRTestCase):
                     RecorderFactory(
                         "watch", [TaskType.store_page, TaskType.process_data], log, check
                     ),
-                    TimeoutLoopFactory(seconds=0.2),
+                    TimeoutLoopFactory(seconds=0.1),
                 ]
             ),
         )
@@ -144,7 +144,7 @@ class TestPages(SNRTestCase):
         self.assertEqual((page.origin, page.data), ("rover", 2.0))
 
     def test_pages_are_stored_in_order(self) -> None:
-        node = Node("test", self.get_config([TimeoutLoopFactory(seconds=0.2)]))
+        node = Node("test", self.get_config([TimeoutLoopFactory(seconds=0.1)]))
         log: Log = []
         node.add_component(RecorderFactory("r", [(TaskType.store_page, "n")], log).get(node))
         for i in range(100):
@@ -229,7 +229,7 @@ class TestLifeCycle(SNRTestCase):
             def get(self, parent: AbstractNode) -> Rogue:
                 return Rogue(self, parent, "rogue")
 
-        self.run_test_node([RogueFactory(), TimeoutLoopFactory(seconds=0.2)])
+        self.run_test_node([RogueFactory(), TimeoutLoopFactory(seconds=0.1)])
         self.assertEqual(len(errors), 1)
         self.assertIn("self.schedule", str(errors[0]))
 
@@ -270,7 +270,7 @@ class TestHandlerFailures(SNRTestCase):
     def test_deployed_mode_logs_and_keeps_running(self) -> None:
         factory = BoomFactory()
         node = Node(
-            "test", Config({"test": [factory, TimeoutLoopFactory(seconds=0.2)]}, mode=Mode.DEPLOYED)
+            "test", Config({"test": [factory, TimeoutLoopFactory(seconds=0.1)]}, mode=Mode.DEPLOYED)
         )
         node.schedule([tasks.event("boom"), tasks.event("boom")])
         with self.assertLogs("snr.test", "ERROR") as logs:

@@ -133,7 +133,7 @@ class TestAddRemove(SNRTestCase):
 
         from snr import Config, Mode, Node
 
-        node = Node("t", Config({"t": [TimeoutLoopFactory(seconds=0.3)]}, mode=Mode.TEST))
+        node = Node("t", Config({"t": [TimeoutLoopFactory(seconds=0.1)]}, mode=Mode.TEST))
         node.schedule(
             [
                 tasks.add_component(dummy),
