@@ -262,6 +262,9 @@ class Node(AbstractNode):
                     break
                 self._start(component)
             self._run_tasks()
+        except KeyboardInterrupt:
+            self.set_terminate_flag("interrupted by user (Ctrl-C)")
+            raise
         finally:
             self.terminate()
         if self._failure is not None:

@@ -81,7 +81,9 @@ class SynchronousRunner(AbstractRunner):
     SNR error (a handler raised, a component is written wrongly, ...) it
     prints the error's message, which points at the student's code, and
     exits with status 1, instead of a traceback through SNR's internals.
-    Pass ``exit_on_error=False`` to get the exception instead.
+    Pass ``exit_on_error=False`` to get the exception instead, and
+    ``announce_interrupt=False`` to stop quietly on Ctrl-C (as `MultiProcRunner`
+    children do, so the message is printed once).
 
     Example::
 
@@ -96,10 +98,12 @@ class SynchronousRunner(AbstractRunner):
         role: Role,
         config: Union[AbstractConfig, ComponentsByRole],
         exit_on_error: bool = True,
+        announce_interrupt: bool = True,
     ) -> None:
         self.role = role
         self.config = _config_or_exit(config, exit_on_error)
         self.exit_on_error = exit_on_error
+        self.announce_interrupt = announce_interrupt
         self.node: Optional[Node] = None
 
     def run(self) -> None:
@@ -112,7 +116,8 @@ class SynchronousRunner(AbstractRunner):
             self.node = Node(self.role, self.config)
             self.node.loop()
         except KeyboardInterrupt:
-            print(INTERRUPTED_MESSAGE, flush=True)
+            if self.announce_interrupt:
+                print(INTERRUPTED_MESSAGE, flush=True)
         except SNRError as error:
             if not self.exit_on_error:
                 raise
@@ -162,7 +167,8 @@ class TestRunner(AbstractRunner):
 
 def _run_role(role: Role, config: AbstractConfig) -> None:
     """Entry point of each MultiProcRunner child process."""
-    SynchronousRunner(role, config).run()  # prints an SNR error and exits with 1
+    # Ctrl-C reaches every process of the group; only the parent says so.
+    SynchronousRunner(role, config, announce_interrupt=False).run()
 
 
 def _start_method(requested: Optional[str]) -> str:
