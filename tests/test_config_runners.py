@@ -118,6 +118,40 @@ class TestCliRunner(unittest.TestCase):
         self.assertNotIn("Traceback", err)
 
 
+    def test_ctrl_c_stops_every_role_and_says_so_once(self) -> None:
+        script = textwrap.dedent(
+            """
+            import sys
+            import snr
+            components = {
+                "a": [snr.TimeoutLoopFactory(seconds=20)],
+                "b": [snr.TimeoutLoopFactory(seconds=20)],
+            }
+            print("ready", flush=True)
+            snr.CliRunner(components, sys.argv).run()
+            """
+        )
+        env = dict(os.environ, PYTHONPATH=ROOT)
+        proc = subprocess.Popen(
+            [sys.executable, "-c", script, "a", "b"], stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE, text=True, env=env, start_new_session=True,
+        )  # fmt: skip
+        try:
+            assert proc.stdout is not None
+            self.assertEqual(proc.stdout.readline().strip(), "ready")
+            time.sleep(0.5)
+            os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C reaches the whole group
+            out, err = proc.communicate(timeout=10)
+        finally:
+            if proc.poll() is None:
+                proc.kill()
+                proc.communicate()
+        self.assertEqual(proc.returncode, 0, err)
+        self.assertEqual(out.count("Interrupted by user, exiting"), 1, out)
+        self.assertEqual(err.count("terminated: interrupted by user (Ctrl-C)"), 2, err)
+        self.assertNotIn("Traceback", err)
+
+
 class TestRunners(SNRTestCase):
     def test_synchronous_runner(self) -> None:
         runner = SynchronousRunner(
