@@ -117,7 +117,6 @@ class TestCliRunner(unittest.TestCase):
         self.assertIn("Interrupted by user, exiting", out)
         self.assertNotIn("Traceback", err)
 
-
     def test_ctrl_c_stops_every_role_and_says_so_once(self) -> None:
         script = textwrap.dedent(
             """
