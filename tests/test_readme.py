@@ -2,6 +2,7 @@
 
 import os
 import re
+import shutil
 import tempfile
 import unittest
 
@@ -32,6 +33,7 @@ class TestReadme(unittest.TestCase):
         code = re.search(r"```python\n(.*?)```", self.text, re.S)
         assert code is not None
         folder = tempfile.mkdtemp(prefix="snr-readme-")
+        self.addCleanup(shutil.rmtree, folder, True)
         path = os.path.join(folder, "robot.py")
         with open(path, "w", encoding="utf-8") as f:
             f.write(code.group(1))
