@@ -9,7 +9,6 @@ read-only ``get_page``/``get_data``.
 
 from __future__ import annotations
 
-import dis
 import enum
 import logging
 import threading
@@ -17,6 +16,14 @@ import time
 from typing import Any, Dict, List, Optional, Set
 
 from snr.core.dispatch import HandlerTable
+from snr.core.explain import (
+    THREAD_SAFE_INSTEAD,
+    bad_result_hint,
+    describe_bad_result,
+    only_returns_none,
+    task_label,
+    task_values,
+)
 from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.node_core import NodeCoreFactory
@@ -71,82 +78,6 @@ class NodeState(enum.Enum):
     RUNNING = "running"
     TERMINATING = "terminating"
     TERMINATED = "terminated"
-
-
-def _task_label(task: Task) -> str:
-    return f"({task.type.name}, {task.name!r})"
-
-
-def _task_values(task: Task) -> str:
-    values = task.val_list
-    if len(values) == 1 and isinstance(values[0], Page):
-        page = values[0]
-        return f"carrying the page {page.key!r} with data {short_repr(page.data, 200)}"
-    return f"with values {short_repr(values, 200)}"
-
-
-def _describe_bad_result(result: Any) -> str:
-    if isinstance(result, list):
-        index, bad = next((i, t) for i, t in enumerate(result) if not isinstance(t, Task))
-        return (
-            f"returned a list whose item {index} is {short_repr(bad)} ({type(bad).__name__}),"
-            " not a Task,"
-        )
-    return f"returned {short_repr(result)} ({type(result).__name__})"
-
-
-def _bad_result_hint(result: Any) -> str:
-    items = result if isinstance(result, (list, tuple)) else []
-    if isinstance(result, tuple) and all(isinstance(t, Task) for t in items):
-        return " Return a list, [task1, task2], not a tuple."
-    if isinstance(result, Page):
-        return " To store a page, return tasks.store_page(page)."
-    if isinstance(result, bool):
-        return " Return None when there is nothing to do."
-    if any(t is None for t in items):
-        return " Leave None out of the list."
-    if any(isinstance(t, (list, tuple)) for t in items):
-        return " Return one flat list of Tasks (join lists with + or extend)."
-    return ""
-
-
-def _only_returns_none(func: Any) -> bool:
-    """True if ``func``'s code has no ``return <value>``: it can only give None.
-
-    Read from the bytecode, not the source (which may not be on the robot).
-    """
-    code = getattr(getattr(func, "__func__", func), "__code__", None)
-    if code is None:
-        return False
-    previous: Optional[dis.Instruction] = None
-    saw_return = False
-    for instruction in dis.get_instructions(code):
-        if instruction.opname == "RETURN_CONST":
-            saw_return = True
-            if instruction.argval is not None:
-                return False
-        if instruction.opname == "RETURN_VALUE":
-            saw_return = True
-            if not (
-                previous is not None and previous.opname == "LOAD_CONST" and previous.argval is None
-            ):
-                return False
-        previous = instruction
-    # No return instruction we know: a newer Python's bytecode. Never accuse
-    # a student's factory on a guess.
-    return saw_return
-
-
-# What a loop thread should call instead of a method that changes node state.
-_THREAD_SAFE_INSTEAD = {
-    "execute_task": "self.schedule(task)",
-    "handle_task": "self.schedule(task)",
-    "add_component": "self.schedule(tasks.add_component(factory))",
-    "remove_component": "self.schedule(tasks.remove_component(name))",
-    "reload_component": "self.schedule(tasks.reload_component(name))",
-    "write_page": "self.store_page(page) or self.store_data(key, value)",
-    "terminate": "self.schedule(tasks.terminate(reason))",
-}
 
 
 class Node(AbstractNode):
@@ -224,7 +155,7 @@ class Node(AbstractNode):
 
     def _got_none(self, factory: AbstractFactory) -> None:
         get = type(factory).get
-        if _only_returns_none(get):
+        if only_returns_none(get):
             raise ComponentError(
                 f"{describe_callable(get)} returned None: it has no `return` with a "
                 f"value, so role {self.role!r} can never get a component from it. Return "
@@ -412,9 +343,9 @@ class Node(AbstractNode):
         if isinstance(result, list) and all(isinstance(t, Task) for t in result):
             return result
         error = HandlerError(
-            f"Task handler {describe_callable(handler)} {_describe_bad_result(result)} "
-            f"while handling {_task_label(task)}. A handler must return a Task, a list of "
-            f"Tasks, or None.{_bad_result_hint(result)} To store a value, return "
+            f"Task handler {describe_callable(handler)} {describe_bad_result(result)} "
+            f"while handling {task_label(task)}. A handler must return a Task, a list of "
+            f"Tasks, or None.{bad_result_hint(result)} To store a value, return "
             "self.store_data_task(key, value); to announce something, return "
             "tasks.event('name', [value])."
         )
@@ -441,8 +372,8 @@ class Node(AbstractNode):
         frames = student_frames(error.__traceback__)
         message = (
             f"Task handler {describe_callable(handler)}{where} raised "
-            f"{type(error).__name__}: {error}\nwhile handling the task {_task_label(task)} "
-            f"{_task_values(task)}.\n"
+            f"{type(error).__name__}: {error}\nwhile handling the task {task_label(task)} "
+            f"{task_values(task)}.\n"
             f"Where it happened (most recent call last):\n{frames}"
         )
         if self.mode is Mode.DEPLOYED:
@@ -505,7 +436,7 @@ class Node(AbstractNode):
             "device) into a ThreadLoop, and let the handler only read and store data.",
             describe_callable(handler),
             took_s,
-            _task_label(task),
+            task_label(task),
         )
 
     # ------------------------------------------------------------------
@@ -803,7 +734,7 @@ class Node(AbstractNode):
             and self._thread_id is not None
             and threading.get_ident() != self._thread_id
         ):
-            instead = _THREAD_SAFE_INSTEAD.get(method, "self.schedule(task)")
+            instead = THREAD_SAFE_INSTEAD.get(method, "self.schedule(task)")
             raise ThreadSafetyError(
                 f"{method}() was called on node {self.role!r} from thread "
                 f"{threading.current_thread().name!r} (at {caller_location()}), but only "
