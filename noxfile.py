@@ -1,4 +1,4 @@
-"""Developer sessions: ``nox -s tests``, ``mypy``, ``lint``, ``bench``, ``docs``."""
+"""Developer sessions: ``nox -s tests``, ``compat``, ``mypy``, ``lint``, ``bench``, ``docs``."""
 
 from __future__ import annotations
 
@@ -10,6 +10,13 @@ nox.options.sessions = ["tests", "mypy", "lint"]
 @nox.session
 def tests(session: nox.Session) -> None:
     """Run the test suite."""
+    session.install("-e", ".[dev]")
+    session.run("python", "-m", "pytest", *session.posargs)
+
+
+@nox.session(python=["3.9", "3.10", "3.11", "3.12", "3.13"])
+def compat(session: nox.Session) -> None:
+    """Run the test suite on every supported Python that is installed."""
     session.install("-e", ".[dev]")
     session.run("python", "-m", "pytest", *session.posargs)
 
