@@ -142,7 +142,7 @@ class TestHandlerTable(unittest.TestCase):
             for t in types:
                 for n in [*names, "zzz"]:
                     task = Task(t, n)
-                    got = [(c.name, k) for _, k, c in table.lookup(t, n)]
+                    got = [(c.name, k) for _, k, c, _ in table.lookup(t, n)]
                     self.assertEqual(got, naive_match(components, task), f"trial {trial}: {task}")
 
     def test_idle_endpoints_do_not_grow_the_lookup(self) -> None:

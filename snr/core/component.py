@@ -121,9 +121,7 @@ class Component(AbstractComponent):
         self._handlers_changed()
 
     def _handlers_changed(self) -> None:
-        notify = getattr(self.parent, "_component_handlers_changed", None)
-        if notify is not None:
-            notify(self)
+        self.parent._snr_handlers_changed(self)
 
     # -- life cycle hooks (documented no-ops: override what you need) -------
     def begin(self) -> None:

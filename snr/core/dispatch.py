@@ -15,7 +15,7 @@ Example::
 
     table = HandlerTable()
     table.rebuild(node.components.values())
-    table.lookup(tasks.event("ping"))   # [(handler, key, component), ...]
+    table.lookup(TaskType.event, "ping")   # [(handler, key, component, cell), ...]
 """
 
 from __future__ import annotations
@@ -37,7 +37,9 @@ from typing import (
 
 from snr.prelude import (
     AbstractComponent,
+    AbstractProfiler,
     ComponentError,
+    StatsCell,
     TaskHandler,
     TaskId,
     TaskType,
@@ -46,8 +48,9 @@ from snr.prelude.errors import closest_match, describe_callable, describe_class
 
 __all__ = ["Entry", "HandlerMap", "HandlerTable", "check_handler", "check_task_id"]
 
-Entry = Tuple[TaskHandler, TaskId, AbstractComponent]
-"""One matched handler: the function, the id it matched under, its component."""
+Entry = Tuple[TaskHandler, TaskId, AbstractComponent, StatsCell]
+"""One matched handler: the function, the id it matched under, its component,
+and its profiler cell ``[times_called, total_s]``."""
 
 SpecificId = Tuple[TaskType, str]
 
@@ -220,14 +223,19 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
 class HandlerTable:
     """Precomputed two-phase matches for every registered task id.
 
+    Each entry carries the profiler's cell for its handler, fetched once here,
+    so timing a handler costs the node two additions and no look-up.
+
     Example::
 
+        table = HandlerTable(profiler)
         table.rebuild(components)
-        for handler, key, component in table.lookup(task): ...
+        for handler, key, component, cell in table.lookup(TaskType.event, "go"): ...
     """
 
-    def __init__(self) -> None:
+    def __init__(self, profiler: Optional[AbstractProfiler] = None) -> None:
         self.table: Dict[Hashable, List[Entry]] = {}
+        self.profiler = profiler
         self._specific_by_type: Dict[TaskType, Set[SpecificId]] = {}
 
     def lookup(self, task_type: TaskType, name: str) -> List[Entry]:
@@ -268,7 +276,7 @@ class HandlerTable:
                     table[key] = list(table.get(key[0], []))
                     self._specific_by_type.setdefault(key[0], set()).add(key)
         for key, handler in handlers.items():
-            entry: Entry = (handler, key, component)
+            entry: Entry = (handler, key, component, self._cell(handler, key))
             table.setdefault(key, []).append(entry)
             if isinstance(key, TaskType):
                 # Fallback: this type-level handler also serves every specific
@@ -276,3 +284,8 @@ class HandlerTable:
                 for specific in self._specific_by_type.get(key, ()):
                     if specific not in handlers:
                         table.setdefault(specific, []).append(entry)
+
+    def _cell(self, handler: TaskHandler, key: TaskId) -> StatsCell:
+        if self.profiler is None:
+            return [0, 0.0]  # timed for slow-handler reports only
+        return self.profiler.task_cell(key, getattr(handler, "__module__", None) or "?")

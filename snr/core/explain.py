@@ -12,18 +12,48 @@ Example::
 from __future__ import annotations
 
 import dis
+import linecache
+import sys
+from types import FrameType
 from typing import Any, Optional
 
-from snr.prelude import Page, Task
-from snr.prelude.errors import short_repr
+from snr.prelude import (
+    AbstractComponent,
+    AbstractFactory,
+    AbstractLoop,
+    ComponentError,
+    HandlerError,
+    LoopError,
+    Page,
+    SNRError,
+    Task,
+    TaskHandler,
+)
+from snr.prelude.errors import (
+    describe_callable,
+    describe_class,
+    frame_location,
+    is_runtime_file,
+    short_repr,
+    student_frames,
+    trim_runtime_frames,
+)
 
 __all__ = [
     "THREAD_SAFE_INSTEAD",
+    "bad_result_error",
     "bad_result_hint",
     "describe_bad_result",
+    "failed_get_error",
+    "handler_failure",
+    "loop_failure",
     "only_returns_none",
+    "reload_failure",
+    "running_line",
+    "slow_handler_text",
     "task_label",
     "task_values",
+    "wrong_get_result_error",
 ]
 
 
@@ -105,3 +135,171 @@ THREAD_SAFE_INSTEAD = {
     "write_page": "self.store_page(page) or self.store_data(key, value)",
     "terminate": "self.schedule(tasks.terminate(reason))",
 }
+
+
+def handler_failure(
+    handler: TaskHandler,
+    task: Task,
+    component: Optional[AbstractComponent],
+    error: Exception,
+    deployed: bool,
+) -> HandlerError:
+    """The HandlerError for ``handler`` raising ``error`` on ``task``, with the fix.
+
+    Example::
+
+        handler_failure(endpoint.on_depth, task, endpoint, ZeroDivisionError(), False)
+        # Task handler Depth.on_depth (robot.py:30) of endpoint 'depth' raised ...
+    """
+    where = ""
+    if component is not None:
+        kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
+        where = f" of {kind} {component.name!r}"
+    frames = student_frames(error.__traceback__)
+    message = (
+        f"Task handler {describe_callable(handler)}{where} raised "
+        f"{type(error).__name__}: {error}\nwhile handling the task {task_label(task)} "
+        f"{task_values(task)}.\n"
+        f"Where it happened (most recent call last):\n{frames}"
+    )
+    if deployed:
+        failure = HandlerError(f"{message}\nThe node keeps running.")
+    else:
+        fix = (
+            "Fix the handler as the message above says."
+            if isinstance(error, SNRError)
+            else "Fix the handler, or catch the error in it if it can happen in normal use "
+            "(in Mode.DEPLOYED the node logs it and keeps running)."
+        )
+        failure = HandlerError(f"{message}\n{fix}")
+    trim_runtime_frames(error)
+    failure.__cause__ = error
+    return failure
+
+
+def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerError:
+    """The HandlerError for a handler that returned something other than tasks."""
+    return HandlerError(
+        f"Task handler {describe_callable(handler)} {describe_bad_result(result)} "
+        f"while handling {task_label(task)}. A handler must return a Task, a list of "
+        f"Tasks, or None.{bad_result_hint(result)} To store a value, return "
+        "self.store_data_task(key, value); to announce something, return "
+        "tasks.event('name', [value])."
+    )
+
+
+def slow_handler_text(handler: TaskHandler, task: Task, took_s: float) -> str:
+    """The warning for a handler that held the node's thread too long."""
+    return (
+        f"Task handler {describe_callable(handler)} took {took_s:.3f} s handling "
+        f"{task_label(task)}. While it runs the node can run no other task. Move slow or "
+        "blocking work (time.sleep, waiting for a device) into a ThreadLoop, and let the "
+        "handler only read and store data."
+    )
+
+
+def loop_failure(loop: AbstractLoop, error: BaseException, deployed: bool) -> LoopError:
+    """The LoopError for ``loop``'s thread ending with ``error``, in plain words.
+
+    ``error`` may be any BaseException: a ``sys.exit()`` or ``KeyboardInterrupt``
+    raised in ``loop()`` is explained too, instead of vanishing with the thread.
+    """
+    frames = student_frames(error.__traceback__)
+    what = f"{type(error).__name__}: {error}"
+    if isinstance(error, SystemExit):
+        what = f"sys.exit({'' if error.code is None else repr(error.code)})"
+    message = (
+        f"Loop {loop.name!r} ({describe_class(type(loop))}) stopped: it raised {what}"
+        f"\nWhere it happened (most recent call last):\n{frames}"
+    )
+    if isinstance(error, SystemExit):
+        fix = (
+            "sys.exit() in a loop ends only the loop's thread, not the program. To stop "
+            "this loop, call self.set_terminate_flag('why'); to stop the node, "
+            "self.schedule(tasks.terminate('why'))."
+        )
+    elif isinstance(error, KeyboardInterrupt):
+        fix = "Ctrl-C stops the whole node; a loop need not catch or raise it."
+    elif deployed:
+        fix = "The node keeps running without this loop."
+    elif isinstance(error, SNRError):
+        fix = "Fix the loop as the message above says."
+    else:
+        fix = (
+            "Fix loop() (or setup()), or catch the error there if it can happen in "
+            "normal use (in Mode.DEPLOYED the node keeps running without the loop)."
+        )
+    failure = LoopError(f"{message}\n{fix}")
+    trim_runtime_frames(error)
+    failure.__cause__ = error
+    return failure
+
+
+def failed_get_error(factory: AbstractFactory, error: Exception, role: str) -> ComponentError:
+    """The ComponentError for a factory's ``get()`` that raised ``error``."""
+    frames = student_frames(error.__traceback__)
+    trim_runtime_frames(error)
+    return ComponentError(
+        f"{describe_callable(type(factory).get)} raised {type(error).__name__}: "
+        f"{error}\nwhile building a component for node {role!r}.\n"
+        f"Where it happened (most recent call last):\n{frames}"
+    )
+
+
+def wrong_get_result_error(factory: AbstractFactory, component: Any) -> ComponentError:
+    """The ComponentError for a ``get()`` that returned something not a component."""
+    get = describe_callable(type(factory).get)
+    if isinstance(component, type):
+        return ComponentError(
+            f"{get} returned the class {component.__name__} itself, not a "
+            f"component made from it. Call the class: `return "
+            f"{component.__name__}(self, parent)`."
+        )
+    return ComponentError(
+        f"{get} returned {short_repr(component)} ({type(component).__name__}), "
+        "not an endpoint or loop. get() must build and return the component, "
+        "e.g. `return MyEndpoint(self, parent)`."
+    )
+
+
+def reload_failure(error: BaseException) -> str:
+    """Where a reload went wrong: ``robot.py:12: invalid syntax`` plus the student's frames.
+
+    A SyntaxError carries its own file and line (it has no frame of its own
+    in the traceback); anything else is shown with the student's frames.
+    """
+    if isinstance(error, SyntaxError):
+        line = (error.text or "").strip()
+        shown = f"\n    {line}" if line else ""
+        return f"{error.filename}:{error.lineno}: SyntaxError: {error.msg}{shown}"
+    frames = student_frames(error.__traceback__)
+    return f"{type(error).__name__}: {error}\nWhere it happened (most recent call last):\n{frames}"
+
+
+def running_line(thread_id: Optional[int]) -> str:
+    """``sensor.py:12 in Sonar.loop: `reading = port.read()```: where a thread is now.
+
+    The innermost frame outside SNR and the standard library is shown (a
+    loop blocked in ``socket.recv`` is shown at the student's line that
+    called it); "" when the thread is not running.
+    """
+    if thread_id is None:
+        return ""
+    frame: Optional[FrameType] = sys._current_frames().get(thread_id)
+    innermost = frame
+    while frame is not None and (
+        is_runtime_file(frame.f_code.co_filename) or _is_stdlib(frame.f_code.co_filename)
+    ):
+        frame = frame.f_back
+    frame = frame or innermost
+    if frame is None:
+        return ""
+    code = linecache.getline(frame.f_code.co_filename, frame.f_lineno).strip()
+    return f"{frame_location(frame)}" + (f": `{code}`" if code else "")
+
+
+def _is_stdlib(filename: str) -> bool:
+    prefixes = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}
+    return filename.startswith("<") or any(
+        filename.startswith(f"{prefix}/lib/python") for prefix in prefixes
+    )

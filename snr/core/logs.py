@@ -10,10 +10,13 @@ from __future__ import annotations
 
 import logging
 import sys
+import threading
+import time
+from typing import Any, Callable, Dict, Hashable, List, Optional
 
 from snr.prelude import Mode
 
-__all__ = ["LOG_FORMAT", "ensure_log_handler", "level_for_mode"]
+__all__ = ["LOG_FORMAT", "LossReport", "RepeatFilter", "ensure_log_handler", "level_for_mode"]
 
 LOG_FORMAT = "%(asctime)s %(name)s %(levelname)s: %(message)s"
 """How SNR's own handler formats a line."""
@@ -38,3 +41,159 @@ def ensure_log_handler() -> None:
     handler = logging.StreamHandler(sys.stderr)
     handler.setFormatter(logging.Formatter(LOG_FORMAT, datefmt="%H:%M:%S"))
     snr_log.addHandler(handler)
+
+
+class RepeatFilter:
+    """Logs the first few of a repeated message in full, then a count every few seconds.
+
+    A handler that raises on every task would otherwise write thousands of
+    identical lines a second and bury everything else in the log. Messages
+    are grouped by a key (e.g. the handler and the error's type): the first
+    ``first`` of each group are logged in full, then at most one summary line
+    every ``every_s`` seconds says how many more there were.
+
+    Example::
+
+        repeats = RepeatFilter(log)
+        for reading in readings:
+            repeats.report(("parse", "ValueError"), "bad reading from the sonar",
+                           logging.WARNING, "Bad reading %r", reading)
+        repeats.flush()   # a last summary for anything not yet counted aloud
+    """
+
+    def __init__(
+        self,
+        log: logging.Logger,
+        first: int = 3,
+        every_s: float = 5.0,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.log = log
+        self.first = first
+        self.every_s = every_s
+        self._clock = clock
+        # key -> [times seen, not yet summarised, start of this summary period, level]
+        self._seen: Dict[Hashable, List[Any]] = {}
+        self._what: Dict[Hashable, str] = {}
+
+    def report(self, key: Hashable, what: str, level: int, msg: str, *args: Any) -> None:
+        """Log ``msg % args`` in full, or count it under ``key`` (``what`` names it)."""
+        now = self._clock()
+        seen = self._seen.get(key)
+        if seen is None:
+            seen = self._seen[key] = [0, 0, now, level]
+            self._what[key] = what
+        seen[0] += 1
+        if seen[0] <= self.first:
+            if seen[0] == self.first:
+                msg += (
+                    f"\n(More of these are counted from now on: one line every {self.every_s:g} s.)"
+                )
+            self.log.log(level, msg, *args)
+            seen[2] = now
+            return
+        seen[1] += 1
+        if now - seen[2] >= self.every_s:
+            self._summarise(key, seen, now)
+
+    def _summarise(self, key: Hashable, seen: List[Any], now: float) -> None:
+        self.log.log(
+            seen[3],
+            "%s: %d more times in the last %.1f s (%d in all).",
+            self._what[key],
+            seen[1],
+            now - seen[2],
+            seen[0],
+        )
+        seen[1] = 0
+        seen[2] = now
+
+    def count(self, key: Hashable) -> int:
+        """How many times ``key`` was reported in all."""
+        seen = self._seen.get(key)
+        return 0 if seen is None else int(seen[0])
+
+    def flush(self) -> None:
+        """Log the summary of every group with uncounted repeats (e.g. at shutdown)."""
+        now = self._clock()
+        for key, seen in self._seen.items():
+            if seen[1]:
+                self._summarise(key, seen, now)
+
+
+class LossReport:
+    """Counts what had to be dropped, says so at most once a second, and says when it ended.
+
+    Dropping is sometimes the right thing (a full queue, a slow peer) but it
+    is never silent: ``dropped()`` counts, a line with the numbers is logged
+    at most every ``every_s`` seconds while drops go on, and ``recovered()``
+    logs one "recovered" line with the total when the cause has passed.
+    Safe to call from any thread.
+
+    Example::
+
+        loss = LossReport(log, "tasks from loops", "the node's queue is full")
+        loss.dropped()          # logs at once: the first drop
+        loss.dropped(5)         # counted; logged a second later if drops go on
+        loss.recovered()        # "recovered: 6 tasks from loops dropped over 0.2 s"
+        loss.total              # 6
+    """
+
+    def __init__(
+        self,
+        log: logging.Logger,
+        what: str,
+        why: str,
+        every_s: float = 1.0,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.log = log
+        self.what = what
+        self.why = why
+        self.every_s = every_s
+        self._clock = clock
+        self._lock = threading.Lock()
+        self.total = 0
+        """Everything dropped so far, over the whole life of the report."""
+        self._episode = 0
+        self._unsaid = 0
+        self._episode_start: Optional[float] = None
+        self._last_said = 0.0
+
+    def dropped(self, n: int = 1) -> None:
+        """Count ``n`` more dropped items; log the count if a second has passed."""
+        with self._lock:
+            now = self._clock()
+            self.total += n
+            self._episode += n
+            self._unsaid += n
+            if self._episode_start is None:
+                self._episode_start = now
+            elif now - self._last_said < self.every_s:
+                return
+            self._last_said = now
+            unsaid, self._unsaid = self._unsaid, 0
+            episode, since = self._episode, now - self._episode_start
+        self.log.warning(
+            "Dropped %d %s (%d in the last %.1f s, %d in all): %s.",
+            unsaid,
+            self.what,
+            episode,
+            since,
+            self.total,
+            self.why,
+        )
+
+    def recovered(self) -> None:
+        """The cause of the drops has passed: log the episode's total once."""
+        with self._lock:
+            if self._episode_start is None:
+                return
+            episode, since = self._episode, self._clock() - self._episode_start
+            self._episode, self._unsaid, self._episode_start = 0, 0, None
+        self.log.warning("Recovered: %d %s dropped over %.1f s.", episode, self.what, since)
+
+    @property
+    def dropping(self) -> bool:
+        """True between the first drop and ``recovered()``."""
+        return self._episode_start is not None

@@ -8,6 +8,7 @@ import time
 from typing import Optional
 
 from snr.core.component import Component
+from snr.core.explain import running_line
 from snr.prelude import (
     AbstractFactory,
     AbstractLoop,
@@ -113,11 +114,14 @@ class ThreadLoop(Component, AbstractLoop):
 
     # -- driven by the node -------------------------------------------------
     def _snr_start(self) -> None:
-        if self.state is not LoopState.NEW:
+        if self.state is LoopState.RUNNING:
             raise NodeStateError(
                 f"Cannot start loop {self.name!r} twice: it is {self.state.value}. "
                 "Reloading builds a new loop from its factory instead."
             )
+        if self.state is LoopState.STOPPED:  # after a reload that failed: run again
+            self._stop_event.clear()
+            self.terminate_reason = ""
         self.begin()
         self.state = LoopState.RUNNING
         self._thread = threading.Thread(
@@ -129,6 +133,11 @@ class ThreadLoop(Component, AbstractLoop):
         self.set_terminate_flag(self.terminate_reason or "node stopping")
         self.halt()
 
+    def _snr_cancel_stop(self) -> None:
+        if self.is_alive():
+            self.terminate_reason = ""
+            self._stop_event.clear()
+
     def join(self, timeout_s: Optional[float] = None) -> None:
         """Wait (up to ``timeout_s``) for the loop's thread to end."""
         thread = self._thread
@@ -139,25 +148,33 @@ class ThreadLoop(Component, AbstractLoop):
         """True while the loop's thread is running."""
         return self._thread is not None and self._thread.is_alive()
 
+    def where_running(self) -> str:
+        """The line the loop's thread is on now (e.g. where it is blocked), or ""."""
+        thread = self._thread
+        if thread is None or not thread.is_alive():
+            return ""
+        return running_line(thread.ident)
+
     def _run(self) -> None:
         profiler = self.parent.profiler
+        cell = profiler.loop_cell(self.name) if profiler is not None else None
         period_s = 1.0 / self.max_tick_rate_hz if self.max_tick_rate_hz > 0 else 0.0
         stop = self._stop_event
+        clock = time.perf_counter
         try:
             self.setup()
             while not stop.is_set():
-                started = time.perf_counter()
+                started = clock()
                 self.loop()
-                took = time.perf_counter() - started
-                if profiler is not None:
-                    profiler.log_loop(self.name, took)
+                took = clock() - started
+                if cell is not None:
+                    cell[0] += 1
+                    cell[1] += took
                 if period_s and period_s > took and stop.wait(period_s - took):
                     break
-        except Exception as error:  # report and stop this loop; never kill the process
-            report = getattr(self.parent, "_loop_failed", None)
-            if report is not None:
-                report(self, error)
-            else:
-                self.log.exception("Loop %r stopped by an exception", self.name)
+        except BaseException as error:  # every way out is reported, in words
+            # sys.exit() and KeyboardInterrupt included: either would end this
+            # thread with no word (or a raw traceback), never the program.
+            self.parent._snr_loop_failed(self, error)
         finally:
             self.state = LoopState.STOPPED

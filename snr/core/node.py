@@ -5,6 +5,14 @@ A node owns a task queue, a datastore of pages and its components. One thread
 thread that writes the datastore or runs task handlers. Loop threads reach the
 node through the thread-safe queue (``schedule``, ``store_data``) and the
 read-only ``get_page``/``get_data``.
+
+The node keeps its life cycle, its run loop and its datastore; two helpers do
+the rest::
+
+    Node ──► ComponentSet   build, add, remove, reload, start and stop components;
+      │                     keep the HandlerTable in step with them
+      └────► HandlerRunner  run a task's handlers, time them, queue what they
+                            return, put failures into words
 """
 
 from __future__ import annotations
@@ -13,17 +21,12 @@ import enum
 import logging
 import threading
 import time
-from typing import Any, Dict, List, Optional, Set
+from typing import Any, List, Optional
 
+from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerTable
-from snr.core.explain import (
-    THREAD_SAFE_INSTEAD,
-    bad_result_hint,
-    describe_bad_result,
-    only_returns_none,
-    task_label,
-    task_values,
-)
+from snr.core.explain import THREAD_SAFE_INSTEAD
+from snr.core.handler_runner import HandlerRunner
 from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.node_core import NodeCoreFactory
@@ -33,19 +36,16 @@ from snr.prelude import (
     AbstractComponent,
     AbstractConfig,
     AbstractFactory,
+    AbstractLoop,
     AbstractNode,
-    ComponentError,
     ComponentName,
     ConfigError,
     DataDict,
     DataKey,
-    HandlerError,
-    LoopError,
     Mode,
     NodeStateError,
     Page,
     Role,
-    SNRError,
     SomeTasks,
     Task,
     TaskHandler,
@@ -53,15 +53,7 @@ from snr.prelude import (
     TaskType,
     ThreadSafetyError,
 )
-from snr.prelude.abstract import AbstractLoop, explain_abstract_error
-from snr.prelude.errors import (
-    caller_location,
-    describe_callable,
-    describe_class,
-    short_repr,
-    student_frames,
-    trim_runtime_frames,
-)
+from snr.prelude.errors import caller_location
 
 __all__ = ["Node", "NodeState"]
 
@@ -95,18 +87,18 @@ class Node(AbstractNode):
 
     Attributes:
         datastore: the newest page for each data key (read it with get_page).
-        queue: the task queue.
+        queue: the task queue (bounded: see `TaskQueue`).
+        components: every endpoint and loop by name, in start order.
         state: the `NodeState`.
         terminate_reason: why the node stopped, once it has.
-        join_timeout_s: how long shutdown waits for each loop's thread.
-        slow_handler_s: in DEBUG/TEST mode, handlers slower than this are reported.
         key_hints: in DEBUG mode, the `MissingKeyHints` that log a hint for a
             data key read but never stored (None in other modes).
     """
 
-    join_timeout_s: float = 1.0
-    slow_handler_s: float = 0.1
     idle_wake_s: float = 1.0
+    """How long an idle node sleeps before checking that it should still run."""
+    max_queued_tasks: int = 10_000
+    """The queue's high-water mark: loops wait (then drop) above it; see `TaskQueue`."""
 
     def __init__(self, role: Role, config: AbstractConfig) -> None:
         if not isinstance(role, str) or not role:
@@ -127,46 +119,50 @@ class Node(AbstractNode):
         self.profiler = config.get_profiler()
         self.timer = Timer()
         self.datastore: DataDict = {}
-        self.queue = TaskQueue()
-        self.components: Dict[ComponentName, AbstractComponent] = {}
+        self.queue = TaskQueue(high_water=self.max_queued_tasks, log=self.log)
         self.state = NodeState.CREATED
         self.terminate_reason: Optional[str] = None
         self._stop_requested = False
         self._running = False
         self._thread_id: Optional[int] = None
-        self._failure: Optional[SNRError] = None
-        self._handlers = HandlerTable()
-        self._table_stale = False
-        self._rebuild_needed = False
-        self._pending_adds: List[AbstractComponent] = []
-        self._timed = self.profiler is not None or self.mode is not Mode.DEPLOYED
-        self._slow_reported: Set[Any] = set()
+        self._components = ComponentSet(self, HandlerTable(self.profiler), join_timeout_s=1.0)
+        self.components = self._components.by_name
+        self._runner = HandlerRunner(
+            role,
+            self.mode,
+            self.log,
+            self.queue,
+            self._components,
+            self.set_terminate_flag,
+            timed=self.profiler is not None or self.mode is not Mode.DEPLOYED,
+        )
         self.key_hints: Optional[MissingKeyHints] = (
             MissingKeyHints(self.log, self.timer.current_s) if self.mode is Mode.DEBUG else None
         )
 
         self.add_component(NodeCoreFactory().get(self), start=False)
         for factory in config.get(role):
-            component = self._build(factory)
-            if component is None:
-                self._got_none(factory)
-                continue
-            self.add_component(component, start=False)
+            component = self.build_component(factory)
+            if component is not None:
+                self.add_component(component, start=False)
 
-    def _got_none(self, factory: AbstractFactory) -> None:
-        get = type(factory).get
-        if only_returns_none(get):
-            raise ComponentError(
-                f"{describe_callable(get)} returned None: it has no `return` with a "
-                f"value, so role {self.role!r} can never get a component from it. Return "
-                "what it builds: `return MyEndpoint(self, parent)`."
-            )
-        self.log.warning(
-            "%s returned None this time, so role %r gets no component from it. If you "
-            "meant to add one, check the conditions before its `return`.",
-            describe_callable(get),
-            self.role,
-        )
+    @property
+    def join_timeout_s(self) -> float:
+        """How long stopping waits for each loop's thread (1 s)."""
+        return self._components.join_timeout_s
+
+    @join_timeout_s.setter
+    def join_timeout_s(self, seconds: float) -> None:
+        self._components.join_timeout_s = seconds
+
+    @property
+    def slow_handler_s(self) -> float:
+        """In DEBUG/TEST mode, handlers slower than this (0.1 s) are reported."""
+        return self._runner.slow_handler_s
+
+    @slow_handler_s.setter
+    def slow_handler_s(self, seconds: float) -> None:
+        self._runner.slow_handler_s = seconds
 
     # ------------------------------------------------------------------
     # Control flow (thesis listing 6.1)
@@ -185,29 +181,26 @@ class Node(AbstractNode):
                 "once; build a new Node to run again."
             )
         self.state = NodeState.RUNNING
-        self._thread_id = threading.get_ident()
+        self._thread_id = self.queue.owner_thread = threading.get_ident()
         self._running = not self._stop_requested
         try:
-            for component in list(self.components.values()):
-                if not self._running:
-                    break
-                self._start(component)
+            self._components.start_all(lambda: self._running)
             self._run_tasks()
         except KeyboardInterrupt:
             self.set_terminate_flag("interrupted by user (Ctrl-C)")
             raise
         finally:
             self.terminate()
-        if self._failure is not None:
-            raise self._failure
+        if self._runner.failure is not None:
+            raise self._runner.failure
 
     def set_terminate_flag(self, reason: str) -> None:
         """Ask the node to stop after the current task; safe from any thread."""
         if not self._stop_requested:
             self._stop_requested = True
             self.terminate_reason = reason
-        self._running = False
-        self.queue.wake()
+        self._running = self._runner.running = False
+        self.queue.close()
 
     def is_terminated(self) -> bool:
         """True once the node has been asked to stop (or has stopped)."""
@@ -226,23 +219,8 @@ class Node(AbstractNode):
             self.set_terminate_flag("terminate() called")
         self._running = False
         self.state = NodeState.TERMINATING
-        components = list(self.components.values())[::-1]
-        for component in components:
-            self._call_safely(component, "halt")
-        deadline = time.monotonic() + self.join_timeout_s
-        for component in components:
-            if hasattr(component, "is_alive"):
-                component.join(max(0.0, deadline - time.monotonic()))
-                if component.is_alive():
-                    self.log.warning(
-                        "Loop %r did not stop within %.1f s of shutdown. Its loop() or "
-                        "setup() may be blocked (a read with no timeout, time.sleep): "
-                        "use timeouts, or self.wait_s(), so it can notice it should stop.",
-                        component.name,
-                        self.join_timeout_s,
-                    )
-        for component in components:
-            self._call_safely(component, "terminate")
+        self._components.shutdown()
+        self._runner.repeats.flush()
         dropped = self.queue.clear()
         if dropped:
             self.log.debug("Dropped %d queued tasks at shutdown", dropped)
@@ -254,47 +232,20 @@ class Node(AbstractNode):
     # ------------------------------------------------------------------
     def _run_tasks(self) -> None:
         queue = self.queue
-        normal, urgent = queue.normal, queue.urgent
-        table = self._handlers.table
+        run_queued = self._runner.run_queued
         while self._running:
-            if urgent:
-                task = urgent.popleft()
-            elif normal:
-                task = normal.popleft()
-            else:
-                queue.wait(self.idle_wake_s)
-                continue
-            if self._table_stale:
-                self._refresh_table()
-            entries = table.get((task.type, task.name))
-            if entries is None:
-                entries = table.get(task.type)
-                if entries is None:
-                    continue
-            if self._timed:
-                for handler, key, component in entries:
-                    self._schedule_result(self.handle_task_entry(handler, task, key, component))
-                continue
-            # Fast path (DEPLOYED mode without profiler): the same steps as
-            # handle_task_entry with the timing left out.
-            for handler, key, component in entries:
-                try:
-                    result = handler(task, key)
-                except Exception as error:
-                    self._handler_failed(handler, task, component, error)
-                    continue
-                if result is None:
-                    continue
-                if result.__class__ is Task:
-                    (urgent if result.priority else normal).append(result)
-                else:
-                    self._schedule_result(self._check_result(result, handler, task))
+            run_queued()
+            if self._running and not queue:
+                queue.wait(self.idle_wake_s)  # a producer's task or stop wakes it
 
     def get_task_handlers(self, task: Task) -> List[tuple[TaskHandler, TaskId]]:
         """Every (handler, matched task id) for ``task``, in component order."""
-        if self._table_stale:
-            self._refresh_table()
-        return [(h, k) for h, k, _ in self._handlers.lookup(task.type, task.name)]
+        return [(entry[0], entry[1]) for entry in self._lookup(task)]
+
+    def _lookup(self, task: Task) -> List[Any]:
+        if self._components.table_stale:
+            self._components.refresh_table()
+        return self._components.table.lookup(task.type, task.name)
 
     def handle_task(self, handler: TaskHandler, task: Task, key: TaskId) -> Optional[List[Task]]:
         """Run one handler with timing and error reporting; its tasks as a list."""
@@ -311,18 +262,10 @@ class Node(AbstractNode):
         component: Optional[AbstractComponent],
     ) -> Optional[List[Task]]:
         """`handle_task` when the handler's component is already known."""
-        started = time.perf_counter()
-        try:
-            result = handler(task, key)
-        except Exception as error:
-            self._handler_failed(handler, task, component, error)
-            return None
-        took = time.perf_counter() - started
+        cell = None
         if self.profiler is not None:
-            self.profiler.log_task(key, getattr(handler, "__module__", "?") or "?", took)
-        if took > self.slow_handler_s and self.mode is not Mode.DEPLOYED:
-            self._report_slow(handler, task, took)
-        return self._check_result(result, handler, task)
+            cell = self.profiler.task_cell(key, getattr(handler, "__module__", None) or "?")
+        return self._runner.run(handler, task, key, component, cell)
 
     def execute_task(self, t: Task) -> None:
         """Run every handler matching ``t`` now and queue what they return.
@@ -330,120 +273,21 @@ class Node(AbstractNode):
         Only the node's own thread may call this; loops use ``schedule``.
         """
         self._check_owner_thread("execute_task")
-        if self._table_stale:
-            self._refresh_table()
-        for handler, key, component in list(self._handlers.lookup(t.type, t.name)):
-            self._schedule_result(self.handle_task_entry(handler, t, key, component))
+        self.queue.urgent.appendleft(t)  # first in line: the next task to run
+        self._runner.run_queued(max_tasks=1)
 
-    def _check_result(self, result: Any, handler: TaskHandler, task: Task) -> Optional[List[Task]]:
-        if result is None:
-            return None
-        if isinstance(result, Task):
-            return [result]
-        if isinstance(result, list) and all(isinstance(t, Task) for t in result):
-            return result
-        error = HandlerError(
-            f"Task handler {describe_callable(handler)} {describe_bad_result(result)} "
-            f"while handling {task_label(task)}. A handler must return a Task, a list of "
-            f"Tasks, or None.{bad_result_hint(result)} To store a value, return "
-            "self.store_data_task(key, value); to announce something, return "
-            "tasks.event('name', [value])."
-        )
-        self._record_failure(error)
-        return None
-
-    def _schedule_result(self, result: Optional[List[Task]]) -> None:
-        if result:
-            queue = self.queue
-            for task in result:
-                (queue.urgent if task.priority else queue.normal).append(task)
-
-    def _handler_failed(
-        self,
-        handler: TaskHandler,
-        task: Task,
-        component: Optional[AbstractComponent],
-        error: Exception,
-    ) -> None:
-        where = ""
-        if component is not None:
-            kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
-            where = f" of {kind} {component.name!r}"
-        frames = student_frames(error.__traceback__)
-        message = (
-            f"Task handler {describe_callable(handler)}{where} raised "
-            f"{type(error).__name__}: {error}\nwhile handling the task {task_label(task)} "
-            f"{task_values(task)}.\n"
-            f"Where it happened (most recent call last):\n{frames}"
-        )
-        if self.mode is Mode.DEPLOYED:
-            self.log.error("%s\nThe node keeps running.", message)
-            return
-        fix = (
-            "Fix the handler as the message above says."
-            if isinstance(error, SNRError)
-            else "Fix the handler, or catch the error in it if it can happen in normal use "
-            "(in Mode.DEPLOYED the node logs it and keeps running)."
-        )
-        failure = HandlerError(f"{message}\n{fix}")
-        trim_runtime_frames(error)
-        failure.__cause__ = error
-        self._record_failure(failure)
-
-    def _record_failure(self, error: SNRError) -> None:
-        if self.mode is Mode.DEPLOYED:
-            self.log.error("%s The node keeps running.", error)
-            return
-        if self._failure is None:
-            # loop() raises this error once the node has stopped, so the log
-            # gets one line now (shutdown can take a moment), not a duplicate.
-            self._failure = error
-            first_sentence = str(error).split("\n", 1)[0].split(". ", 1)[0].rstrip(".")
-            self.log.error("Stopping node %r: %s.", self.role, first_sentence)
-        else:
-            self.log.error("%s", error)
-        self.set_terminate_flag(f"stopped by a {type(error).__name__}")
-
-    def _loop_failed(self, loop: AbstractComponent, error: Exception) -> None:
-        frames = student_frames(error.__traceback__)
-        message = (
-            f"Loop {loop.name!r} ({describe_class(type(loop))}) stopped: it raised "
-            f"{type(error).__name__}: {error}\nWhere it happened (most recent call last):"
-            f"\n{frames}"
-        )
-        if self.mode is Mode.DEPLOYED:
-            self.log.error("%s\nThe node keeps running without this loop.", message)
-            return
-        fix = (
-            "Fix the loop as the message above says."
-            if isinstance(error, SNRError)
-            else "Fix loop() (or setup()), or catch the error there if it can happen in "
-            "normal use (in Mode.DEPLOYED the node keeps running without the loop)."
-        )
-        failure = LoopError(f"{message}\n{fix}")
-        trim_runtime_frames(error)
-        failure.__cause__ = error
-        self._record_failure(failure)
-
-    def _report_slow(self, handler: TaskHandler, task: Task, took_s: float) -> None:
-        func = getattr(handler, "__func__", handler)
-        if func in self._slow_reported:
-            return
-        self._slow_reported.add(func)
-        self.log.warning(
-            "Task handler %s took %.3f s handling %s. While it runs the node can run "
-            "no other task. Move slow or blocking work (time.sleep, waiting for a "
-            "device) into a ThreadLoop, and let the handler only read and store data.",
-            describe_callable(handler),
-            took_s,
-            task_label(task),
-        )
+    def _snr_loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
+        self._runner.loop_failed(loop, error)
 
     # ------------------------------------------------------------------
     # Scheduling (thesis listing 6.3)
     # ------------------------------------------------------------------
     def schedule(self, t: SomeTasks) -> None:
-        """Queue a task or a list of tasks; safe from any thread."""
+        """Queue a task or a list of tasks; safe from any thread.
+
+        From a loop's thread this waits while the node's queue is full (see
+        `TaskQueue`), so a loop cannot run ahead of its node.
+        """
         self.queue.schedule(t)
 
     def task_store_page(self, page: Page) -> Task:
@@ -478,12 +322,8 @@ class Node(AbstractNode):
 
     def get_data(self, key: DataKey) -> Optional[Any]:
         """The newest data under ``key``, or None; safe from any thread."""
-        page = self.datastore.get(key)
-        if page is None:
-            if self.key_hints is not None and self.state is NodeState.RUNNING:
-                self.key_hints.missed(key, self.datastore)
-            return None
-        return page.data
+        page = self.get_page(key)
+        return None if page is None else page.data
 
     def get_time_s(self) -> float:
         """Seconds since this node was created."""
@@ -495,53 +335,16 @@ class Node(AbstractNode):
         self.datastore[page.key] = page
 
     # ------------------------------------------------------------------
-    # Components
+    # Components (the work is done by ComponentSet)
     # ------------------------------------------------------------------
-    def _build(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
-        if not hasattr(factory, "reload_targets"):
-            raise ComponentError(
-                f"{describe_class(type(factory))} did not call super().__init__() in its "
-                "__init__. Add "
-                "`super().__init__()` (or `super().__init__(my_module)` to hot-reload "
-                "my_module) as its first line."
-            )
-        component: Any  # get() is typed, but a student's get() may return anything
-        try:
-            component = factory.get(self)
-        except SNRError:
-            raise
-        except TypeError as error:
-            explained = explain_abstract_error(error)
-            if explained is not None:
-                raise explained from None  # Python's "abstract class" text only confuses
-            raise self._get_failed(factory, error) from error
-        except Exception as error:
-            raise self._get_failed(factory, error) from error
-        if component is None:
-            return None
-        if not isinstance(component, AbstractComponent):
-            get = describe_callable(type(factory).get)
-            if isinstance(component, type):
-                raise ComponentError(
-                    f"{get} returned the class {component.__name__} itself, not a "
-                    f"component made from it. Call the class: `return "
-                    f"{component.__name__}(self, parent)`."
-                )
-            raise ComponentError(
-                f"{get} returned {short_repr(component)} ({type(component).__name__}), "
-                "not an endpoint or loop. get() must build and return the component, "
-                "e.g. `return MyEndpoint(self, parent)`."
-            )
-        return component
+    def build_component(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
+        """``factory.get(self)``, with any mistake in ``get()`` explained.
 
-    def _get_failed(self, factory: AbstractFactory, error: Exception) -> ComponentError:
-        frames = student_frames(error.__traceback__)
-        trim_runtime_frames(error)
-        return ComponentError(
-            f"{describe_callable(type(factory).get)} raised {type(error).__name__}: "
-            f"{error}\nwhile building a component for node {self.role!r}.\n"
-            f"Where it happened (most recent call last):\n{frames}"
-        )
+        Raises:
+            ComponentError: ``get()`` raised or returned something that is not
+                a component.
+        """
+        return self._components.build(factory)
 
     def add_component(self, component: AbstractComponent, start: bool = True) -> None:
         """Add a component; it begins at once if the node is running.
@@ -551,182 +354,25 @@ class Node(AbstractNode):
             ConfigError: another component already has its name.
         """
         self._check_owner_thread("add_component")
-        if not hasattr(component, "name") or (
-            not hasattr(component, "_task_handlers") and not hasattr(component, "parent")
-        ):
-            raise ComponentError(
-                f"{describe_class(type(component))}: its __init__ did not call "
-                "super().__init__(factory, parent, name). Add that line first in "
-                "__init__ so SNR can give the component its name and task handlers."
-            )
-        name = component.name
-        if name in self.components:
-            other = self.components[name]
-            factory = getattr(component, "factory", None)
-            if getattr(other, "factory", None) is factory:
-                raise ConfigError(
-                    f"Node {self.role!r} got two components named {name!r} from the same "
-                    f"{type(factory).__name__} object: it is listed twice in the config, "
-                    "or its get() gives every component the same name. List it once, or "
-                    "add another factory object that uses another name."
-                )
-            raise ConfigError(
-                f"Node {self.role!r} already has a component named {name!r} "
-                f"({describe_class(type(other))}); "
-                f"{describe_class(type(component))} wants the same name. Give each "
-                "component a unique name (e.g. pass a name to its factory)."
-            )
-        self.components[name] = component
-        if self._table_stale:
-            self._pending_adds.append(component)
-        elif self.state is NodeState.RUNNING:
-            self._pending_adds.append(component)  # applied before the next task
-            self._table_stale = True
-        else:
-            self._handlers.add(component)
-        if start and self.state is NodeState.RUNNING:
-            self._start(component)
+        self._components.add(component, start)
 
     def remove_component(self, name: ComponentName) -> None:
         """Halt, join, terminate and forget the component called ``name``."""
         self._check_owner_thread("remove_component")
-        component = self.components.pop(name, None)
-        if component is None:
-            self.log.error(
-                "Cannot remove component %r: node %r has no such component. It has: %s.",
-                name,
-                self.role,
-                ", ".join(self.components),
-            )
-            return
-        self._stop(component)
-        self._call_safely(component, "terminate")
-        self._mark_rebuild()
+        self._components.remove(name)
 
     def reload_component(self, name: ComponentName = "all") -> List[ComponentName]:
         """Reload the source of one component (or ``"all"``) and rebuild it.
 
-        A reload that fails (e.g. a syntax error) leaves the old component
-        running and logs why. Returns the names of the rebuilt components.
+        A reload that fails (a syntax error, a ``get()`` that raises, a loop
+        that will not stop) leaves the old component running and logs why,
+        with the file and line. Returns the names of the rebuilt components.
         """
         self._check_owner_thread("reload_component")
-        if name == "all":
-            targets = [c for c in self.components.values() if c.factory.reload_targets]
-        elif name in self.components:
-            targets = [self.components[name]]
-        else:
-            self.log.error(
-                "Cannot reload %r: node %r has no such component. It has: %s.",
-                name,
-                self.role,
-                ", ".join(self.components),
-            )
-            return []
-        rebuilt: List[ComponentName] = []
-        for old in targets:
-            if self._reload_one(old):
-                rebuilt.append(old.name)
-        return rebuilt
+        return self._components.reload(name)
 
-    def _reload_one(self, old: AbstractComponent) -> bool:
-        factory = old.factory
-        try:
-            factory.reload()
-        except Exception as error:
-            self.log.error(
-                "Reloading %r failed, so the old version keeps running: %s: %s",
-                old.name,
-                type(error).__name__,
-                error,
-            )
-            return False
-        self._stop(old)
-        try:
-            new = self._build(factory)
-        except Exception as error:
-            self.log.error(
-                "Rebuilding %r after reload failed: %s: %s. The old version stays.",
-                old.name,
-                type(error).__name__,
-                error,
-            )
-            self._restart_endpoint(old)
-            return False
-        if new is None:
-            self.log.error("%s.get() returned None on reload; keeping %r.", factory, old.name)
-            self._restart_endpoint(old)
-            return False
-        self._call_safely(old, "terminate")
-        self.components = {
-            (new.name if n == old.name else n): (new if c is old else c)
-            for n, c in self.components.items()
-        }
-        self._mark_rebuild()
-        if self.state is NodeState.RUNNING:
-            self._start(new)
-        self.log.info("Reloaded %r", new.name)
-        return True
-
-    def _restart_endpoint(self, component: AbstractComponent) -> None:
-        if not hasattr(component, "is_alive") and self.state is NodeState.RUNNING:
-            self._call_safely(component, "begin")
-
-    def _start(self, component: AbstractComponent) -> None:
-        start = getattr(component, "_snr_start", component.begin)
-        try:
-            start()
-        except SNRError:
-            raise
-        except Exception as error:
-            frames = student_frames(error.__traceback__)
-            trim_runtime_frames(error)
-            raise ComponentError(
-                f"{describe_class(type(component))} {component.name!r} failed to start: "
-                f"{type(error).__name__}: {error}\n"
-                f"Where it happened (most recent call last):\n{frames}"
-            ) from error
-
-    def _stop(self, component: AbstractComponent) -> None:
-        stop = getattr(component, "_snr_stop", None)
-        if stop is not None:
-            try:
-                stop()
-            except Exception:
-                self.log.exception("Error while halting %r", component.name)
-            component.join(self.join_timeout_s)
-        else:
-            self._call_safely(component, "halt")
-
-    def _call_safely(self, component: AbstractComponent, method: str) -> None:
-        if method == "halt" and hasattr(component, "_snr_stop"):
-            method = "_snr_stop"
-        try:
-            getattr(component, method)()
-        except Exception:
-            self.log.exception(
-                "%s.%s() of component %r raised; carrying on with shutdown",
-                type(component).__name__,
-                method.strip("_").replace("snr_", ""),
-                component.name,
-            )
-
-    def _component_handlers_changed(self, component: AbstractComponent) -> None:
-        if self.components.get(component.name) is component:
-            self._mark_rebuild()
-
-    def _mark_rebuild(self) -> None:
-        self._rebuild_needed = True
-        self._table_stale = True
-
-    def _refresh_table(self) -> None:
-        if self._rebuild_needed:
-            self._handlers.rebuild(self.components.values())
-        else:
-            for component in self._pending_adds:
-                self._handlers.add(component)
-        self._pending_adds = []
-        self._rebuild_needed = False
-        self._table_stale = False
+    def _snr_handlers_changed(self, component: AbstractComponent) -> None:
+        self._components.handlers_changed(component)
 
     def _check_owner_thread(self, method: str) -> None:
         if (

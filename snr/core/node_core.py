@@ -8,15 +8,12 @@ components, and stops the node on a terminate task.
 from __future__ import annotations
 
 import dataclasses
-from typing import TYPE_CHECKING, Any, cast
+from typing import Any
 
 from snr.core import tasks
 from snr.core.endpoint import Endpoint
 from snr.core.factory import EndpointFactory
 from snr.prelude import AbstractFactory, AbstractNode, Page, SomeTasks, Task, TaskId, TaskType
-
-if TYPE_CHECKING:  # pragma: no cover
-    from snr.core.node import Node
 
 __all__ = ["NODE_CORE_NAME", "NodeCoreEndpoint", "NodeCoreFactory"]
 
@@ -35,7 +32,7 @@ class NodeCoreEndpoint(Endpoint):
 
     def __init__(self, factory: AbstractFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, NODE_CORE_NAME)
-        self.node = cast("Node", parent)
+        self.node = parent
         self.task_handlers = {
             TaskType.store_page: self.store_page_handler,
             (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
@@ -67,7 +64,7 @@ class NodeCoreEndpoint(Endpoint):
         if not isinstance(factory, AbstractFactory):
             self.err("add_component needs a factory, got %r", factory)
             return None
-        component = self.node._build(factory)
+        component = self.node.build_component(factory)
         if component is not None:
             self.node.add_component(component)
         return None

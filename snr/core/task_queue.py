@@ -8,21 +8,41 @@ only while the node sleeps: an idle node uses no CPU, and a busy one pays
 nothing for waking. (A ``threading.Event`` does the same job with Python-level
 locking that cost ~15 µs per wake-up, which showed in round trips between
 nodes.)
+
+The queue is bounded by a *high-water mark* (``high_water``, 10,000 tasks by
+default). A task offered by another thread (a loop's ``store_data``) while the
+normal lane is above it waits until the node has worked the lane down to the
+*low-water mark* (half the high one): a loop that produces faster than the
+node can handle is slowed to the node's pace (backpressure). If the node does
+not catch up within ``max_wait_s`` (1 s) the waiting task is dropped, counted
+and logged (at most once a second, with numbers), so a stuck node can never
+fill the memory. Tasks the node's own handlers return never wait (the node
+would wait on itself) and urgent tasks (terminate) never wait or drop.
+Readers of sockets use `over_high_water` to stop reading instead of waiting.
 """
 
 from __future__ import annotations
 
 import collections
+import logging
 import queue
+import threading
+import time
 from typing import Deque, Optional
 
+from snr.core.logs import LossReport
 from snr.prelude import AbstractTaskQueue, HandlerError, SomeTasks, Task
 
 __all__ = ["TaskQueue"]
 
 
 class TaskQueue(AbstractTaskQueue):
-    """FIFO of tasks where high-priority tasks jump ahead.
+    """FIFO of tasks where high-priority tasks jump ahead; bounded, with backpressure.
+
+    Args:
+        high_water: tasks in the normal lane above which other threads wait.
+        max_wait_s: how long such a thread waits before its task is dropped.
+        log: where drops are reported (default: the ``snr`` logger).
 
     Example::
 
@@ -30,20 +50,52 @@ class TaskQueue(AbstractTaskQueue):
         queue.schedule([tasks.event("a"), tasks.terminate("done")])
         queue.get().type      # TaskType.terminate (it jumped ahead)
         queue.get().name      # 'a'
+
+    Attributes:
+        normal: the FIFO lane of ordinary tasks (the node pops from it).
+        urgent: the lane of high-priority tasks, served first.
+        owner_thread: the consuming thread's id (set by the node as it
+            starts); tasks it schedules itself never wait.
+        waits: how many times a producer had to wait for space.
     """
 
-    def __init__(self) -> None:
+    def __init__(
+        self,
+        high_water: int = 10_000,
+        max_wait_s: float = 1.0,
+        log: Optional[logging.Logger] = None,
+    ) -> None:
+        if high_water < 2:
+            raise ValueError(f"high_water must be at least 2, not {high_water}")
         self.normal: Deque[Task] = collections.deque()
         self.urgent: Deque[Task] = collections.deque()
+        self.high_water = high_water
+        self.low_water = high_water // 2
+        self.max_wait_s = max_wait_s
+        self.owner_thread: Optional[int] = None
+        self.waits = 0
+        self.loss = LossReport(
+            log or logging.getLogger("snr"),
+            "tasks from other threads",
+            f"the node's queue held over {high_water:,} tasks for {max_wait_s:g} s; the "
+            "node cannot keep up (a slow handler, or a loop storing data too fast)",
+        )
         self._bell: queue.SimpleQueue[None] = queue.SimpleQueue()
         self._sleeping = False
         self._rung = False
+        self._closed = threading.Event()
 
     def schedule(self, t: SomeTasks) -> None:
-        """Queue a task, a list of tasks, or nothing (None). Any thread."""
+        """Queue a task, a list of tasks, or nothing (None). Any thread.
+
+        From a thread other than the node's, this may wait while the queue is
+        above its high-water mark, and drop the task if it stays there.
+        """
         if t is None:
             return
         if isinstance(t, Task):
+            if not t.priority and len(self.normal) >= self.high_water and not self._make_room():
+                return
             (self.urgent if t.priority else self.normal).append(t)
         elif isinstance(t, list):
             for task in t:
@@ -53,7 +105,14 @@ class TaskQueue(AbstractTaskQueue):
                         "objects can be queued. Build tasks with snr.tasks, e.g. "
                         "tasks.event('name') or self.store_data_task(key, data)."
                     )
-                (self.urgent if task.priority else self.normal).append(task)
+            if len(self.normal) >= self.high_water and not self._make_room(len(t)):
+                urgent = [task for task in t if task.priority]
+                self.urgent.extend(urgent)
+                if not urgent:
+                    return
+            else:
+                for task in t:
+                    (self.urgent if task.priority else self.normal).append(task)
         else:
             raise HandlerError(
                 f"Cannot schedule {t!r} ({type(t).__name__}): schedule() takes a Task, "
@@ -63,6 +122,37 @@ class TaskQueue(AbstractTaskQueue):
         if self._sleeping and not self._rung:  # ring once per sleep
             self._rung = True
             self._bell.put(None)
+
+    def _make_room(self, n: int = 1) -> bool:
+        """Wait for the lane to drain below the low-water mark; False to drop ``n`` tasks."""
+        if threading.get_ident() == self.owner_thread or self.owner_thread is None:
+            return True  # the node's own work (or no node yet): waiting would deadlock
+        if self._closed.is_set():
+            return True  # shutting down: the queue is cleared anyway
+        self.waits += 1
+        deadline = time.monotonic() + self.max_wait_s
+        while len(self.normal) > self.low_water:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                self.loss.dropped(n)
+                return False
+            # Poll: the node works the lane down without a word to producers,
+            # so its hot path pays nothing. close() ends the wait at once.
+            if self._closed.wait(min(left, 0.005)):
+                return True
+        if self.loss.dropping:
+            self.loss.recovered()
+        return True
+
+    def over_high_water(self) -> bool:
+        """True while the normal lane is above the high-water mark.
+
+        Example (a reader that can simply stop reading for a while)::
+
+            if parent.queue.over_high_water():
+                return   # read the socket again later
+        """
+        return len(self.normal) >= self.high_water
 
     def get(self, timeout_s: Optional[float] = None) -> Optional[Task]:
         """The next task; waits up to ``timeout_s`` (None: forever) if empty."""
@@ -99,6 +189,11 @@ class TaskQueue(AbstractTaskQueue):
     def wake(self) -> None:
         """Wake a thread sleeping in :meth:`wait` (used to stop the node)."""
         self._bell.put(None)
+
+    def close(self) -> None:
+        """The consumer is stopping: producers never wait from now on."""
+        self._closed.set()
+        self.wake()
 
     def clear(self) -> int:
         """Drop every waiting task; returns how many were dropped."""

@@ -33,6 +33,7 @@ from snr.prelude.names import (
     Mode,
     Role,
     SomeTasks,
+    StatsCell,
     TaskHandler,
     TaskHandlerMap,
     TaskId,
@@ -197,6 +198,18 @@ class AbstractProfiler(_FriendlyABC):
     """
 
     @abstractmethod
+    def task_cell(self, task_id: TaskId, where: str) -> StatsCell:
+        """The ``[times_called, total_s]`` cell of a handler for ``task_id`` in ``where``.
+
+        The node asks once per handler, when it is registered, and adds to the
+        cell after every run: timing costs two additions per task.
+        """
+
+    @abstractmethod
+    def loop_cell(self, name: ComponentName) -> StatsCell:
+        """The ``[times_called, total_s]`` cell of the loop called ``name``."""
+
+    @abstractmethod
     def log_task(self, task_id: TaskId, where: str, runtime_s: float) -> None:
         """Record one handler run for ``task_id`` in module ``where``."""
 
@@ -285,6 +298,35 @@ class AbstractNode(_FriendlyABC):
     def execute_task(self, t: Task) -> None:
         """Run every matching handler for ``t`` and queue what they return."""
 
+    # -- components (what the node core endpoint asks of its node) --------
+    @abstractmethod
+    def build_component(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
+        """Ask ``factory`` for a component for this node, explaining a wrong ``get()``."""
+
+    @abstractmethod
+    def add_component(self, component: AbstractComponent, start: bool = True) -> None:
+        """Add a component (it begins at once if the node runs)."""
+
+    @abstractmethod
+    def remove_component(self, name: ComponentName) -> None:
+        """Halt, join, terminate and forget the component called ``name``."""
+
+    @abstractmethod
+    def reload_component(self, name: ComponentName = "all") -> List[ComponentName]:
+        """Reload a component's source (or every one's) and rebuild it."""
+
+    # -- what components tell their node (called by SNR, not by students) --
+    def _snr_handlers_changed(self, component: AbstractComponent) -> None:
+        """``component`` changed its ``task_handlers``: the node re-reads them.
+
+        A node that dispatches by looking handlers up every time (a mock)
+        needs to do nothing.
+        """
+
+    def _snr_loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
+        """``loop``'s thread ended with ``error``: report it (the loop has stopped)."""
+        self.log.error("Loop %r stopped: it raised %s: %s", loop.name, type(error).__name__, error)
+
     # -- scheduling (listing 6.3) ----------------------------------------
     @abstractmethod
     def schedule(self, t: SomeTasks) -> None:
@@ -318,6 +360,10 @@ class AbstractNode(_FriendlyABC):
     @abstractmethod
     def get_time_s(self) -> float:
         """Seconds since this node was created."""
+
+    @abstractmethod
+    def write_page(self, page: Page) -> None:
+        """Put ``page`` in the datastore now (the node core's ``store_page`` handler)."""
 
 
 class AbstractComponent(_FriendlyABC):
@@ -361,6 +407,19 @@ class AbstractComponent(_FriendlyABC):
     def store_page(self, page: Page) -> None:
         """Queue storing a page on the parent node."""
 
+    # -- driven by the node (SNR calls these; students override begin/halt) --
+    def _snr_start(self) -> None:
+        """Start the component: an endpoint's ``begin()``; a loop also starts its thread."""
+        self.begin()
+
+    def _snr_stop(self) -> None:
+        """Ask the component to stop: an endpoint's ``halt()``; a loop also ends its thread."""
+        self.halt()
+
+    def is_alive(self) -> bool:
+        """True while a thread of the component runs (endpoints have none)."""
+        return False
+
 
 class AbstractEndpoint(AbstractComponent):
     """A component whose code runs only in task handlers, on the node's thread.
@@ -390,6 +449,16 @@ class AbstractLoop(AbstractComponent):
     @abstractmethod
     def is_terminated(self) -> bool:
         """True once this loop has been asked to stop."""
+
+    def where_running(self) -> str:
+        """The line the loop's thread is running now, e.g. ``sensor.py:12 `read()```.
+
+        Used to say where a loop that will not stop is blocked; "" if unknown.
+        """
+        return ""
+
+    def _snr_cancel_stop(self) -> None:
+        """Take back a request to stop (a refused reload): the loop carries on."""
 
 
 class AbstractFactory(_FriendlyABC):

@@ -10,6 +10,7 @@ from snr.core.config import Config
 from snr.core.timer import Clock, Timer
 from snr.prelude import (
     AbstractComponent,
+    AbstractFactory,
     AbstractNode,
     ComponentName,
     DataDict,
@@ -117,3 +118,23 @@ class MockNode(AbstractNode):
 
     def get_time_s(self) -> float:
         return self._timer.current_s()
+
+    def write_page(self, page: Page) -> None:
+        """Put ``page`` in the datastore at once."""
+        self.datastore[page.key] = page
+
+    def build_component(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
+        """``factory.get(self)``: the component, built on this mock node."""
+        return factory.get(self)
+
+    def add_component(self, component: AbstractComponent, start: bool = True) -> None:
+        """Remember ``component`` by name (a mock node starts nothing)."""
+        self.components[component.name] = component
+
+    def remove_component(self, name: ComponentName) -> None:
+        """Forget the component called ``name``."""
+        self.components.pop(name, None)
+
+    def reload_component(self, name: ComponentName = "all") -> List[ComponentName]:
+        """A mock node reloads nothing; returns ``[]``."""
+        return []

@@ -1,0 +1,414 @@
+"""`ComponentSet`: a node's endpoints and loops, and their life cycle.
+
+It builds components from factories (explaining a wrong ``get()``), adds,
+removes and hot-reloads them, starts and stops them, and keeps the node's
+handler table in step with them. The node owns one and calls it from its own
+thread; the set never calls back into the node except through `AbstractNode`.
+
+Reloading never lies. A reload whose new code fails to import, build or start
+keeps the old component *running* (a loop's thread is restarted) and logs what
+failed with the file and line. A loop that does not stop within
+``join_timeout_s`` is not reloaded at all (two copies would run side by side):
+the reload is refused, naming the line the loop is blocked on, and the loop
+carries on.
+
+Example::
+
+    components = ComponentSet(node, HandlerTable(), join_timeout_s=1.0)
+    components.add(components.build(factory))
+    components.start_all()
+    ...
+    components.shutdown()
+"""
+
+from __future__ import annotations
+
+import time
+from typing import Any, Callable, Dict, List, Optional
+
+from snr.core.dispatch import HandlerTable
+from snr.core.explain import (
+    failed_get_error,
+    only_returns_none,
+    reload_failure,
+    wrong_get_result_error,
+)
+from snr.prelude import (
+    AbstractComponent,
+    AbstractFactory,
+    AbstractLoop,
+    AbstractNode,
+    ComponentError,
+    ComponentName,
+    ConfigError,
+    SNRError,
+)
+from snr.prelude.abstract import explain_abstract_error
+from snr.prelude.errors import (
+    describe_callable,
+    describe_class,
+    student_frames,
+    trim_runtime_frames,
+)
+
+__all__ = ["ComponentSet"]
+
+_BLOCKED_ADVICE = (
+    "Make loop() return often: give reads a timeout and wait with self.wait_s(seconds) "
+    "instead of time.sleep(), so the loop notices when it should stop."
+)
+
+
+class ComponentSet:
+    """The components of one node, in start order, and the table of their handlers.
+
+    Args:
+        node: the node they belong to (for its role and log).
+        table: the handler table to keep in step.
+        join_timeout_s: how long stopping waits for a loop's thread.
+
+    Example::
+
+        components.add(endpoint)          # begins it too if the set is running
+        components.reload("depth_filter") # ['depth_filter'] if rebuilt
+
+    Attributes:
+        by_name: the components by name, in start order (the node's ``components``).
+        table: the `HandlerTable`; call `refresh_table` before using it.
+        running: True between `start_all` and `shutdown`.
+    """
+
+    def __init__(self, node: AbstractNode, table: HandlerTable, join_timeout_s: float) -> None:
+        self.node = node
+        self.table = table
+        self.join_timeout_s = join_timeout_s
+        self.by_name: Dict[ComponentName, AbstractComponent] = {}
+        self.running = False
+        self.table_stale = False
+        self._rebuild_needed = False
+        self._pending_adds: List[AbstractComponent] = []
+
+    # -- building ----------------------------------------------------------
+    def build(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
+        """``factory.get(node)``, with any mistake in it explained.
+
+        Raises:
+            ComponentError: ``get()`` raised, or returned something that is not a
+                component, or the factory skipped ``super().__init__()``.
+        """
+        if not hasattr(factory, "reload_targets"):
+            raise ComponentError(
+                f"{describe_class(type(factory))} did not call super().__init__() in its "
+                "__init__. Add "
+                "`super().__init__()` (or `super().__init__(my_module)` to hot-reload "
+                "my_module) as its first line."
+            )
+        component: Any  # get() is typed, but a student's get() may return anything
+        try:
+            component = factory.get(self.node)
+        except SNRError:
+            raise
+        except TypeError as error:
+            explained = explain_abstract_error(error)
+            if explained is not None:
+                raise explained from None  # Python's "abstract class" text only confuses
+            raise failed_get_error(factory, error, self.node.role) from error
+        except Exception as error:
+            raise failed_get_error(factory, error, self.node.role) from error
+        if component is None:
+            self._got_none(factory)
+            return None
+        if not isinstance(component, AbstractComponent):
+            raise wrong_get_result_error(factory, component)
+        return component
+
+    def _got_none(self, factory: AbstractFactory) -> None:
+        get = type(factory).get
+        if only_returns_none(get):
+            raise ComponentError(
+                f"{describe_callable(get)} returned None: it has no `return` with a "
+                f"value, so role {self.node.role!r} can never get a component from it. "
+                "Return what it builds: `return MyEndpoint(self, parent)`."
+            )
+        self.node.log.warning(
+            "%s returned None this time, so role %r gets no component from it. If you "
+            "meant to add one, check the conditions before its `return`.",
+            describe_callable(get),
+            self.node.role,
+        )
+
+    # -- adding and removing ------------------------------------------------
+    def add(self, component: AbstractComponent, start: bool = True) -> None:
+        """Add ``component`` last; it begins at once if the set is running.
+
+        Raises:
+            ComponentError: the component skipped ``super().__init__``.
+            ConfigError: another component already has its name.
+        """
+        if not hasattr(component, "name") or (
+            not hasattr(component, "_task_handlers") and not hasattr(component, "parent")
+        ):
+            raise ComponentError(
+                f"{describe_class(type(component))}: its __init__ did not call "
+                "super().__init__(factory, parent, name). Add that line first in "
+                "__init__ so SNR can give the component its name and task handlers."
+            )
+        self._check_name_free(component)
+        self.by_name[component.name] = component
+        if self.table_stale or self.running:
+            self._pending_adds.append(component)  # applied before the next task
+            self.table_stale = True
+        else:
+            self.table.add(component)
+        if start and self.running:
+            self.start(component)
+
+    def _check_name_free(self, component: AbstractComponent) -> None:
+        name = component.name
+        other = self.by_name.get(name)
+        if other is None:
+            return
+        factory = getattr(component, "factory", None)
+        if getattr(other, "factory", None) is factory:
+            raise ConfigError(
+                f"Node {self.node.role!r} got two components named {name!r} from the same "
+                f"{type(factory).__name__} object: it is listed twice in the config, "
+                "or its get() gives every component the same name. List it once, or "
+                "add another factory object that uses another name."
+            )
+        raise ConfigError(
+            f"Node {self.node.role!r} already has a component named {name!r} "
+            f"({describe_class(type(other))}); "
+            f"{describe_class(type(component))} wants the same name. Give each "
+            "component a unique name (e.g. pass a name to its factory)."
+        )
+
+    def remove(self, name: ComponentName) -> None:
+        """Halt, join, terminate and forget the component called ``name``."""
+        component = self.by_name.pop(name, None)
+        if component is None:
+            self.node.log.error(
+                "Cannot remove component %r: node %r has no such component. It has: %s.",
+                name,
+                self.node.role,
+                ", ".join(self.by_name),
+            )
+            return
+        self.stop(component)
+        self._warn_if_alive(component)
+        self.call_safely(component.terminate, component, "terminate")
+        self.mark_rebuild()
+
+    # -- hot reload ---------------------------------------------------------
+    def reload(self, name: ComponentName = "all") -> List[ComponentName]:
+        """Reload the source of one component (or ``"all"``) and rebuild it.
+
+        Returns the names of the rebuilt components. A component whose reload
+        fails keeps running as it was, and the log says why.
+        """
+        if name == "all":
+            targets = [c for c in self.by_name.values() if c.factory.reload_targets]
+        elif name in self.by_name:
+            targets = [self.by_name[name]]
+        else:
+            self.node.log.error(
+                "Cannot reload %r: node %r has no such component. It has: %s.",
+                name,
+                self.node.role,
+                ", ".join(self.by_name),
+            )
+            return []
+        return [old.name for old in targets if self._reload_one(old)]
+
+    def _reload_one(self, old: AbstractComponent) -> bool:
+        log = self.node.log
+        try:
+            old.factory.reload()
+        except Exception as error:
+            log.error(
+                "Reloading %r failed while reading its new source, so the old version "
+                "keeps running:\n%s",
+                old.name,
+                reload_failure(error),
+            )
+            return False
+        if self.running and not self._stop_for_reload(old):
+            return False
+        new = self._build_replacement(old)
+        if new is None:
+            self._resume(old)
+            return False
+        self.call_safely(old.terminate, old, "terminate")
+        items = [
+            (new.name if n == old.name else n, new if c is old else c)
+            for n, c in self.by_name.items()
+        ]
+        self.by_name.clear()  # refilled in place: the node's `components` is this dict
+        self.by_name.update(items)
+        self.mark_rebuild()
+        if self.running:
+            try:
+                self.start(new)
+            except SNRError as error:
+                log.error("Reloaded %r, but it failed to start: %s", new.name, error)
+                return False
+        log.info("Reloaded %r", new.name)
+        return True
+
+    def _stop_for_reload(self, old: AbstractComponent) -> bool:
+        """Halt ``old`` and wait for its thread; False (and it resumes) if it will not stop."""
+        self.stop(old)
+        if not old.is_alive():
+            return True
+        where = old.where_running() if isinstance(old, AbstractLoop) else ""
+        self.node.log.error(
+            "Cannot reload loop %r: it did not stop within %.1f s of being asked%s, and "
+            "a new copy would run beside it. Reload refused; the old version keeps "
+            "running. %s",
+            old.name,
+            self.join_timeout_s,
+            f" (it is at {where})" if where else "",
+            _BLOCKED_ADVICE,
+        )
+        if isinstance(old, AbstractLoop):
+            old._snr_cancel_stop()
+        return False
+
+    def _build_replacement(self, old: AbstractComponent) -> Optional[AbstractComponent]:
+        """A new component from ``old``'s factory, or None (logged) if that fails."""
+        log = self.node.log
+        try:
+            new = self.build(old.factory)
+        except Exception as error:
+            log.error(
+                "Rebuilding %r after its reload failed, so the old version keeps running:\n%s",
+                old.name,
+                error if isinstance(error, SNRError) else reload_failure(error),
+            )
+            return None
+        if new is None:
+            log.error(
+                "%s returned None on reload, so the old version of %r keeps running.",
+                describe_callable(type(old.factory).get),
+                old.name,
+            )
+            return None
+        if new.name != old.name and new.name in self.by_name:
+            log.error(
+                "Reloaded %r came back named %r, which another component has; the old "
+                "version keeps running.",
+                old.name,
+                new.name,
+            )
+            return None
+        return new
+
+    def _resume(self, old: AbstractComponent) -> None:
+        """Start ``old`` again after a failed reload stopped it."""
+        if not self.running:
+            return
+        try:
+            old._snr_start()
+        except Exception as error:
+            self.node.log.error(
+                "%r could not be restarted after the failed reload: %s: %s",
+                old.name,
+                type(error).__name__,
+                error,
+            )
+
+    # -- starting and stopping ----------------------------------------------
+    def start_all(self, keep_going: Callable[[], bool]) -> None:
+        """Start every component in order while ``keep_going()`` says so."""
+        self.running = True
+        for component in list(self.by_name.values()):
+            if not keep_going():
+                break
+            self.start(component)
+
+    def start(self, component: AbstractComponent) -> None:
+        """Begin ``component`` (a loop also starts its thread).
+
+        Raises:
+            ComponentError: its ``begin()`` raised; the message shows where.
+        """
+        try:
+            component._snr_start()
+        except SNRError:
+            raise
+        except Exception as error:
+            frames = student_frames(error.__traceback__)
+            trim_runtime_frames(error)
+            raise ComponentError(
+                f"{describe_class(type(component))} {component.name!r} failed to start: "
+                f"{type(error).__name__}: {error}\n"
+                f"Where it happened (most recent call last):\n{frames}"
+            ) from error
+
+    def stop(self, component: AbstractComponent) -> None:
+        """Halt ``component`` and wait (up to ``join_timeout_s``) for its thread."""
+        self.call_safely(component._snr_stop, component, "halt")
+        component.join(self.join_timeout_s)
+
+    def shutdown(self) -> None:
+        """Halt every component (newest first), join their threads, then terminate them."""
+        self.running = False
+        components = list(self.by_name.values())[::-1]
+        for component in components:
+            self.call_safely(component._snr_stop, component, "halt")
+        deadline = time.monotonic() + self.join_timeout_s
+        for component in components:
+            component.join(max(0.0, deadline - time.monotonic()))
+        for component in components:
+            self._warn_if_alive(component)
+            self.call_safely(component.terminate, component, "terminate")
+
+    def _warn_if_alive(self, component: AbstractComponent) -> None:
+        if not component.is_alive():
+            return
+        where = component.where_running() if isinstance(component, AbstractLoop) else ""
+        self.node.log.warning(
+            "Loop %r did not stop within %.1f s of being asked%s. Its terminate() runs "
+            "now anyway, while its thread is still going (the thread ends with the "
+            "program). %s",
+            component.name,
+            self.join_timeout_s,
+            f": it is at {where}" if where else "",
+            _BLOCKED_ADVICE,
+        )
+
+    def call_safely(
+        self, method: Callable[[], None], component: AbstractComponent, what: str
+    ) -> None:
+        """Call a life-cycle ``method``; log (never raise) what goes wrong."""
+        try:
+            method()
+        except Exception:
+            self.node.log.exception(
+                "%s.%s() of component %r raised; carrying on",
+                type(component).__name__,
+                what,
+                component.name,
+            )
+
+    # -- the handler table ----------------------------------------------------
+    def handlers_changed(self, component: AbstractComponent) -> None:
+        """``component`` changed its ``task_handlers``: rebuild the table before the next task."""
+        if self.by_name.get(component.name) is component:
+            self.mark_rebuild()
+
+    def mark_rebuild(self) -> None:
+        """Rebuild the whole table before the next task."""
+        self._rebuild_needed = True
+        self.table_stale = True
+
+    def refresh_table(self) -> None:
+        """Bring the table up to date with every change made since it was built."""
+        if self._rebuild_needed:
+            self.table.rebuild(self.by_name.values())
+        else:
+            for component in self._pending_adds:
+                self.table.add(component)
+        self._pending_adds = []
+        self._rebuild_needed = False
+        self.table_stale = False

@@ -1,0 +1,257 @@
+"""`HandlerRunner`: runs a task's handlers for a node and says what went wrong.
+
+The one place where SNR calls a student's task handler. For every handler
+that matches a task it
+
+1. calls ``handler(task, key)``, timing it unless the node is DEPLOYED
+   without a profiler (the time goes to the handler's profiler cell, two
+   additions, and a handler slower than ``slow_handler_s`` is reported once);
+2. queues the tasks it returned, keeping their order (a high-priority task
+   goes to the urgent lane);
+3. turns a raised exception or a wrong return value into a `HandlerError`
+   that names the handler, the task and the student's lines. In DEBUG and
+   TEST mode the first one stops the node (``Node.loop()`` raises it); in
+   DEPLOYED mode it is logged and the node keeps running, and a handler that
+   fails over and over is logged in full three times, then counted in one
+   line every five seconds.
+
+Example::
+
+    runner = HandlerRunner(node.role, node.mode, node.log, node.queue, components, stop)
+    node.schedule(tasks.event("go"))
+    runner.run_queued()      # runs every handler of (event, 'go'), and what follows
+"""
+
+from __future__ import annotations
+
+import logging
+import time
+from typing import Any, Callable, Hashable, List, Optional, Set
+
+from snr.core.components import ComponentSet
+from snr.core.explain import (
+    bad_result_error,
+    handler_failure,
+    loop_failure,
+    slow_handler_text,
+)
+from snr.core.logs import RepeatFilter
+from snr.core.task_queue import TaskQueue
+from snr.prelude import (
+    AbstractComponent,
+    AbstractLoop,
+    Mode,
+    SNRError,
+    StatsCell,
+    Task,
+    TaskHandler,
+    TaskId,
+)
+
+__all__ = ["HandlerRunner"]
+
+
+class HandlerRunner:
+    """Runs handlers, queues their tasks, and records the first failure.
+
+    Args:
+        role: the node's role, for messages.
+        mode: DEBUG/TEST stop the node on the first failure; DEPLOYED logs.
+        log: the node's logger.
+        queue: where tasks come from and returned tasks go.
+        components: the node's `ComponentSet`, whose handler table says who runs.
+        stop: called with a reason to stop the node (``Node.set_terminate_flag``).
+        timed: time every handler (DEBUG/TEST, or a profiler is on).
+
+    Example::
+
+        runner.run_queued()
+        runner.failure        # the HandlerError/LoopError that stopped the node, or None
+
+    Attributes:
+        running: False once the node is stopping: `run_queued` returns after
+            the current task.
+        failure: the first error that stopped the node (DEBUG/TEST), or None.
+        slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
+        repeats: the `RepeatFilter` that keeps repeated failures from flooding the log.
+    """
+
+    def __init__(
+        self,
+        role: str,
+        mode: Mode,
+        log: logging.Logger,
+        queue: TaskQueue,
+        components: ComponentSet,
+        stop: Callable[[str], None],
+        timed: bool = True,
+        slow_handler_s: float = 0.1,
+    ) -> None:
+        self.role = role
+        self.mode = mode
+        self.log = log
+        self.queue = queue
+        self.components = components
+        self.stop = stop
+        self.running = True
+        self.timed = timed
+        self.slow_handler_s = slow_handler_s
+        self.failure: Optional[SNRError] = None
+        self.repeats = RepeatFilter(log)
+        self._slow_reported: Set[Any] = set()
+
+    def run_queued(self, max_tasks: int = 100_000) -> None:
+        """Run queued tasks until the queue is empty, the node stops, or ``max_tasks`` ran.
+
+        For each task, oldest first (urgent ones first): find its handlers in
+        the table, run each in component order, and queue what each returns.
+        This is the node's hot path, the one place that runs handlers for
+        tasks, timed or not: every task passes here, so it keeps names in
+        locals, tests ``timed`` instead of having a second copy, and handles
+        the common result (one Task) inline.
+        """
+        queue = self.queue
+        normal, urgent = queue.normal, queue.urgent
+        components = self.components
+        lookup = components.table.table.get
+        timed = self.timed
+        clock = time.perf_counter
+        slow_s = self.slow_handler_s
+        for _ in range(max_tasks):
+            if urgent:
+                task = urgent.popleft()
+            elif normal:
+                task = normal.popleft()
+            else:
+                return
+            if components.table_stale:  # what the last task changed applies now
+                components.refresh_table()
+            entries = lookup((task.type, task.name))
+            if entries is None:
+                entries = lookup(task.type)
+                if entries is None:
+                    continue
+            for handler, key, component, cell in entries:
+                if timed:
+                    started = clock()
+                try:
+                    result = handler(task, key)
+                except Exception as error:
+                    self.handler_failed(handler, task, component, error)
+                    continue
+                if timed:
+                    took = clock() - started
+                    cell[0] += 1
+                    cell[1] += took
+                    if took > slow_s:
+                        self.report_slow(handler, task, took)
+                if result is None:
+                    continue
+                if result.__class__ is Task:
+                    (urgent if result.priority else normal).append(result)
+                else:
+                    self.queue_all(self.check_result(result, handler, task))
+            if not self.running:
+                return
+
+    def run(
+        self,
+        handler: TaskHandler,
+        task: Task,
+        key: TaskId,
+        component: Optional[AbstractComponent],
+        cell: Optional[StatsCell] = None,
+    ) -> Optional[List[Task]]:
+        """Run one handler, timed and checked; return its tasks (not queued)."""
+        started = time.perf_counter()
+        try:
+            result = handler(task, key)
+        except Exception as error:
+            self.handler_failed(handler, task, component, error)
+            return None
+        took = time.perf_counter() - started
+        if cell is not None:
+            cell[0] += 1
+            cell[1] += took
+        if took > self.slow_handler_s:
+            self.report_slow(handler, task, took)
+        return self.check_result(result, handler, task)
+
+    def queue_all(self, tasks: Optional[List[Task]]) -> None:
+        """Queue tasks a handler returned, in order (urgent ones jump ahead)."""
+        if tasks:
+            normal, urgent = self.queue.normal, self.queue.urgent
+            for task in tasks:
+                (urgent if task.priority else normal).append(task)
+
+    def check_result(self, result: Any, handler: TaskHandler, task: Task) -> Optional[List[Task]]:
+        """``result`` as a list of tasks; a wrong value is reported and dropped."""
+        if result is None:
+            return None
+        if isinstance(result, Task):
+            return [result]
+        if isinstance(result, list) and all(isinstance(t, Task) for t in result):
+            return result
+        self.record(bad_result_error(result, handler, task), _func_of(handler))
+        return None
+
+    def handler_failed(
+        self,
+        handler: TaskHandler,
+        task: Task,
+        component: Optional[AbstractComponent],
+        error: Exception,
+    ) -> None:
+        """Report ``error`` raised by ``handler`` (and stop the node unless DEPLOYED)."""
+        deployed = self.mode is Mode.DEPLOYED
+        failure = handler_failure(handler, task, component, error, deployed)
+        self.record(failure, (_func_of(handler), type(error)))
+
+    def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
+        """Report a loop's thread ending with ``error`` (any BaseException).
+
+        ``sys.exit()`` or Ctrl-C in a loop stops the node in every mode, as
+        the student meant; other errors are failures like a handler's.
+        """
+        deployed = self.mode is Mode.DEPLOYED
+        failure = loop_failure(loop, error, deployed)
+        if isinstance(error, (SystemExit, KeyboardInterrupt)):
+            self.log.warning("%s The node stops.", failure)
+            what = "sys.exit()" if isinstance(error, SystemExit) else "Ctrl-C"
+            self.stop(f"{what} in loop {loop.name!r}")
+            return
+        self.record(failure, (id(loop), type(error)))
+
+    def record(self, error: SNRError, key: Hashable) -> None:
+        """Log ``error``; outside DEPLOYED mode the first one also stops the node."""
+        if self.mode is Mode.DEPLOYED:
+            text = str(error)
+            if "The node keeps running" not in text:
+                text += " The node keeps running."
+            first_line = text.split("\n", 1)[0]
+            self.repeats.report(key, first_line, logging.ERROR, "%s", text)
+            return
+        if self.failure is None:
+            # loop() raises this error once the node has stopped, so the log
+            # gets one line now (shutdown can take a moment), not a duplicate.
+            self.failure = error
+            first_sentence = str(error).split("\n", 1)[0].split(". ", 1)[0].rstrip(".")
+            self.log.error("Stopping node %r: %s.", self.role, first_sentence)
+        else:
+            self.log.error("%s", error)
+        self.stop(f"stopped by a {type(error).__name__}")
+
+    def report_slow(self, handler: TaskHandler, task: Task, took_s: float) -> None:
+        """Warn once per handler that it held the node's thread for ``took_s``."""
+        if self.mode is Mode.DEPLOYED:
+            return
+        func = _func_of(handler)
+        if func in self._slow_reported:
+            return
+        self._slow_reported.add(func)
+        self.log.warning("%s", slow_handler_text(handler, task, took_s))
+
+
+def _func_of(handler: TaskHandler) -> Any:
+    """The function behind a bound method: one key for every instance's handler."""
+    return getattr(handler, "__func__", handler)
