@@ -116,6 +116,8 @@ class TestHotReload(SNRTestCase):
         self.assertEqual(factory.said, ["hello", "hello"])
         self.assertIn("old version keeps running", "\n".join(logs.output))
         self.assertIn("SyntaxError", "\n".join(logs.output))
+        line = len(textwrap.dedent(SOURCE.format(word="broken")).splitlines()) + 2
+        self.assertIn(f"{MODULE}.py:{line}: SyntaxError", "\n".join(logs.output))  # file:line
 
     def test_reload_unknown_name_lists_components(self) -> None:
         with self.assertLogs("snr.test", "ERROR") as logs:
