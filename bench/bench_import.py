@@ -11,6 +11,8 @@ machine's speed drifts, and each is run ``--runs`` times (at least 10). The
 table shows the best and the median wall time, the overhead over the baseline
 in milliseconds and the ratio to it. Bytecode caching is allowed and one
 warm-up round fills the cache, as on a student's machine after the first run.
+The interpreters run in the checkout this file is in, so they import its
+``snr`` (``python -c`` puts the current directory first on ``sys.path``).
 
 Run: ``python bench/bench_import.py [--runs N]`` (or ``nox -s bench``).
 Add ``--importtime`` to see the 25 slowest modules behind ``import snr``.
@@ -25,6 +27,8 @@ import subprocess
 import sys
 import time
 from typing import Dict, List, Tuple
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 CASES: List[Tuple[str, str]] = [
     ("python -c pass", "pass"),
@@ -41,7 +45,7 @@ def _env() -> Dict[str, str]:
 def run_once(code: str, env: Dict[str, str]) -> float:
     """Wall time in seconds of one fresh ``python -c code``."""
     started = time.perf_counter()
-    subprocess.run([sys.executable, "-c", code], check=True, env=env)
+    subprocess.run([sys.executable, "-c", code], check=True, env=env, cwd=ROOT)
     return time.perf_counter() - started
 
 
@@ -83,6 +87,7 @@ def slowest_imports(count: int = 25) -> str:
         [sys.executable, "-X", "importtime", "-c", "import snr"],
         check=True,
         env=_env(),
+        cwd=ROOT,
         capture_output=True,
         text=True,
     )
