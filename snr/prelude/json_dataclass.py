@@ -2,7 +2,7 @@
 
 ``Page`` and ``Task`` used to subclass ``dataclasses_json.DataClassJsonMixin``.
 Importing dataclasses-json pulls in marshmallow and ``importlib.metadata``,
-about half of what ``import snr`` cost, while only ``serialize()`` /
+over a third of what ``import snr`` cost, while only ``serialize()`` /
 ``deserialize()`` need it (nodes talk to each other with the plain ``json``
 wire format). This base class offers the same methods, with the same
 arguments and results, and imports dataclasses-json the first time one of
