@@ -5,7 +5,14 @@ Everything a student needs is here::
     from snr import *
 
 See the tutorial in ``docs/`` and the thesis listings in ``examples/``.
+
+``import snr`` is kept light: what only some programs need (the ready-made
+components of ``snr.std_mods``, ``unittest`` behind ``SNRTestCase``,
+dataclasses-json behind ``Page.serialize()``) is imported the first time it
+is used; ``from snr import *`` imports everything it names.
 """
+
+from typing import TYPE_CHECKING, Any, Dict, List
 
 from snr.core import (
     CliRunner,
@@ -67,61 +74,6 @@ from snr.prelude import (
     ThreadSafetyError,
     WireFormatError,
 )
-from snr.std_mods import (
-    COMMS_CONNECTED,
-    COMMS_DISCONNECTED,
-    DEFAULT_CONSOLE_PORT,
-    DEFAULT_FILTER_LENGTH,
-    DEFAULT_JOYSTICK_SCRIPT,
-    STEAM_CONTROLLER_BUTTONS,
-    STEAM_CONTROLLER_MAPPING,
-    CommandProcessorEndpoint,
-    CommandReceiverFactory,
-    CommandReceiverLoop,
-    CommsLoop,
-    ControllerLoop,
-    ControllerLoopFactory,
-    ControlProcessorEndpoint,
-    ControlProcessorFactory,
-    InputMappingEndpoint,
-    InputMappingFactory,
-    Joystick,
-    JoystickStep,
-    KalmanFilter,
-    KalmanFilterEndpoint,
-    KalmanFilterFactory,
-    LocalConsole,
-    LocalConsoleFactory,
-    MovingAvgEndpoint,
-    MovingAvgFilter,
-    MovingAvgFilterFactory,
-    PageReader,
-    PipeLoop,
-    PipeLoopFactory,
-    PrinterEndpoint,
-    PrinterEndpointFactory,
-    RecorderEndpoint,
-    RecorderEndpointFactory,
-    RemoteConsole,
-    ReplayerLoop,
-    ReplayerLoopFactory,
-    SerialLinkFactory,
-    SerialLinkLoop,
-    SimulatedJoystick,
-    SocketsClientFactory,
-    SocketsClientLoop,
-    SocketsPair,
-    SocketsServerFactory,
-    SocketsServerLoop,
-    StopwatchEndpoint,
-    StopwatchEndpointFactory,
-    TextReader,
-    TextReplayerFactory,
-    TextReplayerLoop,
-    TimeoutLoop,
-    TimeoutLoopFactory,
-    format_task,
-)
 from snr.utils import (
     DummyEndpoint,
     DummyEndpointFactory,
@@ -134,8 +86,133 @@ from snr.utils import (
     MockNode,
     MultiProcExpector,
     OrderedExpector,
-    SNRTestCase,
 )
+
+if TYPE_CHECKING:
+    from snr.std_mods import (
+        COMMS_CONNECTED,
+        COMMS_DISCONNECTED,
+        DEFAULT_CONSOLE_PORT,
+        DEFAULT_FILTER_LENGTH,
+        DEFAULT_JOYSTICK_SCRIPT,
+        STEAM_CONTROLLER_BUTTONS,
+        STEAM_CONTROLLER_MAPPING,
+        CommandProcessorEndpoint,
+        CommandReceiverFactory,
+        CommandReceiverLoop,
+        CommsLoop,
+        ControllerLoop,
+        ControllerLoopFactory,
+        ControlProcessorEndpoint,
+        ControlProcessorFactory,
+        InputMappingEndpoint,
+        InputMappingFactory,
+        Joystick,
+        JoystickStep,
+        KalmanFilter,
+        KalmanFilterEndpoint,
+        KalmanFilterFactory,
+        LocalConsole,
+        LocalConsoleFactory,
+        MovingAvgEndpoint,
+        MovingAvgFilter,
+        MovingAvgFilterFactory,
+        PageReader,
+        PipeLoop,
+        PipeLoopFactory,
+        PrinterEndpoint,
+        PrinterEndpointFactory,
+        RecorderEndpoint,
+        RecorderEndpointFactory,
+        RemoteConsole,
+        ReplayerLoop,
+        ReplayerLoopFactory,
+        SerialLinkFactory,
+        SerialLinkLoop,
+        SimulatedJoystick,
+        SocketsClientFactory,
+        SocketsClientLoop,
+        SocketsPair,
+        SocketsServerFactory,
+        SocketsServerLoop,
+        StopwatchEndpoint,
+        StopwatchEndpointFactory,
+        TextReader,
+        TextReplayerFactory,
+        TextReplayerLoop,
+        TimeoutLoop,
+        TimeoutLoopFactory,
+        format_task,
+    )
+    from snr.utils.test_case import SNRTestCase
+
+_LAZY: Dict[str, str] = {
+    **dict.fromkeys(
+        (
+            "COMMS_CONNECTED",
+            "COMMS_DISCONNECTED",
+            "CommandProcessorEndpoint",
+            "CommandReceiverFactory",
+            "CommandReceiverLoop",
+            "CommsLoop",
+            "ControlProcessorEndpoint",
+            "ControlProcessorFactory",
+            "ControllerLoop",
+            "ControllerLoopFactory",
+            "DEFAULT_CONSOLE_PORT",
+            "DEFAULT_FILTER_LENGTH",
+            "DEFAULT_JOYSTICK_SCRIPT",
+            "InputMappingEndpoint",
+            "InputMappingFactory",
+            "Joystick",
+            "JoystickStep",
+            "KalmanFilter",
+            "KalmanFilterEndpoint",
+            "KalmanFilterFactory",
+            "LocalConsole",
+            "LocalConsoleFactory",
+            "MovingAvgEndpoint",
+            "MovingAvgFilter",
+            "MovingAvgFilterFactory",
+            "PageReader",
+            "PipeLoop",
+            "PipeLoopFactory",
+            "PrinterEndpoint",
+            "PrinterEndpointFactory",
+            "RecorderEndpoint",
+            "RecorderEndpointFactory",
+            "RemoteConsole",
+            "ReplayerLoop",
+            "ReplayerLoopFactory",
+            "STEAM_CONTROLLER_BUTTONS",
+            "STEAM_CONTROLLER_MAPPING",
+            "SerialLinkFactory",
+            "SerialLinkLoop",
+            "SimulatedJoystick",
+            "SocketsClientFactory",
+            "SocketsClientLoop",
+            "SocketsPair",
+            "SocketsServerFactory",
+            "SocketsServerLoop",
+            "StopwatchEndpoint",
+            "StopwatchEndpointFactory",
+            "TextReader",
+            "TextReplayerFactory",
+            "TextReplayerLoop",
+            "TimeoutLoop",
+            "TimeoutLoopFactory",
+            "format_task",
+        ),
+        "snr.std_mods",
+    ),
+    "SNRTestCase": "snr.utils.test_case",
+}
+"""Public names imported on first use, and the module each comes from.
+
+The ready-made components (``snr.std_mods``: sockets, consoles, serial,
+recorders, filters) and ``SNRTestCase`` (``unittest``) cost more to import
+than the rest of SNR together; a program pays for them only when it uses
+them."""
 
 __version__ = "0.1.0"
 
@@ -263,3 +340,21 @@ __all__ = [
     "format_task",
     "tasks",
 ]
+
+
+def __getattr__(name: str) -> Any:
+    """Import a name of ``_LAZY`` (or ``snr.std_mods``) on first use (PEP 562)."""
+    import importlib
+
+    if name == "std_mods":
+        return importlib.import_module("snr.std_mods")
+    module = _LAZY.get(name)
+    if module is None:
+        raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
+    value = getattr(importlib.import_module(module), name)
+    globals()[name] = value
+    return value
+
+
+def __dir__() -> List[str]:
+    return sorted(set(globals()) | set(__all__))

@@ -170,8 +170,10 @@ def check_docstring_references(modules: Iterable[ModuleType]) -> List[str]:
         check_docstring_references([snr.core.node])   # [] when all is well
     """
     problems: List[str] = []
+    # getattr, not vars(snr): snr binds some exports only on first use (PEP 562).
+    exports = {name: getattr(snr, name) for name in snr.__all__}
     for module in modules:
-        namespace: Dict[str, Any] = {**vars(builtins), **vars(snr), **vars(module)}
+        namespace: Dict[str, Any] = {**vars(builtins), **vars(snr), **exports, **vars(module)}
         for obj in _documented_objects(module):
             doc = inspect.getdoc(obj) or ""
             for reference in _DOC_REFERENCE.findall(doc):

@@ -12,6 +12,21 @@ class TestPublicApi(unittest.TestCase):
         for name in snr.__all__:
             self.assertTrue(hasattr(snr, name), name)
 
+    def test_lazy_names_are_exported_and_from_where_they_say(self) -> None:
+        # snr/__init__.py imports these on first use (PEP 562); the table must
+        # follow snr.std_mods and __all__ when names are added.
+        import snr.std_mods
+
+        lazy = snr._LAZY
+        std = sorted(name for name, module in lazy.items() if module == "snr.std_mods")
+        self.assertEqual(std, sorted(snr.std_mods.__all__))
+        for name, module in lazy.items():
+            self.assertIn(name, snr.__all__)
+            self.assertIs(getattr(snr, name), getattr(__import__(module, fromlist=["_"]), name))
+
+    def test_dir_lists_every_export(self) -> None:
+        self.assertLessEqual(set(snr.__all__), set(dir(snr)))
+
     def test_names_the_thesis_listings_use(self) -> None:
         needed = [
             "Endpoint",

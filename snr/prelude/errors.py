@@ -29,7 +29,6 @@ The tree::
 from __future__ import annotations
 
 import dataclasses
-import difflib
 import enum
 import errno
 import inspect
@@ -206,6 +205,8 @@ def closest_match(word: str, choices: Iterable[str]) -> Optional[str]:
 
         closest_match("urv", ["urov", "topside"])  # 'urov'
     """
+    import difflib  # here, not at the top: hints are only made when something is wrong
+
     found: List[str] = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
     return found[0] if found else None
 

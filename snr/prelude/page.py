@@ -5,16 +5,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Any
 
-from dataclasses_json import DataClassJsonMixin
-
 from snr.prelude.errors import not_serializable_error
+from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import DataKey
 
 __all__ = ["Page"]
 
 
 @dataclass
-class Page(DataClassJsonMixin):
+class Page(JsonDataclass):
     """A value stored under a key, stamped with where and when it was made.
 
     Pages outlive tasks: the newest page for each key stays in the datastore.

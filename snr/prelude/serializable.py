@@ -2,9 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Type, TypeVar
-
-from typing_extensions import Protocol, runtime_checkable
+from typing import Protocol, Type, TypeVar, runtime_checkable
 
 __all__ = ["Serializable"]
 

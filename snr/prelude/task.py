@@ -5,15 +5,14 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from typing import Any, List, Tuple
 
-from dataclasses_json import DataClassJsonMixin
-
+from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import TaskName, TaskPriority, TaskType
 
 __all__ = ["Task"]
 
 
 @dataclass
-class Task(DataClassJsonMixin):
+class Task(JsonDataclass):
     """An ephemeral event handed to every endpoint that registered for it.
 
     A task is identified by its ``type`` and ``name``; ``val_list`` carries any

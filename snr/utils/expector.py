@@ -8,14 +8,15 @@ precise message however the node stopped (thesis 5.2.3).
 
 from __future__ import annotations
 
-import multiprocessing
 import threading
-import unittest
 from types import TracebackType
-from typing import Any, Dict, List, Mapping, Optional, Sequence, Tuple, Type, Union
+from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Type, Union
 
 from snr.core.profiler import format_task_id
 from snr.prelude import TaskId, TaskName, TaskType
+
+if TYPE_CHECKING:  # unittest and multiprocessing cost ~20 ms to import
+    import unittest
 
 __all__ = ["Expectations", "Expector", "MultiProcExpector", "OrderedExpector"]
 
@@ -168,7 +169,11 @@ class MultiProcExpector(Expector):
         context: Any = None,
     ) -> None:
         super().__init__(expectations, testcase)
-        ctx = context or multiprocessing.get_context()
+        if context is None:
+            import multiprocessing
+
+            context = multiprocessing.get_context()
+        ctx = context
         self._keys: List[TaskId] = list(self.expectations)
         self._shared: Any = ctx.Array("l", len(self._keys))
 

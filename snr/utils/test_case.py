@@ -3,8 +3,6 @@
 from __future__ import annotations
 
 import os
-import shutil
-import tempfile
 import unittest
 from typing import Any, Optional, Sequence
 
@@ -70,6 +68,9 @@ class SNRTestCase(unittest.TestCase):
 
     def temp_file(self, suffix: str = "", contents: Optional[str] = None) -> str:
         """A path in a fresh temp folder, removed after the test."""
+        import shutil  # here, not at the top: most tests need no files
+        import tempfile
+
         folder = tempfile.mkdtemp(prefix="snr-test-")
         self.addCleanup(shutil.rmtree, folder, True)
         path = os.path.join(folder, f"file{suffix}")

@@ -32,9 +32,7 @@ import collections
 import enum
 import threading
 import time
-from typing import Deque, Dict, List, Optional, Sequence, Set, Tuple, Union
-
-from typing_extensions import Protocol
+from typing import Deque, Dict, List, Optional, Protocol, Sequence, Set, Tuple, Union
 
 from snr.core import ThreadLoop, tasks
 from snr.prelude import (

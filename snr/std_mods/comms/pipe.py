@@ -17,8 +17,7 @@ the other end, such as the parent, keeps the pipe open.)
 
 from __future__ import annotations
 
-from multiprocessing.connection import Connection
-from typing import Any, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, ConfigError
@@ -29,6 +28,9 @@ from snr.std_mods.comms.link import (
     Link,
     normalize_keys,
 )
+
+if TYPE_CHECKING:  # multiprocessing costs ~14 ms to import; the caller made the pipe
+    from multiprocessing.connection import Connection
 
 __all__ = ["PipeLoop", "PipeLoopFactory", "PipeTransport"]
 

@@ -20,8 +20,6 @@ Example::
 from __future__ import annotations
 
 import enum
-import hmac
-import ipaddress
 import json
 from dataclasses import dataclass
 from typing import Any, List, Optional, Tuple
@@ -277,6 +275,8 @@ def is_loopback(host: str) -> bool:
     """
     if host.lower() == "localhost":
         return True
+    import ipaddress  # here, not at the top: only a listening console needs it
+
     try:
         return ipaddress.ip_address(host).is_loopback
     except ValueError:
@@ -323,4 +323,6 @@ def tokens_match(expected: str, given: str) -> bool:
 
         tokens_match("s3cret", "s3cret"), tokens_match("s3cret", "guess")  # (True, False)
     """
+    import hmac  # here, not at the top: it loads OpenSSL, and only tokens need it
+
     return hmac.compare_digest(expected.encode("utf-8"), given.encode("utf-8"))

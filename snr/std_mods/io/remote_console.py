@@ -14,11 +14,10 @@ Example::
 
 from __future__ import annotations
 
-import argparse
 import os
 import socket
 import sys
-from typing import IO, Callable, Iterable, List, Optional, Sequence
+from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequence
 
 from snr.prelude import WireFormatError
 from snr.std_mods.io.console_commands import COMMANDS
@@ -32,6 +31,9 @@ from snr.std_mods.io.console_protocol import (
     Status,
     parse_address,
 )
+
+if TYPE_CHECKING:
+    import argparse
 
 __all__ = [
     "EXIT_CONNECTION",
@@ -302,6 +304,8 @@ def _enable_line_editing() -> None:
 
 
 def _parser() -> argparse.ArgumentParser:
+    import argparse  # here, not at the top: only the snr-console command parses arguments
+
     parser = argparse.ArgumentParser(
         prog="snr-console",
         description="Send commands to a running SNR node (one with a CommandReceiverFactory).",

@@ -1,0 +1,128 @@
+"""``import snr`` stays light: heavy modules load only when they are used.
+
+Nothing here is timed (``bench/bench_import.py`` measures the time); the
+tests check *which* modules a fresh interpreter has loaded.
+"""
+
+import dataclasses
+import json
+import os
+import subprocess
+import sys
+import unittest
+from typing import Dict, List
+
+from snr import Page, Task, TaskPriority, TaskType
+
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+# Loaded only by the code that needs them: Page/Task (de)serialization,
+# SNRTestCase, and the ready-made components.
+HEAVY = ["dataclasses_json", "marshmallow", "unittest", "snr.std_mods"]
+
+
+def loaded_after(code: str, modules: List[str]) -> Dict[str, bool]:
+    """Which of ``modules`` a fresh interpreter has loaded after running ``code``."""
+    script = (
+        f"{code}\nimport json, sys\nprint(json.dumps({{m: m in sys.modules for m in {modules!r}}}))"
+    )
+    env = dict(os.environ, PYTHONPATH=os.pathsep.join([ROOT, os.environ.get("PYTHONPATH", "")]))
+    result = subprocess.run(
+        [sys.executable, "-c", script],
+        capture_output=True,
+        text=True,
+        env=env,
+        cwd=ROOT,
+        timeout=60,
+        check=True,
+    )
+    loaded: Dict[str, bool] = json.loads(result.stdout.strip().splitlines()[-1])
+    return loaded
+
+
+class TestLightImport(unittest.TestCase):
+    def test_import_snr_loads_none_of_the_heavy_modules(self) -> None:
+        loaded = loaded_after("import snr", HEAVY)
+        self.assertEqual([m for m, yes in loaded.items() if yes], [])
+
+    def test_from_snr_import_star_does_not_load_dataclasses_json(self) -> None:
+        loaded = loaded_after("from snr import *", ["dataclasses_json", "marshmallow"])
+        self.assertEqual([m for m, yes in loaded.items() if yes], [])
+
+    def test_serialize_loads_dataclasses_json_and_round_trips(self) -> None:
+        code = (
+            "import snr\n"
+            "page = snr.Page('depth', {'m': [1.5, 2]}, 'urov', 12.5, process=False)\n"
+            "assert snr.Page.deserialize(page.serialize()) == page\n"
+            "task = snr.Task(snr.TaskType.event, 'go', [1], snr.TaskPriority.high)\n"
+            "assert snr.Task.deserialize(task.serialize()) == task\n"
+        )
+        self.assertEqual(loaded_after(code, ["dataclasses_json"]), {"dataclasses_json": True})
+
+    def test_lazy_names_load_on_first_use(self) -> None:
+        code = (
+            "import snr\n"
+            "assert snr.SNRTestCase.__name__ == 'SNRTestCase'\n"
+            "assert snr.TimeoutLoopFactory.__name__ == 'TimeoutLoopFactory'\n"
+            "assert snr.std_mods.SocketsPair is snr.SocketsPair\n"
+        )
+        self.assertEqual(
+            loaded_after(code, ["unittest", "snr.std_mods"]),
+            {"unittest": True, "snr.std_mods": True},
+        )
+
+    def test_unknown_names_still_raise_attribute_error(self) -> None:
+        import snr
+
+        with self.assertRaises(AttributeError):
+            snr.NoSuchThing  # noqa: B018
+
+
+class TestPageAndTaskStillDataclassJson(unittest.TestCase):
+    """Page and Task keep every dataclasses-json method and dataclass behaviour."""
+
+    page = Page("depth", {"m": [1.5, 2]}, origin="urov", created_at_s=12.5, process=False)
+    task = Task(TaskType.event, "go", [1, "a"], TaskPriority.high)
+
+    def test_json_and_dict_methods(self) -> None:
+        text = self.page.to_json()
+        self.assertEqual(text, self.page.serialize())
+        self.assertEqual(json.loads(text)["origin"], "urov")
+        self.assertEqual(Page.from_json(text), self.page)
+        self.assertEqual(self.page.to_dict()["data"], {"m": [1.5, 2]})
+        self.assertEqual(Page.from_dict(self.page.to_dict()), self.page)
+        self.assertEqual(self.task.to_dict(encode_json=True)["type"], "event")
+        self.assertEqual(Task.from_dict(self.task.to_dict()), self.task)
+        self.assertIn('\n  "key"', self.page.to_json(indent=2))
+
+    def test_from_json_infers_missing_fields_when_asked(self) -> None:
+        text = '{"key": "k", "data": 1, "origin": "a", "created_at_s": 0}'
+        self.assertTrue(Page.from_json(text, infer_missing=True).process)
+        again = Task.from_json('{"type": "event", "name": "x"}', infer_missing=True)
+        self.assertEqual(again, Task(TaskType.event, "x"))
+
+    def test_schema(self) -> None:
+        import warnings
+
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")  # dataclasses-json notes the string annotations
+            self.assertEqual(Page.schema().dump(self.page)["key"], "depth")
+
+    def test_is_a_data_class_json_mixin_once_loaded(self) -> None:
+        from dataclasses_json import DataClassJsonMixin
+
+        self.page.to_json()
+        self.assertIsInstance(self.page, DataClassJsonMixin)
+        self.assertTrue(issubclass(Task, DataClassJsonMixin))
+
+    def test_dataclass_behaviour(self) -> None:
+        self.assertTrue(dataclasses.is_dataclass(Page))
+        self.assertEqual([f.name for f in dataclasses.fields(Task)][:2], ["type", "name"])
+        changed = dataclasses.replace(self.page, data=3)
+        self.assertEqual((changed.data, changed.key), (3, "depth"))
+        self.assertNotEqual(changed, self.page)
+        self.assertIsNone(Page.__hash__)  # mutable dataclasses are unhashable, as before
+
+
+if __name__ == "__main__":
+    unittest.main()
