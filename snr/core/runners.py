@@ -12,7 +12,7 @@ import argparse
 import multiprocessing
 import sys
 import threading
-from typing import Any, List, Optional, Sequence, Union
+from typing import Any, Callable, List, Optional, Sequence, Union
 
 from snr.core.config import Config
 from snr.core.node import Node
@@ -83,11 +83,16 @@ class SynchronousRunner(AbstractRunner):
     exits with status 1, instead of a traceback through SNR's internals.
     Pass ``exit_on_error=False`` to get the exception instead, and
     ``announce_interrupt=False`` to stop quietly on Ctrl-C (as `MultiProcRunner`
-    children do, so the message is printed once).
+    children do, so the message is printed once). ``on_node`` is called with
+    the node as soon as it is built, before it runs, e.g. to hand it to a
+    thread that may stop it with ``node.set_terminate_flag(reason)``.
 
     Example::
 
         snr.SynchronousRunner("lunar_module", config).run()
+
+        watchdog = lambda node: threading.Timer(60, node.set_terminate_flag, ["1 min"]).start()
+        snr.SynchronousRunner("lunar_module", config, on_node=watchdog).run()
 
     Attributes:
         node: the node, once ``run()`` has built it.
@@ -99,11 +104,13 @@ class SynchronousRunner(AbstractRunner):
         config: Union[AbstractConfig, ComponentsByRole],
         exit_on_error: bool = True,
         announce_interrupt: bool = True,
+        on_node: Optional[Callable[[Node], None]] = None,
     ) -> None:
         self.role = role
         self.config = _config_or_exit(config, exit_on_error)
         self.exit_on_error = exit_on_error
         self.announce_interrupt = announce_interrupt
+        self.on_node = on_node
         self.node: Optional[Node] = None
 
     def run(self) -> None:
@@ -114,6 +121,8 @@ class SynchronousRunner(AbstractRunner):
         """
         try:
             self.node = Node(self.role, self.config)
+            if self.on_node is not None:
+                self.on_node(self.node)
             self.node.loop()
         except KeyboardInterrupt:
             if self.announce_interrupt:
