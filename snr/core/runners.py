@@ -9,10 +9,13 @@
 from __future__ import annotations
 
 import argparse
-import multiprocessing
+import logging
+import signal
 import sys
 import threading
-from typing import Any, List, Optional, Sequence, Union
+import time
+from types import FrameType
+from typing import TYPE_CHECKING, Any, Callable, List, Optional, Sequence, Union
 
 from snr.core.config import Config
 from snr.core.node import Node
@@ -26,6 +29,9 @@ from snr.prelude import (
     Role,
     SNRError,
 )
+
+if TYPE_CHECKING:
+    from multiprocessing.connection import Connection
 
 __all__ = [
     "INTERRUPTED_MESSAGE",
@@ -83,11 +89,16 @@ class SynchronousRunner(AbstractRunner):
     exits with status 1, instead of a traceback through SNR's internals.
     Pass ``exit_on_error=False`` to get the exception instead, and
     ``announce_interrupt=False`` to stop quietly on Ctrl-C (as `MultiProcRunner`
-    children do, so the message is printed once).
+    children do, so the message is printed once). ``on_node`` is called with
+    the node as soon as it is built, before it runs, e.g. to hand it to a
+    thread that may stop it with ``node.set_terminate_flag(reason)``.
 
     Example::
 
         snr.SynchronousRunner("lunar_module", config).run()
+
+        watchdog = lambda node: threading.Timer(60, node.set_terminate_flag, ["1 min"]).start()
+        snr.SynchronousRunner("lunar_module", config, on_node=watchdog).run()
 
     Attributes:
         node: the node, once ``run()`` has built it.
@@ -99,11 +110,13 @@ class SynchronousRunner(AbstractRunner):
         config: Union[AbstractConfig, ComponentsByRole],
         exit_on_error: bool = True,
         announce_interrupt: bool = True,
+        on_node: Optional[Callable[[Node], None]] = None,
     ) -> None:
         self.role = role
         self.config = _config_or_exit(config, exit_on_error)
         self.exit_on_error = exit_on_error
         self.announce_interrupt = announce_interrupt
+        self.on_node = on_node
         self.node: Optional[Node] = None
 
     def run(self) -> None:
@@ -114,6 +127,8 @@ class SynchronousRunner(AbstractRunner):
         """
         try:
             self.node = Node(self.role, self.config)
+            if self.on_node is not None:
+                self.on_node(self.node)
             self.node.loop()
         except KeyboardInterrupt:
             if self.announce_interrupt:
@@ -165,13 +180,70 @@ class TestRunner(AbstractRunner):
             watchdog.cancel()
 
 
-def _run_role(role: Role, config: AbstractConfig) -> None:
+class _ParentWatch:
+    """Stops a child's node when its parent asks to, or when the parent dies.
+
+    The parent holds the write end of a pipe to each child. It writes a reason
+    to ask the child to stop; if the parent dies in any way (even SIGKILL) the
+    OS closes the write end and the child reads EOF. A pipe works with every
+    start method and OS, unlike ``prctl(PR_SET_PDEATHSIG)`` (Linux only) or
+    polling the parent's pid (slow, and pids are reused).
+    """
+
+    def __init__(self, role: Role, link: Connection) -> None:
+        self.role = role
+        self.link = link
+        self._lock = threading.Lock()
+        self._node: Optional[Node] = None
+        self._reason: Optional[str] = None
+
+    def start(self) -> None:
+        # Daemon: a child whose node stopped on its own must not wait for it.
+        threading.Thread(target=self._watch, name="snr-parent-watch", daemon=True).start()
+
+    def attach(self, node: Node) -> None:
+        """Called once the node is built; a stop that came earlier applies now."""
+        with self._lock:
+            self._node = node
+            reason = self._reason
+        if reason is not None:
+            node.set_terminate_flag(reason)
+
+    def _watch(self) -> None:
+        try:
+            reason = self.link.recv_bytes().decode("utf-8", "replace")
+        except (EOFError, OSError):
+            reason = "parent process died"
+            # Nobody is left to report this for the child, so say it here.
+            logging.getLogger(f"snr.{self.role}").warning(
+                "Node %r: its parent process died, stopping it.", self.role
+            )
+        with self._lock:
+            self._reason = reason
+            node = self._node
+        if node is not None:
+            # Thread-safe, unlike a signal handler, which could interrupt the
+            # node's thread while it holds the task queue's lock.
+            node.set_terminate_flag(reason)
+
+
+def _run_role(
+    role: Role, config: AbstractConfig, link: Connection, inherited: Sequence[Connection]
+) -> None:
     """Entry point of each MultiProcRunner child process."""
+    # A forked child inherits the write end of every child's pipe; while it
+    # holds them, no child could see its parent die.
+    for writer in inherited:
+        writer.close()
+    watch = _ParentWatch(role, link)
+    watch.start()
     # Ctrl-C reaches every process of the group; only the parent says so.
-    SynchronousRunner(role, config, announce_interrupt=False).run()
+    SynchronousRunner(role, config, announce_interrupt=False, on_node=watch.attach).run()
 
 
 def _start_method(requested: Optional[str]) -> str:
+    import multiprocessing  # lazily: it is slow to import and most programs run one node
+
     if requested is not None:
         return requested
     # fork is fast and needs nothing picklable, but forking a process that
@@ -182,17 +254,46 @@ def _start_method(requested: Optional[str]) -> str:
     return "spawn"
 
 
+class _StopRequested(BaseException):
+    """Raised in the parent by SIGTERM, so it stops like after Ctrl-C."""
+
+    def __init__(self, signame: str) -> None:
+        super().__init__(signame)
+        self.signame = signame
+
+
+def _raise_stop(signum: int, frame: Optional[FrameType]) -> None:
+    raise _StopRequested(signal.Signals(signum).name)
+
+
+def _set_handlers(sigint: Any, sigterm: Any) -> None:
+    """Set SIGINT's and SIGTERM's handlers (main thread only)."""
+    for signum, handler in ((signal.SIGINT, sigint), (signal.SIGTERM, sigterm)):
+        if handler is not None:  # None: set outside Python, cannot be restored
+            signal.signal(signum, handler)
+
+
 class MultiProcRunner(AbstractMultiRunner):
     """Runs several roles at once, each node in its own process.
 
     Handy for trying a whole system on one machine, e.g. with pipe comms.
+    Stopping the parent stops every child in order: Ctrl-C (SIGINT) or SIGTERM
+    to the parent asks each child's node to terminate (``join_timeout_s``
+    bounds the wait; then the child is terminated, and killed if need be), and
+    if the parent dies (even by SIGKILL), each child notices and stops its
+    node, so no child is left running on its own.
 
     Example::
 
-        snr.MultiProcRunner(["topside", "urov"], config).run()
+        runner = snr.MultiProcRunner(["topside", "urov"], config)
+        runner.run()
+        runner.exitcodes   # [0, 0]
+        runner.stopped_by  # "SIGINT" after Ctrl-C, "SIGTERM" after kill, else None
 
     Attributes:
         exitcodes: each role's process exit code, after ``run()``.
+        stopped_by: the signal that stopped ``run()`` early ("SIGINT" or
+            "SIGTERM"), or None when every node stopped on its own.
     """
 
     def __init__(
@@ -211,29 +312,83 @@ class MultiProcRunner(AbstractMultiRunner):
         self.start_method = start_method
         self.join_timeout_s = join_timeout_s
         self.exitcodes: List[Optional[int]] = []
+        self.stopped_by: Optional[str] = None
 
     def run(self) -> None:
-        """Start every role's process and wait for all of them to end."""
-        ctx: Any = multiprocessing.get_context(_start_method(self.start_method))
+        """Start every role's process and wait for all of them to end.
+
+        Ctrl-C prints `INTERRUPTED_MESSAGE`; Ctrl-C and SIGTERM then stop every
+        child and return normally (see `stopped_by`).
+        """
+        import multiprocessing  # lazily: see _start_method
+
+        method = _start_method(self.start_method)
+        ctx: Any = multiprocessing.get_context(method)
+        self.stopped_by = None
+        pipes = [ctx.Pipe(duplex=False) for _ in self.roles]
+        writers: List[Connection] = [writer for _, writer in pipes]
+        # Only a forked child shares the parent's memory and open files; other
+        # start methods pickle the arguments, and the writers must stay here.
+        inherited = writers if method == "fork" else []
         procs = [
-            ctx.Process(target=_run_role, args=(role, self.config), name=f"snr-{role}")
-            for role in self.roles
+            ctx.Process(
+                target=_run_role, args=(role, self.config, reader, inherited), name=f"snr-{role}"
+            )
+            for role, (reader, _) in zip(self.roles, pipes)
         ]
-        for proc in procs:
-            proc.start()
+        # Only the main thread may set signal handlers; elsewhere they stay as they are.
+        main = threading.current_thread() is threading.main_thread()
+        previous = [signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)]
         try:
-            for proc in procs:
-                proc.join()
-        except KeyboardInterrupt:
-            print(INTERRUPTED_MESSAGE, flush=True)
-            for proc in procs:
-                proc.join(self.join_timeout_s)
+            try:
+                for proc in procs:
+                    proc.start()
+                if main:  # after forking, so children keep the default SIGTERM action
+                    signal.signal(signal.SIGTERM, _raise_stop)
+                for proc in procs:
+                    proc.join()
+                if main:  # every child ended: a SIGTERM now has nothing to stop
+                    _set_handlers(None, previous[1])
+            except KeyboardInterrupt:
+                self.stopped_by = "SIGINT"
+                print(INTERRUPTED_MESSAGE, flush=True)
+            except _StopRequested as request:
+                self.stopped_by = request.signame
+            if self.stopped_by is not None:
+                if main:
+                    # One request is enough: a second Ctrl-C must not break off
+                    # the (bounded) wait for the children with a traceback.
+                    _set_handlers(signal.SIG_IGN, signal.SIG_IGN)
+                self._stop_children(procs, writers, f"parent asked to stop ({self.stopped_by})")
         finally:
-            for proc in procs:
-                if proc.is_alive():
-                    proc.terminate()
-                    proc.join(self.join_timeout_s)
+            self._reap(procs)
+            for reader, writer in pipes:  # the children had their own copies
+                reader.close()
+                writer.close()
+            if main:
+                _set_handlers(*previous)
         self.exitcodes = [proc.exitcode for proc in procs]
+
+    def _stop_children(self, procs: Sequence[Any], writers: Sequence[Connection], why: str) -> None:
+        for writer in writers:
+            try:
+                writer.send_bytes(why.encode("utf-8"))
+            except OSError:
+                pass  # that child has already gone
+        deadline = time.monotonic() + self.join_timeout_s
+        for proc in procs:
+            if proc.pid is not None:  # started
+                proc.join(max(0.0, deadline - time.monotonic()))
+
+    def _reap(self, procs: Sequence[Any]) -> None:
+        """Terminate, then kill, any child still running; never leave one behind."""
+        for proc in procs:
+            if proc.is_alive():
+                proc.terminate()
+                proc.join(self.join_timeout_s)
+            if proc.is_alive():
+                proc.kill()
+                proc.join(self.join_timeout_s)
 
 
 class CliRunner(AbstractRunner):
