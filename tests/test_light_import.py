@@ -18,7 +18,14 @@ ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 # Loaded only by the code that needs them: Page/Task (de)serialization,
 # SNRTestCase, and the ready-made components.
-HEAVY = ["dataclasses_json", "marshmallow", "unittest", "snr.std_mods"]
+HEAVY = [
+    "dataclasses_json",
+    "marshmallow",
+    "unittest",
+    "snr.std_mods",
+    "multiprocessing",
+    "argparse",
+]
 
 
 def loaded_after(code: str, modules: List[str]) -> Dict[str, bool]:

@@ -8,7 +8,6 @@
 
 from __future__ import annotations
 
-import argparse
 import logging
 import signal
 import sys
@@ -31,6 +30,7 @@ from snr.prelude import (
 )
 
 if TYPE_CHECKING:
+    import argparse
     from multiprocessing.connection import Connection
 
 __all__ = [
@@ -416,6 +416,8 @@ class CliRunner(AbstractRunner):
 
     def parse(self) -> argparse.Namespace:
         """The parsed command line; exits with a clear message when it is wrong."""
+        import argparse  # only a command line needs it: kept out of `import snr`
+
         roles = self.config.roles()
         prog = self.argv[0] if self.argv else "snr"
         parser = argparse.ArgumentParser(
