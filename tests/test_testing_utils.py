@@ -1,6 +1,7 @@
 """Expectors, the expector endpoint, list replayer and mock node."""
 
 import io
+import os
 import unittest
 from typing import Sequence
 
@@ -11,6 +12,7 @@ from snr import (
     ExpectorEndpointFactory,
     ListReplayerFactory,
     MockNode,
+    MovingAvgFilterFactory,
     OrderedExpector,
     SNRTestCase,
     TaskType,
@@ -19,6 +21,7 @@ from snr import (
 )
 
 EV = TaskType.event
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 class TestExpector(unittest.TestCase):
@@ -156,6 +159,21 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
     def test_a_node_that_stops_by_itself_is_not_a_timeout(self) -> None:
         runner_node = self.run_test_node([TimeoutLoopFactory(ms=10)])
         self.assertEqual(runner_node.terminate_reason, "Timeout")
+
+    def test_the_message_shown_in_the_docs_is_the_real_one(self) -> None:
+        expector = Expector({(TaskType.store_page, "out"): 4})
+        message = self.assertFailsWith(
+            [
+                ListReplayerFactory([0, 1, 2, 4], "in"),
+                MovingAvgFilterFactory("in", "out", 2),
+                ExpectorEndpointFactory(expector),
+            ],
+            timeout_s=0.3,
+        )
+        with open(os.path.join(ROOT, "docs", "utilities.md"), encoding="utf-8") as f:
+            page = f.read()
+        shown = message.replace("time limit of 0.3 s", "time limit of 2 s")
+        self.assertIn(f"AssertionError: {shown}\n", page)
 
     def test_the_failure_is_a_unittest_failure_not_an_error(self) -> None:
         class Forgotten(SNRTestCase):
