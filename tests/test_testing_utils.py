@@ -102,7 +102,7 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
                 DummyEndpointFactory("motors"),
                 TimeoutLoopFactory(seconds=60),  # still waiting at the limit
             ],
-            "The 'test' node was still running when its time limit of 0.5 s ran out",
+            "The 'test' node was still running when its time limit of 0.2 s ran out",
             "list_replayer_x (ListReplayerLoop, finished)",
             "motors (DummyEndpoint)",
             "timeout_loop (TimeoutLoop, still running)",
@@ -110,7 +110,7 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
             'tasks.terminate("done")',
             "timeout_s=",
             "expect_timeout=True",
-            timeout_s=0.5,
+            timeout_s=0.2,
         )
         self.assertNotIn("node_core", message)
 
@@ -118,8 +118,9 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
         expector = Expector({(TaskType.store_page, "x"): 2})
         self.assertFailsWith(
             [ListReplayerFactory([1], "x"), ExpectorEndpointFactory(expector)],
-            "expector_endpoint was still waiting for: TaskType.store_page(x): expected 2, saw 1",
-            timeout_s=0.3,
+            "The expectations of expector_endpoint were not met: "
+            "TaskType.store_page(x): expected 2, saw 1.",
+            timeout_s=0.2,
         )
 
     def test_a_satisfied_expector_without_exit_when_satisfied_is_pointed_out(self) -> None:
@@ -127,12 +128,12 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
         self.assertFailsWith(
             [ListReplayerFactory([1], "x"), ExpectorEndpointFactory(expector)],
             "expector_endpoint was satisfied but was made without exit_when_satisfied=True",
-            timeout_s=0.3,
+            timeout_s=0.2,
         )
 
     def test_the_class_attribute_sets_the_default_limit(self) -> None:
         class Quick(SNRTestCase):
-            timeout_s = 0.2
+            timeout_s = 0.1
 
             def runTest(self) -> None:
                 self.run_test_node([DummyEndpointFactory()])
@@ -141,7 +142,7 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
         result = unittest.TestResult()
         Quick().run(result)
         self.assertEqual(len(result.failures), 1, result.errors)
-        self.assertIn("time limit of 0.2 s", result.failures[0][1])
+        self.assertIn("time limit of 0.1 s", result.failures[0][1])
 
     def test_expect_timeout_runs_until_the_limit(self) -> None:
         node = self.run_test_node([DummyEndpointFactory()], timeout_s=0.1, expect_timeout=True)
@@ -151,7 +152,7 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
         self.assertFailsWith(
             [TimeoutLoopFactory(ms=10)],
             "The 'test' node was expected to run until its time limit of 5 s",
-            "it stopped before it: Timeout",
+            "but it stopped earlier: Timeout.",
             timeout_s=5,
             expect_timeout=True,
         )
@@ -168,11 +169,11 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
                 MovingAvgFilterFactory("in", "out", 2),
                 ExpectorEndpointFactory(expector),
             ],
-            timeout_s=0.3,
+            timeout_s=0.2,
         )
         with open(os.path.join(ROOT, "docs", "utilities.md"), encoding="utf-8") as f:
             page = f.read()
-        shown = message.replace("time limit of 0.3 s", "time limit of 2 s")
+        shown = message.replace("time limit of 0.2 s", "time limit of 2 s")
         self.assertIn(f"AssertionError: {shown}\n", page)
 
     def test_the_failure_is_a_unittest_failure_not_an_error(self) -> None:

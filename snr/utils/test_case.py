@@ -106,7 +106,7 @@ class SNRTestCase(unittest.TestCase):
         if expect_timeout and not runner.timed_out:
             self.fail(
                 f"The {node.role!r} node was expected to run until its time limit of "
-                f"{limit:g} s, but it stopped before it: {node.terminate_reason}. Leave "
+                f"{limit:g} s, but it stopped earlier: {node.terminate_reason}. Leave "
                 "out expect_timeout=True if the node should stop by itself."
             )
         return node
@@ -156,7 +156,7 @@ def _timed_out_message(node: Node, limit_s: float, alive: Sequence[str]) -> str:
         if isinstance(component, ExpectorEndpoint):
             problems = component.expector.problems()
             if problems:
-                waiting.append(f"{name} was still waiting for: " + "; ".join(problems) + ".")
+                waiting.append(f"The expectations of {name} were not met: {'; '.join(problems)}.")
             elif not component.exit_when_satisfied:
                 waiting.append(
                     f"{name} was satisfied but was made without exit_when_satisfied=True, "
