@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from snr import (
     AbstractNode,
@@ -11,6 +11,8 @@ from snr import (
     SomeTasks,
     Task,
     TaskId,
+    TaskType,
+    tasks,
 )
 
 Log = List[Tuple[str, Any]]
@@ -54,3 +56,80 @@ class RecorderFactory(EndpointFactory):
         endpoint = Recorder(self, parent, self.name, self.keys, self.log, self.reply)
         self.built[self.name] = endpoint
         return endpoint
+
+
+class StopWhen(Endpoint):
+    """Stops the node once ``when(task)`` has held for ``count`` tasks with ``task_id``.
+
+    List it after the components whose handling of that task the test checks:
+    every handler of a task runs before the terminate task it returns.
+    """
+
+    def __init__(self, factory: StopWhenFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, factory.name)
+        self.spec = factory
+        self.matched = 0
+        self.task_handlers = {factory.task_id: self.check}
+
+    def check(self, task: Task, key: TaskId) -> SomeTasks:
+        if not self.spec.when(task):
+            return None
+        self.matched += 1
+        if self.matched == self.spec.count:
+            return tasks.terminate(self.spec.reason)
+        return None
+
+
+class StopWhenFactory(EndpointFactory):
+    """E.g. ``StopWhenFactory((TaskType.store_page, "depth"), count=2)``."""
+
+    def __init__(
+        self,
+        task_id: TaskId,
+        when: Callable[[Task], bool] = lambda task: True,
+        count: int = 1,
+        reason: str = "test work done",
+    ) -> None:
+        super().__init__()
+        self.task_id, self.when, self.count, self.reason = task_id, when, count, reason
+        self.name = "stop_when"
+
+    def get(self, parent: AbstractNode) -> StopWhen:
+        return StopWhen(self, parent)
+
+
+DRAINED = (TaskType.process_data, "test_queue_drained")
+"""The marker task of `StopWhenDrained`: no test endpoint handles process_data."""
+
+
+class StopWhenDrained(Endpoint):
+    """Schedules ``first``, then stops the node once the queue has run dry.
+
+    A marker task goes to the back of the queue ``rounds`` times, so the tasks
+    that ``first`` caused (up to ``rounds`` levels of returned tasks) all run
+    before the node stops with the reason "queue drained".
+    """
+
+    def __init__(self, factory: StopWhenDrainedFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "stop_when_drained")
+        self.spec = factory
+        self.rounds_left = factory.rounds
+        self.task_handlers = {DRAINED: self.round_done}
+
+    def begin(self) -> None:
+        self.schedule([*self.spec.first, Task(*DRAINED)])
+
+    def round_done(self, task: Task, key: TaskId) -> SomeTasks:
+        self.rounds_left -= 1
+        if self.rounds_left > 0:
+            return Task(*DRAINED)
+        return tasks.terminate("queue drained")
+
+
+class StopWhenDrainedFactory(EndpointFactory):
+    def __init__(self, first: Sequence[Task] = (), rounds: int = 3) -> None:
+        super().__init__()
+        self.first, self.rounds = list(first), rounds
+
+    def get(self, parent: AbstractNode) -> StopWhenDrained:
+        return StopWhenDrained(self, parent)

@@ -24,6 +24,7 @@ from snr import (
     TimeoutLoopFactory,
 )
 from snr.utils import DummyEndpointFactory, ExpectorEndpointFactory, ListReplayerFactory
+from tests.comms_helpers import StopAfterFactory
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -169,15 +170,18 @@ class TestRunners(SNRTestCase):
         expector = MultiProcExpector({(TaskType.store_page, "a"): 3, (TaskType.store_page, "b"): 2})
         config = Config(
             {
+                # Each node stops after its last page; the timeouts are a backstop.
                 "one": [
                     ListReplayerFactory([1, 2, 3], "a"),
                     ExpectorEndpointFactory(expector),
-                    TimeoutLoopFactory(seconds=0.5),
+                    StopAfterFactory("a", 3, on_store=True),
+                    TimeoutLoopFactory(seconds=10),
                 ],
                 "two": [
                     ListReplayerFactory([1, 2], "b"),
                     ExpectorEndpointFactory(expector),
-                    TimeoutLoopFactory(seconds=0.5),
+                    StopAfterFactory("b", 2, on_store=True),
+                    TimeoutLoopFactory(seconds=10),
                 ],
             },
             mode=Mode.TEST,

@@ -12,12 +12,11 @@ from snr import (
     Task,
     TaskId,
     TaskType,
-    TimeoutLoopFactory,
     tasks,
 )
 from snr.core import HandlerTable
 from snr.utils import DummyEndpointFactory
-from tests.helpers import Log, RecorderFactory
+from tests.helpers import Log, RecorderFactory, StopWhenDrainedFactory
 
 EV = TaskType.event
 
@@ -35,9 +34,8 @@ def naive_match(components: List[Any], task: Task) -> List[Tuple[str, TaskId]]:
 
 class TestTwoPhaseMatching(SNRTestCase):
     def run_node(self, factories: List[Any], first: List[Task]) -> None:
-        node = Node("test", self.get_config([*factories, TimeoutLoopFactory(seconds=0.1)]))
-        node.schedule(first)
-        node.loop()
+        # The node stops once ``first`` and every task it led to have run.
+        self.run_test_node([*factories, StopWhenDrainedFactory(first)])
 
     def test_specific_beats_type_per_endpoint_and_all_endpoints_run(self) -> None:
         log: Log = []
@@ -51,7 +49,7 @@ class TestTwoPhaseMatching(SNRTestCase):
             [tasks.event("go")],
         )
         self.assertEqual(
-            [(name, key) for name, (_, _, key) in log if name != "timeout_loop"],
+            [(name, key) for name, (_, _, key) in log],
             [("both", (EV, "go")), ("type_only", EV), ("specific_only", (EV, "go"))],
         )
 

@@ -58,6 +58,7 @@ from snr.prelude.errors import (
     find_unserializable,
     not_serializable_error,
 )
+from tests.helpers import StopWhenDrainedFactory, StopWhenFactory
 
 HERE = "test_errors.py"
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -159,7 +160,7 @@ class TestForgottenMethods(SNRTestCase):
     def test_lifecycle_hooks_are_optional(self) -> None:
         endpoint = FactoryOf(OnlyAHandler)
         node = self.run_test_node(
-            [endpoint, LoopFactoryOf(OnlyALoop), TimeoutLoopFactory(seconds=0.1)]
+            [endpoint, LoopFactoryOf(OnlyALoop), StopWhenFactory((EV, "ping"))]
         )
         handler = node.components["only_a_handler"]
         assert isinstance(handler, OnlyAHandler)
@@ -630,13 +631,14 @@ class Rogue(ThreadLoop):
                 attempt()
             except ThreadSafetyError as error:
                 self.errors[name] = error
+        self.schedule(tasks.terminate("tried everything"))  # the safe way to stop the node
         self.set_terminate_flag("tried everything")
 
 
 class TestThreadSafety(SNRTestCase):
     def test_loop_thread_cannot_change_node_state(self) -> None:
         factory = LoopFactoryOf(Rogue)
-        node = self.run_test_node([factory, TimeoutLoopFactory(seconds=0.3)])
+        node = self.run_test_node([factory])
         rogue = node.components["rogue"]
         assert isinstance(rogue, Rogue)
         fixes = {
@@ -657,7 +659,8 @@ class TestThreadSafety(SNRTestCase):
                 for part in (fix, HERE, where, "snr-test-rogue", f"{method}()"):
                     self.assertIn(part, message)
         self.assertNotIn("x", node.datastore)
-        self.assertEqual(node.terminate_reason, "Timeout")
+        # Only the terminate task stopped the node: its terminate() call did not.
+        self.assertEqual(node.terminate_reason, "tried everything")
 
 
 # -- 11. a blocking call in a handler -------------------------------------------------
@@ -675,14 +678,18 @@ class TestBlockingHandler(SNRTestCase):
     def test_slow_handler_is_named_with_its_time(self) -> None:
         for mode in (Mode.DEBUG, Mode.TEST):
             with self.subTest(mode=mode):
+                naps = [tasks.event("nap"), tasks.event("nap")]
+                safety = TimeoutLoopFactory(seconds=5)
                 node = Node(
                     "test",
-                    self.get_config([FactoryOf(Sleepy), TimeoutLoopFactory(seconds=0.3)], mode),
+                    self.get_config(
+                        [FactoryOf(Sleepy), StopWhenDrainedFactory(naps), safety], mode
+                    ),
                 )
                 node.slow_handler_s = 0.01
-                node.schedule([tasks.event("nap"), tasks.event("nap")])
                 with self.assertLogs("snr.test", "WARNING") as logs:
                     node.loop()
+                self.assertEqual(node.terminate_reason, "queue drained")
                 slow = [line for line in logs.output if "Sleepy.nap" in line]
                 self.assertEqual(len(slow), 1)  # once per handler, not per call
                 for part in (HERE, "took 0.0", "(event, 'nap')", "ThreadLoop", "time.sleep"):

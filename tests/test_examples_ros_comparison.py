@@ -9,6 +9,7 @@ import unittest
 
 import snr
 from tests.examples_support import ROOT, example_path, load_module
+from tests.helpers import StopWhenFactory
 
 FILE = example_path("ros_comparison", "depth_monitor.py")
 
@@ -21,10 +22,15 @@ class TestDepthMonitor(unittest.TestCase):
     def test_runs_and_displays_filtered_depth(self) -> None:
         monitor = load_module(FILE, "ros_comparison_depth_monitor")
         factories = list(monitor.components["robot"])
-        factories[-1] = snr.TimeoutLoopFactory(seconds=0.4)  # not the 5 s of the file
+        # Not the 5 s of the file: stop once two depths have been displayed.
+        factories[-1] = StopWhenFactory((snr.TaskType.store_page, "depth"), count=2)
+        factories.append(snr.TimeoutLoopFactory(seconds=5))  # only if the stop never comes
+        runner = snr.SynchronousRunner("robot", snr.Config({"robot": factories}))
         with self.assertLogs("snr.robot.depth_display", logging.INFO) as logs:
             with contextlib.redirect_stderr(io.StringIO()):
-                snr.SynchronousRunner("robot", snr.Config({"robot": factories})).run()
+                runner.run()
+        assert runner.node is not None
+        self.assertEqual(runner.node.terminate_reason, "test work done")
         shown = [record.getMessage() for record in logs.records]
         self.assertGreaterEqual(len(shown), 2)
         self.assertEqual(shown[0], "depth 5.00 m")  # the first mean is the first reading

@@ -17,6 +17,7 @@ from typing import List, Optional
 
 import snr
 from tests.examples_support import TUTORIAL, load_module, run_script, script_env
+from tests.helpers import StopWhenFactory
 
 
 def step(name: str) -> str:
@@ -88,19 +89,23 @@ class TestTutorialSteps(unittest.TestCase):
     def test_step03_a_loop(self) -> None:
         loop_step = load_module(step("step03_a_loop.py"), "tutorial_step03_a_loop")
         self.assertEqual(loop_step.config.roles(), ["submarine"])
-        # The step's parts, faster: 50 readings a second for 0.2 s.
+        # The step's parts, faster: 50 readings a second, until three are printed.
         config = snr.Config(
             {
                 "submarine": [
                     loop_step.DepthSensorFactory(rate_hz=50),
                     loop_step.DepthPrinterFactory(),
-                    snr.TimeoutLoopFactory(seconds=0.2),
+                    StopWhenFactory((snr.TaskType.store_page, "depth_m"), count=3),
+                    snr.TimeoutLoopFactory(seconds=5),  # only if the stop never comes
                 ]
             }
         )
         out = io.StringIO()
+        runner = snr.SynchronousRunner("submarine", config)
         with contextlib.redirect_stdout(out):
-            snr.SynchronousRunner("submarine", config).run()
+            runner.run()
+        assert runner.node is not None
+        self.assertEqual(runner.node.terminate_reason, "test work done")
         printed = out.getvalue().splitlines()
         self.assertGreaterEqual(len(printed), 3)
         self.assertEqual(printed[0], "depth 2.00 m")

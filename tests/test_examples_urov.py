@@ -5,9 +5,10 @@ import sys
 import unittest
 from typing import Any, List
 
-from snr import Mode, SNRTestCase, TimeoutLoopFactory, tasks
+from snr import Mode, SNRTestCase, TaskType, tasks
 from snr.utils import ListReplayerFactory
 from tests.examples_support import example_path, load_module, run_script
+from tests.helpers import StopWhenFactory
 
 TELEMETRY = re.compile(r"t=\s*([\d.]+) s \| depth\s+([\d.]+) m \| heading\s+([\d.]+)°")
 
@@ -50,6 +51,11 @@ class TestUrovParts(SNRTestCase):
     def test_one_node_with_both_pipelines_over_a_real_pty(self) -> None:
         """The whole data flow without sockets: sticks to thrusters to sensors."""
         u = self.urov
+        depth_raw = (TaskType.store_page, "depth_raw")
+
+        def diving() -> bool:
+            return bool(u.motor_board.commands >= 1 and u.vehicle.depth_m > 0.05)
+
         node = self.run_test_node(
             [
                 ListReplayerFactory(
@@ -59,9 +65,11 @@ class TestUrovParts(SNRTestCase):
                 u.ControlsProcessorFactory("controller_input", "motor_speed"),
                 u.SerialConnectionFactory("motor_speed"),
                 u.SensorReaderFactory(),
-                TimeoutLoopFactory(seconds=1.5),
+                # Checked at each sensor reading: stop once the board has dived the vehicle.
+                StopWhenFactory(depth_raw, lambda task: diving()),
             ],
             mode=Mode.TEST,
+            timeout_s=5,  # the simulated vehicle takes about half a second to dive
         )
         self.assertEqual(node.get_data("motor_speed"), {"left": 0, "right": 0, "vertical": -100})
         self.assertGreaterEqual(u.motor_board.commands, 1)

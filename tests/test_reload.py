@@ -130,7 +130,7 @@ class TestAddRemove(SNRTestCase):
         from snr.utils import DummyEndpointFactory
 
         dummy = DummyEndpointFactory("extra", [(TaskType.event, "poke")])
-        node = self.run_test_node([TimeoutLoopFactory(seconds=0.01)], timeout_s=0.01)
+        node = self.run_test_node([TimeoutLoopFactory(seconds=0.01)])
         self.assertNotIn("extra", node.components)
 
         from snr import Config, Mode, Node

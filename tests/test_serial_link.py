@@ -41,6 +41,7 @@ needs_pty = unittest.skipUnless(sys.platform.startswith(("linux", "darwin")), "n
 def run_role(role: str, factories: Sequence[AbstractFactory], timeout_s: float = 5.0) -> Node:
     runner = TestRunner(role, Config({role: list(factories)}, mode=Mode.TEST), timeout_s)
     runner.run()
+    assert not runner.timed_out, f"node {role!r} did not stop by itself"
     assert runner.node is not None
     return runner.node
 

@@ -1,12 +1,18 @@
 """Expectors, the expector endpoint, list replayer and mock node."""
 
+import io
+import os
 import unittest
+from typing import Sequence
 
 from snr import (
+    AbstractFactory,
+    DummyEndpointFactory,
     Expector,
     ExpectorEndpointFactory,
     ListReplayerFactory,
     MockNode,
+    MovingAvgFilterFactory,
     OrderedExpector,
     SNRTestCase,
     TaskType,
@@ -15,6 +21,7 @@ from snr import (
 )
 
 EV = TaskType.event
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
 class TestExpector(unittest.TestCase):
@@ -56,7 +63,6 @@ class TestExpectorEndpoint(SNRTestCase):
                 [
                     ListReplayerFactory([1, 2, 3], "x"),
                     ExpectorEndpointFactory(expector, exit_when_satisfied=True),
-                    TimeoutLoopFactory(seconds=5),
                 ]
             )
         self.assertEqual(node.terminate_reason, "expectations satisfied")
@@ -70,6 +76,116 @@ class TestExpectorEndpoint(SNRTestCase):
                     ExpectorEndpointFactory(expector, exit_when_satisfied=True),
                 ]
             )
+
+
+class TestRunTestNodeTimeLimit(SNRTestCase):
+    """A node that never stops fails its test, instead of passing after a wait."""
+
+    def assertFailsWith(
+        self,
+        factories: Sequence[AbstractFactory],
+        *parts: str,
+        timeout_s: float,
+        expect_timeout: bool = False,
+    ) -> str:
+        with self.assertRaises(AssertionError) as ctx:
+            self.run_test_node(factories, timeout_s=timeout_s, expect_timeout=expect_timeout)
+        message = str(ctx.exception)
+        for part in parts:
+            self.assertIn(part, message)
+        return message
+
+    def test_a_node_that_never_stops_fails_naming_its_components(self) -> None:
+        message = self.assertFailsWith(
+            [
+                ListReplayerFactory([1], "x"),  # stops itself; the node runs on
+                DummyEndpointFactory("motors"),
+                TimeoutLoopFactory(seconds=60),  # still waiting at the limit
+            ],
+            "The 'test' node was still running when its time limit of 0.2 s ran out",
+            "list_replayer_x (ListReplayerLoop, finished)",
+            "motors (DummyEndpoint)",
+            "timeout_loop (TimeoutLoop, still running)",
+            "ExpectorEndpointFactory(expector, exit_when_satisfied=True)",
+            'tasks.terminate("done")',
+            "timeout_s=",
+            "expect_timeout=True",
+            timeout_s=0.2,
+        )
+        self.assertNotIn("node_core", message)
+
+    def test_an_expector_that_is_still_waiting_says_for_what(self) -> None:
+        expector = Expector({(TaskType.store_page, "x"): 2})
+        self.assertFailsWith(
+            [ListReplayerFactory([1], "x"), ExpectorEndpointFactory(expector)],
+            "The expectations of expector_endpoint were not met: "
+            "TaskType.store_page(x): expected 2, saw 1.",
+            timeout_s=0.2,
+        )
+
+    def test_a_satisfied_expector_without_exit_when_satisfied_is_pointed_out(self) -> None:
+        expector = Expector({(TaskType.store_page, "x"): 1})
+        self.assertFailsWith(
+            [ListReplayerFactory([1], "x"), ExpectorEndpointFactory(expector)],
+            "expector_endpoint was satisfied but was made without exit_when_satisfied=True",
+            timeout_s=0.2,
+        )
+
+    def test_the_class_attribute_sets_the_default_limit(self) -> None:
+        class Quick(SNRTestCase):
+            timeout_s = 0.1
+
+            def runTest(self) -> None:
+                self.run_test_node([DummyEndpointFactory()])
+
+        self.assertEqual(SNRTestCase.timeout_s, 2.0)
+        result = unittest.TestResult()
+        Quick().run(result)
+        self.assertEqual(len(result.failures), 1, result.errors)
+        self.assertIn("time limit of 0.1 s", result.failures[0][1])
+
+    def test_expect_timeout_runs_until_the_limit(self) -> None:
+        node = self.run_test_node([DummyEndpointFactory()], timeout_s=0.1, expect_timeout=True)
+        self.assertEqual(node.terminate_reason, "test time limit of 0.1 s reached")
+
+    def test_expect_timeout_fails_when_the_node_stops_first(self) -> None:
+        self.assertFailsWith(
+            [TimeoutLoopFactory(ms=10)],
+            "The 'test' node was expected to run until its time limit of 5 s",
+            "but it stopped earlier: Timeout.",
+            timeout_s=5,
+            expect_timeout=True,
+        )
+
+    def test_a_node_that_stops_by_itself_is_not_a_timeout(self) -> None:
+        runner_node = self.run_test_node([TimeoutLoopFactory(ms=10)])
+        self.assertEqual(runner_node.terminate_reason, "Timeout")
+
+    def test_the_message_shown_in_the_docs_is_the_real_one(self) -> None:
+        expector = Expector({(TaskType.store_page, "out"): 4})
+        message = self.assertFailsWith(
+            [
+                ListReplayerFactory([0, 1, 2, 4], "in"),
+                MovingAvgFilterFactory("in", "out", 2),
+                ExpectorEndpointFactory(expector),
+            ],
+            timeout_s=0.2,
+        )
+        with open(os.path.join(ROOT, "docs", "utilities.md"), encoding="utf-8") as f:
+            page = f.read()
+        shown = message.replace("time limit of 0.2 s", "time limit of 2 s")
+        self.assertIn(f"AssertionError: {shown}\n", page)
+
+    def test_the_failure_is_a_unittest_failure_not_an_error(self) -> None:
+        class Forgotten(SNRTestCase):
+            def test_never_stops(self) -> None:
+                self.run_test_node([DummyEndpointFactory("forgotten")], timeout_s=0.1)
+
+        suite = unittest.defaultTestLoader.loadTestsFromTestCase(Forgotten)
+        stream = io.StringIO()
+        result = unittest.TextTestRunner(stream=stream, verbosity=0).run(suite)
+        self.assertEqual((len(result.failures), len(result.errors)), (1, 0))
+        self.assertIn("forgotten (DummyEndpoint)", stream.getvalue())
 
 
 class TestMockNode(SNRTestCase):

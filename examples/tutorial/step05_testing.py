@@ -1,9 +1,10 @@
 """Tutorial step 5: testing your component with expectors.
 
 A test builds a small node around the component, feeds it data, and says
-which tasks it expects. The node stops as soon as the expectations are met
-(or after a time limit), and leaving the ``with`` block fails the test unless
-every expected task happened exactly as often as expected.
+which tasks it expects. The node stops as soon as the expectations are met,
+and leaving the ``with`` block fails the test unless every expected task
+happened exactly as often as expected. A node still running after the time
+limit (2 s unless told) fails the test.
 
     python step05_testing.py          # or: python -m unittest step05_testing -v
 

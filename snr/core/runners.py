@@ -144,13 +144,22 @@ class TestRunner(AbstractRunner):
     """Runs one node in the calling thread, stopping it after ``timeout_s``.
 
     Exceptions from the node (e.g. a failing handler in TEST mode) reach the
-    caller, so a test fails with the handler's name.
+    caller, so a test fails with the handler's name. A node that is still
+    running when the time limit comes is stopped, and ``timed_out`` says so;
+    `SNRTestCase.run_test_node` turns that into a failed test.
 
     Example::
 
         runner = TestRunner("test", config, timeout_s=2)
         runner.run()
-        runner.timed_out   # False when the node stopped on its own
+        runner.timed_out          # False when the node stopped on its own
+        runner.alive_at_timeout   # names of the loops still running at the limit
+
+    Attributes:
+        node: the node, once ``run()`` has built it.
+        timed_out: True when the time limit, not the node itself, ended the run.
+        alive_at_timeout: the names of the loops whose threads were still
+            running when the time limit came (empty when it did not).
     """
 
     __test__ = False  # not a pytest test class despite the name
@@ -160,6 +169,7 @@ class TestRunner(AbstractRunner):
         self.config = config
         self.timeout_s = timeout_s
         self.timed_out = False
+        self.alive_at_timeout: List[str] = []
         self.node: Optional[Node] = None
 
     def run(self) -> None:
@@ -168,6 +178,12 @@ class TestRunner(AbstractRunner):
         self.node = node
 
         def stop() -> None:
+            if node.is_terminated():
+                return  # it stopped by itself just before the limit
+            for component in list(node.components.values()):
+                is_alive = getattr(component, "is_alive", None)
+                if callable(is_alive) and is_alive():
+                    self.alive_at_timeout.append(component.name)
             self.timed_out = True
             node.set_terminate_flag(f"test time limit of {self.timeout_s} s reached")
 

@@ -4,11 +4,13 @@ from __future__ import annotations
 
 import os
 import unittest
-from typing import Any, Optional, Sequence
+from typing import Any, List, Optional, Sequence
 
 from snr.core import Config, Node, TestRunner
+from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import AbstractFactory, DataKey, Mode, Page, TaskId
 from snr.utils.expector import Expectations, Expector, OrderedExpector
+from snr.utils.expector_endpoint import ExpectorEndpoint
 from snr.utils.mock_node import MockNode
 
 __all__ = ["SNRTestCase"]
@@ -34,6 +36,13 @@ class SNRTestCase(unittest.TestCase):
     role = "test"
     """The role of nodes built by ``get_config`` and ``run_test_node``."""
 
+    timeout_s: float = 2.0
+    """The default time limit of ``run_test_node``, in seconds.
+
+    A node under test normally stops within a fraction of a second; set a
+    larger value on a test class whose nodes need longer, e.g.
+    ``timeout_s = 5.0``."""
+
     def expector(self, expectations: Expectations) -> Expector:
         """An `Expector` that fails this test when unmet."""
         return Expector(expectations, self)
@@ -50,17 +59,55 @@ class SNRTestCase(unittest.TestCase):
         self,
         factories: Sequence[AbstractFactory],
         mode: Mode = Mode.TEST,
-        timeout_s: float = 10.0,
+        timeout_s: Optional[float] = None,
+        expect_timeout: bool = False,
     ) -> Node:
-        """Build a node from ``factories`` and run it (at most ``timeout_s``).
+        """Build a node from ``factories``, run it until it stops, and return it.
 
-        A handler that raises fails the test, naming the handler and task.
-        Returns the stopped node, to inspect its datastore.
+        The node must stop by itself, when the test's work is done: usually an
+        ``ExpectorEndpointFactory(expector, exit_when_satisfied=True)`` stops
+        it once every expectation is met, or a handler returns
+        ``tasks.terminate("done")``. A node still running after ``timeout_s``
+        (default: `SNRTestCase.timeout_s`, 2 s) is stopped and the
+        test fails, naming the components the node held, so a test cannot
+        pass only because its node was cut off. A handler that raises fails
+        the test too, naming the handler and task.
+
+        Args:
+            factories: the components of the node (its role is ``self.role``).
+            mode: the node's mode (TEST: failures stop the node and fail the test).
+            timeout_s: the time limit in seconds; None for ``self.timeout_s``.
+            expect_timeout: run until the time limit on purpose, e.g. to check
+                that a node keeps running. The test then fails if the node
+                stopped before the limit, and passes when the limit stops it.
+
+        Returns:
+            The stopped node, to inspect its datastore.
+
+        Example::
+
+            with self.expector({(TaskType.store_page, "out"): 4}) as expector:
+                node = self.run_test_node([
+                    ListReplayerFactory([0, 1, 2, 4], "in"),
+                    MovingAvgFilterFactory("in", "out", 2),
+                    ExpectorEndpointFactory(expector, exit_when_satisfied=True),
+                ])
+            self.run_test_node([DummyEndpointFactory()], timeout_s=0.2, expect_timeout=True)
         """
-        runner = TestRunner(self.role, self.get_config(factories, mode), timeout_s)
+        limit = self.timeout_s if timeout_s is None else timeout_s
+        runner = TestRunner(self.role, self.get_config(factories, mode), limit)
         runner.run()
-        assert runner.node is not None
-        return runner.node
+        node = runner.node
+        assert node is not None
+        if runner.timed_out and not expect_timeout:
+            self.fail(_timed_out_message(node, limit, runner.alive_at_timeout))
+        if expect_timeout and not runner.timed_out:
+            self.fail(
+                f"The {node.role!r} node was expected to run until its time limit of "
+                f"{limit:g} s, but it stopped earlier: {node.terminate_reason}. Leave "
+                "out expect_timeout=True if the node should stop by itself."
+            )
+        return node
 
     def mock_node(self, mode: Mode = Mode.TEST) -> MockNode:
         """A `MockNode` for testing a component's handlers directly."""
@@ -94,3 +141,39 @@ class SNRTestCase(unittest.TestCase):
         self.assertEqual(page.data, data, msg)
         if origin is not None:
             self.assertEqual(page.origin, origin, msg)
+
+
+def _timed_out_message(node: Node, limit_s: float, alive: Sequence[str]) -> str:
+    """Why a test failed when its node was still running at the time limit."""
+    parts: List[str] = []
+    waiting: List[str] = []
+    for name, component in node.components.items():
+        if name == NODE_CORE_NAME:
+            continue
+        kind = type(component).__name__
+        if hasattr(component, "is_alive"):
+            kind += ", still running" if name in alive else ", finished"
+        parts.append(f"{name} ({kind})")
+        if isinstance(component, ExpectorEndpoint):
+            problems = component.expector.problems()
+            if problems:
+                waiting.append(f"The expectations of {name} were not met: {'; '.join(problems)}.")
+            elif not component.exit_when_satisfied:
+                waiting.append(
+                    f"{name} was satisfied but was made without exit_when_satisfied=True, "
+                    "so it did not stop the node."
+                )
+    held = ", ".join(parts) if parts else "no components besides the node core"
+    return " ".join(
+        [
+            f"The {node.role!r} node was still running when its time limit of {limit_s:g} s "
+            "ran out, so the test cannot tell whether its work was done.",
+            f"Components: {held}.",
+            *waiting,
+            "Make the node stop when the work is done: "
+            "ExpectorEndpointFactory(expector, exit_when_satisfied=True) stops it once "
+            'every expectation is met, and a handler can return tasks.terminate("done"). '
+            "If the node needs longer, pass a larger timeout_s=...; if running until the "
+            "limit is the point of the test, pass expect_timeout=True.",
+        ]
+    )
