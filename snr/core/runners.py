@@ -181,8 +181,7 @@ class TestRunner(AbstractRunner):
             if node.is_terminated():
                 return  # it stopped by itself just before the limit
             for component in list(node.components.values()):
-                is_alive = getattr(component, "is_alive", None)
-                if callable(is_alive) and is_alive():
+                if component.is_alive():
                     self.alive_at_timeout.append(component.name)
             self.timed_out = True
             node.set_terminate_flag(f"test time limit of {self.timeout_s} s reached")
@@ -270,16 +269,13 @@ def _start_method(requested: Optional[str]) -> str:
     return "spawn"
 
 
-class _StopRequested(BaseException):
-    """Raised in the parent by SIGTERM, so it stops like after Ctrl-C."""
+def _note_signal(requested: List[str]) -> Callable[[int, Optional[FrameType]], None]:
+    """A signal handler that appends the signal's name to ``requested``."""
 
-    def __init__(self, signame: str) -> None:
-        super().__init__(signame)
-        self.signame = signame
+    def note(signum: int, frame: Optional[FrameType]) -> None:
+        requested.append(signal.Signals(signum).name)
 
-
-def _raise_stop(signum: int, frame: Optional[FrameType]) -> None:
-    raise _StopRequested(signal.Signals(signum).name)
+    return note
 
 
 def _set_handlers(sigint: Any, sigterm: Any) -> None:
@@ -355,22 +351,27 @@ class MultiProcRunner(AbstractMultiRunner):
         # Only the main thread may set signal handlers; elsewhere they stay as they are.
         main = threading.current_thread() is threading.main_thread()
         previous = [signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)]
+        requested: List[str] = []
         try:
             try:
                 for proc in procs:
                     proc.start()
-                if main:  # after forking, so children keep the default SIGTERM action
-                    signal.signal(signal.SIGTERM, _raise_stop)
-                for proc in procs:
-                    proc.join()
-                if main:  # every child ended: a SIGTERM now has nothing to stop
-                    _set_handlers(None, previous[1])
-            except KeyboardInterrupt:
-                self.stopped_by = "SIGINT"
-                print(INTERRUPTED_MESSAGE, flush=True)
-            except _StopRequested as request:
-                self.stopped_by = request.signame
-            if self.stopped_by is not None:
+                if main:  # after forking, so children keep the default actions
+                    _set_handlers(
+                        _note_signal(requested)
+                        if previous[0] is signal.default_int_handler
+                        else None,
+                        _note_signal(requested),
+                    )
+                self._wait(procs, requested)
+                if main and not requested:  # every child ended: nothing more to stop
+                    _set_handlers(*previous)
+            except KeyboardInterrupt:  # Ctrl-C while the children were starting
+                requested.append("SIGINT")
+            if requested:
+                self.stopped_by = requested[0]
+                if self.stopped_by == "SIGINT":
+                    print(INTERRUPTED_MESSAGE, flush=True)
                 if main:
                     # One request is enough: a second Ctrl-C must not break off
                     # the (bounded) wait for the children with a traceback.
@@ -384,6 +385,21 @@ class MultiProcRunner(AbstractMultiRunner):
             if main:
                 _set_handlers(*previous)
         self.exitcodes = [proc.exitcode for proc in procs]
+
+    @staticmethod
+    def _wait(procs: Sequence[Any], requested: List[str]) -> None:
+        """Wait until every child has ended or a signal asked the parent to stop.
+
+        The signal handlers only note the signal: an exception raised inside
+        a wait for a child could lose that child's exit status.
+        """
+        from multiprocessing.connection import wait
+
+        while not requested:
+            running = [proc.sentinel for proc in procs if proc.exitcode is None]
+            if not running:
+                return
+            wait(running, timeout=0.1)  # a noted signal is seen within 0.1 s
 
     def _stop_children(self, procs: Sequence[Any], writers: Sequence[Connection], why: str) -> None:
         for writer in writers:

@@ -8,7 +8,7 @@ from typing import Any, List, Optional, Sequence
 
 from snr.core import Config, Node, TestRunner
 from snr.core.node_core import NODE_CORE_NAME
-from snr.prelude import AbstractFactory, DataKey, Mode, Page, TaskId
+from snr.prelude import AbstractFactory, AbstractLoop, DataKey, Mode, Page, TaskId
 from snr.utils.expector import Expectations, Expector, OrderedExpector
 from snr.utils.expector_endpoint import ExpectorEndpoint
 from snr.utils.mock_node import MockNode
@@ -151,7 +151,7 @@ def _timed_out_message(node: Node, limit_s: float, alive: Sequence[str]) -> str:
         if name == NODE_CORE_NAME:
             continue
         kind = type(component).__name__
-        if hasattr(component, "is_alive"):
+        if isinstance(component, AbstractLoop):
             kind += ", still running" if name in alive else ", finished"
         parts.append(f"{name} ({kind})")
         if isinstance(component, ExpectorEndpoint):
