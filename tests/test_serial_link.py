@@ -16,16 +16,24 @@ from unittest import mock
 
 from snr import (
     AbstractFactory,
+    AbstractNode,
     CommsError,
     Config,
     ConfigError,
+    Endpoint,
+    EndpointFactory,
     ListReplayerFactory,
     Mode,
     Node,
     SerialLinkFactory,
     SNRTestCase,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskType,
     TestRunner,
     TimeoutLoopFactory,
+    tasks,
 )
 from tests.page_collector import PageCollectorFactory
 
@@ -36,6 +44,89 @@ except ImportError:  # pragma: no cover - pyserial is a dev dependency
 
 needs_pyserial = unittest.skipIf(serial is None, "pyserial is not installed")
 needs_pty = unittest.skipUnless(sys.platform.startswith(("linux", "darwin")), "needs a pty")
+
+
+def serial_threads() -> List[threading.Thread]:
+    """The live threads of serial links (reader and writer), by their names."""
+    return [t for t in threading.enumerate() if "serial_link" in t.name and t.is_alive()]
+
+
+def wait_until(condition: Any, timeout_s: float = 5.0) -> bool:
+    deadline = time.monotonic() + timeout_s
+    while not condition() and time.monotonic() < deadline:
+        time.sleep(0.01)
+    return bool(condition())
+
+
+class Ticker(Endpoint):
+    """Handles ``count`` unrelated tasks, storing a page for the device on each."""
+
+    def __init__(self, factory: TickerFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "ticker")
+        self.ticks = factory
+        self.task_handlers = {(TaskType.event, "tick"): self.tick}
+
+    def begin(self) -> None:
+        self.ticks.started_s = time.monotonic()
+        self.schedule(tasks.event("tick"))
+
+    def tick(self, task: Task, key: TaskId) -> SomeTasks:
+        self.ticks.handled += 1
+        self.store_data("cmd", self.ticks.payload)
+        if self.ticks.handled < self.ticks.count:
+            return tasks.event("tick")
+        self.ticks.took_s = time.monotonic() - self.ticks.started_s
+        self.ticks.done.set()
+        return None
+
+
+class TickerFactory(EndpointFactory):
+    def __init__(self, count: int, payload: str) -> None:
+        super().__init__()
+        self.count = count
+        self.payload = payload
+        self.handled = 0
+        self.started_s = 0.0
+        self.took_s = 0.0
+        self.done = threading.Event()
+
+    def get(self, parent: AbstractNode) -> Ticker:
+        return Ticker(self, parent)
+
+
+class Reloader(Endpoint):
+    """Reloads the serial link once (on the node's thread), noting the threads before and after."""
+
+    def __init__(self, factory: ReloaderFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "reloader")
+        self.record = factory
+        self.task_handlers = {(TaskType.event, "reload"): self.reload}
+
+    def begin(self) -> None:
+        self.schedule(tasks.event("reload"))
+
+    def reload(self, task: Task, key: TaskId) -> SomeTasks:
+        node: Any = self.parent
+        old = node.components["serial_link"]
+        self.record.before = serial_threads()
+        self.record.reloaded = node.reload_component("serial_link")
+        self.record.old_alive = old.is_alive()
+        self.record.after = serial_threads()
+        self.record.new_is_other = node.components["serial_link"] is not old
+        return tasks.terminate("reloaded")
+
+
+class ReloaderFactory(EndpointFactory):
+    def __init__(self) -> None:
+        super().__init__()
+        self.before: List[threading.Thread] = []
+        self.after: List[threading.Thread] = []
+        self.reloaded: List[str] = []
+        self.old_alive = True
+        self.new_is_other = False
+
+    def get(self, parent: AbstractNode) -> Reloader:
+        return Reloader(self, parent)
 
 
 def run_role(role: str, factories: Sequence[AbstractFactory], timeout_s: float = 5.0) -> Node:
@@ -99,6 +190,18 @@ class TestLoopback(SNRTestCase):
         link: Any = node.components["serial_link"]
         self.assertFalse(link.is_alive())
         self.assertIsNone(link.port)
+        self.assertEqual(serial_threads(), [])  # the reader and the writer both ended
+
+    def test_a_reload_never_leaves_a_second_live_link(self) -> None:
+        record = ReloaderFactory()
+        run_role("robot", [SerialLinkFactory("loop://", send_keys=["ping"]), record])
+        self.assertEqual(record.reloaded, ["serial_link"])
+        self.assertEqual(len(record.before), 2)  # one reader, one writer
+        self.assertTrue(record.new_is_other)
+        self.assertFalse(record.old_alive)
+        self.assertEqual(len(record.after), 2)  # the new link's two, and no more
+        self.assertFalse(set(record.before) & set(record.after))
+        self.assertEqual(serial_threads(), [])
 
 
 class PtyPair:
@@ -217,6 +320,60 @@ class TestPseudoTerminal(SNRTestCase):
         node.join()
         self.assertEqual(collected.data(), ["ok 120", "bad \ufffd"])
 
+    def test_a_device_that_stops_reading_never_slows_the_node(self) -> None:
+        # The test does not read the pty at first: the OS buffer fills, then
+        # each write waits write_timeout_s. The node must not wait with it.
+        ticker = TickerFactory(1000, payload="x" * 2000)  # 2 MB: far over any buffer
+        with self.assertLogs("snr.robot.serial_link", logging.WARNING) as logs:
+            node = NodeThread(
+                [SerialLinkFactory(self.pty.path, send_keys=["cmd"], write_timeout_s=0.2), ticker],
+                timeout_s=15.0,
+            )
+            self.assertTrue(ticker.done.wait(10.0), f"only {ticker.handled} tasks handled")
+            assert node.runner.node is not None
+            link: Any = node.runner.node.components["serial_link"]
+            self.assertTrue(wait_until(lambda: link._cut), "no write timed out")  # stalled
+            self.assertTrue(any("Dropped" in line for line in logs.output), logs.output)
+            # The device reads again, and new pages come: they go out, then "Recovered".
+            deadline = time.monotonic() + 5.0
+            while not any("Recovered" in line for line in logs.output):
+                self.assertLess(time.monotonic(), deadline, "no recovery line")
+                node.runner.node.schedule(tasks.store_data("cmd", "again"))
+                self.pty.read_lines(10_000, timeout_s=0.05)
+            dropped = link.dropped
+            self.pty.read_lines(10_000, timeout_s=0.1)  # what was written meanwhile
+            node.stop()
+            node.join()
+        # Before the writer thread, each of these tasks could wait 0.2 s: 200 s in all.
+        self.assertLess(ticker.took_s, 5.0)
+        self.assertGreater(dropped, 100)
+        self.assertGreater(link.lines_sent, 0)
+        text = "\n".join(logs.output)
+        self.assertRegex(text, r"Dropped \d+ lines for serial port")
+        self.assertRegex(text, r"Recovered: \d+ lines for serial port .* dropped over")
+        self.assertLess(len(logs.output), 10, text)  # counted, not a line per drop
+        self.assertFalse(link.is_alive())
+
+    def test_bad_lines_are_skipped_and_the_link_reads_on(self) -> None:
+        collected = PageCollectorFactory(["good"], stop_after=1)
+        with self.assertLogs("snr.robot.serial_link", logging.WARNING) as logs:
+            node = NodeThread([SerialLinkFactory(self.pty.path), collected])
+            self.pty.read_lines(1)  # the header: the link is up
+            deep = "[" * 5000 + "]" * 5000  # beyond the JSON decoder's recursion limit
+            self.pty.write(b"garbage {not json\n")
+            self.pty.write(b'{"key":"x","data":1e999}\n')
+            self.pty.write(b'{"key":"x","data":' + deep.encode() + b"}\n")
+            self.pty.write(b'{"key":"good","data":7}\n')
+            node.join()
+        self.assertEqual(collected.data(), [7])  # read after all three bad lines
+        text = "\n".join(logs.output)
+        self.assertEqual(len(logs.output), 3, text)
+        self.assertIn("garbage {not json", text)
+        self.assertIn("it is not JSON", text)
+        self.assertIn("holds inf, not a finite number", text)
+        self.assertIn("RecursionError", text)
+        self.assertIn("More of these are counted", text)  # the next ones are counted
+
     def test_a_lost_device_is_reported_and_the_node_stops_cleanly(self) -> None:
         with self.assertLogs("snr.robot.serial_link", "ERROR") as logs:
             node = NodeThread([SerialLinkFactory(self.pty.path)])
@@ -272,11 +429,60 @@ class TestErrors(SNRTestCase):
         noise = b"".join(f"noise {i}\n".encode() for i in range(9))
         with self.assertLogs("snr.mock.serial_link", logging.WARNING) as logs:
             link._take(noise + b'{"key":"x","data":1}\n')
-        self.assertEqual(len(logs.output), 4)  # about lines 1, 2, 4 and 8 of 9
+            link._repeats.flush()  # as at terminate: the count of the rest
+        self.assertEqual(len(logs.output), 4, logs.output)  # lines 1 to 3, then a count
+        self.assertIn("6 more times", logs.output[3])
+        self.assertEqual(link.bad_lines, 9)
         stored = [task.val_list[0] for task in node.scheduled]
         self.assertEqual([p.data for p in stored[:9]], [f"noise {i}" for i in range(9)])
         self.assertEqual({p.key for p in stored[:9]}, {"serial_in"})
         self.assertEqual((stored[9].key, stored[9].data), ("x", 1))
+
+    def test_values_json_allows_but_pages_must_not_hold_are_refused(self) -> None:
+        node = self.mock_node()
+        link = SerialLinkFactory("loop://").get(node)
+        nested = "[" * 40 + "1" + "]" * 40  # decodes fine; too deep for a page
+        lines = [
+            b'{"key":"a","data":NaN}',
+            b'{"key":"b","data":[1,{"c":-Infinity}]}',
+            b'{"key":"d","data":' + nested.encode() + b"}",
+            b'{"key":"e","data":1,"created_at_s":1e400}',
+            b'{"key":"ok","data":[1.5,{"c":[2]}]}',
+        ]
+        with self.assertLogs("snr.mock.serial_link", logging.WARNING):
+            link._take(b"\n".join(lines) + b"\n")
+        stored = [task.val_list[0] for task in node.scheduled]
+        self.assertEqual([p.key for p in stored], ["serial_in"] * 4 + ["ok"])
+        self.assertEqual(link.bad_lines, 4)
+
+    def test_the_outbox_keeps_the_newest_line_per_key_when_full(self) -> None:
+        from snr.std_mods.comms.serial_link import LineOutbox
+
+        outbox = LineOutbox(max_bytes=40)
+        self.assertEqual(outbox.put("speed", b"speed 1\n"), 0)  # 8 bytes each
+        self.assertEqual(outbox.put("light", b"light 1\n"), 0)
+        for value in range(2, 5):
+            self.assertEqual(outbox.put("speed", f"speed {value}\n".encode()), 0)
+        # full (40 bytes): each new speed line pushes out the oldest speed line
+        self.assertEqual(outbox.put("speed", b"speed 5\n"), 1)
+        self.assertEqual(outbox.put("speed", b"speed 6\n"), 1)
+        # a key with nothing to replace pushes out the oldest line of the key
+        # with the most waiting, so the only light line stays
+        self.assertEqual(outbox.put("beep", b"beep 1\n"), 1)
+        taken = []
+        while len(outbox):
+            taken.append(outbox.take(0))
+        expected = [b"light 1\n", b"speed 4\n", b"speed 5\n", b"speed 6\n", b"beep 1\n"]
+        self.assertEqual(taken, expected)
+        self.assertEqual(outbox.take(0), None)
+        outbox.close()
+        self.assertEqual(outbox.put("speed", b"speed 7\n"), 0)
+        self.assertIsNone(outbox.take())  # closed and empty: does not wait
+
+    def test_a_bad_outbox_size_is_a_config_error(self) -> None:
+        with self.assertRaises(ConfigError) as caught:
+            SerialLinkFactory("loop://", outbox_bytes=0)
+        self.assertIn("outbox_bytes=0", str(caught.exception))
 
     def test_without_pyserial_the_error_says_how_to_install_it(self) -> None:
         hidden = {"serial": None, "serial.tools": None, "serial.tools.list_ports": None}

@@ -21,10 +21,15 @@ from __future__ import annotations
 import collections
 import errno
 import json
+import logging
+import math
 import sys
-from typing import Any, List, Optional, Sequence
+import threading
+import time
+from typing import Any, Deque, Dict, List, Optional, Sequence
 
 from snr.core import LoopFactory, ThreadLoop
+from snr.core.logs import LossReport, RepeatFilter
 from snr.prelude import (
     AbstractNode,
     CommsError,
@@ -42,10 +47,14 @@ from snr.prelude.errors import closest_match
 from snr.std_mods.io.page_lines import header_line, page_from_line, page_to_line
 
 __all__ = [
+    "DEFAULT_OUTBOX_BYTES",
+    "MAX_NESTING",
     "SERIAL_MODES",
+    "LineOutbox",
     "SerialLinkFactory",
     "SerialLinkLoop",
     "available_ports",
+    "check_page_values",
     "describe_open_error",
     "import_pyserial",
     "open_serial_port",
@@ -57,8 +66,15 @@ SERIAL_MODES = ("pages", "lines")
 MAX_LINE_BYTES = 64 * 1024
 """A longer line is discarded: without a newline it is probably noise."""
 
+DEFAULT_OUTBOX_BYTES = 8 * 1024
+"""How many bytes of lines may wait for the device: about 0.7 s of a 115200 baud link."""
+
+MAX_NESTING = 32
+"""Lists and objects in a page line read may nest this deep; a deeper line is skipped."""
+
 _ECHO_GUARD_SIZE = 10_000
 _RECONNECT_MAX_S = 5.0
+_FLUSH_S = 0.25  # after halt, how long lines already queued may still go out
 
 
 def import_pyserial() -> Any:
@@ -159,15 +175,187 @@ def open_serial_port(
         raise describe_open_error(port, error) from error
 
 
-class SerialLinkLoop(ThreadLoop):
-    """Reads lines from the port on its thread; writes pages from handlers.
+class _Entry:
+    """One queued line: its key (``""`` for the header), its bytes, and whether it still counts."""
 
-    If the device disappears (unplugged), the loop logs it and tries to
-    reopen the port with a growing pause (up to 5 s) until the node stops.
+    __slots__ = ("data", "key", "live")
+
+    def __init__(self, key: str, data: bytes) -> None:
+        self.key = key
+        self.data = data
+        self.live = True
+
+
+class LineOutbox:
+    """Lines waiting for a serial link's writer thread, bounded in bytes.
+
+    ``put`` runs on the node's thread and never blocks on the device. When a
+    new line does not fit, older lines make room, oldest first: those of the
+    same data key (the newest value of a key wins: a motor command from a
+    second ago is worse than none), or, if that key has none waiting, those of
+    the key with the most lines waiting. So a flood under one key never pushes
+    out the last value of another. A line longer than the whole outbox is
+    still taken when the outbox is empty.
+
+    Example::
+
+        outbox = LineOutbox(max_bytes=64)
+        outbox.put("speed", b'{"key":"speed","data":1}\\n')   # 0: nothing dropped
+        outbox.put("speed", b'{"key":"speed","data":2}\\n')   # 0: both fit
+        outbox.put("speed", b'{"key":"speed","data":3}\\n')   # 1: data 1 made room
+        outbox.put("light", b'{"key":"light","data":1}\\n')   # 1: speed 2 made room
+        outbox.take()                                         # b'{"key":"speed","data":3}\\n'
+    """
+
+    def __init__(self, max_bytes: int = DEFAULT_OUTBOX_BYTES) -> None:
+        self.max_bytes = max_bytes
+        self._fifo: Deque[_Entry] = collections.deque()  # dropped entries stay, not live
+        self._by_key: Dict[str, Deque[_Entry]] = {}  # live entries only, oldest first
+        self._lines = 0
+        self._bytes = 0
+        self._closed = False
+        self._changed = threading.Condition(threading.Lock())
+
+    def put(self, key: str, data: bytes, first: bool = False) -> int:
+        """Queue ``data`` (at the front if ``first``); how many older lines were dropped.
+
+        Once closed, the line is not queued and 0 is returned.
+        """
+        with self._changed:
+            if self._closed:
+                return 0
+            dropped = 0
+            while self._lines and self._bytes + len(data) > self.max_bytes:
+                same = self._by_key.get(key) or max(self._by_key.values(), key=len)
+                victim = same.popleft()  # its entry in the FIFO is skipped by take()
+                victim.live = False
+                self._count_out(victim)
+                dropped += 1
+            entry = _Entry(key, data)
+            if first:
+                self._fifo.appendleft(entry)
+                self._by_key.setdefault(key, collections.deque()).appendleft(entry)
+            else:
+                self._fifo.append(entry)
+                self._by_key.setdefault(key, collections.deque()).append(entry)
+            self._lines += 1
+            self._bytes += len(data)
+            self._changed.notify()
+            return dropped
+
+    def take(self, timeout_s: Optional[float] = None) -> Optional[bytes]:
+        """For the writer: the oldest line, waiting for one up to ``timeout_s``.
+
+        Returns None when closed and empty, or when ``timeout_s`` passed.
+        """
+        with self._changed:
+            if not self._lines and not self._closed:
+                self._changed.wait(timeout_s)
+            if not self._lines:
+                return None
+            entry = self._pop_oldest()
+            self._count_out(entry)
+            return entry.data
+
+    def _pop_oldest(self) -> _Entry:
+        while True:
+            entry = self._fifo.popleft()
+            if entry.live:
+                self._by_key[entry.key].popleft()  # it is also the oldest of its key
+                return entry
+
+    def _count_out(self, entry: _Entry) -> None:
+        self._lines -= 1
+        self._bytes -= len(entry.data)
+        if not self._by_key[entry.key]:
+            del self._by_key[entry.key]
+
+    def discard(self) -> int:
+        """Forget every pending line; how many there were."""
+        with self._changed:
+            count = self._lines
+            self._fifo.clear()
+            self._by_key.clear()
+            self._lines = self._bytes = 0
+            return count
+
+    def close(self) -> None:
+        """Take no more lines; ``take`` returns what is left, then None."""
+        with self._changed:
+            self._closed = True
+            self._changed.notify_all()
+
+    @property
+    def closed(self) -> bool:
+        """True once ``close()`` was called."""
+        return self._closed
+
+    @property
+    def pending_bytes(self) -> int:
+        """The bytes of the lines waiting."""
+        return self._bytes
+
+    def __len__(self) -> int:
+        return self._lines
+
+
+def check_page_values(page: Page, max_nesting: int = MAX_NESTING) -> None:
+    """Check that a page read holds finite numbers only, nested ``max_nesting`` deep at most.
+
+    JSON lets a device send ``1e999`` (infinity), ``NaN`` or a deeply nested
+    list; such a page could not be recorded or sent on (JSON cannot carry
+    infinity) and a deep one costs deep recursion everywhere it goes.
+
+    Raises:
+        WireFormatError: the data (or ``created_at_s``) holds a number that is
+            not finite, or nests deeper than ``max_nesting``.
+
+    Example::
+
+        check_page_values(Page("x", [1, 2.5], "mcu", 0.0))       # fine
+        check_page_values(Page("x", 1e999, "mcu", 0.0))          # WireFormatError
+    """
+    if not math.isfinite(page.created_at_s):
+        raise WireFormatError(f"its created_at_s is {page.created_at_s!r}, not a finite number")
+    stack: List[Any] = [(page.data, 0)]
+    while stack:
+        value, depth = stack.pop()
+        if isinstance(value, float):
+            if not math.isfinite(value):
+                raise WireFormatError(
+                    f"the data under {page.key!r} holds {value!r}, not a finite number"
+                )
+        elif isinstance(value, (list, dict)):
+            if depth >= max_nesting:
+                raise WireFormatError(
+                    f"the data under {page.key!r} nests lists or objects deeper than "
+                    f"{max_nesting} levels"
+                )
+            items = value.values() if isinstance(value, dict) else value
+            stack.extend((item, depth + 1) for item in items)
+
+
+class SerialLinkLoop(ThreadLoop):
+    """Reads lines from the port on its thread; a writer thread writes queued lines.
+
+    The ``store_page`` handler only encodes the page and puts the line in a
+    bounded `LineOutbox`, so a device that stops reading never slows the
+    node. When the outbox is full the newest line per key is kept and the
+    drops are counted in ``dropped`` and logged at most once a second.
+
+    If the device disappears (unplugged), the reading thread logs it and
+    reopens the port with a growing pause (up to 5 s) until the node stops:
+    that is the link's one reconnect; the writer only writes to whatever
+    port is open.
 
     Example::
 
         SerialLinkFactory("/dev/ttyACM0", send_keys=["motor_speed"], mode="lines")
+
+    Attributes:
+        lines_received: lines read from the port.
+        lines_sent: lines the device took.
+        bad_lines: lines read that could not be used as pages.
     """
 
     def __init__(self, factory: SerialLinkFactory, parent: AbstractNode) -> None:
@@ -177,40 +365,120 @@ class SerialLinkLoop(ThreadLoop):
         self.port: Any = None
         self.lines_received = 0
         self.lines_sent = 0
+        self.bad_lines = 0
         self._buffer = bytearray()
-        self._bad_lines = 0
         self._send_keys = set(factory.send_keys)
         self._received: collections.OrderedDict[int, Page] = collections.OrderedDict()
-        self._reported_send_failure = False
+        self._outbox = LineOutbox(factory.outbox_bytes)
+        self._writer: Optional[threading.Thread] = None
+        self._flush_until = 0.0
+        self._cut = False  # a write timed out, maybe part-way through a line
+        self._write_failure_said = False
+        self._loss = LossReport(
+            self.log,
+            f"lines for serial port {factory.port!r}",
+            "the device is not reading them (or the port is being reopened); the newest "
+            f"line per key is kept, up to {factory.outbox_bytes:,} bytes",
+        )
+        self._repeats = RepeatFilter(self.log)
         self.task_handlers = {
             (TaskType.store_page, key): self.send_page for key in factory.send_keys
         }
 
+    @property
+    def dropped(self) -> int:
+        """Lines not sent: the outbox overflowed, a write timed out, or the port was closed.
+
+        Example::
+
+            link = node.components["serial_link"]
+            print(link.dropped, "lines dropped,", link.lines_sent, "sent")
+        """
+        return self._loss.total
+
     # -- starting and stopping ------------------------------------------------
     def begin(self) -> None:
-        """Open the port now, so a wrong port name stops the node at start-up."""
-        self._open()
+        """Open the port now (a wrong port name stops the node at start-up); start the writer."""
+        self._outbox = LineOutbox(self.link.outbox_bytes)
+        if self.port is None:  # still open after a refused reload: reopening resets boards
+            self._open()
+        self._writer = threading.Thread(
+            target=self._write_lines,
+            name=f"snr-{self.parent.role}-{self.name}-w",
+            daemon=True,
+        )
+        self._writer.start()
 
     def _open(self) -> None:
         link = self.link
-        self.port = open_serial_port(
-            link.port, link.baudrate, link.read_timeout_s, link.write_timeout_s
-        )
+        port = open_serial_port(link.port, link.baudrate, link.read_timeout_s, link.write_timeout_s)
         self._buffer.clear()
-        self._reported_send_failure = False
+        self._cut = False
+        self.port = port
         if link.mode == "pages":  # lets the other end check the format version
-            self._write_line(header_line())
+            self._outbox.put("", (header_line() + "\n").encode("utf-8"), first=True)
+
+    def halt(self) -> None:
+        """Take no more lines; those queued may go out for a moment (see ``join``)."""
+        self._flush_until = time.monotonic() + _FLUSH_S
+        self._outbox.close()
+
+    def join(self, timeout_s: Optional[float] = None) -> None:
+        """Wait (up to ``timeout_s``) for the reading thread and the writer thread.
+
+        The writer sends what was queued before ``halt`` for at most 0.25 s;
+        then the rest is dropped (and counted) and a write still blocked on
+        the device is cancelled.
+        """
+        deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        super().join(timeout_s)
+        self._stop_writer(deadline)
+
+    def _stop_writer(self, deadline: Optional[float]) -> None:
+        writer = self._writer
+        if writer is None or writer is threading.current_thread():
+            return
+        if not self._outbox.closed:  # not halted: the writer is meant to keep going
+            writer.join(None if deadline is None else max(0.0, deadline - time.monotonic()))
+            return
+        flush_end = self._flush_until
+        if deadline is not None:
+            flush_end = min(flush_end, deadline)
+        writer.join(max(0.0, flush_end - time.monotonic()))
+        if not writer.is_alive():
+            return
+        self._outbox.close()
+        left = self._outbox.discard()
+        if left:
+            self._loss.dropped(left)
+        cancel = getattr(self.port, "cancel_write", None)
+        if cancel is not None:
+            try:
+                cancel()  # wakes a write that waits for the device (POSIX, Windows)
+            except Exception:  # the port is going away anyway
+                pass
+        writer.join(None if deadline is None else max(0.0, deadline - time.monotonic()))
+
+    def is_alive(self) -> bool:
+        """True while the reading thread or the writer thread runs."""
+        writer = self._writer
+        return super().is_alive() or (writer is not None and writer.is_alive())
 
     def terminate(self) -> None:
-        """Close the port."""
+        """Stop the writer (bounded by ``write_timeout_s``), then close the port."""
+        self.halt()
+        self._flush_until = time.monotonic()  # no more flushing: the link is going away
+        self._stop_writer(time.monotonic() + self.link.write_timeout_s + 0.1)
+        self._repeats.flush()
         port, self.port = self.port, None
         if port is not None:
             port.close()
             self.info(
-                "Closed serial port %r: sent %d lines, received %d",
+                "Closed serial port %r: sent %d lines, received %d, dropped %d",
                 self.link.port,
                 self.lines_sent,
                 self.lines_received,
+                self.dropped,
             )
 
     # -- reading (the loop's thread) -----------------------------------------
@@ -238,11 +506,20 @@ class SerialLinkLoop(ThreadLoop):
             end = buffer.find(b"\n", start)
             if end < 0:
                 break
-            self._handle_line(bytes(buffer[start:end]))
+            raw = bytes(buffer[start:end])
             start = end + 1
+            try:
+                self._handle_line(raw)
+            except Exception as error:  # one odd line must never stop the reading
+                self._bad_line(
+                    "failed",
+                    raw.decode("utf-8", errors="replace"),
+                    f"{type(error).__name__}: {error}; skipped",
+                )
         del buffer[:start]
         if len(buffer) > MAX_LINE_BYTES:
             self._bad_line(
+                "too long",
                 f"<{len(buffer)} bytes with no newline>",
                 "discarded: too long for a line. Check that both ends use the same baud "
                 f"rate ({self.link.baudrate})",
@@ -259,8 +536,15 @@ class SerialLinkLoop(ThreadLoop):
             return
         try:
             page = page_from_line(text, default_origin=self.name)
-        except WireFormatError as error:
-            self._bad_line(text, f"{error}; stored as text under {self.link.receive_key!r}")
+            if page is not None:
+                check_page_values(page)
+        except Exception as error:  # not JSON, not a page, too deep, inf...: never fatal
+            why = (
+                error if isinstance(error, WireFormatError) else f"{type(error).__name__}: {error}"
+            )
+            self._bad_line(
+                "not a page", text, f"{why}; stored as text under {self.link.receive_key!r}"
+            )
             self.store_data(self.link.receive_key, text)
             return
         if page is None:
@@ -273,17 +557,18 @@ class SerialLinkLoop(ThreadLoop):
                 self._received.popitem(last=False)  # one call: safe beside pop()
         self.store_page(page)
 
-    def _bad_line(self, text: str, why: str) -> None:
-        self._bad_lines += 1
-        count = self._bad_lines
-        if count & (count - 1) == 0:  # 1st, 2nd, 4th, 8th...: noise cannot flood the log
-            self.warn(
-                "Line from serial port %r is not a page (%d such lines so far): %.80r: %s",
-                self.link.port,
-                count,
-                text,
-                why,
-            )
+    def _bad_line(self, kind: str, text: str, why: str) -> None:
+        self.bad_lines += 1
+        self._repeats.report(
+            ("bad line", kind),
+            f"Lines from serial port {self.link.port!r} that are {kind}",
+            logging.WARNING,
+            "Line from serial port %r is %s: %.80r: %s",
+            self.link.port,
+            kind,
+            text,
+            why,
+        )
 
     def _lost(self, error: Exception) -> None:
         self.err(
@@ -310,9 +595,9 @@ class SerialLinkLoop(ThreadLoop):
             self.info("Reopened serial port %r", self.link.port)
             return
 
-    # -- writing (the node's thread) -------------------------------------------
+    # -- sending: the node's thread queues, the writer thread writes -----------
     def send_page(self, task: Task, key: TaskId) -> SomeTasks:
-        """Write the stored page (or its data, in lines mode) as one line."""
+        """Queue the stored page (or its data, in lines mode) as one line; never blocks."""
         page = task.val_list[0] if task.val_list else None
         if not isinstance(page, Page):
             self.warn("A store_page task for %r carries %r, not a Page; not sent", task.name, page)
@@ -324,7 +609,9 @@ class SerialLinkLoop(ThreadLoop):
         except NotSerializableError as error:
             self.err("Did not send a page over serial: %s", error)
             return None
-        self._write_line(line)
+        dropped = self._outbox.put(page.key, (line + "\n").encode("utf-8"))
+        if dropped:
+            self._loss.dropped(dropped)
         return None
 
     def _encode(self, page: Page) -> str:
@@ -346,26 +633,49 @@ class SerialLinkLoop(ThreadLoop):
                 f"written as a line ({error}). Send strings, numbers, lists or dicts."
             ) from error
 
-    def _write_line(self, line: str) -> None:
+    def _write_lines(self) -> None:
+        """The writer thread: write queued lines until the outbox is closed and empty."""
+        outbox = self._outbox
+        while True:
+            data = outbox.take()
+            if data is None:
+                return
+            if outbox.closed and time.monotonic() > self._flush_until:
+                self._loss.dropped(1 + outbox.discard())
+                return
+            try:
+                self._write(data)
+                if not outbox and self._loss.dropping and not self._cut:
+                    self._loss.recovered()  # caught up: the device reads again
+            except Exception:  # a bug must not end the writing silently
+                self.log.exception("Writing a line to serial port %r failed", self.link.port)
+
+    def _write(self, data: bytes) -> None:
         port = self.port
+        if self._cut:  # end the cut-off line, so it is not glued onto this one
+            data = b"\n" + data
         try:
             if port is None:
                 raise CommsError("the port is not open (reconnecting)")
-            port.write((line + "\n").encode("utf-8"))
-        except (self.serial.SerialException, OSError, CommsError) as error:
-            if not self._reported_send_failure:  # once per outage, not once per page
-                self._reported_send_failure = True
-                self.err(
-                    "Could not write to serial port %r: %s. Lines are dropped until it "
-                    "works again (is the device reading its serial port?).",
-                    self.link.port,
-                    error,
-                )
+            written = port.write(data)
+        except self.serial.SerialTimeoutException:
+            self._cut = True
+            self._loss.dropped()
             return
+        except Exception as error:  # SerialException, OSError, a port closed under it
+            self._cut = True
+            self._loss.dropped()
+            if not self._write_failure_said and not self.is_terminated():
+                self._write_failure_said = True  # once per outage, not once per line
+                self.warn("Cannot write to serial port %r: %s", self.link.port, error)
+            return
+        if written is not None and written < len(data):  # the write was cancelled
+            self._cut = True
+            self._loss.dropped()
+            return
+        self._cut = False
+        self._write_failure_said = False
         self.lines_sent += 1
-        if self._reported_send_failure:
-            self._reported_send_failure = False
-            self.info("Writing to serial port %r works again", self.link.port)
 
 
 class SerialLinkFactory(LoopFactory):
@@ -380,7 +690,12 @@ class SerialLinkFactory(LoopFactory):
             that are not pages (``"pages"`` mode).
         mode: ``"pages"`` (JSON page lines) or ``"lines"`` (raw text).
         read_timeout_s: how long one read waits; the loop stops within it.
-        write_timeout_s: how long a write may wait for a busy device.
+        write_timeout_s: how long one line's write may wait for a device that
+            stopped reading before the line is dropped (on the writer
+            thread: the node never waits for the device).
+        outbox_bytes: how many bytes of lines may wait for the device
+            (default 8 KiB); when full, the newest line per key is kept and
+            the drops are counted (``dropped``) and logged.
         name: the loop's name (default ``"serial_link"``).
 
     Raises:
@@ -405,6 +720,7 @@ class SerialLinkFactory(LoopFactory):
         read_timeout_s: float = 0.1,
         write_timeout_s: float = 1.0,
         name: Optional[str] = None,
+        outbox_bytes: int = DEFAULT_OUTBOX_BYTES,
     ) -> None:
         super().__init__(sys.modules[__name__])
         import_pyserial()  # fail now, with the install command, not at start-up
@@ -416,6 +732,7 @@ class SerialLinkFactory(LoopFactory):
         self.mode = mode
         self.read_timeout_s = read_timeout_s
         self.write_timeout_s = write_timeout_s
+        self.outbox_bytes = outbox_bytes
         self.name = name or "serial_link"
         self._check()
 
@@ -434,6 +751,18 @@ class SerialLinkFactory(LoopFactory):
             raise ConfigError(
                 f"{me}: read_timeout_s={self.read_timeout_s}; use a value in (0, 1] so the "
                 "link stops quickly when the node does."
+            )
+        if not 0 < self.write_timeout_s <= 10.0:
+            raise ConfigError(
+                f"{me}: write_timeout_s={self.write_timeout_s}; use a value in (0, 10]: a "
+                "write that may wait forever would keep the link from stopping."
+            )
+        if isinstance(self.outbox_bytes, bool) or not (
+            isinstance(self.outbox_bytes, int) and self.outbox_bytes > 0
+        ):
+            raise ConfigError(
+                f"{me}: outbox_bytes={self.outbox_bytes!r}; give a positive whole number of "
+                f"bytes (default {DEFAULT_OUTBOX_BYTES})."
             )
 
     def get(self, parent: AbstractNode) -> SerialLinkLoop:
