@@ -146,10 +146,12 @@ class LossReport:
         why: str,
         every_s: float = 1.0,
         clock: Callable[[], float] = time.monotonic,
+        verb: str = "Dropped",
     ) -> None:
         self.log = log
         self.what = what
         self.why = why
+        self.verb = verb
         self.every_s = every_s
         self._clock = clock
         self._lock = threading.Lock()
@@ -159,11 +161,14 @@ class LossReport:
         self._unsaid = 0
         self._episode_start: Optional[float] = None
         self._last_said = 0.0
+        self.last_drop = 0.0
+        """When the last drop was counted (the clock's time)."""
 
     def dropped(self, n: int = 1) -> None:
         """Count ``n`` more dropped items; log the count if a second has passed."""
         with self._lock:
             now = self._clock()
+            self.last_drop = now
             self.total += n
             self._episode += n
             self._unsaid += n
@@ -175,7 +180,8 @@ class LossReport:
             unsaid, self._unsaid = self._unsaid, 0
             episode, since = self._episode, now - self._episode_start
         self.log.warning(
-            "Dropped %d %s (%d in the last %.1f s, %d in all): %s.",
+            "%s %d %s (%d in the last %.1f s, %d in all): %s.",
+            self.verb,
             unsaid,
             self.what,
             episode,
@@ -184,14 +190,23 @@ class LossReport:
             self.why,
         )
 
-    def recovered(self) -> None:
-        """The cause of the drops has passed: log the episode's total once."""
+    def recovered(self, quiet_s: float = 0.0) -> bool:
+        """The cause of the drops has passed: log the episode's total once.
+
+        With ``quiet_s``, only if nothing was dropped for that long (so a
+        peer that keeps up by fits and starts gives one episode, not many).
+        Returns True if the episode ended now.
+        """
         with self._lock:
-            if self._episode_start is None:
-                return
-            episode, since = self._episode, self._clock() - self._episode_start
+            now = self._clock()
+            if self._episode_start is None or now - self.last_drop < quiet_s:
+                return False
+            episode, since = self._episode, now - self._episode_start
             self._episode, self._unsaid, self._episode_start = 0, 0, None
-        self.log.warning("Recovered: %d %s dropped over %.1f s.", episode, self.what, since)
+        self.log.warning(
+            "Recovered: %d %s %s over %.1f s.", episode, self.what, self.verb.lower(), since
+        )
+        return True
 
     @property
     def dropping(self) -> bool:

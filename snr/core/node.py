@@ -290,6 +290,17 @@ class Node(AbstractNode):
         """
         self.queue.schedule(t)
 
+    def wait_for_room(self, timeout_s: float) -> bool:
+        """Wait (up to ``timeout_s``) until the queue is below its high-water mark.
+
+        Example (a socket reader that stops reading while the node is behind)::
+
+            while not node.wait_for_room(0.25):
+                if closing:
+                    return
+        """
+        return self.queue.wait_for_room(timeout_s)
+
     def task_store_page(self, page: Page) -> Task:
         """A task that stores ``page`` when it runs."""
         return Task(TaskType.store_page, page.key, [page])

@@ -144,6 +144,30 @@ class TaskQueue(AbstractTaskQueue):
             self.loss.recovered()
         return True
 
+    def wait_for_room(self, timeout_s: float) -> bool:
+        """Wait up to ``timeout_s`` until the normal lane is below the high-water mark.
+
+        For producers that can hold back without losing anything, such as a
+        socket reader (unread bytes stay in the OS, and TCP slows the sender).
+        True once there is room (or the node is stopping); False on timeout.
+
+        Example::
+
+            while not queue.wait_for_room(0.25):
+                if link_closed:
+                    return
+        """
+        if len(self.normal) < self.high_water or self._closed.is_set():
+            return True
+        deadline = time.monotonic() + timeout_s
+        while len(self.normal) > self.low_water:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            if self._closed.wait(min(left, 0.005)):
+                return True
+        return True
+
     def over_high_water(self) -> bool:
         """True while the normal lane is above the high-water mark.
 

@@ -315,6 +315,15 @@ class AbstractNode(_FriendlyABC):
     def reload_component(self, name: ComponentName = "all") -> List[ComponentName]:
         """Reload a component's source (or every one's) and rebuild it."""
 
+    def wait_for_room(self, timeout_s: float) -> bool:
+        """Wait (up to ``timeout_s``) until the node's queue has room; True if it has.
+
+        For producers on other threads that can hold back without losing
+        anything, such as a socket reader. A node without a bounded queue
+        always has room.
+        """
+        return True
+
     # -- what components tell their node (called by SNR, not by students) --
     def _snr_handlers_changed(self, component: AbstractComponent) -> None:
         """``component`` changed its ``task_handlers``: the node re-reads them.

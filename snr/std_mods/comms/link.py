@@ -32,9 +32,10 @@ import collections
 import enum
 import threading
 import time
-from typing import Deque, Dict, List, Optional, Protocol, Sequence, Set, Tuple, Union
+from typing import Any, Deque, Dict, List, Optional, Protocol, Sequence, Set, Tuple, Union
 
 from snr.core import ThreadLoop, tasks
+from snr.core.logs import LossReport
 from snr.prelude import (
     AbstractFactory,
     AbstractNode,
@@ -49,11 +50,19 @@ from snr.prelude import (
     TaskType,
     WireFormatError,
 )
-from snr.std_mods.comms.wire import FrameDecoder, Hello, decode_body, encode_hello, encode_page
+from snr.std_mods.comms.wire import (
+    FrameDecoder,
+    Hello,
+    decode_body,
+    encode_beat,
+    encode_hello,
+    encode_page,
+)
 
 __all__ = [
     "COMMS_CONNECTED",
     "COMMS_DISCONNECTED",
+    "DEFAULT_DEAD_AFTER_S",
     "DEFAULT_MAX_BACKLOG_BYTES",
     "CommsLoop",
     "Keys",
@@ -75,14 +84,16 @@ Example::
 COMMS_DISCONNECTED = "comms_disconnected"
 """Event a comms loop schedules when a link closes: ``[component name, peer address]``."""
 
-DEFAULT_MAX_BACKLOG_BYTES = 64 * 1024 * 1024
-"""How many bytes of frames may wait for a slow peer before new pages are dropped."""
+DEFAULT_MAX_BACKLOG_BYTES = 8 * 1024 * 1024
+"""How many bytes of frames may wait for one slow peer before pages are dropped (8 MiB)."""
+
+DEFAULT_DEAD_AFTER_S = 4.0
+"""Seconds of silence after which a peer that promised beats counts as lost."""
 
 Keys = Union[DataKey, Sequence[DataKey], None]
 """What a comms factory takes as ``keys``: one data key, a list of them, or None."""
 
 _MAX_CHUNK_BYTES = 1024 * 1024  # the writer joins queued frames into chunks up to this size
-_BUSY_QUEUE_LENGTH = 8  # tasks waiting on the node above which frames are batched
 _SHOWN_BAD_FRAMES = 5  # per link, log the first few bad frames in full, then every 100th
 
 
@@ -142,8 +153,11 @@ class Transport(Protocol):
         """Release the socket or pipe."""
 
 
+_Entry = List[Any]  # [data key or None, frame or None once superseded]
+
+
 class Outbox:
-    """Frames waiting to be written to one peer, in the order they were queued.
+    """Frames waiting to be written to one peer, in the order they were queued; bounded.
 
     ``put`` runs on the node's thread. With ``now=True`` and nothing waiting,
     it writes the frame straight away without blocking (no thread switch: the
@@ -152,72 +166,129 @@ class Outbox:
     (the highest throughput when many pages come at once). Either way frames
     leave in the order they were put.
 
+    At most ``max_bytes`` wait. When a new page would go over, the newest
+    page still waiting under the same key is dropped in its favour (newest
+    wins per key: a robot wants the latest reading, not an old one); if none
+    waits under that key, the new page is dropped. Every drop is counted in
+    ``dropped`` and ``dropped_by_key``.
+
     Example::
 
-        outbox.put(frame, now=True)     # False when the backlog limit is reached
+        outbox.put(frame, now=True, key="depth_m")   # "sent", "queued", "replaced" or "dropped"
     """
 
     def __init__(self, transport: Transport, max_bytes: int) -> None:
         self.transport = transport
         self.max_bytes = max_bytes
-        self._frames: Deque[bytes] = collections.deque()
+        self.dropped = 0
+        self.dropped_by_key: Dict[DataKey, int] = {}
+        self._entries: Deque[_Entry] = collections.deque()
+        self._newest: Dict[DataKey, _Entry] = {}
         self._queued_bytes = 0
+        self._live = 0  # entries not superseded
         self._writing = False  # the writer thread holds a chunk it is sending
         self._closed = False
         self._changed = threading.Condition(threading.Lock())
 
-    def put(self, frame: bytes, now: bool = False) -> bool:
-        """Send (if ``now``) or queue ``frame``; False if closed or backlog full."""
+    def put(self, frame: bytes, now: bool = False, key: Optional[DataKey] = None) -> str:
+        """Send (if ``now``) or queue ``frame``; says what happened.
+
+        Returns ``"sent"``, ``"queued"``, ``"replaced"`` (an older page under
+        ``key`` was dropped for it), ``"dropped"`` (the backlog is full) or
+        ``"closed"``.
+        """
         with self._changed:
             if self._closed:
-                return False
-            if now and not self._frames and not self._writing and self.transport.can_try_send:
+                return "closed"
+            if now and not self._live and not self._writing and self.transport.can_try_send:
                 try:
                     sent = self.transport.try_send(frame)
                 except OSError:  # full (BlockingIOError) or broken: the writer deals with it
                     sent = 0
                 if sent == len(frame):
-                    return True
-                frame = frame[sent:]  # the rest must go next, before anything else
-            elif self._queued_bytes + len(frame) > self.max_bytes:
-                return False
-            self._frames.append(frame)
-            self._queued_bytes += len(frame)
-            self._changed.notify()
-            return True
+                    return "sent"
+                if sent:  # the rest must go next, before anything else, whatever the cap
+                    self._append(None, frame[sent:])
+                    return "queued"
+            outcome = "queued"
+            if self._queued_bytes + len(frame) > self.max_bytes:
+                older = self._newest.get(key) if key is not None else None
+                if older is None:
+                    self._count_drop(key)
+                    return "dropped"
+                self._queued_bytes -= len(older[1])
+                older[1] = None
+                self._live -= 1
+                self._count_drop(key)
+                outcome = "replaced"
+            self._append(key, frame)
+            return outcome
 
-    def take(self) -> Optional[bytes]:
+    def _append(self, key: Optional[DataKey], frame: bytes) -> None:
+        entry: _Entry = [key, frame]
+        self._entries.append(entry)
+        if key is not None:
+            self._newest[key] = entry
+        self._queued_bytes += len(frame)
+        self._live += 1
+        self._changed.notify()
+
+    def _count_drop(self, key: Optional[DataKey]) -> None:
+        self.dropped += 1
+        if key is not None:
+            self.dropped_by_key[key] = self.dropped_by_key.get(key, 0) + 1
+
+    def take(self, timeout_s: Optional[float] = None) -> Optional[bytes]:
         """For the writer: the next chunk of frames; None once closed and empty.
 
-        Blocks (without using CPU) until there is something to send.
+        Blocks (without using CPU) until there is something to send; returns
+        ``b""`` if ``timeout_s`` passes first (time for a beat).
         """
         with self._changed:
             self._writing = False
-            while not self._frames:
+            if not self._live:
                 if self._closed:
                     return None
-                self._changed.wait()
+                self._changed.wait(timeout_s)
+                if not self._live:
+                    return None if self._closed else b""
             parts: List[bytes] = []
             size = 0
-            while self._frames and size < _MAX_CHUNK_BYTES:
-                frame = self._frames.popleft()
+            entries = self._entries
+            while entries and size < _MAX_CHUNK_BYTES:
+                entry = entries.popleft()
+                frame = entry[1]
+                if frame is None:
+                    continue  # superseded by a newer page under its key
+                key = entry[0]
+                if key is not None and self._newest.get(key) is entry:
+                    del self._newest[key]
                 parts.append(frame)
                 size += len(frame)
             self._queued_bytes -= size
+            self._live -= len(parts)
             self._writing = True
-            return parts[0] if len(parts) == 1 else b"".join(parts)
+        return parts[0] if len(parts) == 1 else b"".join(parts)
 
     def close(self, discard: bool) -> None:
         """Accept no more frames; with ``discard``, forget those still waiting."""
         with self._changed:
             self._closed = True
             if discard:
-                self._frames.clear()
+                self._entries.clear()
+                self._newest.clear()
                 self._queued_bytes = 0
+                self._live = 0
             self._changed.notify_all()
 
+    @property
+    def queued_bytes(self) -> int:
+        """Bytes of frames waiting to be sent."""
+        return self._queued_bytes
+
     def __len__(self) -> int:
-        return len(self._frames)
+        """How many frames wait to be sent."""
+        return self._live
 
 
 class LinkState(enum.Enum):
@@ -237,15 +308,28 @@ class Link:
     """One live connection to one peer, with a reader and a writer thread.
 
     The reader thread owns the link's end: when the peer goes away, a bad
-    length header arrives, or the link is aborted, it stops the writer,
-    closes the transport and tells the `CommsLoop`.
+    length header arrives, the peer falls silent, or the link is aborted, it
+    stops the writer, closes the transport and tells the `CommsLoop`.
+
+    Liveness: both sides promise a sign of life in their hello (``beat_s``)
+    and the writer sends a beat frame whenever it has sent nothing for that long.
+    A peer that promised beats and is then not heard from for
+    ``max(dead_after_s, 3 * its beat_s)`` is declared lost — also while pages
+    flow the other way, which is when a Wi-Fi link usually dies — and the
+    log says how many pages may have been lost with it.
 
     Example::
 
         link = Link(comms_loop, transport)
         link.start()
-        link.send(encode_page(page))
+        link.send(encode_page(page), key=page.key)
         link.close()              # flush, then end the connection
+
+    Attributes:
+        pages_sent: pages handed to the transport or queued for it.
+        pages_received: pages that arrived.
+        went_silent: the link was closed because the peer fell silent.
+        loss: the `LossReport` of pages dropped because the peer fell behind.
     """
 
     flush_timeout_s: float = 1.0
@@ -254,10 +338,25 @@ class Link:
         self.owner = owner
         self.transport = transport
         self.peer_role: Optional[str] = None
+        self.peer_beat_s: Optional[float] = None
         self.state = LinkState.OPEN
         self.bad_frames = 0
+        self.went_silent = False
+        self.pages_sent = 0
+        self.pages_received = 0
+        self.opened_at = time.monotonic()
+        self.last_heard = self.opened_at
+        self._heard_anything = False
+        self._sent_when_heard = 0
+        self.loss = LossReport(
+            owner.log,
+            f"pages for {transport.peer}",
+            "the peer is not taking them as fast as they are stored "
+            f"({owner.max_backlog_bytes // 1024:,} KiB wait to be sent; the newest page "
+            "under each key is kept)",
+        )
         self.outbox = Outbox(transport, owner.max_backlog_bytes)
-        self.outbox.put(encode_hello(owner.parent.role), now=False)
+        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s), now=False)
         self._closed = threading.Event()
         thread_name = f"snr-{owner.parent.role}-{owner.name}-{transport.peer}"
         self._reader = threading.Thread(target=self._read, name=thread_name + "-r", daemon=True)
@@ -275,9 +374,32 @@ class Link:
         self._writer.start()
         self._reader.start()
 
-    def send(self, frame: bytes, now: bool = True) -> bool:
-        """Send or queue ``frame`` (node thread); False if closing or backed up."""
-        return self.state is LinkState.OPEN and self.outbox.put(frame, now)
+    def send(self, frame: bytes, now: bool = True, key: Optional[DataKey] = None) -> bool:
+        """Send or queue a page's ``frame`` (node thread); False if it was dropped.
+
+        A page that the full backlog cannot take, or a queued one it
+        replaces, is counted and reported (at most once a second).
+        """
+        if self.state is not LinkState.OPEN:
+            return False
+        outcome = self.outbox.put(frame, now, key)
+        if outcome in ("sent", "queued"):
+            self.pages_sent += 1
+            return True
+        if outcome == "replaced":
+            self.pages_sent += 1
+            self.loss.dropped()
+            return True
+        if outcome == "dropped":
+            self.loss.dropped()
+        return False
+
+    def _check_recovered(self) -> None:
+        # Writer thread, after each write and each quiet beat interval: the
+        # peer has caught up once everything queued went out and nothing was
+        # dropped for a second.
+        if self.loss.dropping and not len(self.outbox):
+            self.loss.recovered(quiet_s=1.0)
 
     def close(self) -> None:
         """Send what is queued, then end the connection (graceful)."""
@@ -310,13 +432,38 @@ class Link:
             if thread.is_alive() and thread is not threading.current_thread():
                 thread.join(None if deadline is None else max(0.0, deadline - time.monotonic()))
 
+    def stats(self) -> Dict[str, Any]:
+        """The link's counters, e.g. for the console's ``stats`` command.
+
+        Example::
+
+            link.stats()["dropped"]   # pages dropped because the peer fell behind
+        """
+        return {
+            "peer": self.label,
+            "state": self.state.value,
+            "pages_sent": self.pages_sent,
+            "pages_received": self.pages_received,
+            "dropped": self.outbox.dropped,
+            "dropped_by_key": dict(self.outbox.dropped_by_key),
+            "waiting_frames": len(self.outbox),
+            "waiting_bytes": self.outbox.queued_bytes,
+            "bad_frames": self.bad_frames,
+            "heard_s_ago": round(time.monotonic() - self.last_heard, 3),
+        }
+
     # -- writer thread --------------------------------------------------------
     def _write(self) -> None:
+        beat_s = self.owner.beat_s
         try:
-            chunk = self.outbox.take()
+            chunk = self.outbox.take(beat_s)
             while chunk is not None:
-                self.transport.send_all(chunk)
-                chunk = self.outbox.take()
+                if chunk:
+                    self.transport.send_all(chunk)
+                elif self.peer_beat_s is not None:  # quiet for beat_s: a sign of life
+                    self.transport.send_all(encode_beat())
+                self._check_recovered()
+                chunk = self.outbox.take(beat_s)
             if self.state is LinkState.CLOSING:
                 self.transport.end_writing()
         except OSError:  # the peer is gone: wake the reader, which reports it
@@ -345,9 +492,12 @@ class Link:
         decoder = FrameDecoder()
         while True:
             data = self.transport.receive()
-            if data is None:  # nothing for a while (pipes poll)
+            if data is None:  # nothing for a while
                 if self.state is not LinkState.OPEN:
                     return "the link was closed"
+                silence = self._silence()
+                if silence is not None:
+                    return silence
                 continue
             if not data:
                 if decoder.pending_bytes():
@@ -358,6 +508,9 @@ class Link:
                         )
                     )
                 return "the peer closed the connection"
+            self.last_heard = time.monotonic()
+            self._heard_anything = True
+            self._sent_when_heard = self.pages_sent
             decoder.feed(data)
             pages: List[Page] = []
             try:
@@ -370,7 +523,29 @@ class Link:
                 self.owner.deliver(self, pages)
                 return f"reset after a bad frame ({error})"
             if pages:
+                self.pages_received += len(pages)
                 self.owner.deliver(self, pages)
+
+    def _silence(self) -> Optional[str]:
+        """Why the link is lost if the peer has been quiet too long, else None."""
+        quiet_s = time.monotonic() - self.last_heard
+        if not self._heard_anything and quiet_s > self.owner.hello_timeout_s:
+            return (
+                f"it sent nothing, not even a hello, within {self.owner.hello_timeout_s:g} s "
+                "of connecting"
+            )
+        if self.peer_beat_s is None:
+            return None  # a peer that promised no beats may be quiet for ever
+        limit = max(self.owner.dead_after_s, 3 * self.peer_beat_s)
+        if quiet_s <= limit:
+            return None
+        at_risk = self.pages_sent - self._sent_when_heard
+        self.went_silent = True
+        return (
+            f"nothing heard from it for {quiet_s:.1f} s, though it promised a sign of life "
+            f"every {self.peer_beat_s:g} s (the network path is gone, or the peer froze); "
+            f"{at_risk} pages sent since it was last heard from may be lost"
+        )
 
     def _decode_into(self, body: bytes, pages: List[Page]) -> None:
         try:
@@ -378,11 +553,12 @@ class Link:
         except WireFormatError as error:
             self._bad_frame(error)
             return
-        if isinstance(message, Hello):
-            self.peer_role = message.role
-            self.owner.on_hello(self)
-        else:
+        if isinstance(message, Page):
             pages.append(message)
+        elif isinstance(message, Hello):
+            self.peer_role = message.role
+            self.peer_beat_s = message.beat_s
+            self.owner.on_hello(self)
 
     def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
         self.bad_frames += 1
@@ -415,7 +591,13 @@ class CommsLoop(ThreadLoop):
     Attributes:
         keys: the data keys forwarded to peers.
         links: the links not yet closed (read-only tuple, replaced on change).
+        dead_after_s: a peer that promised beats and is silent this long is lost.
+        beat_s: how often a quiet link sends a beat (a quarter of ``dead_after_s``,
+            at most 1 s); promised to the peer in the hello.
     """
+
+    hello_timeout_s: float = 5.0
+    """A connection that sends nothing at all for this long is closed."""
 
     def __init__(
         self,
@@ -424,10 +606,18 @@ class CommsLoop(ThreadLoop):
         name: ComponentName,
         keys: Sequence[DataKey],
         max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
+        dead_after_s: float = DEFAULT_DEAD_AFTER_S,
     ) -> None:
         super().__init__(factory, parent, name)
+        if not dead_after_s > 0:
+            raise ConfigError(
+                f"{type(self).__name__} {name!r} got dead_after_s={dead_after_s!r}; give the "
+                "seconds of silence after which a peer counts as lost, e.g. 4.0."
+            )
         self.keys: Tuple[DataKey, ...] = tuple(keys)
         self.max_backlog_bytes = max_backlog_bytes
+        self.dead_after_s = dead_after_s
+        self.beat_s = min(1.0, dead_after_s / 4)
         self.links: Tuple[Link, ...] = ()
         self._links_lock = threading.Lock()
         self._started: List[Link] = []  # every link whose threads may still run
@@ -437,7 +627,6 @@ class CommsLoop(ThreadLoop):
         self._arrived: Dict[int, Tuple[Page, Link]] = {}
         self._unsent_reported = False
         self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
-        self._backlog_reported: Set[int] = set()
         self.task_handlers = {(TaskType.store_page, key): self.forward_page for key in self.keys}
 
     # -- node thread: sending -------------------------------------------------
@@ -462,17 +651,9 @@ class CommsLoop(ThreadLoop):
         except NotSerializableError as error:
             self._report_unsendable(page, error)
             return None
-        now = self._node_is_nearly_idle()
         for link in targets:
-            if not link.send(frame, now) and link.state is LinkState.OPEN:
-                self._report_backlog(link, page)
+            link.send(frame, True, page.key)  # a drop is counted and reported by the link
         return None
-
-    def _node_is_nearly_idle(self) -> bool:
-        # A long task queue means more pages are probably coming: let the
-        # writer thread batch them into few large writes. Otherwise send now.
-        queue = getattr(self.parent, "queue", None)
-        return queue is None or len(queue) < _BUSY_QUEUE_LENGTH
 
     def _report_unsent(self, page: Page) -> None:
         if not self._unsent_reported:
@@ -489,23 +670,19 @@ class CommsLoop(ThreadLoop):
             self._unsendable_reported.add(kind)
             self.err("%s The page was dropped; the node keeps running.", error)
 
-    def _report_backlog(self, link: Link, page: Page) -> None:
-        if id(link) not in self._backlog_reported:
-            self._backlog_reported.add(id(link))
-            self.warn(
-                "%s is not keeping up: %d MiB of pages wait to be sent to it, so new "
-                "pages (first %r) are dropped until it catches up. Store pages less "
-                "often, or check the network.",
-                link.label,
-                self.max_backlog_bytes // (1024 * 1024),
-                page.key,
-            )
-
     # -- link threads: receiving ----------------------------------------------
     def deliver(self, link: Link, pages: List[Page]) -> None:
-        """Store pages a link received (called on the link's reader thread)."""
+        """Store pages a link received (called on the link's reader thread).
+
+        While the node's queue is over its high-water mark the reader waits
+        here instead of reading on: the bytes stay in the OS, TCP slows the
+        sender, and nothing is lost on this side.
+        """
         if not pages:
             return
+        while not self.parent.wait_for_room(0.25):
+            if link.state is not LinkState.OPEN:
+                return
         batch: List[Task] = []
         for page in pages:
             if page.key in self._forwarded:
@@ -529,7 +706,6 @@ class CommsLoop(ThreadLoop):
         """A link has closed (called on its reader thread); log it once."""
         with self._links_lock:
             self.links = tuple(other for other in self.links if other is not link)
-        self._backlog_reported.discard(id(link))
         if not self.is_terminated():
             self.on_link_lost(link, reason)
             self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
@@ -541,6 +717,16 @@ class CommsLoop(ThreadLoop):
     def on_link_lost(self, link: Link, reason: str) -> None:
         """Log that the peer went away (subclasses say what happens next)."""
         self.warn("Lost the link to %s: %s.", link.label, reason)
+
+    def stats(self) -> List[Dict[str, Any]]:
+        """The counters of every open link (see `Link.stats`).
+
+        Example::
+
+            for link in comms.stats():
+                print(link["peer"], link["dropped"], link["dropped_by_key"])
+        """
+        return [link.stats() for link in self.links]
 
     # -- shutdown -------------------------------------------------------------
     def halt(self) -> None:

@@ -22,6 +22,7 @@ from typing import TYPE_CHECKING, Any, Optional
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, ConfigError
 from snr.std_mods.comms.link import (
+    DEFAULT_DEAD_AFTER_S,
     DEFAULT_MAX_BACKLOG_BYTES,
     CommsLoop,
     Keys,
@@ -93,7 +94,14 @@ class PipeLoop(CommsLoop):
     """
 
     def __init__(self, factory: PipeLoopFactory, parent: AbstractNode) -> None:
-        super().__init__(factory, parent, factory.name, factory.keys, factory.max_backlog_bytes)
+        super().__init__(
+            factory,
+            parent,
+            factory.name,
+            factory.keys,
+            factory.max_backlog_bytes,
+            factory.dead_after_s,
+        )
         self.connection = factory.connection
         self.link: Optional[Link] = None
 
@@ -123,6 +131,8 @@ class PipeLoopFactory(LoopFactory):
         connection: this node's end of the pipe.
         keys: the data key (or list of keys) to forward to the other end.
         name: the component name (default ``"pipe_loop"``).
+        max_backlog_bytes: how much may wait for a slow peer before pages are dropped.
+        dead_after_s: seconds of silence after which the other end counts as lost.
 
     Example::
 
@@ -136,6 +146,7 @@ class PipeLoopFactory(LoopFactory):
         keys: Keys = None,
         name: Optional[str] = None,
         max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
+        dead_after_s: float = DEFAULT_DEAD_AFTER_S,
     ) -> None:
         super().__init__()
         if not all(hasattr(connection, m) for m in ("send_bytes", "recv_bytes", "poll")):
@@ -148,6 +159,7 @@ class PipeLoopFactory(LoopFactory):
         self.keys = normalize_keys(keys, "PipeLoopFactory")
         self.name = name or "pipe_loop"
         self.max_backlog_bytes = max_backlog_bytes
+        self.dead_after_s = dead_after_s
 
     def get(self, parent: AbstractNode) -> PipeLoop:
         return PipeLoop(self, parent)

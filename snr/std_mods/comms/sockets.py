@@ -20,12 +20,15 @@ from __future__ import annotations
 
 import errno
 import os
+import selectors
 import socket
 from typing import Optional, Tuple
 
 from snr.core import LoopFactory
+from snr.core.logs import LossReport
 from snr.prelude import AbstractNode, CommsError, ConfigError
 from snr.std_mods.comms.link import (
+    DEFAULT_DEAD_AFTER_S,
     DEFAULT_MAX_BACKLOG_BYTES,
     CommsLoop,
     Keys,
@@ -34,6 +37,7 @@ from snr.std_mods.comms.link import (
 )
 
 __all__ = [
+    "DEFAULT_MAX_CONNECTIONS",
     "SocketTransport",
     "SocketsClientFactory",
     "SocketsClientLoop",
@@ -43,6 +47,9 @@ __all__ = [
 ]
 
 Address = Tuple[str, int]
+
+DEFAULT_MAX_CONNECTIONS = 64
+"""How many clients a sockets server takes at once; more are refused (and counted)."""
 
 _RECV_BYTES = 256 * 1024
 _ACCEPT_WAKE_S = 0.5  # how often a waiting server checks whether it should stop
@@ -67,8 +74,25 @@ def _enable_keepalive(sock: socket.socket) -> None:
                 pass
 
 
+def _limit_unacknowledged(sock: socket.socket, seconds: float) -> None:
+    """Give up on data the peer has not acknowledged for ``seconds`` (Linux).
+
+    Without it, a sender on a path that vanished (Wi-Fi out of range: no FIN,
+    no RST) keeps retransmitting for about 15 minutes.
+    """
+    option = getattr(socket, "TCP_USER_TIMEOUT", None)
+    if option is not None:
+        try:
+            sock.setsockopt(socket.IPPROTO_TCP, option, int(seconds * 1000))
+        except OSError:
+            pass
+
+
 class SocketTransport:
     """A connected TCP socket as a link ``Transport`` (``TCP_NODELAY`` on).
+
+    ``receive`` returns None after ``wake_s`` without data, so the reader can
+    check that the peer is still alive and that the link should stay open.
 
     Example::
 
@@ -77,14 +101,26 @@ class SocketTransport:
 
     can_try_send = bool(_DONTWAIT)
 
-    def __init__(self, sock: socket.socket, peer: str) -> None:
+    def __init__(
+        self,
+        sock: socket.socket,
+        peer: str,
+        dead_after_s: float = DEFAULT_DEAD_AFTER_S,
+        wake_s: float = 0.25,
+    ) -> None:
         sock.settimeout(None)
         # Every frame is written in one call; without this, Nagle's algorithm
         # holds small frames back for up to ~40-200 ms.
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
         _enable_keepalive(sock)
+        _limit_unacknowledged(sock, dead_after_s)
         self.sock = sock
         self.peer = peer
+        self.wake_s = wake_s
+        # The reader waits here for data (a timeout on the socket itself would
+        # also cut short the writer thread's sendall).
+        self._ready = selectors.DefaultSelector()
+        self._ready.register(sock, selectors.EVENT_READ)
         # recv(n) allocates n bytes each call, and a big allocation costs an
         # mmap: reading into one reused buffer is ~5x faster for small frames.
         self._buffer = bytearray(_RECV_BYTES)
@@ -99,7 +135,9 @@ class SocketTransport:
         return self.sock.send(data, _DONTWAIT)
 
     def receive(self) -> Optional[bytes]:
-        """Bytes as they come; ``b""`` when the peer closed (blocks until then)."""
+        """Bytes as they come; ``b""`` when the peer closed; None after ``wake_s`` of quiet."""
+        if not self._ready.select(self.wake_s):
+            return None
         count = self.sock.recv_into(self._buffer)
         return bytes(self._view[:count])
 
@@ -119,6 +157,7 @@ class SocketTransport:
 
     def close(self) -> None:
         """Release the socket."""
+        self._ready.close()
         self.sock.close()
 
 
@@ -169,8 +208,23 @@ class SocketsServerLoop(CommsLoop):
     """
 
     def __init__(self, factory: SocketsServerFactory, parent: AbstractNode) -> None:
-        super().__init__(factory, parent, factory.name, factory.keys, factory.max_backlog_bytes)
+        super().__init__(
+            factory,
+            parent,
+            factory.name,
+            factory.keys,
+            factory.max_backlog_bytes,
+            factory.dead_after_s,
+        )
         self.address = factory.address
+        self.max_connections = factory.max_connections
+        self.refused = LossReport(
+            self.log,
+            "connections",
+            f"this server already has {factory.max_connections} clients, the most it takes "
+            "(SocketsPair(..., max_connections=N) changes that)",
+            verb="Refused",
+        )
         self._listener: Optional[socket.socket] = None
 
     def begin(self) -> None:
@@ -195,14 +249,21 @@ class SocketsServerLoop(CommsLoop):
         if self.is_terminated():
             sock.close()
             return
-        link = self.open_link(SocketTransport(sock, _describe(peer[:2])))
+        if len(self.links) >= self.max_connections:
+            sock.close()  # the client sees the connection end and retries later
+            self.refused.dropped()
+            return
+        if self.refused.dropping:
+            self.refused.recovered()
+        link = self.open_link(SocketTransport(sock, _describe(peer[:2]), self.dead_after_s))
         self.dbg("Accepted a connection from %s", link.transport.peer)
 
     def on_hello(self, link: Link) -> None:
         self.info("Client node %r connected from %s", link.peer_role, link.transport.peer)
 
     def on_link_lost(self, link: Link, reason: str) -> None:
-        self.info("Client %s disconnected: %s. Still listening.", link.label, reason)
+        say = self.warn if link.went_silent else self.info  # a silent death is news
+        say("Client %s disconnected: %s. Still listening.", link.label, reason)
 
     def halt(self) -> None:
         """Stop accepting, then flush and close every client link."""
@@ -234,7 +295,14 @@ class SocketsClientLoop(CommsLoop):
     """
 
     def __init__(self, factory: SocketsClientFactory, parent: AbstractNode) -> None:
-        super().__init__(factory, parent, factory.name, factory.keys, factory.max_backlog_bytes)
+        super().__init__(
+            factory,
+            parent,
+            factory.name,
+            factory.keys,
+            factory.max_backlog_bytes,
+            factory.dead_after_s,
+        )
         self.address = factory.address
         self.link: Optional[Link] = None
         self._retry_s = _FIRST_RETRY_S
@@ -257,7 +325,9 @@ class SocketsClientLoop(CommsLoop):
             return
         self._retry_s = _FIRST_RETRY_S
         self._waiting_reported = False
-        self.link = self.open_link(SocketTransport(sock, _describe(self.address)))
+        self.link = self.open_link(
+            SocketTransport(sock, _describe(self.address), self.dead_after_s)
+        )
         self.dbg("TCP connection to %s made", _describe(self.address))
 
     def _connect(self) -> Optional[socket.socket]:
@@ -315,12 +385,16 @@ class _SocketsFactory(LoopFactory):
         keys: Keys = None,
         name: Optional[str] = None,
         max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
+        dead_after_s: float = DEFAULT_DEAD_AFTER_S,
+        max_connections: int = DEFAULT_MAX_CONNECTIONS,
     ) -> None:
         super().__init__()
         self.address = address
         self.keys = normalize_keys(keys, f"{type(self).__name__} for {_describe(address)}")
         self.name = name or f"sockets_{self.side}_{address[1]}"
         self.max_backlog_bytes = max_backlog_bytes
+        self.dead_after_s = dead_after_s
+        self.max_connections = max_connections
 
     def __repr__(self) -> str:
         return f"{type(self).__name__}({_describe(self.address)}, keys={list(self.keys)})"
@@ -360,8 +434,11 @@ class SocketsPair:
     Args:
         server_tuple: ``(host, port)`` the server listens on and clients
             connect to, e.g. ``("192.168.1.10", 9000)`` or ``("localhost", 9000)``.
-        max_backlog_bytes: how much may wait for a slow peer before new pages
-            are dropped (and a warning logged).
+        max_backlog_bytes: how much may wait for one slow peer before pages are
+            dropped (newest page per key kept; counted and logged).
+        dead_after_s: seconds of silence after which a peer counts as lost
+            (both sides send a beat every quarter of it while quiet).
+        max_connections: how many clients the server takes at once (64).
 
     Example::
 
@@ -376,6 +453,8 @@ class SocketsPair:
         self,
         server_tuple: Address,
         max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
+        dead_after_s: float = DEFAULT_DEAD_AFTER_S,
+        max_connections: int = DEFAULT_MAX_CONNECTIONS,
     ) -> None:
         if (
             not isinstance(server_tuple, tuple)
@@ -392,6 +471,8 @@ class SocketsPair:
             )
         self.server_tuple: Address = server_tuple
         self.max_backlog_bytes = max_backlog_bytes
+        self.dead_after_s = dead_after_s
+        self.max_connections = max_connections
 
     def server(self, keys: Keys = None, name: Optional[str] = None) -> SocketsServerFactory:
         """The factory for the listening side; ``keys`` it forwards to clients.
@@ -401,7 +482,14 @@ class SocketsPair:
             sockets.server()                  # only receives
             sockets.server(["sensor_data"])   # also sends sensor_data to clients
         """
-        return SocketsServerFactory(self.server_tuple, keys, name, self.max_backlog_bytes)
+        return SocketsServerFactory(
+            self.server_tuple,
+            keys,
+            name,
+            self.max_backlog_bytes,
+            self.dead_after_s,
+            self.max_connections,
+        )
 
     def client(self, keys: Keys = None, name: Optional[str] = None) -> SocketsClientFactory:
         """The factory for the connecting side; ``keys`` (one or a list) it forwards.
@@ -411,7 +499,9 @@ class SocketsPair:
             sockets.client(["controller_data"])
             sockets.client("controller_input")
         """
-        return SocketsClientFactory(self.server_tuple, keys, name, self.max_backlog_bytes)
+        return SocketsClientFactory(
+            self.server_tuple, keys, name, self.max_backlog_bytes, self.dead_after_s
+        )
 
     def __repr__(self) -> str:
         return f"SocketsPair(server_tuple={self.server_tuple!r})"

@@ -32,10 +32,12 @@ __all__ = [
     "HEADER_BYTES",
     "MAX_FRAME_BYTES",
     "WIRE_VERSION",
+    "Beat",
     "FrameDecoder",
     "Hello",
     "Message",
     "decode_body",
+    "encode_beat",
     "encode_frame",
     "encode_hello",
     "encode_page",
@@ -66,16 +68,32 @@ _DECODER = json.JSONDecoder(parse_constant=_reject_constant)
 class Hello:
     """The first frame on a link: who is on the other end.
 
+    ``beat_s`` is how often the sender promises a sign of life while it has
+    nothing else to send (a `Beat`); None from a peer that makes no promise
+    (older SNR nodes, or a program that does not send beats).
+
     Example::
 
-        decode_body(encode_hello("receiver")[HEADER_BYTES:])   # Hello(role='receiver')
+        decode_body(encode_hello("receiver", 1.0)[HEADER_BYTES:])
+        # Hello(role='receiver', beat_s=1.0)
     """
 
     role: str
+    beat_s: Optional[float] = None
 
 
-Message = Union[Page, Hello]
-"""What a frame carries: a `Page` or a `Hello`."""
+@dataclass(frozen=True)
+class Beat:
+    """A sign of life: "I am still here", sent on an otherwise quiet link.
+
+    Example::
+
+        decode_body(encode_beat()[HEADER_BYTES:])   # Beat()
+    """
+
+
+Message = Union[Page, Hello, Beat]
+"""What a frame carries: a `Page`, a `Hello` or a `Beat`."""
 
 
 def encode_frame(body: bytes) -> bytes:
@@ -132,14 +150,34 @@ def encode_page(page: Page) -> bytes:
         ) from error
 
 
-def encode_hello(role: str) -> bytes:
+def encode_hello(role: str, beat_s: Optional[float] = None) -> bytes:
     """The hello frame a node sends first on every link.
+
+    With ``beat_s`` the node promises a beat at least that often while it has
+    nothing else to send, so the peer can tell a silent link from a dead one.
 
     Example::
 
         encode_hello("receiver")   # b'\\x00\\x00\\x00,{"v":1,"kind":"hello","role":"receiver"}'
+        encode_hello("receiver", 1.0)   # ...,"role":"receiver","beat_s":1.0}
     """
-    return _encode({"v": WIRE_VERSION, "kind": "hello", "role": role}, "the hello frame")
+    fields: Dict[str, Any] = {"v": WIRE_VERSION, "kind": "hello", "role": role}
+    if beat_s is not None:
+        fields["beat_s"] = beat_s
+    return _encode(fields, "the hello frame")
+
+
+_BEAT_FRAME = encode_frame(b'{"v":1,"kind":"beat"}')
+
+
+def encode_beat() -> bytes:
+    """The beat frame: a sign of life on a quiet link (``{"v":1,"kind":"beat"}``).
+
+    Example::
+
+        encode_beat()   # b'\\x00\\x00\\x00\\x15{"v":1,"kind":"beat"}'
+    """
+    return _BEAT_FRAME
 
 
 def _field(obj: Dict[str, Any], name: str, kind: type, what: str) -> Any:
@@ -203,9 +241,21 @@ def decode_body(body: bytes) -> Message:
     kind = obj.get("kind")
     if kind == "page":
         return _decode_page(obj)
+    if kind == "beat":
+        return Beat()
     if kind == "hello":
-        return Hello(_non_empty(_field(obj, "role", str, "hello"), "role", "hello"))
-    raise WireFormatError(f"unknown frame kind {kind!r}; known kinds are 'page' and 'hello'")
+        role = _non_empty(_field(obj, "role", str, "hello"), "role", "hello")
+        beat_s = obj.get("beat_s")
+        if beat_s is None:
+            return Hello(role)
+        if isinstance(beat_s, bool) or not isinstance(beat_s, (int, float)) or not beat_s > 0:
+            raise WireFormatError(
+                f"the hello's 'beat_s' is {beat_s!r}; it must be a number of seconds above 0"
+            )
+        return Hello(role, float(beat_s))
+    raise WireFormatError(
+        f"unknown frame kind {kind!r}; known kinds are 'page', 'hello' and 'beat'"
+    )
 
 
 def _decode_page(obj: Dict[str, Any]) -> Page:
