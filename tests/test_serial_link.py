@@ -332,7 +332,13 @@ class TestPseudoTerminal(SNRTestCase):
             self.assertTrue(ticker.done.wait(10.0), f"only {ticker.handled} tasks handled")
             assert node.runner.node is not None
             link: Any = node.runner.node.components["serial_link"]
-            self.assertTrue(wait_until(lambda: link._cut), "no write timed out")  # stalled
+            # On a busy machine the ticker may finish before the writer has filled
+            # the OS buffer: keep storing until a write times out (the device stalls).
+            deadline = time.monotonic() + 5.0
+            while not link._cut:
+                self.assertLess(time.monotonic(), deadline, "no write timed out")
+                node.runner.node.schedule(tasks.store_data("cmd", "x" * 2000))
+                time.sleep(0.01)
             self.assertTrue(any("Dropped" in line for line in logs.output), logs.output)
             # The device reads again, and new pages come: they go out, then "Recovered".
             deadline = time.monotonic() + 5.0
