@@ -39,7 +39,7 @@ from snr.prelude import (
     WireFormatError,
 )
 from snr.prelude.errors import closest_match
-from snr.std_mods.io.page_lines import header_line, page_from_line, page_to_line
+from snr.std_mods.codec import header_line, page_from_line, page_to_line
 
 __all__ = [
     "SERIAL_MODES",
@@ -258,7 +258,7 @@ class SerialLinkLoop(ThreadLoop):
         if not text.strip():
             return
         try:
-            page = page_from_line(text, default_origin=self.name)
+            page = page_from_line(raw, default_origin=self.name)
         except WireFormatError as error:
             self._bad_line(text, f"{error}; stored as text under {self.link.receive_key!r}")
             self.store_data(self.link.receive_key, text)
