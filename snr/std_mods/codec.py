@@ -138,13 +138,14 @@ def _problem(value: Any, strings: bool, limit: float) -> Optional[str]:
             items: Any = node.values()
         elif type(node) is list:
             items = node
+            if len(node) > 8:  # an array of readings: all numbers are checked at C speed
+                try:
+                    if max(map(abs, node)) < limit:
+                        continue
+                except TypeError:  # not all numbers: one by one below
+                    pass
         else:
             items = (node,)
-        try:  # all numbers (the usual array of readings): checked at C speed
-            if max(map(abs, items), default=0) < limit:
-                continue
-        except TypeError:
-            pass
         for item in items:
             kind = type(item)
             if kind is float or kind is int:
@@ -157,27 +158,50 @@ def _problem(value: Any, strings: bool, limit: float) -> Optional[str]:
     return None
 
 
+# A number can only overflow a double with an exponent of 3 digits or more, or
+# with 200 digits or more before its point (a 2-digit exponent adds at most 99).
+# Looked for in a copy with every digit made 0, E made e and + removed; strings
+# may match too (harmless: the decoded value is then checked). The same for
+# integers beyond 64 bits (19 digits or more).
+_ZEROED = bytes.maketrans(b"123456789E", b"000000000e")
+_BIG_EXPONENT = b"e000"
+_LONG_NUMBER = b"0" * 200
+_MAY_EXCEED_64_BITS = b"0" * 19
+
+
+def _as_bytes(raw: Text) -> bytes:
+    if type(raw) is bytes:
+        return raw
+    return raw.encode("utf-8", "surrogatepass") if isinstance(raw, str) else bytes(raw)
+
+
 def _load_std(raw: Text) -> Any:
+    data = _as_bytes(raw)
+    strings = b"\\ud" in data or b"\\uD" in data
     if isinstance(raw, str):
         text = raw
-        strings = not text.isascii() or "\\ud" in text or "\\uD" in text
+        strings = strings or not text.isascii()
     else:
         try:
-            text = bytes(raw).decode("utf-8")
+            text = data.decode("utf-8")
         except UnicodeDecodeError as error:
             raise WireFormatError(f"it is not UTF-8 text ({error})") from None
-        strings = "\\ud" in text or "\\uD" in text
     try:
         obj = _STD_DECODER.decode(text)
     except ValueError as error:  # json.JSONDecodeError, NaN/Infinity, huge integers
         raise WireFormatError(f"it is not JSON ({error}): {text[:60]!r}") from None
     except RecursionError:
         raise WireFormatError(_TOO_DEEP) from None
-    if type(obj) in _PLAIN and type(obj) is not float and not strings:
-        return obj
-    problem = _problem(obj, strings, math.inf)
-    if problem is not None:
-        raise WireFormatError(f"it is not valid JSON for SNR: {problem}")
+    zeroed = data.translate(_ZEROED, b"+")
+    if (
+        strings
+        or _BIG_EXPONENT in zeroed
+        or _LONG_NUMBER in zeroed
+        or data.count(b"[") + data.count(b"{") > MAX_DEPTH
+    ):
+        problem = _problem(obj, strings, math.inf)
+        if problem is not None:
+            raise WireFormatError(f"it is not valid JSON for SNR: {problem}")
     return obj
 
 
@@ -187,12 +211,13 @@ def _load_orjson(raw: Text) -> Any:
         obj = _orjson.loads(raw)
     except _orjson.JSONDecodeError:
         return _load_std(raw)  # the stdlib path gives the verdict and the message
-    # orjson rejects NaN, infinity and lone surrogates itself; it reads integers
-    # beyond 64 bits as floats, so a large number is re-read by json to stay exact.
-    if type(obj) is dict or type(obj) is list:
-        if _problem(obj, False, _BIG) is not None:
-            return _load_std(raw)
-    elif type(obj) is float and not -_BIG < obj < _BIG:
+    # orjson rejects NaN, infinity and lone surrogates itself, but reads
+    # integers beyond 64 bits as floats: such a number is re-read by json.
+    data = _as_bytes(raw)
+    zeroed = data.translate(_ZEROED, b"+")
+    if (
+        _MAY_EXCEED_64_BITS in zeroed or data.count(b"[") + data.count(b"{") > MAX_DEPTH
+    ) and _problem(obj, False, _BIG) is not None:
         return _load_std(raw)
     return obj
 
@@ -402,7 +427,8 @@ def page_json(
     fields["process"] = page.process
     try:
         if (
-            type(page.key) is str
+            _dump_plain is not _dump_std
+            and type(page.key) is str
             and type(page.origin) is str
             and type(page.created_at_s) in (float, int)
             and type(page.process) is bool
