@@ -127,6 +127,14 @@ bad_bodies = st.one_of(
     st.binary(max_size=64),  # random bytes
     st.binary(min_size=1, max_size=32).map(lambda b: b"\xff" + b),  # never UTF-8
     st.sampled_from([b"[]", b"null", b'"page"', b"{", b'{"v":1,"kind":"page","data":NaN}']),
+    # valid for a lax JSON reader, rejected by the strict one (docs/wire-format.md, section 5)
+    st.sampled_from(
+        [
+            json.dumps(page("bad", 1)).replace('"data": 1', f'"data": {value}').encode()
+            for value in ("1e999", "-1E400", "Infinity", '"\\ud800"', "[" * 100 + "]" * 100)
+        ]
+        + [json.dumps({**page("bad", 1), "v": 1.0}).encode()]
+    ),
 )
 
 
@@ -204,6 +212,8 @@ class InteropTest(unittest.TestCase):
             barrage.sendall(frame(body))
 
         send_bad()
+        host, port = barrage.getsockname()[:2]
+        barrage_label = f"{host}:{port}"
         send_json(barrage, page("good", 2))
         self.assertEqual(self.wait_pages("good", 2), [1, 2])
 
@@ -228,6 +238,10 @@ class InteropTest(unittest.TestCase):
         logs = [r[3] for r in self.reports.seen if r[0] == "log"]
         self.assertTrue(any(line.startswith("Bad frame from 127.0.0.1:") for line in logs))
         self.assertTrue(any("maximum frame size" in line for line in logs))
+        # 300 bad frames: the first five in full, then a count every few seconds
+        from_barrage = [line for line in logs if f"from {barrage_label}" in line]
+        self.assertGreaterEqual(len(from_barrage), 5)
+        self.assertLessEqual(len(from_barrage), 12, from_barrage)
 
 
 if __name__ == "__main__":

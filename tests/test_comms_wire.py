@@ -168,7 +168,7 @@ class TestBadFrames(unittest.TestCase):
             (body(**{**good, "created_at_s": "yesterday"}), "must be a number"),
             (body(**{**good, "created_at_s": True}), "must be a number"),
             (body(**{**good, "created_at_s": 10**400}), "too large"),
-            (b"[" * 100000, "too deeply"),
+            (b"[" * 100000, "more than 100 deep"),
             (body(**{**good, "process": "yes"}), "'process'"),
             (body(v=1, kind="hello"), "no 'role'"),
             (body(v=1, kind="hello", role=""), "must not be empty"),

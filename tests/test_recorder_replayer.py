@@ -169,8 +169,8 @@ class TestRecorder(SNRTestCase):
             )
         self.assertEqual([p.data for p in PageReader(path)], [1, 2, 3])
         text = "\n".join(logs.output)
-        self.assertIn("'k' holds a set", text)
-        self.assertIn("'k' holds a object", text)
+        self.assertIn("'k' to a recording or serial link: data is a set", text)
+        self.assertIn("data is a object", text)
         self.assertEqual(len(logs.output), 2)  # the second set is skipped quietly
 
     def test_a_reload_appends_to_the_same_file(self) -> None:

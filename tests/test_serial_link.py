@@ -306,6 +306,29 @@ class TestPseudoTerminal(SNRTestCase):
         self.assertEqual((temp.key, temp.data, temp.origin), ("temp_c", 21.5, "serial_link"))
         self.assertEqual((text.key, text.data), ("serial_text", "Booting v1.2"))
 
+    def test_pages_mode_rejects_what_the_strict_codec_rejects(self) -> None:
+        # Each bad line is stored as text, as any line that is not a page is.
+        bad = [
+            b'{"key":"temp_c","data":1e999}',
+            b'{"key":"temp_c","data":NaN}',
+            b'{"key":"temp_c","data":Infinity}',
+            b'{"key":"temp_c","data":"\\ud800"}',
+            b'{"key":"temp_c","data":' + b"[" * 100 + b"]" * 100 + b"}",
+            b'{"format":"snr-pages","version":1.0}',
+        ]
+        collected = PageCollectorFactory(["temp_c", "serial_text"], stop_after=len(bad) + 1)
+        with self.assertLogs("snr.robot.serial_link", "WARNING") as logs:
+            node = NodeThread(
+                [SerialLinkFactory(self.pty.path, receive_key="serial_text"), collected]
+            )
+            self.pty.read_lines(1)  # the header: the link is up
+            self.pty.write(b"\r\n".join(bad) + b'\r\n{"key":"temp_c","data":21.5}\r\n')
+            node.join()
+        self.assertIn("is not a page", logs.output[0])
+        stored = [(p.key, p.data) for p in collected.pages]
+        self.assertEqual(stored[-1], ("temp_c", 21.5))
+        self.assertEqual([key for key, _ in stored[:-1]], ["serial_text"] * len(bad))
+
     def test_lines_mode_talks_to_a_device(self) -> None:
         collected = PageCollectorFactory(["arduino"], stop_after=2)
         node = NodeThread(
@@ -376,8 +399,8 @@ class TestPseudoTerminal(SNRTestCase):
         self.assertEqual(len(logs.output), 3, text)
         self.assertIn("garbage {not json", text)
         self.assertIn("it is not JSON", text)
-        self.assertIn("holds inf, not a finite number", text)
-        self.assertIn("RecursionError", text)
+        self.assertIn("the number inf is out of range", text)
+        self.assertIn("nests arrays and objects more than 100 deep", text)
         self.assertIn("More of these are counted", text)  # the next ones are counted
 
     def test_a_lost_device_is_reported_and_the_node_stops_cleanly(self) -> None:
@@ -447,7 +470,7 @@ class TestErrors(SNRTestCase):
     def test_values_json_allows_but_pages_must_not_hold_are_refused(self) -> None:
         node = self.mock_node()
         link = SerialLinkFactory("loop://").get(node)
-        nested = "[" * 40 + "1" + "]" * 40  # decodes fine; too deep for a page
+        nested = "[" * 120 + "1" + "]" * 120  # deeper than a page may nest (MAX_DEPTH)
         lines = [
             b'{"key":"a","data":NaN}',
             b'{"key":"b","data":[1,{"c":-Infinity}]}',

@@ -32,6 +32,7 @@ import dataclasses
 import enum
 import errno
 import inspect
+import math
 import os
 import sys
 import traceback
@@ -475,6 +476,8 @@ _MAX_DEPTH = 100
 _KEY_PROBLEM = "key"
 _LOOP_PROBLEM = "loop"
 _TYPE_PROBLEM = "type"
+_NUMBER_PROBLEM = "number"  # NaN or infinity: JSON has no such numbers
+_TEXT_PROBLEM = "text"  # a lone surrogate: not Unicode text, UTF-8 cannot hold it
 _Found = Tuple[str, Any, str]  # (path, offending value, which problem)
 
 
@@ -482,7 +485,8 @@ def find_unserializable(value: Any, path: str = "data") -> Optional[Tuple[str, A
     """Where JSON cannot hold ``value``: ``(path, the offending part)``, or None.
 
     JSON holds dicts (with str, int, float, bool or None keys), lists,
-    tuples, str, int, float, bool and None.
+    tuples, str, int, float, bool and None: finite floats only (no NaN or
+    infinity) and text only (no lone surrogates such as ``"\\ud800"``).
 
     Example::
 
@@ -495,9 +499,21 @@ def find_unserializable(value: Any, path: str = "data") -> Optional[Tuple[str, A
     return None if found is None else (found[0], found[1])
 
 
+def _scalar_problem(value: Any) -> Optional[str]:
+    if isinstance(value, float) and not math.isfinite(value):
+        return _NUMBER_PROBLEM
+    if isinstance(value, str) and not value.isascii():
+        try:
+            value.encode("utf-8")
+        except UnicodeEncodeError:
+            return _TEXT_PROBLEM
+    return None
+
+
 def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optional[_Found]:
     if isinstance(value, _JSON_SCALARS):
-        return None
+        problem = _scalar_problem(value)
+        return None if problem is None else (path, value, problem)
     if not isinstance(value, (list, tuple, dict)):
         return path, value, _TYPE_PROBLEM
     if id(value) in open_containers or depth > _MAX_DEPTH:
@@ -508,6 +524,13 @@ def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optio
             for key, item in value.items():
                 if not isinstance(key, _JSON_SCALARS):
                     return path, key, _KEY_PROBLEM
+                key_problem = _scalar_problem(key)
+                if key_problem is not None:
+                    return (
+                        path,
+                        key,
+                        _KEY_PROBLEM if key_problem == _NUMBER_PROBLEM else key_problem,
+                    )
                 found = _find(item, f"{path}[{key!r}]", open_containers, depth + 1)
                 if found is not None:
                     return found
@@ -526,6 +549,16 @@ def _serializable_hint(value: Any, problem: str) -> str:
         return "It contains itself (or nests too deep); send a copy without the loop."
     if problem == _KEY_PROBLEM:
         return "Dict keys sent between nodes must be str (or numbers): use str(key)."
+    if problem == _NUMBER_PROBLEM:
+        return (
+            "JSON has no NaN or infinity: send None (or leave the page out) when there is "
+            "no valid number, e.g. None if math.isnan(x) else x."
+        )
+    if problem == _TEXT_PROBLEM:
+        return (
+            "It holds a lone surrogate, which is not text: decode bytes with "
+            "errors='replace', or send them as value.hex()."
+        )
     if isinstance(value, (set, frozenset)):
         return "Send a list instead: list(value), or sorted(value) for a stable order."
     if isinstance(value, (bytes, bytearray)):
@@ -541,13 +574,18 @@ def _serializable_hint(value: Any, problem: str) -> str:
     return "Send a dict or list of plain values instead, e.g. built from the object's fields."
 
 
-def not_serializable_error(key: str, data: Any, where: str = "") -> NotSerializableError:
+def not_serializable_error(
+    key: str, data: Any, where: str = "", to: str = "to another node", reason: str = ""
+) -> NotSerializableError:
     """A NotSerializableError naming the key, the path inside the data and the type.
 
     Args:
         key: the data key of the page.
         data: the page's data.
         where: extra context, e.g. ``" by component 'sockets_client'"``.
+        to: where the page was going, e.g. ``"to a recording"``.
+        reason: what went wrong when no single part of the data is to blame
+            (e.g. it nests too deep or is too big).
 
     Example::
 
@@ -556,13 +594,14 @@ def not_serializable_error(key: str, data: Any, where: str = "") -> NotSerializa
         #  is a set ({3}), which JSON cannot hold. Send a list instead: ..."
     """
     found = _find(data, "data", set(), 0)
-    head = f"Cannot send the page stored under {key!r}{where} to another node"
+    head = f"Cannot send the page stored under {key!r}{where} {to}"
     allowed = (
         "Data sent between nodes may only hold dicts, lists, tuples, str, int, "
         "float, bool and None."
     )
     if found is None:
-        return NotSerializableError(f"{head}: it cannot be written as JSON. {allowed}")
+        why = reason or "it cannot be written as JSON"
+        return NotSerializableError(f"{head}: {why}. {allowed}")
     path, bad, problem = found
     if problem == _KEY_PROBLEM:
         what = f"{path} has a key that is a {type(bad).__name__} ({short_repr(bad, 60)})"

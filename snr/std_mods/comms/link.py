@@ -30,12 +30,13 @@ from __future__ import annotations
 
 import collections
 import enum
+import logging
 import threading
 import time
 from typing import Any, Deque, Dict, List, Optional, Protocol, Sequence, Set, Tuple, Union
 
 from snr.core import ThreadLoop, tasks
-from snr.core.logs import LossReport
+from snr.core.logs import LossReport, RepeatFilter
 from snr.prelude import (
     AbstractFactory,
     AbstractNode,
@@ -94,7 +95,7 @@ Keys = Union[DataKey, Sequence[DataKey], None]
 """What a comms factory takes as ``keys``: one data key, a list of them, or None."""
 
 _MAX_CHUNK_BYTES = 1024 * 1024  # the writer joins queued frames into chunks up to this size
-_SHOWN_BAD_FRAMES = 5  # per link, log the first few bad frames in full, then every 100th
+_SHOWN_BAD_FRAMES = 5  # per link, log the first few bad frames in full, then a count every 5 s
 
 
 def normalize_keys(keys: Keys, where: str) -> Tuple[str, ...]:
@@ -562,18 +563,22 @@ class Link:
 
     def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
         self.bad_frames += 1
-        count = self.bad_frames
-        if not resetting and count > _SHOWN_BAD_FRAMES and count % 100:
-            return
+        repeats: Optional[RepeatFilter] = getattr(self, "_bad_frame_repeats", None)
+        if repeats is None:  # made on the first bad frame: most links never see one
+            repeats = self._bad_frame_repeats = RepeatFilter(
+                self.owner.log, first=_SHOWN_BAD_FRAMES
+            )
         what = "reset the connection" if resetting else "dropped the frame"
+        count = self.bad_frames
         more = f"; {count} bad frames from this peer so far" if count > 1 else ""
-        self.owner.log.warning(
-            "Bad frame from %s: %s (%s; the node keeps running%s; see docs/wire-format.md)",
-            self.label,
-            error,
-            what,
-            more,
-        )
+        message = "Bad frame from %s: %s (%s; the node keeps running%s; see docs/wire-format.md)"
+        args = (self.label, error, what, more)
+        if resetting:  # the last word on this connection: always said, with the count
+            self.owner.log.warning(message, *args)
+            repeats.flush()
+            return
+        what = f"Bad frames from {self.label}"
+        repeats.report("bad frame", what, logging.WARNING, message, *args)
 
 
 class CommsLoop(ThreadLoop):

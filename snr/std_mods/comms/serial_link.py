@@ -22,7 +22,6 @@ import collections
 import errno
 import json
 import logging
-import math
 import sys
 import threading
 import time
@@ -44,17 +43,15 @@ from snr.prelude import (
     WireFormatError,
 )
 from snr.prelude.errors import closest_match
-from snr.std_mods.io.page_lines import header_line, page_from_line, page_to_line
+from snr.std_mods.codec import header_line, page_from_line, page_to_line
 
 __all__ = [
     "DEFAULT_OUTBOX_BYTES",
-    "MAX_NESTING",
     "SERIAL_MODES",
     "LineOutbox",
     "SerialLinkFactory",
     "SerialLinkLoop",
     "available_ports",
-    "check_page_values",
     "describe_open_error",
     "import_pyserial",
     "open_serial_port",
@@ -68,9 +65,6 @@ MAX_LINE_BYTES = 64 * 1024
 
 DEFAULT_OUTBOX_BYTES = 8 * 1024
 """How many bytes of lines may wait for the device: about 0.7 s of a 115200 baud link."""
-
-MAX_NESTING = 32
-"""Lists and objects in a page line read may nest this deep; a deeper line is skipped."""
 
 _ECHO_GUARD_SIZE = 10_000
 _RECONNECT_MAX_S = 5.0
@@ -299,42 +293,6 @@ class LineOutbox:
         return self._lines
 
 
-def check_page_values(page: Page, max_nesting: int = MAX_NESTING) -> None:
-    """Check that a page read holds finite numbers only, nested ``max_nesting`` deep at most.
-
-    JSON lets a device send ``1e999`` (infinity), ``NaN`` or a deeply nested
-    list; such a page could not be recorded or sent on (JSON cannot carry
-    infinity) and a deep one costs deep recursion everywhere it goes.
-
-    Raises:
-        WireFormatError: the data (or ``created_at_s``) holds a number that is
-            not finite, or nests deeper than ``max_nesting``.
-
-    Example::
-
-        check_page_values(Page("x", [1, 2.5], "mcu", 0.0))       # fine
-        check_page_values(Page("x", 1e999, "mcu", 0.0))          # WireFormatError
-    """
-    if not math.isfinite(page.created_at_s):
-        raise WireFormatError(f"its created_at_s is {page.created_at_s!r}, not a finite number")
-    stack: List[Any] = [(page.data, 0)]
-    while stack:
-        value, depth = stack.pop()
-        if isinstance(value, float):
-            if not math.isfinite(value):
-                raise WireFormatError(
-                    f"the data under {page.key!r} holds {value!r}, not a finite number"
-                )
-        elif isinstance(value, (list, dict)):
-            if depth >= max_nesting:
-                raise WireFormatError(
-                    f"the data under {page.key!r} nests lists or objects deeper than "
-                    f"{max_nesting} levels"
-                )
-            items = value.values() if isinstance(value, dict) else value
-            stack.extend((item, depth + 1) for item in items)
-
-
 class SerialLinkLoop(ThreadLoop):
     """Reads lines from the port on its thread; a writer thread writes queued lines.
 
@@ -535,9 +493,7 @@ class SerialLinkLoop(ThreadLoop):
         if not text.strip():
             return
         try:
-            page = page_from_line(text, default_origin=self.name)
-            if page is not None:
-                check_page_values(page)
+            page = page_from_line(raw, default_origin=self.name)
         except Exception as error:  # not JSON, not a page, too deep, inf...: never fatal
             why = (
                 error if isinstance(error, WireFormatError) else f"{type(error).__name__}: {error}"
@@ -626,7 +582,7 @@ class SerialLinkLoop(ThreadLoop):
                 )
             return data
         try:
-            return json.dumps(data, separators=(",", ":"))
+            return json.dumps(data, separators=(",", ":"), allow_nan=False)
         except (TypeError, ValueError) as error:
             raise NotSerializableError(
                 f"the data under {page.key!r} is a {type(data).__name__}, which cannot be "

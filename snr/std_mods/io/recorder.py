@@ -1,6 +1,6 @@
 """`RecorderEndpointFactory`: write pages to disk as they are stored.
 
-The file is in the JSON-lines page format (``page_lines``): a header line,
+The file is in the JSON-lines page format (``snr.std_mods.codec``): a header line,
 then one page per line. Each line is flushed as soon as it is written, so a
 process that is killed loses at most the page it was writing; replay the
 file with `ReplayerLoopFactory` or read it with `PageReader`.
@@ -24,7 +24,7 @@ from snr.prelude import (
     TaskId,
     TaskType,
 )
-from snr.std_mods.io.page_lines import PathLike, header_line, page_to_line
+from snr.std_mods.codec import PathLike, header_line, page_to_line
 
 __all__ = ["RecorderEndpoint", "RecorderEndpointFactory"]
 

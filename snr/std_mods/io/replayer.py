@@ -1,6 +1,6 @@
 """Replay recordings: pages written by the recorder, or plain text lines.
 
-* `PageReader` reads a recording (see ``page_lines``) back, page by page.
+* `PageReader` reads a recording (format: ``snr.std_mods.codec``) back, page by page.
 * `ReplayerLoopFactory` stores those pages into a node again, with their
   original spacing in time or as fast as possible.
 * `TextReader` / `TextReplayerFactory` do the same for a plain text file: one
@@ -19,6 +19,7 @@ import time
 from typing import Generic, Iterator, List, Optional, Sequence, TypeVar
 
 from snr.core import LoopFactory, ThreadLoop, tasks
+from snr.core.logs import RepeatFilter
 from snr.prelude import (
     AbstractNode,
     ConfigError,
@@ -30,7 +31,7 @@ from snr.prelude import (
     TaskType,
     WireFormatError,
 )
-from snr.std_mods.io.page_lines import (
+from snr.std_mods.codec import (
     PathLike,
     check_header,
     decode_line,
@@ -89,19 +90,24 @@ class PageReader:
         self.filename = os.fspath(filename)
         _check_readable(self.filename, "PageReader")
         self.problems: List[str] = []
+        # A corrupt file can hold thousands of bad lines: log the first few in full.
+        self._repeats = RepeatFilter(_log, first=5)
         with open(self.filename, "rb") as file:
             self._check_if_header(file.readline())  # fail now, not halfway through a replay
 
     def __iter__(self) -> Iterator[Page]:
-        with open(self.filename, "rb") as file:
-            for number, raw in enumerate(file, start=1):
-                page = self._parse(number, raw)
-                if page is not None:
-                    yield page
+        try:
+            with open(self.filename, "rb") as file:
+                for number, raw in enumerate(file, start=1):
+                    page = self._parse(number, raw)
+                    if page is not None:
+                        yield page
+        finally:
+            self._repeats.flush()  # the count of bad lines not logged one by one
 
     def _check_if_header(self, raw: bytes) -> None:
         try:
-            fields = decode_line(raw.decode("utf-8", errors="replace"))
+            fields = decode_line(raw)
         except WireFormatError:
             return  # not a header: _parse reports the line when it comes to it
         if is_header(fields):
@@ -111,11 +117,10 @@ class PageReader:
                 raise WireFormatError(f"Cannot replay {self.filename!r}: {error}.") from error
 
     def _parse(self, number: int, raw: bytes) -> Optional[Page]:
-        text = raw.decode("utf-8", errors="replace").rstrip("\r\n")
-        if not text.strip():
+        if not raw.strip():
             return None
         try:
-            fields = decode_line(text)
+            fields = decode_line(raw)
             if is_header(fields):
                 check_header(fields)  # e.g. two recordings joined with `cat`
                 return None
@@ -127,7 +132,9 @@ class PageReader:
 
     def _report(self, problem: str) -> None:
         self.problems.append(problem)
-        _log.warning("%s", problem)
+        self._repeats.report(
+            self.filename, f"Bad lines in {self.filename}", logging.WARNING, "%s", problem
+        )
 
 
 class TextReader:

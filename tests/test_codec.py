@@ -1,0 +1,346 @@
+"""The page codec: strict JSON for frames, recordings and serial lines, with either backend.
+
+Every test of bad input runs once per JSON backend (the standard library's
+``json`` and, when installed, ``orjson``): both must reject exactly the same
+inputs, read the same values and write the same bytes.
+"""
+
+from __future__ import annotations
+
+import enum
+import json
+import math
+import os
+import subprocess
+import sys
+import tempfile
+import unittest
+from typing import Any, Callable, Iterator, List, Optional, Tuple
+
+from hypothesis import given, settings
+from hypothesis import strategies as st
+
+from snr import NotSerializableError, Page, PageReader, WireFormatError
+from snr.std_mods import codec
+from snr.std_mods.comms.wire import HEADER_BYTES, decode_body, encode_hello, encode_page
+
+BACKENDS = codec.available_backends()
+GOOD_PAGE = b'{"v":1,"kind":"page","key":"k","data":%s,"origin":"o","created_at_s":1.5}'
+LINE = b'{"key":"k","data":%s,"origin":"o","created_at_s":1.5}'
+
+
+def nested(depth: int) -> bytes:
+    """``depth`` arrays inside each other: ``nested(2) == b"[[]]"``."""
+    return b"[" * depth + b"]" * depth
+
+
+# Values that may not appear anywhere in a body or a line, as raw JSON text.
+BAD_VALUES: List[Tuple[str, bytes]] = [
+    ("1e999", b"1e999"),
+    ("-1e999", b"-1e999"),
+    ("1E400 in a list", b"[1, 1E400]"),
+    ("a long mantissa", b"1" + b"0" * 400 + b".0"),
+    ("NaN", b"NaN"),
+    ("Infinity", b"Infinity"),
+    ("-Infinity", b"[-Infinity]"),
+    ("a lone high surrogate", b'"\\ud800"'),
+    ("a lone low surrogate", b'"x\\udc00y"'),
+    ("a surrogate pair backwards", b'"\\ude00\\ud83d"'),
+    ("a lone surrogate key", b'{"\\udbff":1}'),
+    ("a surrogate as UTF-8 bytes", b'"\xed\xa0\x80"'),
+    ("nesting past the limit", nested(codec.MAX_DEPTH)),  # the page object makes it 101
+    ("far too deep", nested(100000)),
+]
+
+# Values that are fine, and what they read as.
+GOOD_VALUES: List[Tuple[bytes, Any]] = [
+    (b"1e308", 1e308),
+    (b"1e-999", 0.0),
+    (b"-0.0", -0.0),
+    (b"18446744073709551616", 2**64),  # beyond 64 bits: stays an exact integer
+    (b"-9223372036854775809", -(2**63) - 1),
+    (b"1" + b"0" * 400, 10**400),
+    (b'"\\ud83d\\ude00"', "\U0001f600"),  # a surrogate pair is one character
+    (b'"\\u00e9\xe2\x98\x83"', "\u00e9\u2603"),
+    (nested(codec.MAX_DEPTH - 1), json.loads(nested(codec.MAX_DEPTH - 1))),
+    (b'[1, 2.5, true, null, "x", {"a": [[]]}]', [1, 2.5, True, None, "x", {"a": [[]]}]),
+]
+
+
+class BackendCase(unittest.TestCase):
+    """Runs each test with every backend, and restores the default after."""
+
+    def setUp(self) -> None:
+        self.addCleanup(codec.use_backend)
+
+    def backends(self) -> Iterator[str]:
+        for name in BACKENDS:
+            codec.use_backend(name)
+            yield name
+
+    def subTest(self, msg: Any = None, **params: Any) -> Any:
+        """Every sub-test names the backend it ran with."""
+        return super().subTest(msg, backend=codec.backend(), **params)
+
+
+class TestStrictReading(BackendCase):
+    def test_frames_reject_every_bad_value(self) -> None:
+        for _ in self.backends():
+            for what, value in BAD_VALUES:
+                with self.subTest(what), self.assertRaises(WireFormatError):
+                    decode_body(GOOD_PAGE % value)
+
+    def test_a_bad_value_in_an_unknown_field_is_rejected_too(self) -> None:
+        for _ in self.backends():
+            for what, value in BAD_VALUES:
+                with self.subTest(what), self.assertRaises(WireFormatError):
+                    decode_body(b'{"v":1,"kind":"hello","role":"r","extra":%s}' % value)
+
+    def test_lines_reject_every_bad_value(self) -> None:
+        for _ in self.backends():
+            for what, value in BAD_VALUES:
+                with self.subTest(what):
+                    with self.assertRaises(WireFormatError):
+                        codec.page_from_line(LINE % value)
+                    with self.assertRaises(WireFormatError):  # serial lines arrive as bytes
+                        codec.page_from_line(LINE % value + b"\r")
+
+    def test_text_lines_with_a_raw_lone_surrogate_are_rejected(self) -> None:
+        for _ in self.backends():
+            with self.assertRaises(WireFormatError):
+                codec.page_from_line('{"key":"k","data":"\ud800"}')
+
+    def test_the_time_may_not_be_infinite(self) -> None:
+        for _ in self.backends():
+            with self.assertRaises(WireFormatError):
+                decode_body(
+                    b'{"v":1,"kind":"page","key":"k","data":1,"origin":"o","created_at_s":1e999}'
+                )
+
+    def test_good_values_read_the_same_with_every_backend(self) -> None:
+        for _ in self.backends():
+            for raw, expected in GOOD_VALUES:
+                with self.subTest(raw=raw[:30]):
+                    page = decode_body(GOOD_PAGE % raw)
+                    assert isinstance(page, Page)
+                    self.assertEqual(page.data, expected)
+                    self.assertIs(type(page.data), type(expected))
+                    line_page = codec.page_from_line(LINE % raw)
+                    assert line_page is not None
+                    self.assertEqual(line_page.data, expected)
+
+    def test_the_version_must_be_the_integer_1(self) -> None:
+        for _ in self.backends():
+            for version in (b"1.0", b'"1"', b"true", b"null", b"[1]", b"2"):
+                with self.subTest(version=version), self.assertRaises(WireFormatError) as ctx:
+                    decode_body(b'{"v":%s,"kind":"hello","role":"r"}' % version)
+                self.assertIn("version", str(ctx.exception))
+            for version in (b"1.0", b'"1"', b"true", b"0"):
+                with self.subTest(header=version), self.assertRaises(WireFormatError):
+                    codec.page_from_line(b'{"format":"snr-pages","version":%s}' % version)
+
+    def test_non_utf8_and_byte_order_marks_are_rejected(self) -> None:
+        for _ in self.backends():
+            for raw in (b"\xff" + GOOD_PAGE % b"1", b"\xef\xbb\xbf" + GOOD_PAGE % b"1"):
+                with self.subTest(raw=raw[:6]), self.assertRaises(WireFormatError):
+                    decode_body(raw)
+
+    def test_recordings_skip_bad_lines_and_log_only_the_first_few(self) -> None:
+        lines = [b'{"format":"snr-pages","version":1}']
+        lines += [LINE % value for _, value in BAD_VALUES] * 3
+        lines += [LINE % b"42"]
+        with tempfile.TemporaryDirectory() as folder:
+            path = os.path.join(folder, "bad.jsonl")
+            with open(path, "wb") as file:
+                file.write(b"\n".join(lines) + b"\n")
+            for _ in self.backends():
+                reader = PageReader(path)
+                with self.assertLogs("snr.replay", "WARNING") as logs:
+                    pages = list(reader)
+                self.assertEqual([p.data for p in pages], [42])
+                self.assertEqual(len(reader.problems), 3 * len(BAD_VALUES))
+                self.assertIn("bad.jsonl:2:", reader.problems[0])
+                # five in full, then one line with the count (at the end of the file)
+                self.assertEqual(len(logs.output), 6, logs.output)
+                self.assertIn(f"{3 * len(BAD_VALUES) - 5} more times", logs.output[-1])
+
+
+class TestStrictWriting(BackendCase):
+    def test_nan_and_infinity_are_refused_with_the_clear_message(self) -> None:
+        for _ in self.backends():
+            for value in (math.nan, math.inf, -math.inf, [1.0, math.nan], {"x": math.inf}):
+                for write in (encode_page, codec.page_to_line):
+                    with self.subTest(value=value, write=write.__name__):
+                        with self.assertRaises(NotSerializableError) as ctx:
+                            write(Page("depth", value, "urov", 1.0))
+                        message = str(ctx.exception)
+                        self.assertIn("'depth'", message)
+                        self.assertIn("NaN", message)
+                        self.assertIn("is a float", message)
+
+    def test_lone_surrogates_are_refused(self) -> None:
+        for _ in self.backends():
+            for value in ("\ud800", ["ok", "a\udfffb"], {"\ud800": 1}):
+                with self.subTest(value=value), self.assertRaises(NotSerializableError) as ctx:
+                    encode_page(Page("name", value, "urov", 1.0))
+                self.assertIn("surrogate", str(ctx.exception))
+
+    def test_data_may_nest_one_less_than_the_limit(self) -> None:
+        fine = json.loads(nested(codec.MAX_DEPTH - 1))
+        too_deep = [fine]
+        for _ in self.backends():
+            page = Page("tree", fine, "urov", 1.0)
+            self.assertEqual(decode_body(encode_page(page)[HEADER_BYTES:]), page)
+            with self.assertRaises(NotSerializableError) as ctx:
+                codec.page_to_line(Page("tree", too_deep, "urov", 1.0))
+            self.assertIn(f"more than {codec.MAX_DEPTH - 1} deep", str(ctx.exception))
+
+    def test_other_things_json_cannot_hold(self) -> None:
+        class Colour(enum.Enum):
+            RED = 1
+
+        for _ in self.backends():
+            for value in ({1, 2}, Colour.RED, object(), {(1, 2): "a"}, b"raw"):
+                with self.subTest(value=value), self.assertRaises(NotSerializableError):
+                    encode_page(Page("k", value, "urov", 1.0))
+
+    def test_the_hello_and_header_are_the_same_bytes(self) -> None:
+        for _ in self.backends():
+            self.assertEqual(encode_hello("r")[HEADER_BYTES:], b'{"v":1,"kind":"hello","role":"r"}')
+            self.assertEqual(codec.header_line(), '{"format":"snr-pages","version":1}')
+
+
+class Level(enum.IntEnum):
+    LOW = 1
+
+
+class Key(str, enum.Enum):
+    A = "a"
+
+
+# Data both backends must write identically: awkward floats, non-ASCII and
+# control characters, big integers, tuples, subclasses, None.
+awkward_floats = st.floats(allow_nan=False, allow_infinity=False) | st.sampled_from(
+    [1e-5, 1.5e-7, 0.0001, 1e16, 1e22, -0.0, 5e-324, 1e-320, 123456789.123]
+)
+scalars = (
+    st.none()
+    | st.booleans()
+    | st.integers(min_value=-(2**70), max_value=2**70)
+    | awkward_floats
+    | st.text()
+    | st.sampled_from([Level.LOW, Key.A, "\x7f", "null", "e-1", "0.0000"])
+)
+json_data = st.recursive(
+    scalars,
+    lambda inner: (
+        st.lists(inner, max_size=5)
+        | st.lists(inner, max_size=3).map(tuple)
+        | st.dictionaries(st.text(max_size=5) | st.integers(), inner, max_size=4)
+    ),
+    max_leaves=20,
+)
+
+
+def written(backend: str, write: Callable[[Page], Any], page: Page) -> Any:
+    codec.use_backend(backend)
+    try:
+        return write(page)
+    except NotSerializableError as error:
+        return ("refused", str(error))
+
+
+def read(backend: str, raw: bytes) -> Any:
+    codec.use_backend(backend)
+    try:
+        value = codec.load_json(raw)
+    except WireFormatError:
+        return "rejected"
+    return ("read", json.dumps(value), repr(value))  # types too: 1 is not 1.0
+
+
+@unittest.skipUnless("orjson" in BACKENDS, "orjson is not installed")
+class TestBackendsAgree(BackendCase):
+    @settings(max_examples=400, deadline=None, database=None)
+    @given(data=json_data, created=awkward_floats)
+    def test_the_same_bytes(self, data: Any, created: float) -> None:
+        page = Page("k\u00e9y", data, "origin", created)
+        for write in (encode_page, codec.page_to_line):
+            self.assertEqual(written("json", write, page), written("orjson", write, page))
+
+    @settings(max_examples=400, deadline=None, database=None)
+    @given(
+        st.one_of(
+            st.binary(max_size=40),
+            json_data.map(lambda d: json.dumps(d).encode("utf-8")),
+            st.lists(
+                st.sampled_from(
+                    [
+                        b"[",
+                        b"]",
+                        b"{",
+                        b"}",
+                        b'"a"',
+                        b":",
+                        b",",
+                        b"1",
+                        b"-",
+                        b"e",
+                        b"E",
+                        b"9" * 20,
+                        b".5",
+                        b"0",
+                        b"NaN",
+                        b"\\ud800",
+                        b'"',
+                        b"\\",
+                        b"u",
+                        b"d",
+                        b"\xed\xa0\x80",
+                        b"\xef\xbb\xbf",
+                        b" ",
+                        b"\n",
+                        b"true",
+                        b"null",
+                        b"+",
+                        b"1e400",
+                        b"\x00",
+                    ]
+                ),
+                max_size=12,
+            ).map(b"".join),
+        )
+    )
+    def test_the_same_verdict_on_any_input(self, raw: bytes) -> None:
+        self.assertEqual(read("json", raw), read("orjson", raw))
+
+
+class TestChoosingTheBackend(BackendCase):
+    def test_the_environment_variable_forces_the_stdlib(self) -> None:
+        code = "from snr.std_mods import codec; print(codec.backend())"
+        env = {**os.environ, codec.BACKEND_ENV_VAR: "json"}
+        out = subprocess.run(
+            [sys.executable, "-c", code], env=env, capture_output=True, text=True, check=True
+        )
+        self.assertEqual(out.stdout.strip(), "json")
+
+    def test_unknown_names_are_refused(self) -> None:
+        with self.assertRaises(ValueError):
+            codec.use_backend("pickle")
+
+    def test_the_default_prefers_orjson(self) -> None:
+        default: Optional[str] = None
+        if os.environ.get(codec.BACKEND_ENV_VAR):
+            self.skipTest("the environment chooses the backend")
+        default = codec.use_backend()
+        self.assertEqual(default, "orjson" if "orjson" in BACKENDS else "json")
+
+    def test_old_import_paths_still_work(self) -> None:
+        from snr.std_mods.io import page_lines
+
+        for name in page_lines.__all__:
+            self.assertIs(getattr(page_lines, name), getattr(codec, name))
+
+
+if __name__ == "__main__":
+    unittest.main()
