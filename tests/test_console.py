@@ -8,6 +8,7 @@ import pickle
 import socket
 import subprocess
 import sys
+import threading
 import unittest
 from typing import List
 from unittest import mock
@@ -226,6 +227,33 @@ class TestCommands(unittest.TestCase):
                 replies = read_replies(other, 2)
         self.assertEqual(replies[0].status, Status.HELLO)
         self.assertEqual(replies[1], Reply(Status.BYE, "Node 'robot' is stopping."))
+
+
+class TestStats(unittest.TestCase):
+    def test_stats_shows_the_queue_and_every_link(self) -> None:
+        from snr import SocketsPair
+        from tests.comms_helpers import free_port
+
+        pair = SocketsPair(("127.0.0.1", free_port()))
+        with NodeInThread([pair.server()]) as run, run.console() as console:
+            self.assertIn("0 links", console.send("stats").text)
+            peer = Node("peer", Config({"peer": [pair.client("hello")]}, mode=Mode.TEST))
+            thread = threading.Thread(target=peer.loop, daemon=True)
+            thread.start()
+            try:
+                self.assertTrue(wait_for(lambda: "1 link" in console.send("stats").text))
+                peer.store_data("hello", "world")
+                self.assertTrue(wait_for(lambda: run.node.get_data("hello") == "world"))
+                text = console.send("stats").text
+            finally:
+                peer.set_terminate_flag("test over")
+                thread.join(5)
+        self.assertIn("Queue of node 'robot': ", text)
+        self.assertIn("tasks dropped", text)
+        self.assertRegex(
+            text, r"'peer' at 127\.0\.0\.1:\d+ \(open\): sent 0, received 1, dropped 0"
+        )
+        self.assertIn("heard", text)
 
 
 class TestRobustness(unittest.TestCase):

@@ -10,6 +10,7 @@ the console's `ConsoleSession`. Thesis 6.4.3 lists the commands::
     reload all|<component>          reload source code from disk, keep factory state
     list commands|endpoints         what you can type / what the node runs
     dump profiler|datastore         handler timings / the newest page of every key
+    stats                           the queue and every comms link: sent, dropped...
     help [command]                  the commands, or one command in detail
 
 Consoles are `ConsoleLoop` subclasses: each adds its own processor when it
@@ -43,6 +44,7 @@ from snr.prelude import (
     TaskType,
 )
 from snr.prelude.errors import closest_match
+from snr.std_mods.comms.link import CommsLoop
 from snr.std_mods.io.console_protocol import Reply, Status, parse_values, split_command
 
 __all__ = [
@@ -88,6 +90,12 @@ COMMANDS: Dict[str, CommandHelp] = {
     "dump": CommandHelp(
         "dump profiler|datastore",
         "Show handler timings, or the newest page of every key.",
+    ),
+    "stats": CommandHelp(
+        "stats",
+        "Show the node's queue and every comms link: pages sent, received, dropped.",
+        "Dropped pages are counted per link and per key (a slow peer whose backlog was\n"
+        "full); 'heard' is how long ago the peer last sent anything (a beat at least).",
     ),
     "help": CommandHelp("help [command]", "Show the commands, or one command in detail."),
 }
@@ -155,6 +163,7 @@ class CommandProcessorEndpoint(Endpoint):
             "reload": self.cmd_reload,
             "list": self.cmd_list,
             "dump": self.cmd_dump,
+            "stats": self.cmd_stats,
             "help": self.cmd_help,
         }
         self._current_session = "console"
@@ -357,6 +366,32 @@ class CommandProcessorEndpoint(Endpoint):
                 f"  {key:<{width}} = {_preview(page.data)}  "
                 f"(from {page.origin!r}, {age_s:.1f} s ago)"
             )
+        return _ok("\n".join(lines))
+
+    def cmd_stats(self, args: str) -> _Outcome:
+        """``stats``: the task queue's and every comms link's counters."""
+        node = self._full_node("stats")
+        queue = node.queue
+        lines = [
+            f"Queue of node {node.role!r}: {len(queue)} tasks waiting (high-water mark "
+            f"{queue.high_water:,}); loops waited for room {queue.waits} times; "
+            f"{queue.loss.total} tasks dropped."
+        ]
+        comms = [c for c in node.components.values() if isinstance(c, CommsLoop)]
+        if not comms:
+            lines.append("No comms links.")
+        for loop in comms:
+            links = loop.stats()
+            lines.append(f"{loop.name}: {len(links)} link{'s' if len(links) != 1 else ''}")
+            for link in links:
+                by_key = ", ".join(f"{key}: {n}" for key, n in link["dropped_by_key"].items())
+                lines.append(
+                    f"  {link['peer']} ({link['state']}): sent {link['pages_sent']:,}, "
+                    f"received {link['pages_received']:,}, dropped {link['dropped']:,}"
+                    f"{f' ({by_key})' if by_key else ''}, waiting {link['waiting_frames']} "
+                    f"frames, bad frames {link['bad_frames']}, "
+                    f"heard {link['heard_s_ago']:.1f} s ago"
+                )
         return _ok("\n".join(lines))
 
     def cmd_help(self, args: str) -> _Outcome:
