@@ -177,7 +177,9 @@ class TestRecorder(SNRTestCase):
         text = "\n".join(logs.output)
         self.assertIn("'k' to a recording or serial link: data is a set", text)
         self.assertIn("data is a object", text)
-        self.assertEqual(len(logs.output), 2)  # the second set is skipped quietly
+        self.assertEqual(len(logs.output), 3)  # the second set is only counted...
+        self.assertIn("Pages under 'k' not recorded (set data): 1 more times", logs.output[2])
+        self.assertIn("(2 in all)", logs.output[2])  # ...and the count logged at the end
 
     def test_a_reload_appends_to_the_same_file(self) -> None:
         path = self.temp_file(".jsonl")
@@ -559,3 +561,171 @@ class TestTimedReplayOfAbsurdTimes(SNRTestCase):
         for bad in (-1.0, math.inf, math.nan, 1e300):
             with self.assertRaises(ConfigError):
                 ReplayerLoopFactory("x.jsonl", max_gap_s=bad)
+
+
+def record(
+    path: str, values: Sequence[object], overwrite: bool = False, append: bool = False
+) -> RecorderEndpointFactory:
+    """Run a node that records ``values`` under "n" into ``path``; returns the factory."""
+    recorder = RecorderEndpointFactory(path, ["n"], overwrite=overwrite, append=append)
+    run_role(
+        "robot",
+        [
+            ListReplayerFactory(list(values), "n"),
+            recorder,
+            PageCollectorFactory(["n"], stop_after=len(values)),
+        ],
+    )
+    return recorder
+
+
+class TestRecordingsAreNeverSilentlyReplaced(SNRTestCase):
+    def test_a_second_run_keeps_the_first_recording(self) -> None:
+        path = self.temp_file(".jsonl")
+        first = record(path, [1, 2])
+        self.assertEqual((first.path, first.kept), (path, None))
+        with self.assertLogs("snr.robot.recorder", "INFO") as logs:
+            second = record(path, [3, 4])
+        self.assertEqual(second.path, path)  # the name given holds the latest run
+        self.assertEqual([p.data for p in PageReader(path)], [3, 4])
+        kept = second.kept
+        assert kept is not None
+        self.assertRegex(os.path.basename(kept), r"^file-\d{4}-\d\d-\d\dT\d\d-\d\d-\d\d\.jsonl$")
+        self.assertEqual([p.data for p in PageReader(kept)], [1, 2])
+        self.assertIn(f"the recording that was there is kept as {kept}", "\n".join(logs.output))
+        third = record(path, [5])  # within the same second: a free name, nothing lost
+        self.assertNotIn(third.kept, (None, kept))
+        runs = sorted(os.listdir(os.path.dirname(path)))
+        self.assertEqual(len(runs), 3, runs)
+        self.assertEqual([p.data for p in PageReader(path)], [5])
+
+    def test_a_file_without_pages_is_reused(self) -> None:
+        for contents in ("", HEADER + "\n", "\n"):
+            path = self.temp_file(".jsonl", contents)
+            recorder = record(path, [1])
+            self.assertIsNone(recorder.kept)
+            self.assertEqual(os.listdir(os.path.dirname(path)), ["file.jsonl"])
+
+    def test_a_file_that_is_not_a_recording_is_left_alone(self) -> None:
+        path = self.temp_file(".py", "print('my robot program')\n")
+        with self.assertRaises(ConfigError) as caught:
+            record(path, [1])
+        self.assertIn("not an SNR recording", str(caught.exception))
+        self.assertIn("overwrite=True", str(caught.exception))
+        with open(path, encoding="utf-8") as f:
+            self.assertEqual(f.read(), "print('my robot program')\n")
+
+    def test_overwrite_replaces_the_file(self) -> None:
+        path = self.temp_file(".jsonl")
+        record(path, [1, 2])
+        recorder = record(path, [3], overwrite=True)
+        self.assertIsNone(recorder.kept)
+        self.assertEqual([p.data for p in PageReader(path)], [3])
+        self.assertEqual(os.listdir(os.path.dirname(path)), ["file.jsonl"])
+
+    def test_append_adds_each_run_to_one_file(self) -> None:
+        path = self.temp_file(".jsonl")
+        record(path, [1, 2], append=True)
+        with open(path, "a", encoding="utf-8") as f:
+            f.write('{"key":"n","da')  # the first run was killed mid-line
+        record(path, [3], append=True)
+        reader = PageReader(path)
+        with self.assertLogs("snr.replay", "WARNING"):
+            self.assertEqual([p.data for p in reader], [1, 2, 3])
+        self.assertEqual(reader.bad_lines, 1)  # only the cut line; the new header is intact
+        self.assertEqual(os.listdir(os.path.dirname(path)), ["file.jsonl"])
+
+    def test_overwrite_and_append_together_are_refused(self) -> None:
+        with self.assertRaises(ConfigError):
+            RecorderEndpointFactory("run.jsonl", ["n"], overwrite=True, append=True)
+
+
+def nested(depth: int) -> object:
+    data: object = 1
+    for _ in range(depth):
+        data = [data]
+    return data
+
+
+class StorePages(Endpoint):
+    """Stores hand-made pages, as a comms link stores what a remote node sent."""
+
+    def __init__(self, factory: StorePagesFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "remote")
+        self.pages = factory.pages
+
+    def begin(self) -> None:
+        for page in self.pages:
+            self.parent.schedule(tasks.store_page(page))
+
+
+class StorePagesFactory(EndpointFactory):
+    def __init__(self, pages: List[Page]) -> None:
+        super().__init__()
+        self.pages = pages
+
+    def get(self, parent: AbstractNode) -> StorePages:
+        return StorePages(self, parent)
+
+
+class TestTheRecorderKeepsTheNodeRunning(SNRTestCase):
+    def test_pages_it_cannot_write_are_skipped_and_counted(self) -> None:
+        path = self.temp_file(".jsonl")
+        values = [0, nested(99), nested(100), 1, nested(100_000), 2, float("nan"), 3]
+        with self.assertLogs("snr.robot.recorder", "ERROR") as logs:
+            recorder = record(path, values)  # TEST mode: any error would stop the node
+        self.assertEqual([p.data for p in PageReader(path)], [0, nested(99), 1, 2, 3])
+        self.assertEqual((recorder.pages_written, recorder.pages_skipped), (5, 3))
+        text = "\n".join(logs.output)
+        self.assertIn("under 'n'", text)
+        self.assertIn("more than 99 deep", text)
+
+    def test_a_remote_page_nested_to_the_wire_limit_is_recorded(self) -> None:
+        path = self.temp_file(".jsonl")
+        deepest = Page("n", nested(99), "urov", 1.0)  # 100 deep with the page around it
+        record_pages = [deepest, Page("n", 1, "urov", 2.0)]
+        run_role(
+            "robot",
+            [
+                StorePagesFactory(record_pages),
+                RecorderEndpointFactory(path, ["n"]),
+                PageCollectorFactory(["n"], stop_after=2),
+            ],
+        )
+        self.assertEqual(list(PageReader(path)), record_pages)
+
+    def test_hand_made_pages_a_reader_would_reject_are_skipped(self) -> None:
+        path = self.temp_file(".jsonl")
+        bad_times: List[object] = [10**400, float("inf"), "noon", None]
+        pages = [Page("n", i, "urov", t) for i, t in enumerate(bad_times)]  # type: ignore[arg-type]
+        pages.append(Page("n", 9, "urov", 5.0))
+        with self.assertLogs("snr.robot.recorder", "ERROR") as logs:
+            run_role(
+                "robot",
+                [
+                    StorePagesFactory(pages),
+                    RecorderEndpointFactory(path, ["n"]),
+                    PageCollectorFactory(["n"], stop_after=len(pages)),
+                ],
+            )
+        reader = PageReader(path)
+        self.assertEqual([p.data for p in reader], [9])
+        self.assertEqual(reader.problems, [])
+        self.assertIn("created_at_s", "\n".join(logs.output))
+
+    def test_any_error_while_encoding_skips_only_that_page(self) -> None:
+        path = self.temp_file(".jsonl")
+        real = codec.page_to_line
+
+        def fragile(page: Page) -> str:
+            if page.data == 2:
+                raise RecursionError("maximum recursion depth exceeded")
+            return real(page)
+
+        with mock.patch("snr.std_mods.io.recorder.page_to_line", fragile):
+            with self.assertLogs("snr.robot.recorder", "ERROR") as logs:
+                recorder = record(path, [1, 2, 3])
+        self.assertEqual([p.data for p in PageReader(path)], [1, 3])
+        self.assertEqual(recorder.pages_skipped, 1)
+        self.assertIn("under 'n'", logs.output[0])
+        self.assertIn("RecursionError", logs.output[0])
