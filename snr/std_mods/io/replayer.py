@@ -191,15 +191,17 @@ class PageReader:
         if not self.bad_lines:
             return
         shown = ", ".join(map(str, self._bad_line_numbers))
-        more = ", ..." if self.bad_lines > len(self._bad_line_numbers) else ""
+        if self.bad_lines > len(self._bad_line_numbers):
+            shown += ", ..."
+        unlogged = self.bad_lines - min(self.bad_lines, self._repeats.first)
         _log.warning(
-            "%s: skipped %d bad line%s in all (line%s %s%s); the other lines were read.",
+            "%s: skipped %d bad line%s in all (line%s %s)%s; every other line was read.",
             self.filename,
             self.bad_lines,
             "" if self.bad_lines == 1 else "s",
             "" if self.bad_lines == 1 else "s",
             shown,
-            more,
+            f", {unlogged} more times than logged in full above" if unlogged else "",
         )
 
     def _check_if_header(self, raw: bytes) -> None:
