@@ -53,22 +53,54 @@ __all__ = [
 ]
 
 MAX_CONSOLES = 8
-"""How many remote consoles may be connected (with their token given) at once."""
+"""How many remote consoles may be connected (with their token given) at once.
+
+Example::
+
+    [RemoteConsole(port=9123).connect() for _ in range(MAX_CONSOLES + 1)]  # the last: refused
+"""
 
 MAX_WAITING_CONSOLES = 32
-"""How many consoles may wait to give their token; a new one pushes out the oldest."""
+"""How many consoles may wait to give their token; a new one pushes out the oldest.
+
+Example::
+
+    MAX_WAITING_CONSOLES   # 32: idle sockets beyond that cannot lock anyone out
+"""
 
 MAX_UNANSWERED = 4
-"""Requests of one console the node may hold at once; reading it pauses beyond that."""
+"""Requests of one console the node may hold at once; reading it pauses beyond that.
+
+Example::
+
+    sock.sendall(b"dump datastore\\n" * 1000)   # the node holds MAX_UNANSWERED at a time
+"""
 
 MAX_SEND_BUFFER_BYTES = 4 << 20
-"""Reply bytes kept for one console that is slow to read them; beyond that it is dropped."""
+"""Reply bytes kept for one console that is slow to read them; beyond that it is dropped.
+
+A console that takes none of its replies for 2 s is dropped as well.
+
+Example::
+
+    MAX_SEND_BUFFER_BYTES // (1 << 20)   # 4 (MiB)
+"""
 
 DEFAULT_AUTH_TIMEOUT_S = 5.0
-"""Seconds a console may take to give its token before it is disconnected."""
+"""Seconds a console may take to give its token before it is disconnected.
+
+Example::
+
+    CommandReceiverFactory(token="long-random-word", auth_timeout_s=2.0)
+"""
 
 DEFAULT_IDLE_TIMEOUT_S = 600.0
-"""Seconds a connected console may send no command before it is disconnected."""
+"""Seconds a connected console may send no command before it is disconnected.
+
+Example::
+
+    CommandReceiverFactory(idle_timeout_s=None)   # never close an idle console
+"""
 
 _SEND_TIMEOUT_S = 2.0  # a console that takes none of its replies for this long is dropped
 _PAUSE_OUT_BYTES = 64 * 1024  # stop taking a console's lines while this much waits to go
