@@ -4,12 +4,12 @@ from __future__ import annotations
 
 import os
 import unittest
-from typing import Any, List, Optional, Sequence
+from typing import Any, List, Mapping, Optional, Sequence
 
 from snr.core import Config, Node, TestRunner
 from snr.core.node_core import NODE_CORE_NAME
-from snr.prelude import AbstractFactory, AbstractLoop, DataKey, Mode, Page, TaskId
-from snr.utils.expector import Expectations, Expector, OrderedExpector
+from snr.prelude import AbstractFactory, AbstractLoop, DataKey, Mode, Page
+from snr.utils.expector import Expector, K, OrderedExpector
 from snr.utils.expector_endpoint import ExpectorEndpoint
 from snr.utils.mock_node import MockNode
 
@@ -43,11 +43,11 @@ class SNRTestCase(unittest.TestCase):
     larger value on a test class whose nodes need longer, e.g.
     ``timeout_s = 5.0``."""
 
-    def expector(self, expectations: Expectations) -> Expector:
+    def expector(self, expectations: Mapping[K, int]) -> Expector[K]:
         """An `Expector` that fails this test when unmet."""
         return Expector(expectations, self)
 
-    def ordered_expector(self, expectations: Sequence[TaskId]) -> OrderedExpector:
+    def ordered_expector(self, expectations: Sequence[K]) -> OrderedExpector[K]:
         """An `OrderedExpector` that fails this test when unmet."""
         return OrderedExpector(expectations, self)
 
