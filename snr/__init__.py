@@ -86,6 +86,7 @@ from snr.utils import (
     MockNode,
     MultiProcExpector,
     OrderedExpector,
+    TempFile,
 )
 
 if TYPE_CHECKING:
@@ -326,6 +327,7 @@ __all__ = [
     "TaskQueue",
     "TaskScheduler",
     "TaskType",
+    "TempFile",
     "TestRunner",
     "TextReader",
     "TextReplayerFactory",
