@@ -148,7 +148,7 @@ class TestTokenGuessing(unittest.TestCase):
             with NodeInThread([], token=TOKEN) as run:
                 with self.assertLogs("snr.robot.command_receiver", logging.WARNING) as logs:
                     started = time.monotonic()
-                    while time.monotonic() - started < 1.5:
+                    while time.monotonic() - started < 1.0:
                         attempts += 1
                         try:
                             run.console(token=f"guess-{attempts}").close()
@@ -184,7 +184,12 @@ def read_frames(sock: socket.socket, count: int, timeout_s: float = 5.0) -> List
 
 class TestFloods(unittest.TestCase):
     def test_a_console_that_does_not_read_is_dropped_and_delays_nobody(self) -> None:
-        with NodeInThread([]) as run, run.console() as operator:
+        # The flooder is dropped after 0.5 s without taking a reply (2 s by default).
+        with (
+            mock.patch("snr.std_mods.io.console._SEND_TIMEOUT_S", 0.5),
+            NodeInThread([]) as run,
+            run.console() as operator,
+        ):
             for i in range(3000):
                 run.node.store_data(f"key_{i:04d}", "x" * 200)
             self.assertTrue(wait_for(lambda: run.node.get_data("key_2999") is not None))
