@@ -76,15 +76,17 @@ def closed_by_node(sock: socket.socket, timeout_s: float) -> bool:
 class TestIdleConsolesCannotLockTheOperatorOut(unittest.TestCase):
     def test_100_idle_sockets_with_a_token_do_not_count(self) -> None:
         with mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}):
-            with NodeInThread([], token=TOKEN, auth_timeout_s=1.0) as run:
+            with NodeInThread([], token=TOKEN, auth_timeout_s=0.5) as run:
                 squatters = idle_sockets(run, 100)
                 try:
                     started = time.monotonic()
                     with connect_until_in(run, TOKEN, 5.0) as console:
                         waited = time.monotonic() - started
                         self.assertEqual(console.send("help").status, Status.OK)
-                    print(f"\n100 idle sockets (token, auth timeout 1 s): in after {waited:.3f} s")
-                    self.assertLess(waited, 1.0)  # they never counted against the limit
+                    print(
+                        f"\n100 idle sockets (token, auth timeout 0.5 s): in after {waited:.3f} s"
+                    )
+                    self.assertLess(waited, 0.5)  # they never counted against the limit
                     # Every one of them is disconnected once its time to give a token is up.
                     self.assertTrue(all(closed_by_node(s, 3.0) for s in squatters))
                     self.assertEqual(len(receiver_of(run)._sessions), 0)
@@ -93,15 +95,15 @@ class TestIdleConsolesCannotLockTheOperatorOut(unittest.TestCase):
                         sock.close()
 
     def test_100_idle_sockets_without_a_token_time_out(self) -> None:
-        with NodeInThread([], idle_timeout_s=1.0) as run:
+        with NodeInThread([], idle_timeout_s=0.5) as run:
             squatters = idle_sockets(run, 100)
             try:
                 started = time.monotonic()
                 with connect_until_in(run, None, 5.0) as console:
                     waited = time.monotonic() - started
                     self.assertEqual(console.send("help").status, Status.OK)
-                print(f"\n100 idle sockets (no token, idle timeout 1 s): in after {waited:.3f} s")
-                self.assertLess(waited, 1.0 + 1.5)  # the idle timeout, and a margin
+                print(f"\n100 idle sockets (no token, idle timeout 0.5 s): in after {waited:.3f} s")
+                self.assertLess(waited, 0.5 + 1.5)  # the idle timeout, and a margin
             finally:
                 for sock in squatters:
                     sock.close()
@@ -116,9 +118,9 @@ class TestIdleConsolesCannotLockTheOperatorOut(unittest.TestCase):
             self.assertFalse(console.is_connected())
 
     def test_a_busy_console_is_not_idle(self) -> None:
-        with NodeInThread([], idle_timeout_s=0.5) as run, run.console() as console:
-            for _ in range(8):  # 1.2 s in all, never 0.5 s without a command
-                time.sleep(0.15)
+        with NodeInThread([], idle_timeout_s=0.3) as run, run.console() as console:
+            for _ in range(6):  # 0.6 s in all, never 0.3 s without a command
+                time.sleep(0.1)
                 self.assertEqual(console.send("").status, Status.OK)
 
     def test_time_limits_are_checked(self) -> None:
@@ -148,7 +150,7 @@ class TestTokenGuessing(unittest.TestCase):
             with NodeInThread([], token=TOKEN) as run:
                 with self.assertLogs("snr.robot.command_receiver", logging.WARNING) as logs:
                     started = time.monotonic()
-                    while time.monotonic() - started < 1.0:
+                    while time.monotonic() - started < 0.8:
                         attempts += 1
                         try:
                             run.console(token=f"guess-{attempts}").close()
