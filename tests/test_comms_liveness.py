@@ -251,6 +251,24 @@ class TestDeadPath(CommsFaultTest):
         self.assertLess(cpu_share, 0.05, "an idle pair with beats costs little CPU")
 
 
+class TestCountersInTheProfile(CommsFaultTest):
+    def test_the_profiler_dump_shows_every_link(self) -> None:
+        pair = SocketsPair(("127.0.0.1", self.port))
+        counter = CounterFactory("hello")
+        config = Config(
+            {"a": [pair.server(), counter], "b": [pair.client("hello")]}, mode=Mode.DEBUG
+        )
+        nodes = self.run_nodes(config, ["a", "b"])
+        self.assertTrue(wait_until(lambda: bool(self.log.matching("Client node 'b'")), 5.0))
+        nodes.nodes[1].store_data("hello", "world")
+        self.assertTrue(wait_until(lambda: counter.seen == ["world"], 5.0))
+        profiler = nodes.nodes[0].profiler
+        assert profiler is not None
+        dump = profiler.dump()
+        self.assertIn(f"sockets_server_{self.port}:\n1 link", dump)
+        self.assertRegex(dump, r"'b' at 127\.0\.0\.1:\d+ \(open\): sent 0, received 1, dropped 0")
+
+
 class Flood(ThreadLoop):
     """Stores ``count`` big pages under ``flood`` as fast as it can, then ``last``."""
 

@@ -19,7 +19,7 @@ import logging
 import re
 from abc import ABCMeta, abstractmethod
 from types import ModuleType
-from typing import Any, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional
 
 from snr.prelude.errors import (
     ComponentError,
@@ -220,6 +220,10 @@ class AbstractProfiler(_FriendlyABC):
     @abstractmethod
     def dump(self) -> str:
         """The table of thesis listing 5.2, as text."""
+
+    @abstractmethod
+    def add_report(self, name: str, report: Callable[[], str]) -> None:
+        """Add a section to ``dump()``: ``report()``'s text under ``name`` (replaces one)."""
 
 
 class AbstractTaskQueue(_FriendlyABC):

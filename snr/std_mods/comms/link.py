@@ -633,6 +633,8 @@ class CommsLoop(ThreadLoop):
         self._unsent_reported = False
         self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
         self.task_handlers = {(TaskType.store_page, key): self.forward_page for key in self.keys}
+        if parent.profiler is not None:  # the profile also tells what was sent and dropped
+            parent.profiler.add_report(name, self.stats_text)
 
     # -- node thread: sending -------------------------------------------------
     def forward_page(self, task: Task, key: TaskId) -> SomeTasks:
@@ -732,6 +734,28 @@ class CommsLoop(ThreadLoop):
                 print(link["peer"], link["dropped"], link["dropped_by_key"])
         """
         return [link.stats() for link in self.links]
+
+    def stats_text(self) -> str:
+        """`stats` as lines for people: the console's ``stats`` and the profiler's dump.
+
+        Example::
+
+            print(comms.stats_text())
+            # 1 link
+            #   'receiver' at 127.0.0.1:9000 (open): sent 1,204, received 0, dropped 0, ...
+        """
+        links = self.stats()
+        lines = [f"{len(links)} link{'s' if len(links) != 1 else ''}"]
+        for link in links:
+            by_key = ", ".join(f"{key}: {n}" for key, n in link["dropped_by_key"].items())
+            lines.append(
+                f"  {link['peer']} ({link['state']}): sent {link['pages_sent']:,}, "
+                f"received {link['pages_received']:,}, dropped {link['dropped']:,}"
+                f"{f' ({by_key})' if by_key else ''}, waiting {link['waiting_frames']} "
+                f"frames, bad frames {link['bad_frames']}, "
+                f"heard {link['heard_s_ago']:.1f} s ago"
+            )
+        return "\n".join(lines)
 
     # -- shutdown -------------------------------------------------------------
     def halt(self) -> None:

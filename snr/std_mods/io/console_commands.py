@@ -478,17 +478,7 @@ class CommandProcessorEndpoint(Endpoint):
         if not comms:
             lines.append("No comms links.")
         for loop in comms:
-            links = loop.stats()
-            lines.append(f"{loop.name}: {len(links)} link{'s' if len(links) != 1 else ''}")
-            for link in links:
-                by_key = ", ".join(f"{key}: {n}" for key, n in link["dropped_by_key"].items())
-                lines.append(
-                    f"  {link['peer']} ({link['state']}): sent {link['pages_sent']:,}, "
-                    f"received {link['pages_received']:,}, dropped {link['dropped']:,}"
-                    f"{f' ({by_key})' if by_key else ''}, waiting {link['waiting_frames']} "
-                    f"frames, bad frames {link['bad_frames']}, "
-                    f"heard {link['heard_s_ago']:.1f} s ago"
-                )
+            lines.append(f"{loop.name}: {loop.stats_text()}")
         return _ok("\n".join(lines))
 
     def cmd_help(self, args: str) -> _Outcome:
