@@ -443,10 +443,8 @@ class Link:
             f"({owner.max_backlog_bytes // 1024:,} KiB wait to be sent; the newest page "
             "under each key is kept)",
         )
-        self.outbox = Outbox(transport, owner.max_backlog_bytes, self._wake_writer)
-        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s), now=False)
         self._closed = threading.Event()
-        # The rest belongs to the I/O loop's thread.
+        # These belong to the I/O loop's thread (set before the hello, which may wake it).
         self._decoder = FrameDecoder()
         self._attached = False
         self._paused = False
@@ -454,6 +452,8 @@ class Link:
         self._timer: Optional[IOTimer] = None
         self._tick_s = min(_TICK_S, owner.beat_s / 4)
         self._finished = False
+        self.outbox = Outbox(transport, owner.max_backlog_bytes, self._wake_writer)
+        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s), now=False)
 
     @property
     def label(self) -> str:

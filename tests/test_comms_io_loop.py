@@ -1,0 +1,216 @@
+"""One I/O thread per node: threads stay constant however many peers connect.
+
+A server with hundreds of idle peers used to cost two threads per peer; now
+every link of a node is served by its one ``snr-<role>-io`` thread.
+"""
+
+from __future__ import annotations
+
+import logging
+import multiprocessing
+import socket
+import threading
+import time
+import unittest
+from typing import List, Tuple
+
+from snr import (
+    AbstractNode,
+    Config,
+    Endpoint,
+    EndpointFactory,
+    Mode,
+    PipeLoopFactory,
+    SocketsPair,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskType,
+    tasks,
+)
+from snr.prelude import ConfigError
+from snr.std_mods.comms.link import CommsLoop
+from snr.std_mods.comms.pipe import PipeTransport
+from snr.std_mods.comms.wire import encode_hello
+from tests.comms_helpers import free_port
+from tests.test_comms_liveness import wait_until
+from tests.test_comms_local import LocalNodes, connect_when_listening
+
+IDLE_PEERS = 300
+
+try:
+    import resource
+except ImportError:  # Windows: no descriptor limit to raise
+    resource = None  # type: ignore[assignment]
+
+
+def threads_of(role: str) -> List[str]:
+    prefix = f"snr-{role}-"
+    return sorted(t.name for t in threading.enumerate() if t.name.startswith(prefix))
+
+
+def ensure_open_files(needed: int) -> None:
+    """Raise the soft descriptor limit to ``needed``, or skip the test."""
+    if resource is None:
+        return
+    soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
+    if soft >= needed:
+        return
+    if hard != resource.RLIM_INFINITY and hard < needed:
+        raise unittest.SkipTest(f"needs {needed} open files; the hard limit is {hard}")
+    resource.setrlimit(resource.RLIMIT_NOFILE, (needed, hard))
+
+
+class Latency(Endpoint):
+    """Records how long each page took from being stored to arriving here."""
+
+    def __init__(self, factory: LatencyFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "latency")
+        self.latency_factory = factory
+        self.task_handlers = {(TaskType.store_page, factory.key): self.arrived}
+
+    def arrived(self, task: Task, key: TaskId) -> SomeTasks:
+        page = task.val_list[0]
+        self.latency_factory.seen.append((page.data, time.time() - page.created_at_s))
+        return None
+
+
+class LatencyFactory(EndpointFactory):
+    def __init__(self, key: str) -> None:
+        super().__init__()
+        self.key = key
+        self.seen: List[Tuple[int, float]] = []
+
+    def get(self, parent: AbstractNode) -> Latency:
+        return Latency(self, parent)
+
+
+class ErrorLines(logging.Handler):
+    def __init__(self) -> None:
+        super().__init__(logging.ERROR)
+        self.lines: List[str] = []
+
+    def emit(self, record: logging.LogRecord) -> None:
+        self.lines.append(record.getMessage())
+
+
+class TestOneIOThreadPerNode(unittest.TestCase):
+    def setUp(self) -> None:
+        self.errors = ErrorLines()
+        logging.getLogger("snr").addHandler(self.errors)
+        self.addCleanup(logging.getLogger("snr").removeHandler, self.errors)
+        self.addCleanup(lambda: self.assertEqual(self.errors.lines, [], "no errors logged"))
+
+    def test_300_idle_peers_cost_no_thread_and_pages_still_arrive_on_time(self) -> None:
+        ensure_open_files(2 * IDLE_PEERS + 200)  # both ends live in this process
+        port = free_port()
+        pair = SocketsPair(("127.0.0.1", port), max_connections=IDLE_PEERS + 10)
+        latency = LatencyFactory("tick")
+        config = Config(
+            {"receiver": [pair.server(), latency], "sender": [pair.client("tick")]},
+            mode=Mode.TEST,
+        )
+        nodes = LocalNodes(config, ["receiver", "sender"])
+        self.addCleanup(nodes.stop)
+        receiver, sender = nodes.nodes
+        server = receiver.components[f"sockets_server_{port}"]
+        assert isinstance(server, CommsLoop)
+        self.assertTrue(wait_until(lambda: len(server.links) == 1, 5.0), "the sender connected")
+        before = threads_of("receiver")
+        self.assertIn("snr-receiver-io", before)
+
+        idle: List[socket.socket] = []
+        for i in range(IDLE_PEERS):
+            sock = connect_when_listening(port)
+            self.addCleanup(sock.close)
+            sock.sendall(encode_hello(f"idle{i}"))  # promises no beats: may stay quiet
+            idle.append(sock)
+        self.assertTrue(
+            wait_until(lambda: len(server.links) == IDLE_PEERS + 1, 10.0), len(server.links)
+        )
+        self.assertEqual(threads_of("receiver"), before, "no thread per peer")
+
+        for i in range(10):
+            sender.schedule(tasks.store_data("tick", i))
+            time.sleep(0.05)
+        self.assertTrue(wait_until(lambda: len(latency.seen) == 10, 5.0), latency.seen)
+        self.assertEqual([data for data, _ in latency.seen], list(range(10)))
+        slowest = max(took for _, took in latency.seen)
+        self.assertLess(slowest, 1.0, "every page arrived within a second")
+        for sock in idle[:5]:  # the idle peers were served too: each got the server's hello
+            sock.settimeout(2.0)
+            self.assertIn(b'"kind":"hello"', sock.recv(200))
+
+        nodes.stop()
+        self.assertEqual(threads_of("receiver"), [], "every thread of the node ended")
+        self.assertEqual(threads_of("sender"), [])
+
+    def test_reload_and_terminate_never_leave_a_second_io_thread(self) -> None:
+        port = free_port()
+        pair = SocketsPair(("127.0.0.1", port))
+        config = Config({"both": [pair.server("a"), pair.client("b")]}, mode=Mode.TEST)
+        nodes = LocalNodes(config, ["both"])
+        self.addCleanup(nodes.stop)
+        [node] = nodes.nodes
+        server = node.components[f"sockets_server_{port}"]
+        assert isinstance(server, CommsLoop)
+        self.assertTrue(wait_until(lambda: len(server.links) == 1, 5.0))
+        io_threads = lambda: [n for n in threads_of("both") if n.endswith("-io")]  # noqa: E731
+        self.assertEqual(io_threads(), ["snr-both-io"], "two comms components share one")
+        for name in (f"sockets_server_{port}", f"sockets_client_{port}", "all"):
+            node.schedule(tasks.reload_component(name))
+            time.sleep(0.3)
+            self.assertLessEqual(len(io_threads()), 1, name)
+
+        def reconnected() -> bool:
+            reloaded = node.components[f"sockets_server_{port}"]
+            return (
+                isinstance(reloaded, CommsLoop)
+                and reloaded is not server
+                and len(reloaded.links) == 1
+            )
+
+        self.assertTrue(wait_until(reconnected, 5.0), "the reloaded client reconnected")
+        self.assertEqual(io_threads(), ["snr-both-io"])
+        nodes.stop()
+        self.assertEqual(threads_of("both"), [], "the I/O thread ended with its node")
+
+
+class TestPipeTransport(unittest.TestCase):
+    def test_the_bridge_for_pipes_that_are_not_sockets_carries_bytes_both_ways(self) -> None:
+        here, there = multiprocessing.Pipe()
+        ends = PipeTransport(here, bridge=True), PipeTransport(there, bridge=True)
+        self.assertTrue(all(end.bridged for end in ends))
+        for sender, receiver in (ends, ends[::-1]):
+            self.assertEqual(sender.send(b"frame bytes"), 11)
+            buffer = bytearray(64)
+            got = b""
+            deadline = time.monotonic() + 2.0
+            while got != b"frame bytes" and time.monotonic() < deadline:
+                try:
+                    got += buffer[: receiver.recv_into(buffer)]
+                except BlockingIOError:
+                    time.sleep(0.01)
+            self.assertEqual(got, b"frame bytes")
+        for end in ends:
+            end.close()
+        self.assertEqual([t for t in threading.enumerate() if t.name.startswith("snr-pipe")], [])
+
+    def test_a_duplex_pipe_is_served_as_a_socket(self) -> None:
+        here, there = multiprocessing.Pipe()
+        end = PipeTransport(here)
+        self.addCleanup(there.close)
+        self.addCleanup(end.close)
+        self.assertFalse(end.bridged)
+
+    def test_a_one_way_pipe_is_refused_with_the_fix(self) -> None:
+        reader, writer = multiprocessing.Pipe(duplex=False)
+        self.addCleanup(reader.close)
+        self.addCleanup(writer.close)
+        with self.assertRaises(ConfigError) as ctx:
+            PipeLoopFactory(reader, "a")
+        self.assertIn("multiprocessing.Pipe()", str(ctx.exception))
+
+
+if __name__ == "__main__":
+    unittest.main()
