@@ -277,28 +277,33 @@ class IOLoop:
             self.log.exception("A comms I/O callback failed; the other links carry on")
 
     def _run(self) -> None:
-        select = self._selector.select
-        calls, timers = self._calls, self._timers
+        select, monotonic = self._selector.select, time.monotonic
+        calls, timers, handlers = self._calls, self._timers, self._handlers
         try:
             while not self._stopping:
                 timeout: Optional[float] = None
                 if calls:
                     timeout = 0
                 elif timers:
-                    timeout = max(0.0, timers[0][0] - time.monotonic())
+                    timeout = max(0.0, timers[0][0] - monotonic())
                 for key, mask in select(timeout):
                     handler = key.data
                     if handler is None:
                         self._drain_wake()
                         continue
-                    if mask & _READ and self._handlers.get(handler, 0) & _READ:
-                        self._safely(handler.on_readable)
-                    if mask & _WRITE and self._handlers.get(handler, 0) & _WRITE:
-                        self._safely(handler.on_writable)
+                    # Inline rather than through _safely: this is every read's path.
+                    try:
+                        if mask & _READ:
+                            handler.on_readable()
+                        if mask & _WRITE and handlers.get(handler, 0) & _WRITE:
+                            handler.on_writable()
+                    except Exception:  # a bug in one link must not stop every link
+                        self.log.exception("A comms link's I/O failed; the other links carry on")
+                        self._safely(handler.on_io_stop)  # or it would be ready again at once
                 while calls:
                     self._safely(calls.popleft())
-                if timers:
-                    now = time.monotonic()
+                if timers and timers[0][0] <= monotonic():
+                    now = monotonic()
                     while timers and timers[0][0] <= now:
                         timer = heapq.heappop(timers)[2]
                         if not timer.cancelled:
@@ -307,7 +312,7 @@ class IOLoop:
             self.log.exception("The comms I/O loop of node %r failed", self.node.role)
         finally:
             self._stopping = True
-            for handler in list(self._handlers):
+            for handler in list(handlers):
                 self._safely(handler.on_io_stop)
             while calls:  # what was asked before the stop, e.g. a link's close
                 self._safely(calls.popleft())

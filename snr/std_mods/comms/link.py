@@ -452,6 +452,7 @@ class Link:
         self._timer: Optional[IOTimer] = None
         self._tick_s = min(_TICK_S, owner.beat_s / 4)
         self._finished = False
+        self._ending = False  # half-closed after a graceful flush
         self.outbox = Outbox(transport, owner.max_backlog_bytes, self._wake_writer)
         self.outbox.put(encode_hello(owner.parent.role, owner.beat_s), now=False)
 
@@ -565,6 +566,9 @@ class Link:
 
     def _end_writing(self) -> None:
         """Everything is sent: half-close, then read what still comes for a moment."""
+        if self._ending:
+            return
+        self._ending = True
         self.transport.end_writing()
         if self._timer is not None:
             self._timer.cancel()
@@ -632,6 +636,23 @@ class Link:
     # -- I/O loop thread: writing ---------------------------------------------
     def on_writable(self) -> None:
         """Write what is queued; stop watching for room once it is all out."""
+        try:
+            self._write()
+        except Exception as error:  # a bug must not kill the node silently
+            self._failed(error)
+
+    def on_readable(self) -> None:
+        """Read what arrived, cut it into frames, hand the pages on."""
+        try:
+            self._read()
+        except Exception as error:  # a bug must not kill the node silently
+            self._failed(error)
+
+    def _failed(self, error: Exception) -> None:
+        self.owner.log.exception("Link to %s failed", self.label)
+        self._finish(f"unexpected {type(error).__name__}: {error}")
+
+    def _write(self) -> None:
         if self._finished:
             return
         try:
@@ -650,8 +671,7 @@ class Link:
             self.io.watch(self, self.io.events(self) | _WRITE)
 
     # -- I/O loop thread: reading ---------------------------------------------
-    def on_readable(self) -> None:
-        """Read what arrived, cut it into frames, hand the pages on."""
+    def _read(self) -> None:
         if self._finished or self._paused:
             return
         try:
