@@ -948,7 +948,7 @@ class CommsLoop(ThreadLoop):
             self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
 
     def on_hello(self, link: Link) -> None:
-        """The peer said which node it is (called on the link's reader thread)."""
+        """The peer said which node it is (called on the node's I/O thread)."""
         self.info("Linked to node %r at %s", link.peer_role, link.transport.peer)
 
     def on_link_lost(self, link: Link, reason: str) -> None:

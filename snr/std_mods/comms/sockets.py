@@ -172,7 +172,9 @@ class SocketsServerLoop(CommsLoop):
     """Accepts clients and links to each; built by ``SocketsPair.server()``.
 
     It listens as soon as the node starts (a port in use stops the node with
-    a `CommsError` naming the port and the role).
+    a `CommsError` naming the port and the role). Its own thread accepts;
+    every accepted connection is served by the node's one I/O thread
+    (``IOLoop``), so hundreds of idle clients add no threads.
 
     Example::
 
