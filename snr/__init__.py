@@ -10,6 +10,11 @@ See the tutorial in ``docs/`` and the thesis listings in ``examples/``.
 components of ``snr.std_mods``, ``unittest`` behind ``SNRTestCase``,
 dataclasses-json behind ``Page.serialize()``) is imported the first time it
 is used; ``from snr import *`` imports everything it names.
+
+Code written against the 2021 release of SNR runs too: the names it used
+that the thesis does not print (``ExpectorProtocol``, ``MPExpector``,
+``MovingAvgEndpointFactory``, ...) are kept in ``snr.compat2021``, and
+exported here.
 """
 
 from typing import TYPE_CHECKING, Any, Dict, List
@@ -86,9 +91,25 @@ from snr.utils import (
     MockNode,
     MultiProcExpector,
     OrderedExpector,
+    TempFile,
 )
 
 if TYPE_CHECKING:
+    from snr.compat2021 import (
+        AbstractContext,
+        Consumer,
+        Context,
+        ExpectorProtocol,
+        MovingAvgEndpointFactory,
+        MPExpector,
+        RemovedApiError,
+        Settings,
+        SocketsListenerFactory,
+        SocketsLoopFactory,
+        SocketsWrapper,
+        TaskExpectations,
+        TaskExpector,
+    )
     from snr.std_mods import (
         COMMS_CONNECTED,
         COMMS_DISCONNECTED,
@@ -205,6 +226,24 @@ _LAZY: Dict[str, str] = {
         ),
         "snr.std_mods",
     ),
+    **dict.fromkeys(
+        (
+            "AbstractContext",
+            "Consumer",
+            "Context",
+            "ExpectorProtocol",
+            "MPExpector",
+            "MovingAvgEndpointFactory",
+            "RemovedApiError",
+            "Settings",
+            "SocketsListenerFactory",
+            "SocketsLoopFactory",
+            "SocketsWrapper",
+            "TaskExpectations",
+            "TaskExpector",
+        ),
+        "snr.compat2021",
+    ),
     "SNRTestCase": "snr.utils.test_case",
 }
 """Public names imported on first use, and the module each comes from.
@@ -212,13 +251,15 @@ _LAZY: Dict[str, str] = {
 The ready-made components (``snr.std_mods``: sockets, consoles, serial,
 recorders, filters) and ``SNRTestCase`` (``unittest``) cost more to import
 than the rest of SNR together; a program pays for them only when it uses
-them."""
+them. The names kept for code written against the 2021 release
+(``snr.compat2021``) come with the ready-made components they alias."""
 
 __version__ = "0.1.0"
 
 __all__ = [
     "AbstractComponent",
     "AbstractConfig",
+    "AbstractContext",
     "AbstractEndpoint",
     "AbstractFactory",
     "AbstractLoop",
@@ -241,6 +282,8 @@ __all__ = [
     "ComponentsByRole",
     "Config",
     "ConfigError",
+    "Consumer",
+    "Context",
     "ControlProcessorEndpoint",
     "ControlProcessorFactory",
     "ControllerLoop",
@@ -258,6 +301,7 @@ __all__ = [
     "Expector",
     "ExpectorEndpoint",
     "ExpectorEndpointFactory",
+    "ExpectorProtocol",
     "HandlerError",
     "InputMappingEndpoint",
     "InputMappingFactory",
@@ -273,11 +317,13 @@ __all__ = [
     "LoopError",
     "LoopFactory",
     "LoopState",
+    "MPExpector",
     "MissingKeyHints",
     "MissingSuperInitError",
     "MockNode",
     "Mode",
     "MovingAvgEndpoint",
+    "MovingAvgEndpointFactory",
     "MovingAvgFilter",
     "MovingAvgFilterFactory",
     "MultiProcExpector",
@@ -297,6 +343,7 @@ __all__ = [
     "RecorderEndpoint",
     "RecorderEndpointFactory",
     "RemoteConsole",
+    "RemovedApiError",
     "ReplayerLoop",
     "ReplayerLoopFactory",
     "Role",
@@ -307,17 +354,23 @@ __all__ = [
     "SerialLinkFactory",
     "SerialLinkLoop",
     "Serializable",
+    "Settings",
     "SimulatedJoystick",
     "SocketsClientFactory",
     "SocketsClientLoop",
+    "SocketsListenerFactory",
+    "SocketsLoopFactory",
     "SocketsPair",
     "SocketsServerFactory",
     "SocketsServerLoop",
+    "SocketsWrapper",
     "SomeTasks",
     "StopwatchEndpoint",
     "StopwatchEndpointFactory",
     "SynchronousRunner",
     "Task",
+    "TaskExpectations",
+    "TaskExpector",
     "TaskHandler",
     "TaskHandlerMap",
     "TaskId",
@@ -326,6 +379,7 @@ __all__ = [
     "TaskQueue",
     "TaskScheduler",
     "TaskType",
+    "TempFile",
     "TestRunner",
     "TextReader",
     "TextReplayerFactory",

@@ -31,8 +31,9 @@ class NodeInThread:
         token: Optional[str] = None,
         mode: Mode = Mode.TEST,
         profile: Optional[bool] = None,
+        **receiver_options: Any,
     ) -> None:
-        self.receiver = CommandReceiverFactory(port=0, token=token)
+        self.receiver = CommandReceiverFactory(port=0, token=token, **receiver_options)
         config = Config({"robot": [*factories, self.receiver]}, mode=mode, profile=profile)
         self.node = Node("robot", config)
         self.errors: List[BaseException] = []

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import importlib.util
 import os
 import unittest
 
@@ -31,6 +32,47 @@ class TestLoopLatencyBench(unittest.TestCase):
                 self.assertRegex(out, rf"SNR {mode}, {condition} +[\d.]+ +[\d.]+ +\d+ +[\d.]+x")
                 self.assertRegex(out, rf"  SNR {mode}, {condition}: [\d.]+x \((met|MISSED)\)")
         self.assertIn("Target: node p50 <= 2x the bare hand-off's p50", out)
+
+
+class TestCommsBench(unittest.TestCase):
+    def test_prints_the_tables_and_the_targets(self) -> None:
+        done = run_script(
+            [
+                os.path.join(BENCH, "bench_comms.py"),
+                "--quick",
+                "--pages=300",
+                "--round-trips=30",
+                "--rounds=1",
+                "--idle-s=0.1",
+            ],
+            timeout_s=8.0,
+        )
+        self.assertEqual(done.returncode, 0, done.stderr)
+        out = done.stdout
+        self.assertIn("Comms between two processes on 127.0.0.1: 300 pages one way", out)
+        self.assertRegex(out, r"JSON backend: (orjson|json)")
+        self.assertRegex(out, r"one-way throughput +pages/s +spread +x bare +x PUSH/PULL")
+        self.assertRegex(out, r"round trip +p50 us +spread +x bare +x REQ/REP +p99 us")
+        rows = ["bare TCP, one sendall a frame", "SNR default \\(DEBUG\\)", "SNR DEPLOYED"]
+        if importlib.util.find_spec("zmq") is not None:
+            self.assertRegex(out, r"pyzmq PUSH/PULL +[\d,]+ ")
+            self.assertRegex(out, r"pyzmq REQ/REP +\d+ ")
+            self.assertIn("throughput >= 0.75x pyzmq PUSH/PULL", out)
+        else:
+            self.assertIn("pyzmq is not installed", out)
+        for row in rows:
+            # Every page arrives once and in order: 0 lost, 0 duplicated, 0 reordered.
+            self.assertRegex(out, rf"{row} +[\d,]+ +[\d,]+-[\d,]+ +[\d.]+ +\S+ +0 +0 +0 +0")
+        self.assertRegex(out, r"bare TCP, batched sends +[\d,]+")
+        self.assertRegex(out, r"  \+ reader thread hand-off +\d+")
+        self.assertRegex(out, r"idle connected pair +% core")
+        for mode in ("SNR default (DEBUG):", "SNR DEPLOYED:"):
+            self.assertIn(mode, out)
+        self.assertRegex(
+            out, r"throughput >= 0.50x bare, one sendall a frame +[\d.]+x (met|MISSED)"
+        )
+        self.assertRegex(out, r"p50 round trip <= 1.3x bare +[\d.]+x (met|MISSED)")
+        self.assertRegex(out, r"0 pages lost / duplicated / reordered +0 / 0 / 0 .* met")
 
 
 if __name__ == "__main__":

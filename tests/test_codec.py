@@ -261,14 +261,14 @@ def read(backend: str, raw: bytes) -> Any:
 
 @unittest.skipUnless("orjson" in BACKENDS, "orjson is not installed")
 class TestBackendsAgree(BackendCase):
-    @settings(max_examples=400, deadline=None, database=None)
+    @settings(max_examples=150, deadline=None, database=None)
     @given(data=json_data, created=awkward_floats)
     def test_the_same_bytes(self, data: Any, created: float) -> None:
         page = Page("k\u00e9y", data, "origin", created)
         for write in (encode_page, codec.page_to_line):
             self.assertEqual(written("json", write, page), written("orjson", write, page))
 
-    @settings(max_examples=400, deadline=None, database=None)
+    @settings(max_examples=150, deadline=None, database=None)
     @given(
         st.one_of(
             st.binary(max_size=40),

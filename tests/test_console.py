@@ -10,7 +10,7 @@ import subprocess
 import sys
 import threading
 import unittest
-from typing import List
+from typing import List, Optional
 from unittest import mock
 
 from snr import (
@@ -292,9 +292,9 @@ class TestRobustness(unittest.TestCase):
                     console.close()
 
 
-def _try_connect(run: NodeInThread) -> bool:
+def _try_connect(run: NodeInThread, token: Optional[str] = None) -> bool:
     try:
-        run.console().close()
+        run.console(token).close()
     except ConsoleConnectionError:
         return False
     return True
@@ -345,6 +345,10 @@ class TestToken(unittest.TestCase):
                     run.console()
                 with self.assertRaisesRegex(ConsoleConnectionError, "Wrong or missing"):
                     run.console(token="guess")
+                # The wrong guess makes this address wait a moment before its next try.
+                with self.assertRaisesRegex(ConsoleConnectionError, "next one is checked in"):
+                    run.console(token="s3cret-word")
+                self.assertTrue(wait_for(lambda: _try_connect(run, "s3cret-word")))
                 with run.console(token="s3cret-word") as console:
                     self.assertEqual(console.send("help").status, Status.OK)
 

@@ -153,7 +153,7 @@ class TestStepsWithProcesses(unittest.TestCase):
             "--port",
             port,
             "--seconds",
-            "1.5",
+            "1.0",
         ]
         done = run_script(args, cwd=self.folder, timeout_s=30)
         self.assertEqual(done.returncode, 0, done.stderr)

@@ -23,6 +23,7 @@ HEAVY = [
     "marshmallow",
     "unittest",
     "snr.std_mods",
+    "snr.compat2021",
     "multiprocessing",
     "argparse",
 ]
@@ -72,10 +73,11 @@ class TestLightImport(unittest.TestCase):
             "assert snr.SNRTestCase.__name__ == 'SNRTestCase'\n"
             "assert snr.TimeoutLoopFactory.__name__ == 'TimeoutLoopFactory'\n"
             "assert snr.std_mods.SocketsPair is snr.SocketsPair\n"
+            "assert snr.MPExpector is snr.MultiProcExpector\n"
         )
         self.assertEqual(
-            loaded_after(code, ["unittest", "snr.std_mods"]),
-            {"unittest": True, "snr.std_mods": True},
+            loaded_after(code, ["unittest", "snr.std_mods", "snr.compat2021"]),
+            {"unittest": True, "snr.std_mods": True, "snr.compat2021": True},
         )
 
     def test_unknown_names_still_raise_attribute_error(self) -> None:

@@ -3,11 +3,14 @@
 from __future__ import annotations
 
 import json
+import math
 import os
 import subprocess
 import sys
 import textwrap
-from typing import List, Sequence
+import time
+from typing import Dict, List, Sequence, Tuple
+from unittest import mock
 
 from snr import (
     AbstractFactory,
@@ -34,6 +37,9 @@ from snr import (
     WireFormatError,
     tasks,
 )
+from snr.std_mods import codec
+from snr.std_mods.io import replayer
+from snr.std_mods.io.replayer import MAX_GAP_S, MAX_PROBLEMS
 from tests.page_collector import PageCollectorFactory
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -171,7 +177,9 @@ class TestRecorder(SNRTestCase):
         text = "\n".join(logs.output)
         self.assertIn("'k' to a recording or serial link: data is a set", text)
         self.assertIn("data is a object", text)
-        self.assertEqual(len(logs.output), 2)  # the second set is skipped quietly
+        self.assertEqual(len(logs.output), 3)  # the second set is only counted...
+        self.assertIn("Pages under 'k' not recorded (set data): 1 more times", logs.output[2])
+        self.assertIn("(2 in all)", logs.output[2])  # ...and the count logged at the end
 
     def test_a_reload_appends_to_the_same_file(self) -> None:
         path = self.temp_file(".jsonl")
@@ -344,3 +352,380 @@ class TestPageObjects(SNRTestCase):
         path = self.temp_file(".jsonl")
         write_lines(path, [HEADER, page_line("x", [1, "two"], 3.5, origin="urov")])
         self.assertEqual(list(PageReader(path)), [Page("x", [1, "two"], "urov", 3.5, True)])
+
+
+def bad_lines_of_every_kind() -> List[bytes]:
+    """One line of each kind of damage a recording can hold (none is a page)."""
+    page = '{"key":"n","data":1,"origin":"robot","created_at_s":%s}'
+    return [
+        b"[" * 100_000 + b"]" * 100_000,  # nested far too deep
+        ('{"key":"n","data":' + "[" * 100_000 + "]" * 100_000 + "}").encode(),
+        (page % ("9" * 400)).encode(),  # a time no double can hold
+        (page % "1e999").encode(),
+        (page % "Infinity").encode(),
+        (page % "NaN").encode(),
+        (page % "-1e400").encode(),
+        b'{"key":"n","data":' + b"9" * 5000 + b"}",  # an integer over Python's limit
+        b'{"key":"n","data":"\\ud800"}',  # a lone surrogate
+        b"\xff\xfe not UTF-8 \x80",
+        bytes(b for b in range(256) if b != 10),  # random bytes (no newline)
+        b'{"key":7,"data":1}',  # wrong types
+        b'{"key":"n","data":1,"created_at_s":"noon"}',
+        b'{"key":"n","data":1,"process":"yes"}',
+        b'{"format":"snr-pages","version":99}',  # a header of a newer SNR, mid-file
+        b'{"format":"other","version":1}',
+        b"x" * 5_000_000,  # a long line of junk
+        b'{"key":"n","da',  # cut short
+    ]
+
+
+def write_with_bad_lines(path: str, rounds: int, created_s: float = 1000.0) -> int:
+    """Good pages 0, 1, 2... with every kind of bad line between them; returns how many bad."""
+    bad = bad_lines_of_every_kind()
+    lines = [HEADER.encode()]
+    n = 0
+    for _ in range(rounds):
+        for line in bad:
+            lines.append(page_line("n", n, created_s + 0.01 * n).encode())
+            lines.append(line)
+            n += 1
+    lines.append(page_line("n", n, created_s + 0.01 * n).encode())
+    with open(path, "wb") as f:
+        f.write(b"\n".join(lines) + b"\n")
+    return rounds * len(bad)
+
+
+class TestReplayNeverStopsOnData(SNRTestCase):
+    def test_every_good_page_is_replayed_in_order_around_bad_lines(self) -> None:
+        path = self.temp_file(".jsonl")
+        bad = write_with_bad_lines(path, rounds=3)
+        factory = ReplayerLoopFactory(path, fast=True, exit_when_done=True)
+        replayed = PageCollectorFactory(["n"])
+        with self.assertLogs("snr.replay", "WARNING") as logs:
+            run_role("sim", [factory, replayed], timeout_s=30)
+        self.assertEqual(bad, 54)
+        self.assertEqual(replayed.data(), list(range(bad + 1)))
+        self.assertEqual(factory.position, bad + 1)
+        self.assertEqual(factory.bad_lines, bad)
+        text = "\n".join(logs.output)
+        for number in (3, 5, 7, 9, 11):  # the first five in full, with their line numbers
+            self.assertIn(f".jsonl:{number}: skipped a bad line", text)
+        self.assertIn(f"skipped {bad} bad lines in all (lines 3, 5, 7, 9, 11,", text)
+
+    def test_any_error_from_a_line_skips_only_that_line(self) -> None:
+        path = self.temp_file(".jsonl")
+        write_lines(path, [HEADER] + [page_line("n", i, 1.0) for i in range(6)])
+        real = codec.page_from_fields
+
+        def fragile(fields: Dict[str, object]) -> Page:
+            errors = {1: RecursionError("deep"), 3: OverflowError("big"), 4: MemoryError()}
+            if fields.get("data") in errors:
+                raise errors[fields["data"]]  # type: ignore[index]
+            return real(fields)
+
+        factory = ReplayerLoopFactory(path, fast=True, exit_when_done=True)
+        replayed = PageCollectorFactory(["n"])
+        with mock.patch.object(replayer, "page_from_fields", fragile):
+            with self.assertLogs("snr.replay", "WARNING") as logs:
+                run_role("sim", [factory, replayed])
+        self.assertEqual(replayed.data(), [0, 2, 5])
+        text = "\n".join(logs.output)
+        self.assertIn(".jsonl:3: skipped a bad line: RecursionError('deep')", text)
+        self.assertIn(".jsonl:5: skipped a bad line: OverflowError('big')", text)
+        self.assertIn(".jsonl:6: skipped a bad line: MemoryError()", text)
+
+    def test_a_reader_keeps_the_first_problems_and_counts_them_all(self) -> None:
+        path = self.temp_file(".jsonl")
+        write_lines(path, [HEADER] + ["junk"] * (MAX_PROBLEMS + 50) + [page_line("n", 1, 1.0)])
+        reader = PageReader(path)
+        with self.assertLogs("snr.replay", "WARNING"):
+            self.assertEqual([p.data for p in reader], [1])
+        self.assertEqual(reader.bad_lines, MAX_PROBLEMS + 50)
+        self.assertEqual(len(reader.problems), MAX_PROBLEMS)
+
+    def test_exit_when_done_fires_in_deployed_mode_despite_bad_lines(self) -> None:
+        path = self.temp_file(".jsonl")
+        bad = write_with_bad_lines(path, rounds=1)
+        replayed = PageCollectorFactory(["n"])
+        config = Config(
+            {"sim": [ReplayerLoopFactory(path, exit_when_done=True, max_gap_s=0.05), replayed]},
+            mode=Mode.DEPLOYED,
+        )
+        runner = TestRunner("sim", config, timeout_s=30)
+        with self.assertLogs("snr.replay", "WARNING"):
+            runner.run()
+        self.assertFalse(runner.timed_out, "exit_when_done did not stop the DEPLOYED node")
+        self.assertEqual(replayed.data(), list(range(bad + 1)))
+
+    def test_exit_when_done_fires_in_deployed_mode_when_the_loop_fails(self) -> None:
+        path = self.temp_file(".jsonl")
+        write_lines(path, [HEADER] + [page_line("n", i, 1.0) for i in range(3)])
+        config = Config(
+            {"sim": [ReplayerLoopFactory(path, fast=True, exit_when_done=True)]},
+            mode=Mode.DEPLOYED,
+        )
+        runner = TestRunner("sim", config, timeout_s=10)
+        broken = mock.patch.object(
+            replayer.ReplayerLoop, "store", side_effect=RuntimeError("disk gone")
+        )
+        with broken, self.assertLogs("snr.sim", "ERROR") as logs:
+            runner.run()
+        self.assertFalse(runner.timed_out, "exit_when_done did not stop the DEPLOYED node")
+        self.assertIn("disk gone", "\n".join(logs.output))
+
+
+class TestTimedReplayOfAbsurdTimes(SNRTestCase):
+    def replay_timed(self, lines: List[str], max_gap_s: float = 0.2) -> Tuple[float, List[str]]:
+        path = self.temp_file(".jsonl")
+        write_lines(path, [HEADER, *lines])
+        replayed = PageCollectorFactory(["n"])
+        factory = ReplayerLoopFactory(path, exit_when_done=True, max_gap_s=max_gap_s)
+        started = time.monotonic()
+        with self.assertLogs("snr.replay", "WARNING") as logs:
+            run_role("sim", [factory, replayed], timeout_s=20)
+        took = time.monotonic() - started
+        self.assertEqual(replayed.data(), list(range(len(replayed.pages))))
+        self.replayed = replayed
+        return took, logs.output
+
+    def test_a_time_far_in_the_future_waits_max_gap_only(self) -> None:
+        took, logs = self.replay_timed(
+            [
+                page_line("n", 0, 1000.0),
+                page_line("n", 1, 1e10),  # line 3: 263 years later
+                page_line("n", 2, 1000.05),  # line 4: back to normal
+                page_line("n", 3, 1e308),  # line 5
+                page_line("n", 4, -1e308),  # line 6
+                page_line("n", 5, 1000.1),
+            ]
+        )
+        self.assertEqual(len(self.replayed.pages), 6)
+        self.assertLess(took, 3.0)  # two clamped gaps of 0.2 s, and two of 0.05 s
+        text = "\n".join(logs)
+        self.assertIn(".jsonl:3: the page under 'n' was created 1e+10 s after", text)
+        self.assertIn("waiting 0.2 s instead (max_gap_s)", text)
+        self.assertIn(".jsonl:4: the time of the page under 'n' goes back by 1e+10 s", text)
+        self.assertIn(".jsonl:5:", text)
+        self.assertIn(".jsonl:6:", text)
+        self.assertEqual(self.replayed.pages[1].created_at_s, 1e10)  # the page as recorded
+
+    def test_infinite_and_unreadable_times_are_bad_lines(self) -> None:
+        took, logs = self.replay_timed(
+            [
+                page_line("n", 0, 1000.0),
+                '{"key":"n","data":-1,"created_at_s":1e999}',
+                '{"key":"n","data":-1,"created_at_s":Infinity}',
+                '{"key":"n","data":-1,"created_at_s":-Infinity}',
+                '{"key":"n","data":-1,"created_at_s":' + "9" * 400 + "}",
+                page_line("n", 1, 1000.1),
+            ]
+        )
+        self.assertEqual(self.replayed.data(), [0, 1])
+        self.assertLess(took, 3.0)
+        text = "\n".join(logs)
+        for number in (3, 4, 5, 6):
+            self.assertIn(f".jsonl:{number}: skipped a bad line", text)
+
+    def test_a_page_without_a_time_does_not_stall_the_replay(self) -> None:
+        took, logs = self.replay_timed(
+            [
+                page_line("n", 0, 1000.0),
+                '{"key":"n","data":1}',  # line 3: no created_at_s
+                page_line("n", 2, 1000.1),
+            ]
+        )
+        self.assertEqual(len(self.replayed.pages), 3)
+        self.assertLess(took, 3.0)
+        self.assertIn(".jsonl:3: the page under 'n' has no created_at_s", "\n".join(logs))
+
+    def test_each_origin_keeps_its_own_clock(self) -> None:
+        # Two nodes whose clocks disagree by years: each keeps its own spacing.
+        lines = []
+        for i in range(10):
+            origin, base = ("urov", 1e9) if i % 2 else ("laptop", 1.7e9)
+            lines.append(page_line("n", i, base + 0.02 * i, origin=origin))
+        path = self.temp_file(".jsonl")
+        write_lines(path, [HEADER, *lines])
+        factory = ReplayerLoopFactory(path, exit_when_done=True, max_gap_s=0.5)
+        replayed = PageCollectorFactory(["n"])
+        started = time.monotonic()
+        run_role("sim", [factory, replayed])  # no warning: nothing is out of the ordinary
+        took = time.monotonic() - started
+        self.assertEqual(replayed.data(), list(range(10)))
+        self.assertEqual(factory.retimed, 0)
+        self.assertLess(took, 2.0)  # 0.18 s recorded; clamping every switch would take 2.25 s
+        self.assertGreaterEqual(replayed.arrived_s[-1] - replayed.arrived_s[0], 0.12)
+
+    def test_max_gap_must_be_a_sane_number_of_seconds(self) -> None:
+        self.assertEqual(ReplayerLoopFactory("x.jsonl").max_gap_s, MAX_GAP_S)
+        for bad in (-1.0, math.inf, math.nan, 1e300):
+            with self.assertRaises(ConfigError):
+                ReplayerLoopFactory("x.jsonl", max_gap_s=bad)
+
+
+def record(
+    path: str, values: Sequence[object], overwrite: bool = False, append: bool = False
+) -> RecorderEndpointFactory:
+    """Run a node that records ``values`` under "n" into ``path``; returns the factory."""
+    recorder = RecorderEndpointFactory(path, ["n"], overwrite=overwrite, append=append)
+    run_role(
+        "robot",
+        [
+            ListReplayerFactory(list(values), "n"),
+            recorder,
+            PageCollectorFactory(["n"], stop_after=len(values)),
+        ],
+    )
+    return recorder
+
+
+class TestRecordingsAreNeverSilentlyReplaced(SNRTestCase):
+    def test_a_second_run_keeps_the_first_recording(self) -> None:
+        path = self.temp_file(".jsonl")
+        first = record(path, [1, 2])
+        self.assertEqual((first.path, first.kept), (path, None))
+        with self.assertLogs("snr.robot.recorder", "INFO") as logs:
+            second = record(path, [3, 4])
+        self.assertEqual(second.path, path)  # the name given holds the latest run
+        self.assertEqual([p.data for p in PageReader(path)], [3, 4])
+        kept = second.kept
+        assert kept is not None
+        self.assertRegex(os.path.basename(kept), r"^file-\d{4}-\d\d-\d\dT\d\d-\d\d-\d\d\.jsonl$")
+        self.assertEqual([p.data for p in PageReader(kept)], [1, 2])
+        self.assertIn(f"the recording that was there is kept as {kept}", "\n".join(logs.output))
+        third = record(path, [5])  # within the same second: a free name, nothing lost
+        self.assertNotIn(third.kept, (None, kept))
+        runs = sorted(os.listdir(os.path.dirname(path)))
+        self.assertEqual(len(runs), 3, runs)
+        self.assertEqual([p.data for p in PageReader(path)], [5])
+
+    def test_a_file_without_pages_is_reused(self) -> None:
+        for contents in ("", HEADER + "\n", "\n"):
+            path = self.temp_file(".jsonl", contents)
+            recorder = record(path, [1])
+            self.assertIsNone(recorder.kept)
+            self.assertEqual(os.listdir(os.path.dirname(path)), ["file.jsonl"])
+
+    def test_a_file_that_is_not_a_recording_is_left_alone(self) -> None:
+        path = self.temp_file(".py", "print('my robot program')\n")
+        with self.assertRaises(ConfigError) as caught:
+            record(path, [1])
+        self.assertIn("not an SNR recording", str(caught.exception))
+        self.assertIn("overwrite=True", str(caught.exception))
+        with open(path, encoding="utf-8") as f:
+            self.assertEqual(f.read(), "print('my robot program')\n")
+
+    def test_overwrite_replaces_the_file(self) -> None:
+        path = self.temp_file(".jsonl")
+        record(path, [1, 2])
+        recorder = record(path, [3], overwrite=True)
+        self.assertIsNone(recorder.kept)
+        self.assertEqual([p.data for p in PageReader(path)], [3])
+        self.assertEqual(os.listdir(os.path.dirname(path)), ["file.jsonl"])
+
+    def test_append_adds_each_run_to_one_file(self) -> None:
+        path = self.temp_file(".jsonl")
+        record(path, [1, 2], append=True)
+        with open(path, "a", encoding="utf-8") as f:
+            f.write('{"key":"n","da')  # the first run was killed mid-line
+        record(path, [3], append=True)
+        reader = PageReader(path)
+        with self.assertLogs("snr.replay", "WARNING"):
+            self.assertEqual([p.data for p in reader], [1, 2, 3])
+        self.assertEqual(reader.bad_lines, 1)  # only the cut line; the new header is intact
+        self.assertEqual(os.listdir(os.path.dirname(path)), ["file.jsonl"])
+
+    def test_overwrite_and_append_together_are_refused(self) -> None:
+        with self.assertRaises(ConfigError):
+            RecorderEndpointFactory("run.jsonl", ["n"], overwrite=True, append=True)
+
+
+def nested(depth: int) -> object:
+    data: object = 1
+    for _ in range(depth):
+        data = [data]
+    return data
+
+
+class StorePages(Endpoint):
+    """Stores hand-made pages, as a comms link stores what a remote node sent."""
+
+    def __init__(self, factory: StorePagesFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "remote")
+        self.pages = factory.pages
+
+    def begin(self) -> None:
+        for page in self.pages:
+            self.parent.schedule(tasks.store_page(page))
+
+
+class StorePagesFactory(EndpointFactory):
+    def __init__(self, pages: List[Page]) -> None:
+        super().__init__()
+        self.pages = pages
+
+    def get(self, parent: AbstractNode) -> StorePages:
+        return StorePages(self, parent)
+
+
+class TestTheRecorderKeepsTheNodeRunning(SNRTestCase):
+    def test_pages_it_cannot_write_are_skipped_and_counted(self) -> None:
+        path = self.temp_file(".jsonl")
+        values = [0, nested(99), nested(100), 1, nested(100_000), 2, float("nan"), 3]
+        with self.assertLogs("snr.robot.recorder", "ERROR") as logs:
+            recorder = record(path, values)  # TEST mode: any error would stop the node
+        self.assertEqual([p.data for p in PageReader(path)], [0, nested(99), 1, 2, 3])
+        self.assertEqual((recorder.pages_written, recorder.pages_skipped), (5, 3))
+        text = "\n".join(logs.output)
+        self.assertIn("under 'n'", text)
+        self.assertIn("more than 99 deep", text)
+
+    def test_a_remote_page_nested_to_the_wire_limit_is_recorded(self) -> None:
+        path = self.temp_file(".jsonl")
+        deepest = Page("n", nested(99), "urov", 1.0)  # 100 deep with the page around it
+        record_pages = [deepest, Page("n", 1, "urov", 2.0)]
+        run_role(
+            "robot",
+            [
+                StorePagesFactory(record_pages),
+                RecorderEndpointFactory(path, ["n"]),
+                PageCollectorFactory(["n"], stop_after=2),
+            ],
+        )
+        self.assertEqual(list(PageReader(path)), record_pages)
+
+    def test_hand_made_pages_a_reader_would_reject_are_skipped(self) -> None:
+        path = self.temp_file(".jsonl")
+        bad_times: List[object] = [10**400, float("inf"), "noon", None]
+        pages = [Page("n", i, "urov", t) for i, t in enumerate(bad_times)]  # type: ignore[arg-type]
+        pages.append(Page("n", 9, "urov", 5.0))
+        with self.assertLogs("snr.robot.recorder", "ERROR") as logs:
+            run_role(
+                "robot",
+                [
+                    StorePagesFactory(pages),
+                    RecorderEndpointFactory(path, ["n"]),
+                    PageCollectorFactory(["n"], stop_after=len(pages)),
+                ],
+            )
+        reader = PageReader(path)
+        self.assertEqual([p.data for p in reader], [9])
+        self.assertEqual(reader.problems, [])
+        self.assertIn("created_at_s", "\n".join(logs.output))
+
+    def test_any_error_while_encoding_skips_only_that_page(self) -> None:
+        path = self.temp_file(".jsonl")
+        real = codec.page_to_line
+
+        def fragile(page: Page) -> str:
+            if page.data == 2:
+                raise RecursionError("maximum recursion depth exceeded")
+            return real(page)
+
+        with mock.patch("snr.std_mods.io.recorder.page_to_line", fragile):
+            with self.assertLogs("snr.robot.recorder", "ERROR") as logs:
+                recorder = record(path, [1, 2, 3])
+        self.assertEqual([p.data for p in PageReader(path)], [1, 3])
+        self.assertEqual(recorder.pages_skipped, 1)
+        self.assertIn("under 'n'", logs.output[0])
+        self.assertIn("RecursionError", logs.output[0])

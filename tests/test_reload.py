@@ -148,6 +148,29 @@ class TestAddRemove(SNRTestCase):
         self.assertEqual(dummy.built[0].calls, 1)
         self.assertNotIn("extra", node.components)
 
+    def test_node_core_cannot_be_removed_or_reloaded(self) -> None:
+        from snr import Config, Mode, Node
+
+        node = Node("t", Config({"t": [TimeoutLoopFactory(seconds=0.2)]}, mode=Mode.TEST))
+        node.schedule(
+            [
+                tasks.remove_component("node_core"),
+                tasks.reload_component("node_core"),
+                tasks.reload_component("all"),  # skips the core, refuses nothing
+                tasks.store_data("depth_m", 3.5),
+            ]
+        )
+        with self.assertLogs("snr.t", "ERROR") as logs:
+            node.loop()
+        text = "\n".join(logs.output)
+        self.assertEqual(len(logs.output), 2, text)
+        self.assertIn("Refused to remove 'node_core'", text)
+        self.assertIn("stores every page", text)
+        self.assertIn("Refused to reload 'node_core'", text)
+        self.assertIn("node_core", node.components)
+        self.assertEqual(node.get_data("depth_m"), 3.5)  # pages are still stored
+        self.assertEqual(node.terminate_reason, "Timeout")  # and terminate still stops it
+
 
 if __name__ == "__main__":
     unittest.main()

@@ -1,6 +1,7 @@
 """Timeout, stopwatch and printer (thesis 5.4, figure 5.4)."""
 
 import io
+import logging
 import unittest
 from typing import List
 
@@ -32,10 +33,21 @@ class TestTimeout(SNRTestCase):
         self.assertEqual(len(times), 1)
         self.assertGreaterEqual(times[0], 0.15)
 
-    def test_zero_time_is_refused(self) -> None:
-        with self.assertRaises(ComponentError) as ctx:
-            TimeoutLoopFactory()
-        self.assertIn("positive time", str(ctx.exception))
+    def test_no_time_stops_the_node_once_started(self) -> None:
+        node_log = logging.getLogger(f"snr.{self.role}")
+        self.addCleanup(node_log.setLevel, node_log.level)
+        node_log.setLevel(logging.DEBUG)  # the hint is a DEBUG line
+        for factory in (TimeoutLoopFactory(), TimeoutLoopFactory(seconds=0, ms=0)):
+            with self.assertLogs("snr", "DEBUG") as logs:
+                node = self.run_test_node([factory], timeout_s=0.5)
+            self.assertEqual(node.terminate_reason, "Timeout")
+            self.assertTrue(any("stops the node as soon as it" in line for line in logs.output))
+
+    def test_negative_time_is_refused(self) -> None:
+        for seconds, ms in ((-1, 0), (0, -5), (float("nan"), 0)):
+            with self.assertRaises(ComponentError) as ctx:
+                TimeoutLoopFactory(seconds, ms)
+            self.assertIn("negative time", str(ctx.exception))
 
     def test_two_timeouts_need_names(self) -> None:
         node = self.run_test_node(

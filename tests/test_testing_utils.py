@@ -203,5 +203,76 @@ class TestMockNode(SNRTestCase):
         self.assertPage(self.mock_node().page("k", 1), "k", 1, origin="mock")
 
 
+class TestTempFile(SNRTestCase):
+    """``temp_file``: today's calls (a str path) and the 2021 release's (an object)."""
+
+    def test_a_suffix_by_position_names_file_plus_suffix(self) -> None:
+        path = self.temp_file(".jsonl")
+        self.assertEqual(os.path.basename(path), "file.jsonl")
+        self.assertIsInstance(path, str)
+        self.assertEqual(os.fspath(path), str(path))
+        self.assertIs(type(path.path), str)
+        self.assertTrue(path.endswith(".jsonl"))
+        main = self.temp_file("_main.py", "print('hi')\n")
+        self.assertEqual(os.path.basename(main), "file_main.py")
+        with open(main, encoding="utf-8") as f:
+            self.assertEqual(f.read(), "print('hi')\n")
+
+    def test_a_name_by_position_is_the_file_name(self) -> None:
+        temp = self.temp_file("log.txt")
+        self.assertEqual(os.path.basename(temp.path), "log.txt")
+        self.assertFalse(temp.exists())
+        self.assertEqual(os.path.basename(self.temp_file(filename=".hidden")), ".hidden")
+        self.assertEqual(os.path.basename(self.temp_file(suffix="log.txt")), "filelog.txt")
+        self.assertEqual(os.path.basename(self.temp_file()), "file")
+
+    def test_second_argument_is_contents_or_overwrite(self) -> None:
+        self.assertFalse(self.temp_file("a.txt", True).exists())  # overwrite=True
+        self.assertTrue(self.temp_file("a.txt", "x").exists())  # contents
+        self.assertTrue(self.temp_file("a.txt", contents="x", overwrite=True).exists())
+
+    def test_paths_outside_the_folder_are_refused(self) -> None:
+        for name in ("/etc/passwd", "../x.txt", "a/../../x"):
+            with self.assertRaises(ValueError):
+                self.temp_file(filename=name)
+        with self.assertRaises(TypeError):
+            self.temp_file("a.txt", filename="b.txt")
+
+    def test_context_manager_checks_the_file_and_removes_it(self) -> None:
+        with self.temp_file() as temp:
+            with temp.open() as f:
+                f.write("data")
+            temp.assertExists()
+        self.assertFalse(os.path.exists(temp))
+        with self.assertRaises(AssertionError) as ctx, self.temp_file("never.txt"):
+            pass
+        self.assertIn("never.txt", str(ctx.exception))
+        self.assertIn("does not exist", str(ctx.exception))
+
+    def test_cleanup_false_keeps_the_file(self) -> None:
+        import shutil
+
+        with self.temp_file("kept.txt", cleanup=False) as temp:
+            with temp.open() as f:
+                f.write("x")
+        self.addCleanup(shutil.rmtree, os.path.dirname(temp.path), True)
+        self.assertTrue(temp.exists())
+
+    def test_pickles_as_a_plain_path(self) -> None:
+        import pickle
+
+        temp = self.temp_file(".txt")
+        again = pickle.loads(pickle.dumps(temp))
+        self.assertIs(type(again), str)
+        self.assertEqual(again, temp)
+
+    def test_the_folder_is_removed_after_the_test(self) -> None:
+        inner = SNRTestCase()
+        temp = inner.temp_file("x.txt", "data")
+        self.assertTrue(temp.exists())
+        inner.doCleanups()
+        self.assertFalse(os.path.exists(os.path.dirname(temp)))
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -65,9 +65,10 @@ def make_components(filename: str = "depth_run.jsonl") -> ComponentsByRole:
     """Two roles: one records a (simulated) sensor, one replays the recording."""
     return {
         "record": [
-            ListReplayerFactory(noisy_depths(), "depth_raw", period_s=0.02),  # the "sensor"
+            # The "sensor": 20 readings in 0.4 s, then the node stops.
+            ListReplayerFactory(noisy_depths(), "depth_raw", period_s=0.02, exit_when_done=True),
             RecorderEndpointFactory(filename, ["depth_raw"]),  # writes every depth_raw page
-            TimeoutLoopFactory(seconds=0.6),  # 20 readings take 0.4 s
+            TimeoutLoopFactory(seconds=5),  # a safety net: never record for ever
         ],
         "replay": [
             ReplayerLoopFactory(filename, fast=True, exit_when_done=True),

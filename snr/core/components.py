@@ -33,6 +33,7 @@ from snr.core.explain import (
     reload_failure,
     wrong_get_result_error,
 )
+from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
     AbstractComponent,
     AbstractFactory,
@@ -184,7 +185,20 @@ class ComponentSet:
         )
 
     def remove(self, name: ComponentName) -> None:
-        """Halt, join, terminate and forget the component called ``name``."""
+        """Halt, join, terminate and forget the component called ``name``.
+
+        The node's core (``node_core``) is never removed: the refusal is logged.
+        """
+        if name == NODE_CORE_NAME:
+            self.node.log.error(
+                "Refused to remove %r from node %r: it is the node's own core, which "
+                "stores every page, adds, removes and reloads components, and stops the "
+                "node on a terminate task; without it the node would run on deaf. To stop "
+                "the node, schedule a terminate task (or type `exit` in a console).",
+                name,
+                self.node.role,
+            )
+            return
         component = self.by_name.pop(name, None)
         if component is None:
             self.node.log.error(
@@ -204,10 +218,24 @@ class ComponentSet:
         """Reload the source of one component (or ``"all"``) and rebuild it.
 
         Returns the names of the rebuilt components. A component whose reload
-        fails keeps running as it was, and the log says why.
+        fails keeps running as it was, and the log says why. The node's core
+        (``node_core``) is refused by name and skipped by ``"all"``.
         """
         if name == "all":
-            targets = [c for c in self.by_name.values() if c.factory.reload_targets]
+            targets = [
+                c
+                for n, c in self.by_name.items()
+                if c.factory.reload_targets and n != NODE_CORE_NAME
+            ]
+        elif name == NODE_CORE_NAME:
+            self.node.log.error(
+                "Refused to reload %r in node %r: it is the node's own core and runs this "
+                "very reload (and every store, add, remove and terminate); SNR's own code "
+                "is not reloaded while the node runs. Restart the node to load a new SNR.",
+                name,
+                self.node.role,
+            )
+            return []
         elif name in self.by_name:
             targets = [self.by_name[name]]
         else:

@@ -20,6 +20,7 @@ from snr.utils.expector_endpoint import (
 )
 from snr.utils.list_replayer import ListReplayerFactory, ListReplayerLoop
 from snr.utils.mock_node import MockNode
+from snr.utils.temp_file import TempFile
 
 if TYPE_CHECKING:
     from snr.utils.test_case import SNRTestCase
@@ -37,6 +38,7 @@ __all__ = [
     "MultiProcExpector",
     "OrderedExpector",
     "SNRTestCase",
+    "TempFile",
 ]
 
 

@@ -4,13 +4,32 @@ An expector counts the task ids it is told about (usually by an
 `ExpectorEndpoint` inside the node under test). Used as a context manager, it
 checks on exit that every expectation was met exactly, so a test fails with a
 precise message however the node stopped (thesis 5.2.3).
+
+Expectors are generic in the type of key they count: usually a task id, but
+any hashable key works, e.g. ``Expector[str]({"beep": 2})`` for a test that
+counts calls itself.
 """
 
 from __future__ import annotations
 
 import threading
 from types import TracebackType
-from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Tuple, Type, Union
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    Dict,
+    Generic,
+    Hashable,
+    List,
+    Mapping,
+    Optional,
+    Sequence,
+    Tuple,
+    Type,
+    TypeVar,
+    Union,
+    cast,
+)
 
 from snr.core.profiler import format_task_id
 from snr.prelude import TaskId, TaskName, TaskType
@@ -18,7 +37,7 @@ from snr.prelude import TaskId, TaskName, TaskType
 if TYPE_CHECKING:  # unittest and multiprocessing cost ~20 ms to import
     import unittest
 
-__all__ = ["Expectations", "Expector", "MultiProcExpector", "OrderedExpector"]
+__all__ = ["Expectations", "Expector", "MultiProcExpector", "OrderedExpector", "format_key"]
 
 Expectations = Union[
     Mapping[TaskId, int],
@@ -30,6 +49,24 @@ Expectations = Union[
 A dict whose keys are all ``(type, name)`` pairs (as in thesis listing A.3)
 type-checks as well as one that mixes pairs and bare task types."""
 
+K = TypeVar("K", bound=Hashable)
+"""The type of key an expector counts (a task id unless said otherwise)."""
+
+
+def format_key(key: Hashable) -> str:
+    """How an expectation's key is named in a failure message.
+
+    Example::
+
+        format_key((TaskType.event, "beep"))   # 'TaskType.event(beep)'
+        format_key("beep")                     # "'beep'"
+    """
+    if isinstance(key, TaskType) or (
+        isinstance(key, tuple) and len(key) == 2 and isinstance(key[0], TaskType)
+    ):
+        return format_task_id(cast(TaskId, key))
+    return repr(key)
+
 
 def _fail(testcase: Optional[unittest.TestCase], message: str) -> None:
     if testcase is not None:
@@ -37,8 +74,11 @@ def _fail(testcase: Optional[unittest.TestCase], message: str) -> None:
     raise AssertionError(message)
 
 
-class Expector:
-    """Expects each task id a given number of times, in any order.
+class Expector(Generic[K]):
+    """Expects each task id (or other key) a given number of times, in any order.
+
+    The key type can be written out, ``Expector[str]({"beep": 2}, self)``;
+    it is inferred from the expectations otherwise.
 
     Example::
 
@@ -49,19 +89,19 @@ class Expector:
 
     def __init__(
         self,
-        expectations: Expectations,
+        expectations: Mapping[K, int],
         testcase: Optional[unittest.TestCase] = None,
     ) -> None:
-        self.expectations: Dict[TaskId, int] = {k: n for k, n in expectations.items()}
-        self.counts: Dict[TaskId, int] = {key: 0 for key in self.expectations}
+        self.expectations: Dict[K, int] = {k: n for k, n in expectations.items()}
+        self.counts: Dict[K, int] = {key: 0 for key in self.expectations}
         self.testcase = testcase
         self._lock = threading.Lock()
 
-    def task_ids(self) -> List[TaskId]:
-        """The task ids this expector watches."""
+    def task_ids(self) -> List[K]:
+        """The task ids (keys) this expector watches."""
         return list(self.expectations)
 
-    def call(self, key: TaskId) -> None:
+    def call(self, key: K) -> None:
         """Count one occurrence of ``key`` (thread-safe)."""
         with self._lock:
             if key in self.counts:
@@ -76,7 +116,7 @@ class Expector:
         """One line per expectation not met exactly (empty when all are)."""
         with self._lock:
             return [
-                f"{format_task_id(k)}: expected {n}, saw {self.counts[k]}"
+                f"{format_key(k)}: expected {n}, saw {self.counts[k]}"
                 for k, n in self.expectations.items()
                 if self.counts[k] != n
             ]
@@ -87,7 +127,7 @@ class Expector:
         if problems:
             _fail(self.testcase, "Expectations not met:\n  " + "\n  ".join(problems))
 
-    def __enter__(self) -> Expector:
+    def __enter__(self) -> Expector[K]:
         return self
 
     def __exit__(
@@ -100,7 +140,7 @@ class Expector:
             self.assert_satisfied()
 
 
-class OrderedExpector(Expector):
+class OrderedExpector(Expector[K]):
     """Expects task ids in an exact order (other, unlisted ids are ignored).
 
     Example::
@@ -111,17 +151,17 @@ class OrderedExpector(Expector):
 
     def __init__(
         self,
-        expectations: Sequence[TaskId],
+        expectations: Sequence[K],
         testcase: Optional[unittest.TestCase] = None,
     ) -> None:
-        counts: Dict[TaskId, int] = {}
+        counts: Dict[K, int] = {}
         for key in expectations:
             counts[key] = counts.get(key, 0) + 1
         super().__init__(counts, testcase)
-        self.order: List[TaskId] = list(expectations)
-        self.seen: List[TaskId] = []
+        self.order: List[K] = list(expectations)
+        self.seen: List[K] = []
 
-    def call(self, key: TaskId) -> None:
+    def call(self, key: K) -> None:
         with self._lock:
             if key in self.counts:
                 self.counts[key] += 1
@@ -137,18 +177,15 @@ class OrderedExpector(Expector):
                 return []
             for i, (want, got) in enumerate(zip(self.order, self.seen)):
                 if want != got:
-                    return [
-                        f"at position {i}: expected {format_task_id(want)}, "
-                        f"saw {format_task_id(got)}"
-                    ]
+                    return [f"at position {i}: expected {format_key(want)}, saw {format_key(got)}"]
             if len(self.seen) < len(self.order):
-                missing = ", ".join(format_task_id(k) for k in self.order[len(self.seen) :])
+                missing = ", ".join(format_key(k) for k in self.order[len(self.seen) :])
                 return [f"missing at the end: {missing}"]
-            extra = ", ".join(format_task_id(k) for k in self.seen[len(self.order) :])
+            extra = ", ".join(format_key(k) for k in self.seen[len(self.order) :])
             return [f"unexpected extra at the end: {extra}"]
 
 
-class MultiProcExpector(Expector):
+class MultiProcExpector(Expector[K]):
     """An `Expector` whose counts are shared between processes.
 
     Create it before starting the processes (e.g. before `MultiProcRunner`);
@@ -164,7 +201,7 @@ class MultiProcExpector(Expector):
 
     def __init__(
         self,
-        expectations: Expectations,
+        expectations: Mapping[K, int],
         testcase: Optional[unittest.TestCase] = None,
         context: Any = None,
     ) -> None:
@@ -174,10 +211,10 @@ class MultiProcExpector(Expector):
 
             context = multiprocessing.get_context()
         ctx = context
-        self._keys: List[TaskId] = list(self.expectations)
+        self._keys: List[K] = list(self.expectations)
         self._shared: Any = ctx.Array("l", len(self._keys))
 
-    def call(self, key: TaskId) -> None:
+    def call(self, key: K) -> None:
         if key in self.expectations:
             index = self._keys.index(key)
             with self._shared.get_lock():

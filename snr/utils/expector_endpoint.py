@@ -2,7 +2,7 @@
 
 from __future__ import annotations
 
-from typing import Optional
+from typing import Any, Optional
 
 from snr.core import Endpoint, EndpointFactory, tasks
 from snr.prelude import AbstractNode, SomeTasks, Task, TaskId
@@ -30,7 +30,7 @@ class ExpectorEndpoint(Endpoint):
         self,
         factory: ExpectorEndpointFactory,
         parent: AbstractNode,
-        expector: Expector,
+        expector: Expector[Any],
         exit_when_satisfied: bool,
     ) -> None:
         super().__init__(factory, parent, factory.name)
@@ -61,7 +61,7 @@ class ExpectorEndpointFactory(EndpointFactory):
 
     def __init__(
         self,
-        expector: Expector,
+        expector: Expector[Any],
         exit_when_satisfied: bool = False,
         name: Optional[str] = None,
     ) -> None:

@@ -5,13 +5,16 @@ from __future__ import annotations
 from typing import Any, Optional, Sequence
 
 from snr.core import LoopFactory, ThreadLoop
-from snr.prelude import AbstractNode, DataKey
+from snr.prelude import AbstractNode, DataKey, Task, TaskType
 
 __all__ = ["ListReplayerFactory", "ListReplayerLoop"]
 
 
 class ListReplayerLoop(ThreadLoop):
-    """Stores each value under ``key`` in order, then stops (the node runs on).
+    """Stores each value under ``key`` in order, then stops.
+
+    The node runs on, unless the factory was made with ``exit_when_done=True``:
+    then the node stops once every value has been handled.
 
     Example::
 
@@ -31,10 +34,15 @@ class ListReplayerLoop(ThreadLoop):
         self.values = list(values)
         self.key = key
         self.index = 0
+        self.exit_when_done = factory.exit_when_done
 
     def loop(self) -> None:
         if self.index >= len(self.values):
             self.set_terminate_flag("replayed every value")
+            if self.exit_when_done:
+                # A terminate task of normal priority waits its turn behind the
+                # values just stored, so every handler sees every value first.
+                self.schedule(Task(TaskType.terminate, f"{self.name} stored every value"))
             return
         self.store_data(self.key, self.values[self.index])
         self.index += 1
@@ -47,10 +55,12 @@ class ListReplayerFactory(LoopFactory):
         values: what to store, in order.
         key: the data key to store them under.
         period_s: seconds between values (0: as fast as possible).
+        exit_when_done: stop the node once every value has been handled.
 
     Example::
 
         ListReplayerFactory([0.5, 0.7, 0.6], "depth_m", period_s=0.1)
+        ListReplayerFactory(readings, "depth_m", exit_when_done=True)   # then stop
     """
 
     def __init__(
@@ -59,12 +69,14 @@ class ListReplayerFactory(LoopFactory):
         key: DataKey,
         period_s: float = 0.0,
         name: Optional[str] = None,
+        exit_when_done: bool = False,
     ) -> None:
         super().__init__()
         self.values = list(values)
         self.key = key
         self.period_s = period_s
         self.name = name or f"list_replayer_{key}"
+        self.exit_when_done = exit_when_done
 
     def get(self, parent: AbstractNode) -> ListReplayerLoop:
         return ListReplayerLoop(self, parent, self.values, self.key, self.period_s)

@@ -4,14 +4,15 @@ from __future__ import annotations
 
 import os
 import unittest
-from typing import Any, List, Optional, Sequence
+from typing import Any, List, Mapping, Optional, Sequence, Union
 
 from snr.core import Config, Node, TestRunner
 from snr.core.node_core import NODE_CORE_NAME
-from snr.prelude import AbstractFactory, AbstractLoop, DataKey, Mode, Page, TaskId
-from snr.utils.expector import Expectations, Expector, OrderedExpector
+from snr.prelude import AbstractFactory, AbstractLoop, DataKey, Mode, Page
+from snr.utils.expector import Expector, K, OrderedExpector
 from snr.utils.expector_endpoint import ExpectorEndpoint
 from snr.utils.mock_node import MockNode
+from snr.utils.temp_file import TempFile
 
 __all__ = ["SNRTestCase"]
 
@@ -43,11 +44,11 @@ class SNRTestCase(unittest.TestCase):
     larger value on a test class whose nodes need longer, e.g.
     ``timeout_s = 5.0``."""
 
-    def expector(self, expectations: Expectations) -> Expector:
+    def expector(self, expectations: Mapping[K, int]) -> Expector[K]:
         """An `Expector` that fails this test when unmet."""
         return Expector(expectations, self)
 
-    def ordered_expector(self, expectations: Sequence[TaskId]) -> OrderedExpector:
+    def ordered_expector(self, expectations: Sequence[K]) -> OrderedExpector[K]:
         """An `OrderedExpector` that fails this test when unmet."""
         return OrderedExpector(expectations, self)
 
@@ -113,18 +114,90 @@ class SNRTestCase(unittest.TestCase):
         """A `MockNode` for testing a component's handlers directly."""
         return MockNode(mode=mode)
 
-    def temp_file(self, suffix: str = "", contents: Optional[str] = None) -> str:
-        """A path in a fresh temp folder, removed after the test."""
+    def temp_file(
+        self,
+        name: Optional[str] = None,
+        contents_or_overwrite: Union[str, bool, None] = None,
+        cleanup: bool = True,
+        *,
+        suffix: Optional[str] = None,
+        contents: Optional[str] = None,
+        filename: Optional[str] = None,
+        overwrite: bool = False,
+    ) -> TempFile:
+        """A file's path in a fresh temp folder, removed after the test.
+
+        Two ways to call it work, today's and the 2021 release's:
+
+        * ``temp_file(suffix="", contents=None)``: the file is named
+          ``file`` + ``suffix``, and ``contents`` (if given) is written to it.
+        * ``temp_file(filename=None, overwrite=False, cleanup=True)``: the
+          file is named ``filename``.
+
+        A first argument given by position is a suffix when it starts with
+        ``.`` or ``_`` (``temp_file(".jsonl")``, ``temp_file("_main.py", src)``)
+        and a whole file name otherwise (``temp_file("log.txt")``); the
+        keywords ``suffix=`` and ``filename=`` say which it is outright. A
+        second argument given by position is the contents when it is a str and
+        ``overwrite`` when it is a bool.
+
+        The folder is new, so there is never an old file to overwrite:
+        ``overwrite`` is accepted for 2021 code and changes nothing. With
+        ``cleanup=False`` the file and its folder are kept after the test,
+        e.g. to look at them.
+
+        Returns:
+            A `TempFile`: a ``str`` (the path, usable wherever a path is),
+            with ``.path``, ``.open()``, ``.assertExists()``, and use as a
+            context manager that fails unless the file exists at the end of
+            the block and then removes it (unless ``cleanup=False``).
+
+        Example::
+
+            path = self.temp_file(".jsonl")           # '/tmp/snr-test-.../file.jsonl'
+            script = self.temp_file("_main.py", "print('hi')\n")
+            with self.temp_file() as f:               # 2021 style
+                with f.open() as out:
+                    out.write("data")
+        """
         import shutil  # here, not at the top: most tests need no files
         import tempfile
 
+        if isinstance(contents_or_overwrite, bool):
+            overwrite = overwrite or contents_or_overwrite
+        elif contents_or_overwrite is not None:
+            if contents is not None:
+                raise TypeError("temp_file() got the contents twice, by position and keyword.")
+            contents = contents_or_overwrite
+        if name is not None:
+            if suffix is not None or filename is not None:
+                raise TypeError(
+                    f"temp_file({name!r}, ...) got a name by position and suffix= or "
+                    "filename= too; give one of them."
+                )
+            if name == "" or name.startswith((".", "_")):
+                suffix = name
+            else:
+                filename = name
+        if filename is not None and suffix is not None:
+            raise TypeError("temp_file() takes suffix= or filename=, not both.")
+        basename = filename if filename else f"file{suffix or ''}"
+        parts = basename.replace("\\", "/").split("/")
+        if os.path.isabs(basename) or ".." in parts:
+            raise ValueError(
+                f"temp_file({basename!r}): give a file name inside the temp folder, "
+                "e.g. temp_file('log.txt'), not an absolute path or one with '..'."
+            )
         folder = tempfile.mkdtemp(prefix="snr-test-")
-        self.addCleanup(shutil.rmtree, folder, True)
-        path = os.path.join(folder, f"file{suffix}")
+        if cleanup:
+            self.addCleanup(shutil.rmtree, folder, True)
+        path = os.path.join(folder, basename)
+        if len(parts) > 1:
+            os.makedirs(os.path.dirname(path), exist_ok=True)
         if contents is not None:
             with open(path, "w", encoding="utf-8") as f:
                 f.write(contents)
-        return path
+        return TempFile(path, self, cleanup)
 
     def assertPage(
         self,

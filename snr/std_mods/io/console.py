@@ -15,16 +15,19 @@ from __future__ import annotations
 
 import codecs
 import errno
+import logging
 import os
 import select
 import selectors
 import socket
 import sys
 import threading
-from typing import IO, Any, Dict, List, Optional, Tuple
+import time
+from typing import IO, Any, Dict, Optional, Tuple
 
 from snr.core import LoopFactory
-from snr.prelude import AbstractNode, CommsError, ComponentName, Mode
+from snr.core.logs import RepeatFilter
+from snr.prelude import AbstractNode, CommsError, ComponentName, ConfigError, Mode
 from snr.std_mods.io.console_commands import ConsoleLoop, ConsoleSession
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
@@ -37,6 +40,12 @@ from snr.std_mods.io.console_protocol import (
 )
 
 __all__ = [
+    "DEFAULT_AUTH_TIMEOUT_S",
+    "DEFAULT_IDLE_TIMEOUT_S",
+    "MAX_CONSOLES",
+    "MAX_SEND_BUFFER_BYTES",
+    "MAX_UNANSWERED",
+    "MAX_WAITING_CONSOLES",
     "CommandReceiverFactory",
     "CommandReceiverLoop",
     "LocalConsole",
@@ -44,12 +53,111 @@ __all__ = [
 ]
 
 MAX_CONSOLES = 8
-"""How many remote consoles may be connected to one receiver at once."""
+"""How many remote consoles may be connected (with their token given) at once.
 
-_SEND_TIMEOUT_S = 2.0  # a console that does not read its replies for this long is dropped
-_GOODBYE_TIMEOUT_S = 0.2  # per console, when the node stops
+Example::
+
+    [RemoteConsole(port=9123).connect() for _ in range(MAX_CONSOLES + 1)]  # the last: refused
+"""
+
+MAX_WAITING_CONSOLES = 32
+"""How many consoles may wait to give their token; a new one pushes out the oldest.
+
+Example::
+
+    MAX_WAITING_CONSOLES   # 32: idle sockets beyond that cannot lock anyone out
+"""
+
+MAX_UNANSWERED = 4
+"""Requests of one console the node may hold at once; reading it pauses beyond that.
+
+Example::
+
+    sock.sendall(b"dump datastore\\n" * 1000)   # the node holds MAX_UNANSWERED at a time
+"""
+
+MAX_SEND_BUFFER_BYTES = 4 << 20
+"""Reply bytes kept for one console that is slow to read them; beyond that it is dropped.
+
+A console that takes none of its replies for 2 s is dropped as well.
+
+Example::
+
+    MAX_SEND_BUFFER_BYTES // (1 << 20)   # 4 (MiB)
+"""
+
+DEFAULT_AUTH_TIMEOUT_S = 5.0
+"""Seconds a console may take to give its token before it is disconnected.
+
+Example::
+
+    CommandReceiverFactory(token="long-random-word", auth_timeout_s=2.0)
+"""
+
+DEFAULT_IDLE_TIMEOUT_S = 600.0
+"""Seconds a connected console may send no command before it is disconnected.
+
+Example::
+
+    CommandReceiverFactory(idle_timeout_s=None)   # never close an idle console
+"""
+
+_SEND_TIMEOUT_S = 2.0  # a console that takes none of its replies for this long is dropped
+_PAUSE_OUT_BYTES = 64 * 1024  # stop taking a console's lines while this much waits to go
+_GOODBYE_TIMEOUT_S = 0.5  # for all consoles together, when the node stops
 _POLL_S = 0.5  # the selector wakes at least this often (halt() wakes it at once)
 _READ_CHUNK = 4096
+
+
+class _TokenThrottle:
+    """Wrong tokens from one address make it wait longer and longer before the next try.
+
+    After the n-th wrong token in a row, the address's next token is checked
+    only after ``first_delay_s * 2 ** (n - 1)`` seconds (at most
+    ``max_delay_s``); earlier tries are refused unchecked. A right token, or
+    ``forget_after_s`` without a wrong one, starts the address afresh.
+    """
+
+    def __init__(
+        self,
+        first_delay_s: float = 0.25,
+        max_delay_s: float = 30.0,
+        forget_after_s: float = 600.0,
+        max_addresses: int = 1024,
+    ) -> None:
+        self.first_delay_s = first_delay_s
+        self.max_delay_s = max_delay_s
+        self.forget_after_s = forget_after_s
+        self.max_addresses = max_addresses
+        self._failures: Dict[str, Tuple[int, float]] = {}  # host -> (in a row, last failure)
+
+    def wait_s(self, host: str, now: float) -> float:
+        """How long ``host`` must still wait before its next token is checked."""
+        entry = self._failures.get(host)
+        if entry is None:
+            return 0.0
+        failures, last = entry
+        if now - last > self.forget_after_s:
+            del self._failures[host]
+            return 0.0
+        return max(0.0, last + self.delay_s(failures) - now)
+
+    def delay_s(self, failures: int) -> float:
+        """The wait after ``failures`` wrong tokens in a row."""
+        return min(self.max_delay_s, self.first_delay_s * 2.0 ** min(failures - 1, 30))
+
+    def failed(self, host: str, now: float) -> Tuple[int, float]:
+        """Count a wrong token; the failures in a row and the wait before the next try."""
+        entry = self._failures.pop(host, None)
+        failures = 1 if entry is None or now - entry[1] > self.forget_after_s else entry[0] + 1
+        if len(self._failures) >= self.max_addresses:  # forget the longest-quiet address
+            del self._failures[min(self._failures, key=lambda h: self._failures[h][1])]
+        self._failures[host] = (failures, now)
+        return failures, self.delay_s(failures)
+
+    def succeeded(self, host: str) -> None:
+        """A right token: ``host`` starts afresh."""
+        self._failures.pop(host, None)
 
 
 class _RemoteSession:
@@ -58,15 +166,23 @@ class _RemoteSession:
     Every request line gets a numbered `_ReplySlot`; whoever answers it (the
     node's thread for commands, the loop's thread for a refused line) fills
     the slot, and replies go out in request order, so a console always knows
-    which reply answers which line.
+    which reply answers which line. At most `MAX_UNANSWERED` requests wait for
+    their replies; until some are sent, the console's lines wait in the
+    socket (so a flood of commands costs the node nothing). Replies are sent
+    without blocking from an output buffer that the loop thread drains.
     """
 
-    def __init__(self, sock: socket.socket, peer: str, wake: socket.socket) -> None:
+    def __init__(self, sock: socket.socket, address: Tuple[Any, ...], wake: socket.socket) -> None:
         self.sock = sock
-        self.peer = peer
+        self.host = str(address[0])
+        self.peer = f"{address[0]}:{address[1]}"
         self.authenticated = False
         self.closed = False
         self.leaving = False  # a BYE is due: run no more of this console's lines
+        self.connected_at = self.last_request = self.last_sent = time.monotonic()
+        self.events = 0  # what the selector watches for (0: not registered)
+        self.out = bytearray()  # encoded replies not yet taken by the socket
+        self.bye_queued = False  # the BYE is in `out`: close once it is sent
         self._inbox = bytearray()
         self._skipping_long_line = False
         self._next_slot = 0  # numbers handed to requests (loop thread)
@@ -94,46 +210,71 @@ class _RemoteSession:
         try:
             self._wake.send(b"\0")
         except OSError:
-            pass  # the receiver is shutting down (it sends what is ready then)
+            pass  # the receiver is shutting down, or already has wake-ups to read
 
-    def take_lines(self, data: bytes) -> List[Optional[bytes]]:
-        """The complete lines in ``data``, in order; None stands for a line too long."""
+    @property
+    def unanswered(self) -> int:
+        """Requests whose replies have not gone to the output buffer yet."""
+        return self._next_slot - self._next_to_send
+
+    def takes_lines(self) -> bool:
+        """True while this console may have another line run."""
+        return (
+            not self.leaving
+            and self.unanswered < MAX_UNANSWERED
+            and len(self.out) < _PAUSE_OUT_BYTES
+        )
+
+    def wants_to_read(self) -> bool:
+        """True when the socket should be read: lines are taken, none is waiting."""
+        return self.takes_lines() and b"\n" not in self._inbox
+
+    def receive(self, data: bytes) -> None:
+        """Keep bytes read from the socket until their lines are taken."""
         self._inbox += data
-        lines: List[Optional[bytes]] = []
+
+    def next_line(self) -> Tuple[bool, Optional[bytes]]:
+        """``(True, line)`` for the next complete line (None: too long), else ``(False, None)``."""
         while True:
             newline = self._inbox.find(b"\n")
             if newline < 0:
                 if len(self._inbox) > MAX_LINE_BYTES:
                     self._inbox.clear()
                     if not self._skipping_long_line:
-                        lines.append(None)
-                    self._skipping_long_line = True
-                return lines
+                        self._skipping_long_line = True
+                        return True, None
+                return False, None
             line = bytes(self._inbox[:newline])
             del self._inbox[: newline + 1]
             if self._skipping_long_line:  # the tail of a line already refused
                 self._skipping_long_line = False
-            else:
-                lines.append(line if len(line) <= MAX_LINE_BYTES else None)
+                continue
+            return True, line if len(line) <= MAX_LINE_BYTES else None
 
-    def flush(self, timeout_s: float) -> bool:
-        """Send the replies that are ready, in order; False once the console is done."""
-        self.sock.settimeout(timeout_s)
-        while self._next_to_send in self._ready:
+    def collect(self) -> None:
+        """Move the replies that are ready, in order, to the output buffer."""
+        while not self.bye_queued and self._next_to_send in self._ready:
             reply = self._ready.pop(self._next_to_send)
             self._next_to_send += 1
-            self.sock.sendall(reply.encode())
+            if not self.out:
+                self.last_sent = time.monotonic()  # the send clock starts now
+            self.out += reply.encode()
             if reply.status is Status.BYE:
-                return False
-        return not self.closed
+                self.bye_queued = True
 
-    def goodbye(self, reply: Reply, timeout_s: float) -> None:
-        """Send what is ready, then ``reply`` even if other replies never came."""
-        try:
-            if self.flush(timeout_s):
-                self.sock.sendall(reply.encode())
-        except OSError:
-            pass  # it had gone already
+    def write(self) -> None:
+        """Send what the socket takes now, never waiting.
+
+        Raises:
+            OSError: the console hung up or reset the connection.
+        """
+        while self.out:
+            try:
+                sent = self.sock.send(self.out[:65536])
+            except (BlockingIOError, InterruptedError):
+                return
+            del self.out[:sent]
+            self.last_sent = time.monotonic()
 
     def close(self) -> None:
         self.closed = True
@@ -161,10 +302,14 @@ class CommandReceiverLoop(ConsoleLoop):
     """Accepts console connections over TCP and submits their commands.
 
     Built by `CommandReceiverFactory`. It listens from ``begin()`` (so a port
-    in use is reported at start-up), serves up to `MAX_CONSOLES` consoles with
-    one ``selectors`` loop on its own thread, and says goodbye to every
-    console when the node stops. A console that hangs up, sends garbage or
-    stops reading is dropped; the node never notices.
+    in use is reported at start-up) and serves its consoles with one
+    ``selectors`` loop on its own thread, never blocking on a socket. It
+    serves up to `MAX_CONSOLES` consoles that gave their token, plus up to
+    `MAX_WAITING_CONSOLES` that have yet to (they are disconnected after the
+    factory's ``auth_timeout_s``); a console idle for ``idle_timeout_s`` is
+    disconnected; wrong tokens make their address wait longer and longer; a
+    console that stops reading its replies is dropped. It says goodbye to
+    every console when the node stops. The node never notices any of it.
 
     Example::
 
@@ -177,12 +322,17 @@ class CommandReceiverLoop(ConsoleLoop):
         super().__init__(factory, parent, factory.name)
         self.host = factory.host
         self.port = factory.port
+        self.auth_timeout_s = factory.auth_timeout_s
+        self.idle_timeout_s = factory.idle_timeout_s
         self._token = factory.token
         self._selector: Optional[selectors.BaseSelector] = None
         self._listener: Optional[socket.socket] = None
         self._wake_in: Optional[socket.socket] = None
         self._wake_out: Optional[socket.socket] = None
         self._sessions: Dict[socket.socket, _RemoteSession] = {}
+        self._throttle = _TokenThrottle()
+        self._repeats = RepeatFilter(self.log)
+        self._last_summary = time.monotonic()
 
     # -- life cycle (node thread) -------------------------------------------
     def begin(self) -> None:
@@ -192,6 +342,7 @@ class CommandReceiverLoop(ConsoleLoop):
         except OSError as error:
             self._cannot_listen(error)
             return
+        listener.setblocking(False)
         self._listener = listener
         self._wake_in, self._wake_out = socket.socketpair()
         self._wake_out.setblocking(False)  # a wake-up must never block the node's thread
@@ -226,13 +377,35 @@ class CommandReceiverLoop(ConsoleLoop):
         self._poke()
 
     def terminate(self) -> None:
-        """Send what is queued and a goodbye to every console, then close all sockets."""
-        for session in list(self._sessions.values()):
-            session.goodbye(
-                Reply(Status.BYE, f"Node {self.parent.role!r} is stopping."), _GOODBYE_TIMEOUT_S
-            )
+        """Send what is queued and a goodbye to every console, then close all sockets.
+
+        The goodbyes share one short deadline, so consoles that do not read
+        cannot hold up the node's shutdown.
+        """
+        goodbye = Reply(Status.BYE, f"Node {self.parent.role!r} is stopping.").encode()
+        sessions = list(self._sessions.values())
+        for session in sessions:
+            session.collect()
+            if not session.bye_queued:
+                session.out += goodbye
+        deadline = time.monotonic() + _GOODBYE_TIMEOUT_S
+        waiting = [s for s in sessions if s.out]
+        while waiting and time.monotonic() < deadline:
+            for session in list(waiting):
+                try:
+                    session.write()
+                except OSError:
+                    session.out.clear()  # it had gone already
+                if not session.out:
+                    waiting.remove(session)
+            if waiting:
+                select.select(
+                    [], [s.sock for s in waiting], [], max(0.0, deadline - time.monotonic())
+                )
+        for session in sessions:
             session.close()
         self._sessions.clear()
+        self._repeats.flush()
         for closable in (self._selector, self._listener, self._wake_in, self._wake_out):
             if closable is not None:
                 closable.close()
@@ -247,45 +420,101 @@ class CommandReceiverLoop(ConsoleLoop):
 
     # -- the loop (its own thread) -------------------------------------------
     def loop(self) -> None:
-        """Wait for connections, lines and replies; handle what arrived."""
+        """Wait for connections, lines and replies; handle what arrived; enforce the limits."""
         selector = self._selector
         if selector is None:  # begin() could not listen
             self.set_terminate_flag("not listening")
             return
-        for key, _ in selector.select(timeout=_POLL_S):
+        for key, mask in selector.select(timeout=self._next_wake_s(time.monotonic())):
             sock: Any = key.fileobj
             if sock is self._listener:
                 self._accept()
             elif sock is self._wake_in:
                 self._drain_wakeups()
             elif sock in self._sessions:
-                self._read(self._sessions[sock])
+                session = self._sessions[sock]
+                if mask & selectors.EVENT_READ:
+                    self._read(session)
+                if mask & selectors.EVENT_WRITE and not session.closed:
+                    self._write(session)
+        now = time.monotonic()
         for session in list(self._sessions.values()):
-            self._flush(session)
+            self._serve(session)
+        self._enforce_time_limits(now)
+        if now - self._last_summary >= self._repeats.every_s:
+            self._last_summary = now
+            self._repeats.flush()  # counts of repeated warnings, even when they stopped
+
+    def _next_wake_s(self, now: float) -> float:
+        """Seconds until the nearest time limit (at most `_POLL_S`)."""
+        wake = _POLL_S
+        for session in self._sessions.values():
+            if not session.authenticated:
+                wake = min(wake, session.connected_at + self.auth_timeout_s - now)
+            elif self.idle_timeout_s is not None:
+                wake = min(wake, session.last_request + self.idle_timeout_s - now)
+            if session.out:
+                wake = min(wake, session.last_sent + _SEND_TIMEOUT_S - now)
+        return max(0.005, wake)
 
     def _accept(self) -> None:
         assert self._listener is not None and self._wake_out is not None
         try:
             sock, address = self._listener.accept()
         except OSError:
-            return  # the client gave up before we accepted
-        session = _RemoteSession(sock, f"{address[0]}:{address[1]}", self._wake_out)
-        if len(self._sessions) >= MAX_CONSOLES:
-            self.warn("Turned away console %s: %d are connected.", session.peer, MAX_CONSOLES)
-            session.answer(Reply(Status.BYE, f"Too many consoles ({MAX_CONSOLES}) are open."))
-            self._flush(session)
-            return
-        self._sessions[sock] = session
-        assert self._selector is not None
-        self._selector.register(sock, selectors.EVENT_READ, None)
-        self.info("Console %s connected", session.peer)
+            return  # the client gave up before we accepted, or nothing is waiting
+        sock.setblocking(False)
+        session = _RemoteSession(sock, address, self._wake_out)
         if self._token is None:
-            session.authenticated = True
-            session.answer(Reply(Status.HELLO, self._greeting()))
-        else:
-            session.answer(
-                Reply(Status.AUTH, "This node needs a console token: send `auth <token>`.")
+            if self._count_connected() >= MAX_CONSOLES:
+                self._turn_away(session)
+                return
+            self._add(session)
+            self._admit(session)
+            return
+        waiting = [s for s in self._sessions.values() if not s.authenticated]
+        if len(waiting) >= MAX_WAITING_CONSOLES:
+            oldest = min(waiting, key=lambda s: s.connected_at)
+            self._repeats.report(
+                "waiting full",
+                "Consoles pushed out while waiting to give their token",
+                logging.WARNING,
+                "%d consoles are waiting to give their token, the most this receiver "
+                "keeps; disconnected the oldest, %s, to make room.",
+                MAX_WAITING_CONSOLES,
+                oldest.peer,
             )
+            self._close_with(
+                oldest, Reply(Status.BYE, "Too many consoles are waiting to give their token.")
+            )
+        self._add(session)
+        session.answer(Reply(Status.AUTH, "This node needs a console token: send `auth <token>`."))
+
+    def _add(self, session: _RemoteSession) -> None:
+        self._sessions[session.sock] = session
+        self.dbg("Console %s connected", session.peer)
+
+    def _count_connected(self) -> int:
+        return sum(1 for s in self._sessions.values() if s.authenticated)
+
+    def _admit(self, session: _RemoteSession) -> None:
+        session.authenticated = True
+        session.last_request = time.monotonic()
+        session.answer(Reply(Status.HELLO, self._greeting()))
+        self.info("Console %s connected", session.peer)
+
+    def _turn_away(self, session: _RemoteSession) -> None:
+        self._repeats.report(
+            "full",
+            "Consoles turned away (too many connected)",
+            logging.WARNING,
+            "Turned away console %s: %d are connected, the most this receiver serves.",
+            session.peer,
+            MAX_CONSOLES,
+        )
+        self._close_with(
+            session, Reply(Status.BYE, f"Too many consoles ({MAX_CONSOLES}) are open.")
+        )
 
     def _greeting(self) -> str:
         return (
@@ -303,13 +532,109 @@ class CommandReceiverLoop(ConsoleLoop):
     def _read(self, session: _RemoteSession) -> None:
         try:
             data = session.sock.recv(_READ_CHUNK)
+        except (BlockingIOError, InterruptedError):
+            return
         except OSError:
             data = b""
         if not data:
             self._drop(session, "disconnected")
             return
-        for raw in session.take_lines(data):
+        session.receive(data)
+
+    def _write(self, session: _RemoteSession) -> bool:
+        """Send what the socket takes now; False if the console has gone."""
+        try:
+            session.write()
+        except OSError:  # reset or broken pipe
+            self._drop(session, "connection lost")
+            return False
+        return True
+
+    def _serve(self, session: _RemoteSession) -> None:
+        """Run the lines the console may have run, send its replies, watch its socket."""
+        while not session.closed and session.takes_lines():
+            got, raw = session.next_line()
+            if not got:
+                break
             self._on_line(session, raw)
+        if session.closed:
+            return
+        session.collect()
+        if len(session.out) > MAX_SEND_BUFFER_BYTES:
+            self._drop_slow_reader(session)
+            return
+        if not self._write(session):
+            return
+        if session.bye_queued and not session.out:
+            self._drop(session, "closed")
+            return
+        self._watch(session)
+
+    def _watch(self, session: _RemoteSession) -> None:
+        """Tell the selector what this session waits for now."""
+        assert self._selector is not None
+        events = (selectors.EVENT_READ if session.wants_to_read() else 0) | (
+            selectors.EVENT_WRITE if session.out else 0
+        )
+        if events == session.events:
+            return
+        if session.events == 0:
+            self._selector.register(session.sock, events, None)
+        elif events == 0:
+            self._selector.unregister(session.sock)
+        else:
+            self._selector.modify(session.sock, events, None)
+        session.events = events
+
+    def _enforce_time_limits(self, now: float) -> None:
+        for session in list(self._sessions.values()):
+            if session.closed:
+                continue
+            if session.out and now - session.last_sent > _SEND_TIMEOUT_S:
+                self._drop_slow_reader(session)
+            elif not session.authenticated and now - session.connected_at > self.auth_timeout_s:
+                self._repeats.report(
+                    "no token",
+                    "Consoles disconnected for giving no token in time",
+                    logging.INFO,
+                    "Console %s gave no token within %g s; disconnected it.",
+                    session.peer,
+                    self.auth_timeout_s,
+                )
+                text = f"No console token within {self.auth_timeout_s:g} s: disconnected."
+                self._close_with(session, Reply(Status.BYE, text))
+            elif (
+                self.idle_timeout_s is not None
+                and session.authenticated
+                and session.unanswered == 0
+                and now - session.last_request > self.idle_timeout_s
+            ):
+                self._repeats.report(
+                    "idle",
+                    "Idle consoles disconnected",
+                    logging.INFO,
+                    "Console %s sent no command for %g s; disconnected it.",
+                    session.peer,
+                    self.idle_timeout_s,
+                )
+                text = (
+                    f"Closed this console after {self.idle_timeout_s:g} s without a command. "
+                    "Connect again to carry on."
+                )
+                self._close_with(session, Reply(Status.BYE, text))
+
+    def _drop_slow_reader(self, session: _RemoteSession) -> None:
+        self._repeats.report(
+            "slow reader",
+            "Consoles dropped for not reading their replies",
+            logging.WARNING,
+            "Dropped console %s: it did not read its replies (%d bytes waiting, none "
+            "taken for %.1f s).",
+            session.peer,
+            len(session.out),
+            time.monotonic() - session.last_sent,
+        )
+        self._drop(session, "dropped")
 
     def _on_line(self, session: _RemoteSession, raw: Optional[bytes]) -> None:
         if session.leaving:
@@ -325,7 +650,9 @@ class CommandReceiverLoop(ConsoleLoop):
             return
         if not session.authenticated:
             self._authenticate(session, line)
-        elif not line:
+            return
+        session.last_request = time.monotonic()
+        if not line:
             session.answer(Reply(Status.OK, ""))
         else:
             self.submit(line, session.slot())
@@ -333,11 +660,54 @@ class CommandReceiverLoop(ConsoleLoop):
     def _authenticate(self, session: _RemoteSession, line: str) -> None:
         assert self._token is not None
         word, _, given = line.partition(" ")
-        if word == "auth" and tokens_match(self._token, given.strip()):
-            session.authenticated = True
-            session.answer(Reply(Status.HELLO, self._greeting()))
+        now = time.monotonic()
+        wait_s = self._throttle.wait_s(session.host, now) if word == "auth" else 0.0
+        if wait_s > 0:
+            self._repeats.report(
+                "too early",
+                "Console tokens refused unchecked (too soon after wrong ones)",
+                logging.WARNING,
+                "Console %s gave a token %.1f s too soon after wrong ones from %s; "
+                "refused it unchecked.",
+                session.peer,
+                wait_s,
+                session.host,
+            )
+            text = (
+                f"Too many wrong console tokens from {session.host}: the next one is checked "
+                f"in {wait_s:.1f} s (each wrong token doubles the wait, up to "
+                f"{self._throttle.max_delay_s:g} s)."
+            )
+            session.answer(Reply(Status.BYE, text))
             return
-        self.warn("Console %s gave a wrong or no token; disconnected it.", session.peer)
+        if word == "auth" and tokens_match(self._token, given.strip()):
+            self._throttle.succeeded(session.host)
+            if self._count_connected() >= MAX_CONSOLES:
+                self._turn_away(session)
+                return
+            self._admit(session)
+            return
+        if word == "auth":
+            failures, delay_s = self._throttle.failed(session.host, now)
+            self._repeats.report(
+                "wrong token",
+                "Consoles that gave a wrong token",
+                logging.WARNING,
+                "Console %s gave a wrong token (%d in a row from %s); disconnected it. "
+                "The next token from there is checked after %.2f s.",
+                session.peer,
+                failures,
+                session.host,
+                delay_s,
+            )
+        else:
+            self._repeats.report(
+                "no auth",
+                "Consoles that sent a command instead of their token",
+                logging.WARNING,
+                "Console %s sent a command before its token; disconnected it.",
+                session.peer,
+            )
         session.answer(
             Reply(
                 Status.BYE,
@@ -346,20 +716,27 @@ class CommandReceiverLoop(ConsoleLoop):
             )
         )
 
-    def _flush(self, session: _RemoteSession) -> None:
+    def _close_with(self, session: _RemoteSession, reply: Reply) -> None:
+        """Queue what is ready and ``reply``, send what the socket takes now, and close."""
+        session.collect()
+        if not session.bye_queued:
+            session.out += reply.encode()
         try:
-            still_open = session.flush(_SEND_TIMEOUT_S)
-        except OSError:  # reset, broken pipe, or it stopped reading
-            self._drop(session, "connection lost")
-            return
-        if not still_open:
-            self._drop(session, "closed")
+            session.write()
+        except OSError:
+            pass  # it had gone already
+        self._drop(session, "closed")
 
     def _drop(self, session: _RemoteSession, why: str) -> None:
-        if self._sessions.pop(session.sock, None) is not None and self._selector is not None:
+        if self._sessions.pop(session.sock, None) is not None and session.events:
+            assert self._selector is not None
             self._selector.unregister(session.sock)
+            session.events = 0
+        if session.authenticated:
+            self.info("Console %s %s", session.peer, why)
+        else:
+            self.dbg("Console %s %s before giving its token", session.peer, why)
         session.close()
-        self.info("Console %s %s", session.peer, why)
 
 
 class CommandReceiverFactory(LoopFactory):
@@ -376,14 +753,21 @@ class CommandReceiverFactory(LoopFactory):
         token: shared secret consoles must present; defaults to the
             ``SNR_CONSOLE_TOKEN`` environment variable.
         name: the loop's component name.
+        auth_timeout_s: seconds a console may take to give its token
+            (default `DEFAULT_AUTH_TIMEOUT_S`, 5 s).
+        idle_timeout_s: seconds a console may send no command before it is
+            disconnected (default `DEFAULT_IDLE_TIMEOUT_S`, 10 minutes);
+            None never disconnects an idle console.
 
     Raises:
-        ConfigError: a non-loopback host without a token, or a malformed token.
+        ConfigError: a non-loopback host without a token, a malformed token,
+            or a time limit that is not a positive number.
 
     Example::
 
         CommandReceiverFactory()                                # 127.0.0.1:9123
         CommandReceiverFactory(host="0.0.0.0", token="long-random-word")
+        CommandReceiverFactory(idle_timeout_s=60)               # close idle consoles sooner
     """
 
     def __init__(
@@ -392,15 +776,29 @@ class CommandReceiverFactory(LoopFactory):
         port: int = DEFAULT_CONSOLE_PORT,
         token: Optional[str] = None,
         name: ComponentName = "command_receiver",
+        auth_timeout_s: float = DEFAULT_AUTH_TIMEOUT_S,
+        idle_timeout_s: Optional[float] = DEFAULT_IDLE_TIMEOUT_S,
     ) -> None:
         super().__init__()
         if token is None:
             token = os.environ.get(TOKEN_ENV_VAR) or None
         check_listen_policy(host, token)
+        for what, seconds in (
+            ("auth_timeout_s", auth_timeout_s),
+            ("idle_timeout_s", idle_timeout_s),
+        ):
+            if seconds is not None and not seconds > 0:
+                raise ConfigError(
+                    f"CommandReceiverFactory({what}={seconds!r}): a time limit must be a "
+                    "positive number of seconds"
+                    + (" (or None for no limit)." if what == "idle_timeout_s" else ".")
+                )
         self.host = host
         self.port = port
         self.token = token
         self.name = name
+        self.auth_timeout_s = auth_timeout_s
+        self.idle_timeout_s = idle_timeout_s
         self.address: Optional[Tuple[str, int]] = None
         self._listening = threading.Event()
 

@@ -9,7 +9,7 @@ the console's `ConsoleSession`. Thesis 6.4.3 lists the commands::
     task <type> <name> [values...]  schedule a task
     reload all|<component>          reload source code from disk, keep factory state
     list commands|endpoints         what you can type / what the node runs
-    dump profiler|datastore         handler timings / the newest page of every key
+    dump profiler|datastore [KEY]   handler timings / the newest page of every key
     stats                           the queue and every comms link: sent, dropped...
     help [command]                  the commands, or one command in detail
 
@@ -25,12 +25,15 @@ from __future__ import annotations
 
 import contextlib
 import logging
+import reprlib
 import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, Iterator, List, Tuple
 
 from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, tasks
+from snr.core.logs import RepeatFilter
+from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
     AbstractComponent,
     AbstractFactory,
@@ -49,6 +52,8 @@ from snr.std_mods.io.console_protocol import Reply, Status, parse_values, split_
 
 __all__ = [
     "COMMANDS",
+    "REPLY_BUDGET_CHARS",
+    "REPLY_BUDGET_S",
     "CommandProcessorEndpoint",
     "CommandProcessorFactory",
     "ConsoleLoop",
@@ -88,8 +93,11 @@ COMMANDS: Dict[str, CommandHelp] = {
         "list commands|endpoints", "List these commands, or the node's components."
     ),
     "dump": CommandHelp(
-        "dump profiler|datastore",
+        "dump profiler|datastore [KEY|PREFIX*]",
         "Show handler timings, or the newest page of every key.",
+        "`dump datastore` shows every key with a short preview of its value, up to the\n"
+        "reply's limit. `dump datastore KEY` shows one key's value in full;\n"
+        "`dump datastore PREFIX*` shows the keys that start with PREFIX.",
     ),
     "stats": CommandHelp(
         "stats",
@@ -104,6 +112,40 @@ COMMANDS: Dict[str, CommandHelp] = {
 _LIST_CHOICES = ["commands", "endpoints"]
 _DUMP_CHOICES = ["profiler", "datastore"]
 _VALUE_PREVIEW_CHARS = 120
+
+REPLY_BUDGET_CHARS = 64 * 1024
+"""Longest reply a console command builds; a longer one is cut with a note.
+
+The note says how to ask for the rest, e.g. ``dump datastore KEY``.
+
+Example::
+
+    len(processor.execute("dump datastore").text) <= REPLY_BUDGET_CHARS + 400   # True
+"""
+
+REPLY_BUDGET_S = 0.01
+"""Node-thread time a listing (``dump datastore``) may take before it stops with a note.
+
+Commands run on the node's thread, so a long listing would delay every task
+behind it; the reply says what was left out and how to see it. The first 50
+keys are always shown (each costs microseconds: values are previewed with
+`reprlib`, which stops early).
+
+Example::
+
+    REPLY_BUDGET_S * 1000   # 10.0 ms
+"""
+
+_MIN_LINES = 50  # a listing shows this many keys however slow the node is (each is cheap)
+_previews = reprlib.Repr()
+_previews.maxstring = _previews.maxother = _VALUE_PREVIEW_CHARS
+_previews.maxlevel = 3
+_previews.maxlist = _previews.maxtuple = _previews.maxdict = _previews.maxset = 12
+_whole_values = reprlib.Repr()
+_whole_values.maxstring = _whole_values.maxother = REPLY_BUDGET_CHARS
+_whole_values.maxlevel = 8
+_whole_values.maxlist = _whole_values.maxtuple = 2000
+_whole_values.maxdict = _whole_values.maxset = 2000
 
 
 class ConsoleSession(ABC):
@@ -167,6 +209,7 @@ class CommandProcessorEndpoint(Endpoint):
             "help": self.cmd_help,
         }
         self._current_session = "console"
+        self._refusals = RepeatFilter(self.log)
 
     # -- the task handler ---------------------------------------------------
     def on_command(self, task: Task, key: TaskId) -> SomeTasks:
@@ -182,7 +225,7 @@ class CommandProcessorEndpoint(Endpoint):
         line, session = task.val_list
         self._current_session = str(session)
         outcome = self._run(str(line))
-        session.send(Reply(outcome.status, outcome.text))
+        session.send(Reply(outcome.status, _bounded(outcome.text)))
         return outcome.tasks
 
     def execute(self, line: str) -> Reply:
@@ -192,7 +235,7 @@ class CommandProcessorEndpoint(Endpoint):
         """
         outcome = self._run(line)
         self.schedule(outcome.tasks)
-        return Reply(outcome.status, outcome.text)
+        return Reply(outcome.status, _bounded(outcome.text))
 
     def _run(self, line: str) -> _Outcome:
         word, args = split_command(line)
@@ -256,6 +299,9 @@ class CommandProcessorEndpoint(Endpoint):
             return tasks.reload_component(name)
         values = parse_values(rest)
         if task_type is TaskType.event:
+            if name == tasks.REMOVE_COMPONENT:
+                for target in values:
+                    self._check_removable(str(target))
             return tasks.event(name, values)
         if len(values) != 1:
             raise _CommandFailed(
@@ -298,7 +344,41 @@ class CommandProcessorEndpoint(Endpoint):
             text += "\n".join("  " + message for _, message in results)
         return _Outcome(Status.ERROR if failed else Status.OK, text)
 
+    def _check_removable(self, name: ComponentName) -> None:
+        """Refuse to remove the node's core or a console (the reply says why)."""
+        if name == NODE_CORE_NAME:
+            self._refuse(
+                f"Refused: {name!r} is the node's own core. It stores every page, adds, "
+                "removes and reloads components, and stops the node on `exit`; without "
+                "it the node would run on deaf. To stop the node, type `exit`."
+            )
+        component = self.parent.components.get(name)
+        if component is not None and _is_console_part(component):
+            self._refuse(
+                f"Refused: {name!r} is part of a console; removing it would cut off the "
+                "consoles that use it, maybe this one. Type `quit` to leave this console, "
+                "or `exit` to stop the node."
+            )
+
+    def _refuse(self, reason: str) -> None:
+        """Log the refusal (repeats are counted, not repeated) and reply with it."""
+        self._refusals.report(
+            ("refused", reason[:60]),
+            "Refused console commands",
+            logging.WARNING,
+            "Console %s: %s",
+            self._current_session,
+            reason,
+        )
+        raise _CommandFailed(reason)
+
     def _check_reloadable(self, node: Node, name: ComponentName) -> None:
+        if name == NODE_CORE_NAME:
+            self._refuse(
+                f"Refused: {name!r} is the node's own core and runs every reload itself; "
+                "SNR's own code is not reloaded while the node runs. Restart the node to "
+                "load a new SNR."
+            )
         component = node.components.get(name)
         if component is None:
             guess = closest_match(name, node.components)
@@ -308,7 +388,7 @@ class CommandProcessorEndpoint(Endpoint):
                 f"Components: {self._component_names()}."
             )
         if _is_console_part(component):
-            raise _CommandFailed(
+            self._refuse(
                 f"{name!r} is part of the console, which cannot reload itself while it "
                 "carries this command. Restart the node to load new console code."
             )
@@ -342,8 +422,11 @@ class CommandProcessorEndpoint(Endpoint):
         return _ok("\n".join(lines))
 
     def cmd_dump(self, args: str) -> _Outcome:
-        """``dump profiler|datastore``."""
-        choice = _one_choice("dump", args, _DUMP_CHOICES)
+        """``dump profiler|datastore [KEY|PREFIX*]``."""
+        words = args.split()
+        choice = _one_choice("dump", words[0] if words else "", _DUMP_CHOICES)
+        if len(words) > (1 if choice == "profiler" else 2):
+            raise _CommandFailed(f"Usage: {COMMANDS['dump'].usage}.")
         if choice == "profiler":
             profiler = self.parent.profiler
             if profiler is None:
@@ -353,20 +436,34 @@ class CommandProcessorEndpoint(Endpoint):
                 )
             return _ok(profiler.dump())
         datastore = self._full_node("dump datastore").datastore
-        if not datastore:
-            return _ok(f"The datastore of node {self.parent.role!r} is empty.")
-        now = time.time()
-        width = max(len(key) for key in datastore)
-        count = f"{len(datastore)} key{'s' if len(datastore) != 1 else ''}"
-        lines = [f"Datastore of node {self.parent.role!r} ({count}):"]
-        for key in sorted(datastore):
-            page = datastore[key]
-            age_s = max(0.0, now - page.created_at_s)
-            lines.append(
-                f"  {key:<{width}} = {_preview(page.data)}  "
-                f"(from {page.origin!r}, {age_s:.1f} s ago)"
+        if len(words) == 2 and not words[1].endswith("*"):
+            return self._dump_one_key(datastore, words[1])
+        prefix = words[1][:-1] if len(words) == 2 else ""
+        return _ok(_list_datastore(self.parent.role, datastore, prefix))
+
+    def _dump_one_key(self, datastore: Dict[str, Page], key: str) -> _Outcome:
+        page = datastore.get(key)
+        if page is None:
+            guess = closest_match(key, datastore)
+            hint = f" Did you mean {guess!r}?" if guess else ""
+            raise _CommandFailed(
+                f"Node {self.parent.role!r} has no data under {key!r}.{hint} "
+                "`dump datastore` lists the keys."
             )
-        return _ok("\n".join(lines))
+        age_s = max(0.0, time.time() - page.created_at_s)
+        head = f"{key} (from {page.origin!r}, {age_s:.1f} s ago) = "
+        text = _whole_values.repr(page.data)
+        data: Any = page.data
+        cut_items = isinstance(data, (list, tuple, dict, set, frozenset)) and (
+            len(data) > _whole_values.maxlist
+        )
+        if cut_items or len(head) + len(text) > REPLY_BUDGET_CHARS:
+            text = text[: REPLY_BUDGET_CHARS - len(head)] + (
+                f"\n... (cut: the value is longer than a reply may carry, "
+                f"{REPLY_BUDGET_CHARS:,} characters or {_whole_values.maxlist:,} items; "
+                f"read it in code with node.get_data({key!r}))"
+            )
+        return _ok(head + text)
 
     def cmd_stats(self, args: str) -> _Outcome:
         """``stats``: the task queue's and every comms link's counters."""
@@ -519,10 +616,59 @@ def _describe_task(task: Task) -> str:
 
 
 def _preview(data: Any) -> str:
-    text = repr(data)
+    """A short repr: cheap even for a huge value (reprlib stops early)."""
+    text = _previews.repr(data)
     if len(text) > _VALUE_PREVIEW_CHARS:
         text = text[: _VALUE_PREVIEW_CHARS - 3] + "..."
     return text
+
+
+def _list_datastore(role: str, datastore: Dict[str, Page], prefix: str) -> str:
+    """Every key (starting with ``prefix``) and a preview, within the reply's budgets."""
+    started = time.perf_counter()
+    keys = sorted(key for key in list(datastore) if key.startswith(prefix))
+    where = f" starting with {prefix!r}" if prefix else ""
+    if not keys:
+        return f"The datastore of node {role!r} has no keys{where}."
+    now = time.time()
+    width = min(max(len(key) for key in keys), 40)
+    count = f"{len(keys):,} key{'s' if len(keys) != 1 else ''}{where}"
+    lines = [f"Datastore of node {role!r} ({count}):"]
+    size = len(lines[0])
+    for shown, key in enumerate(keys):
+        page = datastore.get(key)
+        if page is None:
+            continue  # removed since the keys were listed
+        line = (
+            f"  {key:<{width}} = {_preview(page.data)}  "
+            f"(from {page.origin!r}, {max(0.0, now - page.created_at_s):.1f} s ago)"
+        )
+        size += len(line) + 1
+        over_time = shown >= _MIN_LINES and time.perf_counter() - started > REPLY_BUDGET_S
+        if size > REPLY_BUDGET_CHARS - 400 or over_time:
+            limit = (
+                f"{REPLY_BUDGET_S * 1000:g} ms of the node's time"
+                if over_time
+                else f"{REPLY_BUDGET_CHARS:,} characters"
+            )
+            lines.append(
+                f"... and {len(keys) - shown:,} more keys not shown, from {key!r} on (a "
+                f"listing stops at {limit}). Show one key in full with `dump datastore "
+                "KEY`, or the keys that start with a prefix with `dump datastore PREFIX*`."
+            )
+            break
+        lines.append(line)
+    return "\n".join(lines)
+
+
+def _bounded(text: str) -> str:
+    """``text``, cut to `REPLY_BUDGET_CHARS` with a note when longer."""
+    if len(text) <= REPLY_BUDGET_CHARS:
+        return text
+    return text[:REPLY_BUDGET_CHARS] + (
+        f"\n... (reply cut: {len(text) - REPLY_BUDGET_CHARS:,} more characters; ask for "
+        "less, e.g. `dump datastore KEY` for one key)"
+    )
 
 
 class _ErrorCollector(logging.Handler):

@@ -4,29 +4,39 @@ The file is in the JSON-lines page format (``snr.std_mods.codec``): a header lin
 then one page per line. Each line is flushed as soon as it is written, so a
 process that is killed loses at most the page it was writing; replay the
 file with `ReplayerLoopFactory` or read it with `PageReader`.
+
+A recording is never replaced without being asked: when the file already
+holds a recording, the previous one is kept under a new name (its time in
+the name) and the new run is written to the file named. Pages the recorder
+cannot write are logged and skipped; the node goes on.
 """
 
 from __future__ import annotations
 
+import logging
 import os
 import sys
-from typing import IO, List, Optional, Sequence, Set, Tuple, Union
+import time
+from typing import IO, Any, List, Optional, Sequence, Tuple, Union
 
 from snr.core import Endpoint, EndpointFactory
+from snr.core.logs import RepeatFilter
 from snr.prelude import (
     AbstractNode,
     ConfigError,
     DataKey,
-    NotSerializableError,
     Page,
     SomeTasks,
     Task,
     TaskId,
     TaskType,
 )
-from snr.std_mods.codec import PathLike, header_line, page_to_line
+from snr.std_mods.codec import PathLike, decode_line, header_line, is_header, page_to_line
 
-__all__ = ["RecorderEndpoint", "RecorderEndpointFactory"]
+__all__ = ["RecorderEndpoint", "RecorderEndpointFactory", "kept_name"]
+
+_PEEK_BYTES = 65536  # enough for the first line of any recording (its header)
+_MAX_TIME = sys.float_info.max  # NaN, infinity and larger integers fail the comparison
 
 
 class RecorderEndpoint(Endpoint):
@@ -45,6 +55,9 @@ class RecorderEndpoint(Endpoint):
         self.recording = factory
         self._file: Optional[IO[str]] = None
         self._write_failed = False
+        if factory.repeats is None:  # on the factory: a reload does not repeat the messages
+            factory.repeats = RepeatFilter(self.log, first=1)
+        self._repeats = factory.repeats
         self.task_handlers = {(TaskType.store_page, key): self.record_page for key in factory.keys}
 
     def begin(self) -> None:
@@ -52,14 +65,20 @@ class RecorderEndpoint(Endpoint):
         self._open()
 
     def record_page(self, task: Task, key: TaskId) -> SomeTasks:
-        """Write the stored page as one line and flush it to the OS."""
+        """Write the stored page as one line and flush it to the OS.
+
+        A page that cannot be written as a valid line (data JSON cannot
+        hold, nesting too deep, a time that is not a number) is logged with
+        its key and skipped, whatever the error: recording goes on.
+        """
         page = task.val_list[0] if task.val_list else None
         if not isinstance(page, Page):
             self.warn("A store_page task for %r carries %r, not a Page", task.name, page)
             return None
         try:
+            _check_fields(page)
             line = page_to_line(page)
-        except NotSerializableError as error:
+        except Exception as error:  # never take the node down over one page
             self._skip(page, error)
             return None
         self._write(line)
@@ -67,21 +86,45 @@ class RecorderEndpoint(Endpoint):
 
     def terminate(self) -> None:
         """Close the file (every line is already flushed)."""
+        self._repeats.flush()  # the counts of skipped pages not yet logged
         if self._file is not None:
             self._file.close()
             self._file = None
             self.info(
                 "Recorded %d pages to %s (%d skipped)",
                 self.recording.pages_written,
-                self.recording.filename,
+                self.recording.path,
                 self.recording.pages_skipped,
             )
 
     # -- helpers ------------------------------------------------------------
     def _open(self) -> IO[str]:
         if self._file is None:
+            first = not self.recording.started
             self._file = self.recording.open_file()
+            if first:
+                self._say_where()
         return self._file
+
+    def _say_where(self) -> None:
+        recording = self.recording
+        if recording.kept is not None:
+            self.info(
+                "Recording %s to %s; the recording that was there is kept as %s",
+                ", ".join(recording.keys),
+                recording.path,
+                recording.kept,
+            )
+        elif recording.path != recording.filename:
+            self.warn(
+                "Recording %s to %s: %s holds a recording that could not be renamed",
+                ", ".join(recording.keys),
+                recording.path,
+                recording.filename,
+            )
+        else:
+            how = "appending" if recording.append else "writing"
+            self.info("Recording %s to %s (%s)", ", ".join(recording.keys), recording.path, how)
 
     def _write(self, line: str) -> None:
         try:
@@ -97,38 +140,84 @@ class RecorderEndpoint(Endpoint):
                 self.err(
                     "Cannot write to recording %s: %s. Pages are not being recorded (free "
                     "some disk space or choose another file); further failures are counted.",
-                    self.recording.filename,
+                    self.recording.path,
                     error,
                 )
             return
         self.recording.pages_written += 1
 
-    def _skip(self, page: Page, error: NotSerializableError) -> None:
+    def _skip(self, page: Page, error: Exception) -> None:
         self.recording.pages_skipped += 1
-        kind = (page.key, type(page.data).__name__)
-        if kind in self.recording.reported:
-            self.dbg("Skipped another %s page under %r", kind[1], page.key)
-            return
-        self.recording.reported.add(kind)
-        self.err(
-            "Did not record a page: %s Recording goes on; later pages like this one are "
-            "skipped without a message.",
-            error,
+        kind = (page.key, type(page.data).__name__, type(error).__name__)
+        text = str(error) if str(error).startswith("Cannot") else _describe(page, error)
+        self._repeats.report(
+            kind,
+            f"Pages under {page.key!r} not recorded ({type(page.data).__name__} data)",
+            logging.ERROR,
+            "Did not record a page: %s Recording goes on; later pages like this one are counted.",
+            text,
         )
+
+
+def _check_fields(page: Page) -> None:
+    """Refuse a page whose fields a reader would reject (only hand-made pages)."""
+    created = page.created_at_s
+    if not (type(created) in (float, int) and -_MAX_TIME <= created <= _MAX_TIME):
+        raise ValueError(f"its created_at_s is {created!r:.40}, not a finite number")
+    if type(page.origin) is not str:
+        raise ValueError(f"its origin is {page.origin!r:.40}, not a string")
+    if type(page.process) is not bool:
+        raise ValueError(f"its process flag is {page.process!r:.40}, not True or False")
+
+
+def _describe(page: Page, error: Exception) -> str:
+    what = str(error) if isinstance(error, ValueError) else f"{type(error).__name__}: {error}"
+    return f"Cannot write the page stored under {page.key!r} to a recording: {what:.300}."
+
+
+def kept_name(filename: PathLike, when_s: float) -> str:
+    """The name a previous recording is kept under: its time before the extension.
+
+    Args:
+        filename: the recording's file name.
+        when_s: when it was last written (``os.path.getmtime``), seconds since 1970.
+
+    Example::
+
+        kept_name("logs/dive.jsonl", 1795564741.0)   # 'logs/dive-2026-11-24T23-59-01.jsonl' (UTC)
+    """
+    stem, extension = os.path.splitext(os.fspath(filename))
+    stamp = time.strftime("%Y-%m-%dT%H-%M-%S", time.localtime(when_s))
+    return f"{stem}-{stamp}{extension}"
 
 
 class RecorderEndpointFactory(EndpointFactory):
     """Builds a `RecorderEndpoint` that records ``keys`` into ``filename``.
 
+    When ``filename`` already holds a recording, the new run is still
+    written to ``filename`` (so a replayer naming it replays the latest run)
+    and the previous recording is kept, renamed with the time it was last
+    written: ``dive.jsonl`` becomes ``dive-2026-11-24T23-59-01.jsonl``. The
+    log says so. A file that holds no pages (empty, or only a header) is
+    simply reused; a file that is not a recording at all is left alone and
+    the node does not start (``ConfigError``).
+
     Args:
-        filename: the file to write; it is replaced when the node starts.
+        filename: the file to write.
         keys: the data keys to record (one key may be given as a string).
         sync: also ``os.fsync`` every page, so even a power cut loses at most
             one page (slower: every page waits for the disk).
         name: the endpoint's name (default ``"recorder"``).
+        overwrite: replace whatever ``filename`` holds instead of keeping it.
+        append: add this run's pages to the end of ``filename`` (after a
+            header line, so the file stays one valid recording).
 
-    Data that JSON cannot hold (a set, an object) is logged, naming its key
-    and type, and skipped; recording goes on.
+    Raises:
+        ConfigError: no keys, or both ``overwrite`` and ``append``.
+
+    Data that JSON cannot hold (a set, an object, NaN, nesting deeper than
+    the codec allows) is logged, naming its key and type, and skipped;
+    recording goes on.
 
     Example::
 
@@ -138,6 +227,9 @@ class RecorderEndpointFactory(EndpointFactory):
         ]})
 
     Attributes:
+        path: the file being written (``filename``, unless the previous
+            recording could not be renamed: then a new name beside it).
+        kept: where the previous recording was kept, or None.
         pages_written: pages written so far (kept across reloads).
         pages_skipped: pages that could not be written.
     """
@@ -148,6 +240,8 @@ class RecorderEndpointFactory(EndpointFactory):
         keys: Union[DataKey, Sequence[DataKey]],
         sync: bool = False,
         name: Optional[str] = None,
+        overwrite: bool = False,
+        append: bool = False,
     ) -> None:
         super().__init__(sys.modules[__name__])
         self.filename = os.fspath(filename)
@@ -157,40 +251,76 @@ class RecorderEndpointFactory(EndpointFactory):
                 f"RecorderEndpointFactory({self.filename!r}, {keys!r}): keys must be a list "
                 "of data keys to record, e.g. ['depth_m', 'heading_deg']."
             )
+        if overwrite and append:
+            raise ConfigError(
+                f"RecorderEndpointFactory({self.filename!r}): choose overwrite=True (replace "
+                "the file) or append=True (add to it), not both."
+            )
         self.sync = sync
         self.name = name or "recorder"
+        self.overwrite = overwrite
+        self.append = append
+        self.path = self.filename
+        self.kept: Optional[str] = None
         self.pages_written = 0
         self.pages_skipped = 0
-        self.reported: Set[Tuple[DataKey, str]] = set()
-        self._started = False
+        self.repeats: Optional[RepeatFilter] = None
+        self.started = False
 
     def open_file(self) -> IO[str]:
-        """Open the recording: a new file with a header first, then append.
+        """Open the recording: the first time as chosen above, after a reload to append.
 
         Raises:
             ConfigError: the file cannot be created (no such folder, no
-                permission), naming the file and the fix.
+                permission), or it exists and is not a recording; the
+                message names the file and the fix.
         """
-        mode = "a" if self._started else "w"
+        if self.started:
+            return self._open(self.path, "a")
+        self.path, self.kept = self._choose_path()
+        file = self._open(self.path, "a" if self.append else "w")
         try:
-            # Kept open between pages (closed in terminate), hence no `with`.
-            file = open(self.filename, mode, encoding="utf-8", newline="\n")  # noqa: SIM115
+            if self.append and not _ends_with_newline(self.path):
+                file.write("\n")  # a run cut short mid-line: keep its last line apart
+            file.write(header_line() + "\n")
+            file.flush()
         except OSError as error:
+            file.close()
             raise self._cannot_write(error) from error
-        if not self._started:
-            try:
-                file.write(header_line() + "\n")
-                file.flush()
-            except OSError as error:
-                file.close()
-                raise self._cannot_write(error) from error
-            self._started = True
+        self.started = True
         return file
 
+    def _open(self, path: str, mode: str) -> IO[str]:
+        try:
+            # Kept open between pages (closed in terminate), hence no `with`.
+            return open(path, mode, encoding="utf-8", newline="\n")
+        except OSError as error:
+            raise self._cannot_write(error) from error
+
+    def _choose_path(self) -> Tuple[str, Optional[str]]:
+        """The file to write and where the previous recording went (None: nowhere)."""
+        if self.overwrite or self.append or not os.path.isfile(self.filename):
+            return self.filename, None
+        holds = _what_it_holds(self.filename)
+        if holds == "nothing":
+            return self.filename, None
+        if holds == "other":
+            raise ConfigError(
+                f"{type(self).__name__} will not write to {self.filename!r}: the file exists "
+                "and is not an SNR recording, so it is left as it is. Choose another "
+                "filename, or pass overwrite=True to replace it."
+            )
+        kept = _free_name(kept_name(self.filename, os.path.getmtime(self.filename)))
+        try:
+            os.rename(self.filename, kept)
+        except OSError:  # e.g. open in another program on Windows: write beside it
+            return _free_name(kept_name(self.filename, time.time())), None
+        return self.filename, kept
+
     def _cannot_write(self, error: OSError) -> ConfigError:
-        folder = os.path.dirname(os.path.abspath(self.filename))
+        folder = os.path.dirname(os.path.abspath(self.path))
         return ConfigError(
-            f"{type(self).__name__} cannot open {self.filename!r} for writing: "
+            f"{type(self).__name__} cannot open {self.path!r} for writing: "
             f"{error.strerror or error}. Check that the folder {folder!r} exists and "
             "that you may write there, or choose another filename."
         )
@@ -200,3 +330,56 @@ class RecorderEndpointFactory(EndpointFactory):
 
     def __repr__(self) -> str:
         return f"RecorderEndpointFactory({self.filename!r}, {self.keys!r})"
+
+
+def _what_it_holds(path: str) -> str:
+    """``"nothing"`` (no pages), ``"recording"`` or ``"other"``, from the file's start."""
+    try:
+        with open(path, "rb") as file:
+            start = file.read(_PEEK_BYTES)
+    except OSError:
+        return "recording"  # unreadable: do not write over it; renaming keeps it safe
+    lines = [line for line in start.split(b"\n") if line.strip()]
+    if not lines:
+        return "nothing"
+    fields: Any
+    try:
+        fields = decode_line(lines[0])
+    except Exception:
+        # A first line cut short by the size limit, or not JSON at all.
+        return "recording" if len(lines) == 1 and len(start) == _PEEK_BYTES else "other"
+    if not (is_header(fields) and fields.get("format") == "snr-pages") and "key" not in fields:
+        return "other"
+    if len(start) < _PEEK_BYTES and all(_is_header_line(line) for line in lines):
+        return "nothing"
+    return "recording"
+
+
+def _is_header_line(line: bytes) -> bool:
+    try:
+        return is_header(decode_line(line))
+    except Exception:
+        return False
+
+
+def _free_name(path: str) -> str:
+    """``path``, or ``path`` with ``-2``, ``-3``... before its extension, whichever is free."""
+    stem, extension = os.path.splitext(path)
+    candidate, n = path, 1
+    while os.path.exists(candidate):
+        n += 1
+        candidate = f"{stem}-{n}{extension}"
+    return candidate
+
+
+def _ends_with_newline(path: str) -> bool:
+    """True for an empty file or one whose last byte is a newline."""
+    try:
+        with open(path, "rb") as file:
+            file.seek(0, os.SEEK_END)
+            if file.tell() == 0:
+                return True
+            file.seek(-1, os.SEEK_END)
+            return file.read(1) == b"\n"
+    except OSError:
+        return True

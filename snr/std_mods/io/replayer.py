@@ -6,17 +6,32 @@
 * `TextReader` / `TextReplayerFactory` do the same for a plain text file: one
   page per line, e.g. a log of NMEA sentences from a GPS.
 
-A malformed line is reported with its line number and skipped; the rest of
-the file is still replayed.
+Replay never stops on data: a malformed line is reported with its line
+number, counted and skipped, and the rest of the file is still replayed.
+Timestamps that make no sense (missing, far in the future, going back)
+are replaced by a bounded gap, with a warning naming the line.
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import os
 import sys
+import threading
 import time
-from typing import Generic, Iterator, List, Optional, Sequence, TypeVar
+from typing import (
+    Dict,
+    Generator,
+    Generic,
+    Iterator,
+    List,
+    NamedTuple,
+    Optional,
+    Sequence,
+    Tuple,
+    TypeVar,
+)
 
 from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.core.logs import RepeatFilter
@@ -40,7 +55,10 @@ from snr.std_mods.codec import (
 )
 
 __all__ = [
+    "MAX_GAP_S",
+    "MAX_PROBLEMS",
     "PageReader",
+    "RecordedPage",
     "ReplayLoop",
     "ReplayerLoop",
     "ReplayerLoopFactory",
@@ -53,6 +71,39 @@ _log = logging.getLogger("snr.replay")
 
 DRAIN_ROUNDS = 100
 """How many times ``exit_when_done`` lets the queue go round before stopping."""
+
+MAX_GAP_S = 10.0
+"""Default longest wait between two replayed pages with original timing, in seconds.
+
+A longer gap in a recording is far more often a clock that jumped (a board
+without a battery-backed clock setting its time from the network) or a
+corrupt timestamp than a real pause, so the replayer waits this long instead
+and logs a warning naming the line. ``ReplayerLoopFactory(max_gap_s=...)``
+changes it.
+"""
+
+MAX_PROBLEMS = 100
+"""How many problems `PageReader.problems` keeps in full; `PageReader.bad_lines` counts all."""
+
+
+class RecordedPage(NamedTuple):
+    """A page read from a recording, with where it was and whether it had a time.
+
+    Attributes:
+        line: the line number in the file (the header is line 1).
+        page: the page.
+        timed: False when the line had no ``created_at_s`` (the page then
+            holds the time it was read).
+
+    Example::
+
+        for line, page, timed in PageReader("dive.jsonl").recorded_pages():
+            print(line, page.key, page.created_at_s if timed else "no time")
+    """
+
+    line: int
+    page: Page
+    timed: bool
 
 
 def _check_readable(filename: str, what: str) -> None:
@@ -69,8 +120,12 @@ class PageReader:
     """Reads the pages of a recording, in order; iterate over it.
 
     Bad lines are logged with their line number, listed in ``problems`` and
-    skipped. A last line cut short (the recorder was killed mid-write) is
-    reported the same way.
+    skipped: any line that is not a valid page, whatever is wrong with it
+    (not UTF-8, not strict JSON, nested too deep, numbers out of range,
+    fields missing or of the wrong type). A last line cut short (the
+    recorder was killed mid-write) is reported the same way. The first five
+    are logged in full, then a count every 5 s, and a summary with the
+    total when the file has been read.
 
     Args:
         filename: a file written by `RecorderEndpointFactory`.
@@ -79,6 +134,11 @@ class PageReader:
         ConfigError: the file does not exist.
         WireFormatError: the file starts with the header of a newer SNR's
             format, or of another format.
+
+    Attributes:
+        problems: the first `MAX_PROBLEMS` bad lines, each as
+            ``"file:line: reason"``.
+        bad_lines: how many bad lines were skipped in all.
 
     Example::
 
@@ -90,48 +150,92 @@ class PageReader:
         self.filename = os.fspath(filename)
         _check_readable(self.filename, "PageReader")
         self.problems: List[str] = []
+        self.bad_lines = 0
+        self._bad_line_numbers: List[int] = []
         # A corrupt file can hold thousands of bad lines: log the first few in full.
         self._repeats = RepeatFilter(_log, first=5)
         with open(self.filename, "rb") as file:
             self._check_if_header(file.readline())  # fail now, not halfway through a replay
 
     def __iter__(self) -> Iterator[Page]:
+        recorded_pages = self.recorded_pages()
+        try:
+            for recorded in recorded_pages:
+                yield recorded.page
+        finally:
+            recorded_pages.close()  # closes the file now, even if iteration stopped early
+
+    def recorded_pages(self) -> Generator[RecordedPage, None, None]:
+        """The pages with their line numbers, and whether each line had a time.
+
+        Reading starts again at the top of the file on each call; the
+        counts of bad lines start again too.
+
+        Example::
+
+            for recorded in PageReader("dive.jsonl").recorded_pages():
+                print(f"line {recorded.line}: {recorded.page.data}")
+        """
+        self.problems, self.bad_lines, self._bad_line_numbers = [], 0, []
+        self._repeats = RepeatFilter(_log, first=5)
         try:
             with open(self.filename, "rb") as file:
                 for number, raw in enumerate(file, start=1):
-                    page = self._parse(number, raw)
-                    if page is not None:
-                        yield page
+                    parsed = self._parse(number, raw)
+                    if parsed is not None:
+                        yield RecordedPage(number, parsed[0], parsed[1])
         finally:
-            self._repeats.flush()  # the count of bad lines not logged one by one
+            self._summarise()
+
+    def _summarise(self) -> None:
+        if not self.bad_lines:
+            return
+        shown = ", ".join(map(str, self._bad_line_numbers))
+        if self.bad_lines > len(self._bad_line_numbers):
+            shown += ", ..."
+        unlogged = self.bad_lines - min(self.bad_lines, self._repeats.first)
+        _log.warning(
+            "%s: skipped %d bad line%s in all (line%s %s)%s; every other line was read.",
+            self.filename,
+            self.bad_lines,
+            "" if self.bad_lines == 1 else "s",
+            "" if self.bad_lines == 1 else "s",
+            shown,
+            f", {unlogged} more times than logged in full above" if unlogged else "",
+        )
 
     def _check_if_header(self, raw: bytes) -> None:
         try:
             fields = decode_line(raw)
-        except WireFormatError:
-            return  # not a header: _parse reports the line when it comes to it
+        except Exception:  # not a header: _parse reports the line when it comes to it
+            return
         if is_header(fields):
             try:
                 check_header(fields)
             except WireFormatError as error:
                 raise WireFormatError(f"Cannot replay {self.filename!r}: {error}.") from error
 
-    def _parse(self, number: int, raw: bytes) -> Optional[Page]:
-        if not raw.strip():
-            return None
+    def _parse(self, number: int, raw: bytes) -> Optional[Tuple[Page, bool]]:
         try:
+            if not raw.strip():
+                return None
             fields = decode_line(raw)
             if is_header(fields):
                 check_header(fields)  # e.g. two recordings joined with `cat`
                 return None
-            return page_from_fields(fields)
-        except WireFormatError as error:
+            return page_from_fields(fields), "created_at_s" in fields
+        except Exception as error:  # whatever a line holds, replay goes on
+            why = str(error) if isinstance(error, WireFormatError) else repr(error)[:200]
             cut = "" if raw.endswith(b"\n") else " (cut short: the recorder stopped mid-line)"
-            self._report(f"{self.filename}:{number}: skipped a bad line{cut}: {error}")
+            self._report(number, f"{self.filename}:{number}: skipped a bad line{cut}: {why}")
             return None
 
-    def _report(self, problem: str) -> None:
-        self.problems.append(problem)
+    def _report(self, number: int, problem: str) -> None:
+        self.bad_lines += 1
+        if len(self.problems) < MAX_PROBLEMS:
+            self.problems.append(problem)
+        if len(self._bad_line_numbers) < 10:
+            self._bad_line_numbers.append(number)
         self._repeats.report(
             self.filename, f"Bad lines in {self.filename}", logging.WARNING, "%s", problem
         )
@@ -192,6 +296,7 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         self.replay = factory
         self._items: Optional[Iterator[Item]] = None
         self._done_event = f"{self.name}_done"
+        self._exit_scheduled = False
         if factory.exit_when_done:
             self.task_handlers = {(TaskType.event, self._done_event): self.finish_node}
 
@@ -208,29 +313,52 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         """Store ``item`` in the node."""
         raise NotImplementedError
 
+    def summary(self) -> str:
+        """What went wrong with the file, for the last log line ("" if nothing)."""
+        return ""
+
     # -- the loop -------------------------------------------------------------
     def setup(self) -> None:
-        self._items = self.items()
-        for _ in range(self.replay.position):  # resume after a reload
-            if next(self._items, None) is None:
-                break
+        try:
+            self._items = self.items()
+            for _ in range(self.replay.position):  # resume after a reload
+                if next(self._items, None) is None:
+                    break
+        except Exception:
+            self._still_exit()
+            raise
 
     def loop(self) -> None:
         assert self._items is not None  # set in setup()
-        item = next(self._items, None)
-        if item is None:
-            self._finished()
-            return
-        delay = self.delay_s(item)
-        if delay > 0 and self.wait_s(delay):
-            return  # the node is stopping; this item was not stored
-        self.store(item)
-        self.replay.position += 1
+        try:
+            item = next(self._items, None)
+            if item is None:
+                self._finished()
+                return
+            delay = self.delay_s(item)
+            if delay > 0 and self.wait_s(delay):
+                return  # the node is stopping; this item was not stored
+            self.store(item)
+            self.replay.position += 1
+        except Exception:
+            # Reported by the node like any loop's error. In DEPLOYED mode the
+            # node keeps running without this loop: exit_when_done still stops it.
+            self._still_exit()
+            raise
 
     def _finished(self) -> None:
-        self.info("Replayed %d items from %s", self.replay.position, self.replay.filename)
+        self.info(
+            "Replayed %d items from %s%s",
+            self.replay.position,
+            self.replay.filename,
+            self.summary(),
+        )
         self.set_terminate_flag("replayed the whole file")
-        if self.replay.exit_when_done:
+        self._still_exit()
+
+    def _still_exit(self) -> None:
+        if self.replay.exit_when_done and not self._exit_scheduled:
+            self._exit_scheduled = True
             self.schedule(tasks.event(self._done_event, [0]))
 
     def finish_node(self, task: Task, key: TaskId) -> SomeTasks:
@@ -265,11 +393,16 @@ class _ReplayFactory(LoopFactory):
         self.position = 0
 
 
-class ReplayerLoop(ReplayLoop[Page]):
+class ReplayerLoop(ReplayLoop[RecordedPage]):
     """Stores the pages of a recording, each with its key, data, origin and time.
 
-    With original timing, page *n* is stored ``created_at_s[n] -
-    created_at_s[0]`` seconds after the first one.
+    With original timing, each page is stored as long after the previous one
+    as it was created after it (``created_at_s``), but never more than
+    ``max_gap_s`` later. Each origin's clock is followed on its own, so pages
+    from nodes whose clocks disagree still replay with their own spacing. A
+    page with no time, or whose time goes back by more than ``max_gap_s``,
+    is stored right after the previous page; a longer gap is cut to
+    ``max_gap_s``. Each of these is logged with its line number.
 
     Example::
 
@@ -280,27 +413,106 @@ class ReplayerLoop(ReplayLoop[Page]):
         super().__init__(factory, parent)
         self.options = factory
         self.reader = PageReader(factory.filename)
-        self._started_at: Optional[float] = None
-        self._first_created_s = 0.0
+        self._due: Optional[float] = None  # when the previous page was due (monotonic)
+        # origin -> replay time minus created_at_s, so due = created_at_s + offset
+        self._offsets: Dict[str, float] = {}
+        self._timing = RepeatFilter(_log, first=5)
 
-    def items(self) -> Iterator[Page]:
-        pages = iter(self.reader)
-        if self.options.keys is None:
-            return pages
-        keys = set(self.options.keys)
-        return (page for page in pages if page.key in keys)
+    def items(self) -> Iterator[RecordedPage]:
+        recorded_pages = self.reader.recorded_pages()
+        keys = None if self.options.keys is None else set(self.options.keys)
+        try:
+            for recorded in recorded_pages:
+                if keys is None or recorded.page.key in keys:
+                    yield recorded
+        finally:
+            recorded_pages.close()
 
-    def delay_s(self, item: Page) -> float:
+    def delay_s(self, item: RecordedPage) -> float:
         if self.options.fast:
             return 0.0
         now = time.monotonic()
-        if self._started_at is None:
-            self._started_at, self._first_created_s = now, item.created_at_s
-        due = self._started_at + (item.created_at_s - self._first_created_s)
-        return due - now
+        if self._due is None:  # the first page (also after a reload): store it now
+            self._due = now
+            if item.timed:
+                self._offsets[item.page.origin] = now - item.page.created_at_s
+            return 0.0
+        self._due = self._next_due(item, self._due)
+        return self._due - now
 
-    def store(self, item: Page) -> None:
-        self.store_page(item)  # the page as recorded: origin and created_at_s kept
+    def _next_due(self, item: RecordedPage, previous: float) -> float:
+        """When ``item`` is due, given when the page before it was due."""
+        page, max_gap = item.page, self.options.max_gap_s
+        if not item.timed:
+            self._retimed(
+                "no time",
+                "%s:%d: the page under %r has no created_at_s: stored right after the "
+                "previous page.",
+                item.line,
+                page.key,
+            )
+            return previous
+        offset = self._offsets.get(page.origin)
+        if offset is None:  # the first page from this origin: its clock starts here
+            self._offsets[page.origin] = previous - page.created_at_s
+            return previous
+        gap = page.created_at_s + offset - previous
+        if 0.0 <= gap <= max_gap:
+            return previous + gap
+        if gap > max_gap:
+            self._retimed(
+                "gap",
+                "%s:%d: the page under %r was created %s s after the one before it: "
+                "waiting %g s instead (max_gap_s).",
+                item.line,
+                page.key,
+                _seconds(gap),
+                max_gap,
+            )
+            due = previous + max_gap
+        elif gap >= -max_gap:  # a little back in time (clocks of two nodes): no wait
+            return previous
+        else:
+            self._retimed(
+                "back",
+                "%s:%d: the time of the page under %r goes back by %s s: stored right "
+                "after the previous page.",
+                item.line,
+                page.key,
+                _seconds(-gap) if gap == gap else "an unknown number of",
+            )
+            due = previous
+        self._offsets[page.origin] = due - page.created_at_s  # follow the clock from here
+        return due
+
+    def _retimed(self, kind: str, msg: str, line: int, *args: object) -> None:
+        self.options.retimed += 1
+        self._timing.report(
+            kind,
+            f"Replay timing of {self.options.filename} ({kind})",
+            logging.WARNING,
+            msg,
+            self.options.filename,
+            line,
+            *args,
+        )
+
+    def store(self, item: RecordedPage) -> None:
+        self.store_page(item.page)  # the page as recorded: origin and created_at_s kept
+
+    def summary(self) -> str:
+        self.options.bad_lines = self.reader.bad_lines
+        parts = []
+        if self.reader.bad_lines:
+            parts.append(f"{self.reader.bad_lines} bad lines skipped")
+        if self.options.retimed:
+            parts.append(f"{self.options.retimed} pages not stored at their recorded time")
+        return f" ({'; '.join(parts)}; see the warnings above)" if parts else ""
+
+
+def _seconds(value: float) -> str:
+    """A number of seconds for a message, short even when absurd."""
+    return f"{value:.3g}" if math.isfinite(value) else "an unbounded number of"
 
 
 class ReplayerLoopFactory(_ReplayFactory):
@@ -311,9 +523,18 @@ class ReplayerLoopFactory(_ReplayFactory):
         fast: store the pages as fast as possible instead of with their
             original spacing in time.
         exit_when_done: stop the node after the last page (once the node has
-            handled what the pages caused).
+            handled what the pages caused), in every mode.
         keys: replay only pages under these keys (default: all).
         name: the loop's name (default ``"replayer"``).
+        max_gap_s: with original timing, the longest wait between two pages
+            (default `MAX_GAP_S`, 10 s); a longer gap in the recording is
+            cut to this and logged with its line number.
+
+    Raises:
+        ConfigError: ``max_gap_s`` is negative, not finite or too large.
+
+    Bad lines in the file are skipped and logged with their line numbers;
+    the replay goes on.
 
     Example::
 
@@ -321,6 +542,12 @@ class ReplayerLoopFactory(_ReplayFactory):
             ReplayerLoopFactory("dive.jsonl", exit_when_done=True),
             MovingAvgFilterFactory("depth_m", "depth_smooth", 5),
         ]})
+
+    Attributes:
+        position: pages replayed so far (kept across reloads).
+        bad_lines: bad lines skipped, known at the end of the file.
+        retimed: pages not stored at their recorded time (no time, a gap
+            over ``max_gap_s``, time going back).
     """
 
     def __init__(
@@ -330,10 +557,23 @@ class ReplayerLoopFactory(_ReplayFactory):
         exit_when_done: bool = False,
         keys: Optional[Sequence[DataKey]] = None,
         name: Optional[str] = None,
+        max_gap_s: float = MAX_GAP_S,
     ) -> None:
         super().__init__(filename, exit_when_done, name or "replayer")
         self.fast = fast
         self.keys: Optional[List[DataKey]] = None if keys is None else list(keys)
+        if not (
+            isinstance(max_gap_s, (int, float))
+            and math.isfinite(max_gap_s)
+            and 0 <= max_gap_s <= threading.TIMEOUT_MAX
+        ):
+            raise ConfigError(
+                f"ReplayerLoopFactory({self.filename!r}, max_gap_s={max_gap_s!r}): use a "
+                "number of seconds, 0 or more (e.g. 10.0)."
+            )
+        self.max_gap_s = float(max_gap_s)
+        self.bad_lines = 0
+        self.retimed = 0
 
     def get(self, parent: AbstractNode) -> ReplayerLoop:
         return ReplayerLoop(self, parent)

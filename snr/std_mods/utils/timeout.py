@@ -23,6 +23,12 @@ class TimeoutLoop(ThreadLoop):
         self.seconds = seconds
 
     def loop(self) -> None:
+        if self.seconds == 0:
+            self.dbg(
+                "TimeoutLoopFactory() was given no time, so it stops the node as soon as it "
+                "starts (a start-and-stop check). Give a time to keep the node running, "
+                "e.g. TimeoutLoopFactory(seconds=5)."
+            )
         # Measured from the node's clock so the deadline holds however late
         # this thread starts.
         remaining = self.seconds - self.parent.get_time_s()
@@ -36,20 +42,25 @@ class TimeoutLoopFactory(LoopFactory):
     """Builds a `TimeoutLoop`: ``TimeoutLoopFactory(seconds=20)`` or ``(ms=500)``.
 
     The two add up: ``TimeoutLoopFactory(seconds=1, ms=500)`` is 1.5 s,
-    counted from when the node was created.
+    counted from when the node was created. With no time (or 0),
+    ``TimeoutLoopFactory()``, the node stops as soon as it has started: a
+    start-and-stop check, as tests written for the 2021 release use it. A
+    negative time is a `ComponentError`.
 
     Example::
 
         components = {"receiver": [..., snr.TimeoutLoopFactory(seconds=20)]}
+        self.run_test_node([MyEndpointFactory(), TimeoutLoopFactory()])  # start, stop
     """
 
     def __init__(self, seconds: float = 0.0, ms: float = 0.0, name: Optional[str] = None) -> None:
         super().__init__()
         total = seconds + ms / 1000.0
-        if total <= 0:
+        if not total >= 0:  # negative, or NaN
             raise ComponentError(
-                f"TimeoutLoopFactory(seconds={seconds}, ms={ms}) would stop the node at "
-                "once; give a positive time, e.g. TimeoutLoopFactory(seconds=5)."
+                f"TimeoutLoopFactory(seconds={seconds}, ms={ms}) is a negative time. Give "
+                "a positive time, e.g. TimeoutLoopFactory(seconds=5), or no time at all, "
+                "TimeoutLoopFactory(), to stop the node as soon as it starts."
             )
         self.seconds = total
         self.name = name or "timeout_loop"
