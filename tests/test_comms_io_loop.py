@@ -12,7 +12,7 @@ import socket
 import threading
 import time
 import unittest
-from typing import List, Tuple
+from typing import Any, Callable, List, Tuple, cast
 
 from snr import (
     AbstractNode,
@@ -29,6 +29,7 @@ from snr import (
     tasks,
 )
 from snr.prelude import ConfigError
+from snr.std_mods.comms.io_loop import IOLoop
 from snr.std_mods.comms.link import CommsLoop
 from snr.std_mods.comms.pipe import PipeTransport
 from snr.std_mods.comms.wire import encode_hello
@@ -186,6 +187,79 @@ class TestOneIOThreadPerNode(unittest.TestCase):
         self.assertEqual(io_threads(), ["snr-both-io"])
         nodes.stop()
         self.assertEqual(threads_of("both"), [], "the I/O thread ended with its node")
+
+
+class QuietNode:
+    """Just what an `IOLoop` asks of its node."""
+
+    role = "quiet"
+
+    def wait_for_room(self, timeout_s: float) -> bool:
+        return True
+
+
+class RingsWhileDrained:
+    """The loop's wake-up socket; runs ``during`` once, in the middle of a drain."""
+
+    def __init__(self, sock: socket.socket, during: Callable[[], None]) -> None:
+        self.sock = sock
+        self.during: Callable[[], None] = during
+
+    def recv(self, size: int) -> bytes:
+        during, self.during = self.during, lambda: None
+        during()
+        return self.sock.recv(size)
+
+    def __getattr__(self, name: str) -> Any:
+        return getattr(self.sock, name)
+
+
+class TestWakingTheIOThread(unittest.TestCase):
+    """A call from another thread runs at once, however it meets the loop's wake-up."""
+
+    def new_loop(self) -> IOLoop:
+        loop = IOLoop(cast(AbstractNode, QuietNode()))  # no links, so no timers
+        self.addCleanup(loop.stop)
+        return loop
+
+    def test_a_call_made_while_the_loop_drains_its_wake_ups_does_not_mute_later_calls(
+        self,
+    ) -> None:
+        # The interleaving a reconnecting client met: another thread rings
+        # just as the loop drains the wake-up socket. Every later call must
+        # still wake the loop (it has no timer to wake it otherwise).
+        loop = self.new_loop()
+        ran: List[str] = []
+        loop._wake_r = RingsWhileDrained(  # type: ignore[assignment]
+            loop._wake_r, lambda: loop.call_soon(lambda: ran.append("during the drain"))
+        )
+        loop._thread.start()
+        loop.call_soon(lambda: ran.append("first"))
+        self.assertTrue(wait_until(lambda: len(ran) == 2, 1.0), ran)
+        for n in range(3):
+            done = threading.Event()
+            loop.call_soon(done.set)
+            self.assertTrue(done.wait(1.0), f"call {n} after the drain ran within 1 s")
+
+    def test_calls_from_many_threads_each_run_within_a_second(self) -> None:
+        loop = self.new_loop()
+        loop._thread.start()
+        late: List[int] = []
+
+        def caller() -> None:
+            for n in range(2000):
+                done = threading.Event()
+                loop.call_soon(done.set)
+                if not done.wait(1.0):
+                    late.append(n)
+                    return
+
+        callers = [threading.Thread(target=caller) for _ in range(4)]
+        for thread in callers:
+            thread.start()
+        for thread in callers:
+            thread.join(30.0)
+        self.assertEqual(late, [], "calls that waited over 1 s for the I/O thread")
 
 
 class TestPipeTransport(unittest.TestCase):

@@ -321,10 +321,17 @@ class IOLoop:
             self._wake_w.close()
 
     def _drain_wake(self) -> None:
-        # Clear the flag first: a call_soon after this point rings again.
-        self._woken = False
+        # Drain first, then clear the flag, then (in _run) run the calls. A
+        # call_soon that saw the flag still set appended before it was
+        # cleared, so the calls run after this see it; one that sees it
+        # cleared rings again, and that byte stays until the next select.
+        # (Clearing first lost wake-ups: a byte rung between the clearing and
+        # the draining was drained with the rest, leaving the flag set with
+        # nothing to wake the selector, so later calls waited for a timer, or
+        # for ever on a loop with no timers, such as a client between links.)
         try:
             while self._wake_r.recv(4096):
                 pass
         except OSError:  # BlockingIOError: drained
             pass
+        self._woken = False
