@@ -18,7 +18,7 @@ not catch up within ``max_wait_s`` (1 s) the waiting task is dropped, counted
 and logged (at most once a second, with numbers), so a stuck node can never
 fill the memory. Tasks the node's own handlers return never wait (the node
 would wait on itself) and urgent tasks (terminate) never wait or drop.
-Readers of sockets use `over_high_water` to stop reading instead of waiting.
+Readers of sockets ask `wait_for_room(0)` and stop reading instead of waiting.
 """
 
 from __future__ import annotations

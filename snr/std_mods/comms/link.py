@@ -1,9 +1,11 @@
 """Links and the comms loop: what pipe and socket comms have in common.
 
 A `Link` is one live connection to one peer node. It owns a *transport* (a
-TCP socket or a pipe end), a reader thread that cuts incoming bytes into
-frames and hands pages to its `CommsLoop`, and an `Outbox` whose writer thread
-sends frames in the order they were queued.
+TCP socket or a pipe end) and an `Outbox` of frames waiting to be written,
+and has no thread of its own: the node's one `IOLoop` thread reads the
+transport when bytes arrive (cutting them into frames and handing pages to
+its `CommsLoop`) and writes queued frames when the transport has room, for
+every link of the node together.
 
 A `CommsLoop` (thesis 6.4.1) is the component a node gets: it forwards every
 page stored under its keys to each open link, and stores every page a link
@@ -11,10 +13,10 @@ receives, with the page's original origin and time.
 
 How a page travels::
 
-    node thread                          peer's reader thread      peer's node thread
+    node thread                          peer's I/O thread         peer's node thread
     store_page → CommsLoop.forward_page  →  frame bytes  →  decode → schedule(store_page)
-                 (encodes the very page       (outbox / writer         → datastore
-                  that was stored)             thread, in order)       → process_data
+                 (encodes the very page       (written at once, or     → datastore
+                  that was stored)             by the I/O thread)      → process_data
 
 Example (what `SocketsPair` and `PipeLoopFactory` build for you)::
 
@@ -31,15 +33,29 @@ from __future__ import annotations
 import collections
 import enum
 import logging
+import selectors
 import threading
 import time
-from typing import Any, Deque, Dict, List, Optional, Protocol, Sequence, Set, Tuple, Union
+from typing import (
+    Any,
+    Callable,
+    Deque,
+    Dict,
+    List,
+    Optional,
+    Protocol,
+    Sequence,
+    Set,
+    Tuple,
+    Union,
+)
 
 from snr.core import ThreadLoop, tasks
 from snr.core.logs import LossReport, RepeatFilter
 from snr.prelude import (
     AbstractFactory,
     AbstractNode,
+    CommsError,
     ComponentName,
     ConfigError,
     DataKey,
@@ -51,6 +67,7 @@ from snr.prelude import (
     TaskType,
     WireFormatError,
 )
+from snr.std_mods.comms.io_loop import IOLoop, IOTimer
 from snr.std_mods.comms.wire import (
     FrameDecoder,
     Hello,
@@ -94,7 +111,10 @@ DEFAULT_DEAD_AFTER_S = 4.0
 Keys = Union[DataKey, Sequence[DataKey], None]
 """What a comms factory takes as ``keys``: one data key, a list of them, or None."""
 
-_MAX_CHUNK_BYTES = 1024 * 1024  # the writer joins queued frames into chunks up to this size
+_MAX_CHUNK_BYTES = 1024 * 1024  # queued frames are joined into chunks up to this size
+_TICK_S = 0.25  # how often a link checks its peer's silence and whether it owes a beat
+_READ = selectors.EVENT_READ
+_WRITE = selectors.EVENT_WRITE
 _SHOWN_BAD_FRAMES = 5  # per link, log the first few bad frames in full, then a count every 5 s
 
 
@@ -124,7 +144,12 @@ def normalize_keys(keys: Keys, where: str) -> Tuple[str, ...]:
 
 
 class Transport(Protocol):
-    """A byte pipe to one peer: a TCP socket or a multiprocessing pipe end.
+    """A byte stream to one peer that the node's `IOLoop` can watch: a TCP socket or a pipe.
+
+    Every method returns at once (the file descriptor is non-blocking): the
+    loop calls ``recv_into`` when ``fileno()`` is readable and ``send`` when
+    it is writable, and the node's thread may call ``send`` too (under the
+    outbox's lock) to write a frame straight away.
 
     Example: ``SocketTransport(sock, "127.0.0.1:9000")`` in ``sockets.py``.
     """
@@ -132,23 +157,23 @@ class Transport(Protocol):
     peer: str
     """Where the peer is, for log messages, e.g. ``"127.0.0.1:9000"``."""
 
-    can_try_send: bool
-    """True when ``try_send`` can write without blocking (sockets on POSIX)."""
+    def fileno(self) -> int:
+        """The file descriptor the I/O loop watches."""
 
-    def send_all(self, data: bytes) -> None:
-        """Write all of ``data``, blocking until it is handed to the OS."""
+    def send(self, data: bytes) -> int:
+        """Write what fits without blocking; how many bytes went.
 
-    def try_send(self, data: bytes) -> int:
-        """Write what fits without blocking; how many bytes went."""
+        Raises BlockingIOError if nothing fits, another OSError if the peer is gone.
+        """
 
-    def receive(self) -> Optional[bytes]:
-        """Some bytes; ``b""`` at end of stream; None if nothing came in a while."""
+    def recv_into(self, buffer: bytearray) -> int:
+        """Read what has arrived into ``buffer``; 0 at end of stream.
+
+        Raises BlockingIOError if nothing has arrived, another OSError if the link broke.
+        """
 
     def end_writing(self) -> None:
         """Tell the peer nothing more will be sent (after a graceful flush)."""
-
-    def interrupt(self) -> None:
-        """Wake a blocked ``receive`` or ``send_all`` and make them fail."""
 
     def close(self) -> None:
         """Release the socket or pipe."""
@@ -163,9 +188,11 @@ class Outbox:
     ``put`` runs on the node's thread. With ``now=True`` and nothing waiting,
     it writes the frame straight away without blocking (no thread switch: the
     lowest latency). Otherwise, or when the OS buffer is full, the frame is
-    queued and the link's writer thread sends everything queued in one call
-    (the highest throughput when many pages come at once). Either way frames
-    leave in the order they were put.
+    queued, ``on_queued`` asks the node's I/O loop to watch for room, and
+    ``write_some`` then sends everything queued, joined into as few ``send``
+    calls as the socket takes (the highest throughput when many pages come at
+    once). Every write happens under the outbox's lock, so frames leave in the
+    order they were put and each is written whole, however the two threads meet.
 
     At most ``max_bytes`` wait. When a new page would go over, the newest
     page still waiting under the same key is dropped in its favour (newest
@@ -176,20 +203,30 @@ class Outbox:
     Example::
 
         outbox.put(frame, now=True, key="depth_m")   # "sent", "queued", "replaced" or "dropped"
+        outbox.write_some()                          # I/O loop: True once all is written
+
+    Attributes:
+        last_sent_at: when bytes last went to the transport (``time.monotonic()``).
     """
 
-    def __init__(self, transport: Transport, max_bytes: int) -> None:
+    def __init__(
+        self,
+        transport: Transport,
+        max_bytes: int,
+        on_queued: Optional[Callable[[], None]] = None,
+    ) -> None:
         self.transport = transport
         self.max_bytes = max_bytes
+        self.on_queued = on_queued
         self.dropped = 0
         self.dropped_by_key: Dict[DataKey, int] = {}
+        self.last_sent_at = time.monotonic()
         self._entries: Deque[_Entry] = collections.deque()
         self._newest: Dict[DataKey, _Entry] = {}
         self._queued_bytes = 0
         self._live = 0  # entries not superseded
-        self._writing = False  # the writer thread holds a chunk it is sending
         self._closed = False
-        self._changed = threading.Condition(threading.Lock())
+        self._lock = threading.Lock()
 
     def put(self, frame: bytes, now: bool = False, key: Optional[DataKey] = None) -> str:
         """Send (if ``now``) or queue ``frame``; says what happened.
@@ -198,32 +235,38 @@ class Outbox:
         ``key`` was dropped for it), ``"dropped"`` (the backlog is full) or
         ``"closed"``.
         """
-        with self._changed:
+        outcome = "queued"
+        with self._lock:
             if self._closed:
                 return "closed"
-            if now and not self._live and not self._writing and self.transport.can_try_send:
+            if now and not self._live:
                 try:
-                    sent = self.transport.try_send(frame)
-                except OSError:  # full (BlockingIOError) or broken: the writer deals with it
+                    sent = self.transport.send(frame)
+                except OSError:  # full (BlockingIOError) or broken: the I/O loop finds out
                     sent = 0
+                if sent:
+                    self.last_sent_at = time.monotonic()
                 if sent == len(frame):
                     return "sent"
                 if sent:  # the rest must go next, before anything else, whatever the cap
                     self._append(None, frame[sent:])
-                    return "queued"
-            outcome = "queued"
-            if self._queued_bytes + len(frame) > self.max_bytes:
-                older = self._newest.get(key) if key is not None else None
-                if older is None:
+                    frame = b""
+            if frame:
+                if self._queued_bytes + len(frame) > self.max_bytes:
+                    older = self._newest.get(key) if key is not None else None
+                    if older is None:
+                        self._count_drop(key)
+                        return "dropped"
+                    self._queued_bytes -= len(older[1])
+                    older[1] = None
+                    self._live -= 1
                     self._count_drop(key)
-                    return "dropped"
-                self._queued_bytes -= len(older[1])
-                older[1] = None
-                self._live -= 1
-                self._count_drop(key)
-                outcome = "replaced"
-            self._append(key, frame)
-            return outcome
+                    outcome = "replaced"
+                self._append(key, frame)
+            first = self._live == 1
+        if first and self.on_queued is not None:  # was empty: ask for a writer
+            self.on_queued()
+        return outcome
 
     def _append(self, key: Optional[DataKey], frame: bytes) -> None:
         entry: _Entry = [key, frame]
@@ -232,55 +275,84 @@ class Outbox:
             self._newest[key] = entry
         self._queued_bytes += len(frame)
         self._live += 1
-        self._changed.notify()
 
     def _count_drop(self, key: Optional[DataKey]) -> None:
         self.dropped += 1
         if key is not None:
             self.dropped_by_key[key] = self.dropped_by_key.get(key, 0) + 1
 
-    def take(self, timeout_s: Optional[float] = None) -> Optional[bytes]:
-        """For the writer: the next chunk of frames; None once closed and empty.
+    def write_some(self) -> bool:
+        """For the I/O loop: write what the transport takes now; True once nothing waits.
 
-        Blocks (without using CPU) until there is something to send; returns
-        ``b""`` if ``timeout_s`` passes first (time for a beat).
+        Queued frames are joined into chunks of up to 1 MiB, so many small
+        frames cost one system call. What does not fit stays first in line.
+
+        Raises:
+            OSError: the peer is gone (not BlockingIOError: a full buffer just
+                means "later").
         """
-        with self._changed:
-            self._writing = False
-            if not self._live:
-                if self._closed:
-                    return None
-                self._changed.wait(timeout_s)
-                if not self._live:
-                    return None if self._closed else b""
-            parts: List[bytes] = []
-            size = 0
+        with self._lock:
             entries = self._entries
-            while entries and size < _MAX_CHUNK_BYTES:
-                entry = entries.popleft()
-                frame = entry[1]
-                if frame is None:
-                    continue  # superseded by a newer page under its key
-                key = entry[0]
-                if key is not None and self._newest.get(key) is entry:
-                    del self._newest[key]
-                parts.append(frame)
-                size += len(frame)
-            self._queued_bytes -= size
-            self._live -= len(parts)
-            self._writing = True
-        return parts[0] if len(parts) == 1 else b"".join(parts)
+            while self._live:
+                parts: List[bytes] = []
+                taken: List[_Entry] = []
+                size = 0
+                for entry in entries:
+                    if size >= _MAX_CHUNK_BYTES:
+                        break
+                    taken.append(entry)
+                    if entry[1] is not None:
+                        parts.append(entry[1])
+                        size += len(entry[1])
+                chunk = parts[0] if len(parts) == 1 else b"".join(parts)
+                try:
+                    sent = self.transport.send(chunk)
+                except BlockingIOError:
+                    return False
+                if sent:
+                    self.last_sent_at = time.monotonic()
+                self._consume(taken, sent)
+                if sent < size:
+                    return False
+            return True
+
+    def _consume(self, taken: List[_Entry], sent: int) -> None:
+        """Forget the first ``sent`` bytes of the ``taken`` entries (a partial frame stays)."""
+        entries = self._entries
+        for entry in taken:
+            frame = entry[1]
+            if frame is not None:
+                if sent < len(frame):
+                    if sent:  # the rest goes first next time; the key no longer replaces it
+                        entry[1] = frame[sent:]
+                        self._queued_bytes -= sent
+                        self._forget_newest(entry)
+                    return
+                sent -= len(frame)
+                self._queued_bytes -= len(frame)
+                self._live -= 1
+                self._forget_newest(entry)
+            entries.popleft()
+
+    def _forget_newest(self, entry: _Entry) -> None:
+        key = entry[0]
+        if key is not None and self._newest.get(key) is entry:
+            del self._newest[key]
 
     def close(self, discard: bool) -> None:
         """Accept no more frames; with ``discard``, forget those still waiting."""
-        with self._changed:
+        with self._lock:
             self._closed = True
             if discard:
                 self._entries.clear()
                 self._newest.clear()
                 self._queued_bytes = 0
                 self._live = 0
-            self._changed.notify_all()
+
+    @property
+    def closed(self) -> bool:
+        """True once ``close`` was called."""
+        return self._closed
 
     @property
     def queued_bytes(self) -> int:
@@ -306,18 +378,25 @@ class LinkState(enum.Enum):
 
 
 class Link:
-    """One live connection to one peer, with a reader and a writer thread.
+    """One live connection to one peer, served by the node's `IOLoop` (no thread of its own).
 
-    The reader thread owns the link's end: when the peer goes away, a bad
-    length header arrives, the peer falls silent, or the link is aborted, it
-    stops the writer, closes the transport and tells the `CommsLoop`.
+    The I/O loop reads the link's transport when bytes arrive, cuts them into
+    frames and hands pages to the `CommsLoop`; it writes queued frames when
+    the transport has room. The link ends on the loop's thread when the peer
+    goes away, a bad length header arrives, the peer falls silent, or the
+    link is closed or aborted: it closes the transport and tells the
+    `CommsLoop`.
 
     Liveness: both sides promise a sign of life in their hello (``beat_s``)
-    and the writer sends a beat frame whenever it has sent nothing for that long.
+    and a link that has sent nothing for that long sends a beat frame.
     A peer that promised beats and is then not heard from for
     ``max(dead_after_s, 3 * its beat_s)`` is declared lost — also while pages
     flow the other way, which is when a Wi-Fi link usually dies — and the
     log says how many pages may have been lost with it.
+
+    Backpressure: while the node's queue is over its high-water mark the
+    link stops reading (the bytes wait in the OS and TCP slows the sender)
+    and reads on once there is room; the I/O thread never waits for it.
 
     Example::
 
@@ -334,9 +413,17 @@ class Link:
     """
 
     flush_timeout_s: float = 1.0
+    drain_s: float = 0.25  # after a graceful half-close, how long to read what still comes
 
     def __init__(self, owner: CommsLoop, transport: Transport) -> None:
+        io = owner.io_loop
+        if io is None:
+            raise CommsError(
+                f"Cannot open a link for comms component {owner.name!r}: it is not running "
+                "(it was never started, or it has stopped)."
+            )
         self.owner = owner
+        self.io = io
         self.transport = transport
         self.peer_role: Optional[str] = None
         self.peer_beat_s: Optional[float] = None
@@ -356,12 +443,18 @@ class Link:
             f"({owner.max_backlog_bytes // 1024:,} KiB wait to be sent; the newest page "
             "under each key is kept)",
         )
-        self.outbox = Outbox(transport, owner.max_backlog_bytes)
-        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s), now=False)
         self._closed = threading.Event()
-        thread_name = f"snr-{owner.parent.role}-{owner.name}-{transport.peer}"
-        self._reader = threading.Thread(target=self._read, name=thread_name + "-r", daemon=True)
-        self._writer = threading.Thread(target=self._write, name=thread_name + "-w", daemon=True)
+        # These belong to the I/O loop's thread (set before the hello, which may wake it).
+        self._decoder = FrameDecoder()
+        self._attached = False
+        self._paused = False
+        self._held: List[Page] = []  # decoded while the node was behind: delivered first
+        self._timer: Optional[IOTimer] = None
+        self._tick_s = min(_TICK_S, owner.beat_s / 4)
+        self._finished = False
+        self._ending = False  # half-closed after a graceful flush
+        self.outbox = Outbox(transport, owner.max_backlog_bytes, self._wake_writer)
+        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s), now=False)
 
     @property
     def label(self) -> str:
@@ -370,10 +463,13 @@ class Link:
             return f"{self.peer_role!r} at {self.transport.peer}"
         return self.transport.peer
 
+    def fileno(self) -> int:
+        """The transport's file descriptor (what the I/O loop watches)."""
+        return self.transport.fileno()
+
     def start(self) -> None:
-        """Start the reader and writer threads."""
-        self._writer.start()
-        self._reader.start()
+        """Hand the link to the node's I/O loop, which sends the hello and starts reading."""
+        self.io.call_soon(self._attach)
 
     def send(self, frame: bytes, now: bool = True, key: Optional[DataKey] = None) -> bool:
         """Send or queue a page's ``frame`` (node thread); False if it was dropped.
@@ -395,27 +491,21 @@ class Link:
             self.loss.dropped()
         return False
 
-    def _check_recovered(self) -> None:
-        # Writer thread, after each write and each quiet beat interval: the
-        # peer has caught up once everything queued went out and nothing was
-        # dropped for a second.
-        if self.loss.dropping and not len(self.outbox):
-            self.loss.recovered(quiet_s=1.0)
-
     def close(self) -> None:
         """Send what is queued, then end the connection (graceful)."""
         if self.state is LinkState.OPEN:
             self.state = LinkState.CLOSING
             self.outbox.close(discard=False)
+            self.io.call_soon(self._flush_then_end)
 
     def abort(self) -> None:
         """End the connection now, dropping what is queued."""
         self.state = LinkState.CLOSED
         self.outbox.close(discard=True)
-        self.transport.interrupt()
+        self.io.call_soon(lambda: self._finish("the link was closed"))
 
     def is_closed(self) -> bool:
-        """True once the reader has finished and the transport is closed."""
+        """True once the link has ended and the transport is closed."""
         return self._closed.is_set()
 
     def wait_closed(self, timeout_s: Optional[float]) -> bool:
@@ -423,15 +513,12 @@ class Link:
         return self._closed.wait(timeout_s)
 
     def is_alive(self) -> bool:
-        """True while the reader or the writer thread runs."""
-        return self._reader.is_alive() or self._writer.is_alive()
+        """True until the link has ended (it has no thread of its own)."""
+        return not self._closed.is_set()
 
     def join(self, timeout_s: Optional[float]) -> None:
-        """Wait for both threads to end."""
-        deadline = None if timeout_s is None else time.monotonic() + timeout_s
-        for thread in (self._reader, self._writer):
-            if thread.is_alive() and thread is not threading.current_thread():
-                thread.join(None if deadline is None else max(0.0, deadline - time.monotonic()))
+        """Wait up to ``timeout_s`` for the link to end."""
+        self._closed.wait(timeout_s)
 
     def stats(self) -> Dict[str, Any]:
         """The link's counters, e.g. for the console's ``stats`` command.
@@ -453,79 +540,202 @@ class Link:
             "heard_s_ago": round(time.monotonic() - self.last_heard, 3),
         }
 
-    # -- writer thread --------------------------------------------------------
-    def _write(self) -> None:
-        beat_s = self.owner.beat_s
-        try:
-            chunk = self.outbox.take(beat_s)
-            while chunk is not None:
-                if chunk:
-                    self.transport.send_all(chunk)
-                elif self.peer_beat_s is not None:  # quiet for beat_s: a sign of life
-                    self.transport.send_all(encode_beat())
-                self._check_recovered()
-                chunk = self.outbox.take(beat_s)
-            if self.state is LinkState.CLOSING:
-                self.transport.end_writing()
-        except OSError:  # the peer is gone: wake the reader, which reports it
-            self.transport.interrupt()
+    # -- I/O loop thread: life ------------------------------------------------
+    def _attach(self) -> None:
+        if self._finished:  # aborted before the loop got to it
+            return
+        self._attached = True
+        self.io.watch(self, _READ)
+        self._timer = self.io.call_later(self._tick_s, self._tick)
+        self.on_writable()  # the hello goes at once
 
-    # -- reader thread --------------------------------------------------------
-    def _read(self) -> None:
-        reason = "the link was closed"
+    def _wake_writer(self) -> None:
+        # Any thread, when the outbox stops being empty: watch for room to write.
+        if self.io.in_loop_thread():
+            self._want_write()
+        else:
+            self.io.call_soon(self._want_write)
+
+    def _want_write(self) -> None:
+        if self._attached and not self._finished and len(self.outbox):
+            self.io.watch(self, self.io.events(self) | _WRITE)
+
+    def _flush_then_end(self) -> None:
+        if self._attached and not self._finished and not len(self.outbox):
+            self._end_writing()
+
+    def _end_writing(self) -> None:
+        """Everything is sent: half-close, then read what still comes for a moment."""
+        if self._ending:
+            return
+        self._ending = True
+        self.transport.end_writing()
+        if self._timer is not None:
+            self._timer.cancel()
+        self._timer = self.io.call_later(self.drain_s, lambda: self._finish("the link was closed"))
+
+    def _tick(self) -> None:
+        """Every quarter beat or so: is the peer still there, and do we owe it a beat?"""
+        self._timer = None
+        if self._finished:
+            return
+        if not self._paused:  # a paused link reads nothing, so silence would mislead
+            silence = self._silence()
+            if silence is not None:
+                self._finish(silence)
+                return
+        if self.state is LinkState.OPEN:
+            if (
+                self.peer_beat_s is not None
+                and not len(self.outbox)
+                and time.monotonic() - self.outbox.last_sent_at >= self.owner.beat_s
+            ):
+                self.outbox.put(encode_beat(), now=True)  # quiet for beat_s: a sign of life
+            self._check_recovered()
+            self._timer = self.io.call_later(self._tick_s, self._tick)
+
+    def _check_recovered(self) -> None:
+        # The peer has caught up once everything queued went out and nothing
+        # was dropped for a second.
+        if self.loss.dropping and not len(self.outbox):
+            self.loss.recovered(quiet_s=1.0)
+
+    def on_io_stop(self) -> None:
+        """The I/O loop is stopping: end the link now."""
+        self._finish("the node stopped")
+
+    def _finish(self, reason: str) -> None:
+        if self._finished:
+            return
+        self._finished = True
+        if self.state is not LinkState.OPEN and not self.went_silent:
+            reason = reason if reason.startswith("the peer") else "the link was closed"
+        self.state = LinkState.CLOSED
+        self.outbox.close(discard=True)
+        if self._timer is not None:
+            self._timer.cancel()
+        self.io.forget(self)
+        self._drain_unread()
         try:
-            reason = self._read_frames()
-        except OSError as error:
-            reason = f"{type(error).__name__}: {error}" if self.state is LinkState.OPEN else reason
-        except Exception as error:  # a bug must not kill the node silently
-            reason = f"unexpected {type(error).__name__}: {error}"
-            self.owner.log.exception("Link to %s failed", self.label)
-        finally:
-            if self.state is LinkState.CLOSING:
-                self._writer.join(self.flush_timeout_s)  # let queued frames go out
-            self.abort()
-            self._writer.join(self.flush_timeout_s)
             self.transport.close()
-            self._closed.set()
-            self.owner.link_closed(self, reason)
+        except OSError:
+            pass
+        self._closed.set()
+        self.owner.link_closed(self, reason)
 
-    def _read_frames(self) -> str:
-        decoder = FrameDecoder()
-        while True:
-            data = self.transport.receive()
-            if data is None:  # nothing for a while
-                if self.state is not LinkState.OPEN:
-                    return "the link was closed"
-                silence = self._silence()
-                if silence is not None:
-                    return silence
-                continue
-            if not data:
-                if decoder.pending_bytes():
-                    self._bad_frame(
-                        WireFormatError(
-                            "the connection ended in the middle of a frame "
-                            f"({decoder.pending_bytes()} bytes of it arrived)"
-                        )
-                    )
-                return "the peer closed the connection"
-            self.last_heard = time.monotonic()
-            self._heard_anything = True
-            self._sent_when_heard = self.pages_sent
-            decoder.feed(data)
-            pages: List[Page] = []
+    def _drain_unread(self) -> None:
+        # Closing a socket with unread bytes makes the OS reset the connection,
+        # and the peer may then lose what it has not read of ours yet.
+        for _ in range(16):
             try:
+                if not self.transport.recv_into(self.io.buffer):
+                    return
+            except OSError:
+                return
+
+    # -- I/O loop thread: writing ---------------------------------------------
+    def on_writable(self) -> None:
+        """Write what is queued; stop watching for room once it is all out."""
+        try:
+            self._write()
+        except Exception as error:  # a bug must not kill the node silently
+            self._failed(error)
+
+    def on_readable(self) -> None:
+        """Read what arrived, cut it into frames, hand the pages on."""
+        try:
+            self._read()
+        except Exception as error:  # a bug must not kill the node silently
+            self._failed(error)
+
+    def _failed(self, error: Exception) -> None:
+        self.owner.log.exception("Link to %s failed", self.label)
+        self._finish(f"unexpected {type(error).__name__}: {error}")
+
+    def _write(self) -> None:
+        if self._finished:
+            return
+        try:
+            done = self.outbox.write_some()
+        except OSError as error:
+            self._finish(f"{type(error).__name__}: {error}")
+            return
+        if done:
+            events = self.io.events(self)
+            if events & _WRITE:
+                self.io.watch(self, events & ~_WRITE)
+            self._check_recovered()
+            if self.state is LinkState.CLOSING and self.outbox.closed:
+                self._end_writing()
+        elif not self.io.events(self) & _WRITE:
+            self.io.watch(self, self.io.events(self) | _WRITE)
+
+    # -- I/O loop thread: reading ---------------------------------------------
+    def _read(self) -> None:
+        if self._finished or self._paused:
+            return
+        try:
+            count = self.transport.recv_into(self.io.buffer)
+        except BlockingIOError:
+            return
+        except OSError as error:
+            self._finish(f"{type(error).__name__}: {error}")
+            return
+        decoder = self._decoder
+        if not count:
+            if decoder.pending_bytes():
+                self._bad_frame(
+                    WireFormatError(
+                        "the connection ended in the middle of a frame "
+                        f"({decoder.pending_bytes()} bytes of it arrived)"
+                    )
+                )
+            self._finish("the peer closed the connection")
+            return
+        self.last_heard = time.monotonic()
+        self._heard_anything = True
+        self._sent_when_heard = self.pages_sent
+        decoder.feed(bytes(self.io.view[:count]))
+        pages: List[Page] = []
+        try:
+            body = decoder.next_frame()
+            while body is not None:
+                self._decode_into(body, pages)
                 body = decoder.next_frame()
-                while body is not None:
-                    self._decode_into(body, pages)
-                    body = decoder.next_frame()
-            except WireFormatError as error:  # a bad length: the stream is lost
-                self._bad_frame(error, resetting=True)
-                self.owner.deliver(self, pages)
-                return f"reset after a bad frame ({error})"
-            if pages:
-                self.pages_received += len(pages)
-                self.owner.deliver(self, pages)
+        except WireFormatError as error:  # a bad length: the stream is lost
+            self._bad_frame(error, resetting=True)
+            self._deliver(pages)
+            self._finish(f"reset after a bad frame ({error})")
+            return
+        if pages:
+            self._deliver(pages)
+
+    def _deliver(self, pages: List[Page]) -> None:
+        if not pages:
+            return
+        self.pages_received += len(pages)
+        if self._held or not self.owner.parent.wait_for_room(0):
+            # The node is behind: keep these, read no more until it has room.
+            self._held.extend(pages)
+            self._pause()
+            return
+        self.owner.deliver(self, pages)
+
+    def _pause(self) -> None:
+        if not self._paused:
+            self._paused = True
+            self.io.watch(self, self.io.events(self) & ~_READ)
+            self.io.when_room(self._resume)
+
+    def _resume(self) -> None:
+        if self._finished:
+            return
+        self._paused = False
+        self.last_heard = time.monotonic()  # what waited in the OS is news of the peer
+        held, self._held = self._held, []
+        if held:
+            self.owner.deliver(self, held)
+        self.io.watch(self, self.io.events(self) | _READ)
 
     def _silence(self) -> Optional[str]:
         """Why the link is lost if the peer has been quiet too long, else None."""
@@ -624,8 +834,9 @@ class CommsLoop(ThreadLoop):
         self.dead_after_s = dead_after_s
         self.beat_s = min(1.0, dead_after_s / 4)
         self.links: Tuple[Link, ...] = ()
+        self.io_loop: Optional[IOLoop] = None  # the node's, while this component runs
         self._links_lock = threading.Lock()
-        self._started: List[Link] = []  # every link whose threads may still run
+        self._opened: List[Link] = []  # every link that may not have ended yet
         self._forwarded = frozenset(self.keys)
         # Pages a link delivered under a forwarded key, until forward_page sees
         # them: {id(page): (page, link)} so they are not sent back to that link.
@@ -677,19 +888,15 @@ class CommsLoop(ThreadLoop):
             self._unsendable_reported.add(kind)
             self.err("%s The page was dropped; the node keeps running.", error)
 
-    # -- link threads: receiving ----------------------------------------------
+    # -- I/O thread: receiving -------------------------------------------------
     def deliver(self, link: Link, pages: List[Page]) -> None:
-        """Store pages a link received (called on the link's reader thread).
+        """Store pages a link received (called on the node's I/O thread).
 
-        While the node's queue is over its high-water mark the reader waits
-        here instead of reading on: the bytes stay in the OS, TCP slows the
-        sender, and nothing is lost on this side.
+        The link calls it only while the node's queue has room: while the
+        queue is over its high-water mark the link stops reading instead (the
+        bytes stay in the OS, TCP slows the sender, and nothing is lost on
+        this side), so the I/O thread never waits here.
         """
-        if not pages:
-            return
-        while not self.parent.wait_for_room(0.25):
-            if link.state is not LinkState.OPEN:
-                return
         batch: List[Task] = []
         for page in pages:
             if page.key in self._forwarded:
@@ -698,27 +905,67 @@ class CommsLoop(ThreadLoop):
         self.schedule(batch)
 
     # -- opening and closing links --------------------------------------------
-    def open_link(self, transport: Transport) -> Link:
-        """Start a link over ``transport`` and start forwarding pages to it."""
-        link = Link(self, transport)
+    def _snr_start(self) -> None:
+        # Links need the node's I/O loop from begin() on; a restart after a
+        # failed reload keeps the one it has.
+        if self.io_loop is None:
+            self.io_loop = IOLoop.acquire(self.parent)
+        try:
+            super()._snr_start()
+        except BaseException:
+            self._release_io_loop()
+            raise
+
+    def _release_io_loop(self) -> None:
         with self._links_lock:
+            io, self.io_loop = self.io_loop, None
+        if io is not None:
+            io.release()
+
+    def open_link(self, transport: Transport) -> Link:
+        """Start a link over ``transport`` and start forwarding pages to it.
+
+        Raises:
+            CommsError: the component is not running (the transport is closed).
+        """
+        with self._links_lock:
+            try:
+                link = Link(self, transport)
+            except CommsError:
+                transport.close()
+                raise
             self.links = (*self.links, link)
-            self._started = [old for old in self._started if old.is_alive()] + [link]
+            self._opened = [old for old in self._opened if old.is_alive()] + [link]
         self._unsent_reported = False
         link.start()
         self.schedule(tasks.event(COMMS_CONNECTED, [self.name, transport.peer]))
         return link
 
     def link_closed(self, link: Link, reason: str) -> None:
-        """A link has closed (called on its reader thread); log it once."""
+        """A link has closed (called on the I/O thread); log it once."""
         with self._links_lock:
             self.links = tuple(other for other in self.links if other is not link)
         if not self.is_terminated():
             self.on_link_lost(link, reason)
-            self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
+            self._schedule_from_io(
+                tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer])
+            )
+
+    def _schedule_from_io(self, task: Task) -> None:
+        """Queue ``task`` without making the I/O thread wait for room in the node's queue.
+
+        ``schedule`` from another thread waits (up to 1 s) while the queue is
+        over its high-water mark; the I/O thread serves every link of the
+        node, so it queues the task once there is room instead.
+        """
+        io = self.io_loop
+        if io is not None and io.in_loop_thread() and not self.parent.wait_for_room(0):
+            io.when_room(lambda: self.schedule(task))
+        else:
+            self.schedule(task)
 
     def on_hello(self, link: Link) -> None:
-        """The peer said which node it is (called on the link's reader thread)."""
+        """The peer said which node it is (called on the node's I/O thread)."""
         self.info("Linked to node %r at %s", link.peer_role, link.transport.peer)
 
     def on_link_lost(self, link: Link, reason: str) -> None:
@@ -764,12 +1011,13 @@ class CommsLoop(ThreadLoop):
             link.close()
 
     def terminate(self) -> None:
-        """Wait (bounded) for links to finish closing, then force the rest."""
+        """Wait (bounded) for links to finish closing, force the rest, give back the I/O loop."""
         deadline = time.monotonic() + Link.flush_timeout_s
         for link in self.links:
             if not link.wait_closed(max(0.0, deadline - time.monotonic())):
                 link.abort()
         with self._links_lock:
-            started = list(self._started)
-        for link in started:  # closed links too: their threads may be finishing
+            opened = list(self._opened)
+        for link in opened:  # aborted ones end on the I/O thread's next pass
             link.join(max(0.1, deadline - time.monotonic()))
+        self._release_io_loop()

@@ -1,7 +1,8 @@
 """Pipe comms: link two nodes run by `MultiProcRunner` on one machine (thesis 6.4.1).
 
 Each end of a ``multiprocessing.Pipe()`` goes to one role's config. Frames
-are the same as over TCP (docs/wire-format.md), sent as bytes messages::
+are the same as over TCP (docs/wire-format.md), as one byte stream, and the
+node's I/O loop serves the pipe with its sockets::
 
     here, there = multiprocessing.Pipe()
     components = {
@@ -17,7 +18,10 @@ the other end, such as the parent, keeps the pipe open.)
 
 from __future__ import annotations
 
-from typing import TYPE_CHECKING, Any, Optional
+import os
+import socket
+import threading
+from typing import TYPE_CHECKING, Any, List, Optional
 
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, ConfigError
@@ -35,11 +39,19 @@ if TYPE_CHECKING:  # multiprocessing costs ~14 ms to import; the caller made the
 
 __all__ = ["PipeLoop", "PipeLoopFactory", "PipeTransport"]
 
-_POLL_S = 0.25  # how often a waiting reader checks whether it should stop
+_POLL_S = 0.25  # how often a bridge thread waiting on the pipe checks whether to stop
+_BRIDGE_BYTES = 256 * 1024
 
 
 class PipeTransport:
     """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``.
+
+    On POSIX a two-way pipe is a socket pair, so its file descriptor is
+    wrapped as a socket and served by the node's I/O loop like a TCP
+    connection, carrying frames as a plain byte stream (both ends are SNR, so
+    both read it that way). Where the end is not a socket (a Windows named
+    pipe), a socket pair stands in for it and two small threads copy bytes
+    between the two (``bridged`` is then True); the frames are the same.
 
     Example::
 
@@ -47,42 +59,93 @@ class PipeTransport:
         PipeTransport(here)
     """
 
-    can_try_send = False  # Connection.send_bytes always blocks: the writer thread sends
-
-    def __init__(self, connection: Connection, peer: str = "pipe") -> None:
+    def __init__(self, connection: Connection, peer: str = "pipe", bridge: bool = False) -> None:
         self.connection = connection
         self.peer = peer
-        self._interrupted = False
+        self._threads: List[threading.Thread] = []
+        sock = None if bridge else _as_socket(connection)
+        self.bridged = sock is None
+        if sock is None:
+            sock, far = socket.socketpair()
+            self._far = far
+            self._stop = threading.Event()
+            self._threads = [
+                threading.Thread(target=self._pipe_to_socket, name="snr-pipe-in", daemon=True),
+                threading.Thread(target=self._socket_to_pipe, name="snr-pipe-out", daemon=True),
+            ]
+            for thread in self._threads:
+                thread.start()
+        sock.setblocking(False)
+        self.sock = sock
 
-    def send_all(self, data: bytes) -> None:
-        """Send ``data`` as one message (blocks while the pipe is full)."""
-        self.connection.send_bytes(data)
+    def fileno(self) -> int:
+        """The socket's file descriptor."""
+        return self.sock.fileno()
 
-    def try_send(self, data: bytes) -> int:
-        """Not possible on a pipe; the outbox never calls it."""
-        raise BlockingIOError("pipes cannot send without blocking")
+    def send(self, data: bytes) -> int:
+        """Write what fits now; raises BlockingIOError if nothing does."""
+        return self.sock.send(data)
 
-    def receive(self) -> Optional[bytes]:
-        """The next message; ``b""`` once the other end is closed; None after a wait."""
-        if self._interrupted:
-            return b""
-        try:
-            if not self.connection.poll(_POLL_S):
-                return None
-            return self.connection.recv_bytes()
-        except EOFError:
-            return b""
+    def recv_into(self, buffer: bytearray) -> int:
+        """Read what has arrived; 0 once the other end is closed."""
+        return self.sock.recv_into(buffer)
 
     def end_writing(self) -> None:
-        """Pipes have no half-close; the reader stops on its next poll."""
-
-    def interrupt(self) -> None:
-        """Make the reader stop at its next poll (within 0.25 s)."""
-        self._interrupted = True
+        """Nothing: the other process may still use its end, so the pipe stays as it is."""
 
     def close(self) -> None:
-        """Close this end of the pipe."""
+        """Close this end of the pipe (and stop the copying threads, if any)."""
+        self.sock.close()
+        if self._threads:
+            self._stop.set()
+            for thread in self._threads:
+                if thread is not threading.current_thread():
+                    thread.join(_POLL_S * 2)
+            self._far.close()
         self.connection.close()
+
+    # -- the bridge, where the pipe is not a socket ---------------------------
+    def _pipe_to_socket(self) -> None:
+        try:
+            while not self._stop.is_set():
+                if self.connection.poll(_POLL_S):
+                    self._far.sendall(self.connection.recv_bytes())
+        except (EOFError, OSError):
+            pass
+        finally:  # the link sees end of stream
+            try:
+                self._far.shutdown(socket.SHUT_WR)
+            except OSError:
+                pass
+
+    def _socket_to_pipe(self) -> None:
+        try:
+            data = self._far.recv(_BRIDGE_BYTES)
+            while data:
+                self.connection.send_bytes(data)
+                data = self._far.recv(_BRIDGE_BYTES)
+        except OSError:
+            pass
+
+
+def _as_socket(connection: Connection) -> Optional[socket.socket]:
+    """This pipe end's own socket (a duplicate of its descriptor), or None if it is not one."""
+    if os.name == "nt":
+        return None  # a named pipe's handle, not a socket
+    try:
+        fd = os.dup(connection.fileno())
+    except OSError:
+        return None
+    try:
+        sock = socket.socket(fileno=fd)
+    except OSError:  # not a socket (an os.pipe end)
+        os.close(fd)
+        return None
+    if sock.type != socket.SOCK_STREAM:
+        sock.detach()
+        os.close(fd)
+        return None
+    return sock
 
 
 class PipeLoop(CommsLoop):
@@ -154,6 +217,12 @@ class PipeLoopFactory(LoopFactory):
                 f"PipeLoopFactory got {connection!r} ({type(connection).__name__}) as its "
                 "connection. Pass one end of multiprocessing.Pipe(): "
                 "`here, there = multiprocessing.Pipe()`, then PipeLoopFactory(here, keys)."
+            )
+        if not (getattr(connection, "readable", True) and getattr(connection, "writable", True)):
+            raise ConfigError(
+                "PipeLoopFactory got a one-way pipe end (multiprocessing.Pipe(duplex=False)); "
+                "links talk both ways (each side says hello and sends beats). Use "
+                "`here, there = multiprocessing.Pipe()`, which is two-way."
             )
         self.connection: Any = connection
         self.keys = normalize_keys(keys, "PipeLoopFactory")

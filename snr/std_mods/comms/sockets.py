@@ -20,7 +20,6 @@ from __future__ import annotations
 
 import errno
 import os
-import selectors
 import socket
 from typing import Optional, Tuple
 
@@ -51,12 +50,10 @@ Address = Tuple[str, int]
 DEFAULT_MAX_CONNECTIONS = 64
 """How many clients a sockets server takes at once; more are refused (and counted)."""
 
-_RECV_BYTES = 256 * 1024
 _ACCEPT_WAKE_S = 0.5  # how often a waiting server checks whether it should stop
 _CONNECT_TIMEOUT_S = 0.5
 _FIRST_RETRY_S = 0.05
 _MAX_RETRY_S = 1.0
-_DONTWAIT = getattr(socket, "MSG_DONTWAIT", 0)  # not on Windows: the writer thread sends
 
 
 def _describe(address: Address) -> str:
@@ -89,26 +86,22 @@ def _limit_unacknowledged(sock: socket.socket, seconds: float) -> None:
 
 
 class SocketTransport:
-    """A connected TCP socket as a link ``Transport`` (``TCP_NODELAY`` on).
+    """A connected TCP socket as a link ``Transport`` (non-blocking, ``TCP_NODELAY`` on).
 
-    ``receive`` returns None after ``wake_s`` without data, so the reader can
-    check that the peer is still alive and that the link should stay open.
+    The node's I/O loop watches it; nothing here ever blocks.
 
     Example::
 
         SocketTransport(socket.create_connection(("localhost", 9000)), "localhost:9000")
     """
 
-    can_try_send = bool(_DONTWAIT)
-
     def __init__(
         self,
         sock: socket.socket,
         peer: str,
         dead_after_s: float = DEFAULT_DEAD_AFTER_S,
-        wake_s: float = 0.25,
     ) -> None:
-        sock.settimeout(None)
+        sock.setblocking(False)
         # Every frame is written in one call; without this, Nagle's algorithm
         # holds small frames back for up to ~40-200 ms.
         sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
@@ -116,30 +109,18 @@ class SocketTransport:
         _limit_unacknowledged(sock, dead_after_s)
         self.sock = sock
         self.peer = peer
-        self.wake_s = wake_s
-        # The reader waits here for data (a timeout on the socket itself would
-        # also cut short the writer thread's sendall).
-        self._ready = selectors.DefaultSelector()
-        self._ready.register(sock, selectors.EVENT_READ)
-        # recv(n) allocates n bytes each call, and a big allocation costs an
-        # mmap: reading into one reused buffer is ~5x faster for small frames.
-        self._buffer = bytearray(_RECV_BYTES)
-        self._view = memoryview(self._buffer)
 
-    def send_all(self, data: bytes) -> None:
-        """Write all of ``data`` (blocks while the peer's buffers are full)."""
-        self.sock.sendall(data)
+    def fileno(self) -> int:
+        """The socket's file descriptor."""
+        return self.sock.fileno()
 
-    def try_send(self, data: bytes) -> int:
+    def send(self, data: bytes) -> int:
         """Write what fits now; raises BlockingIOError if nothing does."""
-        return self.sock.send(data, _DONTWAIT)
+        return self.sock.send(data)
 
-    def receive(self) -> Optional[bytes]:
-        """Bytes as they come; ``b""`` when the peer closed; None after ``wake_s`` of quiet."""
-        if not self._ready.select(self.wake_s):
-            return None
-        count = self.sock.recv_into(self._buffer)
-        return bytes(self._view[:count])
+    def recv_into(self, buffer: bytearray) -> int:
+        """Read what has arrived; 0 when the peer closed; BlockingIOError if nothing has."""
+        return self.sock.recv_into(buffer)
 
     def end_writing(self) -> None:
         """Half-close: the peer reads to the end, then sees end of stream."""
@@ -148,16 +129,8 @@ class SocketTransport:
         except OSError:
             pass
 
-    def interrupt(self) -> None:
-        """Wake a blocked ``receive``/``send_all`` on another thread."""
-        try:
-            self.sock.shutdown(socket.SHUT_RDWR)
-        except OSError:
-            pass
-
     def close(self) -> None:
         """Release the socket."""
-        self._ready.close()
         self.sock.close()
 
 
@@ -199,7 +172,9 @@ class SocketsServerLoop(CommsLoop):
     """Accepts clients and links to each; built by ``SocketsPair.server()``.
 
     It listens as soon as the node starts (a port in use stops the node with
-    a `CommsError` naming the port and the role).
+    a `CommsError` naming the port and the role). Its own thread accepts;
+    every accepted connection is served by the node's one I/O thread
+    (``IOLoop``), so hundreds of idle clients add no threads.
 
     Example::
 
