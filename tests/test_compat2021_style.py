@@ -147,3 +147,31 @@ class TestTempFile(SNRTestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class TestPipeLoop(SNRTestCase):
+    @pytest.mark.timeout(5)
+    def test_a_page_serialized_into_the_pipe_is_stored_and_the_end_closes(self) -> None:
+        parent_conn, child_conn = mp.Pipe()
+        page = Page("pipe_data", {"depth": 2.5}, "old_code", 1234.5)
+        parent_conn.send_bytes(page.serialize().encode())
+        expector = self.expector({(TaskType.store_page, "pipe_data"): 1})
+        with expector:
+            node = self.run_test_node(
+                [
+                    PipeLoopFactory(child_conn),  # no keys: forwards nothing, stores what comes
+                    ExpectorEndpointFactory(expector, exit_when_satisfied=True),
+                ]
+            )
+        stored = node.get_page("pipe_data")
+        self.assertPage(stored, "pipe_data", {"depth": 2.5}, origin="old_code")
+        assert stored is not None
+        self.assertEqual(stored.created_at_s, 1234.5)
+        # The node has stopped: its end of the pipe is closed (after its hello).
+        received = []
+        with self.assertRaises(EOFError):
+            for _ in range(10):
+                if not parent_conn.poll(2.0):
+                    break
+                received.append(parent_conn.recv_bytes())
+        self.assertLessEqual(len(received), 1)  # at most SNR's hello frame

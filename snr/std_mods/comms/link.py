@@ -71,6 +71,7 @@ from snr.std_mods.comms.io_loop import IOLoop, IOTimer
 from snr.std_mods.comms.wire import (
     FrameDecoder,
     Hello,
+    Message,
     decode_body,
     encode_beat,
     encode_hello,
@@ -760,7 +761,7 @@ class Link:
 
     def _decode_into(self, body: bytes, pages: List[Page]) -> None:
         try:
-            message = decode_body(body)
+            message = self.owner.decode_message(body)
         except WireFormatError as error:
             self._bad_frame(error)
             return
@@ -971,6 +972,14 @@ class CommsLoop(ThreadLoop):
     def on_link_lost(self, link: Link, reason: str) -> None:
         """Log that the peer went away (subclasses say what happens next)."""
         self.warn("Lost the link to %s: %s.", link.label, reason)
+
+    def decode_message(self, body: bytes) -> Message:
+        """The message in one frame's body (`decode_body`); a subclass may accept more.
+
+        Raises:
+            WireFormatError: the body is not a frame of docs/wire-format.md.
+        """
+        return decode_body(body)
 
     def stats(self) -> List[Dict[str, Any]]:
         """The counters of every open link (see `Link.stats`).

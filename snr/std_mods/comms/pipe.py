@@ -24,7 +24,8 @@ import threading
 from typing import TYPE_CHECKING, Any, List, Optional
 
 from snr.core import LoopFactory
-from snr.prelude import AbstractNode, ConfigError
+from snr.prelude import AbstractNode, ConfigError, WireFormatError
+from snr.std_mods.codec import load_object, page_from_fields
 from snr.std_mods.comms.link import (
     DEFAULT_DEAD_AFTER_S,
     DEFAULT_MAX_BACKLOG_BYTES,
@@ -33,6 +34,7 @@ from snr.std_mods.comms.link import (
     Link,
     normalize_keys,
 )
+from snr.std_mods.comms.wire import Message, decode_body
 
 if TYPE_CHECKING:  # multiprocessing costs ~14 ms to import; the caller made the pipe
     from multiprocessing.connection import Connection
@@ -176,6 +178,29 @@ class PipeLoop(CommsLoop):
         """Wait; stop once the pipe has closed (a pipe cannot reconnect)."""
         if self.link is None or self.link.wait_closed(0.5):
             self.set_terminate_flag("the pipe closed")
+
+    def decode_message(self, body: bytes) -> Message:
+        """A frame's message; on a pipe also a page in `Page.serialize()`'s text.
+
+        Code written for the 2021 release sends pages into a pipe as
+        ``conn.send_bytes(page.serialize().encode())``: a JSON object with the
+        page's fields and no ``"v"``. Such a page is accepted here, checked as
+        strictly as a frame's page (its values, key and origin), and stored.
+
+        Example::
+
+            there.send_bytes(Page("depth", 2.5, "old_code", 0.0).serialize().encode())
+        """
+        try:
+            return decode_body(body)
+        except WireFormatError:
+            try:
+                fields = load_object(body)
+            except WireFormatError:
+                fields = {}
+            if "v" in fields or "key" not in fields:
+                raise  # not a 2021 page either: the frame's own error says why
+            return page_from_fields(fields, default_origin=self.parent.role)
 
     def on_link_lost(self, link: Link, reason: str) -> None:
         self.warn(
