@@ -239,7 +239,7 @@ class TestLifeCycle(SNRTestCase):
         before = resource.getrusage(resource.RUSAGE_SELF)
         wall = time.monotonic()
         thread.start()
-        time.sleep(0.8)
+        time.sleep(0.6)
         node.set_terminate_flag("done")
         thread.join(5)
         after = resource.getrusage(resource.RUSAGE_SELF)
