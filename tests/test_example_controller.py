@@ -92,7 +92,15 @@ class TestControllerExample(SNRTestCase):
             env=env,
         )
         try:
-            time.sleep(0.5)  # let the server start listening first, as a student would
+            # Start the input device once the server listens, as a student would.
+            deadline = time.monotonic() + 10
+            while time.monotonic() < deadline:
+                with (
+                    contextlib.suppress(OSError),
+                    socket.create_connection(("127.0.0.1", int(port)), timeout=1),
+                ):
+                    break
+                time.sleep(0.02)
             sender = subprocess.run(
                 [*command, "input_device", "--simulated", "--port", port, "--seconds", "2.2"],
                 capture_output=True,
