@@ -201,8 +201,8 @@ class TestDeadPath(CommsFaultTest):
     def test_a_blackholed_path_is_found_on_both_sides_while_pages_flow(self) -> None:
         relay = Relay(self.port)
         self.addCleanup(relay.close)
-        server = SocketsPair(("127.0.0.1", self.port), dead_after_s=1.0)
-        via_relay = SocketsPair(("127.0.0.1", relay.port), dead_after_s=1.0)
+        server = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.5)
+        via_relay = SocketsPair(("127.0.0.1", relay.port), dead_after_s=0.5)
         ticks = TickerFactory(hz=200)
         counter = CounterFactory("tick")
         config = Config(
@@ -223,7 +223,7 @@ class TestDeadPath(CommsFaultTest):
             line = next(line for line in self.log.matching(lost) if line.startswith(side))
             self.assertIn("pages sent since it was last heard from may be lost", line)
         found_s = max(when for when, line in self.log.lines if lost in line) - cut
-        self.assertLess(found_s, 3.0, "declared lost within the bound (1 s of silence)")
+        self.assertLess(found_s, 3.0, "declared lost within the bound (0.5 s of silence)")
         sender_line = next(line for line in self.log.matching(lost) if "snr.sender" in line)
         self.assertRegex(sender_line, r"; [1-9]\d* pages sent since")  # pages were in flight
 
