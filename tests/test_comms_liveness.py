@@ -201,8 +201,8 @@ class TestDeadPath(CommsFaultTest):
     def test_a_blackholed_path_is_found_on_both_sides_while_pages_flow(self) -> None:
         relay = Relay(self.port)
         self.addCleanup(relay.close)
-        server = SocketsPair(("127.0.0.1", self.port), dead_after_s=1.0)
-        via_relay = SocketsPair(("127.0.0.1", relay.port), dead_after_s=1.0)
+        server = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.5)
+        via_relay = SocketsPair(("127.0.0.1", relay.port), dead_after_s=0.5)
         ticks = TickerFactory(hz=200)
         counter = CounterFactory("tick")
         config = Config(
@@ -223,7 +223,7 @@ class TestDeadPath(CommsFaultTest):
             line = next(line for line in self.log.matching(lost) if line.startswith(side))
             self.assertIn("pages sent since it was last heard from may be lost", line)
         found_s = max(when for when, line in self.log.lines if lost in line) - cut
-        self.assertLess(found_s, 3.0, "declared lost within the bound (1 s of silence)")
+        self.assertLess(found_s, 3.0, "declared lost within the bound (0.5 s of silence)")
         sender_line = next(line for line in self.log.matching(lost) if "snr.sender" in line)
         self.assertRegex(sender_line, r"; [1-9]\d* pages sent since")  # pages were in flight
 
@@ -302,9 +302,12 @@ class FloodFactory(LoopFactory):
 
 class TestSlowReader(CommsFaultTest):
     def test_a_paused_reader_costs_bounded_memory_and_every_drop_is_counted(self) -> None:
+        original_quiet = CommsLoop.recovered_after_s
+        CommsLoop.recovered_after_s = 0.3  # the default is 1 s
+        self.addCleanup(setattr, CommsLoop, "recovered_after_s", original_quiet)
         pair = SocketsPair(("127.0.0.1", self.port), max_backlog_bytes=256 * 1024)
         flood = FloodFactory(count=3000)
-        counter = CounterFactory("flood", pause_s=1.0)
+        counter = CounterFactory("flood", pause_s=0.5)
         original = Node.max_queued_tasks
         Node.max_queued_tasks = 100
         self.addCleanup(setattr, Node, "max_queued_tasks", original)
@@ -321,7 +324,7 @@ class TestSlowReader(CommsFaultTest):
         assert isinstance(client, CommsLoop)
         [stats] = client.stats()
         dropped = stats["dropped"]
-        self.assertGreater(dropped, 0, "the receiver paused for 1 s: some pages had to go")
+        self.assertGreater(dropped, 0, "the receiver paused for 0.5 s: some pages had to go")
         self.assertEqual(stats["dropped_by_key"], {"flood": dropped})
         self.assertEqual(len(counter.seen) + dropped, 3001, "every page arrived or was counted")
         drops = self.log.matching("Dropped")
@@ -329,7 +332,7 @@ class TestSlowReader(CommsFaultTest):
         self.assertLessEqual(len(drops), 5, "at most one line a second")
         self.assertTrue(
             wait_until(lambda: bool(self.log.matching("Recovered:")), 3.0),
-            "a recovery line follows, once nothing was dropped for a second",
+            "a recovery line follows, once nothing was dropped for 0.3 s",
         )
         recovered = self.log.matching("Recovered:")
         self.assertEqual(len(recovered), 1, "one episode, one recovery line")
@@ -360,7 +363,7 @@ class TestConnectionLimits(CommsFaultTest):
 
     def test_a_connection_that_never_speaks_is_closed(self) -> None:
         original = CommsLoop.hello_timeout_s
-        CommsLoop.hello_timeout_s = 0.3
+        CommsLoop.hello_timeout_s = 0.1
         self.addCleanup(setattr, CommsLoop, "hello_timeout_s", original)
         pair = SocketsPair(("127.0.0.1", self.port))
         self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
@@ -379,13 +382,13 @@ class TestConnectionLimits(CommsFaultTest):
         self.assertTrue(wait_until(lambda: bool(self.log.matching("not even a hello")), 2.0))
 
     def test_a_peer_that_promised_no_beats_may_stay_quiet(self) -> None:
-        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.2)
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.1)
         self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
         sock = connect_when_listening(self.port)
         self.addCleanup(sock.close)
         body = b'{"v":1,"kind":"hello","role":"old_node"}'
         sock.sendall(len(body).to_bytes(4, "big") + body)
-        time.sleep(0.5)  # over twice the silence limit
+        time.sleep(0.25)  # over twice the silence limit
         self.assertEqual(self.log.matching("nothing heard"), [])
         sock.settimeout(0.2)
         try:

@@ -6,7 +6,7 @@ import time
 import unittest
 from typing import Any, List
 
-from snr import COMMS_CONNECTED, SocketsPair
+from snr import COMMS_CONNECTED, COMMS_DISCONNECTED, SocketsPair
 from tests.comms_helpers import (
     CpuMeterFactory,
     EchoFactory,
@@ -133,7 +133,7 @@ class TestFaults(SocketsProcessTest):
             SendOnConnectFactory("a", 3),
             EventReporterFactory(writer, [COMMS_CONNECTED]),
         )
-        time.sleep(0.4)  # the client is retrying meanwhile
+        time.sleep(0.2)  # the client is retrying meanwhile (first retries at 0.05 and 0.15 s)
         self.assertEqual(self.reports.seen, [])
         self.node("receiver", self.pair.server(), ReporterFactory(writer, ["a"]))
         self.assertEqual(self.collect("receiver", "a", 3), [0, 1, 2])
@@ -149,7 +149,9 @@ class TestFaults(SocketsProcessTest):
         first = self.node("receiver", self.pair.server(), ReporterFactory(writer, ["tick"]))
         self.collect("receiver", "tick", 5)
         first.kill()  # SIGKILL: no goodbye on the wire
-        time.sleep(0.3)
+        # The sender notices after the receiver died, so every report of the
+        # first receiver is ahead of its warning in the pipe: `before` is exact.
+        self.reports.wait_for(lambda r: r[0] == "log" and "Lost the link" in r[3])
         before = len(pages_of(self.reports.seen, "receiver", "tick"))
         self.node("receiver", self.pair.server(), ReporterFactory(writer, ["tick"]))
         ticks = self.collect("receiver", "tick", before + 5)
@@ -164,11 +166,18 @@ class TestFaults(SocketsProcessTest):
 
     def test_server_survives_a_killed_client_and_takes_the_next(self) -> None:
         writer = self.reports.writer
-        server = self.node("receiver", self.pair.server(), ReporterFactory(writer, ["tick"]))
+        server = self.node(
+            "receiver",
+            self.pair.server(),
+            ReporterFactory(writer, ["tick"]),
+            EventReporterFactory(writer, [COMMS_DISCONNECTED]),
+        )
         first = self.node("sender", self.pair.client(["tick"]), TickerFactory("tick", hz=50))
         self.collect("receiver", "tick", 3)
         first.kill()
-        time.sleep(0.2)
+        # The link's end is handled after the pages read before it: once it is
+        # reported, every page of the first sender has been too.
+        self.reports.wait_for(lambda r: r[0] == "event" and r[2] == COMMS_DISCONNECTED)
         before = len(pages_of(self.reports.seen, "receiver", "tick"))
         self.node("sender", self.pair.client(["tick"]), TickerFactory("tick", hz=50))
         ticks = self.collect("receiver", "tick", before + 3)

@@ -65,7 +65,8 @@ class TestDocsBuild(unittest.TestCase):
         with snr.docsite.make_server(self.output, 0) as server:
             host, port = server.server_address[:2]
             self.assertEqual(host, "127.0.0.1")
-            thread = threading.Thread(target=server.serve_forever, daemon=True)
+            # serve_forever checks for shutdown() every poll_interval (0.5 s by default).
+            thread = threading.Thread(target=server.serve_forever, args=(0.02,), daemon=True)
             thread.start()
             try:
                 url = f"http://127.0.0.1:{port}/guide/index.html"

@@ -10,6 +10,7 @@ import signal
 import socket
 import subprocess
 import sys
+import threading
 import time
 import unittest
 from types import ModuleType
@@ -20,6 +21,7 @@ from snr import ExpectorEndpointFactory, SimulatedJoystick, SNRTestCase, TaskTyp
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXAMPLE = os.path.join(ROOT, "examples", "controller", "main.py")
+Y_RELEASED = "(event, 'button_released'): ['Y']"
 PRESSED = (TaskType.event, "button_pressed")
 RELEASED = (TaskType.event, "button_released")
 FIGURE_5_4_LINES = [  # what the default simulated script makes the receiver print
@@ -101,28 +103,47 @@ class TestControllerExample(SNRTestCase):
                 ):
                     break
                 time.sleep(0.02)
+            # The receiver prints (and flushes) a line per event: read them as
+            # they come, so the test stops it once Y's release is in.
+            out_lines: List[str] = []
+            err_lines: List[str] = []
+            readers = [
+                threading.Thread(target=lambda: out_lines.extend(receiver.stdout or [])),
+                threading.Thread(target=lambda: err_lines.extend(receiver.stderr or [])),
+            ]
+            for reader in readers:
+                reader.start()
+            # Y is released 1.6 s into the pad's script, which starts with the node.
             sender = subprocess.run(
-                [*command, "input_device", "--simulated", "--port", port, "--seconds", "2.2"],
+                [*command, "input_device", "--simulated", "--port", port, "--seconds", "1.9"],
                 capture_output=True,
                 text=True,
                 env=env,
                 timeout=20,
             )
-            time.sleep(0.3)  # the last pages are on their way
+            deadline = time.monotonic() + 5  # the last pages are on their way
+            while Y_RELEASED not in "".join(out_lines) and time.monotonic() < deadline:
+                time.sleep(0.01)
             # Stop the receiver with Ctrl-C, as in thesis figure 5.4.
             receiver.send_signal(signal.SIGINT if os.name == "posix" else signal.SIGTERM)
-            out, err = receiver.communicate(timeout=10)
+            receiver.wait(timeout=10)
+            for reader in readers:
+                reader.join(10)
+            out, err = "".join(out_lines), "".join(err_lines)
         finally:
             if receiver.poll() is None:
                 receiver.kill()
-                receiver.communicate()
+                receiver.wait()
+            for stream in (receiver.stdout, receiver.stderr):
+                if stream is not None:
+                    stream.close()
         self.assertEqual(sender.returncode, 0, sender.stderr)
         self.assertEqual(receiver.returncode, 0, err)
         printed: List[str] = [line for line in out.splitlines() if line.startswith("(event")]
         # Presses made before the client had connected may be missed; the rest
         # arrive in order, each printed exactly once.
         self.assertIn("(event, 'button_pressed'): ['Y']", printed)
-        self.assertIn("(event, 'button_released'): ['Y']", printed)
+        self.assertIn(Y_RELEASED, printed)
         start = FIGURE_5_4_LINES.index(printed[0])
         self.assertEqual(printed, FIGURE_5_4_LINES[start : start + len(printed)])
         self.assertIn("Interrupted by user, exiting", out)

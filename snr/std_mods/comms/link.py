@@ -602,9 +602,9 @@ class Link:
 
     def _check_recovered(self) -> None:
         # The peer has caught up once everything queued went out and nothing
-        # was dropped for a second.
+        # was dropped for a while (a second by default).
         if self.loss.dropping and not len(self.outbox):
-            self.loss.recovered(quiet_s=1.0)
+            self.loss.recovered(quiet_s=self.owner.recovered_after_s)
 
     def on_io_stop(self) -> None:
         """The I/O loop is stopping: end the link now."""
@@ -819,6 +819,9 @@ class CommsLoop(ThreadLoop):
 
     hello_timeout_s: float = 5.0
     """A connection that sends nothing at all for this long is closed."""
+
+    recovered_after_s: float = 1.0
+    """After drops, a link logs "Recovered" once nothing was dropped for this long."""
 
     def __init__(
         self,
