@@ -263,6 +263,41 @@ class FailingFactory(EndpointFactory):
         return Failing(self, parent)
 
 
+class ReadsWhatSetupStored(ThreadLoop):
+    """Thesis listing A.4's pattern: setup() stores a page that loop() reads at once."""
+
+    def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "reader", max_tick_rate_hz=0.5)
+        self.seen: List[Any] = []
+
+    def setup(self) -> None:
+        self.store_data("thruster_data", 0)
+
+    def loop(self) -> None:
+        page = self.get_page("thruster_data")
+        self.seen.append(None if page is None else page.data)
+        self.set_terminate_flag("read once")
+        self.schedule(tasks.terminate("read once"))
+
+
+class ReadsWhatSetupStoredFactory(LoopFactory):
+    def __init__(self) -> None:
+        super().__init__()
+        self.built: List[ReadsWhatSetupStored] = []
+
+    def get(self, parent: AbstractNode) -> ReadsWhatSetupStored:
+        self.built.append(ReadsWhatSetupStored(self, parent))
+        return self.built[-1]
+
+
+class TestSetupComesFirst(unittest.TestCase):
+    def test_what_setup_stored_is_there_in_the_first_loop(self) -> None:
+        for _ in range(20):  # a race would show within a few runs
+            factory = ReadsWhatSetupStoredFactory()
+            run_node([factory])
+            self.assertEqual(factory.built[0].seen, [0])
+
+
 class TestRepeatedFailures(unittest.TestCase):
     def test_the_same_failure_is_shown_three_times_then_counted(self) -> None:
         with self.assertLogs("snr.life", "ERROR") as logs:

@@ -7,6 +7,7 @@ import threading
 import time
 from typing import Optional
 
+from snr.core import tasks
 from snr.core.component import Component
 from snr.core.explain import running_line
 from snr.prelude import (
@@ -16,6 +17,8 @@ from snr.prelude import (
     ComponentError,
     ComponentName,
     NodeStateError,
+    Task,
+    TaskType,
 )
 from snr.prelude.errors import describe_class
 
@@ -88,7 +91,16 @@ class ThreadLoop(Component, AbstractLoop):
 
     # -- what students write ------------------------------------------------
     def setup(self) -> None:
-        """Runs once on the loop's thread before the first ``loop()``."""
+        """Runs once on the loop's thread before the first ``loop()``.
+
+        What it stores is in the datastore by the time the first ``loop()``
+        runs (the loop waits, at most a second, for the node to handle it).
+
+        Example::
+
+            def setup(self) -> None:
+                self.store_data("thruster_data", 0)   # loop() can read it at once
+        """
 
     def loop(self) -> None:
         """One pass of the work; override this (required)."""
@@ -172,6 +184,22 @@ class ThreadLoop(Component, AbstractLoop):
             return ""
         return running_line(thread.ident)
 
+    def _wait_for_setup_tasks(self, timeout_s: float = 1.0) -> None:
+        """Let the node handle what ``setup()`` stored before the first ``loop()``.
+
+        ``store_data`` from a loop only queues the page; without this wait, a
+        ``loop()`` reading it at once (thesis listing A.4) could find nothing.
+        The node handles tasks in order, so once it has handled a marker task
+        scheduled now, it has handled everything ``setup()`` scheduled. The
+        wait ends early if the loop is stopped, and after ``timeout_s`` anyway.
+        """
+        caught_up = threading.Event()
+        self.schedule(Task(TaskType.event, tasks.CAUGHT_UP, [caught_up]))
+        deadline = time.monotonic() + timeout_s
+        while not caught_up.wait(0.01):
+            if self._stop_event.is_set() or time.monotonic() > deadline:
+                return
+
     def _run(self) -> None:
         profiler = self.parent.profiler
         cell = profiler.loop_cell(self.name) if profiler is not None else None
@@ -181,6 +209,8 @@ class ThreadLoop(Component, AbstractLoop):
         clock = time.perf_counter
         try:
             self.setup()
+            if type(self).setup is not ThreadLoop.setup:
+                self._wait_for_setup_tasks()
             while not stop.is_set():
                 started = clock()
                 self.loop()

@@ -8,6 +8,7 @@ components, and stops the node on a terminate task.
 from __future__ import annotations
 
 import dataclasses
+import threading
 from typing import Any
 
 from snr.core import tasks
@@ -37,6 +38,7 @@ class NodeCoreEndpoint(Endpoint):
             TaskType.store_page: self.store_page_handler,
             (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
             (TaskType.event, tasks.REMOVE_COMPONENT): self.remove_component_handler,
+            (TaskType.event, tasks.CAUGHT_UP): self.caught_up_handler,
             TaskType.reload: self.reload_handler,
             TaskType.terminate: self.terminate_handler,
         }
@@ -73,6 +75,13 @@ class NodeCoreEndpoint(Endpoint):
         """Remove the component named in the task."""
         for name in task.val_list:
             self.node.remove_component(str(name))
+        return None
+
+    def caught_up_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Everything scheduled before this task was handled: set the event it carries."""
+        for value in task.val_list:
+            if isinstance(value, threading.Event):
+                value.set()
         return None
 
     def reload_handler(self, task: Task, key: TaskId) -> SomeTasks:

@@ -26,6 +26,7 @@ from snr.prelude import (
 
 __all__ = [
     "ADD_COMPONENT",
+    "CAUGHT_UP",
     "REMOVE_COMPONENT",
     "add_component",
     "event",
@@ -42,6 +43,10 @@ ADD_COMPONENT: TaskName = "add_component"
 
 REMOVE_COMPONENT: TaskName = "remove_component"
 """Name of the event task that removes a component by name."""
+
+CAUGHT_UP: TaskName = "snr_caught_up"
+"""Event a loop schedules after ``setup()``: the node handles it once everything
+scheduled before it was handled (the node core then sets the event it carries)."""
 
 
 def event(name: TaskName, val_list: Optional[List[Any]] = None) -> Task:
