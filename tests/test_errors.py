@@ -598,6 +598,61 @@ class TestMissingDataKey(SNRTestCase):
         self.assertIsNone(node.key_hints)
 
 
+class KeyWatcher(Endpoint):
+    """Handles pages under each of ``keys`` (a test for the wiring hint)."""
+
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode, keys: List[str]) -> None:
+        super().__init__(factory, parent, "watcher")
+        self.task_handlers = {(TaskType.store_page, key): self.on_page for key in keys}
+
+    def on_page(self, task: Task, key: TaskId) -> SomeTasks:
+        return None
+
+
+class KeyWatcherFactory(EndpointFactory):
+    def __init__(self, keys: List[str]) -> None:
+        super().__init__()
+        self.keys = keys
+
+    def get(self, parent: AbstractNode) -> KeyWatcher:
+        return KeyWatcher(self, parent, self.keys)
+
+
+class TestHandlerForAMisspelledKey(SNRTestCase):
+    def test_a_handler_for_a_key_nothing_stores_gets_a_did_you_mean(self) -> None:
+        from snr import ListReplayerFactory
+
+        node = Node(
+            "test",
+            self.get_config(
+                [
+                    ListReplayerFactory([1, 2, 3], "depth", period_s=0.01),
+                    KeyWatcherFactory(["Depth", "depth", "never_sent_sonar"]),
+                    TimeoutLoopFactory(seconds=0.4),
+                ],
+                Mode.DEBUG,
+            ),
+        )
+        assert node.key_hints is not None
+        node.key_hints.handlers_s = 0.15
+        records: List[str] = []
+        handler = _ListHandler(records)
+        node.log.addHandler(handler)
+        try:
+            node.loop()
+        finally:
+            node.log.removeHandler(handler)
+        hints = [r for r in records if "handles pages under" in r]
+        self.assertEqual(len(hints), 1, records)  # 'Depth' only: 'depth' is right,
+        # and 'never_sent_sonar' has no close match (its pages may come later)
+        for part in ("KeyWatcher.on_page", HERE, "'Depth'", "Did you mean 'depth'?"):
+            self.assertIn(part, hints[0])
+
+    def test_no_wiring_hint_outside_debug_mode(self) -> None:
+        node = Node("test", self.get_config([KeyWatcherFactory(["Depth"])], Mode.TEST))
+        self.assertIsNone(node.key_hints)
+
+
 class _ListHandler(logging.Handler):
     def __init__(self, records: List[str]) -> None:
         super().__init__(logging.INFO)

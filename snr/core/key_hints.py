@@ -18,10 +18,10 @@ from __future__ import annotations
 
 import logging
 import threading
-from typing import Callable, Dict, Iterable, List, Optional, Set
+from typing import Callable, Dict, Iterable, List, Optional, Set, Tuple
 
-from snr.prelude import DataKey
-from snr.prelude.errors import caller_location, closest_match
+from snr.prelude import DataKey, TaskHandler
+from snr.prelude.errors import caller_location, closest_match, describe_callable
 
 __all__ = ["MissingKeyHints"]
 
@@ -49,11 +49,13 @@ class MissingKeyHints:
         clock: Callable[[], float],
         typo_s: float = 0.5,
         missing_s: float = 5.0,
+        handlers_s: float = 3.0,
     ) -> None:
         self.log = log
         self.clock = clock
         self.typo_s = typo_s
         self.missing_s = missing_s
+        self.handlers_s = handlers_s
         self._first_and_next_check: Dict[DataKey, List[float]] = {}
         self._reported: Set[DataKey] = set()
         self._lock = threading.Lock()  # loops read keys from their own threads
@@ -111,4 +113,42 @@ class MissingKeyHints:
                 where,
                 shown,
                 footer,
+            )
+
+    def check_handlers(
+        self, handled: Iterable[Tuple[DataKey, TaskHandler]], stored_keys: Iterable[DataKey]
+    ) -> None:
+        """Warn, once per key, about a handler for a data key that looks misspelled.
+
+        Called once, ``handlers_s`` after the node started. A handler registered
+        for ``(TaskType.store_page, key)`` when nothing has stored ``key`` but a
+        key spelled almost the same was stored is the commonest silent wiring
+        mistake: the handler simply never runs. A key with no close match stays
+        quiet (its pages may come later, e.g. from a node not yet connected).
+
+        Example::
+
+            hints.check_handlers([("X", doubler.double)], ["x"])
+            # Doubler.double (robot.py:9) handles pages under 'X', but nothing stored 'X' ...
+        """
+        stored = [k for k in list(stored_keys) if isinstance(k, str)]
+        for key, handler in handled:
+            if key in stored or key in self._reported or not isinstance(key, str):
+                continue
+            same_but_case = [k for k in stored if k.lower() == key.lower()]
+            guess = same_but_case[0] if same_but_case else closest_match(key, stored)
+            if guess is None:
+                continue
+            self._reported.add(key)
+            self.log.warning(
+                "%s handles pages under %r, but nothing stored %r in the first %.1f s, "
+                "while %r was stored. Did you mean %r? Data keys must match exactly "
+                "(capitals too). (This hint shows once per key, in DEBUG mode only; "
+                "node.key_hints = None turns such hints off.)",
+                describe_callable(handler),
+                key,
+                key,
+                self.handlers_s,
+                guess,
+                guess,
             )

@@ -21,8 +21,9 @@ import enum
 import logging
 import threading
 import time
-from typing import Any, List, Optional
+from typing import Any, List, Optional, Tuple
 
+from snr.core import tasks
 from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerTable
 from snr.core.explain import THREAD_SAFE_INSTEAD
@@ -56,6 +57,8 @@ from snr.prelude import (
 from snr.prelude.errors import caller_location
 
 __all__ = ["Node", "NodeState"]
+
+_PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
 
 
 class NodeState(enum.Enum):
@@ -183,6 +186,7 @@ class Node(AbstractNode):
         self.state = NodeState.RUNNING
         self._thread_id = self.queue.owner_thread = threading.get_ident()
         self._running = not self._stop_requested
+        wiring_check = self._start_wiring_check()
         try:
             self._components.start_all(lambda: self._running)
             self._run_tasks()
@@ -190,9 +194,37 @@ class Node(AbstractNode):
             self.set_terminate_flag("interrupted by user (Ctrl-C)")
             raise
         finally:
+            if wiring_check is not None:
+                wiring_check.cancel()
             self.terminate()
         if self._runner.failure is not None:
             raise self._runner.failure
+
+    def _start_wiring_check(self) -> Optional[threading.Timer]:
+        if self.key_hints is None:
+            return None
+        timer = threading.Timer(
+            self.key_hints.handlers_s, self.schedule, args=(tasks.event(tasks.CHECK_WIRING),)
+        )
+        timer.daemon = True
+        timer.start()
+        return timer
+
+    def check_wiring(self) -> None:
+        """In DEBUG mode, warn about handlers of data keys that look misspelled.
+
+        Runs once by itself a few seconds after the node starts (see
+        `MissingKeyHints.check_handlers`).
+        """
+        if self.key_hints is None:
+            return
+        handled: List[Tuple[DataKey, TaskHandler]] = []
+        for entries in list(self._components.table.table.values()):
+            for handler, task_id, _, _ in entries:
+                # Only handlers registered for this very key (not type-level ones).
+                if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
+                    handled.append((task_id[1], handler))
+        self.key_hints.check_handlers(handled, self.datastore)
 
     def set_terminate_flag(self, reason: str) -> None:
         """Ask the node to stop after the current task; safe from any thread."""

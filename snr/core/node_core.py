@@ -39,6 +39,7 @@ class NodeCoreEndpoint(Endpoint):
             (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
             (TaskType.event, tasks.REMOVE_COMPONENT): self.remove_component_handler,
             (TaskType.event, tasks.CAUGHT_UP): self.caught_up_handler,
+            (TaskType.event, tasks.CHECK_WIRING): self.check_wiring_handler,
             TaskType.reload: self.reload_handler,
             TaskType.terminate: self.terminate_handler,
         }
@@ -82,6 +83,11 @@ class NodeCoreEndpoint(Endpoint):
         for value in task.val_list:
             if isinstance(value, threading.Event):
                 value.set()
+        return None
+
+    def check_wiring_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Ask the node to look for handlers of data keys that look misspelled."""
+        self.node.check_wiring()
         return None
 
     def reload_handler(self, task: Task, key: TaskId) -> SomeTasks:

@@ -27,6 +27,7 @@ from snr.prelude import (
 __all__ = [
     "ADD_COMPONENT",
     "CAUGHT_UP",
+    "CHECK_WIRING",
     "REMOVE_COMPONENT",
     "add_component",
     "event",
@@ -47,6 +48,10 @@ REMOVE_COMPONENT: TaskName = "remove_component"
 CAUGHT_UP: TaskName = "snr_caught_up"
 """Event a loop schedules after ``setup()``: the node handles it once everything
 scheduled before it was handled (the node core then sets the event it carries)."""
+
+CHECK_WIRING: TaskName = "snr_check_wiring"
+"""Event a DEBUG node schedules for itself a few seconds after it starts: the node
+core then looks for handlers of data keys that look misspelled."""
 
 
 def event(name: TaskName, val_list: Optional[List[Any]] = None) -> Task:

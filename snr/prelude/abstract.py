@@ -319,6 +319,9 @@ class AbstractNode(_FriendlyABC):
     def reload_component(self, name: ComponentName = "all") -> List[ComponentName]:
         """Reload a component's source (or every one's) and rebuild it."""
 
+    def check_wiring(self) -> None:
+        """Look for handlers of data keys that nothing stores but that look misspelled."""
+
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the node's queue has room; True if it has.
 
