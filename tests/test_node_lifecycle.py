@@ -348,6 +348,14 @@ class TestBoundedQueue(unittest.TestCase):
         self.assertEqual(queue.loss.total, 0)
         self.assertEqual(queue.normal[-1].name, "late")
 
+    def test_a_thread_that_holds_back_by_itself_never_waits(self) -> None:
+        queue = self.make_queue(high_water=10, max_wait_s=5.0)
+        queue.never_wait(threading.get_ident())  # as a socket I/O thread does
+        started = time.monotonic()
+        queue.schedule([tasks.event(str(i)) for i in range(30)])
+        self.assertLess(time.monotonic() - started, 1.0)  # not the 5 s wait
+        self.assertEqual((len(queue), queue.waits, queue.loss.total), (30, 0, 0))
+
     def test_the_node_itself_never_waits(self) -> None:
         queue = TaskQueue(high_water=10, max_wait_s=5.0)
         queue.owner_thread = threading.get_ident()

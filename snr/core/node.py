@@ -322,6 +322,9 @@ class Node(AbstractNode):
         """
         self.queue.schedule(t)
 
+    def _snr_never_wait(self) -> None:
+        self.queue.never_wait(threading.get_ident())
+
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the queue is below its high-water mark.
 

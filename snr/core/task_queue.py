@@ -28,7 +28,7 @@ import logging
 import queue
 import threading
 import time
-from typing import Deque, Optional
+from typing import Deque, Optional, Set
 
 from snr.core.logs import LossReport
 from snr.prelude import AbstractTaskQueue, HandlerError, SomeTasks, Task
@@ -56,6 +56,9 @@ class TaskQueue(AbstractTaskQueue):
         urgent: the lane of high-priority tasks, served first.
         owner_thread: the consuming thread's id (set by the node as it
             starts); tasks it schedules itself never wait.
+        holds_back: ids of other threads that never wait here because they
+            hold back on their own (a socket I/O thread stops reading); see
+            `never_wait`.
         waits: how many times a producer had to wait for space.
     """
 
@@ -73,6 +76,7 @@ class TaskQueue(AbstractTaskQueue):
         self.low_water = high_water // 2
         self.max_wait_s = max_wait_s
         self.owner_thread: Optional[int] = None
+        self.holds_back: Set[int] = set()
         self.waits = 0
         self.loss = LossReport(
             log or logging.getLogger("snr"),
@@ -125,8 +129,9 @@ class TaskQueue(AbstractTaskQueue):
 
     def _make_room(self, n: int = 1) -> bool:
         """Wait for the lane to drain below the low-water mark; False to drop ``n`` tasks."""
-        if threading.get_ident() == self.owner_thread or self.owner_thread is None:
-            return True  # the node's own work (or no node yet): waiting would deadlock
+        me = threading.get_ident()
+        if me == self.owner_thread or self.owner_thread is None or me in self.holds_back:
+            return True  # the node's own work, no node yet, or a thread that holds back
         if self._closed.is_set():
             return True  # shutting down: the queue is cleared anyway
         self.waits += 1
@@ -143,6 +148,20 @@ class TaskQueue(AbstractTaskQueue):
         if self.loss.dropping:
             self.loss.recovered()
         return True
+
+    def never_wait(self, thread_id: int) -> None:
+        """Let ``thread_id``'s tasks in at once, whatever the queue's length.
+
+        For a thread that serves many producers and holds back by itself when
+        the queue is full (a socket I/O thread stops reading): making it wait
+        would stall every link it serves. Its tasks still count towards the
+        high-water mark the others see.
+
+        Example::
+
+            queue.never_wait(threading.get_ident())   # called by the I/O thread
+        """
+        self.holds_back.add(thread_id)
 
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait up to ``timeout_s`` until the normal lane is below the high-water mark.

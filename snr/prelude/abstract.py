@@ -322,6 +322,9 @@ class AbstractNode(_FriendlyABC):
     def check_wiring(self) -> None:
         """Look for handlers of data keys that nothing stores but that look misspelled."""
 
+    def _snr_never_wait(self) -> None:
+        """The calling thread holds back by itself: its tasks never wait for room."""
+
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the node's queue has room; True if it has.
 

@@ -277,6 +277,9 @@ class IOLoop:
             self.log.exception("A comms I/O callback failed; the other links carry on")
 
     def _run(self) -> None:
+        # This thread serves every link and stops reading a link by itself
+        # while the node is behind: the tasks it schedules must never wait.
+        self.node._snr_never_wait()
         select, monotonic = self._selector.select, time.monotonic
         calls, timers, handlers = self._calls, self._timers, self._handlers
         try:

@@ -956,22 +956,7 @@ class CommsLoop(ThreadLoop):
             self.links = tuple(other for other in self.links if other is not link)
         if not self.is_terminated():
             self.on_link_lost(link, reason)
-            self._schedule_from_io(
-                tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer])
-            )
-
-    def _schedule_from_io(self, task: Task) -> None:
-        """Queue ``task`` without making the I/O thread wait for room in the node's queue.
-
-        ``schedule`` from another thread waits (up to 1 s) while the queue is
-        over its high-water mark; the I/O thread serves every link of the
-        node, so it queues the task once there is room instead.
-        """
-        io = self.io_loop
-        if io is not None and io.in_loop_thread() and not self.parent.wait_for_room(0):
-            io.when_room(lambda: self.schedule(task))
-        else:
-            self.schedule(task)
+            self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
 
     def on_hello(self, link: Link) -> None:
         """The peer said which node it is (called on the node's I/O thread)."""
