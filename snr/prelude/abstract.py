@@ -15,6 +15,7 @@ Example::
 from __future__ import annotations
 
 import builtins
+import inspect
 import logging
 import re
 from abc import ABCMeta, abstractmethod
@@ -70,6 +71,27 @@ class _FriendlyABCMeta(ABCMeta):
         if cls.__abstractmethods__:
             raise missing_methods_error(cls, caller_location())
         return super().__call__(*args, **kwargs)
+
+    @property
+    def __signature__(cls) -> inspect.Signature:
+        """The real constructor signature, for ``help()`` and ``inspect``.
+
+        Without this, ``inspect.signature(Node)`` would describe the
+        ``__call__`` above, ``(*args, **kwargs)``, and hide what a student
+        must pass. This is the signature of ``cls.__init__`` without ``self``.
+
+        Example::
+
+            >>> import inspect, snr
+            >>> print(inspect.signature(snr.TimeoutLoopFactory))
+            (seconds: 'float' = 0.0, ms: 'float' = 0.0, name: 'Optional[str]' = None) -> None
+        """
+        # The class's own __init__ (inherited or not): what Python calls after
+        # the check in __call__ above. mypy warns about __init__ on an
+        # instance; here the "instance" is the class itself, so it is sound.
+        init = inspect.signature(cls.__init__)  # type: ignore[misc]
+        parameters = list(init.parameters.values())[1:]  # drop self
+        return init.replace(parameters=parameters, return_annotation=None)
 
 
 class _FriendlyABC(metaclass=_FriendlyABCMeta):
