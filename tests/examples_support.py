@@ -56,10 +56,16 @@ def run_script(
     cwd: Optional[str] = None,
     timeout_s: float = 30.0,
     env: Optional[Dict[str, str]] = None,
+    allow_hints: bool = False,
 ) -> subprocess.CompletedProcess[str]:
-    """Run ``python *args`` as a student would and capture its output."""
+    """Run ``python *args`` as a student would and capture its output.
+
+    The shipped examples must not log a "Did you mean" hint: one there is a
+    false alarm that teaches students to ignore hints. Unless ``allow_hints``,
+    such a line fails the test that ran the script.
+    """
     command: List[str] = [sys.executable, *args]
-    return subprocess.run(
+    done = subprocess.run(
         command,
         cwd=cwd or ROOT,
         capture_output=True,
@@ -67,3 +73,12 @@ def run_script(
         timeout=timeout_s,
         env=env or script_env(),
     )
+    if not allow_hints:
+        hints = [
+            line
+            for line in (done.stdout + done.stderr).splitlines()
+            if "Did you mean" in line
+        ]
+        if hints:
+            raise AssertionError(f"{' '.join(args)} logged a false hint:\n" + "\n".join(hints))
+    return done

@@ -19,7 +19,7 @@ import time
 import unittest
 from abc import ABC, abstractmethod
 from functools import partial
-from typing import Any, Callable, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional, Sequence
 
 from snr import (
     AbstractEndpoint,
@@ -534,11 +534,17 @@ class Reader(ThreadLoop):
 
 
 class TestMissingDataKey(SNRTestCase):
-    def run_reader(self, key: str, typo_s: float, missing_s: float) -> List[str]:
+    def run_reader(
+        self, key: str, typo_s: float, missing_s: float, handled: Sequence[str] = ()
+    ) -> List[str]:
         node = Node(
             "test",
             self.get_config(
-                [LoopFactoryOf(lambda f, p: Reader(f, p, key)), TimeoutLoopFactory(seconds=0.3)],
+                [
+                    LoopFactoryOf(lambda f, p: Reader(f, p, key)),
+                    TimeoutLoopFactory(seconds=0.3),
+                    *([KeyWatcherFactory(list(handled))] if handled else []),
+                ],
                 Mode.DEBUG,
             ),
         )
@@ -570,6 +576,14 @@ class TestMissingDataKey(SNRTestCase):
         self.assertEqual(len(hints), 1, hints)
         for part in ("'speed'", "nothing has stored it", "'depth'", "Reader.loop"):
             self.assertIn(part, hints[0])
+
+    def test_no_hint_for_a_key_a_handler_waits_for(self) -> None:
+        # The UROV's Telemetry reads 'motor_speed' before the pilot connects;
+        # a handler on the node is registered for it, so its pages are planned
+        # (and 'depht' being close to the stored 'depth' is no evidence of a typo).
+        self.assertEqual(
+            self.run_reader("depht", typo_s=0.02, missing_s=0.1, handled=["depht"]), []
+        )
 
     def test_no_hint_before_the_grace_period(self) -> None:
         self.assertEqual(self.run_reader("speed", typo_s=0.02, missing_s=60), [])

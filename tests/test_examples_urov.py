@@ -7,6 +7,7 @@ from typing import Any, List
 
 from snr import Mode, SNRTestCase, TaskType, tasks
 from snr.utils import ListReplayerFactory
+from tests.comms_helpers import free_port
 from tests.examples_support import example_path, load_module, run_script
 from tests.helpers import StopWhenFactory
 
@@ -96,6 +97,19 @@ class TestUrovSystem(unittest.TestCase):
         self.assertGreater(lines[-1][1], lines[0][1])  # the pilot script dives
         self.assertIn("terminated: Timeout", result.stderr)
         self.assertNotIn("Traceback", result.stderr)
+
+    def test_vehicle_alone_gives_no_false_hint(self) -> None:
+        """The first of two terminals: the vehicle runs before the pilot connects.
+
+        Its telemetry reads 'motor_speed' long before any arrives; that is
+        planned (the serial link handles those pages), not a misspelt 'speed'.
+        run_script fails on any "Did you mean" line.
+        """
+        port = free_port()
+        script = example_path("urov", "main.py")
+        result = run_script([script, "urov", "--port", str(port), "--seconds", "1"])
+        self.assertEqual(result.returncode, 0, result.stderr)
+        self.assertIn("terminated: Timeout", result.stderr)
 
 
 if __name__ == "__main__":

@@ -12,6 +12,12 @@ when one looks like a mistake:
 
 Each key is reported at most once, and the closest-match search runs at most
 every ``CHECK_EVERY_S`` per key, so a loop polling a missing key stays cheap.
+
+A key that some handler on the node is registered for (``(TaskType.store_page,
+key)`` or ``(TaskType.process_data, key)``) is *expected*: the node's own wiring
+says its pages will come, e.g. once a peer connects, so reading it early is not
+a mistake and gets no hint. (If that handler's key is the misspelt one,
+``check_handlers`` says so.)
 """
 
 from __future__ import annotations
@@ -59,6 +65,8 @@ class MissingKeyHints:
         self._first_and_next_check: Dict[DataKey, List[float]] = {}
         self._reported: Set[DataKey] = set()
         self._lock = threading.Lock()  # loops read keys from their own threads
+        #: Returns the keys the node's handlers are registered for (set by the node).
+        self.expected_keys: Callable[[], Set[DataKey]] = set
 
     def missed(self, key: DataKey, stored_keys: Iterable[DataKey]) -> None:
         """Note a read of ``key`` that found nothing; maybe log a hint."""
@@ -76,6 +84,11 @@ class MissingKeyHints:
                 return
             times[1] = min(now + self.CHECK_EVERY_S, first_read_s + self.missing_s)
             waited_s = now - first_read_s
+            if key in self.expected_keys():
+                # A handler waits for this key: its pages are planned, not misspelt.
+                self._reported.add(key)
+                del self._first_and_next_check[key]
+                return
             stored = [k for k in list(stored_keys) if isinstance(k, str)]
             guess = closest_match(key, stored) if isinstance(key, str) else None
             if guess is None and waited_s < self.missing_s:

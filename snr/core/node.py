@@ -21,7 +21,7 @@ import enum
 import logging
 import threading
 import time
-from typing import Any, List, Optional, Tuple
+from typing import Any, List, Optional, Set, Tuple
 
 from snr.core import tasks
 from snr.core.components import ComponentSet
@@ -142,6 +142,8 @@ class Node(AbstractNode):
         self.key_hints: Optional[MissingKeyHints] = (
             MissingKeyHints(self.log, self.timer.current_s) if self.mode is Mode.DEBUG else None
         )
+        if self.key_hints is not None:
+            self.key_hints.expected_keys = self._handled_keys
 
         self.add_component(NodeCoreFactory().get(self), start=False)
         for factory in config.get(role):
@@ -218,13 +220,21 @@ class Node(AbstractNode):
         """
         if self.key_hints is None:
             return
+        handled = self._page_handlers()
+        self.key_hints.check_handlers(handled, self.datastore)
+
+    def _page_handlers(self) -> List[Tuple[DataKey, TaskHandler]]:
+        """(key, handler) for every handler registered for one data key's pages."""
         handled: List[Tuple[DataKey, TaskHandler]] = []
         for entries in list(self._components.table.table.values()):
             for handler, task_id, _, _ in entries:
                 # Only handlers registered for this very key (not type-level ones).
                 if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
                     handled.append((task_id[1], handler))
-        self.key_hints.check_handlers(handled, self.datastore)
+        return handled
+
+    def _handled_keys(self) -> Set[DataKey]:
+        return {key for key, _ in self._page_handlers()}
 
     def set_terminate_flag(self, reason: str) -> None:
         """Ask the node to stop after the current task; safe from any thread."""
