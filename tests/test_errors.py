@@ -445,6 +445,14 @@ class TestFactoryGet(SNRTestCase):
         self.assertIn("returned None this time", logs.output[0])
         self.assertEqual(list(node.components), ["node_core"])
 
+    def test_none_again_is_not_said_again(self) -> None:
+        # A.5's factory returns None every time once its limit is reached.
+        with self.assertLogs("snr.test", "WARNING") as logs:
+            node = Node("test", self.get_config([SometimesNothing(False)] * 3))
+            self.assertIsNone(node.build_component(SometimesNothing(False)))
+        self.assertEqual(len(logs.output), 1, logs.output)
+        self.assertIn("Said once per factory class", logs.output[0])
+
     def test_get_that_raises_shows_student_frames(self) -> None:
         def broken(factory: Any, parent: AbstractNode) -> Any:
             settings: Dict[str, Any] = {}

@@ -24,7 +24,7 @@ Example::
 from __future__ import annotations
 
 import time
-from typing import Any, Callable, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional, Set
 
 from snr.core.dispatch import HandlerTable
 from snr.core.explain import (
@@ -88,6 +88,7 @@ class ComponentSet:
         self.table_stale = False
         self._rebuild_needed = False
         self._pending_adds: List[AbstractComponent] = []
+        self._none_told: Set[Any] = set()  # factories' get() already said to return None
 
     # -- building ----------------------------------------------------------
     def build(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
@@ -131,9 +132,13 @@ class ComponentSet:
                 f"value, so role {self.node.role!r} can never get a component from it. "
                 "Return what it builds: `return MyEndpoint(self, parent)`."
             )
+        if get in self._none_told:
+            return  # said once: a factory that stops at a limit returns None every time after
+        self._none_told.add(get)
         self.node.log.warning(
             "%s returned None this time, so role %r gets no component from it. If you "
-            "meant to add one, check the conditions before its `return`.",
+            "meant to add one, check the conditions before its `return`. (Said once per "
+            "factory class.)",
             describe_callable(get),
             self.node.role,
         )
