@@ -131,6 +131,8 @@ class ComponentSet:
                 f"value, so role {self.node.role!r} can never get a component from it. "
                 "Return what it builds: `return MyEndpoint(self, parent)`."
             )
+        if self.running:
+            return  # at run time None is the documented "add nothing" (listing A.5)
         self.node.log.warning(
             "%s returned None this time, so role %r gets no component from it. If you "
             "meant to add one, check the conditions before its `return`.",
