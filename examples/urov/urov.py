@@ -316,6 +316,10 @@ class MotorBoard:
         if self._fd is not None:
             os.close(self._fd)
             self._fd = None
+        # Ready to start again with a new port, for the next node in this process.
+        self.port_name = None
+        self._stop = threading.Event()
+        self._buffer = b""
 
 
 vehicle = Vehicle()
@@ -420,24 +424,54 @@ class SensorReader(ThreadLoop):
 
     def __init__(self, factory: SensorReaderFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, "sensor_reader", max_tick_rate_hz=10)
-        self.prefix = factory.prefix
+        self.output = factory.output
 
     def loop(self) -> None:
         readings = vehicle.read_sensors()
-        self.store_data(f"{self.prefix}depth_raw", round(readings["depth_m"], 3))
-        self.store_data(f"{self.prefix}heading", round(readings["heading_deg"], 1))
-        self.store_data(f"{self.prefix}speed", round(readings["speed_m_s"], 3))
+        depth_m = round(readings["depth_m"], 3)
+        heading_deg = round(readings["heading_deg"], 1)
+        speed_m_s = round(readings["speed_m_s"], 3)
+        self.store_data("depth_raw", depth_m)
+        self.store_data("heading", heading_deg)
+        self.store_data("speed", speed_m_s)
+        if self.output is not None:
+            thrusters = self.get_data("motor_speed")
+            data = telemetry(self.parent, depth_m, heading_deg, speed_m_s, thrusters)
+            self.store_data(self.output, data)
 
 
 class SensorReaderFactory(LoopFactory):
-    """Builds the `SensorReader`. Raw readings go to ``depth_raw``, ``heading``, ``speed``."""
+    """Builds the `SensorReader`.
 
-    def __init__(self, prefix: str = "") -> None:
+    Raw readings go to ``depth_raw``, ``heading`` and ``speed``. Given an
+    ``output`` key, as in listing 5.1's ``SensorReaderFactory("sensor_data")``,
+    the reader also stores them together (unfiltered) as one telemetry page
+    under that key, ready for the display.
+    """
+
+    def __init__(self, output: Optional[DataKey] = None) -> None:
         super().__init__(sys.modules[__name__])
-        self.prefix = prefix
+        self.output = output
 
     def get(self, parent: AbstractNode) -> SensorReader:
         return SensorReader(self, parent)
+
+
+def telemetry(
+    node: AbstractNode,
+    depth_m: float,
+    heading_deg: float,
+    speed_m_s: float,
+    thrusters: Optional[Dict[str, int]],
+) -> Dict[str, Any]:
+    """One telemetry page's data, as `SensorDisplay` shows it."""
+    return {
+        "time_s": round(node.get_time_s(), 2),
+        "depth_m": depth_m,
+        "heading_deg": heading_deg,
+        "speed_m_s": speed_m_s,
+        "thrusters": thrusters or {"left": 0, "right": 0, "vertical": 0},
+    }
 
 
 class Telemetry(Endpoint):
@@ -449,14 +483,13 @@ class Telemetry(Endpoint):
         self.task_handlers = {(TaskType.store_page, "depth"): self.publish}
 
     def publish(self, task: Task, key: TaskId) -> SomeTasks:
-        thrusters = self.get_data("motor_speed") or {"left": 0, "right": 0, "vertical": 0}
-        data = {
-            "time_s": round(self.parent.get_time_s(), 2),
-            "depth_m": round(task.val_list[0].data, 3),
-            "heading_deg": self.get_data("heading") or 0.0,
-            "speed_m_s": self.get_data("speed") or 0.0,
-            "thrusters": thrusters,
-        }
+        data = telemetry(
+            self.parent,
+            round(task.val_list[0].data, 3),
+            self.get_data("heading") or 0.0,
+            self.get_data("speed") or 0.0,
+            self.get_data("motor_speed"),
+        )
         return self.store_data_task(self.output, data)
 
 

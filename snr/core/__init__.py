@@ -14,6 +14,7 @@ from snr.core.factory import EndpointFactory, Factory, LoopFactory
 from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler
 from snr.core.loop import LoopState, ThreadLoop
+from snr.core.moving_avg_filter import MovingAvgFilter
 from snr.core.node import Node, NodeState
 from snr.core.node_core import NodeCoreEndpoint, NodeCoreFactory
 from snr.core.profiler import Profiler
@@ -34,6 +35,7 @@ __all__ = [
     "LoopFactory",
     "LoopState",
     "MissingKeyHints",
+    "MovingAvgFilter",
     "MultiProcRunner",
     "Node",
     "NodeCoreEndpoint",

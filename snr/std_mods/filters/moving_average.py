@@ -2,6 +2,8 @@
 
 The filter's samples live on the factory, so they survive a hot reload of
 this module: the rebuilt endpoint picks up where the old one stopped.
+`MovingAvgFilter` itself is in the runtime layer (`snr.core`), where listing
+A.1 finds it; it is re-exported here.
 """
 
 from __future__ import annotations
@@ -10,7 +12,7 @@ import collections
 import sys
 from typing import Deque, Optional
 
-from snr.core import Endpoint, EndpointFactory, tasks
+from snr.core import Endpoint, EndpointFactory, MovingAvgFilter, tasks
 from snr.prelude import (
     AbstractNode,
     ComponentError,
@@ -31,27 +33,6 @@ __all__ = [
 
 DEFAULT_FILTER_LENGTH: int = 3
 """How many samples the filter averages when no length is given."""
-
-
-class MovingAvgFilter:
-    """The mean of the last ``maxlen`` samples of a deque.
-
-    Example::
-
-        f = MovingAvgFilter(collections.deque(maxlen=2))
-        f.update(1); f.update(3); f.avg()   # 2.0
-    """
-
-    def __init__(self, backing_deque: Deque[float]) -> None:
-        self.samples = backing_deque
-
-    def update(self, value: float) -> None:
-        """Add a sample (the oldest drops out when full)."""
-        self.samples.append(value)
-
-    def avg(self) -> float:
-        """The mean of the samples held (0.0 when there are none)."""
-        return sum(self.samples) / len(self.samples) if self.samples else 0.0
 
 
 class MovingAvgEndpoint(Endpoint):
