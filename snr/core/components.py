@@ -132,8 +132,10 @@ class ComponentSet:
                 f"value, so role {self.node.role!r} can never get a component from it. "
                 "Return what it builds: `return MyEndpoint(self, parent)`."
             )
+        if self.running:
+            return  # at run time None is the documented "add nothing" (listing A.5)
         if get in self._none_told:
-            return  # said once: a factory that stops at a limit returns None every time after
+            return  # said once: the same factory listed twice says the same thing
         self._none_told.add(get)
         self.node.log.warning(
             "%s returned None this time, so role %r gets no component from it. If you "
