@@ -170,7 +170,8 @@ class InteropTest(unittest.TestCase):
         send_json(sock, {"v": 1, "kind": "hello", "role": "foreign"})
         send_json(sock, page("cmd", {"A": 1, "stick": [0.5, -1]}))
         self.assertEqual(
-            recv_json(sock), {"v": 1, "kind": "hello", "role": "snr_server", "beat_s": 1.0}
+            recv_json(sock),
+            {"v": 1, "kind": "hello", "role": "snr_server", "beat_s": 1.0, "bye": True},
         )
         self.assertEqual(self.wait_pages("cmd", 1), [{"A": 1, "stick": [0.5, -1]}])
         self.assertEqual(self.reports.seen[0][3:], ("foreign", 42.5), "origin and time kept")
@@ -180,7 +181,7 @@ class InteropTest(unittest.TestCase):
         sock = self.connect()  # sends no hello: it is optional
         received = [recv_json(sock) for _ in range(4)]
         self.assertEqual(
-            received[0], {"v": 1, "kind": "hello", "role": "snr_server", "beat_s": 1.0}
+            received[0], {"v": 1, "kind": "hello", "role": "snr_server", "beat_s": 1.0, "bye": True}
         )
         self.assertEqual(
             received[1:], [page("greeting", i, "snr_server", 1000.0 + i) for i in range(3)]

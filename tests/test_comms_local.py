@@ -161,7 +161,7 @@ class TestLocalSockets(SNRTestCase):
         nodes = LocalNodes(config, ["receiver"])
         self.addCleanup(nodes.stop)
         with connect_when_listening(self.port) as raw:
-            self.assertEqual(raw.recv(4), b"\x00\x00\x005")  # the hello's header: 53 bytes
+            self.assertEqual(raw.recv(4), b"\x00\x00\x00@")  # the hello's header: 64 bytes
             started = time.monotonic()
             nodes.stop()
             self.assertFalse(nodes.threads[0].is_alive())

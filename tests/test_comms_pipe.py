@@ -81,9 +81,9 @@ class TestPipeComms(unittest.TestCase):
         pipe_loop = stays.components["pipe_loop"]
         assert isinstance(pipe_loop, PipeLoop)
         thread = threading.Thread(target=stays.loop)
-        with self.assertLogs("snr.stays", "WARNING") as logs:
+        with self.assertLogs("snr.stays", "INFO") as logs:
             thread.start()
-            leaves.loop()  # stops after 0.2 s and closes its end of the pipe
+            leaves.loop()  # stops after 0.2 s, says goodbye and closes its end of the pipe
             deadline = time.monotonic() + 3
             while pipe_loop.is_alive() and time.monotonic() < deadline:
                 time.sleep(0.02)
@@ -93,6 +93,8 @@ class TestPipeComms(unittest.TestCase):
         thread.join(5)
         closed = [line for line in logs.output if "pipe" in line and "closed" in line]
         self.assertEqual(len(closed), 1, logs.output)
+        self.assertTrue(closed[0].startswith("INFO:"), "a goodbye is no fault")
+        self.assertIn("said goodbye", closed[0])
 
     def test_not_a_connection(self) -> None:
         with self.assertRaises(ConfigError) as ctx:

@@ -1,28 +1,21 @@
-"""The UROV example (thesis 5.1) and `python -m snr demo`, which runs it."""
+"""The UROV example (thesis 5.1): its parts in snr.demo and examples/urov/main.py.
 
-import re
-import sys
+tests/test_demo.py runs it as `python -m snr demo`.
+"""
+
 import unittest
-from typing import Any, List
+from typing import Any
 
+import snr.demo.urov
 from snr import Mode, SNRTestCase, TaskType, tasks
 from snr.utils import ListReplayerFactory
 from tests.comms_helpers import free_port
 from tests.examples_support import example_path, load_module, run_script
 from tests.helpers import StopWhenFactory
 
-TELEMETRY = re.compile(r"t=\s*([\d.]+) s \| depth\s+([\d.]+) m \| heading\s+([\d.]+)°")
-
-
-def telemetry_lines(output: str) -> List[Any]:
-    return [tuple(float(v) for v in m.groups()) for m in TELEMETRY.finditer(output)]
-
 
 class TestUrovParts(SNRTestCase):
-    @classmethod
-    def setUpClass(cls) -> None:
-        load_module(example_path("urov", "main.py"), "urov_example_main")
-        cls.urov: Any = sys.modules["urov"]
+    urov: Any = snr.demo.urov
 
     def test_mixing_of_surge_yaw_heave(self) -> None:
         node = self.mock_node()
@@ -86,17 +79,6 @@ class TestUrovSystem(unittest.TestCase):
         names = [type(f).__name__ for f in components["urov"]]
         self.assertIn("SerialConnectionFactory", names)
         self.assertEqual(names[-1], "TimeoutLoopFactory")
-
-    def test_snr_demo(self) -> None:
-        """The README's first command: both roles, over TCP, with live telemetry."""
-        result = run_script(["-m", "snr", "demo", "--seconds", "2.5"], timeout_s=40)
-        self.assertEqual(result.returncode, 0, result.stderr)
-        self.assertIn("SNR demo", result.stdout)
-        lines = telemetry_lines(result.stdout)
-        self.assertGreaterEqual(len(lines), 2, result.stdout + result.stderr)
-        self.assertGreater(lines[-1][1], lines[0][1])  # the pilot script dives
-        self.assertIn("terminated: Timeout", result.stderr)
-        self.assertNotIn("Traceback", result.stderr)
 
     def test_vehicle_alone_gives_no_false_hint(self) -> None:
         """The first of two terminals: the vehicle runs before the pilot connects.

@@ -11,61 +11,19 @@ or both at once (each in its own process)::
 
 ``--real-controller`` reads a real game pad instead of the scripted pilot;
 ``--host``/``--port`` choose where the two links listen (ports P and P+1).
+
+The system and its components live in the ``snr.demo`` package
+(``snr/demo/system.py`` is listing 5.1, ``snr/demo/urov.py`` the components
+and the simulated hardware), so ``python -m snr demo`` runs them from an
+installed SNR too. This file is the command line around them.
 """
 
 import argparse
 import sys
-from typing import List, Optional
-
-from urov import (
-    ControlsProcessorFactory,
-    InputProcessorFactory,
-    SensorDisplayEndpointFactory,
-    SensorReaderFactory,
-    SerialConnectionFactory,
-    TelemetryFactory,
-    XboxControllerFactory,
-)
+from typing import List
 
 import snr
-
-
-def make_components(
-    host: str = "127.0.0.1",
-    port: int = 9000,
-    seconds: Optional[float] = None,
-    simulated: bool = True,
-) -> snr.ComponentsByRole:
-    """The whole system; ``seconds`` stops every node after that long."""
-    controller_input_sockets = snr.SocketsPair(server_tuple=(host, port))
-    telemetry_sockets = snr.SocketsPair(server_tuple=(host, port + 1))
-    components: snr.ComponentsByRole = {
-        "topside": [
-            # Topside control pipeline
-            XboxControllerFactory("raw_controller_input", simulated),
-            InputProcessorFactory("raw_controller_input", "controller_input"),
-            controller_input_sockets.client("controller_input"),
-            # Topside sensor pipeline
-            telemetry_sockets.server(),
-            SensorDisplayEndpointFactory("sensor_data"),
-        ],
-        "urov": [
-            # Robot control pipeline
-            controller_input_sockets.server(),
-            ControlsProcessorFactory("controller_input", "motor_speed"),
-            SerialConnectionFactory("motor_speed"),
-            # On robot sensor pipeline
-            SensorReaderFactory(),
-            snr.MovingAvgFilterFactory("depth_raw", "depth", length=5),
-            TelemetryFactory("sensor_data"),
-            telemetry_sockets.client("sensor_data"),
-        ],
-    }
-    if seconds is not None:
-        for factories in components.values():
-            assert isinstance(factories, list)
-            factories.append(snr.TimeoutLoopFactory(seconds=seconds))
-    return components
+from snr.demo import make_components
 
 
 def main(argv: List[str]) -> None:

@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import math
+import time
 from dataclasses import dataclass
 from typing import Any
 
@@ -10,6 +12,8 @@ from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import DataKey
 
 __all__ = ["Page"]
+
+_PREVIEW_CHARS = 1000  # str(page) shows a game pad's buttons, not a camera frame
 
 
 @dataclass
@@ -29,10 +33,15 @@ class Page(JsonDataclass):
         process: when true, a ``process_data`` task follows once the page is in
             the datastore.
 
+    ``print(page)`` shows a short line (`Page.__str__`); ``repr(page)`` shows
+    every field, for debugging.
+
     Example::
 
         page = Page("depth_m", 3.2, origin="urov", created_at_s=1700000000.0)
         Page.deserialize(page.serialize()) == page   # True
+        print(Page("depth_m", 3.2, "urov", time.time()))
+        # Page 'depth_m' = 3.2 from 'urov' (0.0 s ago)
     """
 
     key: DataKey
@@ -57,3 +66,55 @@ class Page(JsonDataclass):
     def deserialize(cls, text: str) -> Page:
         """Rebuild a page from :meth:`serialize`'s JSON text."""
         return cls.from_json(text)
+
+    def __str__(self) -> str:
+        """The page in one short line: key, data, origin and age.
+
+        Data longer than 1,000 characters is cut short with ``...``; ``repr(page)``
+        shows it whole.
+
+        Example::
+
+            str(Page("depth", 2.5, "robot", time.time() - 0.3))
+            # "Page 'depth' = 2.5 from 'robot' (0.3 s ago)"
+            str(Page("depth", 2.5, "robot", 0.0))
+            # "Page 'depth' = 2.5 from 'robot' (made 1970-01-01 00:00:00 UTC)"
+        """
+        age = _age_text(self.created_at_s, time.time())
+        return f"Page {self.key!r} = {_preview(self.data)} from {self.origin!r} ({age})"
+
+
+def _age_text(created_at_s: float, now_s: float) -> str:
+    """How long before ``now_s`` a page was made, in words: ``"0.3 s ago"``.
+
+    A page stamped up to a minute ahead of this computer's clock says so (the
+    clocks of two machines differ); one more than a day old, or further ahead,
+    shows its date instead.
+    """
+    try:
+        age = now_s - created_at_s
+    except TypeError:  # not a number: say what it is rather than fail to print
+        age = math.nan
+    if not math.isfinite(age):
+        return f"created_at_s={created_at_s!r}"
+    if -0.05 <= age < 60:
+        return f"{max(age, 0.0):.1f} s ago"
+    if 60 <= age < 3600:
+        return f"{age / 60:.1f} min ago"
+    if 3600 <= age < 86400:
+        return f"{age / 3600:.1f} h ago"
+    if -60 < age < 0:
+        return f"{-age:.1f} s in the future: the clocks differ"
+    try:
+        made = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(created_at_s))
+    except (OverflowError, OSError, ValueError):
+        return f"created_at_s={created_at_s!r}"
+    return f"made {made} UTC"
+
+
+def _preview(data: Any) -> str:
+    """``repr(data)``, cut short after `_PREVIEW_CHARS` characters."""
+    text = repr(data)
+    if len(text) > _PREVIEW_CHARS:
+        text = text[: _PREVIEW_CHARS - 3] + "..."
+    return text

@@ -7,6 +7,7 @@ from typing import Any, List, Tuple
 
 from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import TaskName, TaskPriority, TaskType
+from snr.prelude.page import Page
 
 __all__ = ["Task"]
 
@@ -46,4 +47,19 @@ class Task(JsonDataclass):
         return cls.from_json(text)
 
     def __str__(self) -> str:
-        return f"({self.type.name}, {self.name!r}): {self.val_list!r}"
+        """The task in one line, as thesis figure 5.4 prints it; pages in their short form.
+
+        ``repr(task)`` shows every field in full, for debugging.
+
+        Example::
+
+            str(Task(TaskType.event, "button_pressed", ["A"]))
+            # "(event, 'button_pressed'): ['A']"
+            str(tasks.store_page(Page("depth", 2.5, "robot", time.time())))
+            # "(store_page, 'depth'): [Page 'depth' = 2.5 from 'robot' (0.0 s ago)]"
+        """
+        values: object = self.val_list  # a task built by hand may hold anything
+        if isinstance(values, list):
+            shown = ", ".join(str(v) if isinstance(v, Page) else repr(v) for v in values)
+            return f"({self.type.name}, {self.name!r}): [{shown}]"
+        return f"({self.type.name}, {self.name!r}): {values!r}"

@@ -69,11 +69,13 @@ from snr.prelude import (
 )
 from snr.std_mods.comms.io_loop import IOLoop, IOTimer
 from snr.std_mods.comms.wire import (
+    Bye,
     FrameDecoder,
     Hello,
     Message,
     decode_body,
     encode_beat,
+    encode_bye,
     encode_hello,
     encode_page,
 )
@@ -400,6 +402,10 @@ class Link:
     flow the other way, which is when a Wi-Fi link usually dies — and the
     log says how many pages may have been lost with it.
 
+    Goodbye: a link closed in order (its node is stopping) sends a bye frame
+    last, to a peer whose hello said it understands one, so that peer logs
+    the end as news rather than as a lost link.
+
     Backpressure: while the node's queue is over its high-water mark the
     link stops reading (the bytes wait in the OS and TCP slows the sender)
     and reads on once there is room; the I/O thread never waits for it.
@@ -415,6 +421,7 @@ class Link:
         pages_sent: pages handed to the transport or queued for it.
         pages_received: pages that arrived.
         went_silent: the link was closed because the peer fell silent.
+        peer_said_bye: the peer sent a bye: the end that follows is orderly.
         loss: the `LossReport` of pages dropped because the peer fell behind.
     """
 
@@ -436,6 +443,8 @@ class Link:
         self.state = LinkState.OPEN
         self.bad_frames = 0
         self.went_silent = False
+        self.peer_said_bye = False
+        self._peer_takes_bye = False  # its hello said it understands a bye frame
         self.pages_sent = 0
         self.pages_received = 0
         self.opened_at = time.monotonic()
@@ -460,7 +469,7 @@ class Link:
         self._finished = False
         self._ending = False  # half-closed after a graceful flush
         self.outbox = Outbox(transport, owner.max_backlog_bytes, self._wake_writer)
-        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s), now=False)
+        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s, bye=True), now=False)
 
     @property
     def label(self) -> str:
@@ -498,9 +507,11 @@ class Link:
         return False
 
     def close(self) -> None:
-        """Send what is queued, then end the connection (graceful)."""
+        """Send what is queued and a goodbye, then end the connection (graceful)."""
         if self.state is LinkState.OPEN:
             self.state = LinkState.CLOSING
+            if self._peer_takes_bye:  # older peers never get a frame they do not know
+                self.outbox.put(encode_bye(), now=True)
             self.outbox.close(discard=False)
             self.io.call_soon(self._flush_then_end)
 
@@ -614,7 +625,9 @@ class Link:
         if self._finished:
             return
         self._finished = True
-        if self.state is not LinkState.OPEN and not self.went_silent:
+        if self.peer_said_bye:
+            reason = "it said goodbye (its node is stopping)"
+        elif self.state is not LinkState.OPEN and not self.went_silent:
             reason = reason if reason.startswith("the peer") else "the link was closed"
         self.state = LinkState.CLOSED
         self.outbox.close(discard=True)
@@ -775,7 +788,10 @@ class Link:
         elif isinstance(message, Hello):
             self.peer_role = message.role
             self.peer_beat_s = message.beat_s
+            self._peer_takes_bye = message.bye
             self.owner.on_hello(self)
+        elif isinstance(message, Bye):
+            self.peer_said_bye = True
 
     def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
         self.bad_frames += 1
@@ -963,8 +979,15 @@ class CommsLoop(ThreadLoop):
         self.info("Linked to node %r at %s", link.peer_role, link.transport.peer)
 
     def on_link_lost(self, link: Link, reason: str) -> None:
-        """Log that the peer went away (subclasses say what happens next)."""
-        self.warn("Lost the link to %s: %s.", link.label, reason)
+        """Log that the peer went away (subclasses say what happens next).
+
+        A warning, unless the peer said goodbye (``link.peer_said_bye``): a
+        node that stops in order is news, not a fault.
+        """
+        if link.peer_said_bye:
+            self.info("The link to %s ended: %s.", link.label, reason)
+        else:
+            self.warn("Lost the link to %s: %s.", link.label, reason)
 
     def decode_message(self, body: bytes) -> Message:
         """The message in one frame's body (`decode_body`); a subclass may accept more.

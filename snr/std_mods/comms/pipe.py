@@ -203,7 +203,8 @@ class PipeLoop(CommsLoop):
             return page_from_fields(fields, default_origin=self.parent.role)
 
     def on_link_lost(self, link: Link, reason: str) -> None:
-        self.warn(
+        say = self.info if link.peer_said_bye else self.warn  # a goodbye is no fault
+        say(
             "The pipe to %s closed: %s. Pipes cannot reconnect, so pages under %s are "
             "no longer forwarded; the node keeps running.",
             link.label,

@@ -343,9 +343,12 @@ class SocketsClientLoop(CommsLoop):
             self.dbg("Connection to %s failed again: %s", link.label, reason)
             return
         self._loss_reported = True
-        self.warn(
-            "Lost the link to the sockets server %s: %s. Reconnecting in the background; "
-            "pages stored meanwhile are not sent.",
+        if link.peer_said_bye:  # its node stopped in order: news, not a fault
+            say, what = self.info, "The sockets server %s closed the link"
+        else:
+            say, what = self.warn, "Lost the link to the sockets server %s"
+        say(
+            what + ": %s. Reconnecting in the background; pages stored meanwhile are not sent.",
             link.label,
             reason,
         )

@@ -6,6 +6,8 @@ of UTF-8 JSON text (the *body*). Every body is a JSON object with a version
 
 * ``"hello"``: the first frame each side sends; names its role.
 * ``"page"``: one page, with the fields of `Page`.
+* ``"beat"``: a sign of life on a quiet link.
+* ``"bye"``: the last frame before an orderly close ("my node is stopping").
 
 Example::
 
@@ -35,11 +37,13 @@ __all__ = [
     "MAX_FRAME_BYTES",
     "WIRE_VERSION",
     "Beat",
+    "Bye",
     "FrameDecoder",
     "Hello",
     "Message",
     "decode_body",
     "encode_beat",
+    "encode_bye",
     "encode_frame",
     "encode_hello",
     "encode_page",
@@ -64,16 +68,19 @@ class Hello:
 
     ``beat_s`` is how often the sender promises a sign of life while it has
     nothing else to send (a `Beat`); None from a peer that makes no promise
-    (older SNR nodes, or a program that does not send beats).
+    (older SNR nodes, or a program that does not send beats). ``bye`` is
+    true when the sender understands a `Bye` frame (older nodes do not, so
+    they are never sent one).
 
     Example::
 
         decode_body(encode_hello("receiver", 1.0)[HEADER_BYTES:])
-        # Hello(role='receiver', beat_s=1.0)
+        # Hello(role='receiver', beat_s=1.0, bye=False)
     """
 
     role: str
     beat_s: Optional[float] = None
+    bye: bool = False
 
 
 @dataclass(frozen=True)
@@ -86,8 +93,20 @@ class Beat:
     """
 
 
-Message = Union[Page, Hello, Beat]
-"""What a frame carries: a `Page`, a `Hello` or a `Beat`."""
+@dataclass(frozen=True)
+class Bye:
+    """The last frame before an orderly close: "my node is stopping, not lost".
+
+    The peer then knows the end of the connection that follows is no fault.
+
+    Example::
+
+        decode_body(encode_bye()[HEADER_BYTES:])   # Bye()
+    """
+
+
+Message = Union[Page, Hello, Beat, Bye]
+"""What a frame carries: a `Page`, a `Hello`, a `Beat` or a `Bye`."""
 
 
 def encode_frame(body: bytes) -> bytes:
@@ -125,20 +144,23 @@ def encode_page(page: Page) -> bytes:
     return _frame(page_json(page, _PAGE_HEAD), f"the page under key {page.key!r}")
 
 
-def encode_hello(role: str, beat_s: Optional[float] = None) -> bytes:
+def encode_hello(role: str, beat_s: Optional[float] = None, bye: bool = False) -> bytes:
     """The hello frame a node sends first on every link.
 
     With ``beat_s`` the node promises a beat at least that often while it has
     nothing else to send, so the peer can tell a silent link from a dead one.
+    With ``bye`` it says it understands a bye frame.
 
     Example::
 
         encode_hello("receiver")   # b'\\x00\\x00\\x00,{"v":1,"kind":"hello","role":"receiver"}'
-        encode_hello("receiver", 1.0)   # ...,"role":"receiver","beat_s":1.0}
+        encode_hello("receiver", 1.0, bye=True)   # ...,"beat_s":1.0,"bye":true}
     """
     fields: Dict[str, Any] = {"v": WIRE_VERSION, "kind": "hello", "role": role}
     if beat_s is not None:
         fields["beat_s"] = beat_s
+    if bye:
+        fields["bye"] = True
     return _frame(dump_json(fields, "the hello frame"), "the hello frame")
 
 
@@ -155,6 +177,21 @@ def encode_beat() -> bytes:
     return _BEAT_FRAME
 
 
+_BYE_FRAME = encode_frame(b'{"v":1,"kind":"bye"}')
+
+
+def encode_bye() -> bytes:
+    """The bye frame: the last one before an orderly close (``{"v":1,"kind":"bye"}``).
+
+    Send it only to a peer whose hello said ``"bye": true``.
+
+    Example::
+
+        encode_bye()   # b'\\x00\\x00\\x00\\x14{"v":1,"kind":"bye"}'
+    """
+    return _BYE_FRAME
+
+
 def _non_empty(value: str, name: str, what: str) -> str:
     if not value:
         raise WireFormatError(f"field {name!r} of a {what} frame must not be empty")
@@ -162,7 +199,7 @@ def _non_empty(value: str, name: str, what: str) -> str:
 
 
 def decode_body(body: bytes) -> Message:
-    """The `Page` or `Hello` in one frame's body (the bytes after the header).
+    """The `Page`, `Hello`, `Beat` or `Bye` in one frame's body (the bytes after the header).
 
     Raises:
         WireFormatError: the body is not UTF-8, not strict JSON (NaN,
@@ -172,7 +209,7 @@ def decode_body(body: bytes) -> Message:
 
     Example::
 
-        decode_body(b'{"v":1,"kind":"hello","role":"urov"}')   # Hello(role='urov')
+        decode_body(b'{"v":1,"kind":"hello","role":"urov"}')   # Hello(role='urov', ...)
     """
     try:
         obj = load_object(body)
@@ -189,6 +226,8 @@ def decode_body(body: bytes) -> Message:
         return page_from_fields(obj, default_origin=None)
     if kind == "beat":
         return Beat()
+    if kind == "bye":
+        return Bye()
     if kind == "hello":
         role = obj.get("role")
         if "role" not in obj:
@@ -201,15 +240,18 @@ def decode_body(body: bytes) -> Message:
         if not role:
             raise WireFormatError("field 'role' of a hello frame must not be empty")
         beat_s = obj.get("beat_s")
-        if beat_s is None:
-            return Hello(role)
-        if isinstance(beat_s, bool) or not isinstance(beat_s, (int, float)) or not beat_s > 0:
+        if beat_s is not None and (
+            isinstance(beat_s, bool) or not isinstance(beat_s, (int, float)) or not beat_s > 0
+        ):
             raise WireFormatError(
                 f"the hello's 'beat_s' is {beat_s!r:.40}; it must be a number of seconds above 0"
             )
-        return Hello(role, float(beat_s))
+        bye = obj.get("bye", False)
+        if type(bye) is not bool:
+            raise WireFormatError(f"the hello's 'bye' is {bye!r:.40}; it must be true or false")
+        return Hello(role, None if beat_s is None else float(beat_s), bye)
     raise WireFormatError(
-        f"unknown frame kind {kind!r:.40}; known kinds are 'page', 'hello' and 'beat'"
+        f"unknown frame kind {kind!r:.40}; known kinds are 'page', 'hello', 'beat' and 'bye'"
     )
 
 

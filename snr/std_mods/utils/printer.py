@@ -12,14 +12,18 @@ __all__ = ["PrinterEndpoint", "PrinterEndpointFactory", "format_task"]
 
 
 def format_task(task: Task) -> str:
-    """One line for a task, as in thesis figure 5.4.
+    """One line for a task, as in thesis figure 5.4 (``str(task)``).
+
+    Pages show in their short form (see `Page`): key, data, origin and age.
 
     Example::
 
         format_task(tasks.event("button_pressed", ["A"]))
         # "(event, 'button_pressed'): ['A']"
+        format_task(tasks.store_page(Page("depth", 2.5, "robot", time.time())))
+        # "(store_page, 'depth'): [Page 'depth' = 2.5 from 'robot' (0.0 s ago)]"
     """
-    return f"({task.type.name}, {task.name!r}): {task.val_list!r}"
+    return str(task)
 
 
 class PrinterEndpoint(Endpoint):
@@ -28,6 +32,7 @@ class PrinterEndpoint(Endpoint):
     Example output::
 
         (event, 'button_pressed'): ['A']
+        (store_page, 'depth'): [Page 'depth' = 2.5 from 'robot' (0.0 s ago)]
     """
 
     def __init__(

@@ -1,7 +1,8 @@
 """The components of the UROV system of thesis listing 5.1, with simulated hardware.
 
-Nobody reading this has the vehicle, so the hardware is simulated behind the
-same factories a real robot would use:
+``python -m snr demo`` runs them (see `snr.demo`), and so does
+``examples/urov/main.py``. Nobody reading this has the vehicle, so the
+hardware is simulated behind the same factories a real robot would use:
 
 * topside: a game controller playing a scripted dive (`XboxControllerFactory`),
   `InputProcessorFactory` turning sticks into surge/yaw/heave commands, and a
@@ -373,7 +374,7 @@ class SerialConnection(Endpoint):
 
     Uses pyserial when it is installed (``pip install 'snr[serial]'``); without
     it, the port is opened as a plain file, which works for the simulated board's
-    pseudo-terminal but not for a real USB device.
+    pseudo-terminal, and for a real USB device at the baud rate it already has.
     """
 
     def __init__(
@@ -385,12 +386,24 @@ class SerialConnection(Endpoint):
         self.task_handlers = {(TaskType.store_page, input): self.send}
 
     def begin(self) -> None:
+        simulated = self.port_name == motor_board.port_name
+        if simulated:
+            self.info(
+                "No serial device: the motor board (an Arduino on the real vehicle) is "
+                "simulated, listening on the pseudo-terminal %s",
+                self.port_name,
+            )
         try:
             import serial
 
             self.port = serial.serial_for_url(self.port_name, baudrate=115200, timeout=0.1)
         except ImportError:
-            self.info("pyserial is not installed; writing to %s as a file", self.port_name)
+            if not simulated:  # a pseudo-terminal needs no settings; a USB device might
+                self.info(
+                    "pyserial is not installed (pip install 'snr[serial]'), so %s is opened "
+                    "as a plain file, at the baud rate it already has",
+                    self.port_name,
+                )
             self.port = open(self.port_name, "wb", buffering=0)  # noqa: SIM115
 
     def send(self, task: Task, key: TaskId) -> SomeTasks:

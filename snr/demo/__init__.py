@@ -1,0 +1,23 @@
+"""``python -m snr demo``: the underwater vehicle (UROV) of thesis 5.1, simulated.
+
+Two nodes, each in its own process, talk over TCP on 127.0.0.1: *topside*
+(a scripted pilot on a simulated game pad, and a live telemetry display) and
+*urov* (thrusters driven through a simulated motor board on a serial
+pseudo-terminal, and noisy depth and heading sensors). It ships inside the
+``snr`` package, so it runs after a plain ``pip install``;
+``examples/urov/`` runs the same system from the command line.
+
+* `snr.demo.urov`: the components and the simulated hardware;
+* `snr.demo.system`: which components each node runs (thesis listing 5.1);
+* `snr.demo.run`: the demo itself: ports, the banner, quiet or verbose logs.
+
+Example::
+
+    from snr.demo import run_demo
+    run_demo(seconds=5)        # what `python -m snr demo --seconds 5` does
+"""
+
+from snr.demo.run import run_demo
+from snr.demo.system import make_components
+
+__all__ = ["make_components", "run_demo"]

@@ -1,0 +1,104 @@
+"""The demo of ``python -m snr demo``: both UROV roles on this machine, one process each.
+
+By default the screen shows a one-line banner and the live telemetry; the
+nodes log only warnings and errors. ``verbose=True`` (``--verbose``) shows
+their whole log: listening, connecting, the simulated serial port.
+"""
+
+from __future__ import annotations
+
+import logging
+import socket
+
+import snr
+from snr.demo.system import make_components
+
+__all__ = ["LogLevel", "LogLevelFactory", "free_port_pair", "run_demo"]
+
+
+def free_port_pair(host: str = "127.0.0.1") -> int:
+    """A port P such that P and P+1 are both free on ``host`` right now.
+
+    Raises:
+        CommsError: no such pair was found in 50 tries.
+
+    Example::
+
+        port = free_port_pair()   # the demo's links listen on port and port + 1
+    """
+    for _ in range(50):
+        with socket.socket() as probe:
+            probe.bind((host, 0))
+            port = int(probe.getsockname()[1])
+        if port >= 65535:
+            continue
+        with socket.socket() as second:
+            try:
+                second.bind((host, port + 1))
+            except OSError:
+                continue
+        return port
+    raise snr.CommsError(f"Could not find two free neighbouring ports on {host}.")
+
+
+class LogLevel(snr.Endpoint):
+    """Sets the log level of its node; it handles no tasks.
+
+    The level is set when the node builds its components, in the node's own
+    process: a process started with "spawn" (Windows, macOS) does not inherit
+    the logging settings of the program that started it.
+
+    Example::
+
+        {"urov": [LogLevelFactory(logging.WARNING), ...]}
+    """
+
+    def __init__(self, factory: LogLevelFactory, parent: snr.AbstractNode) -> None:
+        super().__init__(factory, parent, "log_level")
+        parent.log.setLevel(factory.level)
+
+
+class LogLevelFactory(snr.EndpointFactory):
+    """Builds a `LogLevel`: list it first, so the node's log is quiet from its start.
+
+    Example::
+
+        LogLevelFactory(logging.WARNING)   # warnings and errors only
+    """
+
+    def __init__(self, level: int) -> None:
+        super().__init__()
+        self.level = level
+
+    def get(self, parent: snr.AbstractNode) -> LogLevel:
+        return LogLevel(self, parent)
+
+
+def run_demo(seconds: float = 15.0, verbose: bool = False) -> int:
+    """Run the UROV system for ``seconds``: the exit code of ``python -m snr demo``.
+
+    Each role runs in its own process, talking over TCP on 127.0.0.1 (ports
+    chosen now, so the demo never collides with anything). The topside
+    process shows the vehicle's live telemetry. Ctrl-C stops it early.
+    Returns 0 when both nodes ended well, else 1.
+
+    Example::
+
+        run_demo(seconds=2, verbose=True)   # with the nodes' whole log
+    """
+    components = make_components("127.0.0.1", free_port_pair(), seconds)
+    level = logging.INFO if verbose else logging.WARNING
+    for factories in components.values():
+        assert isinstance(factories, list)
+        factories.insert(0, LogLevelFactory(level))
+    config = snr.Config(components, mode=snr.Mode.DEPLOYED)
+    hint = "" if verbose else "; --verbose shows the log"
+    print(
+        f"SNR demo: a pilot steers a simulated underwater robot over TCP for {seconds:g} s "
+        f"(Ctrl-C stops it{hint}).",
+        flush=True,
+    )
+    runner = snr.MultiProcRunner(["urov", "topside"], config)
+    runner.run()
+    failed = [code for code in runner.exitcodes if code not in (0, None)]
+    return 1 if failed else 0

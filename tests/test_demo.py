@@ -1,0 +1,108 @@
+"""`python -m snr demo`: it ships inside the package, and its screen is quiet.
+
+The demo must run after a plain ``pip install`` (no source checkout). The
+build backend, flit, puts every file of the ``snr/`` folder into the wheel and
+nothing else, so the tests check that pyproject.toml still says so, copy
+``snr/`` alone the way an install does, and run the demo from that copy with
+the checkout nowhere on the path. CI (``.ci/run``) also installs the package
+into a fresh virtualenv with ``pip install .`` and runs the demo there.
+"""
+
+import os
+import re
+import shutil
+import subprocess
+import sys
+import tempfile
+import unittest
+from pathlib import Path
+from typing import Any, List
+
+from tests.examples_support import ROOT, run_script, script_env
+
+TELEMETRY = re.compile(r"t=\s*([\d.]+) s \| depth\s+([\d.]+) m \| heading\s+([\d.]+)°")
+
+# Runs `python -m snr demo` after checking that snr is the installed copy.
+RUN_DEMO = (
+    "import runpy, sys\n"
+    "import snr\n"
+    "assert snr.__file__.startswith(sys.argv[1]), 'snr came from ' + snr.__file__\n"
+    "sys.argv = ['snr', 'demo', *sys.argv[2:]]\n"
+    "runpy.run_module('snr', run_name='__main__', alter_sys=True)\n"
+)
+
+
+def telemetry_lines(output: str) -> List[Any]:
+    return [tuple(float(v) for v in m.groups()) for m in TELEMETRY.finditer(output)]
+
+
+def log_lines(stderr: str, level: str) -> List[str]:
+    return [line for line in stderr.splitlines() if f" {level}: " in line]
+
+
+class TestDemoShipsInThePackage(unittest.TestCase):
+    """The ``snr/`` folder alone, as an install puts it, run from a folder outside the checkout."""
+
+    folder: Path
+    lib: Path
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.folder = Path(tempfile.mkdtemp(prefix="snr-installed-"))
+        cls.lib = cls.folder / "site-packages"
+        shutil.copytree(
+            Path(ROOT, "snr"), cls.lib / "snr", ignore=shutil.ignore_patterns("__pycache__")
+        )
+
+    @classmethod
+    def tearDownClass(cls) -> None:
+        shutil.rmtree(cls.folder, ignore_errors=True)
+
+    def test_the_wheel_is_the_whole_snr_folder(self) -> None:
+        """flit ships the module named in [tool.flit.module], all its files, nothing else."""
+        text = Path(ROOT, "pyproject.toml").read_text(encoding="utf-8")
+        self.assertIn('build-backend = "flit_core.buildapi"', text, "update this test's copy")
+        self.assertRegex(text, r'\[tool\.flit\.module\]\n(#.*\n)*name = "snr"\n')
+        files = {p.relative_to(self.lib).as_posix() for p in self.lib.rglob("*") if p.is_file()}
+        for name in ["__init__.py", "run.py", "system.py", "urov.py"]:
+            self.assertIn(f"snr/demo/{name}", files)
+        self.assertIn("snr/py.typed", files)
+        self.assertEqual(sorted(os.listdir(self.lib)), ["snr"], "no examples/ beside it")
+
+    def test_the_demo_runs_from_the_package_alone(self) -> None:
+        """CI's smoke run, on the installed copy: a banner and the telemetry, no log chatter."""
+        env = script_env({"PYTHONPATH": str(self.lib)})
+        result = subprocess.run(
+            [sys.executable, "-c", RUN_DEMO, str(self.lib), "--seconds", "2.5"],
+            cwd=self.folder,
+            capture_output=True,
+            text=True,
+            timeout=40,
+            env=env,
+        )
+        self.assertEqual(result.returncode, 0, result.stderr)
+        out = result.stdout.splitlines()
+        self.assertTrue(out and out[0].startswith("SNR demo: "), result.stdout)
+        lines = telemetry_lines(result.stdout)
+        self.assertGreaterEqual(len(lines), 2, result.stdout + result.stderr)
+        self.assertEqual(len(out), 1 + len(lines), "the banner, then only telemetry")
+        self.assertGreater(lines[-1][1], lines[0][1])  # the pilot script dives
+        self.assertEqual(log_lines(result.stderr, "INFO"), [], "no chatter by default")
+        self.assertNotIn("Lost the link", result.stderr, "an orderly end is no lost link")
+        self.assertNotIn("Traceback", result.stderr)
+
+
+class TestVerboseDemo(unittest.TestCase):
+    def test_verbose_shows_the_nodes_log(self) -> None:
+        result = run_script(["-m", "snr", "demo", "--seconds", "1.5", "--verbose"], timeout_s=40)
+        self.assertEqual(result.returncode, 0, result.stderr)
+        self.assertIn("Listening for sockets clients on 127.0.0.1:", result.stderr)
+        self.assertIn("Connected to the sockets server", result.stderr)
+        self.assertIn("No serial device: the motor board", result.stderr)
+        self.assertIn("terminated: Timeout", result.stderr)
+        self.assertNotIn("--verbose", result.stdout.splitlines()[0], "no hint once verbose")
+        self.assertEqual(log_lines(result.stderr, "WARNING"), [], result.stderr)
+
+
+if __name__ == "__main__":
+    unittest.main()
