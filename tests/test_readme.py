@@ -27,10 +27,20 @@ class TestReadme(unittest.TestCase):
         self.assertEqual(
             first_block.group(1).splitlines(),
             [
-                "pip install -e . && python -m snr demo",
-                "pip install -e '.[dev]' && python -m pytest",
+                "python3 -m venv .venv && . .venv/bin/activate && pip install -e . "
+                "&& python -m snr demo",
+                "python3 -m venv .venv && . .venv/bin/activate && pip install -e '.[dev]' "
+                "&& python -m pytest",
             ],
         )
+
+    def test_ci_runs_the_readme_test_command_as_written(self) -> None:
+        first_block = re.search(r"```bash\n(.*?)```", self.text, re.S)
+        assert first_block is not None
+        test_command = first_block.group(1).splitlines()[1]
+        with open(os.path.join(ROOT, ".ci", "run"), encoding="utf-8") as f:
+            ci_lines = [line.strip() for line in f]
+        self.assertIn(test_command, ci_lines)
         before = self.text[: first_block.start()].strip()
         self.assertEqual(before.count("\n"), 0, "only the title comes before the commands")
 
