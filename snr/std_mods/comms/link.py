@@ -209,6 +209,8 @@ class Outbox:
 
     Attributes:
         last_sent_at: when bytes last went to the transport (``time.monotonic()``).
+        answer_due: the peer has been heard since the last send (set by the
+            link as frames arrive): the next frame answers it and goes at once.
     """
 
     def __init__(
@@ -223,6 +225,7 @@ class Outbox:
         self.dropped = 0
         self.dropped_by_key: Dict[DataKey, int] = {}
         self.last_sent_at = time.monotonic()
+        self.answer_due = False
         self._entries: Deque[_Entry] = collections.deque()
         self._newest: Dict[DataKey, _Entry] = {}
         self._queued_bytes = 0
@@ -244,8 +247,15 @@ class Outbox:
             # A frame right behind another (a burst) waits for the I/O thread,
             # which sends everything waiting in one call: a burst of pages costs
             # a few system calls instead of one each. A frame after a pause
-            # goes at once, so a lone page or a reply is never held back.
-            if now and not self._live and time.monotonic() - self.last_sent_at >= _BURST_S:
+            # goes at once, and so does one sent after the peer was heard (a
+            # reply: a fast ping-pong would otherwise look like a burst and
+            # pay a trip through the I/O thread every time).
+            if (
+                now
+                and not self._live
+                and (self.answer_due or time.monotonic() - self.last_sent_at >= _BURST_S)
+            ):
+                self.answer_due = False
                 try:
                     sent = self.transport.send(frame)
                 except OSError:  # full (BlockingIOError) or broken: the I/O loop finds out
@@ -701,6 +711,7 @@ class Link:
         self.last_heard = time.monotonic()
         self._heard_anything = True
         self._sent_when_heard = self.pages_sent
+        self.outbox.answer_due = True
         decoder.feed(bytes(self.io.view[:count]))
         pages: List[Page] = []
         try:
