@@ -468,6 +468,7 @@ class Link:
         self._timer: Optional[IOTimer] = None
         self._tick_s = min(_TICK_S, owner.beat_s / 4)
         self._finished = False
+        self._ending_soon = False  # ended while the node's thread read it; the loop's finishes
         self._ending = False  # half-closed after a graceful flush
         self.outbox = Outbox(transport, owner.max_backlog_bytes, self._wake_writer)
         self.outbox.put(encode_hello(owner.parent.role, owner.beat_s), now=False)
@@ -620,22 +621,31 @@ class Link:
         """The I/O loop is stopping: end the link now."""
         self._finish("the node stopped")
 
+    def _end(self, reason: str) -> None:
+        """End the link: at once on the I/O loop's thread, else soon, by that thread."""
+        if self.io.in_loop_thread():
+            self._finish(reason)
+        else:  # the node's thread, reading while idle, leaves it to the loop's
+            self._ending_soon = True  # and reads it no more meanwhile
+            self.io.call_soon(lambda: self._finish(reason))
+
     def _finish(self, reason: str) -> None:
         if self._finished:
             return
-        self._finished = True
-        if self.state is not LinkState.OPEN and not self.went_silent:
-            reason = reason if reason.startswith("the peer") else "the link was closed"
-        self.state = LinkState.CLOSED
-        self.outbox.close(discard=True)
-        if self._timer is not None:
-            self._timer.cancel()
-        self.io.forget(self)
-        self._drain_unread()
-        try:
-            self.transport.close()
-        except OSError:
-            pass
+        with self.io.read_role():  # nobody reads the socket while it closes
+            self._finished = True
+            if self.state is not LinkState.OPEN and not self.went_silent:
+                reason = reason if reason.startswith("the peer") else "the link was closed"
+            self.state = LinkState.CLOSED
+            self.outbox.close(discard=True)
+            if self._timer is not None:
+                self._timer.cancel()
+            self.io.forget(self)
+            self._drain_unread()
+            try:
+                self.transport.close()
+            except OSError:
+                pass
         self._closed.set()
         self.owner.link_closed(self, reason)
 
@@ -666,7 +676,7 @@ class Link:
 
     def _failed(self, error: Exception) -> None:
         self.owner.log.exception("Link to %s failed", self.label)
-        self._finish(f"unexpected {type(error).__name__}: {error}")
+        self._end(f"unexpected {type(error).__name__}: {error}")
 
     def _write(self) -> None:
         if self._finished:
@@ -688,14 +698,17 @@ class Link:
 
     # -- I/O loop thread: reading ---------------------------------------------
     def _read(self) -> None:
-        if self._finished or self._paused:
+        # On the thread that holds the read role: the I/O loop's, or the
+        # node's while it is idle. Everything else (ending the link, pausing)
+        # is left to the loop's thread.
+        if self._finished or self._paused or self._ending_soon:
             return
         try:
             count = self.transport.recv_into(self.io.buffer)
         except BlockingIOError:
             return
         except OSError as error:
-            self._finish(f"{type(error).__name__}: {error}")
+            self._end(f"{type(error).__name__}: {error}")
             return
         decoder = self._decoder
         if not count:
@@ -706,7 +719,7 @@ class Link:
                         f"({decoder.pending_bytes()} bytes of it arrived)"
                     )
                 )
-            self._finish("the peer closed the connection")
+            self._end("the peer closed the connection")
             return
         self.last_heard = time.monotonic()
         self._heard_anything = True
@@ -722,7 +735,7 @@ class Link:
         except WireFormatError as error:  # a bad length: the stream is lost
             self._bad_frame(error, resetting=True)
             self._deliver(pages)
-            self._finish(f"reset after a bad frame ({error})")
+            self._end(f"reset after a bad frame ({error})")
             return
         if pages:
             self._deliver(pages)
@@ -740,7 +753,14 @@ class Link:
 
     def _pause(self) -> None:
         if not self._paused:
-            self._paused = True
+            self._paused = True  # read no more, from now on (either thread)
+            if self.io.in_loop_thread():
+                self._stop_reading()
+            else:
+                self.io.call_soon(self._stop_reading)
+
+    def _stop_reading(self) -> None:
+        if not self._finished:
             self.io.watch(self, self.io.events(self) & ~_READ)
             self.io.when_room(self._resume)
 
