@@ -43,6 +43,7 @@ from snr.prelude import (
     ConfigError,
     DataDict,
     DataKey,
+    IdleWaiter,
     Mode,
     NodeStateError,
     Page,
@@ -334,6 +335,9 @@ class Node(AbstractNode):
 
     def _snr_never_wait(self) -> None:
         self.queue.never_wait(threading.get_ident())
+
+    def _snr_use_idle_waiter(self, waiter: Optional[IdleWaiter]) -> None:
+        self.queue.use_waiter(waiter)
 
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the queue is below its high-water mark.

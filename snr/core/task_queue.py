@@ -19,6 +19,10 @@ and logged (at most once a second, with numbers), so a stuck node can never
 fill the memory. Tasks the node's own handlers return never wait (the node
 would wait on itself) and urgent tasks (terminate) never wait or drop.
 Readers of sockets ask `wait_for_room(0)` and stop reading instead of waiting.
+
+A node with comms links waits on its sockets instead of the bell (see
+`use_waiter`): a page that arrives while the node is idle is then read on the
+node's own thread, with no hand-off between threads.
 """
 
 from __future__ import annotations
@@ -31,7 +35,7 @@ import time
 from typing import Deque, Optional, Set
 
 from snr.core.logs import LossReport
-from snr.prelude import AbstractTaskQueue, HandlerError, SomeTasks, Task
+from snr.prelude import AbstractTaskQueue, HandlerError, IdleWaiter, SomeTasks, Task
 
 __all__ = ["TaskQueue"]
 
@@ -85,6 +89,7 @@ class TaskQueue(AbstractTaskQueue):
             "node cannot keep up (a slow handler, or a loop storing data too fast)",
         )
         self._bell: queue.SimpleQueue[None] = queue.SimpleQueue()
+        self._waiter: Optional[IdleWaiter] = None
         self._sleeping = False
         self._rung = False
         self._closed = threading.Event()
@@ -125,7 +130,11 @@ class TaskQueue(AbstractTaskQueue):
             )
         if self._sleeping and not self._rung:  # ring once per sleep
             self._rung = True
-            self._bell.put(None)
+            waiter = self._waiter
+            if waiter is None:
+                self._bell.put(None)
+            else:
+                waiter.wake()
 
     def _make_room(self, n: int = 1) -> bool:
         """Wait for the lane to drain below the low-water mark; False to drop ``n`` tasks."""
@@ -213,8 +222,24 @@ class TaskQueue(AbstractTaskQueue):
             return self.normal.popleft()
         return None
 
+    def use_waiter(self, waiter: Optional[IdleWaiter]) -> None:
+        """Sleep on ``waiter`` from now on instead of the bell (None: the bell again).
+
+        Called by the node's thread (so it is not sleeping); a sleep on the
+        old one, if any, is ended anyway, so no wake-up is lost.
+
+        Example (what the comms I/O loop does through its node)::
+
+            queue.use_waiter(io_loop)   # idle waits now watch the links' sockets
+        """
+        old, self._waiter = self._waiter, waiter
+        self._bell.put(None)
+        if old is not None:
+            old.wake()
+
     def wait(self, timeout_s: Optional[float]) -> None:
         """Sleep until a task arrives, ``wake()`` is called, or the timeout."""
+        waiter = self._waiter
         self._rung = False
         self._sleeping = True
         try:
@@ -222,16 +247,26 @@ class TaskQueue(AbstractTaskQueue):
             # just before it saw us sleeping.
             if self.normal or self.urgent:
                 return
+            if waiter is not None:
+                waiter.wait(timeout_s)
+                return
             try:
                 self._bell.get(timeout=timeout_s)
             except queue.Empty:
                 pass
         finally:
             self._sleeping = False
+            if waiter is not None:
+                # Reading what woke it queues tasks: done once no producer
+                # rings for this sleep any more.
+                waiter.woken()
 
     def wake(self) -> None:
         """Wake a thread sleeping in :meth:`wait` (used to stop the node)."""
         self._bell.put(None)
+        waiter = self._waiter
+        if waiter is not None:
+            waiter.wake()
 
     def close(self) -> None:
         """The consumer is stopping: producers never wait from now on."""

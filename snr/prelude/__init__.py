@@ -16,6 +16,7 @@ from snr.prelude.abstract import (
     AbstractProfiler,
     AbstractRunner,
     AbstractTaskQueue,
+    IdleWaiter,
 )
 from snr.prelude.errors import (
     CommsError,
@@ -62,6 +63,7 @@ __all__ = [
     "AbstractProfiler",
     "AbstractRunner",
     "AbstractTaskQueue",
+    "IdleWaiter",
     "CommsError",
     "ComponentError",
     "ComponentName",

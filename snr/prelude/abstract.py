@@ -20,7 +20,7 @@ import logging
 import re
 from abc import ABCMeta, abstractmethod
 from types import ModuleType
-from typing import Any, Callable, Dict, List, Optional
+from typing import Any, Callable, Dict, List, Optional, Protocol
 
 from snr.prelude.errors import (
     ComponentError,
@@ -53,6 +53,7 @@ __all__ = [
     "AbstractProfiler",
     "AbstractRunner",
     "AbstractTaskQueue",
+    "IdleWaiter",
     "explain_abstract_error",
     "missing_methods_error",
 ]
@@ -270,6 +271,31 @@ class AbstractTaskQueue(_FriendlyABC):
         """How many tasks are waiting."""
 
 
+class IdleWaiter(Protocol):
+    """How a node's thread waits for work when its queue is empty, if not on its bell.
+
+    A node whose comms links can be read without blocking (Linux: epoll)
+    waits on its links' sockets and a wake-up socket at once, so a page
+    that arrives while the node is idle is read, decoded and queued on the
+    node's own thread, with no hand-off between threads. The task queue
+    calls ``wait`` while it marks the node sleeping, then ``woken`` once it
+    no longer does; producers call ``wake``, only while the node sleeps.
+
+    Example: the comms ``IOLoop`` in ``snr/std_mods/comms/io_loop.py``::
+
+        node._snr_use_idle_waiter(io_loop)    # the node now waits on its sockets too
+    """
+
+    def wait(self, timeout_s: Optional[float]) -> None:
+        """Block until ``wake()``, bytes on a link, or ``timeout_s`` (None: no limit)."""
+
+    def woken(self) -> None:
+        """After ``wait`` (or instead of it): do the reading it found to do."""
+
+    def wake(self) -> None:
+        """End a ``wait`` in progress, or the next one (any thread)."""
+
+
 class AbstractNode(_FriendlyABC):
     """The interface components see of their node (thesis 6.2.6).
 
@@ -346,6 +372,13 @@ class AbstractNode(_FriendlyABC):
 
     def _snr_never_wait(self) -> None:
         """The calling thread holds back by itself: its tasks never wait for room."""
+
+    def _snr_use_idle_waiter(self, waiter: Optional[IdleWaiter]) -> None:
+        """Wait on ``waiter`` when idle instead of the queue's bell (None: the bell again).
+
+        A node that cannot (a mock) ignores it: its comms are then read by
+        the I/O thread alone, which is always correct, only a little slower.
+        """
 
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the node's queue has room; True if it has.

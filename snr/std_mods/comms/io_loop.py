@@ -10,6 +10,17 @@ that reads when a socket has bytes, writes when one has room, and runs the
 links' timers (beats, silence checks, paused readers). The node's thread
 count stays the same whatever the number of peers.
 
+While the node's own thread has nothing to do, *it* reads the links (Linux,
+where sockets can be watched with ``epoll``): its idle wait watches the
+links' sockets and a wake-up socket together, so a page that arrives is
+read, decoded and queued on the node's thread, with no hand-off between
+threads (two of them per round trip cost ~20 us each). While the node's
+thread runs handlers, the I/O thread reads, as before: a slow handler never
+stops a link from being read, beating or noticing a dead peer. One lock, the
+*read role*, decides which of the two reads; the links' sockets sit in one
+epoll set of their own, which the I/O thread watches only while the node's
+thread does not (see `IOLoop.wait`).
+
 The loop is shared: every comms component of a node gets the same one with
 `IOLoop.acquire` (the first starts its thread) and gives it back with
 `IOLoop.release` (the last stops and joins it, within a bound), so it never
@@ -26,14 +37,16 @@ Example::
 from __future__ import annotations
 
 import collections
+import contextlib
 import heapq
 import itertools
 import logging
+import select
 import selectors
 import socket
 import threading
 import time
-from typing import Callable, Deque, Dict, List, Optional, Protocol, Tuple
+from typing import Any, Callable, Deque, Dict, Iterator, List, Optional, Protocol, Tuple
 
 from snr.prelude import AbstractNode
 
@@ -50,6 +63,8 @@ JOIN_TIMEOUT_S = 1.0
 
 _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
+_READS = "reads"  # the selector key of the links' read set (the wake-up socket's is None)
+_HAS_EPOLL = hasattr(select, "epoll")
 
 
 class IOHandler(Protocol):
@@ -103,9 +118,11 @@ _registry: Dict[int, Tuple[AbstractNode, IOLoop]] = {}
 class IOLoop:
     """One selector thread serving the sockets of every comms link of one node.
 
-    Only the loop's thread touches the selector and the handlers' sockets for
-    reading; other threads ask it for things with `call_soon` (thread-safe:
-    it appends to a queue and wakes the selector through a socket pair).
+    Only the loop's thread touches the selector; other threads ask it for
+    things with `call_soon` (thread-safe: it appends to a queue and wakes the
+    selector through a socket pair). The handlers' sockets are read by the
+    thread that holds the *read role*: the node's thread while it is idle
+    (`wait`, `woken`: it is the node's ``IdleWaiter``), else the loop's thread.
 
     Get it with `acquire` and give it back with `release`, never by
     constructing it yourself in a component.
@@ -118,8 +135,16 @@ class IOLoop:
 
     Attributes:
         node: the node whose links it serves.
-        buffer: the receive buffer handlers read into (loop thread only).
+        buffer: the receive buffer handlers read into (by the read role's holder).
         view: a ``memoryview`` of ``buffer``.
+    """
+
+    node_reads: bool = _HAS_EPOLL
+    """Let the node's thread read the links while it is idle (needs epoll: Linux).
+
+    Where it is False (or set so), the I/O thread reads every link and hands
+    the pages over to the node's thread, which is correct everywhere, only
+    slower.
     """
 
     def __init__(self, node: AbstractNode) -> None:
@@ -142,6 +167,33 @@ class IOLoop:
         self._woken = False
         self._selector.register(self._wake_r, _READ, None)
         self._thread = threading.Thread(target=self._run, name=f"snr-{node.role}-io", daemon=True)
+        # With node reads: every link watched for reading is in `_reads` (an
+        # epoll set), never in the selector. The selector watches `_gate`,
+        # which holds `_reads` while the I/O thread has the read role; the
+        # node's thread takes `_reads` out of it before it reads, so the two
+        # threads are never woken for the same bytes.
+        self._reads: Any = None
+        self._gate: Any = None
+        self._node_poll: Any = None
+        self._readers: Dict[int, IOHandler] = {}  # fd -> handler, for `_reads`
+        self._role = threading.RLock()  # the read role: whoever holds it reads
+        self._node_waiting = False  # the node's thread holds the role in wait()
+        self._role_wanted = False  # the loop's thread waits for the role: leave it
+        self._waiter_installed = False  # the node waits on this loop when idle
+        self._node_ready: List[Tuple[int, int]] = []
+        if self.node_reads:
+            self._reads = select.epoll()
+            self._gate = select.epoll()
+            self._gate.register(self._reads.fileno(), select.EPOLLIN)
+            self._selector.register(self._gate.fileno(), _READ, _READS)
+            self._node_wake_r, self._node_wake_w = socket.socketpair()
+            self._node_wake_r.setblocking(False)
+            self._node_wake_w.setblocking(False)
+            self._node_poll = select.epoll()
+            self._node_poll.register(self._node_wake_r.fileno(), select.EPOLLIN)
+            self._node_poll.register(self._reads.fileno(), select.EPOLLIN)
+            self._node_wake_only = select.epoll()  # while the loop's thread wants the role
+            self._node_wake_only.register(self._node_wake_r.fileno(), select.EPOLLIN)
 
     # -- sharing one loop per node ------------------------------------------
     @classmethod
@@ -160,6 +212,9 @@ class IOLoop:
                 loop = cls(node)
                 _registry[id(node)] = (node, loop)
                 loop._thread.start()
+                if loop._reads is not None:
+                    node._snr_use_idle_waiter(loop)
+                    loop._waiter_installed = True
             loop._users += 1
             return loop
 
@@ -181,6 +236,9 @@ class IOLoop:
 
     def stop(self, timeout_s: float = JOIN_TIMEOUT_S) -> None:
         """End the thread (it closes what is still watched) and wait up to ``timeout_s``."""
+        if self._waiter_installed:
+            self._waiter_installed = False
+            self.node._snr_use_idle_waiter(None)  # the node waits on its bell again
         self._stopping = True
         self._wake()
         if self._thread.is_alive() and self._thread is not threading.current_thread():
@@ -191,6 +249,17 @@ class IOLoop:
                     self.node.role,
                     timeout_s,
                 )
+                return
+        if self._reads is not None and not self._thread.is_alive():
+            for closable in (
+                self._node_poll,
+                self._node_wake_only,
+                self._gate,
+                self._reads,
+                self._node_wake_r,
+                self._node_wake_w,
+            ):
+                closable.close()
 
     def is_alive(self) -> bool:
         """True while the loop's thread runs."""
@@ -222,10 +291,20 @@ class IOLoop:
     # -- loop thread only ---------------------------------------------------
     def watch(self, handler: IOHandler, events: int) -> None:
         """Serve ``handler`` for ``events`` (0: keep it, but select nothing for now)."""
-        old = self._handlers.get(handler)
-        if old == events:
+        old = self._handlers.get(handler, 0)
+        if old == events and handler in self._handlers:
             return
         self._handlers[handler] = events
+        if self._reads is not None:
+            if (old ^ events) & _READ:  # reads go to the read set, not the selector
+                fd = handler.fileno()
+                if events & _READ:
+                    self._readers[fd] = handler
+                    self._reads.register(fd, select.EPOLLIN)
+                else:
+                    self._reads.unregister(fd)
+                    self._readers.pop(fd, None)
+            old, events = old & _WRITE, events & _WRITE
         if old:
             if events:
                 self._selector.modify(handler, events, handler)
@@ -240,8 +319,108 @@ class IOLoop:
 
     def forget(self, handler: IOHandler) -> None:
         """Stop serving ``handler`` (before its socket is closed)."""
-        if self._handlers.pop(handler, 0):
-            self._selector.unregister(handler)
+        if self._handlers.get(handler):
+            self.watch(handler, 0)
+        self._handlers.pop(handler, None)
+
+    @contextlib.contextmanager
+    def read_role(self) -> Iterator[None]:
+        """Hold the read role (loop thread), e.g. to close a link's socket.
+
+        No other thread then reads any link. If the node's thread holds it
+        in its idle wait, it is woken to give it back (a rare event: a link
+        ends).
+
+        Example::
+
+            with io.read_role():
+                transport.close()
+        """
+        if not self._role.acquire(blocking=False):
+            self._role_wanted = True  # the node's thread leaves it to us until we are done
+            self._wake_node()
+            self._role.acquire()
+        try:
+            yield
+        finally:
+            self._role_wanted = False
+            self._role.release()
+
+    # -- the node's thread, while idle (the node's IdleWaiter) ----------------
+    def wait(self, timeout_s: Optional[float]) -> None:
+        """Node thread, its queue empty: wait for a task or for bytes on a link.
+
+        The read set leaves the I/O thread's gate first, so that thread is
+        not woken for bytes the node's thread reads; then the node's thread
+        takes the read role (waiting, briefly, for a read the I/O thread has
+        begun) and waits on the read set and its own wake-up socket.
+        """
+        timeout = -1.0 if timeout_s is None else timeout_s
+        if self._role_wanted:  # the loop's thread is closing a link: wait without reading
+            self._node_ready = _poll(self._node_wake_only, timeout)
+            _drain(self._node_wake_r)
+            return
+        try:
+            self._gate.unregister(self._reads.fileno())
+        except (OSError, ValueError):  # closed: the loop has stopped
+            return
+        self._role.acquire()
+        self._node_waiting = True
+        self._node_ready = _poll(self._node_poll, timeout)
+
+    def woken(self) -> None:
+        """Node thread, no longer marked sleeping: read what arrived, give the role back."""
+        if not self._node_waiting:
+            return
+        try:
+            for fd, _ in self._node_ready:
+                if fd == self._node_wake_r.fileno():
+                    _drain(self._node_wake_r)
+                else:
+                    self._read_ready(self._reads.poll(0), on_node=True)
+        finally:
+            self._node_ready = []
+            self._node_waiting = False
+            self._role.release()
+            try:
+                self._gate.register(self._reads.fileno(), select.EPOLLIN)
+            except (OSError, ValueError):  # closed: the loop has stopped
+                pass
+
+    def wake(self) -> None:
+        """End the node thread's idle wait (any thread; the queue rings it once per sleep)."""
+        self._wake_node()
+
+    def _wake_node(self) -> None:
+        try:
+            self._node_wake_w.send(b"\0")
+        except OSError:  # full (a wake-up is already waiting) or closed
+            pass
+
+    def _read_ready(self, ready: List[Tuple[int, int]], on_node: bool) -> None:
+        """Read every link with bytes (or an end) waiting; the caller holds the read role."""
+        readers = self._readers
+        for fd, _ in ready:
+            handler = readers.get(fd)
+            if handler is None:  # forgotten meanwhile
+                continue
+            try:
+                handler.on_readable()
+            except Exception:  # a bug in one link must not stop every link
+                self.log.exception("A comms link's read failed; the other links carry on")
+                if on_node:
+                    self.call_soon(handler.on_io_stop)
+                else:
+                    self._safely(handler.on_io_stop)
+
+    def _serve_reads(self) -> None:
+        """Loop thread: the read set has bytes, and the node's thread is busy."""
+        if not self._role.acquire(blocking=False):
+            return  # the node's thread took the role: it reads them
+        try:
+            self._read_ready(self._reads.poll(0), on_node=False)
+        finally:
+            self._role.release()
 
     def call_later(self, delay_s: float, callback: Callable[[], None]) -> IOTimer:
         """Run ``callback`` on the loop's thread after ``delay_s`` seconds."""
@@ -294,6 +473,9 @@ class IOLoop:
                     if handler is None:
                         self._drain_wake()
                         continue
+                    if handler is _READS:
+                        self._serve_reads()
+                        continue
                     # Inline rather than through _safely: this is every read's path.
                     try:
                         if mask & _READ:
@@ -332,9 +514,23 @@ class IOLoop:
         # the draining was drained with the rest, leaving the flag set with
         # nothing to wake the selector, so later calls waited for a timer, or
         # for ever on a loop with no timers, such as a client between links.)
-        try:
-            while self._wake_r.recv(4096):
-                pass
-        except OSError:  # BlockingIOError: drained
-            pass
+        _drain(self._wake_r)
         self._woken = False
+
+
+def _poll(epoll: Any, timeout_s: float) -> List[Tuple[int, int]]:
+    """``epoll.poll(timeout_s)``; nothing if it is closed (the loop has stopped)."""
+    try:
+        ready: List[Tuple[int, int]] = epoll.poll(timeout_s)
+    except (OSError, ValueError):
+        return []
+    return ready
+
+
+def _drain(sock: socket.socket) -> None:
+    """Read every wake-up byte waiting on a non-blocking socket."""
+    try:
+        while sock.recv(4096):
+            pass
+    except OSError:  # BlockingIOError: drained
+        pass

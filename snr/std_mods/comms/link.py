@@ -211,6 +211,8 @@ class Outbox:
 
     Attributes:
         last_sent_at: when bytes last went to the transport (``time.monotonic()``).
+        answer_due: the peer has been heard since the last send (set by the
+            link as frames arrive): the next frame answers it and goes at once.
     """
 
     def __init__(
@@ -225,6 +227,7 @@ class Outbox:
         self.dropped = 0
         self.dropped_by_key: Dict[DataKey, int] = {}
         self.last_sent_at = time.monotonic()
+        self.answer_due = False
         self._entries: Deque[_Entry] = collections.deque()
         self._newest: Dict[DataKey, _Entry] = {}
         self._queued_bytes = 0
@@ -246,8 +249,15 @@ class Outbox:
             # A frame right behind another (a burst) waits for the I/O thread,
             # which sends everything waiting in one call: a burst of pages costs
             # a few system calls instead of one each. A frame after a pause
-            # goes at once, so a lone page or a reply is never held back.
-            if now and not self._live and time.monotonic() - self.last_sent_at >= _BURST_S:
+            # goes at once, and so does one sent after the peer was heard (a
+            # reply: a fast ping-pong would otherwise look like a burst and
+            # pay a trip through the I/O thread every time).
+            if (
+                now
+                and not self._live
+                and (self.answer_due or time.monotonic() - self.last_sent_at >= _BURST_S)
+            ):
+                self.answer_due = False
                 try:
                     sent = self.transport.send(frame)
                 except OSError:  # full (BlockingIOError) or broken: the I/O loop finds out
@@ -467,6 +477,7 @@ class Link:
         self._timer: Optional[IOTimer] = None
         self._tick_s = min(_TICK_S, owner.beat_s / 4)
         self._finished = False
+        self._ending_soon = False  # ended while the node's thread read it; the loop's finishes
         self._ending = False  # half-closed after a graceful flush
         self.outbox = Outbox(transport, owner.max_backlog_bytes, self._wake_writer)
         self.outbox.put(encode_hello(owner.parent.role, owner.beat_s, bye=True), now=False)
@@ -621,24 +632,33 @@ class Link:
         """The I/O loop is stopping: end the link now."""
         self._finish("the node stopped")
 
+    def _end(self, reason: str) -> None:
+        """End the link: at once on the I/O loop's thread, else soon, by that thread."""
+        if self.io.in_loop_thread():
+            self._finish(reason)
+        else:  # the node's thread, reading while idle, leaves it to the loop's
+            self._ending_soon = True  # and reads it no more meanwhile
+            self.io.call_soon(lambda: self._finish(reason))
+
     def _finish(self, reason: str) -> None:
         if self._finished:
             return
-        self._finished = True
-        if self.peer_said_bye:
-            reason = "it said goodbye (its node is stopping)"
-        elif self.state is not LinkState.OPEN and not self.went_silent:
-            reason = reason if reason.startswith("the peer") else "the link was closed"
-        self.state = LinkState.CLOSED
-        self.outbox.close(discard=True)
-        if self._timer is not None:
-            self._timer.cancel()
-        self.io.forget(self)
-        self._drain_unread()
-        try:
-            self.transport.close()
-        except OSError:
-            pass
+        with self.io.read_role():  # nobody reads the socket while it closes
+            self._finished = True
+            if self.peer_said_bye:
+                reason = "it said goodbye (its node is stopping)"
+            elif self.state is not LinkState.OPEN and not self.went_silent:
+                reason = reason if reason.startswith("the peer") else "the link was closed"
+            self.state = LinkState.CLOSED
+            self.outbox.close(discard=True)
+            if self._timer is not None:
+                self._timer.cancel()
+            self.io.forget(self)
+            self._drain_unread()
+            try:
+                self.transport.close()
+            except OSError:
+                pass
         self._closed.set()
         self.owner.link_closed(self, reason)
 
@@ -669,7 +689,7 @@ class Link:
 
     def _failed(self, error: Exception) -> None:
         self.owner.log.exception("Link to %s failed", self.label)
-        self._finish(f"unexpected {type(error).__name__}: {error}")
+        self._end(f"unexpected {type(error).__name__}: {error}")
 
     def _write(self) -> None:
         if self._finished:
@@ -691,14 +711,17 @@ class Link:
 
     # -- I/O loop thread: reading ---------------------------------------------
     def _read(self) -> None:
-        if self._finished or self._paused:
+        # On the thread that holds the read role: the I/O loop's, or the
+        # node's while it is idle. Everything else (ending the link, pausing)
+        # is left to the loop's thread.
+        if self._finished or self._paused or self._ending_soon:
             return
         try:
             count = self.transport.recv_into(self.io.buffer)
         except BlockingIOError:
             return
         except OSError as error:
-            self._finish(f"{type(error).__name__}: {error}")
+            self._end(f"{type(error).__name__}: {error}")
             return
         decoder = self._decoder
         if not count:
@@ -709,11 +732,12 @@ class Link:
                         f"({decoder.pending_bytes()} bytes of it arrived)"
                     )
                 )
-            self._finish("the peer closed the connection")
+            self._end("the peer closed the connection")
             return
         self.last_heard = time.monotonic()
         self._heard_anything = True
         self._sent_when_heard = self.pages_sent
+        self.outbox.answer_due = True
         decoder.feed(bytes(self.io.view[:count]))
         pages: List[Page] = []
         try:
@@ -724,7 +748,7 @@ class Link:
         except WireFormatError as error:  # a bad length: the stream is lost
             self._bad_frame(error, resetting=True)
             self._deliver(pages)
-            self._finish(f"reset after a bad frame ({error})")
+            self._end(f"reset after a bad frame ({error})")
             return
         if pages:
             self._deliver(pages)
@@ -742,7 +766,14 @@ class Link:
 
     def _pause(self) -> None:
         if not self._paused:
-            self._paused = True
+            self._paused = True  # read no more, from now on (either thread)
+            if self.io.in_loop_thread():
+                self._stop_reading()
+            else:
+                self.io.call_soon(self._stop_reading)
+
+    def _stop_reading(self) -> None:
+        if not self._finished:
             self.io.watch(self, self.io.events(self) & ~_READ)
             self.io.when_room(self._resume)
 
