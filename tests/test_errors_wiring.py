@@ -1,24 +1,32 @@
-"""Errors that point at the line to fix.
+"""Errors that point at the line to fix, and keys that never cross a link.
 
-docs/errors.md entries 2a, 2b, 3a, 4a, 4b and 5: the offending line, with the
-``def`` or class as context. Each test makes the mistake as a student would,
+docs/errors.md entries 2a, 2b, 3a, 4a, 4b and 5 (the offending line, with the
+``def`` or class as context) and 9c (a key that should come from, or go to,
+another node but does not). Each test makes the mistake as a student would,
 with the real components.
 """
 
 from __future__ import annotations
 
 import inspect
-from typing import Any, Callable, List
+import logging
+import threading
+import time
+from types import SimpleNamespace
+from typing import Any, Callable, List, Sequence, Tuple
 
 from snr import (
     AbstractNode,
     ComponentError,
+    Config,
     Endpoint,
     EndpointFactory,
     HandlerError,
+    ListReplayerFactory,
     Mode,
     Node,
     SNRTestCase,
+    SocketsPair,
     SomeTasks,
     Task,
     TaskId,
@@ -26,8 +34,11 @@ from snr import (
     TimeoutLoopFactory,
     tasks,
 )
+from snr.core import MissingKeyHints
 from snr.core.explain import returning_lines
 from snr.prelude import MissingSuperInitError
+from snr.std_mods.comms.link_hints import watch_link
+from tests.comms_helpers import free_port
 
 HERE = "test_errors_wiring.py"
 EV = TaskType.event
@@ -215,3 +226,144 @@ class TestTheLineToFix(SNRTestCase):
             node.loop()  # no error raised: DEPLOYED keeps running
         line = line_of(Counter.on_tick, 'return "done"')
         self.assertIn(f"{HERE}:{line} while handling", logs.output[0])
+
+
+# -- 9c. keys that should cross a link but do not -----------------------------------
+class Watcher(Endpoint):
+    """Handles pages under each of ``keys``."""
+
+    def __init__(self, factory: WatcherFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "watcher")
+        self.task_handlers = {(TaskType.store_page, key): self.on_page for key in factory.keys}
+
+    def on_page(self, task: Task, key: TaskId) -> SomeTasks:
+        return None
+
+
+class WatcherFactory(EndpointFactory):
+    def __init__(self, keys: Sequence[str]) -> None:
+        super().__init__()
+        self.keys = keys
+
+    def get(self, parent: AbstractNode) -> Watcher:
+        return Watcher(self, parent)
+
+
+class Hints(logging.Handler):
+    """Collects the key hints of every node; ``wait`` until ``count`` have come."""
+
+    def __init__(self) -> None:
+        super().__init__(logging.INFO)
+        self.messages: List[Tuple[str, str, str]] = []  # (node logger, level, text)
+        self.changed = threading.Condition()
+
+    def emit(self, record: logging.LogRecord) -> None:
+        text = record.getMessage()
+        if "node.key_hints = None" in text:
+            with self.changed:
+                self.messages.append((record.name, record.levelname, text))
+                self.changed.notify_all()
+
+    def wait(self, count: int, timeout_s: float = 5.0) -> None:
+        with self.changed:
+            self.changed.wait_for(lambda: len(self.messages) >= count, timeout_s)
+
+
+class TestKeysAcrossALink(SNRTestCase):
+    def run_nodes(self, config: Config, link_s: float, hints: Hints, count: int) -> List[Node]:
+        """Run topside and urov on threads until ``count`` hints came (or 5 s), then stop."""
+        nodes = [Node(role, config) for role in ("topside", "urov")]
+        threads = [threading.Thread(target=node.loop, name=f"test-{node.role}") for node in nodes]
+        for node in nodes:
+            assert node.key_hints is not None
+            node.key_hints.handlers_s = 60.0  # only the link check, not the one at start
+            node.key_hints.link_s = link_s
+            node.log.addHandler(hints)
+            self.addCleanup(node.log.removeHandler, hints)
+        for thread in threads:
+            thread.start()
+        try:
+            hints.wait(count)
+        finally:
+            for node in nodes:
+                node.set_terminate_flag("test over")
+            for thread in threads:
+                thread.join(5.0)
+        return nodes
+
+    def test_5_1_telemetry_that_never_arrives(self) -> None:
+        # The robot stores 'depth' and 'sonar' and forwards 'depth_m' (which it
+        # never stores) and 'sonar'; the topside waits for 'depth_m', 'sonar'
+        # (arrives: quiet) and 'sonr' (a typo for what arrives).
+        pair = SocketsPair(server_tuple=("127.0.0.1", free_port()))
+        safety = TimeoutLoopFactory(seconds=8)
+        config = Config(
+            {
+                "topside": [pair.server(), WatcherFactory(["depth_m", "sonar", "sonr"]), safety],
+                "urov": [
+                    ListReplayerFactory(list(range(200)), "depth", period_s=0.01),
+                    ListReplayerFactory(list(range(200)), "sonar", period_s=0.01, name="sonar"),
+                    pair.client(["depth_m", "sonar"]),
+                    safety,
+                ],
+            },
+            mode=Mode.DEBUG,
+        )
+        hints = Hints()
+        self.run_nodes(config, link_s=0.4, hints=hints, count=3)
+        self.assertEqual(len(hints.messages), 3, hints.messages)
+        unsent = [m for m in hints.messages if m[0] == "snr.urov"]
+        received = sorted(m for m in hints.messages if m[0] == "snr.topside")
+        self.assertEqual(len(unsent), 1, hints.messages)
+        _, level, text = unsent[0]
+        self.assertEqual(level, "WARNING")
+        for part in ("'depth_m'", "to node 'topside' at 127.0.0.1:", "Did you mean 'depth'?"):
+            self.assertIn(part, text)
+        texts = {t.split("pages under ")[1].split(",")[0]: (lvl, t) for _, lvl, t in received}
+        self.assertEqual(sorted(texts), ["'depth_m'", "'sonr'"])  # 'sonar' arrived: quiet
+        level, text = texts["'sonr'"]
+        self.assertEqual(level, "WARNING")
+        for part in ("Watcher.on_page", HERE, "from node 'urov' at", "Did you mean 'sonar'?"):
+            self.assertIn(part, text)
+        self.assertIn("Keys received from it: 'sonar'", text)
+        level, text = texts["'depth_m'"]
+        self.assertEqual(level, "INFO")  # nothing like it arrived: perhaps only rare
+        self.assertNotIn("Did you mean", text)
+        self.assertIn("sockets.client(['depth_m'])", text)
+
+    def test_once_per_key_and_quiet_once_the_key_is_there(self) -> None:
+        log = logging.getLogger("snr.test.link_hints")
+        hints = MissingKeyHints(log, time.monotonic, link_s=3.0)
+        handled = [("sonr", pair_or_one)]
+        with self.assertLogs(log, "INFO") as logs:
+            hints.check_link("'c'", "node 'urov' at here", ["x"], handled, [], ["sonar"])
+            hints.check_link("'c'", "node 'urov' at here", ["x"], handled, [], ["sonar"])
+            hints.check_link("'c'", "node 'urov' at here", ["y"], [], ["y"], [])  # stored: quiet
+            log.info("end")
+        self.assertEqual(len(logs.output), 3, logs.output)  # x, sonr, end
+        self.assertIn("Comms component 'c' forwards pages under 'x'", logs.output[0])
+        self.assertIn("Did you mean 'sonar'?", logs.output[1])
+
+    def test_the_check_at_start_leaves_comms_keys_to_the_link_check(self) -> None:
+        pair = SocketsPair(server_tuple=("127.0.0.1", free_port()))
+        node = Node("urov", Config({"urov": [pair.client("depth_m")]}, mode=Mode.TEST))
+        comms: Any = node.components["sockets_client_" + str(pair.server_tuple[1])]
+        student = Watcher(WatcherFactory(["depth_m"]), node)
+        log = logging.getLogger("snr.test.link_hints")
+        hints = MissingKeyHints(log, time.monotonic)
+        with self.assertLogs(log, "INFO") as logs:
+            hints.check_handlers([("depth_m", comms.forward_page)], ["depth"])
+            log.info("end")
+            hints.check_handlers([("depth_m", student.on_page)], ["depth"])
+        self.assertEqual(len(logs.output), 2, logs.output)  # the student's handler only
+        self.assertIn("Watcher.on_page", logs.output[1])
+
+    def test_no_watching_outside_debug_mode(self) -> None:
+        pair = SocketsPair(server_tuple=("127.0.0.1", free_port()))
+        for mode in (Mode.TEST, Mode.DEPLOYED):
+            node = Node("urov", Config({"urov": [pair.client("depth")]}, mode=mode))
+            link: Any = SimpleNamespace(keys_received=None)
+            comms: Any = node.components["sockets_client_" + str(pair.server_tuple[1])]
+            watch_link(comms, link)
+            self.assertIsNone(link.keys_received, mode)  # nothing is noted, no timer is set
+            self.assertIsNone(node.key_hints)
