@@ -344,6 +344,20 @@ class TestKeysAcrossALink(SNRTestCase):
         self.assertIn("Comms component 'c' forwards pages under 'x'", logs.output[0])
         self.assertIn("Did you mean 'sonar'?", logs.output[1])
 
+    def test_a_key_read_early_that_a_handler_waits_for_is_still_checked(self) -> None:
+        now = [0.0]
+        log = logging.getLogger("snr.test.link_hints")
+        hints = MissingKeyHints(log, lambda: now[0])
+        hints.expected_keys = lambda: {"depth_m"}
+        with self.assertLogs(log, "INFO") as logs:
+            for step in range(100):  # a display loop reads it for 10 s: no read hint
+                now[0] = step * 0.1
+                hints.missed("depth_m", ["depth"])
+            hints.check_link("'c'", "node 'urov'", [], [("depth_m", pair_or_one)], [], ["depth"])
+        self.assertEqual(len(logs.output), 1, logs.output)
+        self.assertIn("none has arrived from node 'urov'", logs.output[0])
+        self.assertIn("Did you mean 'depth'?", logs.output[0])
+
     def test_the_check_at_start_leaves_comms_keys_to_the_link_check(self) -> None:
         pair = SocketsPair(server_tuple=("127.0.0.1", free_port()))
         node = Node("urov", Config({"urov": [pair.client("depth_m")]}, mode=Mode.TEST))

@@ -74,13 +74,16 @@ class MissingKeyHints:
         self.link_s = link_s
         self._first_and_next_check: Dict[DataKey, List[float]] = {}
         self._reported: Set[DataKey] = set()
+        # Keys read early that a handler waits for: no read hint, but the wiring
+        # and link checks may still report them (so not in _reported).
+        self._expected_reads: Set[DataKey] = set()
         self._lock = threading.Lock()  # loops read keys from their own threads
         #: Returns the keys the node's handlers are registered for (set by the node).
         self.expected_keys: Callable[[], Set[DataKey]] = set
 
     def missed(self, key: DataKey, stored_keys: Iterable[DataKey]) -> None:
         """Note a read of ``key`` that found nothing; maybe log a hint."""
-        if key in self._reported:
+        if key in self._reported or key in self._expected_reads:
             return
         now = self.clock()
         with self._lock:
@@ -96,7 +99,7 @@ class MissingKeyHints:
             waited_s = now - first_read_s
             if key in self.expected_keys():
                 # A handler waits for this key: its pages are planned, not misspelt.
-                self._reported.add(key)
+                self._expected_reads.add(key)
                 del self._first_and_next_check[key]
                 return
             stored = [k for k in list(stored_keys) if isinstance(k, str)]
