@@ -280,6 +280,10 @@ class TestKeysAcrossALink(SNRTestCase):
             node.key_hints.link_s = link_s
             node.log.addHandler(hints)
             self.addCleanup(node.log.removeHandler, hints)
+            # The "snr.<role>" loggers outlive a node: another test's mode may
+            # have left one at WARNING, which would drop the INFO hints.
+            self.addCleanup(node.log.setLevel, node.log.level)
+            node.log.setLevel(logging.INFO)
         for thread in threads:
             thread.start()
         try:
