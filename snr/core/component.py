@@ -24,7 +24,7 @@ from snr.prelude import (
     Task,
     TaskHandlerMap,
 )
-from snr.prelude.errors import describe_class, short_repr
+from snr.prelude.errors import caller_block, describe_class, short_repr
 
 __all__ = ["Component"]
 
@@ -113,7 +113,7 @@ class Component(AbstractComponent):
             raise MissingSuperInitError(
                 f"{describe_class(type(self))} sets self.task_handlers before calling "
                 "super().__init__(factory, parent, name). Call super().__init__(...) "
-                "first in __init__, then set task_handlers."
+                f"first in __init__, then set task_handlers.\n{caller_block()}".rstrip()
             )
         self._task_handlers = HandlerMap(
             handlers, owner_class=type(self), on_change=self._handlers_changed
@@ -217,7 +217,7 @@ class Component(AbstractComponent):
                 f"{describe_class(type(self))} has no {attribute!r} yet: its __init__ did "
                 "not call super().__init__(factory, parent, name), or used the component "
                 'before calling it. Make `super().__init__(factory, parent, "my_name")` '
-                "the first line of __init__."
+                f"the first line of __init__.\n{caller_block()}".rstrip()
             )
 
     def __repr__(self) -> str:

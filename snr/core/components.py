@@ -48,6 +48,8 @@ from snr.prelude.abstract import explain_abstract_error
 from snr.prelude.errors import (
     describe_callable,
     describe_class,
+    is_runtime_file,
+    source_block,
     student_frames,
     trim_runtime_frames,
 )
@@ -160,6 +162,7 @@ class ComponentSet:
                 f"{describe_class(type(component))}: its __init__ did not call "
                 "super().__init__(factory, parent, name). Add that line first in "
                 "__init__ so SNR can give the component its name and task handlers."
+                f"{_init_block(type(component))}"
             )
         self._check_name_free(component)
         self.by_name[component.name] = component
@@ -447,3 +450,13 @@ class ComponentSet:
         self._pending_adds = []
         self._rebuild_needed = False
         self.table_stale = False
+
+
+def _init_block(cls: type) -> str:
+    """The ``def __init__`` line of ``cls`` (where the call is missing), or ""."""
+    init = next((vars(k)["__init__"] for k in cls.__mro__ if "__init__" in vars(k)), None)
+    code = getattr(init, "__code__", None)
+    if code is None or is_runtime_file(code.co_filename):
+        return ""
+    name = getattr(code, "co_qualname", f"{cls.__qualname__}.__init__")
+    return "\n" + source_block(code.co_filename, code.co_firstlineno, name)

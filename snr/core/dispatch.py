@@ -44,7 +44,13 @@ from snr.prelude import (
     TaskId,
     TaskType,
 )
-from snr.prelude.errors import closest_match, describe_callable, describe_class
+from snr.prelude.errors import (
+    caller_block,
+    closest_match,
+    describe_callable,
+    describe_class,
+    source_block,
+)
 
 __all__ = ["Entry", "HandlerMap", "HandlerTable", "check_handler", "check_task_id"]
 
@@ -84,8 +90,18 @@ class HandlerMap(Dict[TaskId, TaskHandler]):
                 super().__setitem__(key, handler)
 
     def _check(self, key: Any, handler: Any) -> None:
-        check_task_id(key, self._owner_class)
-        check_handler(handler, key, self._owner_class)
+        try:
+            check_task_id(key, self._owner_class)
+            if not callable(handler):
+                check_handler(handler, key, self._owner_class)
+        except ComponentError as error:
+            # The mistake is in the line that registered it: point there, not
+            # only at the class (found only now, while explaining).
+            where = caller_block()
+            if not where:
+                raise
+            raise ComponentError(f"{error}\n{where}") from None
+        check_handler(handler, key, self._owner_class)  # names the def to fix itself
 
     def _changed(self) -> None:
         if self._on_change is not None:
@@ -210,11 +226,15 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
         self_ = "self, " if hasattr(handler, "__self__") else ""
         if hasattr(handler, "__self__"):
             params.insert(0, "self")
+        code_line = ""
+        if code is not None:
+            qualname = getattr(code, "co_qualname", getattr(handler, "__qualname__", name))
+            code_line = "\n" + source_block(code.co_filename, code.co_firstlineno, qualname)
         raise ComponentError(
             f"Task handler {where} for {key!r} is written as "
             f"`def {name}({', '.join(params)})`, but SNR calls a handler with two "
             "arguments: the task and the task id it matched. Write it as "
-            f"`def {name}({self_}task: Task, key: TaskId) -> SomeTasks:`."
+            f"`def {name}({self_}task: Task, key: TaskId) -> SomeTasks:`.{code_line}"
         ) from None
     if code is not None:
         _checked_code.add(code)

@@ -11,11 +11,14 @@ Example::
 
 from __future__ import annotations
 
+import ast
 import dis
+import functools
+import inspect
 import linecache
 import sys
-from types import FrameType
-from typing import Any, Optional
+from types import CodeType, FrameType
+from typing import Any, Dict, Iterator, List, Optional, Union
 
 from snr.prelude import (
     AbstractComponent,
@@ -34,7 +37,9 @@ from snr.prelude.errors import (
     describe_class,
     frame_location,
     is_runtime_file,
+    short_path,
     short_repr,
+    source_block,
     student_frames,
     trim_runtime_frames,
 )
@@ -49,6 +54,7 @@ __all__ = [
     "loop_failure",
     "only_returns_none",
     "reload_failure",
+    "returning_lines",
     "running_line",
     "slow_handler_text",
     "task_label",
@@ -91,6 +97,8 @@ def bad_result_hint(result: Any) -> str:
         return " To store a page, return tasks.store_page(page)."
     if isinstance(result, bool):
         return " Return None when there is nothing to do."
+    if inspect.isgenerator(result):
+        return " A handler cannot yield its tasks: return them in a list."
     if any(t is None for t in items):
         return " Leave None out of the list."
     if any(isinstance(t, (list, tuple)) for t in items):
@@ -178,14 +186,125 @@ def handler_failure(
 
 
 def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerError:
-    """The HandlerError for a handler that returned something other than tasks."""
-    return HandlerError(
-        f"Task handler {describe_callable(handler)} {describe_bad_result(result)} "
-        f"while handling {task_label(task)}. A handler must return a Task, a list of "
-        f"Tasks, or None.{bad_result_hint(result)} To store a value, return "
-        "self.store_data_task(key, value); to announce something, return "
-        "tasks.event('name', [value])."
+    """The HandlerError for a handler that returned something other than tasks.
+
+    It points at the ``return`` line(s) that can give ``result`` (see
+    `returning_lines`), with the ``def`` as context; without the source, at the def.
+
+    Example::
+
+        bad_result_error(42, doubler.double, task)
+        # Task handler Doubler.double returned 42 (int) at robot.py:12 while handling ...
+        #   File "/home/student/rov/robot.py", line 12, in Doubler.double (defined at line 11)
+        #     return task.val_list[0].data * 2
+    """
+    fix = (
+        f"A handler must return a Task, a list of Tasks, or None.{bad_result_hint(result)} "
+        "To store a value, return self.store_data_task(key, value); to announce "
+        "something, return tasks.event('name', [value])."
     )
+    returned = describe_bad_result(result)
+    handling = f"while handling {task_label(task)}"
+    code = getattr(getattr(handler, "__func__", handler), "__code__", None)
+    lines = returning_lines(handler, result) if code is not None else []
+    if code is None or not lines:
+        where = describe_callable(handler)
+        return HandlerError(f"Task handler {where} {returned} {handling}. {fix}")
+    name = getattr(code, "co_qualname", None) or describe_callable(handler).split(" (")[0]
+    short = short_path(code.co_filename)
+    at = f"at {short}:{lines[0]}"
+    if len(lines) > 1:  # the source cannot tell which: show each
+        at = f"at one of its returns, {short}:{', '.join(str(n) for n in lines)},"
+    context = f" (defined at line {code.co_firstlineno})"
+    blocks = "\n".join(source_block(code.co_filename, n, name, context) for n in lines)
+    return HandlerError(f"Task handler {name} {returned} {at} {handling}.\n{blocks}\n{fix}")
+
+
+def returning_lines(handler: Any, result: Any) -> List[int]:
+    """The lines of ``handler``'s ``return`` statements that can have given ``result``.
+
+    Read from the source (only while an error is being explained): a
+    ``return`` of a constant counts only if it is that very constant, a bare
+    ``return`` or ``return None`` never does, nor does one that builds
+    another kind of value (a tuple when a list came back). If some returns
+    build the very kind of value (a list for a list), only those count.
+    ``[]`` when the source cannot be read or has no such return (e.g. a
+    generator, a lambda): the message then names the ``def``.
+
+    Example::
+
+        returning_lines(doubler.double, 42)   # [12]
+    """
+    func = getattr(handler, "__func__", handler)
+    code = getattr(func, "__code__", None)
+    if code is None or code.co_flags & inspect.CO_GENERATOR:
+        return []
+    node = _function_node(code)
+    if node is None:
+        return []
+    exact: List[int] = []
+    same_kind: List[int] = []
+    possible: List[int] = []
+    for statement in _own_returns(node):
+        value = statement.value
+        if value is None or (isinstance(value, ast.Constant) and value.value is None):
+            continue  # gives None, which is never the wrong value
+        if isinstance(value, ast.Constant):
+            if type(value.value) is type(result) and value.value == result:
+                exact.append(statement.lineno)
+            continue
+        builds = _BUILDS.get(type(value))
+        if builds is type(result):
+            same_kind.append(statement.lineno)
+        elif builds is None:
+            possible.append(statement.lineno)
+    return sorted(exact or same_kind or possible)
+
+
+# The expressions whose value is always of one type: to tell returns apart.
+_BUILDS: Dict[type, type] = {
+    ast.Tuple: tuple,
+    ast.List: list,
+    ast.ListComp: list,
+    ast.Dict: dict,
+    ast.DictComp: dict,
+    ast.Set: set,
+    ast.SetComp: set,
+    ast.JoinedStr: str,
+}
+
+
+@functools.lru_cache(maxsize=32)  # DEPLOYED nodes may explain one mistake many times
+def _function_node(code: CodeType) -> Optional[Union[ast.FunctionDef, ast.AsyncFunctionDef]]:
+    """The ``def`` of ``code`` in its file's syntax tree, or None."""
+    linecache.checkcache(code.co_filename)  # the file may have been edited and reloaded
+    lines = linecache.getlines(code.co_filename)
+    if not lines:
+        return None
+    try:
+        tree = ast.parse("".join(lines))
+    except (SyntaxError, ValueError):  # the file changed since it was loaded
+        return None
+    for node in ast.walk(tree):
+        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name == code.co_name:
+            first = min([node.lineno, *(d.lineno for d in node.decorator_list)])
+            if code.co_firstlineno in (first, node.lineno):
+                return node
+    return None
+
+
+_OWN_SCOPES = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef)
+
+
+def _own_returns(function: ast.AST) -> Iterator[ast.Return]:
+    """The ``return`` statements of ``function`` itself, not of functions inside it."""
+    stack = list(ast.iter_child_nodes(function))
+    while stack:
+        node = stack.pop()
+        if isinstance(node, ast.Return):
+            yield node
+        elif not isinstance(node, _OWN_SCOPES):
+            stack.extend(ast.iter_child_nodes(node))
 
 
 def slow_handler_text(handler: TaskHandler, task: Task, took_s: float) -> str:

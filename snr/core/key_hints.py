@@ -24,7 +24,7 @@ from __future__ import annotations
 
 import logging
 import threading
-from typing import Callable, Dict, Iterable, List, Optional, Set, Tuple
+from typing import Callable, Dict, Iterable, List, Mapping, Optional, Set, Tuple
 
 from snr.prelude import DataKey, TaskHandler
 from snr.prelude.errors import caller_location, closest_match, describe_callable
@@ -38,6 +38,12 @@ class MissingKeyHints:
     Args:
         log: where hints go (the node's logger).
         clock: seconds, e.g. ``node.timer.current_s``.
+        typo_s, missing_s: how long a missing key is read before a hint (see `missed`).
+        handlers_s: how long after the node starts its handlers' keys are checked
+            (see `check_handlers`).
+        role: the node's role: a hint says when a key came from another node.
+        link_s: how long after a link to another node comes up the keys that
+            should cross it are checked (see `check_link`).
 
     Example::
 
@@ -56,21 +62,28 @@ class MissingKeyHints:
         typo_s: float = 0.5,
         missing_s: float = 5.0,
         handlers_s: float = 3.0,
+        role: str = "",
+        link_s: float = 3.0,
     ) -> None:
         self.log = log
+        self.role = role
         self.clock = clock
         self.typo_s = typo_s
         self.missing_s = missing_s
         self.handlers_s = handlers_s
+        self.link_s = link_s
         self._first_and_next_check: Dict[DataKey, List[float]] = {}
         self._reported: Set[DataKey] = set()
+        # Keys read early that a handler waits for: no read hint, but the wiring
+        # and link checks may still report them (so not in _reported).
+        self._expected_reads: Set[DataKey] = set()
         self._lock = threading.Lock()  # loops read keys from their own threads
         #: Returns the keys the node's handlers are registered for (set by the node).
         self.expected_keys: Callable[[], Set[DataKey]] = set
 
     def missed(self, key: DataKey, stored_keys: Iterable[DataKey]) -> None:
         """Note a read of ``key`` that found nothing; maybe log a hint."""
-        if key in self._reported:
+        if key in self._reported or key in self._expected_reads:
             return
         now = self.clock()
         with self._lock:
@@ -86,7 +99,7 @@ class MissingKeyHints:
             waited_s = now - first_read_s
             if key in self.expected_keys():
                 # A handler waits for this key: its pages are planned, not misspelt.
-                self._reported.add(key)
+                self._expected_reads.add(key)
                 del self._first_and_next_check[key]
                 return
             stored = [k for k in list(stored_keys) if isinstance(k, str)]
@@ -137,7 +150,10 @@ class MissingKeyHints:
         for ``(TaskType.store_page, key)`` when nothing has stored ``key`` but a
         key spelled almost the same was stored is the commonest silent wiring
         mistake: the handler simply never runs. A key with no close match stays
-        quiet (its pages may come later, e.g. from a node not yet connected).
+        quiet (its pages may come later, e.g. from a node not yet connected;
+        `check_link` looks again once a link has been up for a while). The
+        keys of a component with ``checks_keys_per_link`` set (the comms
+        components) are left to `check_link`, which names the other node.
 
         Example::
 
@@ -148,20 +164,146 @@ class MissingKeyHints:
         for key, handler in handled:
             if key in stored or key in self._reported or not isinstance(key, str):
                 continue
-            same_but_case = [k for k in stored if k.lower() == key.lower()]
-            guess = same_but_case[0] if same_but_case else closest_match(key, stored)
+            if getattr(getattr(handler, "__self__", None), "checks_keys_per_link", False):
+                continue  # a comms component: check_link says where the pages should go
+            guess = _guess(key, stored)
             if guess is None:
                 continue
             self._reported.add(key)
+            page = stored_keys.get(guess) if isinstance(stored_keys, Mapping) else None
+            origin = getattr(page, "origin", None)
+            came = f" (it came from node {origin!r})" if origin and origin != self.role else ""
             self.log.warning(
                 "%s handles pages under %r, but nothing stored %r in the first %.1f s, "
-                "while %r was stored. Did you mean %r? Data keys must match exactly "
-                "(capitals too). (This hint shows once per key, in DEBUG mode only; "
-                "node.key_hints = None turns such hints off.)",
-                describe_callable(handler),
+                "while %r was stored%s. Did you mean %r? Data keys must match exactly "
+                "(capitals too). %s",
+                _describe_handler(handler),
                 key,
                 key,
                 self.handlers_s,
                 guess,
+                came,
                 guess,
+                _SILENCE,
             )
+
+    def check_link(
+        self,
+        comms: str,
+        peer: str,
+        forwarded: Iterable[DataKey],
+        handled: Iterable[Tuple[DataKey, TaskHandler]],
+        stored_keys: Iterable[DataKey],
+        received_keys: Iterable[DataKey],
+    ) -> None:
+        """Warn, once per key, about keys that should cross a link but have not.
+
+        Called by a comms component ``link_s`` after a link to another
+        node came up (its hello arrived), on the node's thread. Two silent
+        mistakes of a two-node system (thesis listing 5.1) show up here:
+
+        * a key the comms component forwards that nothing on this node has
+          stored: nothing is sent (the other node's display stays empty);
+        * a key a handler here waits for that nothing here stores and that
+          has not arrived over the link: the other node does not send it, or
+          sends it under another name.
+
+        With a close match (among the keys that did arrive, or were stored)
+        the hint is a warning with "Did you mean"; without one it is info:
+        the key may simply be rare. Keys stored or received since are quiet.
+
+        Args:
+            comms: the comms component, e.g. ``"'sockets_server_9001'"``.
+            peer: the other node, e.g. ``"node 'urov' at 127.0.0.1:9001"``.
+            forwarded: the keys the comms component sends to it.
+            handled: ``(key, handler)`` for the other handlers of page keys.
+            stored_keys: every key in the datastore.
+            received_keys: the keys of pages that arrived from the peer.
+
+        Example::
+
+            hints.check_link("'sockets_server_9001'", "node 'urov' at 127.0.0.1:9001", [],
+                             [("sensor_data", show)], datastore, {"sensr_data"})
+            # SensorDisplay.show (topside.py:20) handles pages under 'sensor_data', but ...
+        """
+        stored = [k for k in list(stored_keys) if isinstance(k, str)]
+        received = sorted(k for k in list(received_keys) if isinstance(k, str))
+        for key in forwarded:
+            if self._is_news(key, stored):
+                self._report_unsent(comms, peer, key, stored)
+        for key, handler in handled:
+            if self._is_news(key, stored):
+                self._report_unreceived(peer, key, handler, received, stored)
+
+    def _is_news(self, key: DataKey, stored: List[str]) -> bool:
+        """True (and remembered) for a key not stored and not reported yet."""
+        if key in stored or key in self._reported or not isinstance(key, str):
+            return False
+        self._reported.add(key)
+        return True
+
+    def _report_unsent(self, comms: str, peer: str, key: str, stored: List[str]) -> None:
+        guess = _guess(key, stored)
+        say = self.log.warning if guess is not None else self.log.info
+        say(
+            "Comms component %s forwards pages under %r to %s, but nothing on this node "
+            "has stored %r in the %.1f s since that link came up, so none was sent. "
+            "%sStored keys: %s. A comms component sends what is stored on its own node "
+            "under exactly the keys it lists. %s",
+            comms,
+            key,
+            peer,
+            key,
+            self.link_s,
+            f"Did you mean {guess!r}? " if guess is not None else "",
+            _shown(stored),
+            _SILENCE,
+        )
+
+    def _report_unreceived(
+        self, peer: str, key: str, handler: TaskHandler, received: List[str], stored: List[str]
+    ) -> None:
+        guess = _guess(key, received) or _guess(key, stored)
+        say = self.log.warning if guess is not None else self.log.info
+        say(
+            "%s handles pages under %r, but nothing on this node stores %r and none has "
+            "arrived from %s in the %.1f s since it linked. %sKeys received from it: %s. "
+            "A page crosses only if the other node stores it and its comms component "
+            "lists exactly that key (e.g. sockets.client([%r])). %s",
+            _describe_handler(handler),
+            key,
+            key,
+            peer,
+            self.link_s,
+            f"Did you mean {guess!r}? " if guess is not None else "",
+            _shown(received),
+            key,
+            _SILENCE,
+        )
+
+
+_SILENCE = (
+    "(This hint shows once per key, in DEBUG mode only; node.key_hints = None turns "
+    "such hints off.)"
+)
+
+
+def _describe_handler(handler: TaskHandler) -> str:
+    """The student's handler with its file and line; one of SNR's components by its name."""
+    owner = getattr(handler, "__self__", None)
+    name = getattr(owner, "name", None)
+    if isinstance(name, str) and type(owner).__module__.split(".", 1)[0] == "snr":
+        return f"{type(owner).__name__} {name!r}"
+    return describe_callable(handler)
+
+
+def _guess(key: str, choices: List[str]) -> Optional[str]:
+    """The same key in other capitals, else the closest spelling, else None."""
+    same_but_case = [k for k in choices if k.lower() == key.lower()]
+    return same_but_case[0] if same_but_case else closest_match(key, choices)
+
+
+def _shown(keys: List[str]) -> str:
+    """Up to 20 keys for a message."""
+    more = f" and {len(keys) - 20} more" if len(keys) > 20 else ""
+    return (", ".join(repr(k) for k in keys[:20]) or "none") + more

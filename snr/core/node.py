@@ -141,7 +141,9 @@ class Node(AbstractNode):
             timed=self.profiler is not None or self.mode is not Mode.DEPLOYED,
         )
         self.key_hints: Optional[MissingKeyHints] = (
-            MissingKeyHints(self.log, self.timer.current_s) if self.mode is Mode.DEBUG else None
+            MissingKeyHints(self.log, self.timer.current_s, role=role)
+            if self.mode is Mode.DEBUG
+            else None
         )
         if self.key_hints is not None:
             self.key_hints.expected_keys = self._handled_keys

@@ -86,8 +86,17 @@ class NodeCoreEndpoint(Endpoint):
         return None
 
     def check_wiring_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Ask the node to look for handlers of data keys that look misspelled."""
-        self.node.check_wiring()
+        """Look for wiring mistakes: the node's own check, or the checks it carries.
+
+        A comms component sends this event with its check of one link (a
+        function to call) in ``val_list``, so the check runs on the node's
+        thread; without one, the node checks its handlers' keys.
+        """
+        checks = [value for value in task.val_list if callable(value)]
+        if not checks:
+            self.node.check_wiring()
+        for check in checks:
+            check()
         return None
 
     def reload_handler(self, task: Task, key: TaskId) -> SomeTasks:

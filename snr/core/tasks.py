@@ -51,7 +51,9 @@ scheduled before it was handled (the node core then sets the event it carries)."
 
 CHECK_WIRING: TaskName = "snr_check_wiring"
 """Event a DEBUG node schedules for itself a few seconds after it starts: the node
-core then looks for handlers of data keys that look misspelled."""
+core then looks for handlers of data keys that look misspelled. A comms component
+sends it too, a few seconds after a link comes up, carrying its check of that link
+(a function the node core calls on the node's thread)."""
 
 
 def event(name: TaskName, val_list: Optional[List[Any]] = None) -> Task:

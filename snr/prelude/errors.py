@@ -51,6 +51,7 @@ __all__ = [
     "SNRError",
     "ThreadSafetyError",
     "WireFormatError",
+    "caller_block",
     "caller_location",
     "check_serializable",
     "closest_match",
@@ -61,7 +62,9 @@ __all__ = [
     "frame_location",
     "is_runtime_file",
     "not_serializable_error",
+    "short_path",
     "short_repr",
+    "source_block",
     "student_frames",
     "trim_runtime_frames",
 ]
@@ -165,6 +168,16 @@ def _short_path(path: Optional[str]) -> str:
     except ValueError:  # different drive on Windows
         return path
     return rel if not rel.startswith(".." + os.sep + "..") else path
+
+
+def short_path(path: Optional[str]) -> str:
+    """``path`` as messages show it: relative to the current folder when that is shorter.
+
+    Example::
+
+        short_path("/home/student/rov/robot.py")   # 'robot.py' when run in /home/student/rov
+    """
+    return _short_path(path)
 
 
 def describe_class(cls: type) -> str:
@@ -282,6 +295,46 @@ def caller_location(skip: int = 1) -> str:
     if frame is None:
         return "<unknown place>"
     return frame_location(frame)
+
+
+def source_block(filename: str, line: int, name: str, context: str = "") -> str:
+    """One line of code as a traceback shows it: where, then the code itself.
+
+    Editors and terminals make the ``File "...", line N`` part clickable, so
+    it takes the student straight to the line to fix. ``context`` follows the
+    name, e.g. ``" (defined at line 11)"``.
+
+    Example::
+
+        source_block("/home/student/rov/robot.py", 12, "Doubler.double", " (defined at line 11)")
+        #   File "/home/student/rov/robot.py", line 12, in Doubler.double (defined at line 11)
+        #     return task.val_list[0].data * 2
+    """
+    import linecache  # here: only used while an error is being explained
+
+    code = linecache.getline(filename, line).strip()
+    where = f'  File "{filename}", line {line}, in {name}{context}'
+    return f"{where}\n    {code}" if code else where
+
+
+def caller_block(skip: int = 1) -> str:
+    """The nearest caller outside SNR's runtime as a `source_block`, or "".
+
+    For errors found inside SNR on behalf of the line that called it, such
+    as a ``self.task_handlers = ...`` that runs before ``super().__init__``.
+
+    Example::
+
+        raise ComponentError(f"... set too early.\n{caller_block()}")
+    """
+    frame: Optional[FrameType] = sys._getframe(skip)
+    while frame is not None and is_runtime_file(frame.f_code.co_filename):
+        frame = frame.f_back
+    if frame is None:
+        return ""
+    code = frame.f_code
+    name = getattr(code, "co_qualname", None) or frame_location(frame).rsplit(" in ", 1)[-1]
+    return source_block(code.co_filename, frame.f_lineno, name)
 
 
 def frame_location(frame: FrameType, line: Optional[int] = None) -> str:

@@ -68,6 +68,7 @@ from snr.prelude import (
     WireFormatError,
 )
 from snr.std_mods.comms.io_loop import IOLoop, IOTimer
+from snr.std_mods.comms.link_hints import watch_link
 from snr.std_mods.comms.wire import (
     Bye,
     FrameDecoder,
@@ -120,6 +121,7 @@ _TICK_S = 0.25  # how often a link checks its peer's silence and whether it owes
 _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
 _SHOWN_BAD_FRAMES = 5  # per link, log the first few bad frames in full, then a count every 5 s
+_MAX_KEYS_NOTED = 1000  # DEBUG: how many received keys a link remembers for the hints
 
 
 def normalize_keys(keys: Keys, where: str) -> Tuple[str, ...]:
@@ -430,6 +432,8 @@ class Link:
     Attributes:
         pages_sent: pages handed to the transport or queued for it.
         pages_received: pages that arrived.
+        keys_received: in DEBUG mode, the keys of the pages that arrived (up to
+            1,000, for the hints of ``link_hints.py``); None otherwise.
         went_silent: the link was closed because the peer fell silent.
         peer_said_bye: the peer sent a bye: the end that follows is orderly.
         loss: the `LossReport` of pages dropped because the peer fell behind.
@@ -457,6 +461,7 @@ class Link:
         self._peer_takes_bye = False  # its hello said it understands a bye frame
         self.pages_sent = 0
         self.pages_received = 0
+        self.keys_received: Optional[Set[DataKey]] = None  # noted in DEBUG (link_hints.py)
         self.opened_at = time.monotonic()
         self.last_heard = self.opened_at
         self._heard_anything = False
@@ -757,6 +762,9 @@ class Link:
         if not pages:
             return
         self.pages_received += len(pages)
+        noted = self.keys_received
+        if noted is not None and len(noted) < _MAX_KEYS_NOTED:
+            noted.update(page.key for page in pages)
         if self._held or not self.owner.parent.wait_for_room(0):
             # The node is behind: keep these, read no more until it has room.
             self._held.extend(pages)
@@ -821,6 +829,7 @@ class Link:
             self.peer_beat_s = message.beat_s
             self._peer_takes_bye = message.bye
             self.owner.on_hello(self)
+            watch_link(self.owner, self)
         elif isinstance(message, Bye):
             self.peer_said_bye = True
 
@@ -869,6 +878,9 @@ class CommsLoop(ThreadLoop):
 
     recovered_after_s: float = 1.0
     """After drops, a link logs "Recovered" once nothing was dropped for this long."""
+
+    checks_keys_per_link = True
+    """In DEBUG mode its keys are checked once a link is up (link_hints.py), not at start."""
 
     def __init__(
         self,

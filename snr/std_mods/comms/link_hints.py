@@ -1,0 +1,98 @@
+"""In DEBUG mode: keys that should cross a link to another node but do not.
+
+Two nodes that disagree about a data key fail silently: the robot forwards
+``"sensr_data"`` (or never stores the key it forwards) and the topside's
+display handles ``"sensor_data"``, so nothing is shown and nothing is said
+(thesis listing 5.1). A few seconds (``node.key_hints.link_s``) after a
+link's hello arrives, the comms component asks its node to compare the keys
+with what was stored and received, and `MissingKeyHints.check_link` says what
+looks wrong, once per key.
+
+It costs nothing outside DEBUG mode: no timer is set and no key is recorded.
+
+Example (what `CommsLoop` does for you)::
+
+    watch_link(comms_loop, link)   # on the I/O thread, when the hello arrives
+"""
+
+from __future__ import annotations
+
+import functools
+import time
+from typing import TYPE_CHECKING, List, Optional, Set, Tuple
+
+from snr.core import MissingKeyHints, Node, tasks
+from snr.prelude import DataKey, TaskHandler, TaskType
+
+if TYPE_CHECKING:
+    from snr.std_mods.comms.link import CommsLoop, Link
+
+__all__ = ["check_link", "watch_link"]
+
+_PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
+
+
+def _hints_of(comms: CommsLoop) -> Optional[MissingKeyHints]:
+    node = comms.parent
+    return node.key_hints if isinstance(node, Node) else None
+
+
+def watch_link(comms: CommsLoop, link: Link) -> None:
+    """In DEBUG mode, check ``link``'s keys ``link_s`` from now (I/O thread, on hello).
+
+    Example::
+
+        watch_link(self, link)   # in CommsLoop, when the peer's hello arrives
+    """
+    hints = _hints_of(comms)
+    io = comms.io_loop
+    if hints is None or io is None:
+        return
+    if link.keys_received is None:
+        link.keys_received = set()  # from now on the link notes what arrives
+
+    def ask() -> None:  # on the I/O thread: hand the check to the node's thread
+        if link.is_alive() and not comms.is_terminated():
+            check = functools.partial(check_link, comms, link)
+            comms.schedule(tasks.event(tasks.CHECK_WIRING, [check]))
+
+    io.call_later(hints.link_s, ask)
+
+
+def check_link(comms: CommsLoop, link: Link) -> None:
+    """On the node's thread: report keys that should have crossed ``link`` by now.
+
+    Pages may come from the peer over more than one link (thesis listing 5.1
+    has two between the same nodes): their received keys count together, and
+    while one of them is younger than the delay its own check will come later.
+
+    Example::
+
+        check_link(comms_loop, link)   # see MissingKeyHints.check_link for the messages
+    """
+    from snr.std_mods.comms.link import CommsLoop  # here: link.py imports this module
+
+    node = comms.parent
+    hints = _hints_of(comms)
+    if hints is None or not isinstance(node, Node) or not link.is_alive():
+        return
+    if node.components.get(comms.name) is not comms:
+        return  # removed or reloaded since
+    handled: List[Tuple[DataKey, TaskHandler]] = []
+    peer_links: List[Link] = []
+    for component in list(node.components.values()):
+        if isinstance(component, CommsLoop):  # its keys are checked as sent, not wanted
+            peer_links += [other for other in component.links if other.peer_role == link.peer_role]
+            continue
+        for task_id, handler in list(component.task_handlers.items()):
+            if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
+                handled.append((task_id[1], handler))
+    now = time.monotonic()
+    received: Set[DataKey] = set()
+    for other in peer_links:
+        if other.is_alive() and now - other.opened_at < hints.link_s:
+            handled = []  # a newer link to the same node: its own check comes later
+        received.update(other.keys_received or ())
+    places = sorted({other.transport.peer for other in peer_links} | {link.transport.peer})
+    peer = f"node {link.peer_role!r} at {' and '.join(places)}"
+    hints.check_link(repr(comms.name), peer, comms.keys, handled, node.datastore, received)
