@@ -32,6 +32,7 @@ import os
 import pkgutil
 import re
 import sys
+import textwrap
 import warnings
 import webbrowser
 from pathlib import Path
@@ -370,14 +371,27 @@ def build(
     output_dir.mkdir(parents=True, exist_ok=True)
     (output_dir / STAMP_FILE).unlink(missing_ok=True)
     problems: List[str] = []
+    import pdoc.docstrings
+
+    read_rst = pdoc.docstrings.rst
     with warnings.catch_warnings(record=True) as caught:
         warnings.simplefilter("always")
+        # Examples are written "Example::" + an indented block (readable in
+        # help()); on the web page they become highlighted Python.
+        pdoc.docstrings.rst = lambda text, source: read_rst(  # type: ignore[assignment]
+            literal_blocks_to_fences(text), source
+        )
+        pdoc.docstrings.convert.cache_clear()
         pdoc.render.configure(
             docformat="google",
             show_source=show_source,
             footer_text=f"SNR {snr.__version__}",
         )
-        pdoc.pdoc(*modules, output_directory=output_dir)
+        try:
+            pdoc.pdoc(*modules, output_directory=output_dir)
+        finally:
+            pdoc.docstrings.rst = read_rst
+            pdoc.docstrings.convert.cache_clear()
     problems += [f"pdoc: {w.message}" for w in caught]
     problems += check_docstring_references(_snr_modules())
     if guide_dir is not None and guide_dir.is_dir():
@@ -385,6 +399,40 @@ def build(
     if not problems:
         (output_dir / STAMP_FILE).write_text(_fingerprint(guide_dir), encoding="utf-8")
     return problems
+
+
+# A reStructuredText literal block: a line ending in "::", a blank line, then
+# lines indented more than it (SNR's docstrings write examples this way).
+_LITERAL_BLOCK = re.compile(
+    r"^(?P<indent>[ \t]*)(?P<lead>[^\n]*?)::[ \t]*\n"
+    r"(?P<gap>(?:[ \t]*\n)+)"
+    r"(?P<block>(?:(?P=indent)[ \t]+[^\n]*(?:\n|$)|[ \t]*\n)+)",
+    re.MULTILINE,
+)
+
+
+def literal_blocks_to_fences(docstring: str) -> str:
+    """Turn reStructuredText ``Example::`` blocks into fenced Python code.
+
+    pdoc's Google-style reading leaves "Example::" as text; as Markdown the
+    block after it becomes a fenced code block with Python highlighting.
+
+    Example::
+
+        literal_blocks_to_fences("Example::\n\n    node.loop()\n")
+        # 'Example:\n\n```python\nnode.loop()\n```\n\n'
+    """
+
+    def fence(match: re.Match[str]) -> str:
+        indent, lead = match["indent"], match["lead"].rstrip()
+        lines = match["block"].rstrip("\n").split("\n")
+        body = "\n".join(line[len(indent) :] for line in lines)
+        code = textwrap.dedent(body).strip("\n")
+        heading = f"{indent}{lead}:\n\n" if lead else ""
+        fenced = "\n".join(f"{indent}{line}" if line else "" for line in code.split("\n"))
+        return f"{heading}{indent}```python\n{fenced}\n{indent}```\n\n"
+
+    return _LITERAL_BLOCK.sub(fence, docstring)
 
 
 def _start_page(output_dir: Path) -> Path:

@@ -1,0 +1,47 @@
+"""Docstring examples ("Example::" + an indented block) render as Python code."""
+
+import importlib.util
+import shutil
+import tempfile
+import unittest
+from pathlib import Path
+
+from snr.docsite import build, literal_blocks_to_fences
+
+
+class TestLiteralBlocks(unittest.TestCase):
+    def test_example_block_becomes_fenced_python(self) -> None:
+        text = "Starts the node.\n\nExample::\n\n    node = Node('robot', config)\n    node.loop()\n"
+        self.assertEqual(
+            literal_blocks_to_fences(text),
+            "Starts the node.\n\nExample:\n\n```python\n"
+            "node = Node('robot', config)\nnode.loop()\n```\n\n",
+        )
+
+    def test_nested_indentation_and_blank_lines_are_kept(self) -> None:
+        text = "Run it::\n\n    for x in xs:\n        print(x)\n\n    done()\n\nAfter.\n"
+        self.assertEqual(
+            literal_blocks_to_fences(text),
+            "Run it:\n\n```python\nfor x in xs:\n    print(x)\n\ndone()\n```\n\nAfter.\n",
+        )
+
+    def test_text_without_a_literal_block_is_unchanged(self) -> None:
+        text = "Args:\n    key: the data key.\n\nReturns the page, or None: nothing else."
+        self.assertEqual(literal_blocks_to_fences(text), text)
+
+
+@unittest.skipUnless(importlib.util.find_spec("pdoc"), "needs pdoc (pip install -e '.[dev]')")
+class TestRenderedPage(unittest.TestCase):
+    def test_no_literal_example_marker_on_the_page(self) -> None:
+        output = Path(tempfile.mkdtemp(prefix="snr-docs-examples-"))
+        try:
+            build(output, guide_dir=None, show_source=False, modules=("snr.core.timer",))
+            page = (output / "snr" / "core" / "timer.html").read_text("utf-8")
+        finally:
+            shutil.rmtree(output, ignore_errors=True)
+        self.assertNotIn("Example::", page)
+        self.assertIn('class="pdoc-code codehilite"', page)
+
+
+if __name__ == "__main__":
+    unittest.main()
