@@ -11,7 +11,10 @@ from snr.docsite import build, literal_blocks_to_fences
 
 class TestLiteralBlocks(unittest.TestCase):
     def test_example_block_becomes_fenced_python(self) -> None:
-        text = "Starts the node.\n\nExample::\n\n    node = Node('robot', config)\n    node.loop()\n"
+        text = (
+            "Starts the node.\n\nExample::\n\n"
+            "    node = Node('robot', config)\n    node.loop()\n"
+        )
         self.assertEqual(
             literal_blocks_to_fences(text),
             "Starts the node.\n\nExample:\n\n```python\n"
