@@ -5,11 +5,11 @@ over and over: the place for reading a sensor or a socket. Here a simulated
 depth sensor stores a reading ten times a second, an endpoint prints each
 one, and a ready-made timeout loop stops the node after one second.
 
-    python step03_a_loop.py
-
-prints about ten lines such as ``depth 2.31 m``.
+    python step03_a_loop.py              # about ten lines such as ``depth 2.33 m``
+    python step03_a_loop.py --seconds 3  # runs for three seconds instead
 """
 
+import argparse
 import math
 
 from snr import (
@@ -73,15 +73,20 @@ class DepthPrinterFactory(EndpointFactory):
         return DepthPrinter(self, parent)
 
 
-config = Config(
-    {
-        "submarine": [
-            DepthSensorFactory(rate_hz=10),
-            DepthPrinterFactory(),
-            TimeoutLoopFactory(seconds=1),  # schedules terminate after 1 s
-        ]
-    }
-)
+def make_config(seconds: float = 1.0) -> Config:
+    """The submarine's node: the sensor, the printer, and a stop after ``seconds``."""
+    return Config(
+        {
+            "submarine": [
+                DepthSensorFactory(rate_hz=10),
+                DepthPrinterFactory(),
+                TimeoutLoopFactory(seconds=seconds),  # schedules terminate after that
+            ]
+        }
+    )
+
 
 if __name__ == "__main__":
-    SynchronousRunner("submarine", config).run()
+    parser = argparse.ArgumentParser(description="A simulated depth sensor, printed.")
+    parser.add_argument("--seconds", type=float, default=1.0, help="stop after this long")
+    SynchronousRunner("submarine", make_config(parser.parse_args().seconds)).run()

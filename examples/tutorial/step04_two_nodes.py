@@ -2,9 +2,9 @@
 
 One node per computer: a ``sensor`` node (on the robot) measures depth with
 step 3's sensor loop and sends it to a ``display`` node (on the laptop) over
-TCP. The nodes know nothing
-of the network; a `SocketsPair` adds a loop to each that forwards pages by
-key. Run the display in one terminal and the sensor in another:
+TCP. The components know nothing of the network; a `SocketsPair` adds a loop
+to each node that forwards pages by key. Run the display in one terminal and
+the sensor in another:
 
     python step04_two_nodes.py display
     python step04_two_nodes.py sensor
@@ -13,8 +13,9 @@ or both at once, each in its own process:
 
     python step04_two_nodes.py display sensor
 
-On two computers, change ``127.0.0.1`` to the display computer's address.
-``--port`` picks another port; ``--seconds`` how long both nodes run.
+The sensor measures for five seconds (``--seconds`` changes that), then
+stops; the display stops when the sensor has left. On two computers, change
+``127.0.0.1`` to the display computer's address. ``--port`` picks another port.
 """
 
 import argparse
@@ -25,6 +26,7 @@ from typing import List, Sequence, Tuple
 from step03_a_loop import DepthSensorFactory
 
 from snr import (
+    COMMS_DISCONNECTED,
     AbstractNode,
     CliRunner,
     ComponentsByRole,
@@ -36,20 +38,28 @@ from snr import (
     TaskId,
     TaskType,
     TimeoutLoopFactory,
+    tasks,
 )
 
 
 class DepthDisplay(Endpoint):
-    """Prints each depth page, and which node it came from."""
+    """Prints each depth page and which node made it; stops when the sensor leaves."""
 
     def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, "depth_display")
-        self.task_handlers = {(TaskType.store_page, "depth_m"): self.show}
+        self.task_handlers = {
+            (TaskType.store_page, "depth_m"): self.show,
+            # The link schedules this event when a peer goes away.
+            (TaskType.event, COMMS_DISCONNECTED): self.sensor_left,
+        }
 
     def show(self, task: Task, key: TaskId) -> SomeTasks:
         page = task.val_list[0]
         print(f"depth {page.data:.2f} m (measured by {page.origin})", flush=True)
         return None
+
+    def sensor_left(self, task: Task, key: TaskId) -> SomeTasks:
+        return tasks.terminate("the sensor has left")
 
 
 class DepthDisplayFactory(EndpointFactory):
@@ -57,19 +67,22 @@ class DepthDisplayFactory(EndpointFactory):
         return DepthDisplay(self, parent)
 
 
-def make_components(port: int = 9010, seconds: float = 10.0) -> ComponentsByRole:
-    """Both roles; the sockets pair joins them (the server listens on ``port``)."""
+def make_components(port: int = 9010, seconds: float = 5.0) -> ComponentsByRole:
+    """Both roles; the sockets pair joins them (the server listens on ``port``).
+
+    The sensor stops after ``seconds``; the display runs until the sensor has
+    left (or Ctrl-C).
+    """
     link = SocketsPair(server_tuple=("127.0.0.1", port))
     return {
         "sensor": [
             DepthSensorFactory(rate_hz=5),
             link.client(["depth_m"]),  # sends every page stored under depth_m
-            TimeoutLoopFactory(seconds=seconds),
+            TimeoutLoopFactory(seconds=seconds),  # then the sensor stops
         ],
         "display": [
             link.server(),  # stores the pages the client sends
             DepthDisplayFactory(),
-            TimeoutLoopFactory(seconds=seconds),
         ],
     }
 
@@ -78,7 +91,7 @@ def parse_options(argv: Sequence[str]) -> Tuple[argparse.Namespace, List[str]]:
     """Our options; the rest (the roles) goes to the CliRunner."""
     parser = argparse.ArgumentParser(add_help=False)
     parser.add_argument("--port", type=int, default=9010)
-    parser.add_argument("--seconds", type=float, default=10.0)
+    parser.add_argument("--seconds", type=float, default=5.0)
     options, rest = parser.parse_known_args(argv[1:])
     return options, [argv[0], *rest]
 

@@ -5,16 +5,20 @@ Start the node, then edit ``GREETING`` in ``step06_greeter.py`` and save:
     python step06_hot_reload.py
 
 A loop sends a ``tick`` event every second and the greeter prints a line.
-The node reloads the greeter in two ways:
+The node runs for two minutes (``--seconds`` changes that); Ctrl-C stops it
+sooner. The node reloads the greeter in two ways:
 
 * When you save ``step06_greeter.py``, a watcher loop notices and schedules
   ``tasks.reload_component("greeter")`` (a task, like any other).
 * From another terminal, a console talks to the node over TCP:
 
       snr-console 127.0.0.1:9123
-      > reload greeter
-      > list endpoints
-      > exit
+      127.0.0.1:9123> reload greeter
+      127.0.0.1:9123> list endpoints
+      127.0.0.1:9123> exit
+
+  ``exit`` stops the node (and closes the console); ``quit`` or Ctrl-D
+  leaves the console and the node keeps running.
 
 The greeting changes and the count goes on: the count is kept on the factory,
 and a reload builds a new greeter from the same factory. ``--no-watch``
@@ -76,7 +80,7 @@ class ReloadWhenSavedLoop(snr.ThreadLoop):
         now = self.stamp()
         if now is not None and now != self.last_seen:
             self.last_seen = now
-            print(f"{os.path.basename(self.path)} changed: reloading {self.component!r}")
+            # The node logs "Reloaded 'greeter'" once it has rebuilt it.
             self.schedule(snr.tasks.reload_component(self.component))
 
 

@@ -3,17 +3,18 @@
 Record what a sensor measured, then replay it as often as you like: through a
 different filter, on a computer without the sensor, in a test.
 
-    python step07_record_replay.py record     # writes depth_run.jsonl
+    python step07_record_replay.py record     # writes runs/depth_run.jsonl
     python step07_record_replay.py replay     # filters and prints the recording
 
-The recording is a text file with one JSON page per line. The replayer stores
-each page again, under its key and with its origin, as if the sensor were
-there; ``fast=True`` skips the waiting between pages. ``--file`` picks the
-file.
+The recording is a text file with one JSON page per line, in the ``runs``
+folder (made if missing; git ignores it). The replayer stores each page
+again, under its key and with its origin, as if the sensor were there;
+``fast=True`` skips the waiting between pages. ``--file`` picks another file.
 """
 
 import argparse
 import math
+import os
 import random
 import sys
 from typing import List, Sequence, Tuple
@@ -61,12 +62,16 @@ class DepthPrinterFactory(EndpointFactory):
         return DepthPrinter(self, parent)
 
 
-def make_components(filename: str = "depth_run.jsonl") -> ComponentsByRole:
+RECORDING = os.path.join("runs", "depth_run.jsonl")
+"""Where ``record`` writes and ``replay`` reads, unless ``--file`` says otherwise."""
+
+
+def make_components(filename: str = RECORDING) -> ComponentsByRole:
     """Two roles: one records a (simulated) sensor, one replays the recording."""
     return {
         "record": [
-            # The "sensor": 20 readings in 0.4 s, then the node stops.
-            ListReplayerFactory(noisy_depths(), "depth_raw", period_s=0.02, exit_when_done=True),
+            # The "sensor": 20 readings in 0.2 s, then the node stops.
+            ListReplayerFactory(noisy_depths(), "depth_raw", period_s=0.01, exit_when_done=True),
             RecorderEndpointFactory(filename, ["depth_raw"]),  # writes every depth_raw page
             TimeoutLoopFactory(seconds=5),  # a safety net: never record for ever
         ],
@@ -81,11 +86,12 @@ def make_components(filename: str = "depth_run.jsonl") -> ComponentsByRole:
 def parse_options(argv: Sequence[str]) -> Tuple[argparse.Namespace, List[str]]:
     """Our option (--file); the rest (the role) goes to the CliRunner."""
     parser = argparse.ArgumentParser(add_help=False)
-    parser.add_argument("--file", default="depth_run.jsonl")
+    parser.add_argument("--file", default=RECORDING)
     options, rest = parser.parse_known_args(argv[1:])
     return options, [argv[0], *rest]
 
 
 if __name__ == "__main__":
     options, runner_argv = parse_options(sys.argv)
+    os.makedirs(os.path.dirname(options.file) or ".", exist_ok=True)  # the runs folder
     CliRunner(make_components(options.file), runner_argv).run()

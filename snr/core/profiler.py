@@ -2,10 +2,24 @@
 
 The node times every handler in DEBUG and TEST mode (and with
 ``Config(profile=True)``); ``dump()`` prints the table of thesis
-listing 5.2::
+listing 5.2, one section per thread::
 
     Times called,          Avg runtime, Task/Loop type,
-    149878 x     2.317 us -> 17.281%: TaskType.event(stress):__main__
+    (share: of the 0.526 s since the node was made; each thread's lines add up to 100%)
+    node thread:
+          200475 x      1.358 us ->  51.780%: TaskType.event(stress):__main__
+           10475 x     13.823 us ->  27.538%: TaskType.event(add_component):snr.core.node_core
+               1 x     43.164 us ->   0.008%: TaskType.terminate:snr.core.node_core
+                                 ->  20.673%: (outside handlers: the node's own work, ...)
+    loop thread timeout_loop:
+               1 x 504193.137 us ->  95.890%: Loop(timeout_loop)
+                                 ->   4.110%: (outside loop(): waiting between passes)
+
+Handlers all run on the node's thread, one at a time, so their shares and the
+time outside them add up to 100% of the time since the node was made. Each
+loop runs on its own thread, beside the node's: its share is of the same
+time, but in a section of its own. (The 2021 table put them in one list,
+whose shares could add up to far more than 100%.)
 
 Timing must be cheap enough to leave on while students develop, so the
 profiler hands out one *cell* per handler (and per loop) when the handler is
@@ -26,6 +40,14 @@ from typing import Callable, Dict, List, Tuple
 from snr.prelude import AbstractProfiler, ComponentName, StatsCell, TaskId, TaskType
 
 __all__ = ["Profiler", "format_task_id"]
+
+Row = Tuple[str, int, float]  # (label, times_called, total_s)
+
+_LOOP_PREFIX = "Loop("  # the label of a loop's cell: Loop(name)
+_HEADER = "Times called,          Avg runtime, Task/Loop type,"  # thesis listing 5.2
+_COUNT_AND_AVG_WIDTH = len(f"{0:>12} x {0.0:>10.3f} us")  # where " -> share" starts
+_OUTSIDE_HANDLERS = "(outside handlers: the node's own work, waiting for tasks)"
+_OUTSIDE_LOOP = "(outside loop(): waiting between passes)"
 
 
 def format_task_id(task_id: TaskId) -> str:
@@ -105,7 +127,7 @@ class Profiler(AbstractProfiler):
         with self._lock:
             self._reports[name] = report
 
-    def rows(self) -> List[Tuple[str, int, float]]:
+    def rows(self) -> List[Row]:
         """``(label, times_called, total_s)`` rows, busiest first; unused cells left out."""
         with self._lock:
             cells = list(self._cells.items())
@@ -113,13 +135,41 @@ class Profiler(AbstractProfiler):
         return sorted(rows, key=lambda row: row[2], reverse=True)
 
     def dump(self) -> str:
-        """The profile as a table, busiest first; share is of wall time so far."""
+        """The profile as text: one section per thread, each adding up to 100%.
+
+        Every share is of the wall time since the node was made. The node's
+        thread runs the handlers one at a time, so its section is a partition:
+        the handlers' shares plus the time outside them make 100%. Each loop
+        has a section of its own (its thread runs beside the node's): its
+        ``loop()`` passes plus the time between them make 100%. Sections are
+        not added together. Comms components add their link counters below.
+
+        Example::
+
+            print(node.profiler.dump())
+            # Times called,          Avg runtime, Task/Loop type,
+            # (share: of the 0.501 s since the node was made; each thread's lines add up ...)
+            # node thread:
+            #            1 x      8.383 us ->   0.002%: TaskType.store_page:snr.core.node_core
+            #                              ->  99.998%: (outside handlers: the node's own ...)
+            # loop thread timeout_loop:
+            #            1 x 499281.445 us ->  99.739%: Loop(timeout_loop)
+            #                              ->   0.261%: (outside loop(): waiting between passes)
+        """
         elapsed = max(time.perf_counter() - self._start_s, 1e-9)
-        lines = ["Times called,          Avg runtime, Task/Loop type,"]
-        for label, count, total in self.rows():
-            avg_us = total / count * 1e6
-            share = total / elapsed * 100
-            lines.append(f"{count:>12} x {avg_us:>10.3f} us -> {share:7.3f}%: {label}")
+        rows = self.rows()
+        handlers = [row for row in rows if not row[0].startswith(_LOOP_PREFIX)]
+        loops = [row for row in rows if row[0].startswith(_LOOP_PREFIX)]
+        lines = [
+            _HEADER,
+            f"(share: of the {elapsed:.3f} s since the node was made; "
+            "each thread's lines add up to 100%)",
+            "node thread:",
+            *_section(handlers, elapsed, _OUTSIDE_HANDLERS),
+        ]
+        for row in loops:
+            lines.append(f"loop thread {row[0][len(_LOOP_PREFIX) : -1]}:")
+            lines.extend(_section([row], elapsed, _OUTSIDE_LOOP))
         with self._lock:
             reports = list(self._reports.items())
         for name, report in reports:
@@ -129,3 +179,24 @@ class Profiler(AbstractProfiler):
                 text = f"(could not be made: {type(error).__name__}: {error})"
             lines.append(f"\n{name}:\n{text}")
         return "\n".join(lines)
+
+
+def _section(rows: List[Row], elapsed_s: float, rest_label: str) -> List[str]:
+    """One thread's rows, then the time outside them: shares adding up to 100%.
+
+    The rows of one thread cannot overlap in time unless a handler ran
+    others inside itself (``node.execute_task`` from a handler): then their
+    sum can pass 100%, and a last line says why.
+    """
+    lines: List[str] = []
+    busy_s = 0.0
+    for label, count, total in rows:
+        avg_us = total / count * 1e6
+        share = total / elapsed_s * 100
+        lines.append(f"{count:>12} x {avg_us:>10.3f} us -> {share:7.3f}%: {label}")
+        busy_s += total
+    rest_share = max(0.0, elapsed_s - busy_s) / elapsed_s * 100
+    lines.append(f"{'':>{_COUNT_AND_AVG_WIDTH}} -> {rest_share:7.3f}%: {rest_label}")
+    if busy_s > elapsed_s:
+        lines.append("(these add up to more than 100%: some ran inside others, so times nest)")
+    return lines

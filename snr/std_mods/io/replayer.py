@@ -297,6 +297,7 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         self._items: Optional[Iterator[Item]] = None
         self._done_event = f"{self.name}_done"
         self._exit_scheduled = False
+        self._whole_file_replayed = False  # set on the loop's thread, read on the node's
         if factory.exit_when_done:
             self.task_handlers = {(TaskType.event, self._done_event): self.finish_node}
 
@@ -347,14 +348,22 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
             raise
 
     def _finished(self) -> None:
+        self.set_terminate_flag("replayed the whole file")
+        if self.replay.exit_when_done:
+            # Said by finish_node on the node's thread, after the node has
+            # handled the items: the log line then follows what they printed.
+            self._whole_file_replayed = True
+            self._still_exit()
+        else:
+            self._say_replayed()
+
+    def _say_replayed(self) -> None:
         self.info(
             "Replayed %d items from %s%s",
             self.replay.position,
             self.replay.filename,
             self.summary(),
         )
-        self.set_terminate_flag("replayed the whole file")
-        self._still_exit()
 
     def _still_exit(self) -> None:
         if self.replay.exit_when_done and not self._exit_scheduled:
@@ -372,6 +381,8 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         queue = getattr(self.parent, "queue", None)  # a real Node's task queue
         if queue is not None and len(queue) > 0 and rounds < DRAIN_ROUNDS:
             return tasks.event(self._done_event, [rounds + 1])
+        if self._whole_file_replayed:
+            self._say_replayed()
         return tasks.terminate(f"replayed {self.replay.filename}")
 
     def terminate(self) -> None:
