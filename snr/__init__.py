@@ -4,7 +4,12 @@ Everything a student needs is here::
 
     from snr import *
 
-See the tutorial in ``docs/`` and the thesis listings in ``examples/``.
+``python -m snr docs`` builds this documentation, offline, and opens it in a
+browser: the guide (concepts, a tutorial, each ready-made component) and
+the API reference. ``python -m snr demo`` runs a whole system of nodes, the
+thesis's underwater vehicle; its code is the ``snr.demo`` package. In a copy
+of SNR's source, the guide's pages are ``docs/*.md`` and the thesis's
+listings are in ``examples/``.
 
 ``import snr`` is kept light: what only some programs need (the ready-made
 components of ``snr.std_mods``, ``unittest`` behind ``SNRTestCase``,

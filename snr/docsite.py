@@ -1,15 +1,20 @@
 """Build SNR's documentation and read it offline: ``python -m snr docs``.
 
-Two parts, built into one folder (``docs/api/`` in a checkout):
+Two parts, built into one folder (``docs/api/`` in a checkout, a cache
+folder when SNR was installed with pip):
 
-* the API reference, generated from the docstrings by pdoc (thesis 7.6);
-* the guide: the pages in ``docs/`` (concepts, tutorial, ...) as HTML, with
-  the links between them and to the examples kept working.
+* the API reference, generated from the docstrings by pdoc (thesis 7.6). Its
+  start page, ``snr.html``, lists what ``from snr import *`` gives by topic
+  (`TOPICS`), each name with its summary and a link to its full entry;
+* the guide (concepts, tutorial, ...) as HTML, with the links between its
+  pages kept working. Its Markdown is ``docs/*.md`` in a checkout; the
+  package ships a copy as ``snr/guide/`` (see `find_guide`).
 
 A build reports every problem instead of hiding it: an annotation pdoc cannot
 resolve, a docstring that names something that does not exist (a misspelt
 class name in single backticks), a link in a page to a file that is not
-there. ``--build-only`` (CI, ``nox -s docs``) fails when there is any.
+there, a name of ``snr.__all__`` that no topic of the start page lists.
+``--build-only`` (CI, ``nox -s docs``) fails when there is any.
 
 Example::
 
@@ -30,6 +35,7 @@ import importlib.util
 import inspect
 import os
 import pkgutil
+import posixpath
 import re
 import sys
 import textwrap
@@ -40,6 +46,7 @@ from types import ModuleType
 from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple
 
 import snr
+from snr.api_topics import PAGE_MODULES, TOPICS, check_topics, full_entry, summary
 from snr.prelude import SNRError
 
 __all__ = [
@@ -50,15 +57,21 @@ __all__ = [
     "build",
     "check_docstring_references",
     "default_output_dir",
+    "find_guide",
     "is_stale",
     "make_server",
+    "render_api_start_page",
     "render_guide",
     "run",
     "serve",
 ]
 
-API_MODULES: Tuple[str, ...] = ("snr", "snr.prelude", "snr.core", "snr.std_mods", "snr.utils")
-"""What the API reference documents: the student-facing ``snr``, then each layer."""
+API_MODULES: Tuple[str, ...] = PAGE_MODULES
+"""The pages pdoc writes in full: each layer, and the names kept from 2021.
+
+``snr`` itself is not among them: it re-exports all of these, and pdoc would
+repeat every entry on one 4 MB page. Its page, the start page of the
+reference, is written by `render_api_start_page` instead."""
 
 DEFAULT_PORT = 8765
 """The port ``--serve`` uses unless told otherwise."""
@@ -66,8 +79,8 @@ DEFAULT_PORT = 8765
 GUIDE_FOLDER = "guide"
 STAMP_FILE = ".snr-docs-stamp"
 _PACKAGE_DIR = Path(snr.__file__).resolve().parent
-_REPO_DOCS = _PACKAGE_DIR.parent / "docs"
 _MARKDOWN_LINK = re.compile(r"(\]\()([^)\s]+)(\))")
+_LABELLED_LINK = re.compile(r"\[([^\]\n]*)\]\(([^)\s]+)\)")
 # `Name` or `Name.attr` in single backticks: a reference the reader may follow.
 _DOC_REFERENCE = re.compile(r"(?<![`\w])`([A-Z]\w*(?:\.\w+)*)`(?![`\w])")
 
@@ -84,6 +97,32 @@ class DocsBuildError(SNRError):
     """
 
 
+def find_guide(package_dir: Path = _PACKAGE_DIR) -> Optional[Path]:
+    """The folder of the guide's Markdown pages, or None if there is none.
+
+    In a checkout it is ``docs/`` next to the ``snr`` package (next to
+    ``pyproject.toml``); a wheel ships a copy as ``snr/guide/`` (see
+    ``pyproject.toml``), which is what a plain ``pip install`` leaves.
+
+    Example::
+
+        find_guide()   # PosixPath('/home/me/SNR/docs'), or .../site-packages/snr/guide
+    """
+    checkout = package_dir.parent
+    if (checkout / "pyproject.toml").is_file() and (checkout / "docs" / "index.md").is_file():
+        return checkout / "docs"
+    shipped = package_dir / "guide"
+    return shipped if (shipped / "index.md").is_file() else None
+
+
+def _is_shipped_copy(guide_dir: Path) -> bool:
+    """True if ``guide_dir`` is the guide inside an installed package (``snr/guide``)."""
+    return (guide_dir.parent / "__init__.py").is_file()
+
+
+_GUIDE_DIR = find_guide()
+
+
 def default_output_dir() -> Path:
     """``docs/api`` in a checkout; a cache folder when SNR was installed from a wheel.
 
@@ -91,8 +130,9 @@ def default_output_dir() -> Path:
 
         default_output_dir()   # PosixPath('/home/me/SNR/docs/api')
     """
-    if (_REPO_DOCS / "index.md").is_file() and os.access(_REPO_DOCS, os.W_OK):
-        return _REPO_DOCS / "api"
+    guide = _GUIDE_DIR
+    if guide is not None and not _is_shipped_copy(guide) and os.access(guide, os.W_OK):
+        return guide / "api"
     cache = Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache")
     return cache / "snr" / f"docs-{snr.__version__}"
 
@@ -113,7 +153,7 @@ def _fingerprint(guide_dir: Optional[Path]) -> str:
     return f"snr {snr.__version__} newest {newest}"
 
 
-def is_stale(output_dir: Path, guide_dir: Optional[Path] = _REPO_DOCS) -> bool:
+def is_stale(output_dir: Path, guide_dir: Optional[Path] = _GUIDE_DIR) -> bool:
     """True unless ``output_dir`` holds a clean build of the current sources.
 
     Example::
@@ -290,6 +330,34 @@ def _is_module_page(relative: Path) -> bool:
         return False
 
 
+def _unlink_source_files(text: str, page: Path, guide_dir: Path) -> str:
+    """``text`` with its links to files of SNR's source that are not installed as plain text.
+
+    The guide links to the examples (``../examples/...``); the installed copy
+    in ``snr/guide`` has no examples next to it. Such a link becomes its text
+    and where the file is in SNR's source. (The build of the checkout's
+    ``docs/`` checks these links.)
+    """
+    page_dir = page.parent.relative_to(guide_dir).as_posix()
+
+    def unlink(match: re.Match[str]) -> str:
+        label, target = match.group(1), match.group(2)
+        path_part = target.partition("#")[0]
+        resolved = (page.parent / path_part).resolve()
+        if (
+            re.match(r"^[a-z][a-z0-9+.-]*:", target)
+            or not path_part
+            or resolved.exists()
+            or guide_dir.resolve() in resolved.parents
+        ):
+            return match.group(0)
+        source = posixpath.normpath(posixpath.join("docs", page_dir, path_part))
+        source += "/" if path_part.endswith("/") else ""
+        return label if source in label else f"{label} (`{source}` in SNR's source)"
+
+    return _LABELLED_LINK.sub(unlink, text)
+
+
 def _rewrite_links(page: Path, guide_dir: Path, output_dir: Path, problems: List[str]) -> str:
     """The text of ``page`` with every Markdown link rewritten for the built site."""
 
@@ -297,7 +365,10 @@ def _rewrite_links(page: Path, guide_dir: Path, output_dir: Path, problems: List
         target = _rewrite_link(match.group(2), page, guide_dir, output_dir, problems)
         return match.group(1) + target + match.group(3)
 
-    return _MARKDOWN_LINK.sub(rewrite, page.read_text(encoding="utf-8"))
+    text = page.read_text(encoding="utf-8")
+    if _is_shipped_copy(guide_dir):
+        text = _unlink_source_files(text, page, guide_dir)
+    return _MARKDOWN_LINK.sub(rewrite, text)
 
 
 def render_guide(guide_dir: Path, output_dir: Path) -> List[str]:
@@ -333,13 +404,118 @@ def render_guide(guide_dir: Path, output_dir: Path) -> List[str]:
 
 
 # ---------------------------------------------------------------------------
+# The start page of the API reference: snr's exports by topic.
+# ---------------------------------------------------------------------------
+
+_REDIRECT = """<!doctype html>
+<html lang="en"><head><meta charset="utf-8">
+<meta http-equiv="refresh" content="0; url=snr.html"><title>SNR API reference</title></head>
+<body><a href="snr.html">The SNR API reference</a></body></html>
+"""
+
+
+def _start_page_markdown(output_dir: Path, problems: List[str]) -> str:
+    guide = output_dir / GUIDE_FOLDER
+    contents = " · ".join(f"[{t.title}](#{_slug(t.title)})" for t in TOPICS)
+    parts = [
+        "# The SNR API",
+        literal_blocks_to_fences(inspect.getdoc(snr) or ""),
+        "## What `from snr import *` gives, by topic",
+        f"{contents} · [Each layer in full](#each-layer-in-full)",
+    ]
+    built_pages: Dict[Path, str] = {}
+    for topic in TOPICS:
+        parts.append(f'<h3 id="{_slug(topic.title)}">{html.escape(topic.title)}</h3>')
+        pages = [s for s in topic.guide if (guide / f"{s}.html").is_file()]
+        if (guide / "index.html").is_file():
+            problems += [
+                f"snr.api_topics: topic {topic.title!r} names the guide page {s!r}, "
+                "which the guide does not have."
+                for s in sorted(set(topic.guide) - set(pages))
+            ]
+        reading = ", ".join(f"[{s}](guide/{s}.html)" for s in pages)
+        parts.append(topic.about + (f" In the guide: {reading}." if reading else ""))
+        lines = []
+        for name in topic.names:
+            entry = full_entry(name)
+            if entry is None:
+                problems.append(
+                    f"snr.{name} is on the start page but on no page of the API "
+                    f"reference: export it from one of {', '.join(PAGE_MODULES)}."
+                )
+                continue
+            _check_anchor(output_dir, entry, built_pages, problems)
+            lines.append(f"* [`{name}`]({entry}): {summary(name)}")
+        parts.append("\n".join(lines))
+    parts.append('<h2 id="each-layer-in-full">Each layer in full</h2>')
+    parts.append(
+        "\n".join(
+            f"* [`{name}`]({name.replace('.', '/')}.html): {_first_line(name)}"
+            for name in PAGE_MODULES
+        )
+    )
+    return "\n\n".join(parts)
+
+
+def _slug(title: str) -> str:
+    return re.sub(r"[^a-z0-9]+", "-", title.lower()).strip("-")
+
+
+def _first_line(module_name: str) -> str:
+    doc = inspect.getdoc(importlib.import_module(module_name)) or ""
+    return doc.split("\n")[0]
+
+
+def _check_anchor(
+    output_dir: Path, entry: str, built_pages: Dict[Path, str], problems: List[str]
+) -> None:
+    """Report a link of the start page to a place that a page built here lacks."""
+    page_name, _, anchor = entry.partition("#")
+    page = output_dir / page_name
+    if not anchor or not page.is_file():
+        return  # a page this (partial) build did not write
+    if page not in built_pages:
+        built_pages[page] = page.read_text(encoding="utf-8")
+    if f'id="{anchor}"' not in built_pages[page]:
+        problems.append(f"The start page links to {entry}, which that page does not have.")
+
+
+def render_api_start_page(output_dir: Path) -> List[str]:
+    """Write ``snr.html``, the API reference's start page (`TOPICS`); returns problems.
+
+    A problem is an export of ``snr`` in no topic, or a link to an entry that
+    a page built here does not have. ``index.html`` leads to the same page.
+
+    Example::
+
+        render_api_start_page(Path("docs/api"))   # [] when every export is listed
+    """
+    problems = check_topics()
+    body = _markdown_to_html(_start_page_markdown(output_dir, problems))
+    guide_home = output_dir / GUIDE_FOLDER / "index.html"
+    output_dir.mkdir(parents=True, exist_ok=True)
+    (output_dir / "snr.html").write_text(
+        _PAGE.format(
+            title="API reference",
+            home=f"{GUIDE_FOLDER}/index.html" if guide_home.is_file() else "snr.html",
+            api="snr.html",
+            body=body,
+            highlight=_highlight_css(),
+        ),
+        encoding="utf-8",
+    )
+    (output_dir / "index.html").write_text(_REDIRECT, encoding="utf-8")
+    return problems
+
+
+# ---------------------------------------------------------------------------
 # Build, open, serve.
 # ---------------------------------------------------------------------------
 
 
 def build(
     output_dir: Path,
-    guide_dir: Optional[Path] = _REPO_DOCS,
+    guide_dir: Optional[Path] = _GUIDE_DIR,
     show_source: bool = True,
     modules: Sequence[str] = API_MODULES,
 ) -> List[str]:
@@ -396,6 +572,7 @@ def build(
     problems += check_docstring_references(_snr_modules())
     if guide_dir is not None and guide_dir.is_dir():
         problems += render_guide(guide_dir, output_dir)
+    problems += render_api_start_page(output_dir)
     if not problems:
         (output_dir / STAMP_FILE).write_text(_fingerprint(guide_dir), encoding="utf-8")
     return problems
@@ -512,6 +689,13 @@ def run(args: argparse.Namespace) -> int:
     output_dir: Path = args.output or default_output_dir()
     if args.build_only or args.rebuild or is_stale(output_dir):
         print(f"Building the SNR docs into {output_dir} ...", flush=True)
+        if _GUIDE_DIR is None:
+            print(
+                "snr docs: the guide's pages are not here (neither docs/ in a copy of "
+                "SNR's source nor snr/guide/ in the installed package); building the "
+                "API reference only. Reinstall SNR with pip to get them.",
+                file=sys.stderr,
+            )
         try:
             problems = build(output_dir, show_source=not args.no_source)
         except DocsBuildError as error:

@@ -1,11 +1,12 @@
 """`python -m snr demo`: it ships inside the package, and its screen is quiet.
 
 The demo must run after a plain ``pip install`` (no source checkout). The
-build backend, flit, puts every file of the ``snr/`` folder into the wheel and
-nothing else, so the tests check that pyproject.toml still says so, copy
-``snr/`` alone the way an install does, and run the demo from that copy with
-the checkout nowhere on the path. CI (``.ci/run``) also installs the package
-into a fresh virtualenv with ``pip install .`` and runs the demo there.
+build backend, hatchling, puts every file of the ``snr/`` folder into the
+wheel, and the guide's pages (``docs/*.md``) as ``snr/guide/``, and nothing
+else, so the tests check that pyproject.toml still says so, copy those files
+the way an install does, and run the demo from that copy with the checkout
+nowhere on the path. CI (``.ci/run``) also installs the package into a fresh
+virtualenv with ``pip install .`` and runs the demo, and builds the docs, there.
 """
 
 import os
@@ -53,21 +54,34 @@ class TestDemoShipsInThePackage(unittest.TestCase):
         shutil.copytree(
             Path(ROOT, "snr"), cls.lib / "snr", ignore=shutil.ignore_patterns("__pycache__")
         )
+        shutil.copytree(
+            Path(ROOT, "docs"), cls.lib / "snr" / "guide", ignore=shutil.ignore_patterns("api")
+        )
 
     @classmethod
     def tearDownClass(cls) -> None:
         shutil.rmtree(cls.folder, ignore_errors=True)
 
-    def test_the_wheel_is_the_whole_snr_folder(self) -> None:
-        """flit ships the module named in [tool.flit.module], all its files, nothing else."""
+    def test_the_wheel_is_the_whole_snr_folder_and_the_guide(self) -> None:
+        """hatchling ships snr/ and docs/ (as snr/guide/), all their files, nothing else."""
         text = Path(ROOT, "pyproject.toml").read_text(encoding="utf-8")
-        self.assertIn('build-backend = "flit_core.buildapi"', text, "update this test's copy")
-        self.assertRegex(text, r'\[tool\.flit\.module\]\n(#.*\n)*name = "snr"\n')
+        self.assertIn('build-backend = "hatchling.build"', text, "update this test's copy")
+        self.assertIn('only-include = ["snr", "docs"]', text)
+        self.assertIn('dev-mode-dirs = ["."]', text, "pip install -e must stay a .pth entry")
+        self.assertRegex(
+            text, r'\[tool\.hatch\.build\.targets\.wheel\.sources\]\n"docs" = "snr/guide"\n'
+        )
         files = {p.relative_to(self.lib).as_posix() for p in self.lib.rglob("*") if p.is_file()}
         for name in ["__init__.py", "run.py", "system.py", "urov.py"]:
             self.assertIn(f"snr/demo/{name}", files)
         self.assertIn("snr/py.typed", files)
+        self.assertIn("snr/guide/tutorial.md", files)
         self.assertEqual(sorted(os.listdir(self.lib)), ["snr"], "no examples/ beside it")
+
+    def test_the_installed_copy_finds_its_guide(self) -> None:
+        import snr.docsite
+
+        self.assertEqual(snr.docsite.find_guide(self.lib / "snr"), self.lib / "snr" / "guide")
 
     def test_the_demo_runs_from_the_package_alone(self) -> None:
         """CI's smoke run, on the installed copy: a banner and the telemetry, no log chatter."""
