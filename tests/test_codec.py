@@ -17,7 +17,7 @@ import tempfile
 import unittest
 from typing import Any, Callable, Iterator, List, Optional, Tuple
 
-from hypothesis import given, settings
+from hypothesis import example, given, settings
 from hypothesis import strategies as st
 
 from snr import NotSerializableError, Page, PageReader, WireFormatError
@@ -242,6 +242,28 @@ json_data = st.recursive(
 )
 
 
+# The usual robot page: a scalar, or a small flat list or dict (the fast path
+# that checks values instead of searching orjson's output), under ASCII names.
+# Mostly ASCII: one odd value sends the whole page down the slow path.
+flat_scalars = (
+    st.none()
+    | st.booleans()
+    | st.integers(min_value=-(2**70), max_value=2**70)
+    | awkward_floats
+    | st.floats()
+    | st.text(st.characters(max_codepoint=127), max_size=5)
+    | st.sampled_from([Key.A, "\x7f", "a\x7f", "\u00e9", math.nan, math.inf, -math.inf])
+)
+flat_data = (
+    flat_scalars
+    | st.lists(flat_scalars, max_size=20)
+    | st.dictionaries(st.text(st.characters(max_codepoint=127), max_size=3), flat_scalars)
+    | st.dictionaries(st.integers() | st.sampled_from(["\x7f", "\u00e9"]), flat_scalars)
+    | st.dictionaries(st.sampled_from(["axes", "buttons"]), st.lists(flat_scalars, max_size=8))
+    | st.lists(st.lists(st.lists(flat_scalars, max_size=2), max_size=2), max_size=2)
+)
+
+
 def written(backend: str, write: Callable[[Page], Any], page: Page) -> Any:
     codec.use_backend(backend)
     try:
@@ -265,6 +287,20 @@ class TestBackendsAgree(BackendCase):
     @given(data=json_data, created=awkward_floats)
     def test_the_same_bytes(self, data: Any, created: float) -> None:
         page = Page("k\u00e9y", data, "origin", created)
+        for write in (encode_page, codec.page_to_line):
+            self.assertEqual(written("json", write, page), written("orjson", write, page))
+
+    @settings(max_examples=150, deadline=None, database=None)
+    @given(data=flat_data, created=awkward_floats, origin=st.text(max_size=5))
+    @example(data={"a": "b\x7f"}, created=1.0, origin="o")
+    @example(data=[0.5, math.nan], created=1.0, origin="o")
+    @example(data={"x": 1e-5}, created=1.0, origin="o")
+    @example(data=[1, 2**64], created=1.0, origin="o")
+    @example(data={1: 2}, created=1.0, origin="o")
+    @example(data=3.5, created=1e-7, origin="\x7f")
+    @example(data={"axes": [0.5, math.inf]}, created=1.0, origin="o")
+    def test_the_same_bytes_for_flat_data(self, data: Any, created: float, origin: str) -> None:
+        page = Page("key", data, origin or "o", created)
         for write in (encode_page, codec.page_to_line):
             self.assertEqual(written("json", write, page), written("orjson", write, page))
 

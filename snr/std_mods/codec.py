@@ -41,7 +41,18 @@ import math
 import os
 import re
 import time
-from typing import Any, Callable, Dict, List, Mapping, NoReturn, Optional, Tuple, Union
+from typing import (
+    Any,
+    Callable,
+    Dict,
+    Iterable,
+    List,
+    Mapping,
+    NoReturn,
+    Optional,
+    Tuple,
+    Union,
+)
 
 from snr.prelude import NotSerializableError, Page, WireFormatError
 from snr.prelude.errors import not_serializable_error
@@ -167,6 +178,9 @@ _ZEROED = bytes.maketrans(b"123456789E", b"000000000e")
 _BIG_EXPONENT = b"e000"
 _LONG_NUMBER = b"0" * 200
 _MAY_EXCEED_64_BITS = b"0" * 19
+# Valid JSON nested deeper than MAX_DEPTH opens (and closes) more than MAX_DEPTH
+# arrays or objects: anything shorter cannot be too deep, and is not counted.
+_MIN_TOO_DEEP_BYTES = 2 * (MAX_DEPTH + 1)
 
 
 def _as_bytes(raw: Text) -> bytes:
@@ -213,10 +227,10 @@ def _load_orjson(raw: Text) -> Any:
         return _load_std(raw)  # the stdlib path gives the verdict and the message
     # orjson rejects NaN, infinity and lone surrogates itself, but reads
     # integers beyond 64 bits as floats: such a number is re-read by json.
-    data = _as_bytes(raw)
-    zeroed = data.translate(_ZEROED, b"+")
+    data = raw if type(raw) is bytes else _as_bytes(raw)
     if (
-        _MAY_EXCEED_64_BITS in zeroed or data.count(b"[") + data.count(b"{") > MAX_DEPTH
+        _MAY_EXCEED_64_BITS in data.translate(_ZEROED, b"+")
+        or (len(data) >= _MIN_TOO_DEEP_BYTES and data.count(b"[") + data.count(b"{") > MAX_DEPTH)
     ) and _problem(obj, False, _BIG) is not None:
         return _load_std(raw)
     return obj
@@ -279,9 +293,64 @@ def _dump_orjson(obj: Any) -> bytes:
         return _dump_std(obj)
     if (
         not out.isascii()
-        or any(suspect in out for suspect in _ORJSON_SUSPECT)
-        or out.count(b"[") + out.count(b"{") > MAX_DEPTH
+        or b"null" in out  # the suspects of _ORJSON_SUSPECT, one by one: no generator
+        or b"e-" in out
+        or b"0.0000" in out
+        or b"\x7f" in out
+        or (len(out) >= _MIN_TOO_DEEP_BYTES and out.count(b"[") + out.count(b"{") > MAX_DEPTH)
     ):
+        return _dump_std(obj)
+    return out
+
+
+def _exact(values: Iterable[Any], levels: int = 2) -> bool:
+    """True when orjson writes every one of ``values`` exactly as json does, known without writing.
+
+    That holds for ASCII text without DEL, finite floats that are 0 or at
+    least 1e-4 in size (orjson writes NaN as null and smaller ones as
+    ``0.00001``/``1e-7`` where json writes ``1e-05``/``1e-07``), ints, bools
+    and None; and for dicts and lists of up to `_EXACT_MAX_ITEMS` such
+    values (keys included), nested up to ``levels`` deep. A few values are
+    checked here faster than orjson's output is searched for every suspect.
+    Integers beyond 64 bits and non-str keys pass, but orjson refuses them
+    (TypeError). Example: ``_exact([{"seq": 1, "value": 0.5}])`` is True.
+    """
+    for value in values:
+        kind = type(value)
+        if kind is str:
+            if not value.isascii() or "\x7f" in value:
+                return False
+        elif kind is float:
+            # value - value is NaN for NaN and infinity; 0 < |value| < 1e-4 is tiny
+            if value - value != 0.0 or (-1e-4 < value < 1e-4 and value != 0.0):
+                return False
+        elif kind is int or kind is bool or value is None:
+            continue
+        elif kind is dict:
+            if not (
+                levels
+                and len(value) <= _EXACT_MAX_ITEMS
+                and _exact(value, 0)
+                and _exact(value.values(), levels - 1)
+            ):
+                return False
+        elif kind is list or kind is tuple:
+            if not (levels and len(value) <= _EXACT_MAX_ITEMS and _exact(value, levels - 1)):
+                return False
+        else:
+            return False
+    return True
+
+
+_EXACT_MAX_ITEMS = 16  # above this, writing and searching the output is faster
+
+
+def _dump_exact(obj: Mapping[str, Any]) -> bytes:
+    """orjson's bytes for ``obj``, whose values passed `_exact`; json's if orjson refuses."""
+    assert _orjson is not None
+    try:
+        out: bytes = _orjson.dumps(obj)
+    except TypeError:  # integers beyond 64 bits, non-str keys: json decides
         return _dump_std(obj)
     return out
 
@@ -426,6 +495,15 @@ def page_json(
     fields["created_at_s"] = page.created_at_s
     fields["process"] = page.process
     try:
+        if (
+            _dump_plain is _dump_orjson
+            and type(page.key) is str
+            and type(page.origin) is str
+            and _exact(fields.values())
+        ):
+            # The usual robot page (a number, a short text, a small flat dict
+            # or list): orjson's bytes are json's, no need to search them.
+            return _dump_exact(fields)
         if (
             _dump_plain is not _dump_std
             and type(page.key) is str

@@ -141,7 +141,10 @@ def encode_page(page: Page) -> bytes:
         encode_page(Page("x", [1, 2], "robot", 1.5))
         # b'\\x00\\x00\\x00a{"v":1,"kind":"page","key":"x","data":[1,2],...}'
     """
-    return _frame(page_json(page, _PAGE_HEAD), f"the page under key {page.key!r}")
+    body = page_json(page, _PAGE_HEAD)
+    if len(body) > MAX_FRAME_BYTES:  # the message is only built when it is needed
+        _frame(body, f"the page under key {page.key!r}")  # raises
+    return _HEADER.pack(len(body)) + body
 
 
 def encode_hello(role: str, beat_s: Optional[float] = None, bye: bool = False) -> bytes:
