@@ -29,6 +29,7 @@ from typing import Any, Callable, Dict, List, Optional, Set
 from snr.core.dispatch import HandlerTable
 from snr.core.explain import (
     failed_get_error,
+    wrong_get_signature,
     only_returns_none,
     reload_failure,
     wrong_get_result_error,
@@ -45,6 +46,7 @@ from snr.prelude import (
     SNRError,
 )
 from snr.prelude.abstract import explain_abstract_error
+from snr.prelude.error_text import exception_text
 from snr.prelude.errors import (
     describe_callable,
     describe_class,
@@ -113,9 +115,9 @@ class ComponentSet:
         except SNRError:
             raise
         except TypeError as error:
-            explained = explain_abstract_error(error)
+            explained = explain_abstract_error(error) or wrong_get_signature(factory, error)
             if explained is not None:
-                raise explained from None  # Python's "abstract class" text only confuses
+                raise explained from None  # Python's own text blames SNR's call
             raise failed_get_error(factory, error, self.node.role) from error
         except Exception as error:
             raise failed_get_error(factory, error, self.node.role) from error
@@ -376,10 +378,11 @@ class ComponentSet:
             raise
         except Exception as error:
             frames = student_frames(error.__traceback__)
+            what = exception_text(error)
             trim_runtime_frames(error)
             raise ComponentError(
                 f"{describe_class(type(component))} {component.name!r} failed to start: "
-                f"{type(error).__name__}: {error}\n"
+                f"{what}\n"
                 f"Where it happened (most recent call last):\n{frames}"
             ) from error
 

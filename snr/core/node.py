@@ -39,6 +39,7 @@ from snr.prelude import (
     AbstractFactory,
     AbstractLoop,
     AbstractNode,
+    ComponentError,
     ComponentName,
     ConfigError,
     DataDict,
@@ -55,6 +56,7 @@ from snr.prelude import (
     TaskType,
     ThreadSafetyError,
 )
+from snr.prelude.error_text import bad_data_key, page_as_data, wrong_call
 from snr.prelude.errors import caller_location
 
 __all__ = ["Node", "NodeState"]
@@ -105,6 +107,10 @@ class Node(AbstractNode):
     """The queue's high-water mark: loops wait (then drop) above it; see `TaskQueue`."""
 
     def __init__(self, role: Role, config: AbstractConfig) -> None:
+        if isinstance(role, AbstractConfig) and isinstance(config, str):
+            raise ConfigError(
+                wrong_call("Node", Node, (role, config), "the role and the config are swapped.")
+            )
         if not isinstance(role, str) or not role:
             raise ConfigError(f"A node's role must be a non-empty string, not {role!r}.")
         if not isinstance(config, AbstractConfig):
@@ -364,7 +370,16 @@ class Node(AbstractNode):
     # Datastore (thesis listing 6.4)
     # ------------------------------------------------------------------
     def page(self, key: DataKey, data: Any, process: bool = True) -> Page:
-        """A new page from this node, stamped with the wall-clock time."""
+        """A new page from this node, stamped with the wall-clock time.
+
+        Raises:
+            ComponentError: ``key`` is not a str (key and data swapped?), or
+                ``data`` is a whole `Page` (store ``page.data``).
+        """
+        if not isinstance(key, str):
+            raise ComponentError(bad_data_key(key, data))
+        if data.__class__ is Page:
+            raise ComponentError(page_as_data(key))
         return Page(key, data, self.role, time.time(), process)
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
