@@ -29,10 +29,10 @@ from typing import Any, Callable, Dict, List, Optional, Set
 from snr.core.dispatch import HandlerTable
 from snr.core.explain import (
     failed_get_error,
-    wrong_get_signature,
     only_returns_none,
     reload_failure,
     wrong_get_result_error,
+    wrong_get_signature,
 )
 from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
@@ -93,6 +93,9 @@ class ComponentSet:
         self._rebuild_needed = False
         self._pending_adds: List[AbstractComponent] = []
         self._none_told: Set[Any] = set()  # factories' get() already said to return None
+        #: Called with each component before it is added (set by the node in DEBUG
+        #: and TEST mode to read the student's class; see `check_component`).
+        self.check_added: Optional[Callable[[AbstractComponent], None]] = None
 
     # -- building ----------------------------------------------------------
     def build(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
@@ -166,6 +169,8 @@ class ComponentSet:
                 "__init__ so SNR can give the component its name and task handlers."
                 f"{_init_block(type(component))}"
             )
+        if self.check_added is not None:
+            self.check_added(component)
         self._check_name_free(component)
         self.by_name[component.name] = component
         if self.table_stale or self.running:

@@ -43,7 +43,8 @@ class Config(AbstractConfig):
     ) -> None:
         if factories is None:
             factories = {}
-        if isinstance(factories, (list, tuple)):
+        given: object = factories  # typed as a dict, but a student may pass anything
+        if isinstance(given, (list, tuple)):
             raise ConfigError(
                 wrong_call(
                     "Config",

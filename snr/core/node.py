@@ -24,6 +24,7 @@ import time
 from typing import Any, List, Optional, Set, Tuple
 
 from snr.core import tasks
+from snr.core.class_checks import check_component
 from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerTable
 from snr.core.explain import THREAD_SAFE_INSTEAD
@@ -33,6 +34,7 @@ from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.node_core import NodeCoreFactory
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Timer
+from snr.core.wiring_checks import WiringChecks
 from snr.prelude import (
     AbstractComponent,
     AbstractConfig,
@@ -99,6 +101,9 @@ class Node(AbstractNode):
         terminate_reason: why the node stopped, once it has.
         key_hints: in DEBUG mode, the `MissingKeyHints` that log a hint for a
             data key read but never stored (None in other modes).
+        wiring_checks: in DEBUG mode, the `WiringChecks` that warn about an
+            event nothing handles and a handler nothing can reach (None in
+            other modes).
     """
 
     idle_wake_s: float = 1.0
@@ -153,7 +158,15 @@ class Node(AbstractNode):
         )
         if self.key_hints is not None:
             self.key_hints.expected_keys = self._handled_keys
+        self.wiring_checks: Optional[WiringChecks] = None
+        if self.mode is Mode.DEBUG:
+            self.wiring_checks = WiringChecks(
+                self.log, role, self._components.table, self.datastore
+            )
+            self._runner.on_unhandled = self.wiring_checks.unhandled
 
+        if self.mode is not Mode.DEPLOYED:
+            self._components.check_added = self._check_component
         self.add_component(NodeCoreFactory().get(self), start=False)
         for factory in config.get(role):
             component = self.build_component(factory)
@@ -225,12 +238,15 @@ class Node(AbstractNode):
         """In DEBUG mode, warn about handlers of data keys that look misspelled.
 
         Runs once by itself a few seconds after the node starts (see
-        `MissingKeyHints.check_handlers`).
+        `MissingKeyHints.check_handlers`), and about handlers registered so
+        that they can never run (see `WiringChecks.check_never_ran`).
         """
         if self.key_hints is None:
             return
         handled = self._page_handlers()
         self.key_hints.check_handlers(handled, self.datastore)
+        if self.wiring_checks is not None:
+            self.wiring_checks.check_never_ran()
 
     def _page_handlers(self) -> List[Tuple[DataKey, TaskHandler]]:
         """(key, handler) for every handler registered for one data key's pages."""
@@ -241,6 +257,14 @@ class Node(AbstractNode):
                 if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
                     handled.append((task_id[1], handler))
         return handled
+
+    def _check_component(self, component: AbstractComponent) -> None:
+        """A name SNR uses raises; in DEBUG, work that can have no effect is logged once."""
+        warn = self._warn_once if self.mode is Mode.DEBUG else None
+        check_component(component, warn)
+
+    def _warn_once(self, message: str) -> None:
+        self.log.warning("%s\n(Said once per class, in DEBUG mode only.)", message)
 
     def _handled_keys(self) -> Set[DataKey]:
         return {key for key, _ in self._page_handlers()}

@@ -18,7 +18,6 @@ from typing import TYPE_CHECKING, Any, Callable, List, NoReturn, Optional, Seque
 
 from snr.core.config import Config
 from snr.core.node import Node
-from snr.prelude.error_text import wrong_call
 from snr.prelude import (
     AbstractConfig,
     AbstractMultiRunner,
@@ -29,6 +28,7 @@ from snr.prelude import (
     Role,
     SNRError,
 )
+from snr.prelude.error_text import wrong_call
 
 if TYPE_CHECKING:
     import argparse
@@ -121,7 +121,9 @@ class SynchronousRunner(AbstractRunner):
         announce_interrupt: bool = True,
         on_node: Optional[Callable[[Node], None]] = None,
     ) -> None:
-        if not isinstance(role, str) and isinstance(config, str):
+        given: object = config  # typed, but a student may pass anything
+        given_role: object = role
+        if not isinstance(given_role, str) and isinstance(given, str):
             _exit_with(
                 ConfigError(
                     wrong_call(

@@ -201,8 +201,10 @@ def values_not_a_list(name: str, values: Any) -> str:
     got = f"{short_repr(values, 40)} is a {type(values).__name__}"
     if isinstance(values, str) and values:
         got += f", so task.val_list[0] would be {values[0]!r}"
-    wrapped = f"list({short_repr(values, 40)})" if isinstance(values, (tuple, set)) else (
-        f"[{short_repr(values, 40)}]"
+    wrapped = (
+        f"list({short_repr(values, 40)})"
+        if isinstance(values, (tuple, set))
+        else (f"[{short_repr(values, 40)}]")
     )
     return (
         f"tasks.event({name!r}, {short_repr(values, 40)}) at {call_site()}: an event's "
@@ -221,8 +223,7 @@ def bad_data_key(key: Any, data: Any) -> str:
     """
     if isinstance(data, str):
         fix = (
-            f"The key and the data look swapped: write store_data({data!r}, "
-            f"{short_repr(key, 40)})."
+            f"The key and the data look swapped: write store_data({data!r}, {short_repr(key, 40)})."
         )
     else:
         fix = "Write store_data(key, data) with a key such as 'depth_m'."
