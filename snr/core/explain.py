@@ -72,8 +72,8 @@ def task_label(task: Task) -> str:
 
 def task_values(task: Task) -> str:
     """What a task carries, shortened: its page's key and data, or its values."""
-    values = task.val_list
-    if len(values) == 1 and isinstance(values[0], Page):
+    values: object = task.val_list  # a task built by hand may hold anything
+    if isinstance(values, list) and len(values) == 1 and isinstance(values[0], Page):
         page = values[0]
         return f"carrying the page {page.key!r} with data {short_repr(page.data, 200)}"
     return f"with values {short_repr(values, 200)}"
