@@ -6,6 +6,7 @@ import asyncio
 import contextlib
 import io
 import json
+import logging
 import socket
 import struct
 import sys
@@ -170,6 +171,29 @@ async def subscribe_all(viewer: ClientConnection) -> Dict[str, int]:
     subscriptions = [{"id": c["id"] + 100, "channelId": c["id"]} for c in channels]
     await viewer.send(json.dumps({"op": "subscribe", "subscriptions": subscriptions}))
     return {c["topic"]: c["id"] + 100 for c in channels}
+
+
+@NEEDS_WEBSOCKETS
+class TestHandOver(SNRTestCase):
+    def test_the_newest_page_of_each_key_is_kept_and_every_replaced_one_counted(self) -> None:
+        from snr.std_mods.io.live_view_server import LiveViewServer
+
+        with socket.socket() as unused:
+            server = LiveViewServer("robot", unused, logging.getLogger("snr.test.live_view"))
+            for i in range(5):  # the server's thread is not running: nothing is taken
+                server.publish(Page("depth_m", float(i), "robot", 1.0 + i))
+            server.publish(Page("mode", "dive", "robot", 1.0))
+            self.assertEqual(
+                {k: p.data for k, p in server._inbox.items()}, {"depth_m": 4.0, "mode": "dive"}
+            )
+            with self.assertLogs("snr.test.live_view", "WARNING") as logs:
+                server._take_inbox()
+            self.assertEqual(server.stats.dropped_before_sending, 4)
+            self.assertIn("Dropped 4 pages for the live view", logs.output[0])
+            self.assertEqual(server._inbox, {})
+            server.publish(Page("depth_m", 5.0, "robot", 6.0))
+            server._take_inbox()
+            self.assertEqual(server.stats.pages_dropped, 4)  # nothing replaced this time
 
 
 @NEEDS_WEBSOCKETS

@@ -191,10 +191,11 @@ class LiveViewServer:
         self._repeats = RepeatFilter(log, first=1)
         self.watched: FrozenSet[str] = frozenset()
         """Keys some viewer subscribes to (replaced as a whole: safe to read anywhere)."""
-        # node thread -> server thread: newest page per key, under the lock
-        self._lock = threading.Lock()
+        # node thread -> server thread: the newest page per key
         self._inbox: Dict[str, Page] = {}
-        self._ringing = False
+        self._published = 0  # pages put in the inbox (written by the node's thread only)
+        self._taken = 0  # pages taken from it (written by the server's thread only)
+        self._ringing = False  # a call to _take_inbox is on its way
         self._unwatched: Dict[str, Page] = {}  # the newest page of each unwatched key
         # server thread only
         self._channels: Dict[str, _Channel] = {}
@@ -222,24 +223,26 @@ class LiveViewServer:
             )
 
     def publish(self, page: Page) -> None:
-        """Hand over a stored page; never waits. The newest page of a key wins."""
+        """Hand over a stored page; never waits. The newest page of a key wins.
+
+        Lock-free, so the node pays a few dict operations per page: only the
+        node's thread adds to the inbox and counts, only the server's thread
+        takes (``dict`` operations are atomic in CPython).
+        """
         key = page.key
         if key not in self.watched and key in self._channels:
             self._unwatched[key] = page  # nobody looks: keep it for a later subscriber
             return
-        with self._lock:
-            replaced = key in self._inbox
-            self._inbox[key] = page
-            ring = not self._ringing
+        self._inbox[key] = page
+        self._published += 1
+        if not self._ringing:
             self._ringing = True
-        if replaced:
-            self.stats.dropped_before_sending += 1
-            self.loss.dropped()
-        if ring and self._loop is not None:
-            try:
-                self._loop.call_soon_threadsafe(self._take_inbox)
-            except RuntimeError:  # the server has stopped: nothing to send to
-                pass
+            loop = self._loop
+            if loop is not None:
+                try:
+                    loop.call_soon_threadsafe(self._take_inbox)
+                except RuntimeError:  # the server has stopped: nothing to send to
+                    pass
 
     def stop(self, timeout_s: float = 1.0) -> None:
         """Close every connection and the listener; wait (bounded) for the thread."""
@@ -298,18 +301,27 @@ class LiveViewServer:
             pass  # a viewer that never answers the close: its socket is cut on exit
 
     def _take_inbox(self) -> None:
-        with self._lock:
-            pages, self._inbox = self._inbox, {}
-            self._ringing = False
+        self._ringing = False  # first: a page added from now on rings again
+        pages: Dict[str, Page] = {}
+        for key in list(self._inbox):  # list(): the node's thread may add keys meanwhile
+            pages[key] = self._inbox.pop(key)
+        self._taken += len(pages)
+        # Published but neither taken nor waiting: replaced by a newer page of its key.
+        replaced = (
+            self._published - self._taken - len(self._inbox) - self.stats.dropped_before_sending
+        )
         dropped = self.stats.pages_dropped
-        for key in list(self._unwatched):  # list(): the node's thread may add keys meanwhile
+        if replaced > 0:
+            self.stats.dropped_before_sending += replaced
+            self.loss.dropped(replaced)
+        for key in list(self._unwatched):
             if key in self.watched:
                 waiting = self._unwatched.pop(key, None)  # stored as a viewer subscribed
                 if waiting is not None and key not in pages:
                     self._send(waiting)
         for page in pages.values():
             self._send(page)
-        if self.loss.dropping and self.stats.pages_dropped == dropped:
+        if self.loss.dropping and self.stats.pages_dropped == dropped + max(replaced, 0):
             self.loss.recovered(quiet_s=2.0)
 
     def _send(self, page: Page) -> None:
