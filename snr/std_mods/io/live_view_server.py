@@ -185,8 +185,8 @@ class LiveViewServer:
         self.loss = LossReport(
             log,
             "pages for the live view",
-            "a viewer reads more slowly than the node stores pages; the newest page of "
-            "each key is kept",
+            "the node stores pages faster than the view sends them (a slow viewer, or a "
+            "busy machine); the newest page of each key is kept",
         )
         self._repeats = RepeatFilter(log, first=1)
         self.watched: FrozenSet[str] = frozenset()
