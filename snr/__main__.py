@@ -2,8 +2,9 @@
 
 Commands::
 
-    python -m snr demo [--seconds N] [--verbose]
-                                       run the UROV demo system (no hardware needed)
+    python -m snr demo [--seconds N] [--verbose] [--view [--view-port P]]
+                                       run the UROV demo system (no hardware needed);
+                                       --view: watch it live in Foxglove or Lichtblick
     python -m snr console HOST:PORT    type commands into a running node (snr-console)
     python -m snr docs [--serve]       build (if needed) and open the docs, offline
     python -m snr version              print the installed version
@@ -31,6 +32,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     demo_parser.add_argument(
         "--verbose", action="store_true", help="show the nodes' whole log, not only warnings"
     )
+    demo_parser.add_argument(
+        "--view",
+        action="store_true",
+        help="serve a live view for Foxglove or Lichtblick and print the URL to open "
+        "(needs pip install 'snr[viz]')",
+    )
+    demo_parser.add_argument(
+        "--view-port", type=int, default=8765, help="the live view's port (default 8765)"
+    )
     sub.add_parser("console", help="type commands into a running node (same as snr-console)")
     docs_parser = sub.add_parser("docs", help="build (if needed) and open the docs offline")
     snr.docsite.add_arguments(docs_parser)
@@ -42,7 +52,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.command == "demo":
         from snr.demo import run_demo  # only the demo needs it
 
-        return run_demo(args.seconds, verbose=args.verbose)
+        view_port = args.view_port if args.view else None
+        return run_demo(args.seconds, verbose=args.verbose, view_port=view_port)
     if args.command == "docs":
         return snr.docsite.run(args)
     if args.command == "version":
