@@ -6,6 +6,10 @@
 2. A node storing N pages: without a recorder (the baseline), with a
    recorder (one write + flush per page), and with ``sync=True`` (an fsync
    per page; on a laptop SSD this is the slow one).
+3. MCAP (when the mcap package is installed: ``pip install 'snr[viz]'``):
+   raw ``mcap`` writes (``json.dumps`` + ``add_message`` + flush per page)
+   against SNR's `McapPageWriter`, and a node recording to MCAP against
+   the same node recording JSON lines, all in this one run.
 
 Run: ``python bench/bench_recorder.py [--pages N]`` (or ``nox -s bench``).
 """
@@ -13,11 +17,14 @@ Run: ``python bench/bench_recorder.py [--pages N]`` (or ``nox -s bench``).
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import json
 import logging
 import os
+import shutil
 import tempfile
 import time
-from typing import Callable, List, Optional
+from typing import Any, Callable, List, Optional
 
 from snr import (
     AbstractFactory,
@@ -35,6 +42,7 @@ from snr import (
     TaskType,
     tasks,
 )
+from snr.std_mods.io.mcap_files import McapPageWriter
 from snr.std_mods.io.page_lines import page_from_line, page_to_line
 
 SAMPLE = Page("imu", {"ax": 0.01, "ay": -9.81, "az": 0.2, "ok": True}, "urov", 1.7e9)
@@ -86,6 +94,54 @@ def node_pages_per_second(count: int, recorder: Optional[AbstractFactory]) -> fl
     return count / (burst.finished - burst.started)
 
 
+def raw_mcap_per_second(path: str, count: int) -> float:
+    """The mcap package alone: one JSON channel, each message written and flushed."""
+    from mcap.writer import CompressionType, Writer
+
+    with open(path, "wb") as file:
+        writer: Any = Writer(file, compression=CompressionType.NONE, use_chunking=False)
+        writer.start()
+        schema = writer.register_schema("imu", "jsonschema", b'{"type":"object"}')
+        channel = writer.register_channel("/imu", "json", schema)
+        started = time.perf_counter()
+        for _ in range(count):
+            now = time.time_ns()
+            body = json.dumps({"data": SAMPLE.data}).encode()
+            writer.add_message(channel, log_time=now, data=body, publish_time=now)
+            file.flush()
+        took = time.perf_counter() - started
+        writer.finish()
+    return count / took
+
+
+def page_writer_per_second(path: str, count: int) -> float:
+    """SNR's McapPageWriter: the codec's line, the channel lookup, a flush per page."""
+    with open(path, "wb") as file:
+        writer = McapPageWriter(file)
+        started = time.perf_counter()
+        for _ in range(count):
+            writer.write(Page("imu", SAMPLE.data, "urov", time.time()))
+        took = time.perf_counter() - started
+        writer.close()
+    return count / took
+
+
+def mcap_table(folder: str, n: int, jsonl_recorded: float) -> None:
+    if importlib.util.find_spec("mcap") is None:
+        print("\nMCAP: skipped, the mcap package is not installed (pip install 'snr[viz]')")
+        return
+    path = os.path.join(folder, "bench.mcap")
+    raw = raw_mcap_per_second(path, n)
+    writer = page_writer_per_second(path, n)
+    recorded = node_pages_per_second(n, RecorderEndpointFactory(path, ["imu"]))
+    print(f"\nMCAP, uncompressed, flushed per page ({n} pages)")
+    print(f"  {'':34} {'pages/s':>10} {'ratio':>7}")
+    print(f"  {'raw mcap writes (baseline)':34} {raw:10,.0f} {1.0:7.2f}")
+    print(f"  {'McapPageWriter.write':34} {writer:10,.0f} {writer / raw:7.2f}")
+    print(f"  {'node + JSON-lines recorder (base)':34} {jsonl_recorded:10,.0f} {1.0:7.2f}")
+    print(f"  {'node + MCAP recorder':34} {recorded:10,.0f} {recorded / jsonl_recorded:7.2f}")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--pages", type=int, default=20_000)
@@ -117,8 +173,8 @@ def main() -> None:
     print(f"  {'no recorder (baseline)':34} {plain:10,.0f} {1.0:7.2f}")
     print(f"  {'recorder (write + flush per page)':34} {recorded:10,.0f} {recorded / plain:7.2f}")
     print(f"  {'recorder, sync=True (fsync)':34} {synced:10,.0f} {synced / plain:7.3f}")
-    os.remove(path)
-    os.rmdir(folder)
+    mcap_table(folder, n, recorded)
+    shutil.rmtree(folder)  # the recorder kept each earlier run beside the file
 
 
 if __name__ == "__main__":
