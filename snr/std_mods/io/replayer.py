@@ -138,14 +138,16 @@ class PageReader:
         filename: a file written by `RecorderEndpointFactory`.
 
     Raises:
-        ConfigError: the file does not exist.
+        ConfigError: the file does not exist, or is MCAP and the mcap
+            package is not installed.
         WireFormatError: the file starts with the header of a newer SNR's
             format, or of another format.
 
     Attributes:
         problems: the first `MAX_PROBLEMS` bad lines, each as
-            ``"file:line: reason"``.
-        bad_lines: how many bad lines were skipped in all.
+            ``"file:line: reason"`` (MCAP: ``"file: message N: reason"``).
+        bad_lines: how many bad lines (or MCAP messages) were skipped in all.
+        is_mcap: True when the file is MCAP.
 
     Example::
 
