@@ -31,6 +31,7 @@ from snr.std_mods.codec import MAX_DEPTH, header_line, page_to_line
 from snr.std_mods.io.convert import convert_recording
 from snr.std_mods.io.mcap_files import (
     INSTALL_HINT,
+    MCAP_MAGIC,
     McapPageWriter,
     infer_schema,
     log_time_ns,
@@ -177,6 +178,16 @@ class TestRecordMcap(SNRTestCase):
                 RecorderEndpointFactory(keys=["n"], **kwargs)  # type: ignore[arg-type]
         explicit = RecorderEndpointFactory("run.log", ["n"], file_format="mcap")
         self.assertEqual(explicit.file_format, "mcap")
+
+    def test_a_missing_compression_package_is_named_and_nothing_is_moved(self) -> None:
+        path = self.temp_file(".mcap")
+        with open(path, "wb") as f:
+            f.write(MCAP_MAGIC)  # a recording: kept by renaming, if the recorder got that far
+        with mock.patch.dict(sys.modules, {"zstandard": None}):
+            with self.assertRaises(ConfigError) as caught:
+                run_role("robot", [RecorderEndpointFactory(path, ["n"], compression="zstd")])
+        self.assertIn("pip install zstandard", str(caught.exception))
+        self.assertEqual(os.listdir(os.path.dirname(path)), [os.path.basename(path)])
 
 
 @unittest.skipUnless(HAS_MCAP, NEEDS_MCAP)
@@ -332,6 +343,15 @@ class TestWithoutMcap(SNRTestCase):
         self.assertEqual(code, 1)
         self.assertEqual(err.getvalue().count("\n"), 1)
         self.assertIn(INSTALL_HINT, err.getvalue())
+
+    def test_reading_an_mcap_file_says_what_to_install(self) -> None:
+        path = self.temp_file(".mcap")
+        with open(path, "wb") as f:
+            f.write(MCAP_MAGIC)
+        with self.assertRaises(ConfigError) as caught:
+            PageReader(path)
+        self.assertIn(INSTALL_HINT, str(caught.exception))
+        self.assertNotIn("\n", str(caught.exception))
 
     def test_json_lines_need_no_mcap(self) -> None:
         path = self.temp_file(".jsonl")

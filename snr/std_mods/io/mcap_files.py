@@ -58,6 +58,7 @@ from snr.std_mods.codec import (
 
 __all__ = [
     "COMPRESSIONS",
+    "COMPRESSION_PACKAGES",
     "INSTALL_HINT",
     "MCAP_MAGIC",
     "MAX_RECORD_BYTES",
@@ -80,12 +81,14 @@ INSTALL_HINT = "pip install 'snr[viz]'"
 COMPRESSIONS = ("none", "zstd", "lz4")
 """The ``compression`` choices; ``"none"`` needs only the pure-Python ``mcap`` package."""
 
+COMPRESSION_PACKAGES = {"zstd": "zstandard", "lz4": "lz4"}
+"""The package each compression needs besides ``mcap`` (they have no wheels everywhere)."""
+
 MAX_RECORD_BYTES = 256 * 2**20
 """Largest MCAP record read (256 MiB): a damaged length field is reported, not allocated."""
 
 _CHUNK_BYTES = 2**20  # with compression: about 1 MiB of pages per chunk
 _MAX_LOG_TIME = 2**64 - 1  # MCAP times are unsigned 64-bit nanoseconds
-_COMPRESSION_PACKAGES = {"zstd": "zstandard", "lz4": "lz4"}
 
 
 def require_mcap(what: str, part: str = "writer") -> Any:
@@ -259,7 +262,7 @@ class McapPageWriter:
                 chunk_size=_CHUNK_BYTES,
             )
         except exceptions.UnsupportedCompressionError as error:
-            package = _COMPRESSION_PACKAGES.get(compression, compression)
+            package = COMPRESSION_PACKAGES.get(compression, compression)
             raise ConfigError(
                 f"{what} with compression={compression!r} needs the {package} package "
                 f"({error}): pip install {package}, or write it uncompressed"

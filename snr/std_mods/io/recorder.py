@@ -15,6 +15,7 @@ cannot write are logged and skipped; the node goes on.
 
 from __future__ import annotations
 
+import importlib
 import logging
 import os
 import sys
@@ -35,6 +36,7 @@ from snr.prelude import (
 )
 from snr.std_mods.codec import PathLike, decode_line, header_line, is_header, page_to_line
 from snr.std_mods.io.mcap_files import (
+    COMPRESSION_PACKAGES,
     COMPRESSIONS,
     MCAP_MAGIC,
     McapPageWriter,
@@ -357,8 +359,15 @@ class RecorderEndpointFactory(EndpointFactory):
     def _open_recording(self) -> RecordingFile:
         if self.started and self.file_format == "jsonl":
             return _LinesFile(self._open(self.path, "a"), self.sync)
-        if self.file_format == "mcap":  # before any file is made
+        if self.file_format == "mcap":  # before any file is made or renamed
             require_mcap(f"{type(self).__name__}({self.filename!r})")
+            package = COMPRESSION_PACKAGES.get(self.compression)
+            if package is not None and not _installed(package):
+                raise ConfigError(
+                    f"{type(self).__name__}({self.filename!r}, compression="
+                    f"{self.compression!r}) needs the {package} package: pip install "
+                    f"{package}, or leave compression out"
+                )
         self.path, self.kept = self._choose_path()
         if self.file_format == "mcap":
             recording: RecordingFile = self._open_mcap()
@@ -374,9 +383,8 @@ class RecorderEndpointFactory(EndpointFactory):
             raise self._cannot_write(error) from error
         try:
             return McapPageWriter(file, self.compression, sync=self.sync)
-        except ConfigError:  # the compression's package is missing: leave no empty file
+        except ConfigError:
             file.close()
-            os.remove(self.path)
             raise
         except OSError as error:
             file.close()
@@ -434,6 +442,14 @@ class RecorderEndpointFactory(EndpointFactory):
 
     def __repr__(self) -> str:
         return f"RecorderEndpointFactory({self.filename!r}, {self.keys!r})"
+
+
+def _installed(package: str) -> bool:
+    try:
+        importlib.import_module(package)
+    except ImportError:
+        return False
+    return True
 
 
 def _choose_format(filename: str, file_format: Optional[str]) -> str:
