@@ -7,6 +7,7 @@ Commands::
                                        --view: watch it live in Foxglove or Lichtblick
     python -m snr console HOST:PORT    type commands into a running node (snr-console)
     python -m snr docs [--serve]       build (if needed) and open the docs, offline
+    python -m snr convert IN OUT       convert a recording: JSON lines <-> MCAP (by OUT's name)
     python -m snr version              print the installed version
 """
 
@@ -44,10 +45,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     sub.add_parser("console", help="type commands into a running node (same as snr-console)")
     docs_parser = sub.add_parser("docs", help="build (if needed) and open the docs offline")
     snr.docsite.add_arguments(docs_parser)
+    convert_parser = sub.add_parser(
+        "convert", help="convert a recording between JSON lines and MCAP (*.mcap)"
+    )
     sub.add_parser("version", help="print the SNR version")
     words = list(sys.argv[1:] if argv is None else argv)
     if words[:1] == ["console"]:  # its own options, e.g. --token, go to snr-console
         return snr.console.main(words[1:])
+    if words[:1] == ["convert"]:  # its options, built only when asked for
+        from snr.std_mods.io import convert
+
+        convert.add_arguments(convert_parser)
     args = parser.parse_args(words)
     if args.command == "demo":
         from snr.demo import run_demo  # only the demo needs it
@@ -56,6 +64,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return run_demo(args.seconds, verbose=args.verbose, view_port=view_port)
     if args.command == "docs":
         return snr.docsite.run(args)
+    if args.command == "convert":
+        return convert.run(args)
     if args.command == "version":
         print(snr.__version__)
         return 0
