@@ -33,10 +33,10 @@ from snr.std_mods.io.mcap_files import (
     INSTALL_HINT,
     MCAP_MAGIC,
     McapPageWriter,
-    infer_schema,
     log_time_ns,
     page_schema,
 )
+from snr.std_mods.io.page_schema import data_schema as infer_schema
 from tests.page_collector import PageCollectorFactory
 from tests.test_recorder_replayer import ReloadAtFactory, bad_lines_of_every_kind, run_role
 
@@ -374,9 +374,9 @@ class TestSchemaInference(unittest.TestCase):
             (True, {"type": "boolean"}),
             ("dive", {"type": "string"}),
             (None, {}),
-            ([], {"type": "array"}),
+            ([], {"type": "array", "items": {}}),
             ([1, 2.5], {"type": "array", "items": {"type": "number"}}),
-            ([1, "x"], {"type": "array"}),
+            ([1, "x"], {"type": "array", "items": {}}),
             (
                 {"pose": {"x": 1.0}, "ok": False},
                 {

@@ -42,7 +42,7 @@ import importlib
 import json
 import math
 import os
-from typing import IO, Any, Callable, Dict, Iterator, List, Optional, Tuple
+from typing import IO, Any, Callable, Dict, Iterator, Optional, Tuple
 
 from snr.prelude import ConfigError, Page, WireFormatError
 from snr.std_mods.codec import (
@@ -55,6 +55,7 @@ from snr.std_mods.codec import (
     page_from_fields,
     page_to_line,
 )
+from snr.std_mods.io.page_schema import page_schema as any_page_schema
 
 __all__ = [
     "COMPRESSIONS",
@@ -64,7 +65,6 @@ __all__ = [
     "MAX_RECORD_BYTES",
     "McapPageWriter",
     "format_of_name",
-    "infer_schema",
     "is_mcap_file",
     "log_time_ns",
     "page_schema",
@@ -149,48 +149,6 @@ def log_time_ns(created_at_s: float) -> int:
 # -- schemas --------------------------------------------------------------------------
 
 
-def infer_schema(value: Any) -> Dict[str, Any]:
-    """A JSON Schema describing ``value`` (decoded JSON: dict, list, str, number, bool, None).
-
-    Where the value leaves the type of later values open, the schema does
-    too, as a schema cannot be widened once a file holds it: every number is
-    ``number`` (``0`` now may be ``0.5`` next), ``None`` allows any value (it
-    usually means "no reading yet"), a list's ``items`` are given only when
-    every element has the same schema (an empty or mixed list is any array),
-    and a dict lists its keys as ``properties``, none of them required.
-
-    Example::
-
-        infer_schema({"depth": 2.5, "ok": True})
-        # {'type': 'object', 'properties': {'depth': {'type': 'number'},
-        #                                   'ok': {'type': 'boolean'}}}
-    """
-    kind = type(value)
-    if kind is bool:
-        return {"type": "boolean"}
-    if kind is int or kind is float:
-        return {"type": "number"}
-    if kind is str:
-        return {"type": "string"}
-    if kind is dict:
-        properties = {str(k): infer_schema(v) for k, v in value.items()}
-        return {"type": "object", "properties": properties}
-    if kind is list or kind is tuple:
-        schema: Dict[str, Any] = {"type": "array"}
-        items = _common_schema([infer_schema(item) for item in value])
-        if items is not None:
-            schema["items"] = items
-        return schema
-    return {}  # None: any value
-
-
-def _common_schema(schemas: List[Dict[str, Any]]) -> Optional[Dict[str, Any]]:
-    """The schema all of ``schemas`` share, or None (none given, or they differ)."""
-    if schemas and all(schema == schemas[0] for schema in schemas):
-        return schemas[0]
-    return None
-
-
 def page_schema(key: str, data: Any) -> Dict[str, Any]:
     """The JSON Schema of the messages under ``key``: a page whose ``data`` is like ``data``.
 
@@ -198,19 +156,11 @@ def page_schema(key: str, data: Any) -> Dict[str, Any]:
 
         page_schema("depth_m", 3.2)["properties"]["data"]   # {'type': 'number'}
     """
-    return {
-        "title": key,
-        "description": f"SNR pages stored under {key!r}; data inferred from the first page",
-        "type": "object",
-        "properties": {
-            "key": {"type": "string"},
-            "data": infer_schema(data),
-            "origin": {"type": "string"},
-            "created_at_s": {"type": "number"},
-            "process": {"type": "boolean"},
-        },
-        "required": ["key", "data"],
-    }
+    schema = any_page_schema(data)  # the same inference as the live view's channels
+    schema["title"] = key
+    schema["description"] = f"SNR pages stored under {key!r}; data inferred from the first page"
+    schema["required"] = ["key", "data"]
+    return schema
 
 
 # -- writing --------------------------------------------------------------------------
