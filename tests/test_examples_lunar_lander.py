@@ -1,6 +1,9 @@
 """examples/lunar_lander: the descent, the controllers and the Q-learning trainer (5.3, A.4)."""
 
+import os
+import re
 import unittest
+from typing import List
 
 from snr import SNRTestCase, TaskType, tasks
 from tests.examples_support import example_path, load_module, run_script
@@ -99,15 +102,39 @@ class TestLanderNode(SNRTestCase):
             self.assertIsNone(result)
 
 
+def readme_output(command: str) -> List[str]:
+    """The output the README shows under ``command`` (up to a blank line or the next command)."""
+    with open(os.path.join(os.path.dirname(MAIN), "README.md"), encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.split("#")[0].strip() == command)
+    shown: List[str] = []
+    for line in lines[start + 1 :]:
+        if not line.strip() or line.startswith(("python ", "```")):
+            break
+        shown.append(line.rstrip())
+    return shown
+
+
+def matches_shown(output: List[str], shown: List[str]) -> bool:
+    """``output`` is what ``shown`` shows, where a "..." line stands for any lines."""
+    pattern = "\n".join(".*?" if line == "..." else re.escape(line) for line in shown)
+    return re.fullmatch(pattern, "\n".join(output), re.S) is not None
+
+
 class TestLanderScript(unittest.TestCase):
-    def test_main_lands_and_says_so(self) -> None:
-        done = run_script([MAIN, "--speed", "0", "--quiet"])
+    def test_main_lands_and_prints_what_the_readme_shows(self) -> None:
+        done = run_script([MAIN, "--speed", "0"])
         self.assertEqual(done.returncode, 0, done.stderr)
-        self.assertIn("Landed safely", done.stdout)
+        output = [line.rstrip() for line in done.stdout.splitlines()]
+        shown = readme_output("python main.py")
+        self.assertTrue(matches_shown(output, shown), f"README shows {shown}, ran {output}")
 
     def test_a_crash_ends_with_a_message_not_a_traceback(self) -> None:
         done = run_script([MAIN, "--policy", "untrained", "--speed", "0"])
         self.assertEqual(done.returncode, 1)
+        output = [line.rstrip() for line in done.stdout.splitlines()]
+        shown = readme_output("python main.py --policy untrained")
+        self.assertTrue(matches_shown(output, shown), f"README shows {shown}, ran {output}")
         self.assertIn("Crashed at", done.stdout.splitlines()[-1])
         self.assertIn("altitude", done.stdout)  # the telemetry lines
         self.assertNotIn("Traceback", done.stderr)
