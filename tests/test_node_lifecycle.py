@@ -145,7 +145,7 @@ class TestReloadNeverLies(unittest.TestCase):
             result.append(ticker.passes - passes)
 
         with self.assertLogs("snr.life", "ERROR") as logs:
-            node = run_node([ticker, ScriptFactory([reload])], join_timeout_s=0.1)
+            node = run_node([ticker, ScriptFactory([reload])], join_timeout_s=0.05)
         text = "\n".join(logs.output)
         self.assertEqual(result[0], [])  # nothing was rebuilt
         self.assertEqual(ticker.builds, 1)  # no second copy was even built
@@ -212,6 +212,7 @@ class Stubborn(ThreadLoop):
         self.stubborn_factory = factory
 
     def loop(self) -> None:
+        self.stubborn_factory.entered.set()
         self.stubborn_factory.release.wait(3.0)
 
     def terminate(self) -> None:
@@ -221,6 +222,7 @@ class Stubborn(ThreadLoop):
 class StubbornFactory(LoopFactory):
     def __init__(self) -> None:
         super().__init__()
+        self.entered = threading.Event()
         self.release = threading.Event()
 
     def get(self, parent: AbstractNode) -> Stubborn:
@@ -233,7 +235,8 @@ class TestShutdownNamesLiveLoops(unittest.TestCase):
         try:
             with self.assertLogs("snr.life", "WARNING") as logs:
                 run_node(
-                    [stubborn, ScriptFactory([lambda n: time.sleep(0.05)])], join_timeout_s=0.1
+                    [stubborn, ScriptFactory([lambda n: stubborn.entered.wait(2.0)])],
+                    join_timeout_s=0.1,
                 )
         finally:
             stubborn.release.set()
@@ -319,7 +322,7 @@ class TestBoundedQueue(unittest.TestCase):
         return queue
 
     def test_a_producer_waits_then_drops_counts_and_says_so(self) -> None:
-        queue = self.make_queue(high_water=10, max_wait_s=0.05)
+        queue = self.make_queue(high_water=10, max_wait_s=0.02)
         with self.assertLogs("snr", "WARNING") as logs:
             for i in range(14):
                 queue.schedule(tasks.event(str(i)))
