@@ -71,10 +71,14 @@ class TestControllerExample(SNRTestCase):
     def test_both_pipelines_in_one_node_print_figure_5_4_lines(self) -> None:
         # Without sockets: the input device's parts feed the receiver's directly.
         pad = SimulatedJoystick(clock=stepping_clock(0.005))  # 0.135 s of script a pass
+        input_device = self.example.input_device_parts(pad)
+        # The script plays in a fixed number of passes (the clock steps per read),
+        # so only the wall time depends on the rate: 20 passes a second would take 1 s.
+        input_device[0].max_tick_rate_hz = 500
         out = io.StringIO()
         with self.expector({PRESSED: 6, RELEASED: 6}) as expector, contextlib.redirect_stdout(out):
             self.run_test_node([
-                *self.example.input_device_parts(pad),
+                *input_device,
                 *self.example.receiver_parts(),
                 ExpectorEndpointFactory(expector, exit_when_satisfied=True),
             ])  # fmt: skip
