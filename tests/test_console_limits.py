@@ -224,7 +224,9 @@ class TestFloods(unittest.TestCase):
         self.assertLess(max(during), 1.0)  # generous: measured tens of ms (see the print)
 
     def test_pipelined_commands_are_answered_in_order_a_few_at_a_time(self) -> None:
-        with NodeInThread([]) as run:
+        # Without the receiver's periodic wake-up, a line left waiting after
+        # its wake-up was read would wait for good: read_frames would time out.
+        with mock.patch("snr.std_mods.io.console._POLL_S", 60.0), NodeInThread([]) as run:
             with socket.create_connection((run.host, run.port), timeout=5) as sock:
                 lines = [f"task store_page k {i}" for i in range(5 * MAX_UNANSWERED)]
                 sock.sendall("".join(line + "\n" for line in lines).encode())
