@@ -747,7 +747,7 @@ class Sleepy(Endpoint):
         self.task_handlers = {(EV, "nap"): self.nap}
 
     def nap(self, task: Task, key: TaskId) -> SomeTasks:
-        time.sleep(0.05)
+        time.sleep(0.02)  # over the test's slow_handler_s of 0.01 s
         return None
 
 
