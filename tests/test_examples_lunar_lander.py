@@ -85,9 +85,9 @@ class TestLanderNode(SNRTestCase):
 
     def test_without_a_controller_the_loop_says_what_is_missing(self) -> None:
         node = self.run_test_node(
-            [lander.RadarSensorLoopFactory(speed=0, command_timeout_s=0.2)], timeout_s=5
+            [lander.RadarSensorLoopFactory(speed=0, command_timeout_s=0.05)], timeout_s=5
         )
-        self.assertIn("No thruster_data", str(node.terminate_reason))
+        self.assertIn("No thruster_data for 0.05 s", str(node.terminate_reason))
 
     def test_bad_radar_data_is_logged_and_ignored(self) -> None:
         endpoint = lander.ControllerFactory(lander.baseline_policy).get(self.mock_node())
