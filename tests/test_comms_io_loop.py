@@ -136,7 +136,7 @@ class TestOneIOThreadPerNode(unittest.TestCase):
 
         for i in range(10):
             sender.schedule(tasks.store_data("tick", i))
-            time.sleep(0.02)  # a pause (bursts join within 0.2 ms): each page goes alone
+            time.sleep(0.005)  # a pause (bursts join within 0.2 ms): each page goes alone
         self.assertTrue(wait_until(lambda: len(latency.seen) == 10, 5.0), latency.seen)
         self.assertEqual([data for data, _ in latency.seen], list(range(10)))
         slowest = max(took for _, took in latency.seen)
