@@ -232,12 +232,13 @@ class StubbornFactory(LoopFactory):
 class TestShutdownNamesLiveLoops(unittest.TestCase):
     def test_a_loop_still_running_is_named_before_its_terminate(self) -> None:
         stubborn = StubbornFactory()
+
+        def once_it_is_stuck(node: Any) -> None:
+            stubborn.entered.wait(2.0)
+
         try:
             with self.assertLogs("snr.life", "WARNING") as logs:
-                run_node(
-                    [stubborn, ScriptFactory([lambda n: stubborn.entered.wait(2.0)])],
-                    join_timeout_s=0.1,
-                )
+                run_node([stubborn, ScriptFactory([once_it_is_stuck])], join_timeout_s=0.1)
         finally:
             stubborn.release.set()
         said = [line for line in logs.output if "stubborn" in line]
