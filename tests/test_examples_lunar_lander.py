@@ -1,15 +1,24 @@
 """examples/lunar_lander: the descent, the controllers and the Q-learning trainer (5.3, A.4)."""
 
+import functools
 import os
 import re
 import unittest
-from typing import List
+from typing import Any, List, Tuple
 
 from snr import SNRTestCase, TaskType, tasks
 from tests.examples_support import example_path, load_module, run_script
 
 MAIN = example_path("lunar_lander", "main.py")
 lander = load_module(MAIN, "lunar_lander_example")
+
+
+@functools.cache
+def trained() -> Tuple[Any, int]:
+    """A table trained once (3000 flights, seed 1) and the flights flown: two tests use it."""
+    table = lander.QTable()
+    flown = lander.train(table, episodes=3000, seed=1, time_limit_s=20)
+    return table, flown
 
 
 class TestPhysics(unittest.TestCase):
@@ -38,9 +47,8 @@ class TestPhysics(unittest.TestCase):
 
 class TestTrainer(unittest.TestCase):
     def test_training_really_improves_the_landing_rate(self) -> None:
-        table = lander.QTable()
-        before = lander.landing_rate(table.best_action)
-        flown = lander.train(table, episodes=3000, seed=1, time_limit_s=20)
+        before = lander.landing_rate(lander.QTable().best_action)
+        table, flown = trained()
         after = lander.landing_rate(table.best_action)
         self.assertEqual(flown, 3000)
         self.assertEqual(before, 0.0)  # untrained, it never fires the engine
@@ -80,17 +88,16 @@ class TestLanderNode(SNRTestCase):
         self.assertTrue(reason.startswith("Crashed"), reason)
 
     def test_trained_q_controller_lands(self) -> None:
-        table = lander.QTable()
-        lander.train(table, episodes=3000, seed=1, time_limit_s=20)
+        table, _ = trained()
         reason = self.fly_node(lander.QLearningControllerEndpointFactory(table.q_value))
         self.assertEqual(reason, lander.fly(table.best_action).outcome())
         self.assertTrue(reason.startswith("Landed safely"), reason)
 
     def test_without_a_controller_the_loop_says_what_is_missing(self) -> None:
         node = self.run_test_node(
-            [lander.RadarSensorLoopFactory(speed=0, command_timeout_s=0.2)], timeout_s=5
+            [lander.RadarSensorLoopFactory(speed=0, command_timeout_s=0.05)], timeout_s=5
         )
-        self.assertIn("No thruster_data", str(node.terminate_reason))
+        self.assertIn("No thruster_data for 0.05 s", str(node.terminate_reason))
 
     def test_bad_radar_data_is_logged_and_ignored(self) -> None:
         endpoint = lander.ControllerFactory(lander.baseline_policy).get(self.mock_node())
