@@ -177,6 +177,17 @@ class ThreadLoop(Component, AbstractLoop):
         """True while the loop's thread is running."""
         return self._thread is not None and self._thread.is_alive()
 
+    @property
+    def thread_id(self) -> Optional[int]:
+        """The id of the loop's thread (its ``threading.get_ident()``), or None before it starts.
+
+        Example::
+
+            sys._current_frames().get(loop.thread_id)   # what the loop is doing now
+        """
+        thread = self._thread
+        return None if thread is None else thread.ident
+
     def where_running(self) -> str:
         """The line the loop's thread is on now (e.g. where it is blocked), or ""."""
         thread = self._thread

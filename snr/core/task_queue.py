@@ -30,12 +30,15 @@ from __future__ import annotations
 import collections
 import logging
 import queue
+import sys
 import threading
 import time
-from typing import Deque, Optional, Set
+from types import FrameType
+from typing import Deque, Dict, Optional, Set, Tuple
 
 from snr.core.logs import LossReport
 from snr.prelude import AbstractTaskQueue, HandlerError, IdleWaiter, SomeTasks, Task
+from snr.prelude.errors import is_runtime_file
 
 __all__ = ["TaskQueue"]
 
@@ -64,6 +67,10 @@ class TaskQueue(AbstractTaskQueue):
             hold back on their own (a socket I/O thread stops reading); see
             `never_wait`.
         waits: how many times a producer had to wait for space.
+        waits_by_thread: the same, for each thread id that had to wait (the
+            watchdog names a loop that floods the queue with it).
+        waited_at: for each thread id that had to wait, the caller's frame
+            outside SNR and its line at the last wait (the watchdog shows it).
     """
 
     def __init__(
@@ -82,6 +89,8 @@ class TaskQueue(AbstractTaskQueue):
         self.owner_thread: Optional[int] = None
         self.holds_back: Set[int] = set()
         self.waits = 0
+        self.waits_by_thread: Dict[int, int] = {}
+        self.waited_at: Dict[int, Tuple[FrameType, int]] = {}
         self.loss = LossReport(
             log or logging.getLogger("snr"),
             "tasks from other threads",
@@ -143,7 +152,7 @@ class TaskQueue(AbstractTaskQueue):
             return True  # the node's own work, no node yet, or a thread that holds back
         if self._closed.is_set():
             return True  # shutting down: the queue is cleared anyway
-        self.waits += 1
+        self._count_wait(me)
         deadline = time.monotonic() + self.max_wait_s
         while len(self.normal) > self.low_water:
             left = deadline - time.monotonic()
@@ -157,6 +166,19 @@ class TaskQueue(AbstractTaskQueue):
         if self.loss.dropping:
             self.loss.recovered()
         return True
+
+    def _count_wait(self, me: int) -> None:
+        """Count a producer's wait and remember where it waits (slow path: the queue is full)."""
+        self.waits += 1
+        if len(self.waits_by_thread) >= 100:  # threads come and go; keep these bounded
+            self.waits_by_thread.clear()
+            self.waited_at.clear()
+        self.waits_by_thread[me] = self.waits_by_thread.get(me, 0) + 1
+        frame: Optional[FrameType] = sys._getframe(2)  # schedule(); then out of SNR's code
+        while frame is not None and is_runtime_file(frame.f_code.co_filename):
+            frame = frame.f_back
+        if frame is not None:
+            self.waited_at[me] = (frame, frame.f_lineno)
 
     def never_wait(self, thread_id: int) -> None:
         """Let ``thread_id``'s tasks in at once, whatever the queue's length.
