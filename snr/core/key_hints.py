@@ -18,6 +18,12 @@ key)`` or ``(TaskType.process_data, key)``) is *expected*: the node's own wiring
 says its pages will come, e.g. once a peer connects, so reading it early is not
 a mistake and gets no hint. (If that handler's key is the misspelt one,
 ``check_handlers`` says so.)
+
+A key whose page is only late is not missing: while ``on_its_way(key)`` says
+so (the node's answer: a page for it waits in the queue, or the node's thread
+is stuck in a handler and stores nothing) the hint waits. Telling a student to
+check the spelling of a key that is merely queued behind a blocked handler
+would send them looking in the wrong place.
 """
 
 from __future__ import annotations
@@ -44,16 +50,23 @@ class MissingKeyHints:
         role: the node's role: a hint says when a key came from another node.
         link_s: how long after a link to another node comes up the keys that
             should cross it are checked (see `check_link`).
+        on_its_way: called with a key just before its hint would be logged;
+            True holds the hint back (the page is late, not missing).
 
     Example::
 
         hints = MissingKeyHints(node.log, node.timer.current_s)
         if page is None:
             hints.missed("depht", node.datastore)   # may log "Did you mean 'depth'?"
+
+    Attributes:
+        last_missed: for each thread, the last key it read and found missing
+            (the watchdog names the key a stuck handler waits for).
     """
 
     CHECK_EVERY_S = 0.25
     MAX_WATCHED_KEYS = 1000
+    MAX_READERS = 100
 
     def __init__(
         self,
@@ -64,6 +77,7 @@ class MissingKeyHints:
         handlers_s: float = 3.0,
         role: str = "",
         link_s: float = 3.0,
+        on_its_way: Optional[Callable[[DataKey], bool]] = None,
     ) -> None:
         self.log = log
         self.role = role
@@ -72,6 +86,8 @@ class MissingKeyHints:
         self.missing_s = missing_s
         self.handlers_s = handlers_s
         self.link_s = link_s
+        self.on_its_way = on_its_way
+        self.last_missed: Dict[int, DataKey] = {}
         self._first_and_next_check: Dict[DataKey, List[float]] = {}
         self._reported: Set[DataKey] = set()
         # Keys read early that a handler waits for: no read hint, but the wiring
@@ -83,6 +99,10 @@ class MissingKeyHints:
 
     def missed(self, key: DataKey, stored_keys: Iterable[DataKey]) -> None:
         """Note a read of ``key`` that found nothing; maybe log a hint."""
+        readers = self.last_missed
+        if len(readers) >= self.MAX_READERS:
+            readers.clear()  # threads come and go; the live ones are back at once
+        readers[threading.get_ident()] = key
         if key in self._reported or key in self._expected_reads:
             return
         now = self.clock()
@@ -105,6 +125,9 @@ class MissingKeyHints:
             stored = [k for k in list(stored_keys) if isinstance(k, str)]
             guess = closest_match(key, stored) if isinstance(key, str) else None
             if guess is None and waited_s < self.missing_s:
+                return
+            if self.on_its_way is not None and self.on_its_way(key):
+                times[1] = now + self.CHECK_EVERY_S  # late, not missing: look again later
                 return
             self._reported.add(key)
             del self._first_and_next_check[key]

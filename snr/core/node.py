@@ -34,6 +34,7 @@ from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.node_core import NodeCoreFactory
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Timer
+from snr.core.watchdog import Watchdog, queued_page_keys
 from snr.core.wiring_checks import WiringChecks
 from snr.prelude import (
     AbstractComponent,
@@ -104,6 +105,11 @@ class Node(AbstractNode):
         wiring_checks: in DEBUG mode, the `WiringChecks` that warn about an
             event nothing handles and a handler nothing can reach (None in
             other modes).
+        watchdog: in DEBUG mode, the `Watchdog` that says when the node is
+            stuck without a word: a handler that does not return, a ``loop()``
+            that never returns, a loop flooding the queue, a node nothing will
+            ever stop (None in other modes; set it to None before ``loop()``
+            to switch it off).
     """
 
     idle_wake_s: float = 1.0
@@ -151,9 +157,12 @@ class Node(AbstractNode):
             self.set_terminate_flag,
             timed=self.profiler is not None or self.mode is not Mode.DEPLOYED,
         )
+        debug = self.mode is Mode.DEBUG
         self.key_hints: Optional[MissingKeyHints] = (
-            MissingKeyHints(self.log, self.timer.current_s, role=role)
-            if self.mode is Mode.DEBUG
+            MissingKeyHints(
+                self.log, self.timer.current_s, role=role, on_its_way=self._page_on_its_way
+            )
+            if debug
             else None
         )
         if self.key_hints is not None:
@@ -164,6 +173,8 @@ class Node(AbstractNode):
                 self.log, role, self._components.table, self.datastore
             )
             self._runner.on_unhandled = self.wiring_checks.unhandled
+        self.watchdog: Optional[Watchdog] = Watchdog(self) if debug else None
+        self._watching: Optional[Watchdog] = None
 
         if self.mode is not Mode.DEPLOYED:
             self._components.check_added = self._check_component
@@ -211,6 +222,9 @@ class Node(AbstractNode):
         self._thread_id = self.queue.owner_thread = threading.get_ident()
         self._running = not self._stop_requested
         wiring_check = self._start_wiring_check()
+        self._watching = self.watchdog
+        if self._watching is not None:
+            self._watching.start(self._thread_id, [wiring_check] if wiring_check else [])
         try:
             self._components.start_all(lambda: self._running)
             self._run_tasks()
@@ -269,6 +283,18 @@ class Node(AbstractNode):
     def _handled_keys(self) -> Set[DataKey]:
         return {key for key, _ in self._page_handlers()}
 
+    def _page_on_its_way(self, key: DataKey) -> bool:
+        """True if ``key``'s page may be late rather than missing (for the key hints).
+
+        It is late when a page for it waits in the queue, or when the node's
+        thread has been stuck in one handler since the watchdog's last look:
+        the node stores no page until that handler returns.
+        """
+        watchdog = self._watching
+        if watchdog is not None and watchdog.handler_stuck:
+            return True
+        return key in queued_page_keys(self.queue)
+
     def set_terminate_flag(self, reason: str) -> None:
         """Ask the node to stop after the current task; safe from any thread."""
         if not self._stop_requested:
@@ -294,6 +320,8 @@ class Node(AbstractNode):
             self.set_terminate_flag("terminate() called")
         self._running = False
         self.state = NodeState.TERMINATING
+        if self._watching is not None:
+            self._watching.stop()  # stopping loops and waiting for them is no mistake
         self._components.shutdown()
         self._runner.repeats.flush()
         dropped = self.queue.clear()

@@ -1,0 +1,436 @@
+"""`Watchdog`: in DEBUG mode, says why a node is stuck when nothing else would.
+
+Some mistakes hang a node without a word: no exception, no log line, just a
+robot that does nothing. The watchdog notices four of them within a few
+seconds and says which handler or loop it is, the line it is on now, and the
+rule it breaks:
+
+1. **A handler that does not return** (a ``while`` waiting for data, a
+   blocking read): after ``stuck_s`` in one handler call. *A handler must
+   return quickly*: while it runs the node runs no other task and stores no
+   page, so data it waits for can never arrive. When the handler read a data
+   key whose page waits in the queue, the warning names that key.
+2. **A loop() that never returns** to SNR: after ``stuck_s`` inside one call
+   of a student's ``loop()``, when that call is inside a ``while`` written in
+   ``loop()`` itself. *loop() does one pass and returns.* (A ``loop()``
+   blocked in one call for long, e.g. ``accept()`` or ``input()``, is not
+   reported: it is waiting for input.)
+3. **A loop flooding the queue**: for ``stuck_s`` the node was behind while
+   its thread kept working (not stuck in one handler: that is rule 1), and a
+   student's loop had to wait for room in the queue meanwhile. *Set
+   max_tick_rate_hz.* The node is behind at a look when its queue holds a
+   tenth of its high-water mark or a producer had to wait for room since the
+   last look; the queue swings from full to nearly empty while a loop floods
+   it, so a look that finds it shallow counts as behind for ``FLOOD_GRACE_S``.
+4. **A node nothing will ever stop**: for ``idle_s`` its queue was empty, no
+   handler ran, no loop of it was alive, and no other thread was running in
+   the program (the main thread when the node runs on another, a comms I/O
+   thread, a timer, a thread of the student's): nothing can ever give it a
+   task again, so only Ctrl+C ends it. *Something must schedule
+   tasks.terminate.* A server waiting for clients or a console waiting for a
+   command is a loop that is alive, so it is never reported.
+
+Each is said once (per handler, per loop, per node), as a warning. While the
+node's thread is stuck in a handler, `MissingKeyHints` holds back its "nothing
+has stored it" hints (the node asks ``handler_stuck``): the page is late, not
+missing.
+
+**What it costs the node: nothing on the hot path.** A daemon thread wakes
+every ``every_s`` (0.5 s) and samples the stacks of the node's thread and its
+loops' threads with ``sys._current_frames()``. A handler call is the frame
+that `HandlerRunner` called; as long as the very same frame object is there
+look after look, the same call is still running (a new call is a new frame
+object, even at the same line). The node's thread counts and records nothing
+for it; the queue counts each producer's waits only when it is full.
+
+Example::
+
+    node = Node("robot", config)        # DEBUG: node.watchdog is a Watchdog
+    node.watchdog.stuck_s = 5.0         # be more patient
+    node.watchdog = None                # or switch it off (before node.loop())
+"""
+
+from __future__ import annotations
+
+import linecache
+import sys
+import threading
+import time
+from types import CodeType, FrameType
+from typing import TYPE_CHECKING, Dict, FrozenSet, Iterable, List, Optional, Set, Tuple
+
+from snr.core.explain import running_line, task_label
+from snr.core.handler_runner import HandlerRunner
+from snr.core.loop import ThreadLoop
+from snr.core.task_queue import TaskQueue
+from snr.prelude import AbstractComponent, AbstractLoop, DataKey, Task, TaskType
+from snr.prelude.errors import describe_callable, describe_class, frame_location
+
+if TYPE_CHECKING:
+    from snr.core.node import Node
+
+__all__ = ["Watchdog"]
+
+_HANDLER_CALLERS: FrozenSet[CodeType] = frozenset(
+    {HandlerRunner.run_queued.__code__, HandlerRunner.run.__code__}
+)
+_LOOP_CALLER: FrozenSet[CodeType] = frozenset({ThreadLoop._run.__code__})
+_MAX_DEPTH = 200  # frames looked at per stack: enough for any student's call chain
+_PARENT_WATCH = "snr-parent-watch"  # MultiProcRunner's: it stops the node only on Ctrl+C
+_FOOTER = "(This shows once, in DEBUG mode only; node.watchdog = None turns the watchdog off.)"
+
+
+class Watchdog:
+    """Watches a running node from its own thread and says when it is stuck.
+
+    Args:
+        node: the node to watch (it calls `start` and `stop`).
+
+    Example::
+
+        node.watchdog.stuck_s = 0.5   # say it sooner (before node.loop())
+
+    Attributes:
+        every_s: seconds between two looks at the node (0.5).
+        stuck_s: how long a handler may run, a ``loop()`` stay inside its
+            ``while``, or the queue keep overflowing, before it is reported (2 s).
+        idle_s: how long a node nothing can stop may wait before it is reported (3 s).
+        handler_stuck: True while the node's thread has been in one handler
+            call for at least one look (``every_s``).
+        said: one line per report made so far, e.g. ``"handler Waiter.on_go"``.
+    """
+
+    every_s: float = 0.5
+    stuck_s: float = 2.0
+    idle_s: float = 3.0
+    FLOOD_GRACE_S = 1.0
+    """A node that was behind less than this long ago still counts as behind
+    (its queue swings from full to empty and back while a loop floods it)."""
+
+    def __init__(self, node: Node) -> None:
+        self.node = node
+        self.every_s = type(self).every_s
+        self.stuck_s = type(self).stuck_s
+        self.idle_s = type(self).idle_s
+        self.handler_stuck = False
+        self.said: List[str] = []
+        self._said_about: Set[object] = set()
+        self._stop = threading.Event()
+        self._thread: Optional[threading.Thread] = None
+        self._node_thread: Optional[int] = None
+        self._ignored: Set[Optional[int]] = set()
+        # The frame of the handler call (or each loop's loop() call) seen at
+        # the last look, and when it was first seen.
+        self._handler: Optional[FrameType] = None
+        self._handler_since = 0.0
+        self._loop_calls: Dict[ThreadLoop, Tuple[FrameType, float]] = {}
+        self._waits = 0  # the queue's count of producers' waits, at the last look
+        self._loop_waits: Dict[ThreadLoop, int] = {}  # the same for each loop's thread
+        self._flood_since: Optional[float] = None
+        self._behind_s = 0.0  # the last look at which the node was behind
+        self._flooders: List[ThreadLoop] = []
+        self._idle_since: Optional[float] = None
+
+    # -- life cycle ---------------------------------------------------------
+    def start(self, node_thread: int, ignore: Iterable[threading.Thread] = ()) -> None:
+        """Start watching; ``node_thread`` runs the node, ``ignore`` can give it no task."""
+        self._node_thread = node_thread
+        self._ignored = {node_thread, *(thread.ident for thread in ignore)}
+        self._waits = self.node.queue.waits
+        self._thread = threading.Thread(
+            target=self._run, name=f"snr-{self.node.role}-watchdog", daemon=True
+        )
+        self._thread.start()
+        self._ignored.add(self._thread.ident)
+
+    def stop(self) -> None:
+        """Stop watching (the node is stopping); waits for the thread, briefly."""
+        self._stop.set()
+        thread = self._thread
+        if thread is not None and thread is not threading.current_thread():
+            thread.join(1.0)
+        self._handler = None  # let go of the frames (and their locals)
+        self._loop_calls.clear()
+        self._loop_waits.clear()
+        self._flooders = []
+
+    def _run(self) -> None:
+        while not self._stop.wait(self.every_s):
+            try:
+                self.check()
+            except Exception:  # a bug here must not take the node down with it
+                self.node.log.exception("The watchdog failed and stops; the node runs on.")
+                return
+
+    # -- one look -----------------------------------------------------------
+    def check(self) -> None:
+        """Look at the node once: sample its threads' stacks and apply the four rules."""
+        now = time.monotonic()
+        frames = sys._current_frames()
+        loops = [c for c in list(self.node.components.values()) if isinstance(c, ThreadLoop)]
+        handler = _called_by(frames.get(self._node_thread or -1), _HANDLER_CALLERS)
+        self._check_handler(handler, now)
+        theirs = [loop for loop in loops if _is_students(loop)]
+        self._check_loops(theirs, frames, now)
+        self._check_flood(theirs, now)
+        self._check_idle(handler is None, loops, now)
+
+    def _say(self, about: object, label: str, text: str) -> None:
+        if about in self._said_about:
+            return
+        self._said_about.add(about)
+        self.said.append(label)
+        self.node.log.warning("%s %s", text, _FOOTER)
+
+    # -- 1. a handler that does not return ----------------------------------
+    def _check_handler(self, handler: Optional[FrameType], now: float) -> None:
+        if handler is None or handler is not self._handler:
+            self._handler, self._handler_since = handler, now
+            self.handler_stuck = False
+            return
+        self.handler_stuck = True  # the same call as at the last look
+        if now - self._handler_since >= self.stuck_s:
+            name = getattr(handler.f_code, "co_qualname", handler.f_code.co_name)
+            self._say(handler.f_code, f"handler {name}", self._stuck_text(handler))
+
+    def _stuck_text(self, frame: FrameType) -> str:
+        caller = frame.f_back
+        names = caller.f_locals if caller is not None else {}
+        handler = names.get("handler")
+        task = names.get("task")
+        component = names.get("component")
+        who = describe_callable(handler) if handler is not None else frame_location(frame)
+        if isinstance(component, AbstractComponent):
+            kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
+            who += f" of {kind} {component.name!r}"
+        doing = f" handling {task_label(task)}" if isinstance(task, Task) else ""
+        where = running_line(self._node_thread) or frame_location(frame)
+        text = (
+            f"Task handler {who} has been running for {self.stuck_s:g} s{doing}, and has "
+            f"not returned: it is at {where}. A handler must return quickly: while one "
+            "runs, the node runs no other task and stores no page."
+        )
+        key = self._awaited_key()
+        if key is not None:
+            return (
+                f"{text} It waits for data key {key!r}, and the page for {key!r} is in the "
+                "queue behind this handler: it can only be stored once the handler returns. "
+                "Return instead, and react when the page is stored: a handler for "
+                f"(TaskType.store_page, {key!r}) runs then. Move waiting or blocking work "
+                "into a ThreadLoop."
+            )
+        return (
+            f"{text} Move waiting or blocking work (a loop waiting for data, time.sleep, "
+            "a read from a device) into a ThreadLoop, and react to data when it comes: a "
+            "handler for (TaskType.store_page, key) runs each time a page is stored."
+        )
+
+    def _awaited_key(self) -> Optional[DataKey]:
+        """A data key the node's thread read and found missing while its page waits in the queue."""
+        hints = self.node.key_hints
+        if hints is None or self._node_thread is None:
+            return None
+        key = hints.last_missed.get(self._node_thread)
+        if key is not None and key in queued_page_keys(self.node.queue):
+            return key
+        return None
+
+    # -- 2. a loop() that never returns -------------------------------------
+    def _check_loops(
+        self, loops: List[ThreadLoop], frames: Dict[int, FrameType], now: float
+    ) -> None:
+        calls: Dict[ThreadLoop, Tuple[FrameType, float]] = {}
+        for loop in loops:
+            frame = _called_by(frames.get(loop.thread_id or -1), _LOOP_CALLER)
+            if frame is None or frame.f_code is not getattr(type(loop).loop, "__code__", None):
+                continue  # between two passes, in setup(), or waiting for its tick
+            seen = self._loop_calls.get(loop)
+            since = seen[1] if seen is not None and seen[0] is frame else now
+            calls[loop] = (frame, since)
+            if now - since >= self.stuck_s:
+                while_line = enclosing_while(frame)
+                if while_line is not None:  # not merely blocked in one long read
+                    text = self._endless_loop_text(loop, frame, while_line)
+                    self._say((loop, "loop"), f"loop {loop.name}", text)
+        self._loop_calls = calls
+
+    def _endless_loop_text(self, loop: ThreadLoop, frame: FrameType, while_line: int) -> str:
+        code = linecache.getline(frame.f_code.co_filename, while_line).strip()
+        where = running_line(loop.thread_id) or frame_location(frame)
+        return (
+            f"Loop {loop.name!r} ({describe_class(type(loop))}): loop() has not returned "
+            f"for {self.stuck_s:g} s. It is inside `{code}` "
+            f"({frame_location(frame, while_line)}), now at {where}. loop() should do one "
+            "pass and return: SNR calls it again and again, at most max_tick_rate_hz times "
+            "a second, and can stop the loop only between two passes, so this loop cannot "
+            "be stopped. Take out the `while` and keep its body in loop(); instead of "
+            "sleeping, pass max_tick_rate_hz to super().__init__(), e.g. "
+            "max_tick_rate_hz=10 for ten passes a second."
+        )
+
+    # -- 3. a loop flooding the queue ---------------------------------------
+    def _check_flood(self, loops: List[ThreadLoop], now: float) -> None:
+        queue = self.node.queue
+        by_thread = queue.waits_by_thread
+        waited = []  # the loops that had to wait for room since the last look
+        counts = {}
+        for loop in loops:
+            counts[loop] = count = by_thread.get(loop.thread_id or -1, 0)
+            if count > self._loop_waits.get(loop, count):  # (fewer: the counts were reset)
+                waited.append(loop)
+        behind = len(queue.normal) >= queue.high_water // 10 or queue.waits != self._waits
+        self._loop_waits, self._waits = counts, queue.waits
+        if self.handler_stuck or (not behind and now - self._behind_s > self.FLOOD_GRACE_S):
+            # Keeping up; or the node's thread is held by one handler (rule
+            # 1), and the loops wait for it, not it for them.
+            self._flood_since = None
+            self._flooders = []
+            return
+        if behind:
+            self._behind_s = now
+        if self._flood_since is None:
+            self._flood_since = now
+        self._flooders += [loop for loop in waited if loop not in self._flooders]
+        if now - self._flood_since >= self.stuck_s:
+            for loop in self._flooders:
+                self._say((loop, "flood"), f"flood {loop.name}", self._flood_text(loop))
+
+    def _flood_text(self, loop: ThreadLoop) -> str:
+        place = self.node.queue.waited_at.get(loop.thread_id or -1)
+        if place is None:
+            where = running_line(loop.thread_id)
+        else:  # the line that had to wait (the loop may have moved on since)
+            frame, line = place
+            code = linecache.getline(frame.f_code.co_filename, line).strip()
+            where = frame_location(frame, line) + (f": `{code}`" if code else "")
+        rate = loop.max_tick_rate_hz
+        if rate > 0:
+            fix = (
+                f"It runs loop() up to {rate:,.10g} times a second, more than the node can "
+                "handle: lower max_tick_rate_hz, or make the handlers of what it stores "
+                "faster (node.profiler.dump() shows the slow ones)."
+            )
+        else:
+            fix = (
+                "It has no max_tick_rate_hz, so loop() runs again the moment it returns. "
+                "Give it a rate: super().__init__(factory, parent, "
+                f"{loop.name!r}, max_tick_rate_hz=50) runs loop() at most 50 times a second."
+            )
+        return (
+            f"Loop {loop.name!r} ({describe_class(type(loop))}) stores data faster than the "
+            f"node can handle it: for {self.stuck_s:g} s the node's queue kept filling up "
+            f"to its limit ({self.node.queue.high_water:,} tasks) and the loop had to wait "
+            f"for room{f' (at {where})' if where else ''}. {fix}"
+        )
+
+    # -- 4. a node nothing will ever stop -----------------------------------
+    def _check_idle(self, no_handler: bool, loops: List[ThreadLoop], now: float) -> None:
+        idle = (
+            no_handler
+            and len(self.node.queue) == 0
+            and not any(loop.is_alive() for loop in loops)
+            and not self._other_threads()
+        )
+        if not idle:
+            self._idle_since = None
+            return
+        if self._idle_since is None:
+            self._idle_since = now
+        if now - self._idle_since >= self.idle_s:
+            self._say("idle", "idle", self._idle_text(loops))
+
+    def _other_threads(self) -> List[threading.Thread]:
+        """Threads that could still give the node a task (any but its own helpers)."""
+        return [
+            thread
+            for thread in threading.enumerate()
+            if thread.ident not in self._ignored
+            and thread.name != _PARENT_WATCH
+            and thread.is_alive()
+        ]
+
+    def _idle_text(self, loops: List[ThreadLoop]) -> str:
+        finished = ", ".join(repr(loop.name) for loop in loops)
+        loops_said = f"its loops ({finished}) have finished" if loops else "it has no loops"
+        return (
+            f"Node {self.node.role!r} has had nothing to do for {self.idle_s:g} s, and "
+            f"nothing can give it anything to do: its queue is empty, {loops_said}, and no "
+            "other thread (a comms link, a console, a timer) is running that could "
+            "schedule a task. So nothing will ever schedule tasks.terminate, and the node "
+            "waits until you press Ctrl+C. To make it stop by itself, add "
+            "TimeoutLoopFactory(seconds=...) to its components, or have a handler return "
+            'tasks.terminate("done") once the work is done.'
+        )
+
+
+def queued_page_keys(queue: TaskQueue) -> Set[DataKey]:
+    """The data keys of the pages waiting in ``queue`` to be stored (any thread).
+
+    Example::
+
+        "depth" in queued_page_keys(node.queue)   # a page for 'depth' is on its way
+    """
+    # deque.copy() runs in C without letting go of the GIL: a consistent snapshot
+    # even while loops append.
+    return {task.name for task in queue.normal.copy() if task.type is TaskType.store_page}
+
+
+def enclosing_while(frame: FrameType) -> Optional[int]:
+    """The first line of the outermost ``while`` around ``frame``'s current line.
+
+    Only ``while`` statements written in ``frame``'s own function count. None
+    when there is none (or the source cannot be read).
+
+    Example::
+
+        enclosing_while(loop_frame)   # 12: loop() is inside `while True:` on line 12
+    """
+    spans = _while_spans(frame.f_code)
+    line = frame.f_lineno
+    starts = [start for start, end in spans if start <= line <= end]
+    return min(starts) if starts else None
+
+
+_SPANS: Dict[CodeType, List[Tuple[int, int]]] = {}
+
+
+def _while_spans(code: CodeType) -> List[Tuple[int, int]]:
+    """(first, last) line of every ``while`` statement in ``code``'s function."""
+    spans = _SPANS.get(code)
+    if spans is not None:
+        return spans
+    import ast  # here, not at the top: only needed once something looks stuck
+    import inspect
+    import textwrap
+
+    spans = []
+    try:
+        lines, first = inspect.getsourcelines(code)
+        tree = ast.parse(textwrap.dedent("".join(lines)))
+    except (OSError, TypeError, SyntaxError):
+        pass
+    else:
+        for node in ast.walk(tree):
+            if isinstance(node, ast.While):
+                end = node.end_lineno or node.lineno
+                spans.append((node.lineno + first - 1, end + first - 1))
+    if len(_SPANS) < 1000:
+        _SPANS[code] = spans
+    return spans
+
+
+def _called_by(frame: Optional[FrameType], callers: FrozenSet[CodeType]) -> Optional[FrameType]:
+    """The frame on ``frame``'s stack that a function in ``callers`` called, innermost first."""
+    for _ in range(_MAX_DEPTH):
+        if frame is None:
+            return None
+        back = frame.f_back
+        if back is not None and back.f_code in callers:
+            return frame
+        frame = back
+    return None
+
+
+def _is_students(loop: ThreadLoop) -> bool:
+    """SNR's own loops are written to the rules; only a student's are judged."""
+    return not type(loop).__module__.startswith("snr.")
