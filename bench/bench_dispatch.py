@@ -8,9 +8,13 @@ the simplest possible loop (a ``deque`` and a ``dict``) in the same process:
 the pure-Python floor the node's overheads are measured against. A loop of
 closures is shown too, for reference.
 
-Also measured: ``python -c "import snr"`` and a node's start-up time.
+Also measured: ``python -c "import snr"`` and a node's start-up time, and
+what the DEBUG watchdog costs: the default-mode rate with the watchdog on
+(one look at the node every 0.5 s, and every 10 ms: 50 times as often) against
+off, in runs long enough for it to look several times.
 
-Run: ``python bench/bench_dispatch.py [--tasks N]`` (or ``nox -s bench``).
+Run: ``python bench/bench_dispatch.py [--tasks N]`` (or ``nox -s bench``);
+``--watchdog-only`` runs only the watchdog comparison.
 """
 
 from __future__ import annotations
@@ -53,16 +57,19 @@ class PingPong(Endpoint):
         self.count = 0
         self.started = 0.0
         self.finished = 0.0
+        self.cpu_s = 0.0  # the process's CPU time (every thread's) from begin to the end
         self.task_handlers = {PING: self.on_ping, PONG: self.on_pong}
 
     def begin(self) -> None:
         self.started = time.perf_counter()
+        self.cpu_s = time.process_time()
         self.schedule(Task(TaskType.event, "ping"))
 
     def on_ping(self, task: Task, key: TaskId) -> SomeTasks:
         self.count += 1
         if self.count >= self.limit:
             self.finished = time.perf_counter()
+            self.cpu_s = time.process_time() - self.cpu_s
             return tasks.terminate("done")
         return Task(TaskType.event, "pong")
 
@@ -70,6 +77,7 @@ class PingPong(Endpoint):
         self.count += 1
         if self.count >= self.limit:
             self.finished = time.perf_counter()
+            self.cpu_s = time.process_time() - self.cpu_s
             return tasks.terminate("done")
         return Task(TaskType.event, "ping")
 
@@ -85,11 +93,17 @@ class PingPongFactory(EndpointFactory):
         return self.endpoint
 
 
-def node_rate(n_tasks: int, idle: int, mode: Optional[Mode] = Mode.DEPLOYED) -> float:
+def node_rate(
+    n_tasks: int,
+    idle: int,
+    mode: Optional[Mode] = Mode.DEPLOYED,
+    watchdog_every_s: Optional[float] = 0.5,
+) -> float:
     """Tasks per second through a node with ``idle`` idle endpoints.
 
     ``mode=None`` builds the config as the thesis listings do,
-    ``Config(factories)``: the default mode (DEBUG), profiler on.
+    ``Config(factories)``: the default mode (DEBUG), profiler on. In DEBUG
+    mode the watchdog looks every ``watchdog_every_s`` (None: switched off).
     """
     ping_pong = PingPongFactory(n_tasks)
     idle_factories = [
@@ -100,10 +114,20 @@ def node_rate(n_tasks: int, idle: int, mode: Optional[Mode] = Mode.DEPLOYED) -> 
     config = Config(factories) if mode is None else Config(factories, mode=mode, profile=False)
     node = Node("bench", config)
     node.log.setLevel("WARNING")
+    if node.watchdog is not None:
+        if watchdog_every_s is None:
+            node.watchdog = None
+        else:
+            node.watchdog.every_s = watchdog_every_s
     node.loop()
     endpoint = ping_pong.endpoint
     assert endpoint is not None and endpoint.count == n_tasks
+    LAST_RUN_CPU_S[0] = endpoint.cpu_s
     return n_tasks / (endpoint.finished - endpoint.started)
+
+
+LAST_RUN_CPU_S = [0.0]
+"""The CPU time (all threads) of the last `node_rate` run, from the first task to the last."""
 
 
 def bare_closure_rate(n_tasks: int) -> float:
@@ -195,12 +219,57 @@ def startup_s(components: int) -> float:
     return time.perf_counter() - started
 
 
+def watchdog_cost(n_tasks: int, rounds: int) -> None:
+    """Print the default-mode rate with the watchdog off and on, median of ``rounds``.
+
+    Each run must last long enough for the watchdog to look a few times (it
+    looks every 0.5 s). Two rates per run: tasks per second of wall time, and
+    tasks per second of the process's CPU time (every thread's, the watchdog's
+    too), which other programs on a busy machine disturb far less. Each round
+    runs the cases back to back; a case's ratio is the median over rounds of
+    its rate against the "off" run of the same round.
+    """
+    cases: List[Tuple[str, Optional[float]]] = [
+        ("DEBUG, watchdog off", None),
+        ("DEBUG, watchdog on (every 0.5 s)", 0.5),
+        ("DEBUG, watchdog on (every 10 ms)", 0.01),
+    ]
+    wall: Dict[str, List[float]] = {label: [] for label, _ in cases}
+    cpu: Dict[str, List[float]] = {label: [] for label, _ in cases}
+    for _ in range(rounds):  # interleaved: the machine's drift spreads over every case
+        for label, every_s in cases:
+            wall[label].append(node_rate(n_tasks, 0, None, every_s))
+            cpu[label].append(n_tasks / LAST_RUN_CPU_S[0])
+    off = cases[0][0]
+    print(
+        f"\nWatchdog cost, ping-pong, {n_tasks:,} tasks a run, median of {rounds} "
+        "interleaved rounds"
+    )
+    print(f"{'case':<34} {'tasks/s':>10} {'vs off':>7} {'tasks/CPU-s':>12} {'vs off':>7}")
+    for label, _ in cases:
+        wall_ratio = statistics.median(r / o for r, o in zip(wall[label], wall[off]))
+        cpu_ratio = statistics.median(r / o for r, o in zip(cpu[label], cpu[off]))
+        print(
+            f"{label:<34} {statistics.median(wall[label]):>10,.0f} {wall_ratio:>7.3f} "
+            f"{statistics.median(cpu[label]):>12,.0f} {cpu_ratio:>7.3f}"
+        )
+    print("target: DEBUG with the watchdog on (every 0.5 s) >= 0.95 of off")
+
+
 def main() -> None:
     parser = argparse.ArgumentParser(description=__doc__)
     parser.add_argument("--tasks", type=int, default=300_000, help="tasks per measurement")
     parser.add_argument("--runs", type=int, default=5, help="best of this many runs")
+    parser.add_argument(
+        "--watchdog-tasks", type=int, default=1_000_000, help="tasks per watchdog run"
+    )
+    parser.add_argument("--watchdog-rounds", type=int, default=11, help="watchdog rounds")
+    parser.add_argument("--watchdog-only", action="store_true", help="only the watchdog comparison")
     args = parser.parse_args()
     n, runs = args.tasks, args.runs
+    if args.watchdog_only:
+        watchdog_cost(args.watchdog_tasks, args.watchdog_rounds)
+        return
 
     # Interleave the cases, best of ``runs`` each: the machine's speed drifts
     # (shared cores, frequency scaling), and interleaving spreads that drift
@@ -245,6 +314,8 @@ def main() -> None:
     for components in (1, 100):
         value = min(startup_s(components) for _ in range(runs))
         print(f"{f'node start+stop, {components} endpoints':<34} {value:>12.4f}")
+
+    watchdog_cost(args.watchdog_tasks, args.watchdog_rounds)
 
 
 if __name__ == "__main__":
