@@ -56,6 +56,62 @@ class TestExpector(unittest.TestCase):
         self.assertIn("at position 0", str(ctx.exception))
 
 
+class TestWhatWasSeenInstead(unittest.TestCase):
+    """A failure lists the keys seen but not expected, and the closest to each missing one."""
+
+    def test_the_closest_key_seen_is_named(self) -> None:
+        with self.assertRaises(AssertionError) as ctx:
+            with Expector({(EV, "beep"): 2, (EV, "stop"): 1}) as expector:
+                for key in [(EV, "Beep"), (EV, "Beep"), (EV, "go"), (EV, "stop")]:
+                    expector.call(key)
+        self.assertEqual(
+            str(ctx.exception),
+            "Expectations not met:\n"
+            "  TaskType.event(beep): expected 2, saw 0 (closest seen instead: "
+            "TaskType.event(Beep), 2 times)\n"
+            "Seen but not expected: TaskType.event(Beep) 2 times, TaskType.event(go) once.",
+        )
+
+    def test_nothing_close_names_nothing(self) -> None:
+        expector = Expector({(TaskType.store_page, "depth"): 1})
+        expector.call((TaskType.store_page, "heading"))
+        self.assertEqual(expector.problems(), ["TaskType.store_page(depth): expected 1, saw 0"])
+        self.assertEqual(
+            expector.seen_instead(), "Seen but not expected: TaskType.store_page(heading) once."
+        )
+
+    def test_the_same_name_under_another_type(self) -> None:
+        expector = Expector({(TaskType.store_page, "depth"): 1})
+        expector.call((TaskType.process_data, "depth"))
+        self.assertIn("closest seen instead: TaskType.process_data(depth)", expector.problems()[0])
+
+    def test_keys_that_are_not_task_ids(self) -> None:
+        expector = Expector[str]({"beep": 1})
+        expector.call("bep")
+        self.assertEqual(
+            expector.problems(), ["'beep': expected 1, saw 0 (closest seen instead: 'bep', once)"]
+        )
+
+    def test_an_ordered_expector_names_the_closest_to_the_first_missing(self) -> None:
+        expector = OrderedExpector([(EV, "a"), (EV, "start")])
+        expector.call((EV, "a"))
+        expector.call((EV, "stat"))
+        self.assertEqual(
+            expector.problems(),
+            [
+                "missing at the end: TaskType.event(start) "
+                "(closest seen instead: TaskType.event(stat), once)"
+            ],
+        )
+
+    def test_what_is_seen_instead_is_bounded(self) -> None:
+        expector = Expector({(EV, "a"): 1})
+        for i in range(Expector.MAX_OTHERS + 50):
+            expector.call((EV, f"other_{i}"))
+        self.assertEqual(len(expector.others), Expector.MAX_OTHERS)
+        self.assertIn("and 80 more.", expector.seen_instead())
+
+
 class TestExpectorEndpoint(SNRTestCase):
     def test_exits_when_satisfied(self) -> None:
         with self.expector({(TaskType.store_page, "x"): 3}) as expector:
@@ -118,8 +174,8 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
         expector = Expector({(TaskType.store_page, "x"): 2})
         self.assertFailsWith(
             [ListReplayerFactory([1], "x"), ExpectorEndpointFactory(expector)],
-            "The expectations of expector_endpoint were not met: "
-            "TaskType.store_page(x): expected 2, saw 1.",
+            "It waited the whole time limit, and the expectations of expector_endpoint were "
+            "still not met: TaskType.store_page(x): expected 2, saw 1.",
             timeout_s=0.1,
         )
 

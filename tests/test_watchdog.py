@@ -1,4 +1,4 @@
-"""Stuck without a word: docs/errors.md entry 17.
+"""Stuck without a word (docs/errors.md entry 17) and unmet expectations (entry 18).
 
 Every mistake runs for real, as the page shows it. Programs that cannot be
 stopped from inside (a handler or loop() that never returns, a node nothing
@@ -31,9 +31,11 @@ from snr import (
     LoopFactory,
     Node,
     SNRTestCase,
+    TaskType,
     ThreadLoop,
 )
 from tests.examples_support import ROOT, script_env
+from tests.helpers import StopWhenFactory
 
 HERE = "test_watchdog.py"
 ERRORS_MD = os.path.join(ROOT, "docs", "errors.md")
@@ -349,6 +351,59 @@ class TestTheClassesOfTheDocs(SNRTestCase):
             sorted(node.watchdog.said if node.watchdog else []),
             ["flood counter", "flood fast_counter"],
         )
+
+
+class TestAnUnmetExpectation(unittest.TestCase):
+    """Entry 18: the page's test fails saying it waited, and what it saw instead."""
+
+    def failure_of(self, source: str, timeout_s: float, **names: Any) -> str:
+        """Run the page's test file (as module ``test_filter``); its one failure, as printed.
+
+        ``names`` are defined in the module before it runs.
+        """
+        lines = source.splitlines(True)
+        linecache.cache["test_filter.py"] = (len(source), None, lines, "test_filter.py")
+        self.addCleanup(linecache.cache.pop, "test_filter.py", None)
+        module = types.ModuleType("test_filter")
+        module.__file__ = "test_filter.py"
+        module.__dict__.update(names)
+        exec(compile(source, "test_filter.py", "exec"), module.__dict__)
+        case = module.TestFilter("test_average")
+        case.timeout_s = timeout_s
+        result = unittest.TestResult()
+        case.run(result)
+        self.assertEqual((len(result.failures), len(result.errors)), (1, 0), result.errors)
+        return str(result.failures[0][1])
+
+    def test_the_time_limit_ran_out(self) -> None:
+        source = docs_blocks("## 18", "python")[0]
+        printed = self.failure_of(source, timeout_s=0.5)  # time for the replayer on a busy machine
+        shown = docs_blocks("## 18", "text")[0]
+        real = [line for line in printed.splitlines() if line.startswith("AssertionError")]
+        expected = [line for line in shown.splitlines() if line.startswith("AssertionError")]
+        self.assertEqual([line.replace("of 0.5 s", "of 2 s") for line in real], expected)
+        for part in (
+            "It waited the whole time limit",
+            "closest seen instead: TaskType.store_page(depth_avg), 4 times",
+            "Seen but not expected: TaskType.store_page(depth) 4 times",
+        ):
+            self.assertIn(part, real[0])
+        # The traceback points at the test's own line, not at SNR's.
+        self.assertIn('File "test_filter.py", line 10, in test_average', printed)
+        self.assertNotIn("snr", printed.split("AssertionError")[0])
+
+    def test_the_node_stopped_by_itself(self) -> None:
+        # The page stops the node with TimeoutLoopFactory(seconds=0.5); this
+        # stops it once the filter's four pages were handled, which is what
+        # the half second is for, without counting on a busy machine's speed.
+        source = docs_blocks("## 18", "python")[0].replace(
+            "ExpectorEndpointFactory(expector, exit_when_satisfied=True),",
+            "ExpectorEndpointFactory(expector), StopWhenFactory(AVERAGE, count=4),",
+        )
+        average = (TaskType.store_page, "depth_avg")
+        printed = self.failure_of(source, 5, StopWhenFactory=StopWhenFactory, AVERAGE=average)
+        shown = docs_blocks("## 18", "text")[1].rstrip("\n")
+        self.assertIn(shown, printed)
 
 
 class TestTheProgramsOfTheDocs(unittest.TestCase):

@@ -33,11 +33,23 @@ from typing import (
 
 from snr.core.profiler import format_task_id
 from snr.prelude import TaskId, TaskName, TaskType
+from snr.prelude.errors import closest_match
 
 if TYPE_CHECKING:  # unittest and multiprocessing cost ~20 ms to import
     import unittest
 
-__all__ = ["Expectations", "Expector", "MultiProcExpector", "OrderedExpector", "format_key"]
+__all__ = [
+    "Expectations",
+    "Expector",
+    "MultiProcExpector",
+    "OrderedExpector",
+    "closest_key",
+    "format_key",
+]
+
+# unittest (and pytest) leave out the frames of modules that set this, so a
+# failed expectation points at the test's own line, not at SNR's.
+__unittest = True
 
 Expectations = Union[
     Mapping[TaskId, int],
@@ -68,6 +80,44 @@ def format_key(key: Hashable) -> str:
     return repr(key)
 
 
+def _name_of(key: Hashable) -> Optional[str]:
+    """The name part of a key: a task id's name, or the key itself if it is a str."""
+    if isinstance(key, str):
+        return key
+    if isinstance(key, tuple) and len(key) == 2 and isinstance(key[1], str):
+        return key[1]
+    return None
+
+
+def _kind_of(key: Hashable) -> Hashable:
+    """What must match besides the name: a task id's type (None for a str key)."""
+    return key[0] if isinstance(key, tuple) and len(key) == 2 else None
+
+
+def closest_key(missing: K, seen: Sequence[K]) -> Optional[K]:
+    """The key in ``seen`` most like ``missing``, or None: for "did you mean" in failures.
+
+    A key of the same task type with a name spelled almost the same (or the
+    same but for capitals) comes first, then the same name under another type.
+
+    Example::
+
+        closest_key((TaskType.store_page, "out"),
+                    [(TaskType.store_page, "in"), (TaskType.store_page, "Out")])
+        # (TaskType.store_page, 'Out')
+    """
+    name = _name_of(missing)
+    if name is None:
+        return None
+    same_kind = {_name_of(k): k for k in seen if _kind_of(k) == _kind_of(missing)}
+    names = [n for n in same_kind if n is not None]
+    same_but_case = [n for n in names if n.lower() == name.lower()]
+    guess = same_but_case[0] if same_but_case else closest_match(name, names)
+    if guess is not None:
+        return same_kind[guess]
+    return next((k for k in seen if _name_of(k) == name), None)
+
+
 def _fail(testcase: Optional[unittest.TestCase], message: str) -> None:
     if testcase is not None:
         testcase.fail(message)
@@ -80,12 +130,22 @@ class Expector(Generic[K]):
     The key type can be written out, ``Expector[str]({"beep": 2}, self)``;
     it is inferred from the expectations otherwise.
 
+    Keys it is told about but does not expect are counted apart, in
+    ``others`` (the first ``MAX_OTHERS`` different ones), so a failure can say
+    what was seen instead, and which of it is closest to each missing key.
+
     Example::
 
         with Expector({(TaskType.store_page, "out"): 4}) as expector:
             run_node_with(ExpectorEndpointFactory(expector))
         # leaving the block fails unless exactly 4 such tasks were seen
+
+    Attributes:
+        counts: how many times each expected key was seen.
+        others: how many times each key it does not expect was seen.
     """
+
+    MAX_OTHERS = 100
 
     def __init__(
         self,
@@ -94,6 +154,7 @@ class Expector(Generic[K]):
     ) -> None:
         self.expectations: Dict[K, int] = {k: n for k, n in expectations.items()}
         self.counts: Dict[K, int] = {key: 0 for key in self.expectations}
+        self.others: Dict[K, int] = {}
         self.testcase = testcase
         self._lock = threading.Lock()
 
@@ -106,6 +167,13 @@ class Expector(Generic[K]):
         with self._lock:
             if key in self.counts:
                 self.counts[key] += 1
+            else:
+                self._count_other(key)
+
+    def _count_other(self, key: K) -> None:
+        """Count a key not expected (call with the lock held)."""
+        if key in self.others or len(self.others) < self.MAX_OTHERS:
+            self.others[key] = self.others.get(key, 0) + 1
 
     def is_satisfied(self) -> bool:
         """True once every expected count has been reached."""
@@ -113,19 +181,49 @@ class Expector(Generic[K]):
             return all(self.counts[k] >= n for k, n in self.expectations.items())
 
     def problems(self) -> List[str]:
-        """One line per expectation not met exactly (empty when all are)."""
+        """One line per expectation not met exactly (empty when all are).
+
+        A key seen too few times names the closest key seen instead, if any.
+        """
         with self._lock:
             return [
                 f"{format_key(k)}: expected {n}, saw {self.counts[k]}"
+                + (self._closest_seen(k) if self.counts[k] < n else "")
                 for k, n in self.expectations.items()
                 if self.counts[k] != n
             ]
+
+    def _closest_seen(self, key: K) -> str:
+        guess = closest_key(key, list(self.others))
+        if guess is None:
+            return ""
+        return f" (closest seen instead: {format_key(guess)}, {_times(self.others[guess])})"
+
+    def seen_instead(self) -> str:
+        """The keys seen but not expected, with counts, as one line ("" if none).
+
+        Example::
+
+            expector.seen_instead()
+            # 'Seen but not expected: TaskType.store_page(in) 4 times, ...'
+        """
+        with self._lock:
+            others = list(self.others.items())
+        if not others:
+            return ""
+        shown = ", ".join(f"{format_key(k)} {_times(n)}" for k, n in others[:20])
+        more = f" and {len(others) - 20} more" if len(others) > 20 else ""
+        return f"Seen but not expected: {shown}{more}."
 
     def assert_satisfied(self) -> None:
         """Fail the test unless every expectation was met exactly."""
         problems = self.problems()
         if problems:
-            _fail(self.testcase, "Expectations not met:\n  " + "\n  ".join(problems))
+            seen = self.seen_instead()
+            _fail(
+                self.testcase,
+                "Expectations not met:\n  " + "\n  ".join(problems) + (f"\n{seen}" if seen else ""),
+            )
 
     def __enter__(self) -> Expector[K]:
         return self
@@ -138,6 +236,10 @@ class Expector(Generic[K]):
     ) -> None:
         if exc_type is None:
             self.assert_satisfied()
+
+
+def _times(n: int) -> str:
+    return "once" if n == 1 else f"{n} times"
 
 
 class OrderedExpector(Expector[K]):
@@ -166,6 +268,8 @@ class OrderedExpector(Expector[K]):
             if key in self.counts:
                 self.counts[key] += 1
                 self.seen.append(key)
+            else:
+                self._count_other(key)
 
     def is_satisfied(self) -> bool:
         with self._lock:
@@ -180,7 +284,8 @@ class OrderedExpector(Expector[K]):
                     return [f"at position {i}: expected {format_key(want)}, saw {format_key(got)}"]
             if len(self.seen) < len(self.order):
                 missing = ", ".join(format_key(k) for k in self.order[len(self.seen) :])
-                return [f"missing at the end: {missing}"]
+                closest = self._closest_seen(self.order[len(self.seen)])
+                return [f"missing at the end: {missing}{closest}"]
             extra = ", ".join(format_key(k) for k in self.seen[len(self.order) :])
             return [f"unexpected extra at the end: {extra}"]
 
@@ -219,6 +324,9 @@ class MultiProcExpector(Expector[K]):
             index = self._keys.index(key)
             with self._shared.get_lock():
                 self._shared[index] += 1
+        else:
+            with self._lock:  # seen only in this process, unlike the counts
+                self._count_other(key)
 
     def _sync(self) -> None:
         with self._shared.get_lock():

@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any, Optional
+from typing import Any, Dict, Optional
 
 from snr.core import Endpoint, EndpointFactory, tasks
-from snr.prelude import AbstractNode, SomeTasks, Task, TaskId
+from snr.prelude import AbstractNode, SomeTasks, Task, TaskHandler, TaskId
 from snr.utils.expector import Expector
 
 __all__ = [
@@ -19,7 +19,10 @@ class ExpectorEndpoint(Endpoint):
     """Registers a handler for every id the expector watches and counts them.
 
     With ``exit_when_satisfied`` it stops the node as soon as every
-    expectation has been reached.
+    expectation has been reached. It also tells the expector about the other
+    tasks of the same types (e.g. every store_page when it expects
+    ``(TaskType.store_page, "out")``), so a failure can list what was seen
+    instead of what was missing, with the closest match.
 
     Example::
 
@@ -36,7 +39,18 @@ class ExpectorEndpoint(Endpoint):
         super().__init__(factory, parent, factory.name)
         self.expector = expector
         self.exit_when_satisfied = exit_when_satisfied
-        self.task_handlers = {key: self.expect for key in expector.task_ids()}
+        expected = expector.task_ids()
+        handlers: Dict[TaskId, TaskHandler] = {}
+        for key in expected:
+            if isinstance(key, tuple) and key[0] not in expected:
+                handlers[key[0]] = self.observe  # the same type, any other name
+        handlers.update({key: self.expect for key in expected})
+        self.task_handlers = handlers
+
+    def observe(self, task: Task, key: TaskId) -> SomeTasks:
+        """Tell the expector about a task it does not expect (for its failure message)."""
+        self.expector.call((task.type, task.name))
+        return None
 
     def expect(self, task: Task, key: TaskId) -> SomeTasks:
         """Count the task; stop the node once satisfied, if asked to."""

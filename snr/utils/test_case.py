@@ -16,6 +16,10 @@ from snr.utils.temp_file import TempFile
 
 __all__ = ["SNRTestCase"]
 
+# unittest (and pytest) leave out the frames of modules that set this, so a
+# failed expectation points at the test's own line, not at SNR's.
+__unittest = True
+
 
 class SNRTestCase(unittest.TestCase):
     """A TestCase that can run a node, expect tasks and make temp files.
@@ -230,7 +234,11 @@ def _timed_out_message(node: Node, limit_s: float, alive: Sequence[str]) -> str:
         if isinstance(component, ExpectorEndpoint):
             problems = component.expector.problems()
             if problems:
-                waiting.append(f"The expectations of {name} were not met: {'; '.join(problems)}.")
+                seen = component.expector.seen_instead()
+                waiting.append(
+                    f"It waited the whole time limit, and the expectations of {name} were "
+                    f"still not met: {'; '.join(problems)}.{f' {seen}' if seen else ''}"
+                )
             elif not component.exit_when_satisfied:
                 waiting.append(
                     f"{name} was satisfied but was made without exit_when_satisfied=True, "
