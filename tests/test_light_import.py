@@ -135,3 +135,44 @@ class TestPageAndTaskStillDataclassJson(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+# Packages only an extra brings (serial, controller, viz, zenoh, docs, fast).
+OPTIONAL_PACKAGES = ["serial", "pygame", "mcap", "websockets", "zenoh", "pdoc", "orjson"]
+
+IMPORT_EVERY_MODULE_WITHOUT_EXTRAS = f"""
+import importlib, importlib.abc, pkgutil, sys
+
+class NoExtras(importlib.abc.MetaPathFinder):
+    def find_spec(self, name, path=None, target=None):
+        if name.split(".")[0] in {OPTIONAL_PACKAGES!r}:
+            raise ModuleNotFoundError(f"No module named {{name!r}}", name=name)
+        return None
+
+sys.meta_path.insert(0, NoExtras())
+import snr
+failed = []
+for info in pkgutil.walk_packages(snr.__path__, "snr."):
+    if info.name in ("snr.__main__",):
+        continue
+    try:
+        importlib.import_module(info.name)
+    except ImportError as error:
+        failed.append(f"{{info.name}}: {{error}}")
+print("\\n".join(failed) or "all imported")
+"""
+
+
+class TestModulesImportWithoutExtras(unittest.TestCase):
+    def test_every_snr_module_imports_without_the_optional_packages(self) -> None:
+        # The docs build imports every module; a plain `pip install .` has no extras.
+        env = dict(os.environ, PYTHONPATH=os.pathsep.join([ROOT, os.environ.get("PYTHONPATH", "")]))
+        result = subprocess.run(
+            [sys.executable, "-c", IMPORT_EVERY_MODULE_WITHOUT_EXTRAS],
+            capture_output=True,
+            text=True,
+            env=env,
+            cwd=ROOT,
+            timeout=60,
+        )
+        self.assertEqual(result.stdout.strip(), "all imported", result.stdout + result.stderr)

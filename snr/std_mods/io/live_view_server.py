@@ -43,16 +43,17 @@ import socket
 import struct
 import threading
 import time
-from typing import Any, Dict, FrozenSet, List, Optional, Set, Tuple
-
-from websockets.asyncio.server import ServerConnection, serve
-from websockets.exceptions import ConnectionClosed
-from websockets.typing import Subprotocol
+from typing import TYPE_CHECKING, Any, Dict, FrozenSet, List, Optional, Set, Tuple
 
 from snr.core.logs import LossReport, RepeatFilter
 from snr.prelude import Page, WireFormatError
 from snr.std_mods.codec import load_object, page_json
 from snr.std_mods.io.page_schema import PAGE_SCHEMA_NAME, page_schema
+
+if TYPE_CHECKING:
+    # websockets (the viz extra) is imported when the server starts, not with
+    # this module: the docs and `import snr.std_mods.io` must work without it.
+    from websockets.asyncio.server import ServerConnection
 
 __all__ = ["MESSAGE_DATA", "SUBPROTOCOLS", "LiveViewServer", "LiveViewStats"]
 
@@ -278,6 +279,9 @@ class LiveViewServer:
                 self.log.error("The live view server stopped: %s", error)
 
     async def _serve(self) -> None:
+        from websockets.asyncio.server import serve
+        from websockets.typing import Subprotocol
+
         self._loop = asyncio.get_running_loop()
         self._stop = asyncio.Event()
         library_log = self.log.getChild("websockets")
@@ -358,6 +362,8 @@ class LiveViewServer:
         return channel
 
     async def _serve_viewer(self, connection: ServerConnection) -> None:
+        from websockets.exceptions import ConnectionClosed
+
         viewer = _Viewer(connection)
         self._viewers.add(viewer)
         host, port = connection.remote_address[:2]
