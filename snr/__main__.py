@@ -5,6 +5,8 @@ Commands::
     python -m snr demo [--seconds N] [--verbose]
                                        run the UROV demo system (no hardware needed)
     python -m snr console HOST:PORT    type commands into a running node (snr-console)
+    python -m snr graph FILE [--role R] [--format mermaid|dot|text] [-- ARGS...]
+                                       draw the system FILE runs, without running it
     python -m snr docs [--serve]       build (if needed) and open the docs, offline
     python -m snr version              print the installed version
 """
@@ -34,6 +36,24 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     sub.add_parser("console", help="type commands into a running node (same as snr-console)")
     docs_parser = sub.add_parser("docs", help="build (if needed) and open the docs offline")
     snr.docsite.add_arguments(docs_parser)
+    graph_parser = sub.add_parser(
+        "graph",
+        help="draw the data-flow graph of the system a program runs, without running it",
+        description="Draw the nodes, components, data keys and links of the system FILE "
+        "would run. FILE runs until it starts an SNR runner; the runner hands over its "
+        "config instead of starting nodes. Keys read but never stored, or stored but "
+        "never read, are marked (!).",
+    )
+    graph_parser.add_argument("file", metavar="FILE", help="the program, e.g. main.py")
+    graph_parser.add_argument(
+        "args", nargs="*", metavar="ARGS", help="arguments for FILE (after --)"
+    )
+    graph_parser.add_argument(
+        "--role", action="append", default=None, help="draw only this role (repeatable)"
+    )
+    graph_parser.add_argument(
+        "--format", choices=["mermaid", "dot", "text"], default="mermaid", help="default mermaid"
+    )
     sub.add_parser("version", help="print the SNR version")
     words = list(sys.argv[1:] if argv is None else argv)
     if words[:1] == ["console"]:  # its own options, e.g. --token, go to snr-console
@@ -43,6 +63,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         from snr.demo import run_demo  # only the demo needs it
 
         return run_demo(args.seconds, verbose=args.verbose)
+    if args.command == "graph":
+        return _graph(args.file, args.args, args.role, args.format)
     if args.command == "docs":
         return snr.docsite.run(args)
     if args.command == "version":
@@ -50,6 +72,21 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 0
     parser.print_help()
     return 2
+
+
+def _graph(file: str, file_args: Sequence[str], roles: Optional[Sequence[str]], form: str) -> int:
+    """``python -m snr graph``: print the graph of the system ``file`` runs."""
+    from snr.std_mods.graph import config_from_script, graph_of_config, render
+
+    try:
+        config = config_from_script(file, file_args)
+        for role in roles or ():
+            config.get(role)  # an unknown role: the error lists the known ones
+        print(render(graph_of_config(config, roles), form))
+    except snr.SNRError as error:
+        print(f"snr graph: {error}", file=sys.stderr)
+        return 1
+    return 0
 
 
 if __name__ == "__main__":
