@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Optional, Sequence
+from typing import List, Optional, Sequence
 
 import snr
 import snr.console
@@ -38,6 +38,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     snr.docsite.add_arguments(docs_parser)
     graph_parser = sub.add_parser(
         "graph",
+        usage="snr graph FILE [--role ROLE] [--format {mermaid,dot,text}] [-- ARGS...]",
         help="draw the data-flow graph of the system a program runs, without running it",
         description="Draw the nodes, components, data keys and links of the system FILE "
         "would run. FILE runs until it starts an SNR runner; the runner hands over its "
@@ -45,9 +46,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "never read, are marked (!).",
     )
     graph_parser.add_argument("file", metavar="FILE", help="the program, e.g. main.py")
-    graph_parser.add_argument(
-        "args", nargs="*", metavar="ARGS", help="arguments for FILE (after --)"
-    )
     graph_parser.add_argument(
         "--role", action="append", default=None, help="draw only this role (repeatable)"
     )
@@ -58,13 +56,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
     if words[:1] == ["console"]:  # its own options, e.g. --token, go to snr-console
         return snr.console.main(words[1:])
+    file_args: List[str] = []
+    if words[:1] == ["graph"] and "--" in words:  # what follows `--` is FILE's own
+        file_args = words[words.index("--") + 1 :]
+        words = words[: words.index("--")]
     args = parser.parse_args(words)
     if args.command == "demo":
         from snr.demo import run_demo  # only the demo needs it
 
         return run_demo(args.seconds, verbose=args.verbose)
     if args.command == "graph":
-        return _graph(args.file, args.args, args.role, args.format)
+        return _graph(args.file, file_args, args.role, args.format)
     if args.command == "docs":
         return snr.docsite.run(args)
     if args.command == "version":

@@ -14,7 +14,8 @@ is read from the built component. Any other ``KEY`` (a variable, an
 f-string) is computed while the node runs; the call is noted as *unresolved*,
 so the graph can say "stores keys computed at run time; name them in
 ``produces``". A ``store_page(page)`` of a page made elsewhere is unresolved
-too. Parsing costs a few milliseconds per class, once: the result is cached.
+too. Each source file is parsed once (a few milliseconds), and each class's
+result is cached.
 
 Example::
 
@@ -27,6 +28,8 @@ from __future__ import annotations
 import ast
 import inspect
 import linecache
+import os
+import weakref
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Set, Tuple, Union
 
@@ -74,7 +77,8 @@ class KeysInCode:
     unresolved: List[str] = field(default_factory=list)
 
 
-_cache: Dict[type, Tuple[KeyUse, ...]] = {}
+# Per class; weak, so the classes a hot reload replaces are not kept alive.
+_cache: weakref.WeakKeyDictionary[type, Tuple[KeyUse, ...]] = weakref.WeakKeyDictionary()
 
 
 def key_uses(cls: type) -> Tuple[KeyUse, ...]:
@@ -150,7 +154,7 @@ def _uses_in_class(klass: type) -> List[KeyUse]:
     return uses
 
 
-_trees: Dict[str, Optional[ast.Module]] = {}
+_trees: Dict[Tuple[str, float], Optional[ast.Module]] = {}  # (file, its mtime) -> tree
 
 
 def _class_node(klass: type) -> Optional[ast.ClassDef]:
@@ -158,18 +162,20 @@ def _class_node(klass: type) -> Optional[ast.ClassDef]:
 
     (``inspect.getsource`` would parse the whole module again for every class.)
     """
-    try:
-        filename = inspect.getsourcefile(klass)
-    except TypeError:  # a built-in class
-        return None
+    filename = _source_file(klass)
     if filename is None:
         return None
-    if filename not in _trees:
+    try:
+        version = (filename, os.stat(filename).st_mtime)
+    except OSError:
+        return None
+    if version not in _trees:  # new, or edited since (a hot reload): read it again
+        linecache.checkcache(filename)
         try:
-            _trees[filename] = ast.parse("".join(linecache.getlines(filename)))
+            _trees[version] = ast.parse("".join(linecache.getlines(filename)))
         except (SyntaxError, ValueError):
-            _trees[filename] = None
-    tree = _trees[filename]
+            _trees[version] = None
+    tree = _trees[version]
     if tree is None:
         return None
     candidates = [
@@ -186,6 +192,23 @@ def _class_node(klass: type) -> Optional[ast.ClassDef]:
         }
         candidates = [node for node in candidates if _method_lines(node) & lines]
     return candidates[0] if len(candidates) == 1 else None
+
+
+def _source_file(klass: type) -> Optional[str]:
+    """The file that defines ``klass``, from its methods' code when it has some.
+
+    Better than ``inspect.getsourcefile``, which looks the module up by name:
+    a class of a program run as ``__main__`` (as ``python -m snr graph``
+    runs it) would be looked for in the wrong file.
+    """
+    for value in vars(klass).values():
+        code = getattr(value, "__code__", None)
+        if code is not None and os.path.isfile(code.co_filename):
+            return str(code.co_filename)
+    try:
+        return inspect.getsourcefile(klass)
+    except TypeError:  # a built-in class
+        return None
 
 
 def _method_lines(node: ast.ClassDef) -> Set[int]:

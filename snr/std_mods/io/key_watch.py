@@ -151,6 +151,12 @@ class KeyWatches:
         self.owner = owner
         self.tick_name = tick_name
         self.preview = preview
+        #: The time limits (module constants); a test may shorten them.
+        self.echo_batch_s, self.echo_wait_s, self.echo_keep_s = (
+            ECHO_BATCH_S,
+            ECHO_WAIT_S,
+            ECHO_KEEP_S,
+        )
         self._echoes: Dict[Tuple[str, DataKey], _Echo] = {}
         self._rates: List[_Rate] = []
         self._watched: Dict[DataKey, int] = {}  # key -> open watches
@@ -223,10 +229,10 @@ class KeyWatches:
             rate.session.send(Reply(Status.OK, self._rate_text(rate)))
         for echo in list(self._echoes.values()):
             if echo.session is not None:
-                batch_due = echo.first_at is not None and now - echo.first_at >= ECHO_BATCH_S
-                if batch_due or now - echo.asked_at >= ECHO_WAIT_S:
+                batch_due = echo.first_at is not None and now - echo.first_at >= self.echo_batch_s
+                if batch_due or now - echo.asked_at >= self.echo_wait_s:
                     self._answer_echo(echo)
-            elif now - echo.idle_since >= ECHO_KEEP_S:
+            elif now - echo.idle_since >= self.echo_keep_s:
                 del self._echoes[(echo.console, echo.key)]
                 self._unwatch(echo.key)
         if self._echoes or self._rates:
@@ -284,7 +290,8 @@ class KeyWatches:
             )
         if not lines:
             lines.append(
-                f"No page under {echo.key!r} in the last {ECHO_WAIT_S:g} s.{self._hint(echo.key)}"
+                f"No page under {echo.key!r} in the last {self.echo_wait_s:g} s."
+                f"{self._hint(echo.key)}"
             )
         return Reply(Status.OK, "\n".join(lines))
 
