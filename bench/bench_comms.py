@@ -33,7 +33,8 @@ What is measured:
   step every SNR node has by design: a reader thread receives each frame and
   hands it to the thread that handles it.
 * **idle CPU**: a connected pair of SNR nodes doing nothing for ``--idle-s``
-  seconds; CPU time of both processes (all threads, from /proc) as % of a core.
+  seconds, measured once start-up work has settled (``--settle-s``, 0.3 s);
+  CPU time of both processes (all threads, from /proc) as % of a core.
 
 All variants run once per round, interleaved, for ``--rounds`` rounds, so a busy
 moment on the machine hits every variant alike. The table shows the median of
@@ -680,7 +681,9 @@ def _cpu_s_from_ticks(pid: int) -> Optional[float]:
     return (int(fields[11]) + int(fields[12])) / os.sysconf("SC_CLK_TCK")
 
 
-def measure_idle(mode: Optional[Mode], seconds: float) -> Optional[Tuple[float, float]]:
+def measure_idle(
+    mode: Optional[Mode], seconds: float, settle_s: float = 0.3
+) -> Optional[Tuple[float, float]]:
     """% of a core used by a connected, idle server node and client node; None without /proc."""
     procs = Processes()
     try:
@@ -694,7 +697,7 @@ def measure_idle(mode: Optional[Mode], seconds: float) -> Optional[Tuple[float, 
             ),
         ]
         procs.wait_for("connected", n=2)
-        time.sleep(0.3)  # let start-up work (imports, hellos, first beats) settle
+        time.sleep(settle_s)  # let start-up work (imports, hellos, first beats) settle
         before = [cpu_s(pid) for pid in pids]
         started = time.perf_counter()
         time.sleep(seconds)
@@ -956,6 +959,12 @@ def main(argv: Optional[List[str]] = None) -> None:
     parser.add_argument(
         "--idle-s", type=float, help="seconds the idle pair is measured (3; --quick 0.5)"
     )
+    parser.add_argument(
+        "--settle-s",
+        type=float,
+        default=0.3,
+        help="seconds the idle pair runs before it is measured (0.3)",
+    )
     args = parser.parse_args(argv)
     defaults = (10_000, 500, 2, 0.5) if args.quick else (200_000, 5000, 5, 3.0)
     for field, default in zip(("pages", "round_trips", "rounds", "idle_s"), defaults):
@@ -975,7 +984,7 @@ def main(argv: Optional[List[str]] = None) -> None:
         for name, (make, ready_first) in trip_cases.items():
             trips[name].append(measure_trips(make, ready_first))
         for name, mode in SNR_MODES.items():
-            cpu = measure_idle(mode, args.idle_s)
+            cpu = measure_idle(mode, args.idle_s, args.settle_s)
             if cpu is not None:
                 idle[name].append(cpu)
     print_report(args, rates, trips, idle, warm_up)

@@ -2,12 +2,14 @@
 
 Commands::
 
-    python -m snr demo [--seconds N] [--verbose]
-                                       run the UROV demo system (no hardware needed)
+    python -m snr demo [--seconds N] [--verbose] [--view [--view-port P]]
+                                       run the UROV demo system (no hardware needed);
+                                       --view: watch it live in Foxglove or Lichtblick
     python -m snr console HOST:PORT    type commands into a running node (snr-console)
     python -m snr graph FILE [--role R] [--format mermaid|dot|text] [-- ARGS...]
                                        draw the system FILE runs, without running it
     python -m snr docs [--serve]       build (if needed) and open the docs, offline
+    python -m snr convert IN OUT       convert a recording: JSON lines <-> MCAP (by OUT's name)
     python -m snr version              print the installed version
 """
 
@@ -33,6 +35,15 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     demo_parser.add_argument(
         "--verbose", action="store_true", help="show the nodes' whole log, not only warnings"
     )
+    demo_parser.add_argument(
+        "--view",
+        action="store_true",
+        help="serve a live view for Foxglove or Lichtblick and print the URL to open "
+        "(needs pip install 'snr[viz]')",
+    )
+    demo_parser.add_argument(
+        "--view-port", type=int, default=8765, help="the live view's port (default 8765)"
+    )
     sub.add_parser("console", help="type commands into a running node (same as snr-console)")
     docs_parser = sub.add_parser("docs", help="build (if needed) and open the docs offline")
     snr.docsite.add_arguments(docs_parser)
@@ -52,6 +63,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     graph_parser.add_argument(
         "--format", choices=["mermaid", "dot", "text"], default="mermaid", help="default mermaid"
     )
+    convert_parser = sub.add_parser(
+        "convert", help="convert a recording between JSON lines and MCAP (*.mcap)"
+    )
     sub.add_parser("version", help="print the SNR version")
     words = list(sys.argv[1:] if argv is None else argv)
     if words[:1] == ["console"]:  # its own options, e.g. --token, go to snr-console
@@ -60,15 +74,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if words[:1] == ["graph"] and "--" in words:  # what follows `--` is FILE's own
         file_args = words[words.index("--") + 1 :]
         words = words[: words.index("--")]
+    if words[:1] == ["convert"]:  # its options, built only when asked for
+        from snr.std_mods.io import convert
+
+        convert.add_arguments(convert_parser)
     args = parser.parse_args(words)
     if args.command == "demo":
         from snr.demo import run_demo  # only the demo needs it
 
-        return run_demo(args.seconds, verbose=args.verbose)
+        view_port = args.view_port if args.view else None
+        return run_demo(args.seconds, verbose=args.verbose, view_port=view_port)
     if args.command == "graph":
         return _graph(args.file, file_args, args.role, args.format)
     if args.command == "docs":
         return snr.docsite.run(args)
+    if args.command == "convert":
+        return convert.run(args)
     if args.command == "version":
         print(snr.__version__)
         return 0

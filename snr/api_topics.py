@@ -105,6 +105,12 @@ TOPICS: Tuple[Topic, ...] = (
         _names("recording"),
     ),
     Topic(
+        "Seeing your robot",
+        "Watch a node's pages live in Foxglove or Lichtblick.",
+        _names("FoxgloveBridgeFactory FoxgloveBridge"),
+        _names("viewing"),
+    ),
+    Topic(
         "The console",
         "Type commands into a running node, from its terminal or over TCP.",
         _names(

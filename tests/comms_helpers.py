@@ -328,7 +328,7 @@ class CpuMeter(ThreadLoop):
     def loop(self) -> None:
         if not self.connected.wait(0.2):
             return
-        if self.wait_s(0.5):  # let start-up work finish
+        if self.wait_s(0.25):  # let start-up work (hellos, first beats) finish
             return
         cpu, wall = time.process_time(), time.monotonic()
         if self.wait_s(self.spec.window_s):

@@ -8,10 +8,12 @@ from snr import (
     AbstractNode,
     Endpoint,
     EndpointFactory,
+    LoopFactory,
     SomeTasks,
     Task,
     TaskId,
     TaskType,
+    ThreadLoop,
     tasks,
 )
 
@@ -96,6 +98,43 @@ class StopWhenFactory(EndpointFactory):
 
     def get(self, parent: AbstractNode) -> StopWhen:
         return StopWhen(self, parent)
+
+
+class StopWhenTrue(ThreadLoop):
+    """Stops the node as soon as ``condition()`` holds, or once ``within_s`` have passed.
+
+    For a test that waits on something no task marks (a loop's count, a
+    thread's state): it checks every 2 ms. Past the bound it stops the node
+    with the reason "condition not met within ... s", which the test's
+    assertions then show.
+    """
+
+    def __init__(self, factory: StopWhenTrueFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "stop_when_true", max_tick_rate_hz=500)
+        self.spec = factory
+
+    def loop(self) -> None:
+        if self.spec.condition():
+            reason = self.spec.reason
+        elif self.parent.get_time_s() > self.spec.within_s:
+            reason = f"condition not met within {self.spec.within_s:g} s"
+        else:
+            return
+        self.schedule(tasks.terminate(reason))
+        self.set_terminate_flag(reason)
+
+
+class StopWhenTrueFactory(LoopFactory):
+    """E.g. ``StopWhenTrueFactory(lambda: ticker.ticks >= 3, within_s=0.3)``."""
+
+    def __init__(
+        self, condition: Callable[[], object], within_s: float, reason: str = "test work done"
+    ) -> None:
+        super().__init__()
+        self.condition, self.within_s, self.reason = condition, within_s, reason
+
+    def get(self, parent: AbstractNode) -> StopWhenTrue:
+        return StopWhenTrue(self, parent)
 
 
 DRAINED = (TaskType.process_data, "test_queue_drained")

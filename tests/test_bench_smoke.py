@@ -44,6 +44,7 @@ class TestCommsBench(unittest.TestCase):
                 "--round-trips=30",
                 "--rounds=1",
                 "--idle-s=0.1",
+                "--settle-s=0.02",
             ],
             timeout_s=8.0,
         )

@@ -201,8 +201,8 @@ class TestDeadPath(CommsFaultTest):
     def test_a_blackholed_path_is_found_on_both_sides_while_pages_flow(self) -> None:
         relay = Relay(self.port)
         self.addCleanup(relay.close)
-        server = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.5)
-        via_relay = SocketsPair(("127.0.0.1", relay.port), dead_after_s=0.5)
+        server = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.25)
+        via_relay = SocketsPair(("127.0.0.1", relay.port), dead_after_s=0.25)
         ticks = TickerFactory(hz=200)
         counter = CounterFactory("tick")
         config = Config(
@@ -223,7 +223,7 @@ class TestDeadPath(CommsFaultTest):
             line = next(line for line in self.log.matching(lost) if line.startswith(side))
             self.assertIn("pages sent since it was last heard from may be lost", line)
         found_s = max(when for when, line in self.log.lines if lost in line) - cut
-        self.assertLess(found_s, 3.0, "declared lost within the bound (0.5 s of silence)")
+        self.assertLess(found_s, 3.0, "declared lost within the bound (0.25 s of silence)")
         sender_line = next(line for line in self.log.matching(lost) if "snr.sender" in line)
         self.assertRegex(sender_line, r"; [1-9]\d* pages sent since")  # pages were in flight
 
@@ -235,19 +235,19 @@ class TestDeadPath(CommsFaultTest):
         self.assertTrue(self.log.matching("Reconnected to the sockets server"))
 
     def test_beats_keep_a_quiet_link_alive(self) -> None:
-        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.3)  # a beat every 0.075 s
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.15)  # a beat every 0.0375 s
         config = Config({"a": [pair.server()], "b": [pair.client()]}, mode=Mode.TEST)
         nodes = self.run_nodes(config, ["a", "b"])
         self.assertTrue(wait_until(lambda: bool(self.log.matching("Client node 'b'")), 5.0))
         cpu_before, wall_before = time.process_time(), time.monotonic()
-        time.sleep(0.6)  # nothing is stored: only beats cross (twice the silence limit)
+        time.sleep(0.3)  # nothing is stored: only beats cross (twice the silence limit)
         cpu_share = (time.process_time() - cpu_before) / (time.monotonic() - wall_before)
         self.assertEqual(self.log.matching("Lost the link"), [])
         self.assertEqual(self.log.matching("disconnected"), [])
         server = nodes.nodes[0].components["sockets_server_" + str(self.port)]
         assert isinstance(server, CommsLoop)
         [stats] = server.stats()
-        self.assertLess(stats["heard_s_ago"], 0.3)
+        self.assertLess(stats["heard_s_ago"], 0.15)
         self.assertLess(cpu_share, 0.05, "an idle pair with beats costs little CPU")
 
 
@@ -303,11 +303,11 @@ class FloodFactory(LoopFactory):
 class TestSlowReader(CommsFaultTest):
     def test_a_paused_reader_costs_bounded_memory_and_every_drop_is_counted(self) -> None:
         original_quiet = CommsLoop.recovered_after_s
-        CommsLoop.recovered_after_s = 0.3  # the default is 1 s
+        CommsLoop.recovered_after_s = 0.15  # the default is 1 s
         self.addCleanup(setattr, CommsLoop, "recovered_after_s", original_quiet)
         pair = SocketsPair(("127.0.0.1", self.port), max_backlog_bytes=256 * 1024)
         flood = FloodFactory(count=3000)
-        counter = CounterFactory("flood", pause_s=0.5)
+        counter = CounterFactory("flood", pause_s=0.3)
         original = Node.max_queued_tasks
         Node.max_queued_tasks = 100
         self.addCleanup(setattr, Node, "max_queued_tasks", original)
@@ -324,7 +324,7 @@ class TestSlowReader(CommsFaultTest):
         assert isinstance(client, CommsLoop)
         [stats] = client.stats()
         dropped = stats["dropped"]
-        self.assertGreater(dropped, 0, "the receiver paused for 0.5 s: some pages had to go")
+        self.assertGreater(dropped, 0, "the receiver paused for 0.3 s: some pages had to go")
         self.assertEqual(stats["dropped_by_key"], {"flood": dropped})
         self.assertEqual(len(counter.seen) + dropped, 3001, "every page arrived or was counted")
         drops = self.log.matching("Dropped")
@@ -332,7 +332,7 @@ class TestSlowReader(CommsFaultTest):
         self.assertLessEqual(len(drops), 5, "at most one line a second")
         self.assertTrue(
             wait_until(lambda: bool(self.log.matching("Recovered:")), 3.0),
-            "a recovery line follows, once nothing was dropped for 0.3 s",
+            "a recovery line follows, once nothing was dropped for 0.15 s",
         )
         recovered = self.log.matching("Recovered:")
         self.assertEqual(len(recovered), 1, "one episode, one recovery line")
@@ -365,7 +365,8 @@ class TestConnectionLimits(CommsFaultTest):
         original = CommsLoop.hello_timeout_s
         CommsLoop.hello_timeout_s = 0.1
         self.addCleanup(setattr, CommsLoop, "hello_timeout_s", original)
-        pair = SocketsPair(("127.0.0.1", self.port))
+        # A short silence limit makes the link check its peer every 0.025 s (else 0.25 s).
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.4)
         self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
         sock = connect_when_listening(self.port)
         self.addCleanup(sock.close)
@@ -382,15 +383,15 @@ class TestConnectionLimits(CommsFaultTest):
         self.assertTrue(wait_until(lambda: bool(self.log.matching("not even a hello")), 2.0))
 
     def test_a_peer_that_promised_no_beats_may_stay_quiet(self) -> None:
-        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.1)
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.05)
         self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
         sock = connect_when_listening(self.port)
         self.addCleanup(sock.close)
         body = b'{"v":1,"kind":"hello","role":"old_node"}'
         sock.sendall(len(body).to_bytes(4, "big") + body)
-        time.sleep(0.25)  # over twice the silence limit
+        time.sleep(0.12)  # over twice the silence limit
         self.assertEqual(self.log.matching("nothing heard"), [])
-        sock.settimeout(0.2)
+        sock.settimeout(0.05)
         try:
             self.assertNotEqual(sock.recv(4096), b"", "still open")
         except socket.timeout:

@@ -73,7 +73,7 @@ class TestPipeComms(unittest.TestCase):
         config = Config(
             {
                 "stays": [PipeLoopFactory(here, "a"), TimeoutLoopFactory(seconds=5)],
-                "leaves": [PipeLoopFactory(there, "b"), TimeoutLoopFactory(seconds=0.2)],
+                "leaves": [PipeLoopFactory(there, "b"), TimeoutLoopFactory(seconds=0.05)],
             },
             mode=Mode.TEST,
         )
@@ -83,7 +83,7 @@ class TestPipeComms(unittest.TestCase):
         thread = threading.Thread(target=stays.loop)
         with self.assertLogs("snr.stays", "INFO") as logs:
             thread.start()
-            leaves.loop()  # stops after 0.2 s, says goodbye and closes its end of the pipe
+            leaves.loop()  # stops after 0.05 s, says goodbye and closes its end of the pipe
             deadline = time.monotonic() + 3
             while pipe_loop.is_alive() and time.monotonic() < deadline:
                 time.sleep(0.02)

@@ -59,6 +59,27 @@ class TestConfig(unittest.TestCase):
             Config({"robot": TimeoutLoopFactory(seconds=1)})  # type: ignore[dict-item]
 
 
+# The start of a script whose node prints "ready" once it runs: listed last,
+# the endpoint's begin() comes after every other component has started, so the
+# test knows when Ctrl-C finds the node running.
+READY = textwrap.dedent(
+    """
+    import sys
+    import snr
+
+
+    class Ready(snr.Endpoint):
+        def begin(self):
+            print("ready", flush=True)
+
+
+    class ReadyFactory(snr.EndpointFactory):
+        def get(self, parent):
+            return Ready(self, parent, "ready")
+    """
+)
+
+
 class TestCliRunner(unittest.TestCase):
     components = {
         "urov": [TimeoutLoopFactory(seconds=0.05)],
@@ -87,12 +108,9 @@ class TestCliRunner(unittest.TestCase):
         CliRunner(self.components, ["main.py", "urov", "--mode", "test"]).run()
 
     def test_ctrl_c_exits_cleanly(self) -> None:
-        script = textwrap.dedent(
+        script = READY + textwrap.dedent(
             """
-            import sys
-            import snr
-            components = {"robot": [snr.TimeoutLoopFactory(seconds=20)]}
-            print("ready", flush=True)
+            components = {"robot": [snr.TimeoutLoopFactory(seconds=20), ReadyFactory()]}
             snr.CliRunner(components, sys.argv).run()
             """
         )
@@ -106,8 +124,7 @@ class TestCliRunner(unittest.TestCase):
         )
         try:
             assert proc.stdout is not None
-            self.assertEqual(proc.stdout.readline().strip(), "ready")
-            time.sleep(0.3)
+            self.assertEqual(proc.stdout.readline().strip(), "ready")  # the node runs
             proc.send_signal(signal.SIGINT)
             out, err = proc.communicate(timeout=10)
         finally:

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import functools
 import io
 import os
 import pickle
@@ -26,7 +27,7 @@ from snr import (
     RemoteConsole,
     TimeoutLoopFactory,
 )
-from snr.std_mods.io.console import MAX_CONSOLES
+from snr.std_mods.io.console import MAX_CONSOLES, _TokenThrottle
 from snr.std_mods.io.console_commands import CommandProcessorFactory
 from snr.std_mods.io.console_protocol import (
     MAX_LINE_BYTES,
@@ -309,7 +310,7 @@ class TestReceiverSetup(unittest.TestCase):
 
     def test_port_in_use_when_deployed_keeps_the_node_running(self) -> None:
         with NodeInThread([]) as run:
-            factories = [CommandReceiverFactory(port=run.port), TimeoutLoopFactory(ms=100)]
+            factories = [CommandReceiverFactory(port=run.port), TimeoutLoopFactory(ms=20)]
             node = Node("b", Config({"b": factories}, mode=Mode.DEPLOYED))
             with self.assertLogs("snr.b", "ERROR") as logs:
                 node.loop()
@@ -339,7 +340,11 @@ class TestReceiverSetup(unittest.TestCase):
 
 class TestToken(unittest.TestCase):
     def test_token_required_and_checked(self) -> None:
-        with mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}):
+        quick = functools.partial(_TokenThrottle, first_delay_s=0.05)  # 0.25 s by default
+        with (
+            mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}),
+            mock.patch("snr.std_mods.io.console._TokenThrottle", quick),
+        ):
             with NodeInThread([], token="s3cret-word") as run:
                 with self.assertRaisesRegex(ConsoleConnectionError, "needs a console token"):
                     run.console()

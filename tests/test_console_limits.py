@@ -7,6 +7,7 @@ without bound. Figures worth knowing are printed (run pytest with ``-s``).
 
 from __future__ import annotations
 
+import functools
 import logging
 import os
 import socket
@@ -33,6 +34,7 @@ from snr.std_mods.io.console_protocol import (
 from tests.console_helpers import NodeInThread, wait_for
 
 TOKEN = "s3cret-word"
+THROTTLE = "snr.std_mods.io.console._TokenThrottle"  # wrong tokens: first wait 0.25 s
 
 
 def connect_until_in(run: NodeInThread, token: Optional[str], timeout_s: float) -> RemoteConsole:
@@ -76,7 +78,7 @@ def closed_by_node(sock: socket.socket, timeout_s: float) -> bool:
 class TestIdleConsolesCannotLockTheOperatorOut(unittest.TestCase):
     def test_100_idle_sockets_with_a_token_do_not_count(self) -> None:
         with mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}):
-            with NodeInThread([], token=TOKEN, auth_timeout_s=0.5) as run:
+            with NodeInThread([], token=TOKEN, auth_timeout_s=0.25) as run:
                 squatters = idle_sockets(run, 100)
                 try:
                     started = time.monotonic()
@@ -84,9 +86,9 @@ class TestIdleConsolesCannotLockTheOperatorOut(unittest.TestCase):
                         waited = time.monotonic() - started
                         self.assertEqual(console.send("help").status, Status.OK)
                     print(
-                        f"\n100 idle sockets (token, auth timeout 0.5 s): in after {waited:.3f} s"
+                        f"\n100 idle sockets (token, auth timeout 0.25 s): in after {waited:.3f} s"
                     )
-                    self.assertLess(waited, 0.5)  # they never counted against the limit
+                    self.assertLess(waited, 0.25)  # they never counted against the limit
                     # Every one of them is disconnected once its time to give a token is up.
                     self.assertTrue(all(closed_by_node(s, 3.0) for s in squatters))
                     self.assertEqual(len(receiver_of(run)._sessions), 0)
@@ -95,32 +97,32 @@ class TestIdleConsolesCannotLockTheOperatorOut(unittest.TestCase):
                         sock.close()
 
     def test_100_idle_sockets_without_a_token_time_out(self) -> None:
-        with NodeInThread([], idle_timeout_s=0.5) as run:
+        with NodeInThread([], idle_timeout_s=0.2) as run:
             squatters = idle_sockets(run, 100)
             try:
                 started = time.monotonic()
                 with connect_until_in(run, None, 5.0) as console:
                     waited = time.monotonic() - started
                     self.assertEqual(console.send("help").status, Status.OK)
-                print(f"\n100 idle sockets (no token, idle timeout 0.5 s): in after {waited:.3f} s")
-                self.assertLess(waited, 0.5 + 1.5)  # the idle timeout, and a margin
+                print(f"\n100 idle sockets (no token, idle timeout 0.2 s): in after {waited:.3f} s")
+                self.assertLess(waited, 0.2 + 1.5)  # the idle timeout, and a margin
             finally:
                 for sock in squatters:
                     sock.close()
 
     def test_an_idle_console_is_told_why_it_was_closed(self) -> None:
-        with NodeInThread([], idle_timeout_s=0.3) as run, run.console() as console:
+        with NodeInThread([], idle_timeout_s=0.1) as run, run.console() as console:
             self.assertEqual(console.send("help").status, Status.OK)
-            time.sleep(0.6)
+            time.sleep(0.2)
             reply = console.send("help")  # the goodbye came first: it answers this line
             self.assertEqual(reply.status, Status.BYE)
-            self.assertIn("after 0.3 s without a command", reply.text)
+            self.assertIn("after 0.1 s without a command", reply.text)
             self.assertFalse(console.is_connected())
 
     def test_a_busy_console_is_not_idle(self) -> None:
-        with NodeInThread([], idle_timeout_s=0.3) as run, run.console() as console:
-            for _ in range(6):  # 0.6 s in all, never 0.3 s without a command
-                time.sleep(0.1)
+        with NodeInThread([], idle_timeout_s=0.15) as run, run.console() as console:
+            for _ in range(6):  # 0.3 s in all, never 0.15 s without a command
+                time.sleep(0.05)
                 self.assertEqual(console.send("").status, Status.OK)
 
     def test_time_limits_are_checked(self) -> None:
@@ -146,11 +148,14 @@ class TestTokenGuessing(unittest.TestCase):
 
     def test_guessing_is_throttled_and_logged_with_counts(self) -> None:
         attempts = checked = 0
-        with mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}):
+        with (
+            mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}),
+            mock.patch(THROTTLE, functools.partial(_TokenThrottle, first_delay_s=0.05)),
+        ):
             with NodeInThread([], token=TOKEN) as run:
                 with self.assertLogs("snr.robot.command_receiver", logging.WARNING) as logs:
                     started = time.monotonic()
-                    while time.monotonic() - started < 0.5:
+                    while time.monotonic() - started < 0.15:
                         attempts += 1
                         try:
                             run.console(token=f"guess-{attempts}").close()
@@ -158,7 +163,7 @@ class TestTokenGuessing(unittest.TestCase):
                             checked += "Wrong or missing" in str(error)
                     seconds = time.monotonic() - started
                     receiver_of(run)._repeats.flush()  # the summary line (due every 5 s)
-                # The operator gets in once the address's wait is over (here: at most 2 s).
+                # The operator gets in once the address's wait is over (here: at most 0.4 s).
                 with connect_until_in(run, TOKEN, 5.0) as console:
                     self.assertEqual(console.send("help").status, Status.OK)
         print(
@@ -166,7 +171,7 @@ class TestTokenGuessing(unittest.TestCase):
             f"({checked / seconds:.1f} guesses/s); {len(logs.output)} warning lines"
         )
         self.assertGreater(attempts, 50)
-        self.assertLessEqual(checked, 4)  # checked at 0, 0.25, 0.75 s (then 1.75 s)
+        self.assertLessEqual(checked, 4)  # checked at 0, 0.05, 0.15 s (then 0.35 s)
         self.assertLessEqual(len(logs.output), 10)  # not one line per try
         text = "\n".join(logs.output)
         self.assertIn("more times in the last", text)
@@ -186,9 +191,9 @@ def read_frames(sock: socket.socket, count: int, timeout_s: float = 5.0) -> List
 
 class TestFloods(unittest.TestCase):
     def test_a_console_that_does_not_read_is_dropped_and_delays_nobody(self) -> None:
-        # The flooder is dropped after 0.5 s without taking a reply (2 s by default).
+        # The flooder is dropped after 0.25 s without taking a reply (2 s by default).
         with (
-            mock.patch("snr.std_mods.io.console._SEND_TIMEOUT_S", 0.5),
+            mock.patch("snr.std_mods.io.console._SEND_TIMEOUT_S", 0.25),
             NodeInThread([]) as run,
             run.console() as operator,
         ):
@@ -207,7 +212,7 @@ class TestFloods(unittest.TestCase):
                     during.append(_timed(operator, "help"))
                     sessions = list(receiver._sessions.values())
                     most_waiting = max([most_waiting, *(len(s.out) for s in sessions)])
-                    if len(sessions) == 1 and time.monotonic() - started > 0.5:
+                    if len(sessions) == 1 and time.monotonic() - started > 0.25:
                         break  # the flooder is gone
                 dropped_after = time.monotonic() - started
             finally:
@@ -224,7 +229,9 @@ class TestFloods(unittest.TestCase):
         self.assertLess(max(during), 1.0)  # generous: measured tens of ms (see the print)
 
     def test_pipelined_commands_are_answered_in_order_a_few_at_a_time(self) -> None:
-        with NodeInThread([]) as run:
+        # Without the receiver's periodic wake-up, a line left waiting after
+        # its wake-up was read would wait for good: read_frames would time out.
+        with mock.patch("snr.std_mods.io.console._POLL_S", 60.0), NodeInThread([]) as run:
             with socket.create_connection((run.host, run.port), timeout=5) as sock:
                 lines = [f"task store_page k {i}" for i in range(5 * MAX_UNANSWERED)]
                 sock.sendall("".join(line + "\n" for line in lines).encode())

@@ -37,7 +37,7 @@ class TestLocalConsole(SNRTestCase):
         typed = io.StringIO("task store_page k 1")  # no newline, then end of input
         # The node must still be running when its time limit stops it.
         node = self.run_test_node(
-            [LocalConsoleFactory(typed, io.StringIO())], timeout_s=0.3, expect_timeout=True
+            [LocalConsoleFactory(typed, io.StringIO())], timeout_s=0.1, expect_timeout=True
         )
         self.assertEqual(node.get_data("k"), 1)
         self.assertIs(node.components["local_console"].state, LoopState.STOPPED)  # type: ignore[attr-defined]
@@ -66,7 +66,7 @@ class TestLocalConsole(SNRTestCase):
         out.close()  # writing raises ValueError: the console must swallow it
         # The node must still be running when its time limit stops it.
         self.run_test_node(
-            [LocalConsoleFactory(io.StringIO("help\n"), out)], timeout_s=0.2, expect_timeout=True
+            [LocalConsoleFactory(io.StringIO("help\n"), out)], timeout_s=0.1, expect_timeout=True
         )
 
 

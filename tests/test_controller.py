@@ -30,6 +30,7 @@ from snr import (
     tasks,
 )
 from snr.std_mods.io.joystick import read_joystick
+from tests.helpers import StopWhenTrueFactory
 
 PRESSED = (TaskType.event, "button_pressed")
 RELEASED = (TaskType.event, "button_released")
@@ -265,12 +266,21 @@ class TestControllerLoop(SNRTestCase):
         self.assertEqual((node.get_data("controller_data") or {}).get("Y"), 0)
 
     def test_state_is_stored_only_when_it_changes(self) -> None:
-        pad = SimulatedJoystick([(0.05, "axis_0", 0.5)], clock=stepping_clock(0.001))
-        # about 100 passes: the state at rest, then the one change
+        step = stepping_clock(0.001)
+        reads = [0]
+
+        def clock() -> float:
+            reads[0] += 1
+            return step()
+
+        pad = SimulatedJoystick([(0.05, "axis_0", 0.5)], clock=clock)
+        # 100 passes (a pass reads the clock once per control): the state at
+        # rest, then the one change, then no more stores
+        controls = pad.num_axes + pad.num_buttons + pad.num_hats
         with self.expector({(TaskType.store_page, "raw"): 2}) as expector:
             node = self.run_test_node([
-                ControllerLoopFactory("raw", joystick=pad, max_tick_rate_hz=500),
-                TimeoutLoopFactory(seconds=0.2),
+                ControllerLoopFactory("raw", joystick=pad, max_tick_rate_hz=2000),
+                StopWhenTrueFactory(lambda: reads[0] >= 100 * controls, within_s=0.5),
                 ExpectorEndpointFactory(expector),
             ])  # fmt: skip
         self.assertEqual((node.get_data("raw") or {}).get("axis_0"), 0.5)

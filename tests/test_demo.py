@@ -108,7 +108,7 @@ class TestDemoShipsInThePackage(unittest.TestCase):
 
 class TestVerboseDemo(unittest.TestCase):
     def test_verbose_shows_the_nodes_log(self) -> None:
-        result = run_script(["-m", "snr", "demo", "--seconds", "1.5", "--verbose"], timeout_s=40)
+        result = run_script(["-m", "snr", "demo", "--seconds", "0.6", "--verbose"], timeout_s=40)
         self.assertEqual(result.returncode, 0, result.stderr)
         self.assertIn("Listening for sockets clients on 127.0.0.1:", result.stderr)
         self.assertIn("Connected to the sockets server", result.stderr)

@@ -550,7 +550,7 @@ class TestMissingDataKey(SNRTestCase):
             self.get_config(
                 [
                     LoopFactoryOf(lambda f, p: Reader(f, p, key)),
-                    TimeoutLoopFactory(seconds=0.3),
+                    TimeoutLoopFactory(seconds=0.15),
                     *([KeyWatcherFactory(list(handled))] if handled else []),
                 ],
                 Mode.DEBUG,
@@ -575,12 +575,12 @@ class TestMissingDataKey(SNRTestCase):
 
     def test_typo_gets_one_hint_with_the_closest_key(self) -> None:
         hints = self.run_reader("depht", typo_s=0.02, missing_s=60)
-        self.assertEqual(len(hints), 1, hints)  # once, though read ~50 times
+        self.assertEqual(len(hints), 1, hints)  # once, though read ~25 times
         for part in ("'depht'", "Did you mean 'depth'?", "'depth'", HERE, "Reader.loop"):
             self.assertIn(part, hints[0])
 
     def test_key_never_stored_gets_one_hint_after_a_while(self) -> None:
-        hints = self.run_reader("speed", typo_s=0.02, missing_s=0.1)
+        hints = self.run_reader("speed", typo_s=0.02, missing_s=0.05)
         self.assertEqual(len(hints), 1, hints)
         for part in ("'speed'", "nothing has stored it", "'depth'", "Reader.loop"):
             self.assertIn(part, hints[0])
@@ -590,7 +590,7 @@ class TestMissingDataKey(SNRTestCase):
         # a handler on the node is registered for it, so its pages are planned
         # (and 'depht' being close to the stored 'depth' is no evidence of a typo).
         self.assertEqual(
-            self.run_reader("depht", typo_s=0.02, missing_s=0.1, handled=["depht"]), []
+            self.run_reader("depht", typo_s=0.02, missing_s=0.05, handled=["depht"]), []
         )
 
     def test_no_hint_before_the_grace_period(self) -> None:
@@ -650,13 +650,13 @@ class TestHandlerForAMisspelledKey(SNRTestCase):
                 [
                     ListReplayerFactory([1, 2, 3], "depth", period_s=0.01),
                     KeyWatcherFactory(["Depth", "depth", "never_sent_sonar"]),
-                    TimeoutLoopFactory(seconds=0.4),
+                    TimeoutLoopFactory(seconds=0.15),
                 ],
                 Mode.DEBUG,
             ),
         )
         assert node.key_hints is not None
-        node.key_hints.handlers_s = 0.15
+        node.key_hints.handlers_s = 0.05
         records: List[str] = []
         handler = _ListHandler(records)
         node.log.addHandler(handler)
@@ -747,7 +747,7 @@ class Sleepy(Endpoint):
         self.task_handlers = {(EV, "nap"): self.nap}
 
     def nap(self, task: Task, key: TaskId) -> SomeTasks:
-        time.sleep(0.05)
+        time.sleep(0.02)  # over the test's slow_handler_s of 0.01 s
         return None
 
 

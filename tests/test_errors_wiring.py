@@ -314,7 +314,7 @@ class TestKeysAcrossALink(SNRTestCase):
             mode=Mode.DEBUG,
         )
         hints = Hints()
-        self.run_nodes(config, link_s=0.4, hints=hints, count=3)
+        self.run_nodes(config, link_s=0.2, hints=hints, count=3)
         self.assertEqual(len(hints.messages), 3, hints.messages)
         unsent = [m for m in hints.messages if m[0] == "snr.urov"]
         received = sorted(m for m in hints.messages if m[0] == "snr.topside")

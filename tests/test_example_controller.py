@@ -71,10 +71,14 @@ class TestControllerExample(SNRTestCase):
     def test_both_pipelines_in_one_node_print_figure_5_4_lines(self) -> None:
         # Without sockets: the input device's parts feed the receiver's directly.
         pad = SimulatedJoystick(clock=stepping_clock(0.005))  # 0.135 s of script a pass
+        input_device = self.example.input_device_parts(pad)
+        # The script plays in a fixed number of passes (the clock steps per read),
+        # so only the wall time depends on the rate: 20 passes a second would take 1 s.
+        input_device[0].max_tick_rate_hz = 500
         out = io.StringIO()
         with self.expector({PRESSED: 6, RELEASED: 6}) as expector, contextlib.redirect_stdout(out):
             self.run_test_node([
-                *self.example.input_device_parts(pad),
+                *input_device,
                 *self.example.receiver_parts(),
                 ExpectorEndpointFactory(expector, exit_when_satisfied=True),
             ])  # fmt: skip
@@ -86,13 +90,19 @@ class TestControllerExample(SNRTestCase):
         port = str(free_port())
         env = dict(os.environ, PYTHONPATH=ROOT, SDL_VIDEODRIVER="dummy", SDL_AUDIODRIVER="dummy")
         command = [sys.executable, EXAMPLE]
-        receiver = subprocess.Popen(
-            [*command, "receiver", "--port", port, "--seconds", "30"],
-            stdout=subprocess.PIPE,
-            stderr=subprocess.PIPE,
-            text=True,
-            env=env,
-        )
+
+        def start(*args: str) -> subprocess.Popen[str]:
+            return subprocess.Popen(
+                [*command, *args, "--port", port, "--seconds", "30"],
+                stdout=subprocess.PIPE,
+                stderr=subprocess.PIPE,
+                text=True,
+                env=env,
+            )
+
+        ctrl_c = signal.SIGINT if os.name == "posix" else signal.SIGTERM
+        receiver = start("receiver")
+        sender = None
         try:
             # Start the input device once the server listens, as a student would.
             deadline = time.monotonic() + 10
@@ -114,30 +124,29 @@ class TestControllerExample(SNRTestCase):
             for reader in readers:
                 reader.start()
             # Y is released 1.6 s into the pad's script, which starts with the node.
-            sender = subprocess.run(
-                [*command, "input_device", "--simulated", "--port", port, "--seconds", "1.9"],
-                capture_output=True,
-                text=True,
-                env=env,
-                timeout=20,
-            )
-            deadline = time.monotonic() + 5  # the last pages are on their way
+            sender = start("input_device", "--simulated")
+            deadline = time.monotonic() + 15
             while Y_RELEASED not in "".join(out_lines) and time.monotonic() < deadline:
                 time.sleep(0.01)
-            # Stop the receiver with Ctrl-C, as in thesis figure 5.4.
-            receiver.send_signal(signal.SIGINT if os.name == "posix" else signal.SIGTERM)
+            # Stop both with Ctrl-C, as in thesis figure 5.4: the input device first.
+            sender.send_signal(ctrl_c)
+            _, sender_err = sender.communicate(timeout=10)
+            receiver.send_signal(ctrl_c)
             receiver.wait(timeout=10)
             for reader in readers:
                 reader.join(10)
             out, err = "".join(out_lines), "".join(err_lines)
         finally:
-            if receiver.poll() is None:
-                receiver.kill()
-                receiver.wait()
-            for stream in (receiver.stdout, receiver.stderr):
-                if stream is not None:
-                    stream.close()
-        self.assertEqual(sender.returncode, 0, sender.stderr)
+            for process in (sender, receiver):
+                if process is None:
+                    continue
+                if process.poll() is None:
+                    process.kill()
+                    process.wait()
+                for stream in (process.stdout, process.stderr):
+                    if stream is not None:
+                        stream.close()
+        self.assertEqual(sender.returncode, 0, sender_err)
         self.assertEqual(receiver.returncode, 0, err)
         printed: List[str] = [line for line in out.splitlines() if line.startswith("(event")]
         # Presses made before the client had connected may be missed; the rest

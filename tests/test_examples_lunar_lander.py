@@ -1,12 +1,24 @@
 """examples/lunar_lander: the descent, the controllers and the Q-learning trainer (5.3, A.4)."""
 
+import functools
+import os
+import re
 import unittest
+from typing import Any, List, Tuple
 
 from snr import SNRTestCase, TaskType, tasks
 from tests.examples_support import example_path, load_module, run_script
 
 MAIN = example_path("lunar_lander", "main.py")
 lander = load_module(MAIN, "lunar_lander_example")
+
+
+@functools.cache
+def trained() -> Tuple[Any, int]:
+    """A table trained once (3000 flights, seed 1) and the flights flown: two tests use it."""
+    table = lander.QTable()
+    flown = lander.train(table, episodes=3000, seed=1, time_limit_s=20)
+    return table, flown
 
 
 class TestPhysics(unittest.TestCase):
@@ -35,9 +47,8 @@ class TestPhysics(unittest.TestCase):
 
 class TestTrainer(unittest.TestCase):
     def test_training_really_improves_the_landing_rate(self) -> None:
-        table = lander.QTable()
-        before = lander.landing_rate(table.best_action)
-        flown = lander.train(table, episodes=3000, seed=1, time_limit_s=20)
+        before = lander.landing_rate(lander.QTable().best_action)
+        table, flown = trained()
         after = lander.landing_rate(table.best_action)
         self.assertEqual(flown, 3000)
         self.assertEqual(before, 0.0)  # untrained, it never fires the engine
@@ -77,17 +88,16 @@ class TestLanderNode(SNRTestCase):
         self.assertTrue(reason.startswith("Crashed"), reason)
 
     def test_trained_q_controller_lands(self) -> None:
-        table = lander.QTable()
-        lander.train(table, episodes=3000, seed=1, time_limit_s=20)
+        table, _ = trained()
         reason = self.fly_node(lander.QLearningControllerEndpointFactory(table.q_value))
         self.assertEqual(reason, lander.fly(table.best_action).outcome())
         self.assertTrue(reason.startswith("Landed safely"), reason)
 
     def test_without_a_controller_the_loop_says_what_is_missing(self) -> None:
         node = self.run_test_node(
-            [lander.RadarSensorLoopFactory(speed=0, command_timeout_s=0.2)], timeout_s=5
+            [lander.RadarSensorLoopFactory(speed=0, command_timeout_s=0.05)], timeout_s=5
         )
-        self.assertIn("No thruster_data", str(node.terminate_reason))
+        self.assertIn("No thruster_data for 0.05 s", str(node.terminate_reason))
 
     def test_bad_radar_data_is_logged_and_ignored(self) -> None:
         endpoint = lander.ControllerFactory(lander.baseline_policy).get(self.mock_node())
@@ -99,15 +109,39 @@ class TestLanderNode(SNRTestCase):
             self.assertIsNone(result)
 
 
+def readme_output(command: str) -> List[str]:
+    """The output the README shows under ``command`` (up to a blank line or the next command)."""
+    with open(os.path.join(os.path.dirname(MAIN), "README.md"), encoding="utf-8") as f:
+        lines = f.read().splitlines()
+    start = next(i for i, line in enumerate(lines) if line.split("#")[0].strip() == command)
+    shown: List[str] = []
+    for line in lines[start + 1 :]:
+        if not line.strip() or line.startswith(("python ", "```")):
+            break
+        shown.append(line.rstrip())
+    return shown
+
+
+def matches_shown(output: List[str], shown: List[str]) -> bool:
+    """``output`` is what ``shown`` shows, where a "..." line stands for any lines."""
+    pattern = "\n".join(".*?" if line == "..." else re.escape(line) for line in shown)
+    return re.fullmatch(pattern, "\n".join(output), re.S) is not None
+
+
 class TestLanderScript(unittest.TestCase):
-    def test_main_lands_and_says_so(self) -> None:
-        done = run_script([MAIN, "--speed", "0", "--quiet"])
+    def test_main_lands_and_prints_what_the_readme_shows(self) -> None:
+        done = run_script([MAIN, "--speed", "0"])
         self.assertEqual(done.returncode, 0, done.stderr)
-        self.assertIn("Landed safely", done.stdout)
+        output = [line.rstrip() for line in done.stdout.splitlines()]
+        shown = readme_output("python main.py")
+        self.assertTrue(matches_shown(output, shown), f"README shows {shown}, ran {output}")
 
     def test_a_crash_ends_with_a_message_not_a_traceback(self) -> None:
         done = run_script([MAIN, "--policy", "untrained", "--speed", "0"])
         self.assertEqual(done.returncode, 1)
+        output = [line.rstrip() for line in done.stdout.splitlines()]
+        shown = readme_output("python main.py --policy untrained")
+        self.assertTrue(matches_shown(output, shown), f"README shows {shown}, ran {output}")
         self.assertIn("Crashed at", done.stdout.splitlines()[-1])
         self.assertIn("altitude", done.stdout)  # the telemetry lines
         self.assertNotIn("Traceback", done.stderr)

@@ -22,7 +22,7 @@ class TestMovingAverageExample(unittest.TestCase):
         readings = demo.noisy_depths(10)
         out = io.StringIO()
         with contextlib.redirect_stdout(out):
-            demo.SynchronousRunner("filter_demo", demo.make_config(readings, 0.0, 0.5)).run()
+            demo.SynchronousRunner("filter_demo", demo.make_config(readings, 0.0, 0.1)).run()
         lines = out.getvalue().splitlines()
         # Each line ends with the mean of the newest five readings so far.
         expected = [sum(readings[max(0, i - 4) : i + 1]) / min(i + 1, 5) for i in range(10)]

@@ -28,7 +28,13 @@ from snr import (
     tasks,
 )
 from snr.core import NodeState
-from tests.helpers import Log, RecorderFactory
+from tests.helpers import (
+    DRAINED,
+    Log,
+    RecorderFactory,
+    StopWhenDrainedFactory,
+    StopWhenTrueFactory,
+)
 
 EV = TaskType.event
 
@@ -103,6 +109,8 @@ class TestPages(SNRTestCase):
         seen: List[Any] = []
 
         def check(task: Task, key: TaskId) -> SomeTasks:
+            if (task.type, task.name) == DRAINED:
+                return None  # the marker that stops the node, not a page
             stored = node.get_page(task.name)
             seen.append((task.type, stored is not None and stored == task.val_list[0]))
             return None
@@ -115,7 +123,7 @@ class TestPages(SNRTestCase):
                     RecorderFactory(
                         "watch", [TaskType.store_page, TaskType.process_data], log, check
                     ),
-                    TimeoutLoopFactory(seconds=0.1),
+                    StopWhenDrainedFactory(),
                 ]
             ),
         )
@@ -136,7 +144,8 @@ class TestPages(SNRTestCase):
         self.assertIsNone(node.get_data("never_stored"))
 
     def test_tasks_store_data_is_stamped_with_the_node_role(self) -> None:
-        node = Node("rover", Config({"rover": [TimeoutLoopFactory(seconds=0.1)]}, mode=Mode.TEST))
+        stop = StopWhenDrainedFactory()
+        node = Node("rover", Config({"rover": [stop]}, mode=Mode.TEST))
         node.schedule(tasks.store_data("speed", 2.0))
         node.loop()
         page = node.get_page("speed")
@@ -144,7 +153,7 @@ class TestPages(SNRTestCase):
         self.assertEqual((page.origin, page.data), ("rover", 2.0))
 
     def test_pages_are_stored_in_order(self) -> None:
-        node = Node("test", self.get_config([TimeoutLoopFactory(seconds=0.1)]))
+        node = Node("test", self.get_config([StopWhenDrainedFactory()]))
         log: Log = []
         node.add_component(RecorderFactory("r", [(TaskType.store_page, "n")], log).get(node))
         for i in range(100):
@@ -168,7 +177,11 @@ class TestLifeCycle(SNRTestCase):
     def test_orderly_shutdown_halts_joins_and_terminates_every_loop(self) -> None:
         loops = [TickerFactory(name=f"t{i}", rate=200) for i in range(3)]
         slow = TickerFactory(name="slow", rate=0, block=True)  # ignores halt for ~50 ms
-        node = Node("test", self.get_config([*loops, slow, TimeoutLoopFactory(seconds=0.2)]))
+        # Stop while every loop runs: the slow one is inside its first wait.
+        every_loop_runs = StopWhenTrueFactory(
+            lambda: all(factory.ticks for factory in [*loops, slow]), within_s=0.2
+        )
+        node = Node("test", self.get_config([*loops, slow, every_loop_runs]))
         node.loop()
         for factory in [*loops, slow]:
             self.assertEqual(factory.events, ["setup", "halt", "terminate"])
@@ -177,15 +190,17 @@ class TestLifeCycle(SNRTestCase):
     def test_shutdown_of_a_stuck_loop_is_bounded(self) -> None:
         class Stuck(ThreadLoop):
             def loop(self) -> None:
+                stuck.set()
                 gate.wait(3)
 
         class StuckFactory(LoopFactory):
             def get(self, parent: AbstractNode) -> Stuck:
                 return Stuck(self, parent, "stuck")
 
-        gate = threading.Event()
-        node = Node("test", self.get_config([StuckFactory(), TimeoutLoopFactory(seconds=0.05)]))
-        node.join_timeout_s = 0.2
+        gate, stuck = threading.Event(), threading.Event()
+        stop = StopWhenTrueFactory(stuck.is_set, within_s=2)
+        node = Node("test", self.get_config([StuckFactory(), stop]))
+        node.join_timeout_s = 0.05
         started = time.monotonic()
         with self.assertLogs("snr.test", "WARNING") as logs:
             node.loop()
@@ -209,10 +224,10 @@ class TestLifeCycle(SNRTestCase):
         self.assertEqual(node.terminate_reason, "changed my mind")
 
     def test_loop_tick_rate_is_honoured(self) -> None:
-        ticker = TickerFactory(rate=50)
-        self.run_test_node([ticker, TimeoutLoopFactory(seconds=0.3)])
+        ticker = TickerFactory(rate=100)
+        self.run_test_node([ticker, TimeoutLoopFactory(seconds=0.15)])
         self.assertGreater(ticker.ticks, 3)
-        self.assertLessEqual(ticker.ticks, 17)  # 50 Hz × 0.3 s = 15, plus one
+        self.assertLessEqual(ticker.ticks, 16)  # 100 Hz × 0.15 s = 15, plus one
 
     def test_loop_cannot_execute_tasks_directly(self) -> None:
         errors: List[Exception] = []
@@ -229,17 +244,17 @@ class TestLifeCycle(SNRTestCase):
             def get(self, parent: AbstractNode) -> Rogue:
                 return Rogue(self, parent, "rogue")
 
-        self.run_test_node([RogueFactory(), TimeoutLoopFactory(seconds=0.1)])
+        self.run_test_node([RogueFactory(), StopWhenTrueFactory(lambda: errors, within_s=0.1)])
         self.assertEqual(len(errors), 1)
         self.assertIn("self.schedule", str(errors[0]))
 
     def test_idle_node_does_not_spin(self) -> None:
-        node = Node("test", self.get_config([TickerFactory(rate=2)]))
+        node = Node("test", self.get_config([TickerFactory(rate=4)]))
         thread = threading.Thread(target=node.loop)
         before = resource.getrusage(resource.RUSAGE_SELF)
         wall = time.monotonic()
         thread.start()
-        time.sleep(0.6)
+        time.sleep(0.3)
         node.set_terminate_flag("done")
         thread.join(5)
         after = resource.getrusage(resource.RUSAGE_SELF)
@@ -269,14 +284,13 @@ class TestHandlerFailures(SNRTestCase):
 
     def test_deployed_mode_logs_and_keeps_running(self) -> None:
         factory = BoomFactory()
-        node = Node(
-            "test", Config({"test": [factory, TimeoutLoopFactory(seconds=0.1)]}, mode=Mode.DEPLOYED)
-        )
-        node.schedule([tasks.event("boom"), tasks.event("boom")])
+        booms = [tasks.event("boom"), tasks.event("boom")]
+        stop = StopWhenDrainedFactory(booms)
+        node = Node("test", Config({"test": [factory, stop]}, mode=Mode.DEPLOYED))
         with self.assertLogs("snr.test", "ERROR") as logs:
             node.loop()
         self.assertEqual(factory.endpoint.calls, 2)
-        self.assertEqual(node.terminate_reason, "Timeout")
+        self.assertEqual(node.terminate_reason, "queue drained")  # the errors did not stop it
         self.assertIn("Boom.explode", logs.output[0])
 
     def test_wrong_return_type_is_reported(self) -> None:
@@ -306,17 +320,18 @@ class TestHandlerFailures(SNRTestCase):
                 self.task_handlers = {(EV, "nap"): self.nap}
 
             def nap(self, task: Task, key: TaskId) -> SomeTasks:
-                time.sleep(0.15)
+                time.sleep(0.03)
                 return None
 
         class SleepyFactory(EndpointFactory):
             def get(self, parent: AbstractNode) -> Sleepy:
                 return Sleepy(self, parent)
 
+        naps = [tasks.event("nap"), tasks.event("nap")]
         node = Node(
-            "test", self.get_config([SleepyFactory(), TimeoutLoopFactory(seconds=0.5)], Mode.DEBUG)
+            "test", self.get_config([SleepyFactory(), StopWhenDrainedFactory(naps)], Mode.DEBUG)
         )
-        node.schedule([tasks.event("nap"), tasks.event("nap")])
+        node.slow_handler_s = 0.02  # 0.1 s unless set
         with self.assertLogs("snr.test", "WARNING") as logs:
             node.loop()
         slow = [line for line in logs.output if "Sleepy.nap" in line]
@@ -326,9 +341,12 @@ class TestHandlerFailures(SNRTestCase):
 
 class TestProfiler(SNRTestCase):
     def test_dump_lists_task_ids_and_loops(self) -> None:
+        ticker = TickerFactory(rate=100)
         node = Node(
             "test",
-            self.get_config([TickerFactory(rate=100), TimeoutLoopFactory(seconds=0.1)], Mode.DEBUG),
+            self.get_config(
+                [ticker, StopWhenTrueFactory(lambda: ticker.ticks >= 2, 0.1)], Mode.DEBUG
+            ),
         )
         node.store_data("x", 1)
         node.loop()

@@ -145,7 +145,7 @@ class TestReloadNeverLies(unittest.TestCase):
             result.append(ticker.passes - passes)
 
         with self.assertLogs("snr.life", "ERROR") as logs:
-            node = run_node([ticker, ScriptFactory([reload])], join_timeout_s=0.1)
+            node = run_node([ticker, ScriptFactory([reload])], join_timeout_s=0.05)
         text = "\n".join(logs.output)
         self.assertEqual(result[0], [])  # nothing was rebuilt
         self.assertEqual(ticker.builds, 1)  # no second copy was even built
@@ -212,6 +212,7 @@ class Stubborn(ThreadLoop):
         self.stubborn_factory = factory
 
     def loop(self) -> None:
+        self.stubborn_factory.entered.set()
         self.stubborn_factory.release.wait(3.0)
 
     def terminate(self) -> None:
@@ -221,6 +222,7 @@ class Stubborn(ThreadLoop):
 class StubbornFactory(LoopFactory):
     def __init__(self) -> None:
         super().__init__()
+        self.entered = threading.Event()
         self.release = threading.Event()
 
     def get(self, parent: AbstractNode) -> Stubborn:
@@ -230,11 +232,13 @@ class StubbornFactory(LoopFactory):
 class TestShutdownNamesLiveLoops(unittest.TestCase):
     def test_a_loop_still_running_is_named_before_its_terminate(self) -> None:
         stubborn = StubbornFactory()
+
+        def once_it_is_stuck(node: Any) -> None:
+            stubborn.entered.wait(2.0)
+
         try:
             with self.assertLogs("snr.life", "WARNING") as logs:
-                run_node(
-                    [stubborn, ScriptFactory([lambda n: time.sleep(0.05)])], join_timeout_s=0.1
-                )
+                run_node([stubborn, ScriptFactory([once_it_is_stuck])], join_timeout_s=0.1)
         finally:
             stubborn.release.set()
         said = [line for line in logs.output if "stubborn" in line]
@@ -319,7 +323,7 @@ class TestBoundedQueue(unittest.TestCase):
         return queue
 
     def test_a_producer_waits_then_drops_counts_and_says_so(self) -> None:
-        queue = self.make_queue(high_water=10, max_wait_s=0.05)
+        queue = self.make_queue(high_water=10, max_wait_s=0.02)
         with self.assertLogs("snr", "WARNING") as logs:
             for i in range(14):
                 queue.schedule(tasks.event(str(i)))
@@ -370,7 +374,7 @@ class TestBoundedQueue(unittest.TestCase):
                 self.sent = 0
 
             def loop(self) -> None:
-                if self.sent == 3000:
+                if self.sent == 1000:
                     self.set_terminate_flag("sent everything")
                     return
                 self.store_data("n", self.sent)
@@ -392,7 +396,7 @@ class TestBoundedQueue(unittest.TestCase):
                 self.longest = max(self.longest, len(self.parent.queue))  # type: ignore[attr-defined]
                 if len(self.got) % 100 == 0:
                     time.sleep(0.002)
-                return tasks.terminate("all in") if len(self.got) == 3000 else None
+                return tasks.terminate("all in") if len(self.got) == 1000 else None
 
         slow_box: List[Optional[Slow]] = [None]
 
@@ -404,12 +408,13 @@ class TestBoundedQueue(unittest.TestCase):
         original = Node.max_queued_tasks
         Node.max_queued_tasks = 50
         try:
-            run_node([FloodFactory(), SlowFactory()])
+            node = run_node([FloodFactory(), SlowFactory()])
         finally:
             Node.max_queued_tasks = original
         slow = slow_box[0]
         assert slow is not None
-        self.assertEqual(slow.got, list(range(3000)))  # in order, none lost
+        self.assertEqual(slow.got, list(range(1000)))  # in order, none lost
+        self.assertGreater(node.queue.waits, 0, "the loop was held back")
         # The bound holds (a store_page task can add its process_data task).
         self.assertLessEqual(slow.longest, 2 * 50 + 2)
 

@@ -9,6 +9,7 @@ import unittest
 from typing import Any, List
 
 from snr import SNRTestCase, TaskType, TimeoutLoopFactory, tasks
+from tests.helpers import StopWhenDrainedFactory, StopWhenFactory
 
 MODULE = "snr_reload_target_mod"
 
@@ -135,7 +136,7 @@ class TestAddRemove(SNRTestCase):
 
         from snr import Config, Mode, Node
 
-        node = Node("t", Config({"t": [TimeoutLoopFactory(seconds=0.1)]}, mode=Mode.TEST))
+        node = Node("t", Config({"t": [StopWhenDrainedFactory()]}, mode=Mode.TEST))
         node.schedule(
             [
                 tasks.add_component(dummy),
@@ -151,7 +152,8 @@ class TestAddRemove(SNRTestCase):
     def test_node_core_cannot_be_removed_or_reloaded(self) -> None:
         from snr import Config, Mode, Node
 
-        node = Node("t", Config({"t": [TimeoutLoopFactory(seconds=0.2)]}, mode=Mode.TEST))
+        stored = StopWhenFactory((TaskType.store_page, "depth_m"))
+        node = Node("t", Config({"t": [stored]}, mode=Mode.TEST))
         node.schedule(
             [
                 tasks.remove_component("node_core"),
@@ -169,7 +171,7 @@ class TestAddRemove(SNRTestCase):
         self.assertIn("Refused to reload 'node_core'", text)
         self.assertIn("node_core", node.components)
         self.assertEqual(node.get_data("depth_m"), 3.5)  # pages are still stored
-        self.assertEqual(node.terminate_reason, "Timeout")  # and terminate still stops it
+        self.assertEqual(node.terminate_reason, "test work done")  # and terminate still stops it
 
 
 if __name__ == "__main__":

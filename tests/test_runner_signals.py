@@ -22,27 +22,29 @@ from tests.examples_support import script_env
 
 ROLES = ("one", "two")
 
-# The parent under test. Its children write their pid when their node is
-# built, so the test knows whom to watch; the endpoints just idle.
+# The parent under test. Its children write their pid once their node runs,
+# so the test knows whom to watch; the endpoints just idle.
 SYSTEM = """
 import os
 import signal
 import sys
 
 import snr
-from snr.utils import DummyEndpointFactory
 
 folder = sys.argv[1]
 
 
-class PidFileFactory(DummyEndpointFactory):
-    def get(self, parent):
-        endpoint = super().get(parent)
-        path = os.path.join(folder, parent.role + ".pid")
+class PidFile(snr.Endpoint):
+    def begin(self):
+        path = os.path.join(folder, self.parent.role + ".pid")
         with open(path + ".tmp", "w") as file:
             file.write(str(os.getpid()))
         os.replace(path + ".tmp", path)  # never seen half written
-        return endpoint
+
+
+class PidFileFactory(snr.EndpointFactory):
+    def get(self, parent):
+        return PidFile(self, parent, "pid_file")
 
 
 if __name__ == "__main__":
@@ -122,9 +124,24 @@ class TestNoOrphans(unittest.TestCase):
             time.sleep(0.02)
         self.assertEqual(sorted(self.children), sorted(ROLES), self.output())
         self.assertTrue(all(alive(pid) for pid in self.children.values()), self.output())
-        # The pid is written while the node is built; let the parent finish
-        # starting the other child and set its signal handlers.
-        time.sleep(0.2)
+        # The pid is written once the child's node runs; the parent may still
+        # be starting the other child before it sets its signal handlers.
+        self.wait_for_parent_handlers()
+
+    def wait_for_parent_handlers(self) -> None:
+        """Wait until the parent catches SIGTERM: it sets SIGINT's handler just before."""
+        status_path = f"/proc/{self.parent.pid}/status"
+        if not os.path.exists(status_path):  # no /proc (macOS): give it a moment
+            time.sleep(0.2)
+            return
+        deadline = time.monotonic() + START_LIMIT_S
+        while time.monotonic() < deadline:
+            with open(status_path) as status:
+                caught = next(line for line in status if line.startswith("SigCgt:"))
+            if int(caught.split()[1], 16) & (1 << (signal.SIGTERM - 1)):
+                return
+            time.sleep(0.005)
+        self.fail(f"the parent set no SIGTERM handler\n{self.output()}")
 
     def seconds_until_children_gone(self, limit_s: float) -> float:
         """Seconds until no child runs; fails after ``limit_s``."""

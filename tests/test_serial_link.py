@@ -35,12 +35,17 @@ from snr import (
     TimeoutLoopFactory,
     tasks,
 )
+from tests.helpers import StopWhenTrueFactory
 from tests.page_collector import PageCollectorFactory
 
 try:
     import serial
 except ImportError:  # pragma: no cover - pyserial is a dev dependency
     serial = None
+
+QUICK = 0.02
+"""``read_timeout_s`` for links whose stopping time is not what a test checks:
+a link stops within one read (0.1 s by default)."""
 
 needs_pyserial = unittest.skipIf(serial is None, "pyserial is not installed")
 needs_pty = unittest.skipUnless(sys.platform.startswith(("linux", "darwin")), "needs a pty")
@@ -146,7 +151,11 @@ class TestLoopback(SNRTestCase):
             [
                 ListReplayerFactory(["hello", 42, [1, 2.5], {"a": None}], "to_mcu"),
                 SerialLinkFactory(
-                    "loop://", send_keys=["to_mcu"], receive_key="from_mcu", mode="lines"
+                    "loop://",
+                    send_keys=["to_mcu"],
+                    receive_key="from_mcu",
+                    mode="lines",
+                    read_timeout_s=QUICK,
                 ),
                 received,
             ],
@@ -159,9 +168,9 @@ class TestLoopback(SNRTestCase):
             "robot",
             [
                 ListReplayerFactory([1, "two", [3]], "ping"),
-                SerialLinkFactory("loop://", send_keys=["ping"]),
+                SerialLinkFactory("loop://", send_keys=["ping"], read_timeout_s=QUICK),
                 collected,
-                TimeoutLoopFactory(seconds=0.4),
+                TimeoutLoopFactory(seconds=0.2),  # ten reads: time for an echo to show
             ],
         )
         # each page is stored once locally and once more when it comes back;
@@ -178,7 +187,13 @@ class TestLoopback(SNRTestCase):
                 "robot",
                 [
                     ListReplayerFactory(["two\nlines", "fine"], "out"),
-                    SerialLinkFactory("loop://", send_keys=["out"], receive_key="in", mode="lines"),
+                    SerialLinkFactory(
+                        "loop://",
+                        send_keys=["out"],
+                        receive_key="in",
+                        mode="lines",
+                        read_timeout_s=QUICK,
+                    ),
                     received,
                 ],
             )
@@ -186,7 +201,9 @@ class TestLoopback(SNRTestCase):
         self.assertIn("line break", logs.output[0])
 
     def test_the_link_stops_quickly_with_its_node(self) -> None:
-        node = run_role("robot", [SerialLinkFactory("loop://"), TimeoutLoopFactory(seconds=0.2)])
+        # Stopped once both its threads run; it then stops within a read (0.1 s).
+        both_run = StopWhenTrueFactory(lambda: len(serial_threads()) == 2, within_s=2.0)
+        node = run_role("robot", [SerialLinkFactory("loop://"), both_run])
         link: Any = node.components["serial_link"]
         self.assertFalse(link.is_alive())
         self.assertIsNone(link.port)
@@ -194,7 +211,8 @@ class TestLoopback(SNRTestCase):
 
     def test_a_reload_never_leaves_a_second_live_link(self) -> None:
         record = ReloaderFactory()
-        run_role("robot", [SerialLinkFactory("loop://", send_keys=["ping"]), record])
+        link = SerialLinkFactory("loop://", send_keys=["ping"], read_timeout_s=QUICK)
+        run_role("robot", [link, record])
         self.assertEqual(record.reloaded, ["serial_link"])
         self.assertEqual(len(record.before), 2)  # one reader, one writer
         self.assertTrue(record.new_is_other)
@@ -283,7 +301,12 @@ class TestPseudoTerminal(SNRTestCase):
         collected = PageCollectorFactory(["temp_c", "serial_text", "motor"], stop_after=4)
         node = NodeThread(
             [
-                SerialLinkFactory(self.pty.path, send_keys=["motor"], receive_key="serial_text"),
+                SerialLinkFactory(
+                    self.pty.path,
+                    send_keys=["motor"],
+                    receive_key="serial_text",
+                    read_timeout_s=QUICK,
+                ),
                 ListReplayerFactory([0.5, -0.25], "motor", period_s=0.05),
                 collected,
             ]
@@ -319,7 +342,12 @@ class TestPseudoTerminal(SNRTestCase):
         collected = PageCollectorFactory(["temp_c", "serial_text"], stop_after=len(bad) + 1)
         with self.assertLogs("snr.robot.serial_link", "WARNING") as logs:
             node = NodeThread(
-                [SerialLinkFactory(self.pty.path, receive_key="serial_text"), collected]
+                [
+                    SerialLinkFactory(
+                        self.pty.path, receive_key="serial_text", read_timeout_s=QUICK
+                    ),
+                    collected,
+                ]
             )
             self.pty.read_lines(1)  # the header: the link is up
             self.pty.write(b"\r\n".join(bad) + b'\r\n{"key":"temp_c","data":21.5}\r\n')
@@ -333,7 +361,9 @@ class TestPseudoTerminal(SNRTestCase):
         collected = PageCollectorFactory(["arduino"], stop_after=2)
         node = NodeThread(
             [
-                SerialLinkFactory(self.pty.path, 9600, ["speed"], "arduino", mode="lines"),
+                SerialLinkFactory(
+                    self.pty.path, 9600, ["speed"], "arduino", mode="lines", read_timeout_s=QUICK
+                ),
                 ListReplayerFactory([120], "speed", period_s=0.05),
                 collected,
             ]
@@ -349,7 +379,12 @@ class TestPseudoTerminal(SNRTestCase):
         ticker = TickerFactory(1000, payload="x" * 2000)  # 2 MB: far over any buffer
         with self.assertLogs("snr.robot.serial_link", logging.WARNING) as logs:
             node = NodeThread(
-                [SerialLinkFactory(self.pty.path, send_keys=["cmd"], write_timeout_s=0.2), ticker],
+                [
+                    SerialLinkFactory(
+                        self.pty.path, send_keys=["cmd"], write_timeout_s=0.05, read_timeout_s=QUICK
+                    ),
+                    ticker,
+                ],
                 timeout_s=15.0,
             )
             self.assertTrue(ticker.done.wait(10.0), f"only {ticker.handled} tasks handled")
@@ -373,7 +408,7 @@ class TestPseudoTerminal(SNRTestCase):
             self.pty.read_lines(10_000, timeout_s=0.1)  # what was written meanwhile
             node.stop()
             node.join()
-        # Before the writer thread, each of these tasks could wait 0.2 s: 200 s in all.
+        # Before the writer thread, each of these tasks could wait 0.05 s: 50 s in all.
         self.assertLess(ticker.took_s, 5.0)
         self.assertGreater(dropped, 100)
         self.assertGreater(link.lines_sent, 0)
@@ -386,7 +421,7 @@ class TestPseudoTerminal(SNRTestCase):
     def test_bad_lines_are_skipped_and_the_link_reads_on(self) -> None:
         collected = PageCollectorFactory(["good"], stop_after=1)
         with self.assertLogs("snr.robot.serial_link", logging.WARNING) as logs:
-            node = NodeThread([SerialLinkFactory(self.pty.path), collected])
+            node = NodeThread([SerialLinkFactory(self.pty.path, read_timeout_s=QUICK), collected])
             self.pty.read_lines(1)  # the header: the link is up
             deep = "[" * 5000 + "]" * 5000  # beyond the JSON decoder's recursion limit
             self.pty.write(b"garbage {not json\n")
@@ -405,7 +440,7 @@ class TestPseudoTerminal(SNRTestCase):
 
     def test_a_lost_device_is_reported_and_the_node_stops_cleanly(self) -> None:
         with self.assertLogs("snr.robot.serial_link", "ERROR") as logs:
-            node = NodeThread([SerialLinkFactory(self.pty.path)])
+            node = NodeThread([SerialLinkFactory(self.pty.path, read_timeout_s=QUICK)])
             self.pty.read_lines(1)  # the header: the link is up
             self.pty.close_master()  # as if the cable were pulled
             deadline = time.monotonic() + 3.0

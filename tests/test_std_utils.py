@@ -18,6 +18,7 @@ from snr import (
     format_task,
     tasks,
 )
+from tests.helpers import StopWhenDrainedFactory
 
 
 class TestTimeout(SNRTestCase):
@@ -25,13 +26,13 @@ class TestTimeout(SNRTestCase):
         times: List[float] = []
         node = self.run_test_node(
             [
-                TimeoutLoopFactory(seconds=0.05, ms=100),
+                TimeoutLoopFactory(seconds=0.02, ms=30),
                 StopwatchEndpointFactory(times, [TaskType.terminate]),
             ]
         )
         self.assertEqual(node.terminate_reason, "Timeout")
         self.assertEqual(len(times), 1)
-        self.assertGreaterEqual(times[0], 0.15)
+        self.assertGreaterEqual(times[0], 0.05)
 
     def test_no_time_stops_the_node_once_started(self) -> None:
         node_log = logging.getLogger(f"snr.{self.role}")
@@ -71,7 +72,7 @@ class TestPrinter(SNRTestCase):
             "t",
             Config(
                 {"t": [PrinterEndpointFactory([(TaskType.event, "shown")], out),
-                       TimeoutLoopFactory(ms=100)]},
+                       StopWhenDrainedFactory()]},
                 mode=Mode.TEST,
             ),
         )  # fmt: skip

@@ -102,7 +102,7 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
                 DummyEndpointFactory("motors"),
                 TimeoutLoopFactory(seconds=60),  # still waiting at the limit
             ],
-            "The 'test' node was still running when its time limit of 0.2 s ran out",
+            "The 'test' node was still running when its time limit of 0.1 s ran out",
             "list_replayer_x (ListReplayerLoop, finished)",
             "motors (DummyEndpoint)",
             "timeout_loop (TimeoutLoop, still running)",
@@ -110,7 +110,7 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
             'tasks.terminate("done")',
             "timeout_s=",
             "expect_timeout=True",
-            timeout_s=0.2,
+            timeout_s=0.1,
         )
         self.assertNotIn("node_core", message)
 
@@ -120,7 +120,7 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
             [ListReplayerFactory([1], "x"), ExpectorEndpointFactory(expector)],
             "The expectations of expector_endpoint were not met: "
             "TaskType.store_page(x): expected 2, saw 1.",
-            timeout_s=0.2,
+            timeout_s=0.1,
         )
 
     def test_a_satisfied_expector_without_exit_when_satisfied_is_pointed_out(self) -> None:
@@ -128,12 +128,12 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
         self.assertFailsWith(
             [ListReplayerFactory([1], "x"), ExpectorEndpointFactory(expector)],
             "expector_endpoint was satisfied but was made without exit_when_satisfied=True",
-            timeout_s=0.2,
+            timeout_s=0.1,
         )
 
     def test_the_class_attribute_sets_the_default_limit(self) -> None:
         class Quick(SNRTestCase):
-            timeout_s = 0.1
+            timeout_s = 0.05
 
             def runTest(self) -> None:
                 self.run_test_node([DummyEndpointFactory()])
@@ -142,11 +142,11 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
         result = unittest.TestResult()
         Quick().run(result)
         self.assertEqual(len(result.failures), 1, result.errors)
-        self.assertIn("time limit of 0.1 s", result.failures[0][1])
+        self.assertIn("time limit of 0.05 s", result.failures[0][1])
 
     def test_expect_timeout_runs_until_the_limit(self) -> None:
-        node = self.run_test_node([DummyEndpointFactory()], timeout_s=0.1, expect_timeout=True)
-        self.assertEqual(node.terminate_reason, "test time limit of 0.1 s reached")
+        node = self.run_test_node([DummyEndpointFactory()], timeout_s=0.05, expect_timeout=True)
+        self.assertEqual(node.terminate_reason, "test time limit of 0.05 s reached")
 
     def test_expect_timeout_fails_when_the_node_stops_first(self) -> None:
         self.assertFailsWith(
@@ -169,17 +169,17 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
                 MovingAvgFilterFactory("in", "out", 2),
                 ExpectorEndpointFactory(expector),
             ],
-            timeout_s=0.2,
+            timeout_s=0.1,
         )
         with open(os.path.join(ROOT, "docs", "utilities.md"), encoding="utf-8") as f:
             page = f.read()
-        shown = message.replace("time limit of 0.2 s", "time limit of 2 s")
+        shown = message.replace("time limit of 0.1 s", "time limit of 2 s")
         self.assertIn(f"AssertionError: {shown}\n", page)
 
     def test_the_failure_is_a_unittest_failure_not_an_error(self) -> None:
         class Forgotten(SNRTestCase):
             def test_never_stops(self) -> None:
-                self.run_test_node([DummyEndpointFactory("forgotten")], timeout_s=0.1)
+                self.run_test_node([DummyEndpointFactory("forgotten")], timeout_s=0.05)
 
         suite = unittest.defaultTestLoader.loadTestsFromTestCase(Forgotten)
         stream = io.StringIO()

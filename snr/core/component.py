@@ -121,6 +121,17 @@ class Component(AbstractComponent):
             self._log = self.parent.log.getChild(self.name)
         return self._log
 
+    @log.setter
+    def log(self, value: Any) -> None:
+        # Without this setter Python says "property 'log' of 'X' object has no
+        # setter", which names neither the clash nor the fix.
+        cls = type(self)
+        raise ComponentError(
+            f"{describe_class(cls)} uses the name 'log' for its own value, but 'log' is "
+            "already the component's logger (self.info(...), self.warn(...) write to it). "
+            f"Use another name, e.g. self.{cls.__name__.lower()}_log.\n{caller_block()}".rstrip()
+        )
+
     # -- handlers ---------------------------------------------------------
     @property
     def task_handlers(self) -> TaskHandlerMap:

@@ -32,6 +32,7 @@ from snr.core.explain import (
     only_returns_none,
     reload_failure,
     wrong_get_result_error,
+    wrong_get_signature,
 )
 from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
@@ -45,6 +46,7 @@ from snr.prelude import (
     SNRError,
 )
 from snr.prelude.abstract import explain_abstract_error
+from snr.prelude.error_text import exception_text
 from snr.prelude.errors import (
     describe_callable,
     describe_class,
@@ -91,6 +93,9 @@ class ComponentSet:
         self._rebuild_needed = False
         self._pending_adds: List[AbstractComponent] = []
         self._none_told: Set[Any] = set()  # factories' get() already said to return None
+        #: Called with each component before it is added (set by the node in DEBUG
+        #: and TEST mode to read the student's class; see `check_component`).
+        self.check_added: Optional[Callable[[AbstractComponent], None]] = None
 
     # -- building ----------------------------------------------------------
     def build(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
@@ -113,9 +118,9 @@ class ComponentSet:
         except SNRError:
             raise
         except TypeError as error:
-            explained = explain_abstract_error(error)
+            explained = explain_abstract_error(error) or wrong_get_signature(factory, error)
             if explained is not None:
-                raise explained from None  # Python's "abstract class" text only confuses
+                raise explained from None  # Python's own text blames SNR's call
             raise failed_get_error(factory, error, self.node.role) from error
         except Exception as error:
             raise failed_get_error(factory, error, self.node.role) from error
@@ -164,6 +169,8 @@ class ComponentSet:
                 "__init__ so SNR can give the component its name and task handlers."
                 f"{_init_block(type(component))}"
             )
+        if self.check_added is not None:
+            self.check_added(component)
         self._check_name_free(component)
         self.by_name[component.name] = component
         if self.table_stale or self.running:
@@ -376,10 +383,11 @@ class ComponentSet:
             raise
         except Exception as error:
             frames = student_frames(error.__traceback__)
+            what = exception_text(error)
             trim_runtime_frames(error)
             raise ComponentError(
                 f"{describe_class(type(component))} {component.name!r} failed to start: "
-                f"{type(error).__name__}: {error}\n"
+                f"{what}\n"
                 f"Where it happened (most recent call last):\n{frames}"
             ) from error
 

@@ -13,6 +13,7 @@ from snr.prelude import (
     Mode,
     Role,
 )
+from snr.prelude.error_text import wrong_call
 from snr.prelude.errors import closest_match
 
 __all__ = ["Config"]
@@ -42,6 +43,17 @@ class Config(AbstractConfig):
     ) -> None:
         if factories is None:
             factories = {}
+        given: object = factories  # typed as a dict, but a student may pass anything
+        if isinstance(given, (list, tuple)):
+            raise ConfigError(
+                wrong_call(
+                    "Config",
+                    Config,
+                    (factories,),
+                    "a Config needs a dict from each role to its list of factories, not "
+                    'the list alone: Config({"robot": [...]}).',
+                )
+            )
         if not isinstance(factories, Mapping):
             raise ConfigError(
                 f"Config(factories=...) got {type(factories).__name__}; it needs a dict "

@@ -32,6 +32,7 @@ from snr.prelude import (
     Task,
     TaskHandler,
 )
+from snr.prelude.error_text import exception_text
 from snr.prelude.errors import (
     describe_callable,
     describe_class,
@@ -60,6 +61,7 @@ __all__ = [
     "task_label",
     "task_values",
     "wrong_get_result_error",
+    "wrong_get_signature",
 ]
 
 
@@ -70,8 +72,8 @@ def task_label(task: Task) -> str:
 
 def task_values(task: Task) -> str:
     """What a task carries, shortened: its page's key and data, or its values."""
-    values = task.val_list
-    if len(values) == 1 and isinstance(values[0], Page):
+    values: object = task.val_list  # a task built by hand may hold anything
+    if isinstance(values, list) and len(values) == 1 and isinstance(values[0], Page):
         page = values[0]
         return f"carrying the page {page.key!r} with data {short_repr(page.data, 200)}"
     return f"with values {short_repr(values, 200)}"
@@ -166,8 +168,8 @@ def handler_failure(
     frames = student_frames(error.__traceback__)
     message = (
         f"Task handler {describe_callable(handler)}{where} raised "
-        f"{type(error).__name__}: {error}\nwhile handling the task {task_label(task)} "
-        f"{task_values(task)}.\n"
+        f"{exception_text(error)}\nwhile handling the task {task_label(task)} "
+        f"{task_values(task)}.{_values_hint(task)}\n"
         f"Where it happened (most recent call last):\n{frames}"
     )
     if deployed:
@@ -183,6 +185,18 @@ def handler_failure(
     trim_runtime_frames(error)
     failure.__cause__ = error
     return failure
+
+
+def _values_hint(task: Task) -> str:
+    """A hint when the task's ``val_list`` is not a list (it was built by hand)."""
+    values: object = task.val_list
+    if isinstance(values, list):
+        return ""
+    return (
+        f" Its val_list is {short_repr(values, 60)} ({type(values).__name__}), not a list: "
+        "whoever built the task must pass the values in a list, e.g. "
+        f"Task(TaskType.{task.type.name}, {task.name!r}, [value])."
+    )
 
 
 def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerError:
@@ -324,7 +338,7 @@ def loop_failure(loop: AbstractLoop, error: BaseException, deployed: bool) -> Lo
     raised in ``loop()`` is explained too, instead of vanishing with the thread.
     """
     frames = student_frames(error.__traceback__)
-    what = f"{type(error).__name__}: {error}"
+    what = exception_text(error)
     if isinstance(error, SystemExit):
         what = f"sys.exit({'' if error.code is None else repr(error.code)})"
     message = (
@@ -357,11 +371,48 @@ def loop_failure(loop: AbstractLoop, error: BaseException, deployed: bool) -> Lo
 def failed_get_error(factory: AbstractFactory, error: Exception, role: str) -> ComponentError:
     """The ComponentError for a factory's ``get()`` that raised ``error``."""
     frames = student_frames(error.__traceback__)
+    what = exception_text(error)
     trim_runtime_frames(error)
     return ComponentError(
-        f"{describe_callable(type(factory).get)} raised {type(error).__name__}: "
-        f"{error}\nwhile building a component for node {role!r}.\n"
+        f"{describe_callable(type(factory).get)} raised {what}"
+        f"\nwhile building a component for node {role!r}.\n"
         f"Where it happened (most recent call last):\n{frames}"
+    )
+
+
+def wrong_get_signature(factory: AbstractFactory, error: TypeError) -> Optional[ComponentError]:
+    """The ComponentError for a ``get()`` that cannot be called as ``get(parent)``, or None.
+
+    Python's own TypeError ("takes 1 positional argument but 2 were given")
+    points at SNR's call; the mistake is the student's ``def``.
+
+    Example::
+
+        wrong_get_signature(factory, error)
+        # PingerFactory.get (robot.py:10) is written as `def get(self)`, but ...
+    """
+    tb = error.__traceback__
+    if tb is None or tb.tb_next is not None:
+        return None  # raised inside get(): not a call that failed to bind
+    get = type(factory).get
+    try:
+        inspect.signature(get).bind(factory, object())
+        return None
+    except TypeError:
+        pass
+    except ValueError:
+        return None
+    code = getattr(get, "__code__", None)
+    params = ", ".join(inspect.signature(get).parameters)
+    block = ""
+    if code is not None:
+        qualname = getattr(code, "co_qualname", get.__qualname__)
+        block = "\n" + source_block(code.co_filename, code.co_firstlineno, qualname)
+    return ComponentError(
+        f"{describe_callable(get)} is written as `def get({params})`, but the node calls "
+        "get(parent) with itself as the one argument. Write it as `def get(self, "
+        "parent: AbstractNode) -> MyComponent:` and pass `parent` on: "
+        f"`return MyComponent(self, parent)`.{block}"
     )
 
 
@@ -392,7 +443,7 @@ def reload_failure(error: BaseException) -> str:
         shown = f"\n    {line}" if line else ""
         return f"{error.filename}:{error.lineno}: SyntaxError: {error.msg}{shown}"
     frames = student_frames(error.__traceback__)
-    return f"{type(error).__name__}: {error}\nWhere it happened (most recent call last):\n{frames}"
+    return f"{exception_text(error)}\nWhere it happened (most recent call last):\n{frames}"
 
 
 def running_line(thread_id: Optional[int]) -> str:

@@ -73,6 +73,8 @@ class HandlerRunner:
             the current task.
         failure: the first error that stopped the node (DEBUG/TEST), or None.
         slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
+        on_unhandled: called with each task no handler matched, or None (the
+            default): a DEBUG node reports events nothing handles through it.
         repeats: the `RepeatFilter` that keeps repeated failures from flooding the log.
     """
 
@@ -99,6 +101,8 @@ class HandlerRunner:
         self.failure: Optional[SNRError] = None
         self.repeats = RepeatFilter(log)
         self._slow_reported: Set[Any] = set()
+        #: Called with a task that no handler matched (set by a DEBUG node).
+        self.on_unhandled: Optional[Callable[[Task], None]] = None
 
     def run_queued(self, max_tasks: int = 100_000) -> None:
         """Run queued tasks until the queue is empty, the node stops, or ``max_tasks`` ran.
@@ -117,6 +121,7 @@ class HandlerRunner:
         timed = self.timed
         clock = time.perf_counter
         slow_s = self.slow_handler_s
+        on_unhandled = self.on_unhandled
         for _ in range(max_tasks):
             if urgent:
                 task = urgent.popleft()
@@ -130,6 +135,8 @@ class HandlerRunner:
             if entries is None:
                 entries = lookup(task.type)
                 if entries is None:
+                    if on_unhandled is not None:  # DEBUG: an event nobody handles
+                        on_unhandled(task)
                     continue
             for handler, key, component, cell in entries:
                 if timed:

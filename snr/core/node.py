@@ -24,6 +24,7 @@ import time
 from typing import Any, List, Optional, Set, Tuple
 
 from snr.core import tasks
+from snr.core.class_checks import check_component
 from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerTable
 from snr.core.explain import THREAD_SAFE_INSTEAD
@@ -33,12 +34,14 @@ from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.node_core import NodeCoreFactory
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Timer
+from snr.core.wiring_checks import WiringChecks
 from snr.prelude import (
     AbstractComponent,
     AbstractConfig,
     AbstractFactory,
     AbstractLoop,
     AbstractNode,
+    ComponentError,
     ComponentName,
     ConfigError,
     DataDict,
@@ -55,6 +58,7 @@ from snr.prelude import (
     TaskType,
     ThreadSafetyError,
 )
+from snr.prelude.error_text import bad_data_key, page_as_data, wrong_call
 from snr.prelude.errors import caller_location
 
 __all__ = ["Node", "NodeState"]
@@ -97,6 +101,9 @@ class Node(AbstractNode):
         terminate_reason: why the node stopped, once it has.
         key_hints: in DEBUG mode, the `MissingKeyHints` that log a hint for a
             data key read but never stored (None in other modes).
+        wiring_checks: in DEBUG mode, the `WiringChecks` that warn about an
+            event nothing handles and a handler nothing can reach (None in
+            other modes).
     """
 
     idle_wake_s: float = 1.0
@@ -105,6 +112,10 @@ class Node(AbstractNode):
     """The queue's high-water mark: loops wait (then drop) above it; see `TaskQueue`."""
 
     def __init__(self, role: Role, config: AbstractConfig) -> None:
+        if isinstance(role, AbstractConfig) and isinstance(config, str):
+            raise ConfigError(
+                wrong_call("Node", Node, (role, config), "the role and the config are swapped.")
+            )
         if not isinstance(role, str) or not role:
             raise ConfigError(f"A node's role must be a non-empty string, not {role!r}.")
         if not isinstance(config, AbstractConfig):
@@ -147,7 +158,15 @@ class Node(AbstractNode):
         )
         if self.key_hints is not None:
             self.key_hints.expected_keys = self._handled_keys
+        self.wiring_checks: Optional[WiringChecks] = None
+        if self.mode is Mode.DEBUG:
+            self.wiring_checks = WiringChecks(
+                self.log, role, self._components.table, self.datastore
+            )
+            self._runner.on_unhandled = self.wiring_checks.unhandled
 
+        if self.mode is not Mode.DEPLOYED:
+            self._components.check_added = self._check_component
         self.add_component(NodeCoreFactory().get(self), start=False)
         for factory in config.get(role):
             component = self.build_component(factory)
@@ -219,12 +238,15 @@ class Node(AbstractNode):
         """In DEBUG mode, warn about handlers of data keys that look misspelled.
 
         Runs once by itself a few seconds after the node starts (see
-        `MissingKeyHints.check_handlers`).
+        `MissingKeyHints.check_handlers`), and about handlers registered so
+        that they can never run (see `WiringChecks.check_never_ran`).
         """
         if self.key_hints is None:
             return
         handled = self._page_handlers()
         self.key_hints.check_handlers(handled, self.datastore)
+        if self.wiring_checks is not None:
+            self.wiring_checks.check_never_ran()
 
     def _page_handlers(self) -> List[Tuple[DataKey, TaskHandler]]:
         """(key, handler) for every handler registered for one data key's pages."""
@@ -235,6 +257,14 @@ class Node(AbstractNode):
                 if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
                     handled.append((task_id[1], handler))
         return handled
+
+    def _check_component(self, component: AbstractComponent) -> None:
+        """A name SNR uses raises; in DEBUG, work that can have no effect is logged once."""
+        warn = self._warn_once if self.mode is Mode.DEBUG else None
+        check_component(component, warn)
+
+    def _warn_once(self, message: str) -> None:
+        self.log.warning("%s\n(Said once per class, in DEBUG mode only.)", message)
 
     def _handled_keys(self) -> Set[DataKey]:
         return {key for key, _ in self._page_handlers()}
@@ -364,7 +394,16 @@ class Node(AbstractNode):
     # Datastore (thesis listing 6.4)
     # ------------------------------------------------------------------
     def page(self, key: DataKey, data: Any, process: bool = True) -> Page:
-        """A new page from this node, stamped with the wall-clock time."""
+        """A new page from this node, stamped with the wall-clock time.
+
+        Raises:
+            ComponentError: ``key`` is not a str (key and data swapped?), or
+                ``data`` is a whole `Page` (store ``page.data``).
+        """
+        if not isinstance(key, str):
+            raise ComponentError(bad_data_key(key, data))
+        if data.__class__ is Page:
+            raise ComponentError(page_as_data(key))
         return Page(key, data, self.role, time.time(), process)
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:

@@ -14,7 +14,7 @@ import sys
 import threading
 import time
 from types import FrameType
-from typing import TYPE_CHECKING, Any, Callable, List, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Any, Callable, List, NoReturn, Optional, Sequence, Union
 
 from snr.core.config import Config
 from snr.core.node import Node
@@ -28,6 +28,7 @@ from snr.prelude import (
     Role,
     SNRError,
 )
+from snr.prelude.error_text import wrong_call
 
 if TYPE_CHECKING:
     import argparse
@@ -65,6 +66,14 @@ def _as_config(components_or_config: Union[AbstractConfig, ComponentsByRole]) ->
     if isinstance(components_or_config, AbstractConfig):
         return components_or_config
     return Config(components_or_config)
+
+
+def _exit_with(error: ConfigError, exit_on_error: bool) -> NoReturn:
+    """Raise ``error``, or (at the top of a program) print it and exit with status 1."""
+    if not exit_on_error:
+        raise error
+    report_error(error)
+    raise SystemExit(1)
 
 
 def _config_or_exit(
@@ -112,6 +121,20 @@ class SynchronousRunner(AbstractRunner):
         announce_interrupt: bool = True,
         on_node: Optional[Callable[[Node], None]] = None,
     ) -> None:
+        given: object = config  # typed, but a student may pass anything
+        given_role: object = role
+        if not isinstance(given_role, str) and isinstance(given, str):
+            _exit_with(
+                ConfigError(
+                    wrong_call(
+                        "SynchronousRunner",
+                        SynchronousRunner,
+                        (role, config),
+                        "the role and the config are swapped: the role comes first.",
+                    )
+                ),
+                exit_on_error,
+            )
         self.role = role
         self.config = _config_or_exit(config, exit_on_error)
         self.exit_on_error = exit_on_error
@@ -443,6 +466,21 @@ class CliRunner(AbstractRunner):
         components_or_config: Union[AbstractConfig, ComponentsByRole],
         argv: Optional[Sequence[str]] = None,
     ) -> None:
+        if isinstance(components_or_config, str):
+            _exit_with(
+                ConfigError(
+                    wrong_call(
+                        "CliRunner",
+                        CliRunner,
+                        (components_or_config, argv),
+                        f"the first argument is the role {components_or_config!r}, but "
+                        "CliRunner takes the components (or a Config) and reads the role "
+                        "from the command line: `python robot.py "
+                        f"{components_or_config}`.",
+                    )
+                ),
+                exit_on_error=True,
+            )
         self.config = _config_or_exit(components_or_config, exit_on_error=True)
         self.argv = list(sys.argv if argv is None else argv)
 

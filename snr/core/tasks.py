@@ -15,6 +15,7 @@ from typing import Any, List, Optional
 
 from snr.prelude import (
     AbstractFactory,
+    ComponentError,
     ComponentName,
     DataKey,
     Page,
@@ -23,6 +24,7 @@ from snr.prelude import (
     TaskPriority,
     TaskType,
 )
+from snr.prelude.error_text import bad_data_key, page_as_data, values_not_a_list
 
 __all__ = [
     "ADD_COMPONENT",
@@ -57,8 +59,16 @@ sends it too, a few seconds after a link comes up, carrying its check of that li
 
 
 def event(name: TaskName, val_list: Optional[List[Any]] = None) -> Task:
-    """An event task, e.g. ``tasks.event("button_pressed", ["A"])``."""
-    return Task(TaskType.event, name, [] if val_list is None else val_list)
+    """An event task, e.g. ``tasks.event("button_pressed", ["A"])``.
+
+    Raises:
+        ComponentError: ``val_list`` is not a list (``tasks.event("say", "hi")``).
+    """
+    if val_list is None:
+        return Task(TaskType.event, name, [])
+    if not isinstance(val_list, list):
+        raise ComponentError(values_not_a_list(name, val_list))
+    return Task(TaskType.event, name, val_list)
 
 
 def store_page(page: Page) -> Task:
@@ -77,7 +87,14 @@ def store_data(key: DataKey, data: Any, process: bool = True) -> Task:
     Example::
 
         return tasks.store_data("thruster_data", 2)
+
+    Raises:
+        ComponentError: ``key`` is not a str, or ``data`` is a whole `Page`.
     """
+    if not isinstance(key, str):
+        raise ComponentError(bad_data_key(key, data))
+    if data.__class__ is Page:
+        raise ComponentError(page_as_data(key))
     page = Page(key, data, origin="", created_at_s=time.time(), process=process)
     return Task(TaskType.store_page, key, [page])
 

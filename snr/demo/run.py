@@ -9,6 +9,8 @@ from __future__ import annotations
 
 import logging
 import socket
+import sys
+from typing import Optional
 
 import snr
 from snr.demo.system import make_components
@@ -74,23 +76,52 @@ class LogLevelFactory(snr.EndpointFactory):
         return LogLevel(self, parent)
 
 
-def run_demo(seconds: float = 15.0, verbose: bool = False) -> int:
+VIEWED_KEYS = ["sensor_data", "controller_input"]
+"""The topside keys ``--view`` shows: telemetry (a dict of numbers) and the pilot's command."""
+
+
+def run_demo(seconds: float = 15.0, verbose: bool = False, view_port: Optional[int] = None) -> int:
     """Run the UROV system for ``seconds``: the exit code of ``python -m snr demo``.
 
     Each role runs in its own process, talking over TCP on 127.0.0.1 (ports
     chosen now, so the demo never collides with anything). The topside
     process shows the vehicle's live telemetry. Ctrl-C stops it early.
-    Returns 0 when both nodes ended well, else 1.
+    With ``view_port`` (``--view``) the topside node also serves a live view
+    of `VIEWED_KEYS` for Foxglove or Lichtblick on that port of 127.0.0.1,
+    and the address to open is printed. Returns 0 when both nodes ended
+    well, 1 if one did not, 2 if the live view cannot be offered (the
+    ``viz`` extra is not installed).
 
     Example::
 
         run_demo(seconds=2, verbose=True)   # with the nodes' whole log
+        run_demo(seconds=120, view_port=8765)   # open the printed URL in a browser
     """
     components = make_components("127.0.0.1", free_port_pair(), seconds)
     level = logging.INFO if verbose else logging.WARNING
     for factories in components.values():
         assert isinstance(factories, list)
         factories.insert(0, LogLevelFactory(level))
+    if view_port is not None:
+        if view_port == 0:  # the URL is printed before the node starts: choose the port now
+            with socket.socket() as probe:
+                probe.bind(("127.0.0.1", 0))
+                view_port = int(probe.getsockname()[1])
+        try:
+            bridge = snr.FoxgloveBridgeFactory(VIEWED_KEYS, port=view_port)
+        except snr.ConfigError as error:
+            print(error, file=sys.stderr)
+            return 2
+        topside = components["topside"]
+        assert isinstance(topside, list)
+        topside.append(bridge)
+        print(
+            f"Live view: open {bridge.app_url}\n"
+            f"  (or, in Foxglove or Lichtblick, open a Foxglove WebSocket connection to "
+            f"{bridge.url}),\n"
+            "  add a Plot panel and plot /sensor_data.data.depth_m",
+            flush=True,
+        )
     config = snr.Config(components, mode=snr.Mode.DEPLOYED)
     hint = "" if verbose else "; --verbose shows the log"
     print(

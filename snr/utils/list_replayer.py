@@ -5,7 +5,8 @@ from __future__ import annotations
 from typing import Any, Optional, Sequence
 
 from snr.core import LoopFactory, ThreadLoop
-from snr.prelude import AbstractNode, DataKey, Task, TaskType
+from snr.prelude import AbstractNode, ConfigError, DataKey, Task, TaskType
+from snr.prelude.error_text import wrong_call
 
 __all__ = ["ListReplayerFactory", "ListReplayerLoop"]
 
@@ -72,6 +73,19 @@ class ListReplayerFactory(LoopFactory):
         exit_when_done: bool = False,
     ) -> None:
         super().__init__()
+        if not isinstance(key, str) or isinstance(values, str):
+            swapped = isinstance(values, str) and not isinstance(key, str)
+            raise ConfigError(
+                wrong_call(
+                    "ListReplayerFactory",
+                    ListReplayerFactory,
+                    (values, key),
+                    "the values and the key are swapped: the list of values comes first."
+                    if swapped
+                    else f"the values must be a list and the key a str, not "
+                    f"{type(values).__name__} and {type(key).__name__}.",
+                )
+            )
         self.values = list(values)
         self.key = key
         self.period_s = period_s

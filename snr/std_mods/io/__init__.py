@@ -1,4 +1,4 @@
-"""Input and output: console, recorder, replayer, controller.
+"""Input and output: console, recorder, replayer, controller, live view.
 
 Example::
 
@@ -37,6 +37,10 @@ from snr.std_mods.io.joystick import (
     JoystickStep,
     SimulatedJoystick,
 )
+from snr.std_mods.io.live_view import (
+    FoxgloveBridge,
+    FoxgloveBridgeFactory,
+)
 from snr.std_mods.io.recorder import (
     RecorderEndpoint,
     RecorderEndpointFactory,
@@ -63,6 +67,8 @@ __all__ = [
     "ControllerLoopFactory",
     "DEFAULT_CONSOLE_PORT",
     "DEFAULT_JOYSTICK_SCRIPT",
+    "FoxgloveBridge",
+    "FoxgloveBridgeFactory",
     "InputMappingEndpoint",
     "InputMappingFactory",
     "Joystick",

@@ -225,9 +225,13 @@ class _RemoteSession:
             and len(self.out) < _PAUSE_OUT_BYTES
         )
 
+    def has_line_waiting(self) -> bool:
+        """True when a line read from the socket waits to be run."""
+        return b"\n" in self._inbox
+
     def wants_to_read(self) -> bool:
         """True when the socket should be read: lines are taken, none is waiting."""
-        return self.takes_lines() and b"\n" not in self._inbox
+        return self.takes_lines() and not self.has_line_waiting()
 
     def receive(self, data: bytes) -> None:
         """Keep bytes read from the socket until their lines are taken."""
@@ -552,14 +556,21 @@ class CommandReceiverLoop(ConsoleLoop):
 
     def _serve(self, session: _RemoteSession) -> None:
         """Run the lines the console may have run, send its replies, watch its socket."""
-        while not session.closed and session.takes_lines():
-            got, raw = session.next_line()
-            if not got:
+        while True:
+            while not session.closed and session.takes_lines():
+                got, raw = session.next_line()
+                if not got:
+                    break
+                self._on_line(session, raw)
+            if session.closed:
+                return
+            unanswered = session.unanswered
+            session.collect()
+            # A reply filled after this pass read its wake-up is collected here:
+            # if that makes room for a line already read, run it now, or it would
+            # wait for the next wake-up (up to _POLL_S) with nothing to bring it.
+            if session.unanswered == unanswered or not session.has_line_waiting():
                 break
-            self._on_line(session, raw)
-        if session.closed:
-            return
-        session.collect()
         if len(session.out) > MAX_SEND_BUFFER_BYTES:
             self._drop_slow_reader(session)
             return

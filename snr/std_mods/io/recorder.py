@@ -1,9 +1,11 @@
 """`RecorderEndpointFactory`: write pages to disk as they are stored.
 
 The file is in the JSON-lines page format (``snr.std_mods.codec``): a header line,
-then one page per line. Each line is flushed as soon as it is written, so a
-process that is killed loses at most the page it was writing; replay the
-file with `ReplayerLoopFactory` or read it with `PageReader`.
+then one page per line; or, for a file named ``*.mcap``, in MCAP
+(``snr.std_mods.io.mcap_files``), one JSON message per page. Each page is
+flushed as soon as it is written, so a process that is killed loses at most
+the page it was writing; replay the file with `ReplayerLoopFactory` or read
+it with `PageReader`.
 
 A recording is never replaced without being asked: when the file already
 holds a recording, the previous one is kept under a new name (its time in
@@ -13,6 +15,7 @@ cannot write are logged and skipped; the node goes on.
 
 from __future__ import annotations
 
+import importlib
 import logging
 import os
 import sys
@@ -32,18 +35,50 @@ from snr.prelude import (
     TaskType,
 )
 from snr.std_mods.codec import PathLike, decode_line, header_line, is_header, page_to_line
+from snr.std_mods.io.mcap_files import (
+    COMPRESSION_PACKAGES,
+    COMPRESSIONS,
+    MCAP_MAGIC,
+    McapPageWriter,
+    format_of_name,
+    require_mcap,
+)
 
-__all__ = ["RecorderEndpoint", "RecorderEndpointFactory", "kept_name"]
+__all__ = ["FILE_FORMATS", "RecorderEndpoint", "RecorderEndpointFactory", "kept_name"]
+
+FILE_FORMATS = ("jsonl", "mcap")
+"""The formats a recorder writes: JSON lines (the default) and MCAP."""
 
 _PEEK_BYTES = 65536  # enough for the first line of any recording (its header)
 _MAX_TIME = sys.float_info.max  # NaN, infinity and larger integers fail the comparison
+
+
+class _LinesFile:
+    """A JSON-lines recording open for writing: a line per page, flushed at once."""
+
+    def __init__(self, file: IO[str], sync: bool) -> None:
+        self.file = file
+        self.sync = sync
+
+    def write(self, page: Page, line: str) -> None:
+        self.file.write(line + "\n")  # one write per page, so a kill cuts one line at most
+        self.file.flush()
+        if self.sync:
+            os.fsync(self.file.fileno())
+
+    def close(self) -> None:
+        self.file.close()
+
+
+RecordingFile = Union[_LinesFile, McapPageWriter]
+"""A recording open for writing: ``write(page, line)`` and ``close()``."""
 
 
 class RecorderEndpoint(Endpoint):
     """Appends every page stored under its keys to the recording file.
 
     The file opens when the node starts and closes when it stops. After a
-    hot reload the new endpoint appends to the same file.
+    hot reload the new endpoint goes on writing the same open file.
 
     Example::
 
@@ -53,7 +88,10 @@ class RecorderEndpoint(Endpoint):
     def __init__(self, factory: RecorderEndpointFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
         self.recording = factory
-        self._file: Optional[IO[str]] = None
+        # The newest endpoint of this factory: a reload builds the new one before
+        # the old one terminates, so the old one knows to leave the file open.
+        factory.endpoint = self
+        self._file: Optional[RecordingFile] = None
         self._write_failed = False
         if factory.repeats is None:  # on the factory: a reload does not repeat the messages
             factory.repeats = RepeatFilter(self.log, first=1)
@@ -81,15 +119,16 @@ class RecorderEndpoint(Endpoint):
         except Exception as error:  # never take the node down over one page
             self._skip(page, error)
             return None
-        self._write(line)
+        self._write(page, line)
         return None
 
     def terminate(self) -> None:
-        """Close the file (every line is already flushed)."""
+        """Close the file (every page is already flushed), unless a reload goes on with it."""
         self._repeats.flush()  # the counts of skipped pages not yet logged
-        if self._file is not None:
-            self._file.close()
-            self._file = None
+        self._file = None
+        if self.recording.endpoint is not self:
+            return  # reloaded: the new endpoint writes on to the open file
+        if self.recording.close_file(self.log):
             self.info(
                 "Recorded %d pages to %s (%d skipped)",
                 self.recording.pages_written,
@@ -98,7 +137,7 @@ class RecorderEndpoint(Endpoint):
             )
 
     # -- helpers ------------------------------------------------------------
-    def _open(self) -> IO[str]:
+    def _open(self) -> RecordingFile:
         if self._file is None:
             first = not self.recording.started
             self._file = self.recording.open_file()
@@ -124,15 +163,13 @@ class RecorderEndpoint(Endpoint):
             )
         else:
             how = "appending" if recording.append else "writing"
+            if recording.file_format == "mcap":
+                how += " MCAP"
             self.info("Recording %s to %s (%s)", ", ".join(recording.keys), recording.path, how)
 
-    def _write(self, line: str) -> None:
+    def _write(self, page: Page, line: str) -> None:
         try:
-            file = self._open()
-            file.write(line + "\n")  # one write per page, so a kill cuts one line at most
-            file.flush()
-            if self.recording.sync:
-                os.fsync(file.fileno())
+            self._open().write(page, line)
         except OSError as error:
             self.recording.pages_skipped += 1
             if not self._write_failed:  # a full disk would fail every page: say it once
@@ -210,10 +247,18 @@ class RecorderEndpointFactory(EndpointFactory):
         name: the endpoint's name (default ``"recorder"``).
         overwrite: replace whatever ``filename`` holds instead of keeping it.
         append: add this run's pages to the end of ``filename`` (after a
-            header line, so the file stays one valid recording).
+            header line, so the file stays one valid recording). JSON lines only.
+        file_format: ``"jsonl"`` or ``"mcap"``; by default ``"mcap"`` when
+            ``filename`` ends in ``.mcap``, else ``"jsonl"`` (the thesis's format).
+            MCAP needs ``pip install 'snr[viz]'``; see ``docs/recording.md``.
+        compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress the file in
+            chunks of about 1 MiB (a killed process loses the unfinished
+            chunk); ``None`` (default) writes and flushes each page on its own.
 
     Raises:
-        ConfigError: no keys, or both ``overwrite`` and ``append``.
+        ConfigError: no keys, both ``overwrite`` and ``append``, an unknown
+            ``file_format`` or ``compression``, or ``append`` or ``compression``
+            where the format does not allow it.
 
     Data that JSON cannot hold (a set, an object, NaN, nesting deeper than
     the codec allows) is logged, naming its key and type, and skipped;
@@ -224,6 +269,7 @@ class RecorderEndpointFactory(EndpointFactory):
         config = Config({"robot": [
             DepthSensorFactory("depth_m"),
             RecorderEndpointFactory("dive.jsonl", ["depth_m"]),
+            RecorderEndpointFactory("dive.mcap", ["depth_m"], name="mcap_recorder"),
         ]})
 
     Attributes:
@@ -242,6 +288,8 @@ class RecorderEndpointFactory(EndpointFactory):
         name: Optional[str] = None,
         overwrite: bool = False,
         append: bool = False,
+        file_format: Optional[str] = None,
+        compression: Optional[str] = None,
     ) -> None:
         super().__init__(sys.modules[__name__])
         self.filename = os.fspath(filename)
@@ -256,6 +304,14 @@ class RecorderEndpointFactory(EndpointFactory):
                 f"RecorderEndpointFactory({self.filename!r}): choose overwrite=True (replace "
                 "the file) or append=True (add to it), not both."
             )
+        self.file_format = _choose_format(self.filename, file_format)
+        self.compression = _choose_compression(self.filename, self.file_format, compression)
+        if append and self.file_format == "mcap":
+            raise ConfigError(
+                f"RecorderEndpointFactory({self.filename!r}): append=True works for JSON "
+                "lines only (an MCAP file ends with an index written when it closes). "
+                "Record each run to its own .mcap file, or append to a .jsonl file."
+            )
         self.sync = sync
         self.name = name or "recorder"
         self.overwrite = overwrite
@@ -266,18 +322,75 @@ class RecorderEndpointFactory(EndpointFactory):
         self.pages_skipped = 0
         self.repeats: Optional[RepeatFilter] = None
         self.started = False
+        self.file: Optional[RecordingFile] = None  # open while the node runs, across reloads
+        self.endpoint: Optional[RecorderEndpoint] = None
 
-    def open_file(self) -> IO[str]:
-        """Open the recording: the first time as chosen above, after a reload to append.
+    def open_file(self) -> RecordingFile:
+        """Open the recording (the first time as chosen above), or give the one already open.
+
+        After a reload the new endpoint gets the file still open. A JSON-lines
+        file closed earlier (the recorder removed and added again) is appended
+        to; an MCAP file cannot be, so a new one starts and the closed one is kept.
 
         Raises:
             ConfigError: the file cannot be created (no such folder, no
-                permission), or it exists and is not a recording; the
-                message names the file and the fix.
+                permission), or it exists and is not a recording, or MCAP
+                needs a package that is not installed; the message names the
+                file and the fix.
         """
-        if self.started:
-            return self._open(self.path, "a")
+        if self.file is None:
+            self.file = self._open_recording()
+        return self.file
+
+    def close_file(self, log: logging.Logger) -> bool:
+        """Close the recording if it is open (an MCAP file gets its index); True if it was.
+
+        A failure to write the end of the file is logged, not raised.
+        """
+        file, self.file = self.file, None
+        if file is None:
+            return False
+        try:
+            file.close()
+        except OSError as error:
+            log.error("Could not finish the recording %s: %s", self.path, error)
+        return True
+
+    def _open_recording(self) -> RecordingFile:
+        if self.started and self.file_format == "jsonl":
+            return _LinesFile(self._open(self.path, "a"), self.sync)
+        if self.file_format == "mcap":  # before any file is made or renamed
+            require_mcap(f"{type(self).__name__}({self.filename!r})")
+            package = COMPRESSION_PACKAGES.get(self.compression)
+            if package is not None and not _installed(package):
+                raise ConfigError(
+                    f"{type(self).__name__}({self.filename!r}, compression="
+                    f"{self.compression!r}) needs the {package} package: pip install "
+                    f"{package}, or leave compression out"
+                )
         self.path, self.kept = self._choose_path()
+        if self.file_format == "mcap":
+            recording: RecordingFile = self._open_mcap()
+        else:
+            recording = _LinesFile(self._open_lines(), self.sync)
+        self.started = True
+        return recording
+
+    def _open_mcap(self) -> McapPageWriter:
+        try:
+            file = open(self.path, "wb")  # noqa: SIM115 - closed by close_file
+        except OSError as error:
+            raise self._cannot_write(error) from error
+        try:
+            return McapPageWriter(file, self.compression, sync=self.sync)
+        except ConfigError:
+            file.close()
+            raise
+        except OSError as error:
+            file.close()
+            raise self._cannot_write(error) from error
+
+    def _open_lines(self) -> IO[str]:
         file = self._open(self.path, "a" if self.append else "w")
         try:
             if self.append and not _ends_with_newline(self.path):
@@ -287,7 +400,6 @@ class RecorderEndpointFactory(EndpointFactory):
         except OSError as error:
             file.close()
             raise self._cannot_write(error) from error
-        self.started = True
         return file
 
     def _open(self, path: str, mode: str) -> IO[str]:
@@ -332,6 +444,37 @@ class RecorderEndpointFactory(EndpointFactory):
         return f"RecorderEndpointFactory({self.filename!r}, {self.keys!r})"
 
 
+def _installed(package: str) -> bool:
+    try:
+        importlib.import_module(package)
+    except ImportError:
+        return False
+    return True
+
+
+def _choose_format(filename: str, file_format: Optional[str]) -> str:
+    """The format asked for, else the one the file's name says."""
+    if file_format is None:
+        return format_of_name(filename)
+    if file_format not in FILE_FORMATS:
+        raise ConfigError(
+            f"RecorderEndpointFactory({filename!r}, file_format={file_format!r}): choose "
+            f"one of {FILE_FORMATS}, or leave it out to go by the file's extension."
+        )
+    return file_format
+
+
+def _choose_compression(filename: str, file_format: str, compression: Optional[str]) -> str:
+    if compression is None:
+        return "none"
+    if file_format != "mcap" or compression not in COMPRESSIONS:
+        raise ConfigError(
+            f"RecorderEndpointFactory({filename!r}, compression={compression!r}): "
+            f"compression is for MCAP recordings, one of {COMPRESSIONS}."
+        )
+    return compression
+
+
 def _what_it_holds(path: str) -> str:
     """``"nothing"`` (no pages), ``"recording"`` or ``"other"``, from the file's start."""
     try:
@@ -339,6 +482,8 @@ def _what_it_holds(path: str) -> str:
             start = file.read(_PEEK_BYTES)
     except OSError:
         return "recording"  # unreadable: do not write over it; renaming keeps it safe
+    if start.startswith(MCAP_MAGIC):
+        return "recording"
     lines = [line for line in start.split(b"\n") if line.strip()]
     if not lines:
         return "nothing"

@@ -53,6 +53,7 @@ from snr.std_mods.codec import (
     is_header,
     page_from_fields,
 )
+from snr.std_mods.io.mcap_files import is_mcap_file, read_mcap_pages, require_mcap
 
 __all__ = [
     "MAX_GAP_S",
@@ -90,7 +91,8 @@ class RecordedPage(NamedTuple):
     """A page read from a recording, with where it was and whether it had a time.
 
     Attributes:
-        line: the line number in the file (the header is line 1).
+        line: the line number in the file (the header is line 1); in an MCAP
+            file, the message number (the first message is 1).
         page: the page.
         timed: False when the line had no ``created_at_s`` (the page then
             holds the time it was read).
@@ -117,7 +119,12 @@ def _check_readable(filename: str, what: str) -> None:
 
 
 class PageReader:
-    """Reads the pages of a recording, in order; iterate over it.
+    """Reads the pages of a recording, JSON lines or MCAP, in order; iterate over it.
+
+    An MCAP file (known by its first bytes, whatever its name) is read with
+    the ``mcap`` package (``pip install 'snr[viz]'``); its messages are taken
+    as lines are, so what follows holds for both, with "message N" for "line N"
+    (see `read_mcap_pages`).
 
     Bad lines are logged with their line number, listed in ``problems`` and
     skipped: any line that is not a valid page, whatever is wrong with it
@@ -131,14 +138,16 @@ class PageReader:
         filename: a file written by `RecorderEndpointFactory`.
 
     Raises:
-        ConfigError: the file does not exist.
+        ConfigError: the file does not exist, or is MCAP and the mcap
+            package is not installed.
         WireFormatError: the file starts with the header of a newer SNR's
             format, or of another format.
 
     Attributes:
         problems: the first `MAX_PROBLEMS` bad lines, each as
-            ``"file:line: reason"``.
-        bad_lines: how many bad lines were skipped in all.
+            ``"file:line: reason"`` (MCAP: ``"file: message N: reason"``).
+        bad_lines: how many bad lines (or MCAP messages) were skipped in all.
+        is_mcap: True when the file is MCAP.
 
     Example::
 
@@ -154,6 +163,10 @@ class PageReader:
         self._bad_line_numbers: List[int] = []
         # A corrupt file can hold thousands of bad lines: log the first few in full.
         self._repeats = RepeatFilter(_log, first=5)
+        self.is_mcap = is_mcap_file(self.filename)
+        if self.is_mcap:  # fail now if the mcap package is missing
+            require_mcap(f"Reading the MCAP file {self.filename!r}", "stream_reader")
+            return
         with open(self.filename, "rb") as file:
             self._check_if_header(file.readline())  # fail now, not halfway through a replay
 
@@ -179,6 +192,10 @@ class PageReader:
         self.problems, self.bad_lines, self._bad_line_numbers = [], 0, []
         self._repeats = RepeatFilter(_log, first=5)
         try:
+            if self.is_mcap:
+                for number, page, timed in read_mcap_pages(self.filename, self._report_message):
+                    yield RecordedPage(number, page, timed)
+                return
             with open(self.filename, "rb") as file:
                 for number, raw in enumerate(file, start=1):
                     parsed = self._parse(number, raw)
@@ -194,14 +211,17 @@ class PageReader:
         if self.bad_lines > len(self._bad_line_numbers):
             shown += ", ..."
         unlogged = self.bad_lines - min(self.bad_lines, self._repeats.first)
+        unit = "message" if self.is_mcap else "line"
+        units = unit if self.bad_lines == 1 else unit + "s"
         _log.warning(
-            "%s: skipped %d bad line%s in all (line%s %s)%s; every other line was read.",
+            "%s: skipped %d bad %s in all (%s %s)%s; every other %s was read.",
             self.filename,
             self.bad_lines,
-            "" if self.bad_lines == 1 else "s",
-            "" if self.bad_lines == 1 else "s",
+            units,
+            units,
             shown,
             f", {unlogged} more times than logged in full above" if unlogged else "",
+            unit,
         )
 
     def _check_if_header(self, raw: bytes) -> None:
@@ -229,6 +249,9 @@ class PageReader:
             cut = "" if raw.endswith(b"\n") else " (cut short: the recorder stopped mid-line)"
             self._report(number, f"{self.filename}:{number}: skipped a bad line{cut}: {why}")
             return None
+
+    def _report_message(self, number: int, problem: str) -> None:
+        self._report(number, f"{self.filename}: message {number}: {problem}")
 
     def _report(self, number: int, problem: str) -> None:
         self.bad_lines += 1

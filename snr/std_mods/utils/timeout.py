@@ -6,6 +6,7 @@ from typing import Optional
 
 from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.prelude import AbstractNode, ComponentError
+from snr.prelude.error_text import wrong_call
 
 __all__ = ["TimeoutLoop", "TimeoutLoopFactory"]
 
@@ -55,6 +56,16 @@ class TimeoutLoopFactory(LoopFactory):
 
     def __init__(self, seconds: float = 0.0, ms: float = 0.0, name: Optional[str] = None) -> None:
         super().__init__()
+        if not all(isinstance(t, (int, float)) for t in (seconds, ms)):
+            raise ComponentError(
+                wrong_call(
+                    "TimeoutLoopFactory",
+                    TimeoutLoopFactory,
+                    (seconds, ms) if ms else (seconds,),
+                    "the time must be a number of seconds (or ms), not "
+                    f"{type(seconds if not isinstance(seconds, (int, float)) else ms).__name__}.",
+                )
+            )
         total = seconds + ms / 1000.0
         if not total >= 0:  # negative, or NaN
             raise ComponentError(

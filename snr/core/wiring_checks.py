@@ -1,0 +1,209 @@
+"""`WiringChecks`: in DEBUG mode, say when a task can never reach a handler.
+
+A task that no handler matches is dropped without a word: that is the
+thesis's dispatch rule, and for a ``process_data`` task nobody waits for it
+is normal. An *event* that nothing handles, though, is almost always a
+mistake (a misspelt name, ``tasks.event("terminate")`` instead of
+``tasks.terminate(...)``, a factory missing from the config), and the
+program then "works" wrongly or waits for its timeout. The same goes for a
+handler that can never run because it is registered under the wrong kind
+of task. This helper says so, once per name, in plain words:
+
+* `unhandled`: the node's run loop calls it for a task no handler matched
+  (only in DEBUG mode; the branch costs nothing for tasks that are handled);
+* `check_never_ran`: the node calls it at its wiring check, a few seconds
+  after it starts, for handlers that have not run once.
+
+Events that SNR's own components announce for whoever cares
+(``comms_disconnected``, ``button_released``, ...) are listed in
+`OPTIONAL_EVENTS` and never reported.
+
+Example::
+
+    checks = WiringChecks(node.log, node.role, table, node.datastore)
+    checks.unhandled(tasks.event("strat"))
+    # Nothing on node 'robot' handles the event 'strat' ... Did you mean 'start'?
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Iterator, List, Mapping, Optional, Set, Tuple
+
+from snr.core.dispatch import HandlerTable
+from snr.prelude import DataKey, Page, Task, TaskName, TaskType
+from snr.prelude.errors import closest_match, describe_callable, short_repr
+
+__all__ = ["OPTIONAL_EVENTS", "WiringChecks"]
+
+OPTIONAL_EVENTS: Set[TaskName] = {
+    "comms_connected",
+    "comms_disconnected",
+    "button_pressed",
+    "button_released",
+}
+"""Events SNR's components announce whether or not anything listens: never reported."""
+
+_BUILDER_OF = {
+    "terminate": "tasks.terminate('why')",
+    "reload": "tasks.reload_component('name')",
+    "store_page": "tasks.store_page(page)",
+    "store_data": "self.store_data_task(key, value)",
+    "process_data": "tasks.process_data(page)",
+}
+
+_FOOTER = "(Said once per name, in DEBUG mode only.)"
+
+
+class WiringChecks:
+    """Finds events nothing handles and handlers nothing can reach (DEBUG mode).
+
+    Args:
+        log: where warnings go (the node's logger).
+        role: the node's role, for messages.
+        table: the node's handler table.
+        datastore: the node's datastore (to tell data keys from event names).
+
+    Example::
+
+        checks.unhandled(task)      # from the run loop, for a task with no handler
+        checks.check_never_ran()    # a few seconds after the node started
+    """
+
+    MAX_REPORTS = 100  # a loop inventing names must not fill the log
+
+    def __init__(
+        self,
+        log: logging.Logger,
+        role: str,
+        table: HandlerTable,
+        datastore: Mapping[DataKey, Page],
+    ) -> None:
+        self.log = log
+        self.role = role
+        self.table = table
+        self.datastore = datastore
+        self._reported: Set[Tuple[TaskType, str]] = set()
+
+    # -- a task that reached no handler -----------------------------------
+    def unhandled(self, task: Task) -> None:
+        """Warn, once per name, about an event no handler on this node matches."""
+        if task.type is not TaskType.event:
+            return  # process_data nobody waits for is normal; store_page is always handled
+        name = task.name
+        if (
+            not isinstance(name, str)
+            or name in OPTIONAL_EVENTS
+            or name.startswith("snr_")
+            or (TaskType.event, name) in self._reported
+            or len(self._reported) >= self.MAX_REPORTS
+        ):
+            return
+        self._reported.add((TaskType.event, name))
+        self.log.warning(
+            "Nothing on node %r handles the event %r (%s), so it was dropped. %s %s",
+            self.role,
+            name,
+            _values(task),
+            self._why_unhandled(name),
+            _FOOTER,
+        )
+
+    def _why_unhandled(self, name: str) -> str:
+        events = sorted(self._event_names())
+        if name in _BUILDER_OF:
+            return (
+                f"tasks.event({name!r}) makes an event called {name!r}, not a {name} "
+                f"task: use {_BUILDER_OF[name]}."
+            )
+        other_kinds = [k for k in self.table.table if isinstance(k, tuple) and k[1] == name]
+        if other_kinds or name in self.datastore:
+            kind = other_kinds[0][0] if other_kinds else TaskType.store_page
+            return (
+                f"{name!r} is a data key here (a handler waits for (TaskType.{kind.name}, "
+                f"{name!r})), and data reaches handlers only when it is stored: "
+                f"self.store_data({name!r}, value) in a loop, or return "
+                f"self.store_data_task({name!r}, value) from a handler."
+            )
+        guess = _same_but_case(name, events) or closest_match(name, events)
+        listened = ", ".join(repr(e) for e in events) or "none"
+        if guess is not None:
+            return (
+                f"Did you mean {guess!r}? Events handled here: {listened}. Event names "
+                "must match exactly (capitals too)."
+            )
+        return (
+            f"Events handled here: {listened}. If a component should handle it, check that "
+            "its factory is in this role's list in the config, and that it registers "
+            f"(TaskType.event, {name!r}) in task_handlers."
+        )
+
+    def _event_names(self) -> Iterator[str]:
+        for key in self.table.table:
+            if (
+                isinstance(key, tuple)
+                and key[0] is TaskType.event
+                and not key[1].startswith("snr_")
+                and key[1] not in _CORE_EVENTS
+            ):
+                yield key[1]
+
+    # -- handlers that never ran ---------------------------------------------
+    def check_never_ran(self) -> None:
+        """Warn about handlers that have not run and cannot, as they are registered.
+
+        Called once, at the node's wiring check. Two silent mix-ups are caught:
+
+        * a handler of ``(TaskType.event, key)`` for a *data key*: stored data
+          arrives as ``store_page`` tasks, never as events;
+        * a handler of ``(TaskType.process_data, key)`` while every page under
+          ``key`` is stored with ``process=False``, which sends no process_data.
+        """
+        for handler, task_id in self._never_ran():
+            if not isinstance(task_id, tuple) or (task_id in self._reported):
+                continue
+            kind, key = task_id
+            page = self.datastore.get(key)
+            if page is None:
+                continue
+            if kind is TaskType.event:
+                text = (
+                    f"{describe_callable(handler)} handles the event {key!r}, but {key!r} "
+                    "is a data key: data is stored, not announced, so this handler never "
+                    f"runs. Register it as (TaskType.store_page, {key!r}) to run on every "
+                    "page stored under it."
+                )
+            elif kind is TaskType.process_data and not page.process:
+                text = (
+                    f"{describe_callable(handler)} handles process_data for {key!r}, but "
+                    f"the pages under {key!r} are stored with process=False, which skips "
+                    "process_data, so this handler never runs. Store them with "
+                    f"process=True (the default), or register (TaskType.store_page, {key!r})."
+                )
+            else:
+                continue
+            self._reported.add(task_id)
+            self.log.warning("%s %s", text, _FOOTER)
+
+    def _never_ran(self) -> Iterator[Tuple[object, object]]:
+        seen: Set[object] = set()
+        for task_id, entries in list(self.table.table.items()):
+            for entry in entries:
+                handler, registered, _, cell = entry
+                if registered == task_id and cell[0] == 0 and id(entry) not in seen:
+                    seen.add(id(entry))
+                    yield handler, registered
+
+
+# Events handled by the node core: not names a student would mean.
+_CORE_EVENTS = {"add_component", "remove_component"}
+
+
+def _same_but_case(name: str, choices: List[str]) -> Optional[str]:
+    same = [c for c in choices if c.lower() == name.lower()]
+    return same[0] if same else None
+
+
+def _values(task: Task) -> str:
+    values: object = task.val_list
+    return f"values {short_repr(values, 80)}" if values else "no values"
