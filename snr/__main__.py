@@ -6,6 +6,8 @@ Commands::
                                        run the UROV demo system (no hardware needed);
                                        --view: watch it live in Foxglove or Lichtblick
     python -m snr console HOST:PORT    type commands into a running node (snr-console)
+    python -m snr graph FILE [--role R] [--format mermaid|dot|text] [-- ARGS...]
+                                       draw the system FILE runs, without running it
     python -m snr docs [--serve]       build (if needed) and open the docs, offline
     python -m snr convert IN OUT       convert a recording: JSON lines <-> MCAP (by OUT's name)
     python -m snr version              print the installed version
@@ -15,7 +17,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Optional, Sequence
+from typing import List, Optional, Sequence
 
 import snr
 import snr.console
@@ -45,6 +47,22 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     sub.add_parser("console", help="type commands into a running node (same as snr-console)")
     docs_parser = sub.add_parser("docs", help="build (if needed) and open the docs offline")
     snr.docsite.add_arguments(docs_parser)
+    graph_parser = sub.add_parser(
+        "graph",
+        usage="snr graph FILE [--role ROLE] [--format {mermaid,dot,text}] [-- ARGS...]",
+        help="draw the data-flow graph of the system a program runs, without running it",
+        description="Draw the nodes, components, data keys and links of the system FILE "
+        "would run. FILE runs until it starts an SNR runner; the runner hands over its "
+        "config instead of starting nodes. Keys read but never stored, or stored but "
+        "never read, are marked (!).",
+    )
+    graph_parser.add_argument("file", metavar="FILE", help="the program, e.g. main.py")
+    graph_parser.add_argument(
+        "--role", action="append", default=None, help="draw only this role (repeatable)"
+    )
+    graph_parser.add_argument(
+        "--format", choices=["mermaid", "dot", "text"], default="mermaid", help="default mermaid"
+    )
     convert_parser = sub.add_parser(
         "convert", help="convert a recording between JSON lines and MCAP (*.mcap)"
     )
@@ -52,6 +70,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     words = list(sys.argv[1:] if argv is None else argv)
     if words[:1] == ["console"]:  # its own options, e.g. --token, go to snr-console
         return snr.console.main(words[1:])
+    file_args: List[str] = []
+    if words[:1] == ["graph"] and "--" in words:  # what follows `--` is FILE's own
+        file_args = words[words.index("--") + 1 :]
+        words = words[: words.index("--")]
     if words[:1] == ["convert"]:  # its options, built only when asked for
         from snr.std_mods.io import convert
 
@@ -62,6 +84,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
 
         view_port = args.view_port if args.view else None
         return run_demo(args.seconds, verbose=args.verbose, view_port=view_port)
+    if args.command == "graph":
+        return _graph(args.file, file_args, args.role, args.format)
     if args.command == "docs":
         return snr.docsite.run(args)
     if args.command == "convert":
@@ -71,6 +95,21 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 0
     parser.print_help()
     return 2
+
+
+def _graph(file: str, file_args: Sequence[str], roles: Optional[Sequence[str]], form: str) -> int:
+    """``python -m snr graph``: print the graph of the system ``file`` runs."""
+    from snr.std_mods.graph import config_from_script, graph_of_config, render
+
+    try:
+        config = config_from_script(file, file_args)
+        for role in roles or ():
+            config.get(role)  # an unknown role: the error lists the known ones
+        print(render(graph_of_config(config, roles), form))
+    except snr.SNRError as error:
+        print(f"snr graph: {error}", file=sys.stderr)
+        return 1
+    return 0
 
 
 if __name__ == "__main__":

@@ -8,7 +8,7 @@ talks to the rest of the node only through tasks and pages.
 from __future__ import annotations
 
 import logging
-from typing import TYPE_CHECKING, Any, Optional
+from typing import TYPE_CHECKING, Any, Optional, Sequence
 
 from snr.core.dispatch import HandlerMap
 from snr.prelude import (
@@ -38,6 +38,31 @@ class Component(AbstractComponent):
             def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
                 super().__init__(factory, parent, "beeper")
                 self.task_handlers = {(TaskType.event, "beep"): self.beep}
+    """
+
+    produces: Sequence[DataKey] = ()
+    """Data keys this component stores, for the system's graph (optional).
+
+    ``python -m snr graph`` finds most keys in the code itself
+    (``self.store_data("depth", ...)``, ``self.store_data_task(self.output, ...)``);
+    when the keys are computed while running, name them all here (the code is
+    then not searched).
+
+    Example::
+
+        self.produces = [f"motor_{side}" for side in ("left", "right")]
+    """
+
+    reads: Sequence[DataKey] = ()
+    """Data keys this component reads with ``get_data``/``get_page``, for the graph (optional).
+
+    Keys it registers handlers for, and keys read with a literal or an
+    attribute (``self.get_data("heading")``, ``self.get_data(self.input)``),
+    are found without it; set it, and it is the whole list.
+
+    Example::
+
+        self.reads = [f"sonar_{n}" for n in range(4)]
     """
 
     def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:

@@ -381,11 +381,15 @@ class SerialConnection(Endpoint):
         self, factory: SerialConnectionFactory, parent: AbstractNode, input: DataKey
     ) -> None:
         super().__init__(factory, parent, "serial_connection")
-        self.port_name = factory.port_name or motor_board.start()
+        self.port_name = factory.port_name
         self.port: Any = None
         self.task_handlers = {(TaskType.store_page, input): self.send}
 
     def begin(self) -> None:
+        # Hardware is opened here, not in __init__: building a component has no
+        # side effects, so `python -m snr graph` can build it just to look at it.
+        if self.port_name is None:
+            self.port_name = motor_board.start()
         simulated = self.port_name == motor_board.port_name
         if simulated:
             self.info(
@@ -416,7 +420,7 @@ class SerialConnection(Endpoint):
         if self.port is not None:
             self.port.write(b"M,0,0,0\n")  # stop the thrusters before letting go
             self.port.close()
-        if self.port_name == motor_board.port_name:
+        if self.port_name is not None and self.port_name == motor_board.port_name:
             motor_board.stop()
 
 

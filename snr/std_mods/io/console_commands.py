@@ -11,6 +11,9 @@ the console's `ConsoleSession`. Thesis 6.4.3 lists the commands::
     list commands|endpoints         what you can type / what the node runs
     dump profiler|datastore [KEY]   handler timings / the newest page of every key
     stats                           the queue and every comms link: sent, dropped...
+    graph [text|mermaid|dot]        the node's components, data keys and links
+    echo KEY [N]                    the next pages of a key (snr-console repeats it)
+    hz KEY [WINDOW_S]               how often a key is stored, and the jitter
     help [command]                  the commands, or one command in detail
 
 Consoles are `ConsoleLoop` subclasses: each adds its own processor when it
@@ -29,7 +32,7 @@ import reprlib
 import time
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, Iterator, List, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 
 from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, tasks
 from snr.core.logs import RepeatFilter
@@ -39,6 +42,7 @@ from snr.prelude import (
     AbstractFactory,
     AbstractNode,
     ComponentName,
+    DataKey,
     Page,
     SomeTasks,
     Task,
@@ -49,6 +53,14 @@ from snr.prelude import (
 from snr.prelude.errors import closest_match
 from snr.std_mods.comms.link import CommsLoop
 from snr.std_mods.io.console_protocol import Reply, Status, parse_values, split_command
+from snr.std_mods.io.key_watch import (
+    ECHO_DEFAULT_PAGES,
+    ECHO_MAX_PAGES,
+    HZ_DEFAULT_WINDOW_S,
+    HZ_MAX_WINDOW_S,
+    KeyWatches,
+    WatchRefused,
+)
 
 __all__ = [
     "COMMANDS",
@@ -104,6 +116,29 @@ COMMANDS: Dict[str, CommandHelp] = {
         "Show the node's queue and every comms link: pages sent, received, dropped.",
         "Dropped pages are counted per link and per key (a slow peer whose backlog was\n"
         "full); 'heard' is how long ago the peer last sent anything (a beat at least).",
+    ),
+    "graph": CommandHelp(
+        "graph [text|mermaid|dot]",
+        "Show the node's components, the data keys each stores and handles, and its links.",
+        "`text` (the default) is for reading here; `mermaid` can be pasted into a\n"
+        "Markdown file (GitHub draws it), `dot` into Graphviz. Keys read but never\n"
+        "stored, or stored but never read, are marked (!). `python -m snr graph main.py`\n"
+        "draws the whole system without running it.",
+    ),
+    "echo": CommandHelp(
+        "echo KEY [N]",
+        "Show the next pages stored under KEY (snr-console repeats it until Ctrl-C).",
+        f"One reply carries at most N pages (default {ECHO_DEFAULT_PAGES}, at most "
+        f"{ECHO_MAX_PAGES}): it comes\nwhen N pages have come, a quarter second after the "
+        "first, or after 1 s\nwithout one. Pages that come between two `echo KEY` wait "
+        "for the next one,\nso repeating it shows every page.",
+    ),
+    "hz": CommandHelp(
+        "hz KEY [WINDOW_S]",
+        "Measure how often KEY is stored, and the jitter of the time between pages.",
+        f"Counts pages for WINDOW_S seconds (default {HZ_DEFAULT_WINDOW_S:g}, at most "
+        f"{HZ_MAX_WINDOW_S:g}), then replies with\nthe rate and the period's mean, min, max "
+        "and standard deviation, timed when\nthis node stores each page.",
     ),
     "help": CommandHelp("help [command]", "Show the commands, or one command in detail."),
 }
@@ -171,6 +206,7 @@ class _Outcome:
     status: Status
     text: str
     tasks: SomeTasks = None
+    later: bool = False  # the reply is sent later (echo, hz), not now
 
 
 class _CommandFailed(Exception):
@@ -194,11 +230,19 @@ class CommandProcessorEndpoint(Endpoint):
         processor.execute("task event beep")   # Reply(Status.OK, "Scheduled ...")
     """
 
+    # For the graph: a console stores only what its user types (`task store_page ...`).
+    produces: Sequence[DataKey] = ()
+    reads: Sequence[DataKey] = ()
+
     def __init__(
         self, factory: CommandProcessorFactory, parent: AbstractNode, task_name: TaskName
     ) -> None:
         super().__init__(factory, parent, factory.name)
-        self.task_handlers = {(TaskType.event, task_name): self.on_command}
+        self.watches = KeyWatches(self, f"{task_name}:tick", _preview)
+        self.task_handlers = {
+            (TaskType.event, task_name): self.on_command,
+            (TaskType.event, self.watches.tick_name): self.watches.on_tick,
+        }
         self._commands: Dict[str, Callable[[str], _Outcome]] = {
             "exit": self.cmd_exit,
             "task": self.cmd_task,
@@ -206,9 +250,13 @@ class CommandProcessorEndpoint(Endpoint):
             "list": self.cmd_list,
             "dump": self.cmd_dump,
             "stats": self.cmd_stats,
+            "graph": self.cmd_graph,
+            "echo": self.cmd_echo,
+            "hz": self.cmd_hz,
             "help": self.cmd_help,
         }
         self._current_session = "console"
+        self._session: Optional[ConsoleSession] = None  # of the command being run
         self._refusals = RepeatFilter(self.log)
 
     # -- the task handler ---------------------------------------------------
@@ -224,9 +272,18 @@ class CommandProcessorEndpoint(Endpoint):
             return None
         line, session = task.val_list
         self._current_session = str(session)
-        outcome = self._run(str(line))
-        session.send(Reply(outcome.status, _bounded(outcome.text)))
+        self._session = session
+        try:
+            outcome = self._run(str(line))
+        finally:
+            self._session = None
+        if not outcome.later:
+            session.send(Reply(outcome.status, _bounded(outcome.text)))
         return outcome.tasks
+
+    def terminate(self) -> None:
+        """Stop the timer of open ``echo``/``hz`` watches."""
+        self.watches.close()
 
     def execute(self, line: str) -> Reply:
         """Run one command line now and return the reply (on the node's thread).
@@ -481,6 +538,50 @@ class CommandProcessorEndpoint(Endpoint):
             lines.append(f"{loop.name}: {loop.stats_text()}")
         return _ok("\n".join(lines))
 
+    def cmd_graph(self, args: str) -> _Outcome:
+        """``graph [text|mermaid|dot]``: this node's data-flow graph, as it runs now."""
+        from snr.std_mods.graph import graph_of_node, render  # loads ast: only when asked
+
+        choice = _one_choice("graph", args or "text", ["text", "mermaid", "dot"])
+        return _ok(render(graph_of_node(self._full_node("graph")), choice))
+
+    def cmd_echo(self, args: str) -> _Outcome:
+        """``echo KEY [N]``: the next pages of KEY (the reply waits for them)."""
+        words = args.split()
+        if not 1 <= len(words) <= 2:
+            raise _CommandFailed(f"Usage: {COMMANDS['echo'].usage}, e.g. `echo depth`.")
+        wanted = ECHO_DEFAULT_PAGES
+        if len(words) == 2:
+            wanted = int(_number(words[1], "echo", "N", 1, ECHO_MAX_PAGES, int))
+        reply = self._watch(lambda session: self.watches.echo(words[0], wanted, session))
+        if reply is None:
+            return _Outcome(Status.OK, "", later=True)
+        return _Outcome(reply.status, reply.text)
+
+    def cmd_hz(self, args: str) -> _Outcome:
+        """``hz KEY [WINDOW_S]``: the rate and jitter of KEY (the reply comes after the window)."""
+        words = args.split()
+        if not 1 <= len(words) <= 2:
+            raise _CommandFailed(f"Usage: {COMMANDS['hz'].usage}, e.g. `hz depth 2`.")
+        window_s = (
+            _number(words[1], "hz", "WINDOW_S", 0.1, HZ_MAX_WINDOW_S, float)
+            if len(words) == 2
+            else HZ_DEFAULT_WINDOW_S
+        )
+        self._watch(lambda session: self.watches.hz(words[0], window_s, session))
+        return _Outcome(Status.OK, "", later=True)
+
+    def _watch(self, start: Callable[[ConsoleSession], Optional[Reply]]) -> Optional[Reply]:
+        if self._session is None:
+            raise _CommandFailed(
+                "`echo` and `hz` reply once pages have come, so they need a console to "
+                "reply to: type them in snr-console or a LocalConsoleFactory console."
+            )
+        try:
+            return start(self._session)
+        except WatchRefused as refused:
+            raise _CommandFailed(str(refused)) from None
+
     def cmd_help(self, args: str) -> _Outcome:
         """``help [command]``."""
         topic = args.strip().lower()
@@ -540,6 +641,10 @@ class ConsoleLoop(ThreadLoop):
                 self.submit(read_a_line(), self.session)
     """
 
+    # For the graph: a console stores only what its user types (`task store_page ...`).
+    produces: Sequence[DataKey] = ()
+    reads: Sequence[DataKey] = ()
+
     def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:
         super().__init__(factory, parent, name)
         self.processor_name = f"{name}_commands"
@@ -580,6 +685,20 @@ def _one_choice(command: str, args: str, choices: List[str]) -> str:
     guess = closest_match(choice, choices)
     hint = f" Did you mean `{command} {guess}`?" if guess else ""
     raise _CommandFailed(f"{command!r} cannot show {choice!r}.{hint} {usage}")
+
+
+def _number(word: str, command: str, name: str, low: float, high: float, kind: type) -> float:
+    """``word`` as a number of ``kind`` from ``low`` to ``high``, or a reply saying why not."""
+    try:
+        value = kind(word)
+    except ValueError:
+        value = None
+    if value is None or not low <= value <= high:
+        raise _CommandFailed(
+            f"`{command}` takes {name} from {low:g} to {high:g}; got {word!r}. "
+            f"Usage: {COMMANDS[command].usage}."
+        )
+    return float(value)
 
 
 def _commands_table() -> str:

@@ -31,6 +31,7 @@ from snr.std_mods.io.console_protocol import (
     Status,
     parse_address,
 )
+from snr.std_mods.io.key_watch import HZ_DEFAULT_WINDOW_S
 
 if TYPE_CHECKING:
     import argparse
@@ -92,6 +93,7 @@ class RemoteConsole:
         self._sock: Optional[socket.socket] = None
         self._decoder = ReplyDecoder()
         self._ready: List[Reply] = []
+        self._unanswered = 0  # requests sent whose replies were not read (Ctrl-C in a wait)
 
     @property
     def where(self) -> str:
@@ -158,8 +160,53 @@ class RemoteConsole:
             raise ValueError("A console command is one line: remove the line breaks.")
         if len(line.encode("utf-8")) > MAX_LINE_BYTES:
             raise ValueError(f"A console command may be at most {MAX_LINE_BYTES} bytes long.")
+        while self._unanswered:  # a reply left unread by Ctrl-C: it is not this one's
+            self._receive(self._reply_timeout_s(""))
+            self._unanswered -= 1
         self._send_line(line)
-        return self._receive()
+        self._unanswered += 1
+        reply = self._receive(self._reply_timeout_s(line))
+        self._unanswered -= 1
+        return reply
+
+    def _reply_timeout_s(self, line: str) -> float:
+        """How long to wait for the reply to ``line``: ``hz KEY W`` replies after W s."""
+        words = line.split()
+        if len(words) == 3 and words[0].lower() == "hz":
+            try:
+                return max(self.timeout_s, float(words[2]) + self.timeout_s)
+            except ValueError:
+                pass
+        if words[:1] == ["hz"]:
+            return max(self.timeout_s, HZ_DEFAULT_WINDOW_S + self.timeout_s)
+        return self.timeout_s
+
+    def stream(self, line: str, output: IO[str], replies: Optional[int] = None) -> int:
+        """Send ``line`` (an ``echo KEY``) again and again, printing each reply, until Ctrl-C.
+
+        Stops early after ``replies`` replies, on an error reply, or when the
+        node says bye. Returns an exit code, like `run_command`.
+
+        Example::
+
+            console.stream("echo depth", sys.stdout)   # until Ctrl-C
+        """
+        sent = 0
+        try:
+            while replies is None or sent < replies:
+                reply = self.send(line)
+                sent += 1
+                _say(output, reply.text)
+                if reply.status is Status.ERROR:
+                    return EXIT_CONNECTION
+                if reply.status is Status.BYE:
+                    return EXIT_CONNECTION
+        except ValueError as error:
+            _say(output, f"error: {error}")
+            return EXIT_CONNECTION
+        except KeyboardInterrupt:
+            _say(output, f"\n(Ctrl-C) Stopped `{line}`.")
+        return EXIT_OK
 
     def _send_line(self, line: str) -> None:
         sock = self._connected()
@@ -168,14 +215,16 @@ class RemoteConsole:
         except OSError as error:
             raise self._lost(error) from None
 
-    def _receive(self) -> Reply:
+    def _receive(self, timeout_s: Optional[float] = None) -> Reply:
         sock = self._connected()
+        wait_s = self.timeout_s if timeout_s is None else timeout_s
+        sock.settimeout(wait_s)
         while not self._ready:
             try:
                 data = sock.recv(65536)
             except socket.timeout:
                 raise ConsoleConnectionError(
-                    f"No reply from the node at {self.where} within {self.timeout_s} s. "
+                    f"No reply from the node at {self.where} within {wait_s:g} s. "
                     "It may be busy in a slow handler; try again, or use a longer "
                     "--timeout."
                 ) from None
@@ -265,9 +314,15 @@ class RemoteConsole:
     def run_command(self, line: str, output: IO[str]) -> int:
         """Send ``line``, print the reply; an exit code for this command.
 
+        ``echo KEY`` (without a count) streams: it is sent again and again,
+        each reply printed, until Ctrl-C (see `stream`).
+
         Raises:
             ConsoleConnectionError: the node went away.
         """
+        words = line.split()
+        if len(words) == 2 and words[0].lower() == "echo":
+            return self.stream(line, output)
         try:
             reply = self.send(line)
         except ValueError as error:
