@@ -12,7 +12,7 @@ import os
 import sys
 import unittest
 from pathlib import Path
-from typing import Any, Iterator
+from typing import Any, Callable, Iterator
 
 os.environ["SDL_VIDEODRIVER"] = "dummy"  # before pygame is imported
 os.environ["PYGAME_HIDE_SUPPORT_PROMPT"] = "1"
@@ -83,8 +83,14 @@ class TestPicture(SNRTestCase):
 
 
 class TestInANode(SNRTestCase):
-    def run_rover(self, view: SimViewFactory) -> SimRobotFactory:
-        """The rover example's brain drives the simulated robot for 40 steps."""
+    def run_rover(
+        self, view: SimViewFactory, drawn: Callable[[], bool] = lambda: True
+    ) -> SimRobotFactory:
+        """The rover example's brain drives the simulated robot for 40 steps.
+
+        The node stops once 40 steps were taken and two frames written (or
+        ``drawn()`` holds, in window mode).
+        """
         sim = SimRobotFactory(World.load(example_path("rover", "room.json")), rate_hz=250)
         self.run_test_node(
             [
@@ -93,7 +99,7 @@ class TestInANode(SNRTestCase):
                 view,
                 StopWhenFactory(
                     (TaskType.store_page, "true_pose"),
-                    when=lambda task: sim.steps >= 40 and view.frames_written >= 2,
+                    when=lambda task: sim.steps >= 40 and view.frames_written >= 2 and drawn(),
                 ),
             ]
         )
@@ -107,6 +113,26 @@ class TestInANode(SNRTestCase):
         self.assertGreater(sim.robot.pose.x, 0.505)  # it set off forward from x = 0.5
         self.assertFalse(sim.robot.bumped)
         self.assertGreaterEqual(len(list(frames.glob("frame_*.png"))), 2)
+
+    @unittest.skipIf(pygame is None, "pygame is not installed")
+    def test_a_window_is_drawn_and_closed_with_the_node(self) -> None:
+        # SDL's dummy driver (set above) stands in for a screen.
+        view = SimViewFactory(World.box(4, 3), window=True, rate_hz=100)
+        drawn = {"count": 0}
+        flip = pygame.display.flip
+
+        def counting_flip() -> None:
+            drawn["count"] += 1
+            flip()
+
+        pygame.display.flip = counting_flip
+        try:
+            view.frames_written = 2  # no frames in window mode: wait for a flip instead
+            self.run_rover(view, drawn=lambda: drawn["count"] >= 1)
+        finally:
+            pygame.display.flip = flip
+        self.assertGreaterEqual(drawn["count"], 1)
+        self.assertFalse(pygame.display.get_init())  # the loop let the display go
 
     def test_without_pygame_it_runs_and_says_how_to_see_it(self) -> None:
         with no_pygame():
