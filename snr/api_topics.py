@@ -131,6 +131,17 @@ TOPICS: Tuple[Topic, ...] = (
         _names("controller"),
     ),
     Topic(
+        "Simulating a robot",
+        "A 2-D differential-drive robot among walls, storing the pages a real "
+        "robot would; drawn in a window or to PNG files.",
+        _names(
+            "SimRobotFactory SimRobotLoop SimViewFactory SimViewLoop World "
+            "DiffDriveRobot RobotSpec Pose RangeSensor Odometry sensor_pages "
+            "wheel_command"
+        ),
+        _names("simulator"),
+    ),
+    Topic(
         "Small helpers: timeout, stopwatch, printer",
         "End a node after a while, time tasks, print them.",
         _names(

@@ -4,6 +4,8 @@ from __future__ import annotations
 
 import importlib.util
 import os
+import shutil
+import tempfile
 import unittest
 
 from tests.examples_support import ROOT, run_script
@@ -74,6 +76,26 @@ class TestCommsBench(unittest.TestCase):
         )
         self.assertRegex(out, r"p50 round trip <= 1.3x bare +[\d.]+x (met|MISSED)")
         self.assertRegex(out, r"0 pages lost / duplicated / reordered +0 / 0 / 0 .* met")
+
+
+class TestSimBench(unittest.TestCase):
+    def test_prints_a_row_per_case_and_writes_the_picture(self) -> None:
+        picture = os.path.join(tempfile.mkdtemp(prefix="snr-bench-sim-"), "sim.png")
+        self.addCleanup(shutil.rmtree, os.path.dirname(picture), ignore_errors=True)
+        done = run_script(
+            [os.path.join(BENCH, "bench_sim.py"), "--steps=50", "--rounds=1"]
+            + (["--picture", picture] if importlib.util.find_spec("pygame") else []),
+            timeout_s=10.0,
+        )
+        self.assertEqual(done.returncode, 0, done.stderr)
+        out = done.stdout
+        self.assertIn("Simulator speed: 50 steps of 20 ms, 9 walls, 5 range rays", out)
+        self.assertRegex(out, r"bare physics \(inline\) +\d+ +\d+x +1\.00x")
+        self.assertRegex(out, r"\nsimulator +\d+ +\d+x +[\d.]+x")
+        if importlib.util.find_spec("pygame"):
+            for every in ("5th", "step"):
+                self.assertRegex(out, rf"\nsimulator \+ draw every {every} +\d+ +\d+x +[\d.]+x")
+            self.assertGreater(os.path.getsize(picture), 1000)
 
 
 if __name__ == "__main__":

@@ -1,0 +1,58 @@
+"""A 2-D robot simulator: a differential-drive robot among walls, as pages.
+
+``world`` (walls, the world file), ``robot`` (the physics), ``sensors`` (the
+pages it stores), ``draw`` (pygame pictures) and ``components`` (the
+factories a config lists). Pure Python; pygame only to draw.
+
+Example::
+
+    from snr.std_mods.sim import SimRobotFactory, SimViewFactory, World
+
+    world = World.box(4.0, 3.0)
+    components = {"sim": [SimRobotFactory(world, seed=1), SimViewFactory(world)]}
+"""
+
+from snr.std_mods.sim.components import (
+    SimRobotFactory,
+    SimRobotLoop,
+    SimViewFactory,
+    SimViewLoop,
+    has_display,
+)
+from snr.std_mods.sim.robot import DiffDriveRobot, Pose, RobotSpec
+from snr.std_mods.sim.sensors import (
+    BUMP,
+    ODOMETRY,
+    RANGE,
+    TRUE_POSE,
+    WHEEL_CMD,
+    WHEEL_ENCODERS,
+    Odometry,
+    RangeSensor,
+    sensor_pages,
+    wheel_command,
+)
+from snr.std_mods.sim.world import Segment, World
+
+__all__ = [
+    "BUMP",
+    "DiffDriveRobot",
+    "ODOMETRY",
+    "Odometry",
+    "Pose",
+    "RANGE",
+    "RangeSensor",
+    "RobotSpec",
+    "Segment",
+    "SimRobotFactory",
+    "SimRobotLoop",
+    "SimViewFactory",
+    "SimViewLoop",
+    "TRUE_POSE",
+    "WHEEL_CMD",
+    "WHEEL_ENCODERS",
+    "World",
+    "has_display",
+    "sensor_pages",
+    "wheel_command",
+]
