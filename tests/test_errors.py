@@ -15,6 +15,7 @@ import socket
 import subprocess
 import sys
 import textwrap
+import threading
 import time
 import unittest
 from abc import ABC, abstractmethod
@@ -543,14 +544,24 @@ class Reader(ThreadLoop):
 
 class TestMissingDataKey(SNRTestCase):
     def run_reader(
-        self, key: str, typo_s: float, missing_s: float, handled: Sequence[str] = ()
+        self,
+        key: str,
+        typo_s: float,
+        missing_s: float,
+        handled: Sequence[str] = (),
+        hint_expected: bool = False,
     ) -> List[str]:
+        """Run a node whose loop reads ``key``; the hints it logged.
+
+        A run that expects a hint ends 0.05 s after one is logged (within 3 s);
+        one that expects none runs 0.15 s, well past ``typo_s``/``missing_s``.
+        """
         node = Node(
             "test",
             self.get_config(
                 [
                     LoopFactoryOf(lambda f, p: Reader(f, p, key)),
-                    TimeoutLoopFactory(seconds=0.15),
+                    TimeoutLoopFactory(seconds=3.0 if hint_expected else 0.15),
                     *([KeyWatcherFactory(list(handled))] if handled else []),
                 ],
                 Mode.DEBUG,
@@ -560,6 +571,11 @@ class TestMissingDataKey(SNRTestCase):
         node.key_hints.typo_s, node.key_hints.missing_s = typo_s, missing_s
         records: List[str] = []
         handler = _ListHandler(records)
+        if hint_expected:
+            # Stop 0.05 s after the hint: about ten more reads, which must not repeat it.
+            handler.on_hint = lambda: threading.Timer(
+                0.05, node.set_terminate_flag, args=("hint seen",)
+            ).start()
         level = node.log.level
         node.log.setLevel(logging.INFO)  # the "snr.test" logger is shared with other tests
         node.log.addHandler(handler)
@@ -574,13 +590,13 @@ class TestMissingDataKey(SNRTestCase):
         return [r for r in records if "get_data/get_page return None" in r]
 
     def test_typo_gets_one_hint_with_the_closest_key(self) -> None:
-        hints = self.run_reader("depht", typo_s=0.02, missing_s=60)
+        hints = self.run_reader("depht", typo_s=0.02, missing_s=60, hint_expected=True)
         self.assertEqual(len(hints), 1, hints)  # once, though read ~25 times
         for part in ("'depht'", "Did you mean 'depth'?", "'depth'", HERE, "Reader.loop"):
             self.assertIn(part, hints[0])
 
     def test_key_never_stored_gets_one_hint_after_a_while(self) -> None:
-        hints = self.run_reader("speed", typo_s=0.02, missing_s=0.05)
+        hints = self.run_reader("speed", typo_s=0.02, missing_s=0.05, hint_expected=True)
         self.assertEqual(len(hints), 1, hints)
         for part in ("'speed'", "nothing has stored it", "'depth'", "Reader.loop"):
             self.assertIn(part, hints[0])
@@ -679,9 +695,12 @@ class _ListHandler(logging.Handler):
     def __init__(self, records: List[str]) -> None:
         super().__init__(logging.INFO)
         self.records = records
+        self.on_hint: Callable[[], None] = lambda: None
 
     def emit(self, record: logging.LogRecord) -> None:
         self.records.append(record.getMessage())
+        if "get_data/get_page return None" in record.getMessage():
+            self.on_hint()
 
 
 # -- 10. changing node state from a loop thread -------------------------------------
