@@ -33,7 +33,8 @@ from typing import Callable, List, Optional, Tuple
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
-from snr import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, World, sensor_pages
+from snr import World
+from snr.std_mods.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
 from snr.std_mods.sim.draw import WorldView, import_pygame, render_scene
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

@@ -133,12 +133,9 @@ TOPICS: Tuple[Topic, ...] = (
     Topic(
         "Simulating a robot",
         "A 2-D differential-drive robot among walls, storing the pages a real "
-        "robot would; drawn in a window or to PNG files.",
-        _names(
-            "SimRobotFactory SimRobotLoop SimViewFactory SimViewLoop World "
-            "DiffDriveRobot RobotSpec Pose RangeSensor Odometry sensor_pages "
-            "wheel_command"
-        ),
+        "robot would; drawn in a window or to PNG files (the physics, sensors and "
+        "robot spec are in snr.std_mods.sim).",
+        _names("SimRobotFactory SimRobotLoop SimViewFactory SimViewLoop World"),
         _names("simulator"),
     ),
     Topic(

@@ -8,16 +8,13 @@ import random
 import unittest
 from typing import Any, Dict, List
 
-from snr import (
-    ComponentError,
+from snr import ComponentError, SimRobotFactory, SNRTestCase, World
+from snr.std_mods.sim import (
     DiffDriveRobot,
     Odometry,
     Pose,
     RangeSensor,
     RobotSpec,
-    SimRobotFactory,
-    SNRTestCase,
-    World,
     sensor_pages,
     wheel_command,
 )
