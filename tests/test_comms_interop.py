@@ -148,6 +148,7 @@ class InteropTest(unittest.TestCase):
     def start_server(self, *factories: Any) -> NodeProcess:
         node = NodeProcess(self.ctx, "snr_server", factories).start()
         self.addCleanup(node.interrupt)
+        self.reports.nodes.append(node)  # a failure shows what it printed
         return node
 
     def connect(self) -> socket.socket:
