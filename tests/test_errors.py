@@ -59,6 +59,7 @@ from snr.prelude.errors import (
     not_serializable_error,
 )
 from tests.helpers import StopWhenDrainedFactory, StopWhenFactory
+from tests.quiet import capture_test_logs, captured_logs
 
 HERE = "test_errors.py"
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -362,11 +363,13 @@ class TestHandlers(SNRTestCase):
         factory = FactoryOf(lambda f, p: Returns(f, p, value))
         node = Node("test", self.get_config([factory, TimeoutLoopFactory(seconds=2)]))
         node.schedule(tasks.event("go", [1]))
-        with self.assertRaises(HandlerError) as ctx:
+        with self.assertRaises(HandlerError) as ctx, self.assertLogs(node.log, "ERROR") as logs:
             node.loop()
         message = str(ctx.exception)
         for part in ("Returns.go", HERE, "(event, 'go')", "a Task, a list of Tasks, or None"):
             self.assertIn(part, message)
+        self.assertEqual(len(logs.output), 1, logs.output)  # the log says it once
+        self.assertIn("Stopping node 'test': Task handler Returns.go", logs.output[0])
         return message
 
     def test_wrong_return_value(self) -> None:
@@ -432,6 +435,7 @@ class TestFactoryGet(SNRTestCase):
             self.assertIn(part, str(ctx.exception))
 
     def test_forgets_to_return(self) -> None:
+        capture_test_logs(self)  # and the INFO level a DEBUG node gives "snr.test" goes
         for mode in Mode:
             with self.subTest(mode=mode), self.assertRaises(ComponentError) as ctx:
                 Node("test", self.get_config([ForgetsToReturn()], mode))
@@ -558,16 +562,9 @@ class TestMissingDataKey(SNRTestCase):
         )
         assert node.key_hints is not None
         node.key_hints.typo_s, node.key_hints.missing_s = typo_s, missing_s
-        records: List[str] = []
-        handler = _ListHandler(records)
-        level = node.log.level
-        node.log.setLevel(logging.INFO)  # the "snr.test" logger is shared with other tests
-        node.log.addHandler(handler)
-        try:
+        # INFO, then the level it had: the "snr.test" logger is shared with other tests
+        with captured_logs(node.log.name, logging.INFO) as records:
             node.loop()
-        finally:
-            node.log.removeHandler(handler)
-            node.log.setLevel(level)
         reader = node.components["reader"]
         assert isinstance(reader, Reader)
         self.assertIn(None, reader.seen)  # get_data keeps returning None
@@ -657,13 +654,8 @@ class TestHandlerForAMisspelledKey(SNRTestCase):
         )
         assert node.key_hints is not None
         node.key_hints.handlers_s = 0.05
-        records: List[str] = []
-        handler = _ListHandler(records)
-        node.log.addHandler(handler)
-        try:
+        with captured_logs(node.log.name) as records:
             node.loop()
-        finally:
-            node.log.removeHandler(handler)
         hints = [r for r in records if "handles pages under" in r]
         self.assertEqual(len(hints), 1, records)  # 'Depth' only: 'depth' is right,
         # and 'never_sent_sonar' has no close match (its pages may come later)
@@ -673,15 +665,6 @@ class TestHandlerForAMisspelledKey(SNRTestCase):
     def test_no_wiring_hint_outside_debug_mode(self) -> None:
         node = Node("test", self.get_config([KeyWatcherFactory(["Depth"])], Mode.TEST))
         self.assertIsNone(node.key_hints)
-
-
-class _ListHandler(logging.Handler):
-    def __init__(self, records: List[str]) -> None:
-        super().__init__(logging.INFO)
-        self.records = records
-
-    def emit(self, record: logging.LogRecord) -> None:
-        self.records.append(record.getMessage())
 
 
 # -- 10. changing node state from a loop thread -------------------------------------
@@ -753,6 +736,7 @@ class Sleepy(Endpoint):
 
 class TestBlockingHandler(SNRTestCase):
     def test_slow_handler_is_named_with_its_time(self) -> None:
+        capture_test_logs(self)  # and the INFO level a DEBUG node gives "snr.test" goes
         for mode in (Mode.DEBUG, Mode.TEST):
             with self.subTest(mode=mode):
                 naps = [tasks.event("nap"), tasks.event("nap")]
@@ -913,8 +897,9 @@ class TestHandlerExceptions(SNRTestCase):
     def test_message_shows_student_frames_and_task(self) -> None:
         node = Node("test", self.get_config([FactoryOf(Crasher), TimeoutLoopFactory(seconds=2)]))
         node.schedule(tasks.store_data("depth", 0))
-        with self.assertRaises(HandlerError) as ctx:
+        with self.assertRaises(HandlerError) as ctx, self.assertLogs(node.log, "ERROR") as logs:
             node.loop()
+        self.assertIn("Stopping node 'test': Task handler Crasher.on_depth", logs.output[0])
         message = str(ctx.exception)
         for part in (
             "Crasher.on_depth",
@@ -939,8 +924,9 @@ class TestHandlerExceptions(SNRTestCase):
 
         factory = LoopFactoryOf(lambda f, p: Clock(f, p, "clock"))
         node = Node("test", self.get_config([factory, TimeoutLoopFactory(seconds=2)]))
-        with self.assertRaises(LoopError) as ctx:
+        with self.assertRaises(LoopError) as ctx, self.assertLogs(node.log, "ERROR") as logs:
             node.loop()
+        self.assertIn("Stopping node 'test': Loop 'clock'", logs.output[0])
         message = str(ctx.exception)
         for part in ("'clock'", "ThreadSafetyError", "self.schedule(task)", "Clock.loop", HERE):
             self.assertIn(part, message)
@@ -949,8 +935,9 @@ class TestHandlerExceptions(SNRTestCase):
 
     def test_loop_exception(self) -> None:
         node = Node("test", self.get_config([LoopFactoryOf(CrashingLoop)]))
-        with self.assertRaises(LoopError) as ctx:
+        with self.assertRaises(LoopError) as ctx, self.assertLogs(node.log, "ERROR") as logs:
             node.loop()
+        self.assertIn("Stopping node 'test': Loop 'crashing_loop'", logs.output[0])
         message = str(ctx.exception)
         for part in ("'crashing_loop'", "CrashingLoop", HERE, "High velocity impact", "Fix loop()"):
             self.assertIn(part, message)
