@@ -51,6 +51,9 @@ def captured_logs(name: str = "snr", level: Optional[int] = None) -> Iterator[Li
     ``name`` is as it was: a node sets its logger's level from its mode the first
     time its role is used, and a DEBUG node must not leave the next test's TEST
     node of the same role logging INFO lines.
+
+    It replaces the handlers of ``name`` while it lasts: start it before any
+    ``assertLogs`` on the same logger (first thing in the test, or in setUp).
     """
     logger = logging.getLogger(name)
     lines: List[str] = []
