@@ -33,6 +33,7 @@ from snr import (
 )
 from snr.std_mods.comms.link import CommsLoop
 from tests.comms_helpers import free_port
+from tests.quiet import capture_test_logs
 from tests.test_comms_local import LocalNodes, connect_when_listening
 
 
@@ -181,6 +182,7 @@ def wait_until(condition: Callable[[], bool], timeout_s: float) -> bool:
 
 class CommsFaultTest(unittest.TestCase):
     def setUp(self) -> None:
+        capture_test_logs(self)  # the lines these tests read stay out of the run's output
         self.log = LogLines()
         snr_log = logging.getLogger("snr")
         snr_log.addHandler(self.log)

@@ -289,9 +289,11 @@ class TestLunarLanderListing(unittest.TestCase):
             mock.patch.object(controller_factory, "get", noted_controller),
             contextlib.redirect_stderr(err),
             self.assertRaises(SystemExit) as exit,
+            self.assertLogs("snr.lunar_module", "ERROR") as logs,
         ):
             a4.main()
         self.assertEqual(exit.exception.code, 1)
+        self.assertIn("Stopping node 'lunar_module': Loop 'radar_sensor_endpoint'", logs.output[0])
         self.assertIn("LoopError in node 'lunar_module'", err.getvalue())
         self.assertIn("raised Exception: High velocity impact", err.getvalue())
         # Four actions rated per reading; (altitude, velocity) falls by 9.8 m/s a tick.
