@@ -8,6 +8,7 @@ from pathlib import Path
 import snr.docsite
 from snr.api_topics import TOPICS, Topic, check_topics, full_entry, summary
 from tests.examples_support import ROOT
+from tests.optional import needs
 
 
 def _temp_dir(test: unittest.TestCase) -> Path:
@@ -44,6 +45,7 @@ class TestTopics(unittest.TestCase):
         self.assertTrue(summary("Node").startswith("Builds its components"))
 
 
+@needs("pdoc")
 class TestStartPage(unittest.TestCase):
     def test_the_start_page_lists_names_by_topic_with_links(self) -> None:
         output = _temp_dir(self)
@@ -76,6 +78,7 @@ class TestGuideLookup(unittest.TestCase):
         (package / "guide" / "index.md").write_text("# Home\n", "utf-8")
         self.assertEqual(snr.docsite.find_guide(package), package / "guide")
 
+    @needs("pdoc")
     def test_the_shipped_copy_names_the_examples_it_cannot_link_to(self) -> None:
         package = _temp_dir(self) / "snr"
         (package / "guide").mkdir(parents=True)
