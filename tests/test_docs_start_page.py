@@ -38,6 +38,7 @@ class TestTopics(unittest.TestCase):
         self.assertEqual(full_entry("tasks"), "snr/core/tasks.html")
         self.assertEqual(full_entry("Settings"), "snr/compat2021.html#Settings")
 
+    @needs("websockets")  # summary() imports every module of snr, the live view's server too
     def test_an_alias_is_summed_up_by_the_docstring_under_it(self) -> None:
         # DataKey is str: its summary must not be str's docstring.
         self.assertTrue(summary("DataKey").startswith("The name a page is stored under"))
