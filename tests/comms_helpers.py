@@ -1,7 +1,9 @@
 """Components and process helpers shared by the comms tests (not part of the library).
 
 Nodes under test run in child processes; they report what they saw to the
-test through a one-way pipe (`Reports`), one small message per event.
+test through a one-way pipe (`Reports`), one small message per event. What a
+node prints (Ctrl-C's message, its warnings) goes to a file, not to the test
+run's output; a report that never comes shows it in the failure.
 """
 
 from __future__ import annotations
@@ -11,6 +13,7 @@ import multiprocessing
 import os
 import signal
 import socket
+import tempfile
 import threading
 import time
 from multiprocessing.connection import Connection
@@ -60,10 +63,14 @@ class Reports:
     def __init__(self, ctx: Any) -> None:
         self.reader, self.writer = ctx.Pipe(duplex=False)
         self.seen: List[Any] = []
+        self.nodes: List[NodeProcess] = []
+        """The nodes whose output a failure shows (see `NodeProcess.output`)."""
 
     def get(self, timeout_s: float) -> Any:
         if not self.reader.poll(timeout_s):
-            raise AssertionError(f"no report within {timeout_s} s; so far: {self.seen[-5:]}")
+            raise AssertionError(
+                f"no report within {timeout_s} s; so far: {self.seen[-5:]}{self.node_output()}"
+            )
         item = self.reader.recv()
         self.seen.append(item)
         return item
@@ -74,18 +81,27 @@ class Reports:
         while True:
             remaining = deadline - time.monotonic()
             if remaining <= 0:
-                raise AssertionError(f"no matching report in {timeout_s} s: {self.seen[-5:]}")
+                raise AssertionError(
+                    f"no matching report in {timeout_s} s: {self.seen[-5:]}{self.node_output()}"
+                )
             item = self.get(remaining)
             if predicate(item):
                 return item
+
+    def node_output(self) -> str:
+        """What each node in ``nodes`` printed, for a failure message."""
+        return "".join(f"\nnode {n.role!r} printed:\n{n.output()}" for n in self.nodes)
 
     def close(self) -> None:
         self.reader.close()
         self.writer.close()
 
 
-def run_role(role: str, config: Config) -> None:
-    """Child process entry point."""
+def run_role(role: str, config: Config, output_path: str) -> None:
+    """Child process entry point: what the node prints goes to ``output_path``."""
+    with open(output_path, "wb") as output:  # file descriptors: C-level writes too
+        os.dup2(output.fileno(), 1)
+        os.dup2(output.fileno(), 2)
     SynchronousRunner(role, config).run()
 
 
@@ -97,7 +113,21 @@ class NodeProcess:
             {role: [*factories, TimeoutLoopFactory(seconds=SAFETY_S, name="safety_timeout")]},
             mode=Mode.TEST,
         )
-        self.process = ctx.Process(target=run_role, args=(role, config), name=f"node-{role}")
+        self.role = role
+        handle, self.output_path = tempfile.mkstemp(prefix=f"snr-node-{role}-", suffix=".txt")
+        os.close(handle)
+        self.printed: Optional[str] = None
+        """All the node printed, once `interrupt` has stopped it."""
+        self.process = ctx.Process(
+            target=run_role, args=(role, config, self.output_path), name=f"node-{role}"
+        )
+
+    def output(self) -> str:
+        """What the node printed so far (stdout and stderr)."""
+        if self.printed is not None:
+            return self.printed
+        with open(self.output_path, encoding="utf-8", errors="replace") as output:
+            return output.read()
 
     def start(self) -> NodeProcess:
         self.process.start()
@@ -108,6 +138,9 @@ class NodeProcess:
             os.kill(self.process.pid, signal.SIGINT)
         self.process.join(timeout_s)
         self.kill()
+        if self.printed is None:  # keep what it printed; its file goes
+            self.printed = self.output()
+            os.remove(self.output_path)
         code: Optional[int] = self.process.exitcode
         return code
 

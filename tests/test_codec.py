@@ -17,12 +17,10 @@ import tempfile
 import unittest
 from typing import Any, Callable, Iterator, List, Optional, Tuple
 
-from hypothesis import example, given, settings
-from hypothesis import strategies as st
-
 from snr import NotSerializableError, Page, PageReader, WireFormatError
 from snr.std_mods import codec
 from snr.std_mods.comms.wire import HEADER_BYTES, decode_body, encode_hello, encode_page
+from tests.optional import example, given, settings, st
 
 BACKENDS = codec.available_backends()
 GOOD_PAGE = b'{"v":1,"kind":"page","key":"k","data":%s,"origin":"o","created_at_s":1.5}'

@@ -14,9 +14,6 @@ import time
 import unittest
 from typing import Any, Dict, List
 
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-
 from snr import SocketsPair
 from tests.comms_helpers import (
     LogForwarderFactory,
@@ -28,6 +25,7 @@ from tests.comms_helpers import (
     free_port,
     pages_of,
 )
+from tests.optional import HealthCheck, given, needs, settings, st
 
 
 # -- the foreign side: socket + json only -------------------------------------
@@ -150,6 +148,7 @@ class InteropTest(unittest.TestCase):
     def start_server(self, *factories: Any) -> NodeProcess:
         node = NodeProcess(self.ctx, "snr_server", factories).start()
         self.addCleanup(node.interrupt)
+        self.reports.nodes.append(node)  # a failure shows what it printed
         return node
 
     def connect(self) -> socket.socket:
@@ -187,6 +186,7 @@ class InteropTest(unittest.TestCase):
             received[1:], [page("greeting", i, "snr_server", 1000.0 + i) for i in range(3)]
         )
 
+    @needs("hypothesis")
     def test_bad_input_barrage_then_good_pages_still_flow(self) -> None:
         writer = self.reports.writer
         server = self.start_server(

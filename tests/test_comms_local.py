@@ -29,6 +29,7 @@ from snr import (
     tasks,
 )
 from tests.comms_helpers import StopAfterFactory, free_port
+from tests.quiet import capture_test_logs
 
 PAGE = Page("pose", {"x": 1.5, "tags": ["a", "b"]}, "robot", 1234.5, process=False)
 
@@ -104,6 +105,8 @@ class TestLocalSockets(SNRTestCase):
     def setUp(self) -> None:
         self.port = free_port()
         self.pair = SocketsPair(server_tuple=("127.0.0.1", self.port))
+        # The receiver stops first: the sender may warn that it lost the link.
+        capture_test_logs(self, "snr.sender")
 
     def run_pair(
         self, receiver: Sequence[Any], sender: Sequence[Any], mode: Mode = Mode.TEST
@@ -187,6 +190,7 @@ class TestLocalSockets(SNRTestCase):
 
     def test_listing_5_3_config_shape(self) -> None:
         # Listing 5.3: SocketsPair on localhost, the client given a key list.
+        capture_test_logs(self, "snr.input_device")  # may warn that the receiver is gone
         sockets = SocketsPair(server_tuple=("localhost", self.port))
         named = {"A": 1, "left_stick_x": 0.5}
         config = Config(

@@ -36,6 +36,7 @@ class SocketsProcessTest(unittest.TestCase):
     def node(self, role: str, *factories: Any) -> NodeProcess:
         node = NodeProcess(self.ctx, role, factories).start()
         self.nodes.append(node)
+        self.reports.nodes.append(node)  # a failure shows what it printed
         return node
 
     def stop_all(self) -> None:

@@ -10,9 +10,6 @@ import struct
 import unittest
 from typing import Any
 
-from hypothesis import given, settings
-from hypothesis import strategies as st
-
 from snr import NotSerializableError, Page, WireFormatError
 from snr.std_mods.comms.wire import (
     HEADER_BYTES,
@@ -25,6 +22,7 @@ from snr.std_mods.comms.wire import (
     encode_hello,
     encode_page,
 )
+from tests.optional import given, settings, st
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 

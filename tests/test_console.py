@@ -192,13 +192,17 @@ class TestCommands(unittest.TestCase):
             "exit now": "takes no arguments",
             "frobnicate": "Type 'help'",
         }
-        with NodeInThread([TimeoutLoopFactory(seconds=30)]) as run:
-            with run.console() as console:
-                for line, expected in cases.items():
-                    reply = console.send(line)
-                    self.assertEqual(reply.status, Status.ERROR, line)
-                    self.assertIn(expected, reply.text, line)
-            self.assertIs(run.node.state, NodeState.RUNNING)
+        with self.assertLogs("snr.robot", "WARNING") as logs:
+            with NodeInThread([TimeoutLoopFactory(seconds=30)]) as run:
+                with run.console() as console:
+                    for line, expected in cases.items():
+                        reply = console.send(line)
+                        self.assertEqual(reply.status, Status.ERROR, line)
+                        self.assertIn(expected, reply.text, line)
+                self.assertIs(run.node.state, NodeState.RUNNING)
+        # The two refused reloads of the console itself are logged for the robot's keeper.
+        cannot = [line for line in logs.output if "cannot reload itself" in line]
+        self.assertEqual(len(cannot), 2, logs.output)
 
     def test_task_types(self) -> None:
         with NodeInThread([TimeoutLoopFactory(seconds=30)]) as run, run.console() as console:
@@ -286,7 +290,7 @@ class TestRobustness(unittest.TestCase):
             self.assertIs(run.node.state, NodeState.RUNNING)
 
     def test_too_many_consoles_are_turned_away(self) -> None:
-        with NodeInThread([]) as run:
+        with self.assertLogs("snr.robot", "WARNING") as logs, NodeInThread([]) as run:
             consoles = [run.console() for _ in range(MAX_CONSOLES)]
             try:
                 with self.assertRaisesRegex(ConsoleConnectionError, "Too many consoles"):
@@ -297,6 +301,7 @@ class TestRobustness(unittest.TestCase):
             finally:
                 for console in consoles:
                     console.close()
+        self.assertIn(f"{MAX_CONSOLES} are connected, the most", logs.output[0])
 
 
 def _try_connect(run: NodeInThread, token: Optional[str] = None) -> bool:
@@ -351,26 +356,31 @@ class TestToken(unittest.TestCase):
             mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}),
             mock.patch("snr.std_mods.io.console._TokenThrottle", quick),
         ):
-            with NodeInThread([], token="s3cret-word") as run:
-                with self.assertRaisesRegex(ConsoleConnectionError, "needs a console token"):
-                    run.console()
-                with self.assertRaisesRegex(ConsoleConnectionError, "Wrong or missing"):
-                    run.console(token="guess")
-                # The wrong guess makes this address wait a moment before its next try.
-                with self.assertRaisesRegex(ConsoleConnectionError, "next one is checked in"):
-                    run.console(token="s3cret-word")
-                self.assertTrue(wait_for(lambda: _try_connect(run, "s3cret-word")))
-                with run.console(token="s3cret-word") as console:
-                    self.assertEqual(console.send("help").status, Status.OK)
+            with self.assertLogs("snr.robot", "WARNING") as logs:
+                with NodeInThread([], token="s3cret-word") as run:
+                    with self.assertRaisesRegex(ConsoleConnectionError, "needs a console token"):
+                        run.console()
+                    with self.assertRaisesRegex(ConsoleConnectionError, "Wrong or missing"):
+                        run.console(token="guess")
+                    # The wrong guess makes this address wait a moment before its next try.
+                    with self.assertRaisesRegex(ConsoleConnectionError, "next one is checked in"):
+                        run.console(token="s3cret-word")
+                    self.assertTrue(wait_for(lambda: _try_connect(run, "s3cret-word")))
+                    with run.console(token="s3cret-word") as console:
+                        self.assertEqual(console.send("help").status, Status.OK)
+        self.assertIn("gave a wrong token (1 in a row from 127.0.0.1)", logs.output[0])
+        self.assertIn("too soon after wrong ones", logs.output[1])
 
     def test_commands_before_the_token_are_not_run(self) -> None:
         with mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}):
-            with NodeInThread([], token="s3cret-word") as run:
-                with socket.create_connection((run.host, run.port), timeout=5) as sneaky:
-                    sneaky.sendall(b"exit\n")
-                    replies = read_replies(sneaky, 3)
-                self.assertEqual([r.status for r in replies], [Status.AUTH, Status.BYE])
-                self.assertIs(run.node.state, NodeState.RUNNING)
+            with self.assertLogs("snr.robot", "WARNING") as logs:
+                with NodeInThread([], token="s3cret-word") as run:
+                    with socket.create_connection((run.host, run.port), timeout=5) as sneaky:
+                        sneaky.sendall(b"exit\n")
+                        replies = read_replies(sneaky, 3)
+                    self.assertEqual([r.status for r in replies], [Status.AUTH, Status.BYE])
+                    self.assertIs(run.node.state, NodeState.RUNNING)
+        self.assertIn("sent a command before its token; disconnected it", logs.output[0])
 
 
 class TestRemoteConsoleProgram(unittest.TestCase):

@@ -2,7 +2,7 @@
 
 Each test plays one misbehaving console (or many) against a node and checks
 that the operator still gets in, the node keeps working, and nothing grows
-without bound. Figures worth knowing are printed (run pytest with ``-s``).
+without bound. Figures worth knowing are in the failure messages.
 """
 
 from __future__ import annotations
@@ -32,6 +32,7 @@ from snr.std_mods.io.console_protocol import (
     Status,
 )
 from tests.console_helpers import NodeInThread, wait_for
+from tests.quiet import captured_logs
 
 TOKEN = "s3cret-word"
 THROTTLE = "snr.std_mods.io.console._TokenThrottle"  # wrong tokens: first wait 0.25 s
@@ -78,37 +79,39 @@ def closed_by_node(sock: socket.socket, timeout_s: float) -> bool:
 class TestIdleConsolesCannotLockTheOperatorOut(unittest.TestCase):
     def test_100_idle_sockets_with_a_token_do_not_count(self) -> None:
         with mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}):
-            with NodeInThread([], token=TOKEN, auth_timeout_s=0.25) as run:
+            with self.assertLogs("snr.robot", logging.WARNING) as logs:
+                with NodeInThread([], token=TOKEN, auth_timeout_s=0.25) as run:
+                    squatters = idle_sockets(run, 100)
+                    try:
+                        started = time.monotonic()
+                        with connect_until_in(run, TOKEN, 5.0) as console:
+                            waited = time.monotonic() - started
+                            self.assertEqual(console.send("help").status, Status.OK)
+                        # They never counted against the limit.
+                        self.assertLess(waited, 0.25, f"100 idle sockets: in after {waited:.3f} s")
+                        # Every one of them is disconnected once its time to give a token is up.
+                        self.assertTrue(all(closed_by_node(s, 3.0) for s in squatters))
+                        self.assertEqual(len(receiver_of(run)._sessions), 0)
+                    finally:
+                        for sock in squatters:
+                            sock.close()
+        self.assertIn("32 consoles are waiting to give their token", logs.output[0])
+
+    def test_100_idle_sockets_without_a_token_time_out(self) -> None:
+        with self.assertLogs("snr.robot", logging.WARNING) as logs:
+            with NodeInThread([], idle_timeout_s=0.2) as run:
                 squatters = idle_sockets(run, 100)
                 try:
                     started = time.monotonic()
-                    with connect_until_in(run, TOKEN, 5.0) as console:
+                    with connect_until_in(run, None, 5.0) as console:
                         waited = time.monotonic() - started
                         self.assertEqual(console.send("help").status, Status.OK)
-                    print(
-                        f"\n100 idle sockets (token, auth timeout 0.25 s): in after {waited:.3f} s"
-                    )
-                    self.assertLess(waited, 0.25)  # they never counted against the limit
-                    # Every one of them is disconnected once its time to give a token is up.
-                    self.assertTrue(all(closed_by_node(s, 3.0) for s in squatters))
-                    self.assertEqual(len(receiver_of(run)._sessions), 0)
+                    # The idle timeout, and a margin.
+                    self.assertLess(waited, 0.2 + 1.5, f"100 idle sockets: in after {waited:.3f} s")
                 finally:
                     for sock in squatters:
                         sock.close()
-
-    def test_100_idle_sockets_without_a_token_time_out(self) -> None:
-        with NodeInThread([], idle_timeout_s=0.2) as run:
-            squatters = idle_sockets(run, 100)
-            try:
-                started = time.monotonic()
-                with connect_until_in(run, None, 5.0) as console:
-                    waited = time.monotonic() - started
-                    self.assertEqual(console.send("help").status, Status.OK)
-                print(f"\n100 idle sockets (no token, idle timeout 0.2 s): in after {waited:.3f} s")
-                self.assertLess(waited, 0.2 + 1.5)  # the idle timeout, and a margin
-            finally:
-                for sock in squatters:
-                    sock.close()
+        self.assertIn("8 are connected, the most this receiver serves", logs.output[0])
 
     def test_an_idle_console_is_told_why_it_was_closed(self) -> None:
         with NodeInThread([], idle_timeout_s=0.1) as run, run.console() as console:
@@ -152,7 +155,9 @@ class TestTokenGuessing(unittest.TestCase):
             mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}),
             mock.patch(THROTTLE, functools.partial(_TokenThrottle, first_delay_s=0.05)),
         ):
-            with NodeInThread([], token=TOKEN) as run:
+            # The operator's own tries while the address waits are counted; their
+            # summary comes when the node stops: kept here, not printed.
+            with captured_logs("snr.robot"), NodeInThread([], token=TOKEN) as run:
                 with self.assertLogs("snr.robot.command_receiver", logging.WARNING) as logs:
                     started = time.monotonic()
                     while time.monotonic() - started < 0.15:
@@ -166,13 +171,13 @@ class TestTokenGuessing(unittest.TestCase):
                 # The operator gets in once the address's wait is over (here: at most 0.4 s).
                 with connect_until_in(run, TOKEN, 5.0) as console:
                     self.assertEqual(console.send("help").status, Status.OK)
-        print(
-            f"\nToken guessing: {attempts} tries in {seconds:.1f} s, {checked} checked "
+        figures = (
+            f"{attempts} tries in {seconds:.1f} s, {checked} checked "
             f"({checked / seconds:.1f} guesses/s); {len(logs.output)} warning lines"
         )
-        self.assertGreater(attempts, 50)
-        self.assertLessEqual(checked, 4)  # checked at 0, 0.05, 0.15 s (then 0.35 s)
-        self.assertLessEqual(len(logs.output), 10)  # not one line per try
+        self.assertGreater(attempts, 50, figures)
+        self.assertLessEqual(checked, 4, figures)  # checked at 0, 0.05, 0.15 s (then 0.35 s)
+        self.assertLessEqual(len(logs.output), 10, figures)  # not one line per try
         text = "\n".join(logs.output)
         self.assertIn("more times in the last", text)
         self.assertIn("refused it unchecked", text)
@@ -193,6 +198,7 @@ class TestFloods(unittest.TestCase):
     def test_a_console_that_does_not_read_is_dropped_and_delays_nobody(self) -> None:
         # The flooder is dropped after 0.25 s without taking a reply (2 s by default).
         with (
+            self.assertLogs("snr.robot", logging.WARNING) as logs,
             mock.patch("snr.std_mods.io.console._SEND_TIMEOUT_S", 0.25),
             NodeInThread([]) as run,
             run.console() as operator,
@@ -217,16 +223,17 @@ class TestFloods(unittest.TestCase):
                 dropped_after = time.monotonic() - started
             finally:
                 flooder.close()
-        print(
-            f"\n'help' while another console sent 1000 'dump datastore' and read nothing: "
+        figures = (
+            f"'help' while another console sent 1000 'dump datastore' and read nothing: "
             f"median {statistics.median(during) * 1000:.1f} ms, max {max(during) * 1000:.1f} ms "
             f"(before: median {statistics.median(before) * 1000:.1f} ms, max "
             f"{max(before) * 1000:.1f} ms); flooder dropped after {dropped_after:.1f} s; "
             f"at most {most_waiting:,} bytes waited for it"
         )
-        self.assertLess(dropped_after, 8.0)
-        self.assertLessEqual(most_waiting, MAX_SEND_BUFFER_BYTES)
-        self.assertLess(max(during), 1.0)  # generous: measured tens of ms (see the print)
+        self.assertLess(dropped_after, 8.0, figures)
+        self.assertLessEqual(most_waiting, MAX_SEND_BUFFER_BYTES, figures)
+        self.assertLess(max(during), 1.0, figures)  # generous: measured tens of ms
+        self.assertIn("did not read its replies", "\n".join(logs.output))
 
     def test_pipelined_commands_are_answered_in_order_a_few_at_a_time(self) -> None:
         # Without the receiver's periodic wake-up, a line left waiting after
@@ -253,7 +260,11 @@ def _timed(console: RemoteConsole, line: str) -> float:
 
 class TestProtectedComponents(unittest.TestCase):
     def test_remove_node_core_is_refused_and_pages_are_still_stored(self) -> None:
-        with NodeInThread([TimeoutLoopFactory(seconds=30)]) as run, run.console() as console:
+        with (
+            self.assertLogs("snr.robot", logging.WARNING) as later_logs,
+            NodeInThread([TimeoutLoopFactory(seconds=30)]) as run,
+            run.console() as console,
+        ):
             with self.assertLogs("snr.robot", logging.WARNING) as logs:
                 reply = console.send("task event remove_component node_core")
             self.assertEqual(reply.status, Status.ERROR)
@@ -274,6 +285,7 @@ class TestProtectedComponents(unittest.TestCase):
             self.assertEqual(wait_for(lambda: run.node.get_data("depth_m")), 2.5)
             self.assertEqual(console.send("exit").status, Status.BYE)
             run.wait_stopped()  # `exit` still stops the node
+        self.assertIn("Refused: 'command_receiver_commands'", "\n".join(later_logs.output))
 
 
 class TestDumpDatastore(unittest.TestCase):

@@ -96,10 +96,12 @@ class TestReloadFromConsole(unittest.TestCase):
 
             # A broken edit: the reply says why, and v2 keeps running.
             self.write(SOURCE.replace("WORD", "v3") + "\ndef broken(:\n")
-            reply = console.send("reload pinger")
+            with self.assertLogs("snr.robot", "ERROR") as logs:
+                reply = console.send("reload pinger")
             self.assertEqual(reply.status, Status.ERROR)
             self.assertIn("old version keeps running", reply.text)
             self.assertIn("SyntaxError", reply.text)
+            self.assertIn("SyntaxError", logs.output[0])  # the node's log says it too
             self.ping(run, console, ["v2", 4])
 
             # Fixed again, through `reload all`.
@@ -115,9 +117,11 @@ class TestReloadFromConsole(unittest.TestCase):
         factory = self.module.PingerFactory()
         with NodeInThread([factory]) as run, run.console() as console:
             self.write(SOURCE + "\nraise RuntimeError('motor driver missing')\n")
-            reply = console.send("reload pinger")
+            with self.assertLogs("snr.robot", "ERROR") as logs:
+                reply = console.send("reload pinger")
             self.assertEqual(reply.status, Status.ERROR)
             self.assertIn("RuntimeError: motor driver missing", reply.text)
+            self.assertIn("RuntimeError: motor driver missing", logs.output[0])
             self.ping(run, console, ["v1", 1])
 
 

@@ -17,10 +17,12 @@ from unittest import mock
 import snr.docsite
 from snr.__main__ import main
 from tests.examples_support import ROOT
+from tests.optional import needs
 
 DOCS = Path(ROOT, "docs")
 
 
+@needs("pdoc")
 class TestDocsBuild(unittest.TestCase):
     output: Path
     problems: list
@@ -109,6 +111,7 @@ class TestDocsChecks(unittest.TestCase):
         self.assertIn("`Endpont`", problems[0])
         self.assertIn("`Task.val_lst`", problems[1])
 
+    @needs("pdoc")
     def test_a_broken_link_in_a_page_is_reported(self) -> None:
         guide = Path(tempfile.mkdtemp(prefix="snr-guide-"))
         self.addCleanup(shutil.rmtree, guide, True)
@@ -123,6 +126,7 @@ class TestDocsChecks(unittest.TestCase):
         other = (guide / "api" / "guide" / "other.html").read_text("utf-8")
         self.assertIn('href="index.html#home"', other)
 
+    @needs("pdoc")
     def test_a_link_to_a_module_that_does_not_exist_is_reported(self) -> None:
         guide = Path(tempfile.mkdtemp(prefix="snr-guide-"))
         self.addCleanup(shutil.rmtree, guide, True)

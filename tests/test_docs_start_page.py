@@ -8,6 +8,7 @@ from pathlib import Path
 import snr.docsite
 from snr.api_topics import TOPICS, Topic, check_topics, full_entry, summary
 from tests.examples_support import ROOT
+from tests.optional import needs
 
 
 def _temp_dir(test: unittest.TestCase) -> Path:
@@ -37,6 +38,7 @@ class TestTopics(unittest.TestCase):
         self.assertEqual(full_entry("tasks"), "snr/core/tasks.html")
         self.assertEqual(full_entry("Settings"), "snr/compat2021.html#Settings")
 
+    @needs("websockets")  # summary() imports every module of snr, the live view's server too
     def test_an_alias_is_summed_up_by_the_docstring_under_it(self) -> None:
         # DataKey is str: its summary must not be str's docstring.
         self.assertTrue(summary("DataKey").startswith("The name a page is stored under"))
@@ -44,6 +46,7 @@ class TestTopics(unittest.TestCase):
         self.assertTrue(summary("Node").startswith("Builds its components"))
 
 
+@needs("pdoc")
 class TestStartPage(unittest.TestCase):
     def test_the_start_page_lists_names_by_topic_with_links(self) -> None:
         output = _temp_dir(self)
@@ -76,6 +79,7 @@ class TestGuideLookup(unittest.TestCase):
         (package / "guide" / "index.md").write_text("# Home\n", "utf-8")
         self.assertEqual(snr.docsite.find_guide(package), package / "guide")
 
+    @needs("pdoc")
     def test_the_shipped_copy_names_the_examples_it_cannot_link_to(self) -> None:
         package = _temp_dir(self) / "snr"
         (package / "guide").mkdir(parents=True)

@@ -60,6 +60,7 @@ from snr.prelude.errors import (
     not_serializable_error,
 )
 from tests.helpers import StopWhenDrainedFactory, StopWhenFactory
+from tests.quiet import capture_test_logs, captured_logs
 
 HERE = "test_errors.py"
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -363,11 +364,13 @@ class TestHandlers(SNRTestCase):
         factory = FactoryOf(lambda f, p: Returns(f, p, value))
         node = Node("test", self.get_config([factory, TimeoutLoopFactory(seconds=2)]))
         node.schedule(tasks.event("go", [1]))
-        with self.assertRaises(HandlerError) as ctx:
+        with self.assertRaises(HandlerError) as ctx, self.assertLogs(node.log, "ERROR") as logs:
             node.loop()
         message = str(ctx.exception)
         for part in ("Returns.go", HERE, "(event, 'go')", "a Task, a list of Tasks, or None"):
             self.assertIn(part, message)
+        self.assertEqual(len(logs.output), 1, logs.output)  # the log says it once
+        self.assertIn("Stopping node 'test': Task handler Returns.go", logs.output[0])
         return message
 
     def test_wrong_return_value(self) -> None:
@@ -433,6 +436,7 @@ class TestFactoryGet(SNRTestCase):
             self.assertIn(part, str(ctx.exception))
 
     def test_forgets_to_return(self) -> None:
+        capture_test_logs(self)  # and the INFO level a DEBUG node gives "snr.test" goes
         for mode in Mode:
             with self.subTest(mode=mode), self.assertRaises(ComponentError) as ctx:
                 Node("test", self.get_config([ForgetsToReturn()], mode))
@@ -569,21 +573,14 @@ class TestMissingDataKey(SNRTestCase):
         )
         assert node.key_hints is not None
         node.key_hints.typo_s, node.key_hints.missing_s = typo_s, missing_s
-        records: List[str] = []
-        handler = _ListHandler(records)
-        if hint_expected:
-            # Stop 0.05 s after the hint: about ten more reads, which must not repeat it.
-            handler.on_hint = lambda: threading.Timer(
-                0.05, node.set_terminate_flag, args=("hint seen",)
-            ).start()
-        level = node.log.level
-        node.log.setLevel(logging.INFO)  # the "snr.test" logger is shared with other tests
-        node.log.addHandler(handler)
-        try:
+        # INFO, then the level it had: the "snr.test" logger is shared with other tests
+        with captured_logs(node.log.name, logging.INFO) as records:
+            if hint_expected:
+                # Stop 0.05 s after the hint: about ten more reads, which must not repeat it.
+                node.log.addHandler(_OnHint(lambda: threading.Timer(
+                    0.05, node.set_terminate_flag, args=("hint seen",)
+                ).start()))  # fmt: skip
             node.loop()
-        finally:
-            node.log.removeHandler(handler)
-            node.log.setLevel(level)
         reader = node.components["reader"]
         assert isinstance(reader, Reader)
         self.assertIn(None, reader.seen)  # get_data keeps returning None
@@ -673,13 +670,8 @@ class TestHandlerForAMisspelledKey(SNRTestCase):
         )
         assert node.key_hints is not None
         node.key_hints.handlers_s = 0.05
-        records: List[str] = []
-        handler = _ListHandler(records)
-        node.log.addHandler(handler)
-        try:
+        with captured_logs(node.log.name) as records:
             node.loop()
-        finally:
-            node.log.removeHandler(handler)
         hints = [r for r in records if "handles pages under" in r]
         self.assertEqual(len(hints), 1, records)  # 'Depth' only: 'depth' is right,
         # and 'never_sent_sonar' has no close match (its pages may come later)
@@ -691,14 +683,14 @@ class TestHandlerForAMisspelledKey(SNRTestCase):
         self.assertIsNone(node.key_hints)
 
 
-class _ListHandler(logging.Handler):
-    def __init__(self, records: List[str]) -> None:
+class _OnHint(logging.Handler):
+    """Calls ``on_hint`` when a missing-key hint is logged."""
+
+    def __init__(self, on_hint: Callable[[], None]) -> None:
         super().__init__(logging.INFO)
-        self.records = records
-        self.on_hint: Callable[[], None] = lambda: None
+        self.on_hint = on_hint
 
     def emit(self, record: logging.LogRecord) -> None:
-        self.records.append(record.getMessage())
         if "get_data/get_page return None" in record.getMessage():
             self.on_hint()
 
@@ -772,6 +764,7 @@ class Sleepy(Endpoint):
 
 class TestBlockingHandler(SNRTestCase):
     def test_slow_handler_is_named_with_its_time(self) -> None:
+        capture_test_logs(self)  # and the INFO level a DEBUG node gives "snr.test" goes
         for mode in (Mode.DEBUG, Mode.TEST):
             with self.subTest(mode=mode):
                 naps = [tasks.event("nap"), tasks.event("nap")]
@@ -932,8 +925,9 @@ class TestHandlerExceptions(SNRTestCase):
     def test_message_shows_student_frames_and_task(self) -> None:
         node = Node("test", self.get_config([FactoryOf(Crasher), TimeoutLoopFactory(seconds=2)]))
         node.schedule(tasks.store_data("depth", 0))
-        with self.assertRaises(HandlerError) as ctx:
+        with self.assertRaises(HandlerError) as ctx, self.assertLogs(node.log, "ERROR") as logs:
             node.loop()
+        self.assertIn("Stopping node 'test': Task handler Crasher.on_depth", logs.output[0])
         message = str(ctx.exception)
         for part in (
             "Crasher.on_depth",
@@ -958,8 +952,9 @@ class TestHandlerExceptions(SNRTestCase):
 
         factory = LoopFactoryOf(lambda f, p: Clock(f, p, "clock"))
         node = Node("test", self.get_config([factory, TimeoutLoopFactory(seconds=2)]))
-        with self.assertRaises(LoopError) as ctx:
+        with self.assertRaises(LoopError) as ctx, self.assertLogs(node.log, "ERROR") as logs:
             node.loop()
+        self.assertIn("Stopping node 'test': Loop 'clock'", logs.output[0])
         message = str(ctx.exception)
         for part in ("'clock'", "ThreadSafetyError", "self.schedule(task)", "Clock.loop", HERE):
             self.assertIn(part, message)
@@ -968,8 +963,9 @@ class TestHandlerExceptions(SNRTestCase):
 
     def test_loop_exception(self) -> None:
         node = Node("test", self.get_config([LoopFactoryOf(CrashingLoop)]))
-        with self.assertRaises(LoopError) as ctx:
+        with self.assertRaises(LoopError) as ctx, self.assertLogs(node.log, "ERROR") as logs:
             node.loop()
+        self.assertIn("Stopping node 'test': Loop 'crashing_loop'", logs.output[0])
         message = str(ctx.exception)
         for part in ("'crashing_loop'", "CrashingLoop", HERE, "High velocity impact", "Fix loop()"):
             self.assertIn(part, message)

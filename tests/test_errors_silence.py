@@ -56,6 +56,7 @@ from snr import (
 )
 from snr.std_mods.utils.timeout import TimeoutLoop
 from tests.examples_support import ROOT
+from tests.quiet import captured_logs
 
 DOCS = Path(ROOT, "docs", "errors.md")
 STUDENT_DIR = "/home/student/rov"
@@ -127,8 +128,8 @@ def run_program(source: str, wanted: List[str]) -> Tuple[List[str], int]:
     handler.setFormatter(logging.Formatter("%(name)s %(levelname)s: %(message)s"))
     snr_log = logging.getLogger("snr")
     role_log = logging.getLogger("snr.robot")
-    saved = (snr_log.propagate, role_log.level, os.getcwd())
-    snr_log.addHandler(handler)
+    saved = (snr_log.propagate, role_log.level, os.getcwd(), snr_log.handlers[:])
+    snr_log.handlers = [handler]  # the screen only, not also an earlier node's stderr handler
     snr_log.propagate = False
     role_log.setLevel(logging.INFO)
     status = 0
@@ -153,8 +154,7 @@ def run_program(source: str, wanted: List[str]) -> Tuple[List[str], int]:
                 print("".join(traceback.format_exception_only(error)), end="", file=sys.stderr)
                 status = 1
     finally:
-        snr_log.removeHandler(handler)
-        snr_log.propagate, level, cwd = saved
+        snr_log.propagate, level, cwd, snr_log.handlers = saved
         role_log.setLevel(level)
         os.chdir(cwd)
         shutil.rmtree(folder, ignore_errors=True)
@@ -242,14 +242,13 @@ class LogLines(logging.Handler):
 def run_node(factories: List[Any], mode: Mode = Mode.DEBUG) -> Tuple[Node, List[str]]:
     """Run a node of ``factories`` plus a 0.1 s timeout; the node and its log lines."""
     lines = LogLines()
-    log = logging.getLogger("snr.silence")
-    log.addHandler(lines)  # before the node is built: classes are read as it adds them
-    try:
+    # Only to `lines`, not to the run's output; the level a DEBUG node sets is put back.
+    with captured_logs("snr.silence"):
+        # Before the node is built: classes are read as it adds them.
+        logging.getLogger("snr.silence").addHandler(lines)
         config = Config({"silence": [*factories, TimeoutLoopFactory(ms=100)]}, mode)
         node = Node("silence", config)
         node.loop()
-    finally:
-        log.removeHandler(lines)
     return node, lines.lines
 
 

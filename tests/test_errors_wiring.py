@@ -39,6 +39,7 @@ from snr.core.explain import returning_lines
 from snr.prelude import MissingSuperInitError
 from snr.std_mods.comms.link_hints import watch_link
 from tests.comms_helpers import free_port
+from tests.quiet import capture_test_logs
 
 HERE = "test_errors_wiring.py"
 EV = TaskType.event
@@ -185,8 +186,9 @@ class TestTheLineToFix(SNRTestCase):
         node = Node("test", self.get_config([FactoryOf(cls), TimeoutLoopFactory(seconds=2)]))
         if go:
             node.schedule(tasks.event("go", [7]))
-        with self.assertRaises(HandlerError) as ctx:
+        with self.assertRaises(HandlerError) as ctx, self.assertLogs(node.log, "ERROR") as logs:
             node.loop()
+        self.assertIn(f"Stopping node 'test': Task handler {cls.__name__}.", logs.output[0])
         return str(ctx.exception)
 
     def test_a_wrong_return_points_at_that_return(self) -> None:
@@ -272,6 +274,7 @@ class Hints(logging.Handler):
 class TestKeysAcrossALink(SNRTestCase):
     def run_nodes(self, config: Config, link_s: float, hints: Hints, count: int) -> List[Node]:
         """Run topside and urov on threads until ``count`` hints came (or 5 s), then stop."""
+        capture_test_logs(self)  # the hints and the links' INFO lines, read through `hints`
         nodes = [Node(role, config) for role in ("topside", "urov")]
         threads = [threading.Thread(target=node.loop, name=f"test-{node.role}") for node in nodes]
         for node in nodes:

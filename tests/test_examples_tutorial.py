@@ -33,6 +33,7 @@ from typing import Callable, Dict, Iterator, List, Optional
 from snr.core.logs import LOG_FORMAT
 from snr.std_mods.io.remote_console import RemoteConsole
 from tests.examples_support import ROOT, TUTORIAL, script_env
+from tests.quiet import captured_logs
 from tests.tutorial_transcripts import compare, transcripts
 
 PAGE = os.path.join(ROOT, "docs", "tutorial.md")
@@ -53,13 +54,12 @@ def terminal() -> Iterator[io.StringIO]:
     screen = io.StringIO()
     handler = logging.StreamHandler(screen)
     handler.setFormatter(logging.Formatter(LOG_FORMAT, datefmt="%H:%M:%S"))
-    snr_log = logging.getLogger("snr")
-    snr_log.addHandler(handler)  # so SNR adds no stderr handler of its own
-    try:
+    # Only to the screen: not also to the stderr handler an earlier node may have
+    # given "snr"; and the levels these DEBUG nodes set are put back afterwards.
+    with captured_logs("snr"):
+        logging.getLogger("snr").addHandler(handler)  # so SNR adds no stderr handler
         with contextlib.redirect_stdout(screen), contextlib.redirect_stderr(screen):
             yield screen
-    finally:
-        snr_log.removeHandler(handler)
 
 
 class Process:

@@ -32,6 +32,7 @@ import snr
 from snr import AbstractNode, Node, SNRTestCase, Task, TaskType, tasks
 from snr.utils import ExpectorEndpointFactory, ListReplayerFactory
 from tests.comms_helpers import free_port
+from tests.quiet import capture_test_logs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 LISTINGS = os.path.join(ROOT, "tests", "listings")
@@ -289,9 +290,11 @@ class TestLunarLanderListing(unittest.TestCase):
             mock.patch.object(controller_factory, "get", noted_controller),
             contextlib.redirect_stderr(err),
             self.assertRaises(SystemExit) as exit,
+            self.assertLogs("snr.lunar_module", "ERROR") as logs,
         ):
             a4.main()
         self.assertEqual(exit.exception.code, 1)
+        self.assertIn("Stopping node 'lunar_module': Loop 'radar_sensor_endpoint'", logs.output[0])
         self.assertIn("LoopError in node 'lunar_module'", err.getvalue())
         self.assertIn("raised Exception: High velocity impact", err.getvalue())
         # Four actions rated per reading; (altitude, velocity) falls by 9.8 m/s a tick.
@@ -366,6 +369,7 @@ class TestControllerListings(SNRTestCase):
         )
 
     def test_5_3_with_a8_on_a_virtual_pad_sends_the_input_to_the_receiver(self) -> None:
+        capture_test_logs(self)  # the listing's DEBUG nodes log INFO lines
         os.environ.setdefault("SDL_VIDEODRIVER", "dummy")  # no screen, no sound
         os.environ.setdefault("SDL_AUDIODRIVER", "dummy")
         os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
@@ -430,6 +434,7 @@ class TestControllerListings(SNRTestCase):
 
 class TestUrovListing(unittest.TestCase):
     def test_5_1_with_the_urov_example_shows_telemetry(self) -> None:
+        capture_test_logs(self)  # the listing's DEBUG nodes log INFO lines
         with sockets_on_free_local_ports() as printed:
             listing = fresh_import("listing_5_1", UROV_EXAMPLE)
         self.assertEqual(printed, [("192.168.1.10", 9000), ("192.168.1.11", 9001)])

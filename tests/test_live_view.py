@@ -20,6 +20,7 @@ from snr import Config, ConfigError, Mode, Node, Page, SNRTestCase, tasks
 from snr.std_mods.codec import page_json
 from snr.std_mods.io.live_view import FoxgloveBridgeFactory, foxglove_app_url
 from snr.std_mods.io.page_schema import data_schema, page_schema
+from tests.quiet import capture_test_logs
 
 try:
     from websockets.asyncio.client import ClientConnection, connect
@@ -108,6 +109,7 @@ class TestConfiguration(SNRTestCase):
 
     @NEEDS_WEBSOCKETS
     def test_a_port_in_use_stops_the_node_with_the_port_named(self) -> None:
+        capture_test_logs(self)  # and the INFO level this DEBUG node gives "snr.robot" goes
         with socket.create_server(("127.0.0.1", 0)) as taken:
             port = taken.getsockname()[1]
             node = Node("robot", Config({"robot": [FoxgloveBridgeFactory("x", port=port)]}))
@@ -119,6 +121,9 @@ class LiveNode:
     """A node with a live view, run on a thread; the test stores pages into it."""
 
     def __init__(self, test: SNRTestCase, keys: List[str]) -> None:
+        # The view's lines (viewers come and go; pages dropped for a slow one,
+        # depending on timing) stay out of the run's output.
+        capture_test_logs(test)
         self.bridge = FoxgloveBridgeFactory(keys, port=0)
         self.node = Node("robot", Config({"robot": [self.bridge]}, mode=Mode.TEST))
         self.thread = threading.Thread(target=self.node.loop, daemon=True)

@@ -14,9 +14,6 @@ import unittest
 from typing import Any, Dict, List, Tuple
 from unittest import mock
 
-from hypothesis import HealthCheck, given, settings
-from hypothesis import strategies as st
-
 from snr import (
     ConfigError,
     ListReplayerFactory,
@@ -37,6 +34,7 @@ from snr.std_mods.io.mcap_files import (
     page_schema,
 )
 from snr.std_mods.io.page_schema import data_schema as infer_schema
+from tests.optional import HealthCheck, given, settings, st
 from tests.page_collector import PageCollectorFactory
 from tests.test_recorder_replayer import ReloadAtFactory, bad_lines_of_every_kind, run_role
 

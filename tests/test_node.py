@@ -35,6 +35,7 @@ from tests.helpers import (
     StopWhenDrainedFactory,
     StopWhenTrueFactory,
 )
+from tests.quiet import capture_test_logs
 
 EV = TaskType.event
 
@@ -267,8 +268,9 @@ class TestHandlerFailures(SNRTestCase):
         factory = BoomFactory()
         node = Node("test", self.get_config([factory, TimeoutLoopFactory(seconds=2)]))
         node.schedule(tasks.event("boom", [7]))
-        with self.assertRaises(HandlerError) as ctx:
+        with self.assertRaises(HandlerError) as ctx, self.assertLogs("snr.test", "ERROR") as logs:
             node.loop()
+        self.assertIn("Stopping node 'test': Task handler Boom.explode", logs.output[0])
         text = str(ctx.exception)
         for part in (
             "Boom.explode",
@@ -283,6 +285,7 @@ class TestHandlerFailures(SNRTestCase):
         self.assertEqual(snr_threads(), [])
 
     def test_deployed_mode_logs_and_keeps_running(self) -> None:
+        capture_test_logs(self)  # and the INFO level a DEPLOYED node gives "snr.test" goes
         factory = BoomFactory()
         booms = [tasks.event("boom"), tasks.event("boom")]
         stop = StopWhenDrainedFactory(booms)
@@ -300,16 +303,18 @@ class TestHandlerFailures(SNRTestCase):
                     "test", self.get_config([BoomFactory(bad), TimeoutLoopFactory(seconds=2)])
                 )
                 node.schedule(tasks.event("bad_return"))
-                with self.assertRaises(HandlerError) as ctx:
+                with self.assertRaises(HandlerError) as ctx, self.assertLogs(node.log) as logs:
                     node.loop()
+                self.assertIn("Stopping node 'test': Task handler Boom.bad_return", logs.output[0])
                 self.assertIn("Boom.bad_return", str(ctx.exception))
                 self.assertIn("must return a Task, a list of Tasks, or None", str(ctx.exception))
 
     def test_loop_exception_stops_node_in_test_mode(self) -> None:
         crasher = TickerFactory(rate=100, crash_after=2)
         node = Node("test", self.get_config([crasher, TimeoutLoopFactory(seconds=2)]))
-        with self.assertRaises(LoopError) as ctx:
+        with self.assertRaises(LoopError) as ctx, self.assertLogs(node.log, "ERROR") as logs:
             node.loop()
+        self.assertIn("Stopping node 'test': Loop 'ticker'", logs.output[0])
         self.assertIn("High velocity impact", str(ctx.exception))
         self.assertIn("ticker", str(ctx.exception))
 
@@ -327,6 +332,7 @@ class TestHandlerFailures(SNRTestCase):
             def get(self, parent: AbstractNode) -> Sleepy:
                 return Sleepy(self, parent)
 
+        capture_test_logs(self)  # and the INFO level a DEBUG node gives "snr.test" goes
         naps = [tasks.event("nap"), tasks.event("nap")]
         node = Node(
             "test", self.get_config([SleepyFactory(), StopWhenDrainedFactory(naps)], Mode.DEBUG)
@@ -341,6 +347,7 @@ class TestHandlerFailures(SNRTestCase):
 
 class TestProfiler(SNRTestCase):
     def test_dump_lists_task_ids_and_loops(self) -> None:
+        capture_test_logs(self)  # a DEBUG node: its INFO lines
         ticker = TickerFactory(rate=100)
         node = Node(
             "test",
@@ -359,6 +366,7 @@ class TestProfiler(SNRTestCase):
         self.assertRegex(dump, r"\n +1 x +[\d.]+ us -> +[\d.]+%: TaskType.store_page")
 
     def test_no_profiler_when_deployed(self) -> None:
+        capture_test_logs(self)  # and the INFO level a DEPLOYED node gives "snr.t" goes
         node = Node("t", Config({"t": [TimeoutLoopFactory(seconds=0.01)]}, mode=Mode.DEPLOYED))
         self.assertIsNone(node.profiler)
 

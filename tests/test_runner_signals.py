@@ -166,11 +166,8 @@ class TestNoOrphans(unittest.TestCase):
             os.killpg(self.parent.pid, signum)  # the parent leads its own group
         else:
             os.kill(self.parent.pid, signum)
-        took_s = self.seconds_until_children_gone(1.0 + STOP_SLACK_S)
+        self.seconds_until_children_gone(1.0 + STOP_SLACK_S)
         name = signal.Signals(signum).name
-        print(
-            f"\n{name}{' to the group' if whole_group else ''}: children gone after {took_s:.2f} s"
-        )
         self.assertEqual(self.parent.wait(5), 0, self.output())
         output = self.output()
         self.assertNotIn("Traceback", output)
@@ -200,8 +197,7 @@ class TestNoOrphans(unittest.TestCase):
         self.wait_for_children()
         os.kill(self.parent.pid, signal.SIGKILL)
         self.parent.wait(5)
-        took_s = self.seconds_until_children_gone(2.0 + STOP_SLACK_S)
-        print(f"\nSIGKILL: children gone after {took_s:.2f} s")
+        self.seconds_until_children_gone(2.0 + STOP_SLACK_S)
         output = self.output()
         lines: List[str] = [line for line in output.splitlines() if "parent process died" in line]
         for role in ROLES:

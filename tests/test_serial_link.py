@@ -37,6 +37,7 @@ from snr import (
 )
 from tests.helpers import StopWhenTrueFactory
 from tests.page_collector import PageCollectorFactory
+from tests.quiet import capture_test_logs, captured_logs
 
 try:
     import serial
@@ -212,7 +213,9 @@ class TestLoopback(SNRTestCase):
     def test_a_reload_never_leaves_a_second_live_link(self) -> None:
         record = ReloaderFactory()
         link = SerialLinkFactory("loop://", send_keys=["ping"], read_timeout_s=QUICK)
-        run_role("robot", [link, record])
+        # The reload joins the old link's threads in a handler: it may be called slow.
+        with captured_logs("snr.robot"):
+            run_role("robot", [link, record])
         self.assertEqual(record.reloaded, ["serial_link"])
         self.assertEqual(len(record.before), 2)  # one reader, one writer
         self.assertTrue(record.new_is_other)
@@ -298,6 +301,7 @@ class TestPseudoTerminal(SNRTestCase):
 
     def test_pages_mode_talks_to_a_device(self) -> None:
         # stops once both motor pages went out and both device lines came in
+        logs = capture_test_logs(self, "snr.robot.serial_link")
         collected = PageCollectorFactory(["temp_c", "serial_text", "motor"], stop_after=4)
         node = NodeThread(
             [
@@ -328,6 +332,7 @@ class TestPseudoTerminal(SNRTestCase):
         temp, text = [p for p in collected.pages if p.key != "motor"]
         self.assertEqual((temp.key, temp.data, temp.origin), ("temp_c", 21.5, "serial_link"))
         self.assertEqual((text.key, text.data), ("serial_text", "Booting v1.2"))
+        self.assertIn("is not a page: 'Booting v1.2'", "\n".join(logs))
 
     def test_pages_mode_rejects_what_the_strict_codec_rejects(self) -> None:
         # Each bad line is stored as text, as any line that is not a page is.
