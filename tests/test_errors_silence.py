@@ -383,6 +383,16 @@ class TestMechanisms(unittest.TestCase):
         self.assertEqual([m for m in lines if "drops it" in m or "handles the" in m], [])
         Node("deployed", Config({"deployed": [LoopBuilds(StateInLoop)]}, Mode.DEPLOYED))
 
+    def test_deployed_pages_skip_the_checks_debug_pages_make(self) -> None:
+        debug = Node("checked", Config({"checked": [TimeoutLoopFactory(seconds=1)]}))
+        with self.assertRaises(ComponentError):
+            debug.page(3, "depth")  # type: ignore[arg-type]
+        deployed = Node(
+            "fast", Config({"fast": [TimeoutLoopFactory(seconds=1)]}, Mode.DEPLOYED)
+        )
+        self.assertEqual(deployed.page("depth", 3).data, 3)
+        self.assertEqual(deployed.page(3, "depth").key, 3)  # type: ignore[arg-type]
+
     def test_store_data_builder_checks_its_key(self) -> None:
         with self.assertRaises(ComponentError) as caught:
             tasks.store_data(3, "depth")  # type: ignore[arg-type]
