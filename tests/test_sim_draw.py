@@ -22,6 +22,7 @@ from snr.std_mods.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotS
 from snr.std_mods.sim.draw import WALL, WorldView, import_pygame, render_scene, save_png
 from tests.examples_support import example_path, load_module
 from tests.helpers import StopWhenFactory
+from tests.optional import needs
 
 try:
     pygame: Any = importlib.import_module("pygame")
@@ -136,6 +137,7 @@ class TestInANode(SNRTestCase):
 
 
 class TestRoverExample(unittest.TestCase):
+    @needs("serial")  # the rover role's serial link is built with the config
     def test_sim_and_rover_differ_only_in_what_drives_the_wheels(self) -> None:
         roles = rover.make_components(seconds=1.0, port="loop://")
         kinds = {role: [type(f).__name__ for f in factories] for role, factories in roles.items()}
