@@ -344,6 +344,13 @@ class TestMicroPythonHelper(unittest.TestCase):
         board.poll()
         board.poll()
         self.assertEqual((self.stops, board.failsafes, board.failsafe_active), (2, 1, True))
+        # Hearing nothing, it says it is ready now and every FAILSAFE_MS: a computer
+        # that opens the port without resetting the board hears that too.
+        uart.written.clear()
+        for self.now_ms in (2500, 2999, 3000, 3999, 4000):
+            board.poll()
+        ready_lines = [line for line in uart.written if line.startswith(b'{"format"')]
+        self.assertEqual(len(ready_lines), 2)
 
     def test_noise_and_long_lines_are_counted_and_reset_nothing(self) -> None:
         uart = FakeUart()

@@ -4,7 +4,9 @@ Copy this file to the board. It speaks the board protocol of SNR's serial
 link (``docs/serial.md``): it prints the ready line once set up, sends a
 heartbeat every 200 ms, hands each page from the computer to ``on_page``,
 and calls ``on_failsafe`` (stop the motors!) when no page line, command or
-heartbeat, came for 1000 ms. It runs under CPython too, which is how SNR's
+heartbeat, came for 1000 ms; while it hears nothing, it repeats the ready
+line every 1000 ms, so a computer that opens the port without resetting the
+board (a GPIO UART) hears it too. It runs under CPython too, which is how SNR's
 tests run it.
 
 Example (``main.py`` on a Pico wired to the Pi's GPIO UART)::
@@ -120,6 +122,7 @@ class SnrBoard:
         self._skipping = False  # inside a line that was too long
         self._heard_ms = 0
         self._next_heartbeat_ms = 0
+        self._next_ready_ms = 0
 
     def begin(self) -> None:
         """Stop the actuators, then print the ready line: call it at the end of setting up."""
@@ -128,6 +131,7 @@ class SnrBoard:
         now = self.clock_ms()
         self._heard_ms = now
         self._next_heartbeat_ms = now
+        self._next_ready_ms = ticks_add(now, self.failsafe_ms)
         self._write_line(READY_LINE)
 
     def poll(self) -> None:
@@ -142,6 +146,10 @@ class SnrBoard:
             self.failsafe_active = True
             self.failsafes += 1
             self.on_failsafe()
+            self._next_ready_ms = now
+        if self.failsafe_active and ticks_diff(now, self._next_ready_ms) >= 0:
+            self._write_line(READY_LINE)  # "I am here, and nobody talks to me"
+            self._next_ready_ms = ticks_add(now, self.failsafe_ms)
         if ticks_diff(now, self._next_heartbeat_ms) >= 0:
             self._write_line('{"key":"hb","data":' + str(self.heartbeats_sent) + "}")
             self.heartbeats_sent += 1

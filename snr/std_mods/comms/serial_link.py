@@ -597,9 +597,13 @@ class SerialLinkLoop(ThreadLoop):
             self._ready.set()
             return False
         if verdict == "ready-again":
-            self.warn(
-                "The board on serial port %r restarted (it sent its ready line again): a "
-                "reset button, a watchdog, or its power dipped (motors starting?).",
+            self._repeats.report(
+                ("ready again",),
+                f"Ready lines again from the board on serial port {self.link.port!r}",
+                logging.WARNING,
+                "The board on serial port %r sent its ready line again: it restarted (its "
+                "reset button, a watchdog, its power dipping as motors start?), or its "
+                "failsafe fired as it heard nothing from this link.",
                 self.link.port,
             )
             return False

@@ -6,7 +6,9 @@
 //     hands each to your handler as a key and up to SNR_MAX_VALUES numbers;
 //   * poll() sends a heartbeat every SNR_HEARTBEAT_MS and calls your
 //     failsafe handler when no page line (a command or a heartbeat) came for
-//     SNR_FAILSAFE_MS: stop the motors there;
+//     SNR_FAILSAFE_MS: stop the motors there; while it hears nothing it
+//     repeats the ready line every SNR_FAILSAFE_MS (for a computer that opens
+//     the port without resetting the board, as on a GPIO UART);
 //   * send() writes a page line back: {"key":"depth_m","data":2.41}.
 //
 // The parser is a small hand-written one: data must be a number or a list of
@@ -43,6 +45,7 @@ class SnrBoard {
     onFailsafe_();  // start with the actuators stopped
     failsafeActive = true;
     heardMs_ = nextHeartbeatMs_ = millis();
+    nextReadyMs_ = heardMs_ + SNR_FAILSAFE_MS;
     port_.println(SNR_READY_LINE);
   }
 
@@ -55,6 +58,11 @@ class SnrBoard {
       failsafeActive = true;
       failsafes++;
       onFailsafe_();
+      nextReadyMs_ = now;
+    }
+    if (failsafeActive && (long)(now - nextReadyMs_) >= 0) {
+      port_.println(SNR_READY_LINE);  // "I am here, and nobody talks to me"
+      nextReadyMs_ = now + SNR_FAILSAFE_MS;
     }
     if ((long)(now - nextHeartbeatMs_) >= 0) {
       port_.print("{\"key\":\"" SNR_HEARTBEAT_KEY "\",\"data\":");
@@ -177,4 +185,5 @@ class SnrBoard {
   float values_[SNR_MAX_VALUES];
   unsigned long heardMs_ = 0;
   unsigned long nextHeartbeatMs_ = 0;
+  unsigned long nextReadyMs_ = 0;
 };
