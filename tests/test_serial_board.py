@@ -14,6 +14,7 @@ import os
 import re
 import select
 import shutil
+import subprocess
 import tempfile
 import time
 import unittest
@@ -436,6 +437,62 @@ class TestArduinoHelper(unittest.TestCase):
         self.assertEqual(int(defines["SNR_FAILSAFE_MS"]), board_protocol.FAILSAFE_S * 1000)
         self.assertEqual(json.loads(defines["SNR_HEARTBEAT_KEY"]), board_protocol.HEARTBEAT_KEY)
         self.assertLess(int(defines["SNR_MAX_LINE"]), 256)
+
+    @unittest.skipUnless(shutil.which("g++"), "needs a C++ compiler")
+    def test_the_header_builds_and_keeps_the_protocol_on_a_computer(self) -> None:
+        # tests/data/arduino_host/ fakes the little of Arduino.h the header uses.
+        folder = tempfile.mkdtemp(prefix="snr-arduino-")
+        self.addCleanup(shutil.rmtree, folder, True)
+        program = os.path.join(folder, "snr_host")
+        host = os.path.join(ROOT, "tests", "data", "arduino_host")
+        sketch = os.path.join(BOARDS, "arduino", "snr_board")
+        flags = ["-std=c++11", "-Wall", "-Wextra", "-Werror", "-I", host, "-I", sketch]
+        subprocess.run(
+            ["g++", *flags, os.path.join(host, "host_main.cpp"), "-o", program],
+            check=True,
+            timeout=60,
+        )
+        too_long = '{"key":"x","data":[' + ",".join(["1"] * 60) + "]}"
+        commands = [
+            "T 0",
+            "P",
+            f"I {READY_LINE}",
+            'I {"key":"motor","data":[50,-50.5]}',
+            'I {"key":"hb","data":3}',
+            "I garbage",
+            'I {"key":"x","data":"text"}',
+            f"I {too_long}",
+            'I {"key":"depth","data":2.5,"origin":"pi","created_at_s":1.0,"process":true}',
+            "P",
+            "S depth_m 2.41",
+            "T 999",
+            "P",
+            "T 1000",
+            "P",
+        ]
+        result = subprocess.run(
+            [program],
+            input="\n".join(commands) + "\n",
+            capture_output=True,
+            text=True,
+            check=True,
+            timeout=10,
+        )
+        self.assertEqual(
+            result.stdout.splitlines(),
+            [
+                "STOP",  # begin() stops the actuators, then says it is ready
+                f"W {READY_LINE}",
+                'W {"key":"hb","data":0}',
+                "PAGE motor 50 -50.5",
+                "PAGE depth 2.5",  # a full page line is read too
+                'W {"key":"depth_m","data":2.410}',
+                'W {"key":"hb","data":1}',
+                "STOP",  # FAILSAFE_MS after the last page line
+                f"W {READY_LINE}",  # nobody talks to it: it says it is ready
+                "BAD 3 FAILSAFES 1",  # garbage, text data, too long
+            ],
+        )
 
     def test_the_micropython_helper_s_constants_are_the_link_s(self) -> None:
         helper = load_micropython_helper()
