@@ -13,6 +13,12 @@ talks in lines, in one of two modes:
   a line (strings as they are, other values as JSON); every line read is
   stored as a string under ``receive_key``.
 
+With ``ready_timeout_s``, ``heartbeat_s`` and ``answer_timeout_s`` the link
+also follows the board protocol of `snr.std_mods.comms.board_protocol`: it
+waits for the board's ready line after each opening, sends heartbeats, and
+reports a board that stopped answering (whose own failsafe then stops its
+motors).
+
 pyserial is an optional dependency: ``pip install 'snr[serial]'``.
 """
 
@@ -27,7 +33,7 @@ import threading
 import time
 from typing import Any, Deque, Dict, List, Optional, Sequence
 
-from snr.core import LoopFactory, ThreadLoop
+from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.core.logs import LossReport, RepeatFilter
 from snr.prelude import (
     AbstractNode,
@@ -44,6 +50,13 @@ from snr.prelude import (
 )
 from snr.prelude.errors import closest_match
 from snr.std_mods.codec import header_line, page_from_line, page_to_line
+from snr.std_mods.comms.board_protocol import (
+    HEARTBEAT_KEY,
+    BoardWatch,
+    compact_line,
+    heartbeat_line,
+    is_heartbeat_line,
+)
 
 __all__ = [
     "DEFAULT_OUTBOX_BYTES",
@@ -69,6 +82,7 @@ DEFAULT_OUTBOX_BYTES = 8 * 1024
 _ECHO_GUARD_SIZE = 10_000
 _RECONNECT_MAX_S = 5.0
 _FLUSH_S = 0.25  # after halt, how long lines already queued may still go out
+_WRITER_WAKE_S = 0.1  # how often a writer holding lines for a starting board looks up
 
 
 def import_pyserial() -> Any:
@@ -314,6 +328,9 @@ class SerialLinkLoop(ThreadLoop):
         lines_received: lines read from the port.
         lines_sent: lines the device took.
         bad_lines: lines read that could not be used as pages.
+        boot_lines: lines skipped before the board's ready line.
+        heartbeats_received: heartbeat lines read (not stored).
+        heartbeats_sent: heartbeat lines queued for the board.
     """
 
     def __init__(self, factory: SerialLinkFactory, parent: AbstractNode) -> None:
@@ -324,6 +341,14 @@ class SerialLinkLoop(ThreadLoop):
         self.lines_received = 0
         self.lines_sent = 0
         self.bad_lines = 0
+        self.boot_lines = 0
+        self.heartbeats_received = 0
+        self.heartbeats_sent = 0
+        self._watch = BoardWatch(
+            factory.ready_timeout_s, factory.heartbeat_s, factory.answer_timeout_s
+        )
+        self._ready = threading.Event()  # the writer writes only while it is set
+        self._heartbeat_event = f"{factory.name}_heartbeat"
         self._buffer = bytearray()
         self._send_keys = set(factory.send_keys)
         self._received: collections.OrderedDict[int, Page] = collections.OrderedDict()
@@ -342,6 +367,10 @@ class SerialLinkLoop(ThreadLoop):
         self.task_handlers = {
             (TaskType.store_page, key): self.send_page for key in factory.send_keys
         }
+        if factory.heartbeat_s is not None:
+            # Queued by the node's thread, so a node that hangs stops the
+            # heartbeats and the board's failsafe stops the motors.
+            self.task_handlers[(TaskType.event, self._heartbeat_event)] = self.send_heartbeat
 
     @property
     def dropped(self) -> int:
@@ -372,6 +401,11 @@ class SerialLinkLoop(ThreadLoop):
         port = open_serial_port(link.port, link.baudrate, link.read_timeout_s, link.write_timeout_s)
         self._buffer.clear()
         self._cut = False
+        self._watch.opened(time.monotonic())
+        if self._watch.ready:
+            self._ready.set()
+        else:
+            self._ready.clear()  # the board resets on opening: hold the lines for it
         self.port = port
         if link.mode == "pages":  # lets the other end check the format version
             self._outbox.put("", (header_line() + "\n").encode("utf-8"), first=True)
@@ -455,6 +489,32 @@ class SerialLinkLoop(ThreadLoop):
             return
         if chunk:
             self._take(chunk)
+        self._follow_board(time.monotonic())
+
+    def _follow_board(self, now_s: float) -> None:
+        """Act on what the board protocol says is due (nothing, without it)."""
+        for due in self._watch.tick(now_s):
+            if due == "ready-timeout":
+                self.err(
+                    "The board on serial port %r sent no ready line within %.1f s (%d other "
+                    "lines came). Its code should print %s once set up (see "
+                    "examples/boards/); check the baud rate (%d). Sending to it anyway.",
+                    self.link.port,
+                    self.link.ready_timeout_s,
+                    self._watch.boot_lines,
+                    header_line(),
+                    self.link.baudrate,
+                )
+                self._ready.set()
+            elif due == "silent":
+                self.warn(
+                    "The board on serial port %r stopped answering: no line for %.1f s. Its "
+                    "failsafe should have stopped its actuators. Still listening.",
+                    self.link.port,
+                    self._watch.silent_for_s(now_s),
+                )
+            elif due == "heartbeat":
+                self.schedule(tasks.event(self._heartbeat_event))
 
     def _take(self, chunk: bytes) -> None:
         buffer = self._buffer
@@ -487,6 +547,11 @@ class SerialLinkLoop(ThreadLoop):
     def _handle_line(self, raw: bytes) -> None:
         text = raw.decode("utf-8", errors="replace").rstrip("\r")
         self.lines_received += 1
+        if not self._board_says(raw, text):
+            return
+        if is_heartbeat_line(text):
+            self.heartbeats_received += 1
+            return
         if self.link.mode == "lines":
             self.store_data(self.link.receive_key, text)
             return
@@ -505,6 +570,9 @@ class SerialLinkLoop(ThreadLoop):
             return
         if page is None:
             return  # the other end's header line
+        if page.key == HEARTBEAT_KEY:  # a heartbeat written another way
+            self.heartbeats_received += 1
+            return
         if not page.origin:
             page.origin = self.name
         if page.key in self._send_keys:  # do not send it straight back
@@ -512,6 +580,40 @@ class SerialLinkLoop(ThreadLoop):
             if len(self._received) > _ECHO_GUARD_SIZE:
                 self._received.popitem(last=False)  # one call: safe beside pop()
         self.store_page(page)
+
+    def _board_says(self, raw: bytes, text: str) -> bool:
+        """Follow the board protocol for one line; True if the line is to be used."""
+        verdict = self._watch.line(raw, time.monotonic())
+        if verdict == "boot":
+            self.boot_lines += 1
+            self.dbg("Skipped a line before the board was ready: %.80r", text)
+            return False
+        if verdict == "ready":
+            self.info(
+                "The board on serial port %r is ready (%d lines of boot output skipped)",
+                self.link.port,
+                self._watch.boot_lines,
+            )
+            self._ready.set()
+            return False
+        if verdict == "ready-again":
+            self._repeats.report(
+                ("ready again",),
+                f"Ready lines again from the board on serial port {self.link.port!r}",
+                logging.WARNING,
+                "The board on serial port %r sent its ready line again: it restarted (its "
+                "reset button, a watchdog, its power dipping as motors start?), or its "
+                "failsafe fired as it heard nothing from this link.",
+                self.link.port,
+            )
+            return False
+        if verdict == "use-again":
+            self.info(
+                "The board on serial port %r answers again, after %.1f s of silence",
+                self.link.port,
+                self._watch.last_silence_s,
+            )
+        return True
 
     def _bad_line(self, kind: str, text: str, why: str) -> None:
         self.bad_lines += 1
@@ -570,9 +672,18 @@ class SerialLinkLoop(ThreadLoop):
             self._loss.dropped(dropped)
         return None
 
+    def send_heartbeat(self, task: Task, key: TaskId) -> SomeTasks:
+        """Queue the next heartbeat line (on the node's thread: proof it still runs)."""
+        line = heartbeat_line(self.heartbeats_sent)
+        self.heartbeats_sent += 1
+        dropped = self._outbox.put(HEARTBEAT_KEY, (line + "\n").encode("ascii"))
+        if dropped:
+            self._loss.dropped(dropped)
+        return None
+
     def _encode(self, page: Page) -> str:
         if self.link.mode == "pages":
-            return page_to_line(page)
+            return compact_line(page) if self.link.compact else page_to_line(page)
         data = page.data
         if isinstance(data, str):
             if "\n" in data or "\r" in data:
@@ -593,9 +704,18 @@ class SerialLinkLoop(ThreadLoop):
         """The writer thread: write queued lines until the outbox is closed and empty."""
         outbox = self._outbox
         while True:
-            data = outbox.take()
+            if not self._ready.wait(_WRITER_WAKE_S):  # the board is starting up
+                if outbox.closed:
+                    left = outbox.discard()
+                    if left:
+                        self._loss.dropped(left)
+                    return
+                continue
+            data = outbox.take(_WRITER_WAKE_S)
             if data is None:
-                return
+                if outbox.closed:
+                    return
+                continue
             if outbox.closed and time.monotonic() > self._flush_until:
                 self._loss.dropped(1 + outbox.discard())
                 return
@@ -653,6 +773,18 @@ class SerialLinkFactory(LoopFactory):
             (default 8 KiB); when full, the newest line per key is kept and
             the drops are counted (``dropped``) and logged.
         name: the loop's name (default ``"serial_link"``).
+        ready_timeout_s: after each opening, wait up to this long for the
+            board's ready line (``board_protocol.READY_LINE``), skipping the lines before it and
+            writing nothing; None (the default): do not wait. 5 s covers an
+            Uno's reset.
+        heartbeat_s: send a heartbeat line (``{"key":"hb","data":<n>}``) this
+            often, e.g. 0.2; None: send none. The board's failsafe relies on it.
+        answer_timeout_s: log a warning when the board sent no line for this
+            long (its failsafe time, e.g. 1.0), and again when it answers;
+            None: never.
+        compact: in pages mode, write only each page's key and data
+            (``{"key":"motor","data":[50,-50,0]}``), short enough for a small
+            board's receive buffer.
 
     Raises:
         CommsError: pyserial is not installed (says how to install it); when
@@ -664,6 +796,10 @@ class SerialLinkFactory(LoopFactory):
         # an Arduino that reads motor speeds and prints sensor readings
         SerialLinkFactory("/dev/ttyACM0", 115200, send_keys=["motor_speed"],
                           receive_key="arduino_line", mode="lines")
+        # a board running examples/boards/: handshake, heartbeats, failsafe
+        SerialLinkFactory("/dev/serial/by-id/usb-Arduino_Uno_1234-if00",
+                          send_keys=["motor"], ready_timeout_s=5.0,
+                          heartbeat_s=0.2, answer_timeout_s=1.0, compact=True)
     """
 
     def __init__(
@@ -677,6 +813,10 @@ class SerialLinkFactory(LoopFactory):
         write_timeout_s: float = 1.0,
         name: Optional[str] = None,
         outbox_bytes: int = DEFAULT_OUTBOX_BYTES,
+        ready_timeout_s: Optional[float] = None,
+        heartbeat_s: Optional[float] = None,
+        answer_timeout_s: Optional[float] = None,
+        compact: bool = False,
     ) -> None:
         super().__init__(sys.modules[__name__])
         import_pyserial()  # fail now, with the install command, not at start-up
@@ -689,6 +829,10 @@ class SerialLinkFactory(LoopFactory):
         self.read_timeout_s = read_timeout_s
         self.write_timeout_s = write_timeout_s
         self.outbox_bytes = outbox_bytes
+        self.ready_timeout_s = ready_timeout_s
+        self.heartbeat_s = heartbeat_s
+        self.answer_timeout_s = answer_timeout_s
+        self.compact = compact
         self.name = name or "serial_link"
         self._check()
 
@@ -720,6 +864,12 @@ class SerialLinkFactory(LoopFactory):
                 f"{me}: outbox_bytes={self.outbox_bytes!r}; give a positive whole number of "
                 f"bytes (default {DEFAULT_OUTBOX_BYTES})."
             )
+        if self.compact and self.mode != "pages":
+            raise ConfigError(f"{me}: compact=True writes page lines: use it with mode='pages'.")
+        try:
+            BoardWatch(self.ready_timeout_s, self.heartbeat_s, self.answer_timeout_s)
+        except ConfigError as error:
+            raise ConfigError(f"{me}: {error}") from None
 
     def get(self, parent: AbstractNode) -> SerialLinkLoop:
         return SerialLinkLoop(self, parent)
