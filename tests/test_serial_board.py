@@ -117,6 +117,7 @@ class TestBoardWatch(unittest.TestCase):
         watch.line(READY_LINE.encode(), 1.2)
         self.assertEqual(watch.tick(1.3), ["heartbeat"])
 
+    @needs_pyserial  # the factory checks for pyserial first
     def test_bad_settings_are_config_errors(self) -> None:
         for bad in (0, -1.0, "1s"):
             with self.assertRaises(ConfigError):
