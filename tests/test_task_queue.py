@@ -2,8 +2,9 @@
 
 import threading
 import unittest
+from typing import List, Optional
 
-from snr import HandlerError, tasks
+from snr import HandlerError, Task, tasks
 from snr.core import TaskQueue
 
 
@@ -38,13 +39,13 @@ class TestTaskQueue(unittest.TestCase):
 
     def test_wait_wakes_when_another_thread_schedules(self) -> None:
         queue = TaskQueue()
-        got = []
+        got: List[Optional[Task]] = []
         consumer = threading.Thread(target=lambda: got.append(queue.get(5.0)))
         consumer.start()
         queue.schedule(tasks.event("hello"))
         consumer.join(5.0)
         self.assertFalse(consumer.is_alive())
-        self.assertEqual(got[0].name, "hello")
+        self.assertEqual([task.name if task else None for task in got], ["hello"])
 
     def test_many_producers_lose_nothing(self) -> None:
         queue = TaskQueue()
