@@ -12,6 +12,7 @@ import types
 import unittest
 import urllib.request
 from pathlib import Path
+from typing import List
 from unittest import mock
 
 import snr.docsite
@@ -25,7 +26,7 @@ DOCS = Path(ROOT, "docs")
 @needs("pdoc")
 class TestDocsBuild(unittest.TestCase):
     output: Path
-    problems: list
+    problems: List[str]
 
     @classmethod
     def setUpClass(cls) -> None:
