@@ -281,7 +281,12 @@ class TestLunarLanderListing(unittest.TestCase):
         def noted_controller(parent: AbstractNode) -> Any:
             endpoint = type(controller_factory).get(controller_factory, parent)
             rate = endpoint.q_function
-            endpoint.q_function = lambda data, action: readings.append(data) or rate(data, action)
+
+            def noted_rate(data: Any, action: Any) -> Any:
+                readings.append(data)
+                return rate(data, action)
+
+            endpoint.q_function = noted_rate
             return endpoint
 
         err = io.StringIO()
@@ -421,6 +426,7 @@ class TestControllerListings(SNRTestCase):
                 pad.handle = None
                 if "input_device" in nodes.nodes:
                     loop = nodes.nodes["input_device"].components["controller_loop"]
+                    assert isinstance(loop, snr.AbstractLoop)  # A.9 builds a ThreadLoop
                     loop.set_terminate_flag("the test is done")
                     loop.join(2.0)
                 nodes.stop()
