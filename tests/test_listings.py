@@ -332,8 +332,10 @@ class TestBenchmarkListing(unittest.TestCase):
         lines = [line.strip() for line in out.splitlines()]
         self.assertIn("Stressed with:", lines)
         self.assertIn("Terminate expected at 2000 ms", lines)
-        made = int(re.search(r"(\d+) stressor endpoints", out).group(1))  # type: ignore[union-attr]
-        calls = int(re.search(r"(\d+) stressor factory calls", out).group(1))  # type: ignore[union-attr]
+        made_line = re.search(r"(\d+) stressor endpoints", out)
+        calls_line = re.search(r"(\d+) stressor factory calls", out)
+        assert made_line and calls_line, out
+        made, calls = int(made_line.group(1)), int(calls_line.group(1))
         self.assertGreaterEqual(calls, made)
         self.assertGreater(made, 1)
         self.assertRegex(out, r"[\d.]+ ms terminate handled\n")

@@ -13,7 +13,7 @@ class TestTaskQueue(unittest.TestCase):
         queue = TaskQueue()
         queue.schedule([tasks.event(str(i)) for i in range(5)])
         queue.schedule(tasks.event("5"))
-        names = [queue.get(0).name for _ in range(6)]  # type: ignore[union-attr]
+        names = [task.name if task else None for task in [queue.get(0) for _ in range(6)]]
         self.assertEqual(names, ["0", "1", "2", "3", "4", "5"])
         self.assertIsNone(queue.get(0))
 
