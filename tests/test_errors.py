@@ -330,7 +330,7 @@ class Returns(Endpoint):
         self.task_handlers = {(EV, "go"): self.go}
 
     def go(self, task: Task, key: TaskId) -> SomeTasks:
-        return self.value  # type: ignore[no-any-return]
+        return self.value  # type: ignore[no-any-return]  # a wrong value, on purpose
 
 
 class BareStringKey(Endpoint):

@@ -52,7 +52,7 @@ class Boom(Endpoint):
         raise ValueError("sensor unplugged")
 
     def bad_return(self, task: Task, key: TaskId) -> SomeTasks:
-        return self.returns  # type: ignore[no-any-return]
+        return self.returns  # type: ignore[no-any-return]  # a wrong value, on purpose
 
 
 class BoomFactory(EndpointFactory):
