@@ -23,9 +23,9 @@ def compat(session: nox.Session) -> None:
 
 @nox.session
 def mypy(session: nox.Session) -> None:
-    """Type-check the library and the examples strictly."""
+    """Type-check the library, the examples and the tests strictly."""
     session.install("-e", ".[dev]")
-    session.run("python", "-m", "mypy", "--strict", "snr", "examples")
+    session.run("python", "-m", "mypy", "--strict", "snr", "examples", "tests")
 
 
 @nox.session

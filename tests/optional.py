@@ -36,6 +36,7 @@ __all__ = [
 ]
 
 T = TypeVar("T")
+Decorated = TypeVar("Decorated", bound=Callable[..., Any])  # a test function or class
 
 
 def reason(module: str) -> str:
@@ -43,7 +44,7 @@ def reason(module: str) -> str:
     return f"needs {module} (pip install -e '.[dev]')"
 
 
-def needs(module: str) -> Callable[[T], T]:
+def needs(module: str) -> Callable[[Decorated], Decorated]:
     """Skips a test or test class (with the reason) when ``module`` is not installed.
 
     Example::
@@ -84,9 +85,13 @@ else:
         def __iter__(self) -> Iterator[Any]:
             return iter(())  # list(HealthCheck) is empty
 
-    st = HealthCheck = _NoStrategy()  # type: ignore[assignment]
+    # hypothesis' names are a module, an enum and classes; the stand-ins are not.
+    st = _NoStrategy()  # type: ignore[assignment]
+    HealthCheck = _NoStrategy()  # type: ignore[assignment, misc]
 
-    def given(*args: Any, **kwargs: Any) -> Callable[[T], T]:  # type: ignore[no-redef]
+    def given(  # type: ignore[no-redef]
+        *args: Any, **kwargs: Any
+    ) -> Callable[[Decorated], Decorated]:
         """Skips the test: without hypothesis there is nothing to draw examples from."""
         return unittest.skip(reason("hypothesis"))
 
@@ -94,7 +99,8 @@ else:
         """Leaves the test as it is (its settings only matter to hypothesis)."""
         return lambda test: test
 
-    example = settings  # explicit examples are drawn by hypothesis too
+    # Explicit examples are drawn by hypothesis too.
+    example = settings  # type: ignore[assignment, misc]
 
 
 class _MarkMaker:

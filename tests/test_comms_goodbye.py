@@ -68,10 +68,11 @@ class TestGoodbyeBetweenNodes(unittest.TestCase):
         self.nodes = LocalNodes(config, ["urov", "topside"])
         self.addCleanup(self.nodes.stop)
         urov, topside = self.nodes.nodes
-        self.server_loop = urov.components[self.server.name]
-        self.client_loop = topside.components[self.client.name]
-        assert isinstance(self.server_loop, CommsLoop)
-        assert isinstance(self.client_loop, CommsLoop)
+        server_loop = urov.components[self.server.name]
+        client_loop = topside.components[self.client.name]
+        assert isinstance(server_loop, CommsLoop)
+        assert isinstance(client_loop, CommsLoop)
+        self.server_loop, self.client_loop = server_loop, client_loop
 
     def linked(self) -> bool:
         return all(

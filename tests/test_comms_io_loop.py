@@ -10,6 +10,7 @@ import functools
 import logging
 import multiprocessing
 import socket
+import sys
 import threading
 import time
 import unittest
@@ -40,10 +41,8 @@ from tests.test_comms_local import LocalNodes, connect_when_listening
 
 IDLE_PEERS = 300
 
-try:
+if sys.platform != "win32":  # Windows has no descriptor limit to raise
     import resource
-except ImportError:  # Windows: no descriptor limit to raise
-    resource = None  # type: ignore[assignment]
 
 
 def threads_of(role: str) -> List[str]:
@@ -53,7 +52,7 @@ def threads_of(role: str) -> List[str]:
 
 def ensure_open_files(needed: int) -> None:
     """Raise the soft descriptor limit to ``needed``, or skip the test."""
-    if resource is None:
+    if sys.platform == "win32":
         return
     soft, hard = resource.getrlimit(resource.RLIMIT_NOFILE)
     if soft >= needed:
@@ -159,7 +158,10 @@ class TestOneIOThreadPerNode(unittest.TestCase):
         server = node.components[f"sockets_server_{port}"]
         assert isinstance(server, CommsLoop)
         self.assertTrue(wait_until(lambda: len(server.links) == 1, 5.0))
-        io_threads = lambda: [n for n in threads_of("both") if n.endswith("-io")]  # noqa: E731
+
+        def io_threads() -> List[str]:
+            return [n for n in threads_of("both") if n.endswith("-io")]
+
         self.assertEqual(io_threads(), ["snr-both-io"], "two comms components share one")
         most = [0]
         done = threading.Event()

@@ -16,7 +16,9 @@ from typing import Any, Optional
 try:
     import pytest
 except ImportError:  # a plain install: unittest runs these the same, marks are pytest's
-    from tests.optional import pytest_marks_only as pytest
+    from tests.optional import (  # type: ignore[no-redef]  # a stand-in for its marks
+        pytest_marks_only as pytest,
+    )
 
 from snr import *
 

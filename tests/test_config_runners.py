@@ -9,6 +9,7 @@ import sys
 import textwrap
 import time
 import unittest
+from typing import List, Tuple, Union
 
 from snr import (
     CliRunner,
@@ -86,7 +87,8 @@ class TestCliRunner(unittest.TestCase):
         "topside": [TimeoutLoopFactory(seconds=0.05)],
     }
 
-    def run_cli(self, argv: list) -> tuple:
+    def run_cli(self, argv: List[str]) -> Tuple[Union[str, int, None], str]:
+        """The exit code and standard error of a CliRunner that exits."""
         err = io.StringIO()
         with contextlib.redirect_stderr(err), self.assertRaises(SystemExit) as ctx:
             CliRunner(self.components, argv).run()

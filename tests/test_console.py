@@ -50,7 +50,8 @@ from tests.console_helpers import NodeInThread, wait_for
 
 def read_replies(sock: socket.socket, count: int) -> List[Reply]:
     """Read ``count`` reply frames (or fewer if the node hangs up)."""
-    decoder, replies = ReplyDecoder(), []
+    decoder = ReplyDecoder()
+    replies: List[Reply] = []
     while len(replies) < count:
         data = sock.recv(65536)
         if not data:

@@ -14,7 +14,7 @@ import socket
 import statistics
 import time
 import unittest
-from typing import Any, List, Optional
+from typing import List, Optional
 from unittest import mock
 
 from snr import CommandReceiverFactory, ConfigError, RemoteConsole, TimeoutLoopFactory
@@ -28,6 +28,7 @@ from snr.std_mods.io.console_commands import REPLY_BUDGET_CHARS
 from snr.std_mods.io.console_protocol import (
     TOKEN_ENV_VAR,
     ConsoleConnectionError,
+    Reply,
     ReplyDecoder,
     Status,
 )
@@ -183,8 +184,9 @@ class TestTokenGuessing(unittest.TestCase):
         self.assertIn("refused it unchecked", text)
 
 
-def read_frames(sock: socket.socket, count: int, timeout_s: float = 5.0) -> List[Any]:
-    decoder, replies = ReplyDecoder(), []
+def read_frames(sock: socket.socket, count: int, timeout_s: float = 5.0) -> List[Reply]:
+    decoder = ReplyDecoder()
+    replies: List[Reply] = []
     sock.settimeout(timeout_s)
     while len(replies) < count:
         data = sock.recv(65536)

@@ -15,6 +15,7 @@ from snr import (
     Node,
     NodeState,
     SNRTestCase,
+    ThreadLoop,
 )
 from tests.console_helpers import wait_for
 
@@ -40,7 +41,9 @@ class TestLocalConsole(SNRTestCase):
             [LocalConsoleFactory(typed, io.StringIO())], timeout_s=0.1, expect_timeout=True
         )
         self.assertEqual(node.get_data("k"), 1)
-        self.assertIs(node.components["local_console"].state, LoopState.STOPPED)  # type: ignore[attr-defined]
+        console = node.components["local_console"]
+        assert isinstance(console, ThreadLoop)
+        self.assertIs(console.state, LoopState.STOPPED)
 
     def test_a_real_pipe_as_stdin(self) -> None:
         read_fd, write_fd = os.pipe()

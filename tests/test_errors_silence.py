@@ -172,7 +172,9 @@ def fast_timeout(done: Callable[[], bool]) -> type:
             # been flowing: run it once the first page is in (programs that
             # store nothing wait 0.15 s).
             first_page = time.monotonic() + 0.15
-            while not self.parent.datastore and time.monotonic() < first_page:
+            node = self.parent
+            assert isinstance(node, Node)  # the datastore is the Node's, not in AbstractNode
+            while not node.datastore and time.monotonic() < first_page:
                 if self.wait_s(0.005):
                     return
             self.schedule(tasks.event(tasks.CHECK_WIRING))

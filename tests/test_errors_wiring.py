@@ -157,6 +157,7 @@ class TestTheLineToFix(SNRTestCase):
 
     def test_task_handlers_before_super_init_points_at_that_line(self) -> None:
         message = self.build_error(HandlersTooEarly)
+        self.assertIn("before calling super().__init__", message)
         self.assertIn("HandlersTooEarly (", message)  # the class, as context
         self.assertIn(f"{HERE}:{line_of(HandlersTooEarly, 'class')})", message)
         self.assert_points_at(
@@ -166,12 +167,15 @@ class TestTheLineToFix(SNRTestCase):
     def test_using_the_component_before_super_init_points_at_that_line(self) -> None:
         with self.assertRaises(MissingSuperInitError) as ctx:
             Node("test", self.get_config([FactoryOf(LogsTooEarly)]))
+        self.assertIsInstance(ctx.exception, AttributeError)  # hasattr() still works
+        self.assertIn("super().__init__(factory, parent", str(ctx.exception))
         self.assert_points_at(
             str(ctx.exception), LogsTooEarly.__init__, 'self.info("starting")', "LogsTooEarly"
         )
 
     def test_no_super_init_points_at_the_def_init(self) -> None:
         message = self.build_error(NoSuperInit)
+        self.assertIn("did not call super().__init__(factory, parent, name)", message)
         self.assert_points_at(message, NoSuperInit.__init__, "def __init__", "NoSuperInit.__init__")
 
     def test_a_bad_key_points_at_the_line_that_registers_it(self) -> None:

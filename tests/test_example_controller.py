@@ -153,8 +153,8 @@ class TestControllerExample(SNRTestCase):
         # arrive in order, each printed exactly once.
         self.assertIn("(event, 'button_pressed'): ['Y']", printed)
         self.assertIn(Y_RELEASED, printed)
-        start = FIGURE_5_4_LINES.index(printed[0])
-        self.assertEqual(printed, FIGURE_5_4_LINES[start : start + len(printed)])
+        first = FIGURE_5_4_LINES.index(printed[0])
+        self.assertEqual(printed, FIGURE_5_4_LINES[first : first + len(printed)])
         self.assertIn("Interrupted by user, exiting", out)
 
 

@@ -6,7 +6,7 @@ import re
 import unittest
 from typing import Any, List, Tuple
 
-from snr import SNRTestCase, TaskType, tasks
+from snr import AbstractFactory, SNRTestCase, TaskType, tasks
 from tests.examples_support import example_path, load_module, run_script
 
 MAIN = example_path("lunar_lander", "main.py")
@@ -62,7 +62,7 @@ class TestTrainer(unittest.TestCase):
 
 
 class TestLanderNode(SNRTestCase):
-    def fly_node(self, controller: object, **radar_options: float) -> str:
+    def fly_node(self, controller: AbstractFactory, **radar_options: float) -> str:
         node = self.run_test_node(
             [
                 lander.RadarSensorLoopFactory(speed=0, **radar_options),

@@ -6,6 +6,7 @@ import logging
 import os
 import re
 import unittest
+from typing import List
 
 import snr
 from tests.examples_support import ROOT, example_path, load_module
@@ -14,7 +15,7 @@ from tests.helpers import StopWhenFactory
 FILE = example_path("ros_comparison", "depth_monitor.py")
 
 
-def python_blocks(markdown: str) -> list:
+def python_blocks(markdown: str) -> List[str]:
     return re.findall(r"```python\n(.*?)```", markdown, re.DOTALL)
 
 

@@ -281,7 +281,12 @@ class TestLunarLanderListing(unittest.TestCase):
         def noted_controller(parent: AbstractNode) -> Any:
             endpoint = type(controller_factory).get(controller_factory, parent)
             rate = endpoint.q_function
-            endpoint.q_function = lambda data, action: readings.append(data) or rate(data, action)
+
+            def noted_rate(data: Any, action: Any) -> Any:
+                readings.append(data)
+                return rate(data, action)
+
+            endpoint.q_function = noted_rate
             return endpoint
 
         err = io.StringIO()
@@ -327,8 +332,10 @@ class TestBenchmarkListing(unittest.TestCase):
         lines = [line.strip() for line in out.splitlines()]
         self.assertIn("Stressed with:", lines)
         self.assertIn("Terminate expected at 2000 ms", lines)
-        made = int(re.search(r"(\d+) stressor endpoints", out).group(1))  # type: ignore[union-attr]
-        calls = int(re.search(r"(\d+) stressor factory calls", out).group(1))  # type: ignore[union-attr]
+        made_line = re.search(r"(\d+) stressor endpoints", out)
+        calls_line = re.search(r"(\d+) stressor factory calls", out)
+        assert made_line and calls_line, out
+        made, calls = int(made_line.group(1)), int(calls_line.group(1))
         self.assertGreaterEqual(calls, made)
         self.assertGreater(made, 1)
         self.assertRegex(out, r"[\d.]+ ms terminate handled\n")
@@ -421,6 +428,7 @@ class TestControllerListings(SNRTestCase):
                 pad.handle = None
                 if "input_device" in nodes.nodes:
                     loop = nodes.nodes["input_device"].components["controller_loop"]
+                    assert isinstance(loop, snr.AbstractLoop)  # A.9 builds a ThreadLoop
                     loop.set_terminate_flag("the test is done")
                     loop.join(2.0)
                 nodes.stop()

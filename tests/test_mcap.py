@@ -173,7 +173,7 @@ class TestRecordMcap(SNRTestCase):
             {"filename": "run.jsonl", "file_format": "bag"},
         ):
             with self.subTest(**kwargs), self.assertRaises(ConfigError):
-                RecorderEndpointFactory(keys=["n"], **kwargs)  # type: ignore[arg-type]
+                RecorderEndpointFactory(keys=["n"], **kwargs)
         explicit = RecorderEndpointFactory("run.log", ["n"], file_format="mcap")
         self.assertEqual(explicit.file_format, "mcap")
 

@@ -4,7 +4,7 @@ import resource
 import threading
 import time
 import unittest
-from typing import Any, List
+from typing import Any, List, Optional
 
 from snr import (
     AbstractNode,
@@ -52,18 +52,19 @@ class Boom(Endpoint):
         raise ValueError("sensor unplugged")
 
     def bad_return(self, task: Task, key: TaskId) -> SomeTasks:
-        return self.returns  # type: ignore[no-any-return]
+        return self.returns  # type: ignore[no-any-return]  # a wrong value, on purpose
 
 
 class BoomFactory(EndpointFactory):
     def __init__(self, returns: Any = None) -> None:
         super().__init__()
         self.returns = returns
-        self.endpoint: Any = None
+        self.endpoint: Optional[Boom] = None
 
     def get(self, parent: AbstractNode) -> Boom:
-        self.endpoint = Boom(self, parent, self.returns)
-        return self.endpoint
+        endpoint = Boom(self, parent, self.returns)
+        self.endpoint = endpoint
+        return endpoint
 
 
 class Ticker(ThreadLoop):
@@ -292,6 +293,7 @@ class TestHandlerFailures(SNRTestCase):
         node = Node("test", Config({"test": [factory, stop]}, mode=Mode.DEPLOYED))
         with self.assertLogs("snr.test", "ERROR") as logs:
             node.loop()
+        assert factory.endpoint is not None
         self.assertEqual(factory.endpoint.calls, 2)
         self.assertEqual(node.terminate_reason, "queue drained")  # the errors did not stop it
         self.assertIn("Boom.explode", logs.output[0])

@@ -393,7 +393,8 @@ class TestBoundedQueue(unittest.TestCase):
 
             def on_n(self, task: Task, key: TaskId) -> SomeTasks:
                 self.got.append(task.val_list[0].data)
-                self.longest = max(self.longest, len(self.parent.queue))  # type: ignore[attr-defined]
+                assert isinstance(self.parent, Node)  # the queue is the Node's
+                self.longest = max(self.longest, len(self.parent.queue))
                 if len(self.got) % 100 == 0:
                     time.sleep(0.002)
                 return tasks.terminate("all in") if len(self.got) == 1000 else None

@@ -421,8 +421,9 @@ class TestReplayNeverStopsOnData(SNRTestCase):
 
         def fragile(fields: Dict[str, object]) -> Page:
             errors = {1: RecursionError("deep"), 3: OverflowError("big"), 4: MemoryError()}
-            if fields.get("data") in errors:
-                raise errors[fields["data"]]  # type: ignore[index]
+            data = fields.get("data")
+            if isinstance(data, int) and data in errors:
+                raise errors[data]
             return real(fields)
 
         factory = ReplayerLoopFactory(path, fast=True, exit_when_done=True)

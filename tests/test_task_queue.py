@@ -2,8 +2,9 @@
 
 import threading
 import unittest
+from typing import List, Optional
 
-from snr import HandlerError, tasks
+from snr import HandlerError, Task, tasks
 from snr.core import TaskQueue
 
 
@@ -12,7 +13,7 @@ class TestTaskQueue(unittest.TestCase):
         queue = TaskQueue()
         queue.schedule([tasks.event(str(i)) for i in range(5)])
         queue.schedule(tasks.event("5"))
-        names = [queue.get(0).name for _ in range(6)]  # type: ignore[union-attr]
+        names = [task.name if task else None for task in [queue.get(0) for _ in range(6)]]
         self.assertEqual(names, ["0", "1", "2", "3", "4", "5"])
         self.assertIsNone(queue.get(0))
 
@@ -38,13 +39,13 @@ class TestTaskQueue(unittest.TestCase):
 
     def test_wait_wakes_when_another_thread_schedules(self) -> None:
         queue = TaskQueue()
-        got = []
+        got: List[Optional[Task]] = []
         consumer = threading.Thread(target=lambda: got.append(queue.get(5.0)))
         consumer.start()
         queue.schedule(tasks.event("hello"))
         consumer.join(5.0)
         self.assertFalse(consumer.is_alive())
-        self.assertEqual(got[0].name, "hello")
+        self.assertEqual([task.name if task else None for task in got], ["hello"])
 
     def test_many_producers_lose_nothing(self) -> None:
         queue = TaskQueue()

@@ -298,7 +298,13 @@ class TestTheClassesOfTheDocs(SNRTestCase):
             release(node)
             node.set_terminate_flag("the test saw what it waited for")
 
-        said = _Lines(lambda: len(node.watchdog.said) >= warnings and stop())  # type: ignore[union-attr]
+        watchdog = node.watchdog
+
+        def stop_once_warned() -> None:
+            if len(watchdog.said) >= warnings:
+                stop()
+
+        said = _Lines(stop_once_warned)
         safety = threading.Timer(10.0, stop)
         node.log.addHandler(said)
         node.log.propagate = False  # the test reads the lines; nobody else need see them

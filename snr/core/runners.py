@@ -14,15 +14,25 @@ import sys
 import threading
 import time
 from types import FrameType
-from typing import TYPE_CHECKING, Any, Callable, List, NoReturn, Optional, Sequence, Union
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    Callable,
+    List,
+    Mapping,
+    NoReturn,
+    Optional,
+    Sequence,
+    Union,
+)
 
 from snr.core.config import Config
 from snr.core.node import Node
 from snr.prelude import (
     AbstractConfig,
+    AbstractFactory,
     AbstractMultiRunner,
     AbstractRunner,
-    ComponentsByRole,
     ConfigError,
     Mode,
     Role,
@@ -33,6 +43,11 @@ from snr.prelude.error_text import wrong_call
 if TYPE_CHECKING:
     import argparse
     from multiprocessing.connection import Connection
+
+# What a runner runs: a Config, or each role's factories. A Mapping (not the Dict
+# of ComponentsByRole), like Config's own argument: dicts are invariant, so
+# mypy --strict would reject a plain {"robot": [TimeoutLoopFactory(...)]}.
+_System = Union[AbstractConfig, Mapping[Role, Sequence[AbstractFactory]]]
 
 __all__ = [
     "INTERRUPTED_MESSAGE",
@@ -62,7 +77,7 @@ def report_error(error: SNRError, role: Optional[Role] = None) -> None:
     print(f"{type(error).__name__}{where}: {error}", file=sys.stderr, flush=True)
 
 
-def _as_config(components_or_config: Union[AbstractConfig, ComponentsByRole]) -> AbstractConfig:
+def _as_config(components_or_config: _System) -> AbstractConfig:
     if isinstance(components_or_config, AbstractConfig):
         return components_or_config
     return Config(components_or_config)
@@ -76,9 +91,7 @@ def _exit_with(error: ConfigError, exit_on_error: bool) -> NoReturn:
     raise SystemExit(1)
 
 
-def _config_or_exit(
-    components_or_config: Union[AbstractConfig, ComponentsByRole], exit_on_error: bool
-) -> AbstractConfig:
+def _config_or_exit(components_or_config: _System, exit_on_error: bool) -> AbstractConfig:
     """The config; a wrong one is reported without a traceback (the runner is top level)."""
     try:
         return _as_config(components_or_config)
@@ -116,7 +129,7 @@ class SynchronousRunner(AbstractRunner):
     def __init__(
         self,
         role: Role,
-        config: Union[AbstractConfig, ComponentsByRole],
+        config: _System,
         exit_on_error: bool = True,
         announce_interrupt: bool = True,
         on_node: Optional[Callable[[Node], None]] = None,
@@ -334,7 +347,7 @@ class MultiProcRunner(AbstractMultiRunner):
     def __init__(
         self,
         roles: Sequence[Role],
-        config: Union[AbstractConfig, ComponentsByRole],
+        config: _System,
         start_method: Optional[str] = None,
         join_timeout_s: float = 5.0,
     ) -> None:
@@ -463,7 +476,7 @@ class CliRunner(AbstractRunner):
 
     def __init__(
         self,
-        components_or_config: Union[AbstractConfig, ComponentsByRole],
+        components_or_config: _System,
         argv: Optional[Sequence[str]] = None,
     ) -> None:
         if isinstance(components_or_config, str):
