@@ -170,6 +170,8 @@ if TYPE_CHECKING:
         TextReplayerLoop,
         TimeoutLoop,
         TimeoutLoopFactory,
+        ZenohComms,
+        ZenohCommsFactory,
         format_task,
     )
     from snr.utils.test_case import SNRTestCase
@@ -231,6 +233,8 @@ _LAZY: Dict[str, str] = {
             "TextReplayerLoop",
             "TimeoutLoop",
             "TimeoutLoopFactory",
+            "ZenohComms",
+            "ZenohCommsFactory",
             "format_task",
         ),
         "snr.std_mods",
@@ -401,6 +405,8 @@ __all__ = [
     "TimeoutLoopFactory",
     "Timer",
     "WireFormatError",
+    "ZenohComms",
+    "ZenohCommsFactory",
     "__version__",
     "format_task",
     "tasks",

@@ -22,6 +22,8 @@ from snr.std_mods.comms import (
     SocketsPair,
     SocketsServerFactory,
     SocketsServerLoop,
+    ZenohComms,
+    ZenohCommsFactory,
 )
 from snr.std_mods.filters import (
     DEFAULT_FILTER_LENGTH,
@@ -128,5 +130,7 @@ __all__ = [
     "TextReplayerLoop",
     "TimeoutLoop",
     "TimeoutLoopFactory",
+    "ZenohComms",
+    "ZenohCommsFactory",
     "format_task",
 ]
