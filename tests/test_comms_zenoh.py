@@ -252,6 +252,35 @@ class TestZenohInOneProcess(unittest.TestCase):
         self.assertEqual(nodes.errors, [])
         self.assertEqual((stranger["received"], stranger["peers"]), (0, []))
 
+    def test_nodes_in_client_mode_talk_through_a_router(self) -> None:
+        # A Zenoh router in this process stands in for zenohd (where multicast is blocked).
+        zenoh = _zenoh_module()
+        ep = endpoint(free_port())
+        config = zenoh.Config()
+        config.insert_json5("mode", '"router"')
+        config.insert_json5("scouting/multicast/enabled", "false")
+        config.insert_json5("listen/endpoints", json.dumps([ep]))
+        router = zenoh.open(config)
+        self.addCleanup(router.close)
+        nodes = self.run_nodes(
+            {
+                "topside": [
+                    comms("lab", subscribe="n", mode="client", connect=[ep]),
+                    StopAfterFactory("n", count=20, on_store=True),
+                ],
+                "robot": [
+                    comms("lab", publish="n", mode="client", connect=[ep]),
+                    SendOnConnectFactory("n", 20),
+                ],
+            },
+            ["topside", "robot"],
+        )
+        topside = nodes.wait_first()
+        self.assertEqual(topside.terminate_reason, "got n")
+        self.assertEqual(topside.get_page("n"), Page("n", 19, "robot", 1019.0))
+        nodes.stop()
+        self.assertEqual(nodes.errors, [])
+
     def test_a_plain_zenoh_program_reads_snr_pages_and_publishes_to_snr(self) -> None:
         ep = endpoint(free_port())
         nodes = self.run_nodes(
