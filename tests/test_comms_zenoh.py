@@ -11,6 +11,7 @@ import json
 import multiprocessing
 import os
 import signal
+import struct
 import subprocess
 import sys
 import threading
@@ -27,6 +28,7 @@ from snr import (
     Endpoint,
     EndpointFactory,
     LoopFactory,
+    MockNode,
     Mode,
     Page,
     SomeTasks,
@@ -126,6 +128,33 @@ class TestZenohSettings(unittest.TestCase):
             with self.subTest(payload=payload), self.assertRaises(WireFormatError) as caught:
                 page_from_sample("d", payload)
             self.assertIn(words, str(caught.exception))
+
+
+@unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)
+class TestZenohCounting(unittest.TestCase):
+    """What a receiver counts, without a network: gaps in a sender's count, bad samples."""
+
+    def setUp(self) -> None:
+        self.comms = ZenohCommsFactory("lab", subscribe="**").get(MockNode())
+
+    def test_a_gap_in_a_senders_count_is_counted_as_lost(self) -> None:
+        sender, other = b"A" * 8, b"B" * 8
+        with self.assertLogs("snr", "WARNING") as logs:
+            for count in (1, 2, 5, 6):  # 3 and 4 never came
+                self.comms._follow_sequence("depth", struct.pack(">8sQ", sender, count))
+            self.comms._follow_sequence("depth", struct.pack(">8sQ", other, 7))  # a newcomer
+            self.comms._follow_sequence("depth", b"not a count")  # ignored
+        self.assertEqual(self.comms.stats()["lost"], 2)
+        self.assertIn("Lost 2 pages from Zenoh", logs.output[0])
+
+    def test_bad_samples_are_counted_and_the_first_five_explained(self) -> None:
+        with self.assertLogs("snr", "WARNING") as logs:
+            for _ in range(7):
+                self.comms._bad_sample("snr/lab/x", WireFormatError("not JSON"))
+        self.assertEqual(self.comms.stats()["bad_samples"], 7)
+        self.assertEqual(len(logs.output), 5)
+        self.assertIn("snr/lab/x", logs.output[0])
+        self.assertIn("only counted", logs.output[-1])
 
 
 class Pulse(ThreadLoop):
