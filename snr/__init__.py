@@ -175,6 +175,8 @@ if TYPE_CHECKING:
         TimeoutLoop,
         TimeoutLoopFactory,
         World,
+        ZenohComms,
+        ZenohCommsFactory,
         format_task,
     )
     from snr.utils.test_case import SNRTestCase
@@ -241,6 +243,8 @@ _LAZY: Dict[str, str] = {
             "TimeoutLoop",
             "TimeoutLoopFactory",
             "World",
+            "ZenohComms",
+            "ZenohCommsFactory",
             "format_task",
         ),
         "snr.std_mods",
@@ -416,6 +420,8 @@ __all__ = [
     "Timer",
     "WireFormatError",
     "World",
+    "ZenohComms",
+    "ZenohCommsFactory",
     "__version__",
     "format_task",
     "tasks",

@@ -75,12 +75,12 @@ TOPICS: Tuple[Topic, ...] = (
     Topic(
         "Talking to other nodes",
         "Comms components forward pages by key between nodes: TCP sockets, "
-        "pipes between processes, a serial port to a device.",
+        "pipes between processes, a serial port to a device, Zenoh.",
         _names(
             "SocketsPair SocketsServerFactory SocketsServerLoop "
             "SocketsClientFactory SocketsClientLoop PipeLoopFactory PipeLoop "
             "CommsLoop COMMS_CONNECTED COMMS_DISCONNECTED SerialLinkFactory "
-            "SerialLinkLoop"
+            "SerialLinkLoop ZenohCommsFactory ZenohComms"
         ),
         _names("comms serial wire-format"),
     ),

@@ -22,6 +22,8 @@ from snr.std_mods.comms import (
     SocketsPair,
     SocketsServerFactory,
     SocketsServerLoop,
+    ZenohComms,
+    ZenohCommsFactory,
 )
 from snr.std_mods.filters import (
     DEFAULT_FILTER_LENGTH,
@@ -140,5 +142,7 @@ __all__ = [
     "TimeoutLoop",
     "TimeoutLoopFactory",
     "World",
+    "ZenohComms",
+    "ZenohCommsFactory",
     "format_task",
 ]

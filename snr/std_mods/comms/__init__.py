@@ -1,4 +1,4 @@
-"""Communication between nodes: pipes, TCP sockets, serial links.
+"""Communication between nodes: pipes, TCP sockets, serial links, Zenoh.
 
 Example::
 
@@ -25,6 +25,10 @@ from snr.std_mods.comms.sockets import (
     SocketsServerFactory,
     SocketsServerLoop,
 )
+from snr.std_mods.comms.zenoh_comms import (
+    ZenohComms,
+    ZenohCommsFactory,
+)
 
 __all__ = [
     "COMMS_CONNECTED",
@@ -39,4 +43,6 @@ __all__ = [
     "SocketsPair",
     "SocketsServerFactory",
     "SocketsServerLoop",
+    "ZenohComms",
+    "ZenohCommsFactory",
 ]

@@ -1,0 +1,586 @@
+"""Zenoh comms: many nodes, one network, pages published by key (``pip install 'snr[zenoh]'``).
+
+Each node adds one `ZenohCommsFactory`. It publishes the pages stored under
+the keys it names, each under the Zenoh key expression ``snr/<system>/<key>``,
+and stores the pages of the keys it subscribes to (exact keys or wildcards),
+with their origin and creation time, as a `SocketsPair` link does::
+
+    zenoh = snr.ZenohCommsFactory("team7", publish=["sensor_data"], subscribe=["controller_*"])
+
+The payload of every sample is the body of a page frame of
+docs/wire-format.md (``{"v":1,"kind":"page","key":...,"data":...,...}``),
+declared as ``application/json``, so any Zenoh program in any language can read
+SNR pages and publish pages to SNR nodes (docs/comms.md, "Zenoh").
+
+Zenoh runs its own threads. Received samples are decoded on them and handed to
+the node through its task queue, which they respect: while the node is behind
+they wait (Zenoh then slows the sender), and after ``max_wait_s`` a page is
+dropped and counted. Pages published here are never received here, and a page
+that came from Zenoh is never published again (no echo).
+"""
+
+from __future__ import annotations
+
+import json
+import os
+import struct
+import threading
+import time
+from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Set, Tuple
+
+from snr.core import EndpointFactory, tasks
+from snr.core.endpoint import Endpoint
+from snr.core.logs import LossReport
+from snr.prelude import (
+    AbstractNode,
+    CommsError,
+    ConfigError,
+    DataKey,
+    NotSerializableError,
+    Page,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskType,
+    WireFormatError,
+)
+from snr.std_mods.codec import load_object, page_from_fields, page_json
+from snr.std_mods.comms.link import (
+    COMMS_CONNECTED,
+    COMMS_DISCONNECTED,
+    DEFAULT_DEAD_AFTER_S,
+    Keys,
+    normalize_keys,
+)
+from snr.std_mods.comms.wire import WIRE_VERSION
+
+if TYPE_CHECKING:  # imported when a node starts: the extra is optional
+    import zenoh
+
+__all__ = [
+    "DEFAULT_ORIGIN",
+    "KEY_PREFIX",
+    "ZenohComms",
+    "ZenohCommsFactory",
+    "key_expr_of",
+    "page_from_sample",
+    "zenoh_config",
+]
+
+KEY_PREFIX = "snr"
+"""The first chunk of every SNR key expression: ``snr/<system>/<key>``."""
+
+DEFAULT_ORIGIN = "zenoh"
+"""The origin of a page whose sample says none (a program that is not SNR sent it)."""
+
+_PAGE_HEAD = {"v": WIRE_VERSION, "kind": "page"}
+_SEQ = struct.Struct(">8sQ")  # the attachment: the sender's random id, then its count under the key
+_MAX_ECHO_GUARD = (
+    10_000  # pages from Zenoh waiting to be stored, remembered so they are not re-sent
+)
+_MAX_SENDERS = 10_000  # (sender, key) pairs whose sequence is followed for lost pages
+_BAD_CHARS = set("*$?#")
+_MODES = ("peer", "client", "router")
+_INSTALL = "pip install 'snr[zenoh]'"
+
+
+def _zenoh_module() -> Any:
+    """The ``zenoh`` module, or a ConfigError that says how to install it."""
+    try:
+        import zenoh
+    except ImportError as error:
+        raise ConfigError(
+            f"ZenohCommsFactory needs the Zenoh library ({error}): {_INSTALL}"
+        ) from None
+    return zenoh
+
+
+def _check_chunk_text(text: str, what: str, wildcards: bool) -> None:
+    if not isinstance(text, str) or not text:
+        raise ConfigError(f"{what} must be a non-empty string, not {text!r}.")
+    for chunk in text.split("/"):
+        if not chunk:
+            raise ConfigError(
+                f"{what} {text!r} has an empty part (a leading, trailing or double '/'); "
+                "Zenoh key expressions cannot have one."
+            )
+        if chunk.startswith("@"):
+            raise ConfigError(
+                f"{what} {text!r} has a part starting with '@', which Zenoh keeps for "
+                "itself (SNR uses '@node' and '@console' under each system)."
+            )
+        if wildcards and chunk in ("*", "**"):
+            continue
+        if _BAD_CHARS & set(chunk):
+            allowed = " ('*' or '**' as a whole part matches keys)" if wildcards else ""
+            raise ConfigError(
+                f"{what} {text!r} has one of * $ ? # inside a part{allowed}; Zenoh key "
+                "expressions cannot. Use letters, digits, '_', '-' and '/'."
+            )
+
+
+def key_expr_of(system: str, key: str) -> str:
+    """The Zenoh key expression SNR uses for ``key`` in ``system``.
+
+    Example::
+
+        key_expr_of("team7", "depth_m")   # 'snr/team7/depth_m'
+    """
+    return f"{KEY_PREFIX}/{system}/{key}"
+
+
+def page_from_sample(key: str, payload: bytes) -> Page:
+    """The page in a Zenoh sample's payload, received under the data key ``key``.
+
+    The payload is a page frame's body (docs/wire-format.md). From programs
+    that are not SNR, ``v`` and ``kind`` may be left out, the key is the key
+    expression's, a missing origin is ``"zenoh"`` and a missing time is now:
+    ``{"data": 3.2}`` published under ``snr/team7/depth_m`` is a page.
+
+    Raises:
+        WireFormatError: not a JSON object, another version or kind, a key
+            that is not the key expression's, or a field of the wrong type.
+
+    Example::
+
+        page_from_sample("depth_m", b'{"data": 3.2}')   # Page('depth_m', 3.2, 'zenoh', ...)
+    """
+    fields = load_object(payload)
+    version = fields.get("v", WIRE_VERSION)
+    if type(version) is not int or version != WIRE_VERSION:
+        raise WireFormatError(
+            f"the page has version {version!r:.40}; this SNR speaks version {WIRE_VERSION}"
+        )
+    kind = fields.get("kind", "page")
+    if kind != "page":
+        raise WireFormatError(f"the sample is a {kind!r:.40}, not a page")
+    named = fields.setdefault("key", key)
+    if named != key:
+        raise WireFormatError(
+            f"the page's key {named!r:.60} is not the key of its key expression {key!r}"
+        )
+    return page_from_fields(fields, default_origin=DEFAULT_ORIGIN)
+
+
+def zenoh_config(
+    mode: str = "peer",
+    connect: Sequence[str] = (),
+    listen: Sequence[str] = (),
+    scouting: bool = True,
+    dead_after_s: float = DEFAULT_DEAD_AFTER_S,
+    extra: Optional[Mapping[str, Any]] = None,
+) -> Any:
+    """A ``zenoh.Config`` for one node (what `ZenohCommsFactory` opens its session with).
+
+    ``extra`` maps more Zenoh configuration paths to values (JSON), set last,
+    e.g. ``{"transport/link/tx/queue/congestion_control/drop/wait_before_drop": 5000}``.
+
+    Example::
+
+        zenoh.open(zenoh_config(connect=["tcp/127.0.0.1:7447"], scouting=False))
+    """
+    zenoh = _zenoh_module()
+    config = zenoh.Config()
+    settings: Dict[str, Any] = {
+        "mode": mode,
+        "scouting/multicast/enabled": scouting,
+        # A node whose peer is not up yet still starts, and keeps trying
+        # (0.1 s, doubling, at most 1 s apart, as a sockets client does).
+        "connect/exit_on_failure": False,
+        "connect/retry": {
+            "period_init_ms": 100,
+            "period_max_ms": 1000,
+            "period_increase_factor": 2.0,
+        },
+        # A peer not heard from for this long is lost (Zenoh beats 4 times per lease).
+        "transport/link/tx/lease": int(dead_after_s * 1000),
+    }
+    if connect:
+        settings["connect/endpoints"] = list(connect)
+    if listen:
+        settings["listen/endpoints"] = list(listen)
+    if not scouting:
+        settings["scouting/delay"] = 0  # nothing to wait for: open at once
+    settings.update(extra or {})
+    for path, value in settings.items():
+        try:
+            config.insert_json5(path, json.dumps(value))
+        except Exception as error:  # zenoh.ZError: an unknown path or a bad value
+            raise ConfigError(
+                f"Zenoh refused the setting {path} = {value!r}: {error}. See the Zenoh "
+                "configuration reference (DEFAULT_CONFIG.json5) for the paths it knows."
+            ) from None
+    return config
+
+
+class ZenohCommsFactory(EndpointFactory):
+    """Builds a `ZenohComms`: pages by key over Zenoh, between any number of nodes.
+
+    Args:
+        system: the name that keeps one robot's nodes apart from another's on the
+            same network (one part: letters, digits, ``_``, ``-``).
+        publish: the data key (or keys) whose pages this node publishes.
+        subscribe: keys whose pages this node stores: exact keys, or patterns with
+            ``*`` (one part of a key) and ``**`` (any number of parts).
+        mode: ``"peer"`` (default: talk to other nodes directly) or ``"client"``
+            (talk through a Zenoh router, ``zenohd``).
+        connect: endpoints to connect to, e.g. ``["tcp/192.168.1.10:7447"]``.
+        listen: endpoints to listen on, e.g. ``["tcp/0.0.0.0:7447"]``.
+        scouting: find peers by UDP multicast (default True; turn it off where
+            multicast is blocked, and give ``connect`` endpoints instead).
+        congestion: ``"drop"`` (default: a page that finds Zenoh's send queue full
+            is dropped; the receiver counts the gap) or ``"block"`` (the node
+            waits for room; nothing is dropped while the peer lives).
+        dead_after_s: seconds of silence after which a peer counts as gone.
+        max_wait_s: how long a received page waits for room in the node's queue
+            before it is dropped (and counted).
+        zenoh_settings: more Zenoh configuration paths and values, set last.
+        name: the component name (default ``"zenoh_comms"``).
+
+    Example::
+
+        ZenohCommsFactory("team7", publish=["sensor_data"], subscribe=["controller_*"])
+        ZenohCommsFactory("team7", subscribe="**", connect=["tcp/192.168.1.10:7447"],
+                          scouting=False)
+    """
+
+    def __init__(
+        self,
+        system: str,
+        publish: Keys = None,
+        subscribe: Keys = None,
+        *,
+        mode: str = "peer",
+        connect: Sequence[str] = (),
+        listen: Sequence[str] = (),
+        scouting: bool = True,
+        congestion: str = "drop",
+        dead_after_s: float = DEFAULT_DEAD_AFTER_S,
+        max_wait_s: float = 1.0,
+        zenoh_settings: Optional[Mapping[str, Any]] = None,
+        name: Optional[str] = None,
+    ) -> None:
+        super().__init__()
+        if not isinstance(system, str) or "/" in system:
+            raise ConfigError(
+                f"ZenohCommsFactory got system={system!r}. Give one word naming your robot's "
+                'system, e.g. "team7": nodes only hear nodes of the same system.'
+            )
+        _check_chunk_text(system, "The system name", wildcards=False)
+        self.system = system
+        self.publish = normalize_keys(publish, "ZenohCommsFactory publish")
+        self.subscribe = normalize_keys(subscribe, "ZenohCommsFactory subscribe")
+        for key in self.publish:
+            _check_chunk_text(key, "The published key", wildcards=False)
+        for key in self.subscribe:
+            _check_chunk_text(key, "The subscribed key", wildcards=True)
+        if not self.publish and not self.subscribe:
+            raise ConfigError(
+                "ZenohCommsFactory got no keys to publish and none to subscribe to: give "
+                'publish=["key", ...] and/or subscribe=["key", "sensors/*", "**"].'
+            )
+        if mode not in _MODES:
+            raise ConfigError(f"ZenohCommsFactory got mode={mode!r}; use one of {_MODES}.")
+        if congestion not in ("drop", "block"):
+            raise ConfigError(
+                f'ZenohCommsFactory got congestion={congestion!r}; use "drop" or "block".'
+            )
+        for what, endpoints in (("connect", connect), ("listen", listen)):
+            if isinstance(endpoints, str) or not all(isinstance(e, str) for e in endpoints):
+                raise ConfigError(
+                    f"ZenohCommsFactory got {what}={endpoints!r}; give a list of endpoints, "
+                    'e.g. ["tcp/192.168.1.10:7447"].'
+                )
+        if not dead_after_s > 0 or not max_wait_s >= 0:
+            raise ConfigError(
+                f"ZenohCommsFactory got dead_after_s={dead_after_s!r}, max_wait_s="
+                f"{max_wait_s!r}; give seconds (dead_after_s above 0, max_wait_s 0 or more)."
+            )
+        self.mode = mode
+        self.connect = list(connect)
+        self.listen = list(listen)
+        self.scouting = scouting
+        self.congestion = congestion
+        self.dead_after_s = dead_after_s
+        self.max_wait_s = max_wait_s
+        self.zenoh_settings = dict(zenoh_settings or {})
+        self.name = name or "zenoh_comms"
+
+    def get(self, parent: AbstractNode) -> ZenohComms:
+        return ZenohComms(self, parent)
+
+
+class ZenohComms(Endpoint):
+    """Publishes pages under its keys to Zenoh and stores the pages it subscribes to.
+
+    Built by `ZenohCommsFactory`. A Zenoh session is opened when the node
+    starts and closed when it stops. Other nodes of the same system are
+    announced with the events ``COMMS_CONNECTED`` and ``COMMS_DISCONNECTED``
+    (values ``[component name, peer role]``), from Zenoh liveliness tokens.
+
+    Example::
+
+        comms = ZenohCommsFactory("team7", publish="depth_m").get(node)
+        comms.stats()["published"]
+
+    Attributes:
+        peers: the roles of the other nodes of the system now present, by Zenoh id.
+        lost_report: counts pages that never arrived from a sender (gaps in its
+            count: Zenoh dropped them under congestion, or the path broke).
+        queue_report: counts received pages dropped because the node's queue
+            stayed full.
+    """
+
+    def __init__(self, factory: ZenohCommsFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, factory.name)
+        self.zenoh = _zenoh_module()
+        self.spec = factory
+        self.prefix = f"{KEY_PREFIX}/{factory.system}/"
+        self.session: Any = None
+        self.peers: Dict[str, str] = {}
+        self.published = 0
+        self.received = 0
+        self.bad_samples = 0
+        self._sender_id = os.urandom(8)
+        self._counts: Dict[DataKey, int] = {}
+        self._publishers: Dict[DataKey, Any] = {}
+        self._declared: List[Any] = []
+        self._last_seq: Dict[Tuple[bytes, str], int] = {}
+        self._arrived: Dict[int, Page] = {}  # the echo guard: id(page) -> page
+        self._published_keys = frozenset(factory.publish)
+        self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
+        self._bad_reported = 0
+        self._lock = threading.Lock()
+        self.lost_report = LossReport(
+            self.log,
+            "pages from Zenoh",
+            "they never arrived: a sender's queue was full (Zenoh drops under congestion) "
+            "or the path broke",
+            verb="Lost",
+        )
+        self.queue_report = LossReport(
+            self.log,
+            "pages from Zenoh",
+            f"the node's queue stayed full for {factory.max_wait_s:g} s; it cannot keep up",
+        )
+        self.task_handlers = {
+            (TaskType.store_page, key): self.publish_page for key in factory.publish
+        }
+        if parent.profiler is not None:
+            parent.profiler.add_report(self.name, self.stats_text)
+
+    # -- starting and stopping --------------------------------------------------
+    def begin(self) -> None:
+        """Open the Zenoh session; declare the publishers, subscribers and this node's token."""
+        zenoh, spec = self.zenoh, self.spec
+        config = zenoh_config(
+            spec.mode,
+            spec.connect,
+            spec.listen,
+            spec.scouting,
+            spec.dead_after_s,
+            spec.zenoh_settings,
+        )
+        try:
+            self.session = zenoh.open(config)
+        except zenoh.ZError as error:
+            raise CommsError(
+                f"Node {self.parent.role!r} could not open its Zenoh session (listen="
+                f"{spec.listen}, connect={spec.connect}, mode={spec.mode!r}): "
+                f"{str(error).split(' at /')[0]}. If a port is in use, stop the other "
+                "program or pick another port."
+            ) from None
+        session = self.session
+        congestion = (
+            zenoh.CongestionControl.BLOCK
+            if spec.congestion == "block"
+            else zenoh.CongestionControl.DROP
+        )
+        for key in spec.publish:
+            self._publishers[key] = session.declare_publisher(
+                self.prefix + key,
+                encoding=zenoh.Encoding.APPLICATION_JSON,
+                congestion_control=congestion,
+            )
+        remote = zenoh.Locality.REMOTE  # never hear our own pages
+        for pattern in spec.subscribe:
+            self._declared.append(
+                session.declare_subscriber(
+                    self.prefix + pattern, self._on_sample, allowed_origin=remote
+                )
+            )
+        me = str(session.zid())
+        liveliness = session.liveliness()
+        self._declared.append(
+            liveliness.declare_token(f"{self.prefix}@node/{self.parent.role}/{me}")
+        )
+        self._declared.append(
+            liveliness.declare_subscriber(
+                f"{self.prefix}@node/**", self._on_liveliness, history=True
+            )
+        )
+        self.info(
+            "Zenoh session %s open for system %r (publishing %s, subscribed to %s)",
+            me[:8],
+            spec.system,
+            list(spec.publish),
+            list(spec.subscribe),
+        )
+
+    def halt(self) -> None:
+        """Close the session (the node is stopping or this component is reloaded)."""
+        self._close()
+
+    def terminate(self) -> None:
+        """Close the session if it is still open."""
+        self._close()
+
+    def _close(self) -> None:
+        session, self.session = self.session, None
+        if session is None:
+            return
+        # Undeclare first: closing a session with callbacks still declared can
+        # hang (zenoh-python #434).
+        for entity in reversed(self._declared):
+            try:
+                entity.undeclare()
+            except Exception:  # already gone with the session
+                pass
+        self._declared.clear()
+        self._publishers.clear()
+        session.close()
+
+    # -- node thread: publishing --------------------------------------------------
+    def publish_page(self, task: Task, key: TaskId) -> SomeTasks:
+        """Publish the page just stored, unless it came from Zenoh."""
+        page = task.val_list[0] if task.val_list else None
+        if not isinstance(page, Page):
+            return None  # the node core has already reported the bad task
+        if self._arrived.pop(id(page), None) is page:
+            return None  # it came from Zenoh: never send it back
+        publisher = self._publishers.get(page.key)
+        if publisher is None:
+            return None  # not started, or stopping
+        try:
+            body = page_json(page, _PAGE_HEAD, to="over Zenoh")
+        except NotSerializableError as error:
+            kind = (page.key, type(page.data))
+            if kind not in self._unsendable_reported:
+                self._unsendable_reported.add(kind)
+                self.err("%s The page was dropped; the node keeps running.", error)
+            return None
+        count = self._counts.get(page.key, 0) + 1
+        self._counts[page.key] = count
+        self.published += 1
+        publisher.put(body, attachment=_SEQ.pack(self._sender_id, count))
+        return None
+
+    # -- Zenoh's threads: receiving ---------------------------------------------
+    def _on_sample(self, sample: zenoh.Sample) -> None:
+        key_expr = str(sample.key_expr)
+        key = key_expr[len(self.prefix) :]
+        try:
+            page = page_from_sample(key, sample.payload.to_bytes())
+        except WireFormatError as error:
+            self._bad_sample(key_expr, error)
+            return
+        attachment = sample.attachment
+        if attachment is not None:
+            self._follow_sequence(key, attachment.to_bytes())
+        self.received += 1
+        parent = self.parent
+        if not parent.wait_for_room(0):
+            # The node is behind: hold this Zenoh thread (Zenoh then slows the
+            # sender) until there is room, for at most max_wait_s.
+            if not parent.wait_for_room(self.spec.max_wait_s):
+                self.queue_report.dropped()
+                return
+            if self.queue_report.dropping:
+                self.queue_report.recovered()
+        if key in self._published_keys:
+            arrived = self._arrived
+            if len(arrived) >= _MAX_ECHO_GUARD:  # their tasks were dropped: forget them
+                arrived.clear()
+            arrived[id(page)] = page
+        self.parent.schedule(Task(TaskType.store_page, page.key, [page]))
+
+    def _follow_sequence(self, key: str, attachment: bytes) -> None:
+        if len(attachment) != _SEQ.size:
+            return  # not an SNR sender's count
+        sender, count = _SEQ.unpack(attachment)
+        with self._lock:  # samples of different senders may come on different threads
+            seen = self._last_seq
+            last = seen.get((sender, key))
+            if last is None and len(seen) >= _MAX_SENDERS:
+                seen.clear()
+            seen[(sender, key)] = count
+        if last is not None and count > last + 1:
+            self.lost_report.dropped(count - last - 1)
+        elif self.lost_report.dropping and time.monotonic() - self.lost_report.last_drop > 1.0:
+            self.lost_report.recovered()
+
+    def _bad_sample(self, key_expr: str, error: WireFormatError) -> None:
+        self.bad_samples += 1
+        if self._bad_reported < 5:
+            self._bad_reported += 1
+            self.warn(
+                "Bad sample under %s: %s (dropped; the node keeps running; see docs/comms.md, "
+                "Zenoh)%s",
+                key_expr,
+                error,
+                "" if self._bad_reported < 5 else ". Further bad samples are only counted",
+            )
+
+    def _on_liveliness(self, sample: zenoh.Sample) -> None:
+        parts = str(sample.key_expr)[len(self.prefix) :].split("/")
+        if len(parts) != 3 or self.session is None:
+            return
+        _, role, zid = parts
+        if zid == str(self.session.zid()):
+            return
+        if sample.kind == self.zenoh.SampleKind.PUT:
+            self.peers[zid] = role
+            self.info("Node %r joined system %r over Zenoh", role, self.spec.system)
+            self.parent.schedule(tasks.event(COMMS_CONNECTED, [self.name, role]))
+        else:
+            self.peers.pop(zid, None)
+            self.info(
+                "Node %r left system %r (it stopped, or nothing was heard from it for %g s)",
+                role,
+                self.spec.system,
+                self.spec.dead_after_s,
+            )
+            self.parent.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, role]))
+
+    # -- counters ---------------------------------------------------------------
+    def stats(self) -> Dict[str, Any]:
+        """The counters: published, received, lost, dropped, bad samples, peers.
+
+        Example::
+
+            comms.stats()   # {'published': 120, 'received': 80, 'lost': 0, ...}
+        """
+        return {
+            "system": self.spec.system,
+            "published": self.published,
+            "received": self.received,
+            "lost": self.lost_report.total,
+            "dropped": self.queue_report.total,
+            "bad_samples": self.bad_samples,
+            "peers": sorted(self.peers.values()),
+        }
+
+    def stats_text(self) -> str:
+        """`stats` as one line for people (the console's ``stats``, the profiler's dump).
+
+        Example::
+
+            print(comms.stats_text())
+            # Zenoh system 'team7': published 120, received 80, lost 0, ... peers ['urov']
+        """
+        s = self.stats()
+        return (
+            f"Zenoh system {s['system']!r}: published {s['published']:,}, received "
+            f"{s['received']:,}, lost {s['lost']:,}, dropped {s['dropped']:,}, bad samples "
+            f"{s['bad_samples']:,}, peers {s['peers']}"
+        )

@@ -1,0 +1,425 @@
+"""Zenoh comms: settings, the page codec, nodes in one process and in five processes.
+
+Everything runs on 127.0.0.1 with multicast scouting off, explicit endpoints
+and ports chosen at run time. Skipped when the Zenoh extra is not installed.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import multiprocessing
+import os
+import signal
+import struct
+import subprocess
+import sys
+import threading
+import unittest
+from typing import Any, Dict, List, Sequence
+from unittest import mock
+
+from snr import (
+    COMMS_CONNECTED,
+    COMMS_DISCONNECTED,
+    AbstractNode,
+    Config,
+    ConfigError,
+    Endpoint,
+    EndpointFactory,
+    LoopFactory,
+    MockNode,
+    Mode,
+    Page,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskType,
+    ThreadLoop,
+    TimeoutLoopFactory,
+    WireFormatError,
+)
+from tests.comms_helpers import (
+    EventReporterFactory,
+    NodeProcess,
+    Reports,
+    SendOnConnectFactory,
+    StopAfterFactory,
+    free_port,
+)
+from tests.test_comms_local import LocalNodes
+
+HAVE_ZENOH = importlib.util.find_spec("zenoh") is not None
+NEEDS_ZENOH = "needs the Zenoh extra: pip install 'snr[zenoh]'"
+PLAIN_CLIENT = os.path.join(os.path.dirname(__file__), "zenoh_plain_client.py")
+
+if HAVE_ZENOH:
+    from snr import ZenohComms, ZenohCommsFactory
+    from snr.std_mods.comms.zenoh_comms import _zenoh_module, page_from_sample
+
+
+def zenoh_safe_context() -> Any:
+    """Processes forked from a clean server: a child forked from a process whose
+    Zenoh runtime has run (an earlier test here) can hang in ``zenoh.open``."""
+    if "forkserver" not in multiprocessing.get_all_start_methods():
+        return multiprocessing.get_context("spawn")
+    ctx = multiprocessing.get_context("forkserver")
+    ctx.set_forkserver_preload(["zenoh", "tests.test_comms_zenoh"])  # import once, not per node
+    return ctx
+
+
+def endpoint(port: int) -> str:
+    return f"tcp/127.0.0.1:{port}"
+
+
+def comms(system: str, **kwargs: Any) -> Any:
+    """A ZenohCommsFactory as the tests use it: no multicast, explicit endpoints."""
+    return ZenohCommsFactory(system, scouting=False, **kwargs)
+
+
+def zenoh_of(node: Any) -> Any:
+    found = [c for c in node.components.values() if isinstance(c, ZenohComms)]
+    return found[0]
+
+
+@unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)
+class TestZenohSettings(unittest.TestCase):
+    """Bad settings fail at once with a clear message; samples decode strictly."""
+
+    def test_bad_settings_are_config_errors_that_say_why(self) -> None:
+        cases = [
+            (lambda: ZenohCommsFactory("a/b", publish="x"), "one word"),
+            (lambda: ZenohCommsFactory("", publish="x"), "non-empty"),
+            (lambda: ZenohCommsFactory("team", publish="x*"), "* $ ? #"),
+            (lambda: ZenohCommsFactory("team", subscribe="a*b"), "whole part"),
+            (lambda: ZenohCommsFactory("team", subscribe="a//b"), "empty part"),
+            (lambda: ZenohCommsFactory("team", publish="@node"), "'@'"),
+            (lambda: ZenohCommsFactory("team"), "no keys"),
+            (lambda: ZenohCommsFactory("team", "x", mode="server"), "mode"),
+            (lambda: ZenohCommsFactory("team", "x", congestion="wait"), '"drop"'),
+            (lambda: ZenohCommsFactory("team", "x", connect="tcp/h:1"), "list of endpoints"),
+        ]
+        for make, words in cases:
+            with self.subTest(words=words), self.assertRaises(ConfigError) as caught:
+                make()
+            self.assertIn(words, str(caught.exception))
+        ZenohCommsFactory("team", publish=["a/b"], subscribe=["*", "sensors/**"])  # fine
+
+    def test_a_missing_library_names_the_extra_to_install(self) -> None:
+        with mock.patch.dict(sys.modules, {"zenoh": None}), self.assertRaises(ConfigError) as e:
+            _zenoh_module()
+        self.assertIn("pip install 'snr[zenoh]'", str(e.exception))
+
+    def test_samples_decode_as_frames_do_and_plain_programs_may_say_less(self) -> None:
+        full = b'{"v":1,"kind":"page","key":"d","data":[1,2],"origin":"r","created_at_s":5.0}'
+        self.assertEqual(page_from_sample("d", full), Page("d", [1, 2], "r", 5.0))
+        plain = page_from_sample("depth_m", b'{"data": 3.5}')
+        self.assertEqual((plain.key, plain.data, plain.origin), ("depth_m", 3.5, "zenoh"))
+        bad = {
+            b"[1]": "object",
+            b'{"data": NaN}': "NaN",
+            b'{"v": 2, "data": 1}': "version",
+            b'{"kind": "beat"}': "not a page",
+            b'{"key": "other", "data": 1}': "not the key",
+            b'{"data": 1, "origin": 7}': "origin",
+            b'{"origin": "r"}': "no 'data'",
+        }
+        for payload, words in bad.items():
+            with self.subTest(payload=payload), self.assertRaises(WireFormatError) as caught:
+                page_from_sample("d", payload)
+            self.assertIn(words, str(caught.exception))
+
+
+@unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)
+class TestZenohCounting(unittest.TestCase):
+    """What a receiver counts, without a network: gaps in a sender's count, bad samples."""
+
+    def setUp(self) -> None:
+        self.comms = ZenohCommsFactory("lab", subscribe="**").get(MockNode())
+
+    def test_a_gap_in_a_senders_count_is_counted_as_lost(self) -> None:
+        sender, other = b"A" * 8, b"B" * 8
+        with self.assertLogs("snr", "WARNING") as logs:
+            for count in (1, 2, 5, 6):  # 3 and 4 never came
+                self.comms._follow_sequence("depth", struct.pack(">8sQ", sender, count))
+            self.comms._follow_sequence("depth", struct.pack(">8sQ", other, 7))  # a newcomer
+            self.comms._follow_sequence("depth", b"not a count")  # ignored
+        self.assertEqual(self.comms.stats()["lost"], 2)
+        self.assertIn("Lost 2 pages from Zenoh", logs.output[0])
+
+    def test_bad_samples_are_counted_and_the_first_five_explained(self) -> None:
+        with self.assertLogs("snr", "WARNING") as logs:
+            for _ in range(7):
+                self.comms._bad_sample("snr/lab/x", WireFormatError("not JSON"))
+        self.assertEqual(self.comms.stats()["bad_samples"], 7)
+        self.assertEqual(len(logs.output), 5)
+        self.assertIn("snr/lab/x", logs.output[0])
+        self.assertIn("only counted", logs.output[-1])
+
+
+class Pulse(ThreadLoop):
+    """Stores 0, 1, 2, ... under ``key`` at ``hz`` once ``peers`` nodes have joined."""
+
+    def __init__(self, factory: PulseFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, f"pulse_{factory.key}", max_tick_rate_hz=factory.hz)
+        self.spec = factory
+        self.joined: List[str] = []
+        self.ready = threading.Event()
+        self.sent = 0
+        self.task_handlers = {(TaskType.event, COMMS_CONNECTED): self.on_joined}
+        if factory.peers == 0:
+            self.ready.set()
+
+    def on_joined(self, task: Task, key: TaskId) -> SomeTasks:
+        self.joined.append(task.val_list[1])
+        if len(set(self.joined)) >= self.spec.peers:
+            self.ready.set()
+        return None
+
+    def loop(self) -> None:
+        if not self.ready.wait(0.1):
+            return
+        if self.sent < self.spec.count:
+            self.store_data(self.spec.key, self.sent)
+            self.sent += 1
+
+
+class PulseFactory(LoopFactory):
+    def __init__(self, key: str, count: int, hz: float, peers: int = 1) -> None:
+        super().__init__()
+        self.key, self.count, self.hz, self.peers = key, count, hz, peers
+
+    def get(self, parent: AbstractNode) -> Pulse:
+        return Pulse(self, parent)
+
+
+class Tally(Endpoint):
+    """Collects the data of pages under ``keys``; reports each key's list once ``count`` came."""
+
+    def __init__(self, factory: TallyFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "tally")
+        self.spec = factory
+        self.seen: Dict[str, List[Any]] = {key: [] for key in factory.keys}
+        self.task_handlers = {(TaskType.store_page, key): self.count for key in factory.keys}
+
+    def count(self, task: Task, key: TaskId) -> SomeTasks:
+        page: Page = task.val_list[0]
+        seen = self.seen[page.key]
+        seen.append(page.data)
+        if len(seen) == self.spec.count:
+            self.spec.writer.send(("tally", self.parent.role, page.key, page.origin, seen))
+            self.seen[page.key] = []
+        return None
+
+
+class TallyFactory(EndpointFactory):
+    def __init__(self, writer: Any, keys: Sequence[str], count: int) -> None:
+        super().__init__()
+        self.writer, self.keys, self.count = writer, list(keys), count
+
+    def get(self, parent: AbstractNode) -> Tally:
+        return Tally(self, parent)
+
+
+@unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)
+class TestZenohInOneProcess(unittest.TestCase):
+    """Nodes on threads of this process, each with its own Zenoh session."""
+
+    def run_nodes(self, config: Dict[str, List[Any]], roles: Sequence[str]) -> LocalNodes:
+        safety = TimeoutLoopFactory(seconds=8)
+        built = Config({role: [*f, safety] for role, f in config.items()}, mode=Mode.TEST)
+        nodes = LocalNodes(built, roles)
+        self.addCleanup(nodes.stop)
+        return nodes
+
+    def test_pages_arrive_in_order_with_their_fields_and_never_echo(self) -> None:
+        count = 300
+        ep = endpoint(free_port())
+        nodes = self.run_nodes(
+            {
+                # The receiver publishes "n" too: pages it got from Zenoh must not go back.
+                "receiver": [
+                    comms("lab", publish=["n", "ack"], subscribe="*", listen=[ep]),
+                    StopAfterFactory("n", count=count, then_store="ack", on_store=True),
+                ],
+                "sender": [
+                    comms("lab", publish="n", subscribe="*", connect=[ep]),
+                    SendOnConnectFactory("n", count),
+                    StopAfterFactory("ack", on_store=True),
+                ],
+            },
+            ["sender", "receiver"],
+        )
+        sender = nodes.wait_first()
+        self.assertEqual(sender.terminate_reason, "got ack")
+        receiver = nodes.nodes[1]
+        self.assertEqual(receiver.get_page("n"), Page("n", count - 1, "sender", 1000.0 + count - 1))
+        got, sent = zenoh_of(receiver).stats(), zenoh_of(sender).stats()
+        nodes.stop()
+        self.assertEqual(nodes.errors, [])
+        self.assertEqual((got["received"], got["lost"], got["dropped"]), (count, 0, 0))
+        self.assertEqual(got["published"], 1, "only the ack: received pages are never re-sent")
+        self.assertEqual((sent["published"], sent["received"]), (count, 1))
+
+    def test_two_systems_on_the_same_endpoints_do_not_hear_each_other(self) -> None:
+        ep = endpoint(free_port())
+        nodes = self.run_nodes(
+            {
+                "listener": [
+                    comms("red", subscribe="x", listen=[ep]),
+                    StopAfterFactory("x", count=5, on_store=True),
+                ],
+                "speaker": [comms("red", publish="x", connect=[ep]), PulseFactory("x", 50, 100)],
+                "stranger": [comms("blue", publish="x", subscribe="**", connect=[ep])],
+            },
+            ["listener", "speaker", "stranger"],
+        )
+        listener = nodes.wait_first()
+        self.assertEqual(listener.terminate_reason, "got x")
+        stranger = zenoh_of(nodes.nodes[2]).stats()
+        nodes.stop()
+        self.assertEqual(nodes.errors, [])
+        self.assertEqual((stranger["received"], stranger["peers"]), (0, []))
+
+    def test_nodes_in_client_mode_talk_through_a_router(self) -> None:
+        # A Zenoh router in this process stands in for zenohd (where multicast is blocked).
+        zenoh = _zenoh_module()
+        ep = endpoint(free_port())
+        config = zenoh.Config()
+        config.insert_json5("mode", '"router"')
+        config.insert_json5("scouting/multicast/enabled", "false")
+        config.insert_json5("listen/endpoints", json.dumps([ep]))
+        router = zenoh.open(config)
+        self.addCleanup(router.close)
+        nodes = self.run_nodes(
+            {
+                "topside": [
+                    comms("lab", subscribe="n", mode="client", connect=[ep]),
+                    StopAfterFactory("n", count=20, on_store=True),
+                ],
+                "robot": [
+                    comms("lab", publish="n", mode="client", connect=[ep]),
+                    SendOnConnectFactory("n", 20),
+                ],
+            },
+            ["topside", "robot"],
+        )
+        topside = nodes.wait_first()
+        self.assertEqual(topside.terminate_reason, "got n")
+        self.assertEqual(topside.get_page("n"), Page("n", 19, "robot", 1019.0))
+        nodes.stop()
+        self.assertEqual(nodes.errors, [])
+
+    def test_a_plain_zenoh_program_reads_snr_pages_and_publishes_to_snr(self) -> None:
+        ep = endpoint(free_port())
+        nodes = self.run_nodes(
+            {
+                "robot": [
+                    comms("lab", publish="depth_m", subscribe="from_plain", listen=[ep]),
+                    PulseFactory("depth_m", 1000, 50, peers=0),
+                    StopAfterFactory("from_plain", on_store=True),
+                ]
+            },
+            ["robot"],
+        )
+        plain = subprocess.Popen(
+            [sys.executable, PLAIN_CLIENT, ep, "lab", "2"],
+            stdin=subprocess.PIPE,
+            stdout=subprocess.PIPE,
+            text=True,
+        )
+        self.addCleanup(plain.__exit__, None, None, None)  # closes its pipes and waits
+        self.addCleanup(plain.kill)
+        assert plain.stdout is not None and plain.stdin is not None
+        lines = [json.loads(plain.stdout.readline()) for _ in range(3)]
+        self.assertEqual(plain.stdout.readline().strip(), "publishing")
+        robot = nodes.wait_first()
+        plain.stdin.write("stop\n")
+        plain.stdin.flush()
+        self.assertEqual(plain.wait(5), 0)
+        self.assertEqual(robot.terminate_reason, "got from_plain")
+        page = robot.get_page("from_plain")
+        assert page is not None
+        self.assertEqual((page.data, page.origin), (42, "zenoh"))
+        samples, imported = lines[:2], lines[2]
+        self.assertEqual(imported, {"snr_imported": False})
+        for sample in samples:
+            self.assertEqual(sample["key_expr"], "snr/lab/depth_m")
+            self.assertEqual(sample["encoding"], "application/json")
+            body = sample["payload"]
+            self.assertEqual(
+                sorted(body), ["created_at_s", "data", "key", "kind", "origin", "process", "v"]
+            )
+            self.assertEqual((body["v"], body["kind"], body["key"]), (1, "page", "depth_m"))
+            self.assertEqual(body["origin"], "robot")
+        self.assertEqual(samples[1]["payload"]["data"], samples[0]["payload"]["data"] + 1)
+
+
+@unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)
+class TestZenohProcesses(unittest.TestCase):
+    def test_five_processes_exchange_pages_in_order_and_a_restarted_one_rejoins(self) -> None:
+        ctx = zenoh_safe_context()
+        reports = Reports(ctx)
+        self.addCleanup(reports.close)
+        roles = [f"n{i}" for i in range(5)]
+        ports = [free_port() for _ in roles]
+        count, hz = 40, 200
+
+        def node(i: int) -> NodeProcess:
+            others = [r for r in roles if r != roles[i]]
+            factories = [
+                comms(
+                    "five",
+                    publish=roles[i],
+                    subscribe="*",
+                    listen=[endpoint(ports[i])],
+                    connect=[endpoint(p) for p in ports[:i]],
+                ),
+                PulseFactory(roles[i], count, hz, peers=len(others)),
+                TallyFactory(reports.writer, others, count),
+                EventReporterFactory(reports.writer, [COMMS_DISCONNECTED]),
+            ]
+            process = NodeProcess(ctx, roles[i], factories).start()
+            self.addCleanup(process.kill)
+            return process
+
+        processes = [node(i) for i in range(5)]
+        expected = list(range(count))
+
+        def tallies(how_many: int, origin: str = "") -> List[Any]:
+            found: List[Any] = []
+            while len(found) < how_many:
+                report = reports.wait_for(lambda r: r[0] == "tally", timeout_s=10.0)
+                if not origin or report[3] == origin:
+                    found.append(report)
+            return found
+
+        first = tallies(5 * 4)
+        self.assertEqual(
+            sorted((r[1], r[2]) for r in first), [(a, b) for a in roles for b in roles if a != b]
+        )
+        for _, role, key, origin, data in first:
+            self.assertEqual((origin, data), (key, expected), f"{role} got {key} out of order")
+
+        processes[4].kill()  # no goodbye: as if it crashed
+        lost = [
+            reports.wait_for(lambda r: r[0] == "event" and r[2] == COMMS_DISCONNECTED)
+            for _ in range(4)
+        ]
+        self.assertEqual(sorted(r[1] for r in lost), roles[:4])
+        self.assertTrue(all(r[3][1] == "n4" for r in lost), lost)
+
+        processes[4] = node(4)  # the same role on the same port: it rejoins
+        again = tallies(4, origin="n4")
+        self.assertEqual(sorted(r[1] for r in again), roles[:4])
+        for report in again:
+            self.assertEqual(report[4], expected)
+        for process in processes:  # stop them all at once, then wait
+            if process.process.pid is not None:
+                os.kill(process.process.pid, signal.SIGINT)
+        for process in processes:
+            self.assertEqual(process.join(5.0), 0)
+
+
+if __name__ == "__main__":
+    unittest.main()
