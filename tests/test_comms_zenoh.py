@@ -16,7 +16,7 @@ import subprocess
 import sys
 import threading
 import unittest
-from typing import Any, Dict, List, Sequence
+from typing import Any, Callable, Dict, List, Sequence, Tuple
 from unittest import mock
 
 from snr import (
@@ -87,7 +87,7 @@ class TestZenohSettings(unittest.TestCase):
     """Bad settings fail at once with a clear message; samples decode strictly."""
 
     def test_bad_settings_are_config_errors_that_say_why(self) -> None:
-        cases = [
+        cases: List[Tuple[Callable[[], object], str]] = [
             (lambda: ZenohCommsFactory("a/b", publish="x"), "one word"),
             (lambda: ZenohCommsFactory("", publish="x"), "non-empty"),
             (lambda: ZenohCommsFactory("team", publish="x*"), "* $ ? #"),

@@ -14,6 +14,7 @@ import json
 import sys
 import threading
 import time
+from typing import Any, Dict, List
 
 import zenoh
 
@@ -24,7 +25,7 @@ def main() -> int:
     config.insert_json5("mode", '"peer"')
     config.insert_json5("scouting/multicast/enabled", "false")
     config.insert_json5("connect/endpoints", json.dumps([endpoint]))
-    samples = []
+    samples: List[Dict[str, Any]] = []
     got_all = threading.Event()
 
     def on_sample(sample: zenoh.Sample) -> None:
@@ -50,7 +51,12 @@ def main() -> int:
     print(json.dumps({"snr_imported": any(m.split(".")[0] == "snr" for m in sys.modules)}))
     print("publishing", flush=True)
     stop = threading.Event()
-    threading.Thread(target=lambda: (sys.stdin.readline(), stop.set()), daemon=True).start()
+
+    def stop_when_told() -> None:
+        sys.stdin.readline()
+        stop.set()
+
+    threading.Thread(target=stop_when_told, daemon=True).start()
     deadline = time.monotonic() + 10.0
     while not stop.is_set() and time.monotonic() < deadline:  # until the node has it
         publisher.put(b'{"data": 42}')
