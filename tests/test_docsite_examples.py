@@ -46,5 +46,16 @@ class TestRenderedPage(unittest.TestCase):
         self.assertIn('class="pdoc-code codehilite"', page)
 
 
+
+class TestExtrasWarnings(unittest.TestCase):
+    def test_a_missing_extra_behind_type_checking_is_not_a_problem(self) -> None:
+        from snr.docsite import _extra_not_installed
+
+        prefix = "Failed to run TYPE_CHECKING code while parsing X for snr.m.f: "
+        self.assertTrue(_extra_not_installed(prefix + "No module named 'zenoh'"))
+        self.assertFalse(_extra_not_installed(prefix + "No module named 'snr.missing'"))
+        self.assertFalse(_extra_not_installed("Error parsing type annotation for snr.x"))
+
+
 if __name__ == "__main__":
     unittest.main()
