@@ -241,14 +241,16 @@ class LogLines(logging.Handler):
         self.lines.append(record.getMessage())
 
 
-def run_node(factories: List[Any], mode: Mode = Mode.DEBUG) -> Tuple[Node, List[str]]:
-    """Run a node of ``factories`` plus a 0.1 s timeout; the node and its log lines."""
+def run_node(
+    factories: List[Any], mode: Mode = Mode.DEBUG, timeout_ms: float = 100
+) -> Tuple[Node, List[str]]:
+    """Run a node of ``factories`` plus a timeout (0.1 s); the node and its log lines."""
     lines = LogLines()
     # Only to `lines`, not to the run's output; the level a DEBUG node sets is put back.
     with captured_logs("snr.silence"):
         # Before the node is built: classes are read as it adds them.
         logging.getLogger("snr.silence").addHandler(lines)
-        config = Config({"silence": [*factories, TimeoutLoopFactory(ms=100)]}, mode)
+        config = Config({"silence": [*factories, TimeoutLoopFactory(ms=timeout_ms)]}, mode)
         node = Node("silence", config)
         node.loop()
     return node, lines.lines
@@ -370,7 +372,8 @@ class TestMechanisms(unittest.TestCase):
 
     def test_a_hand_made_task_with_values_not_a_list_is_named_when_it_fails(self) -> None:
         with self.assertRaises(HandlerError) as caught:
-            run_node([Builds(HandMadeTask)])
+            # The failing handler ends the node; the timeout is only a bound.
+            run_node([Builds(HandMadeTask)], timeout_ms=5000)
         self.assertIn("Its val_list is 5 (int), not a list", str(caught.exception))
         self.assertIn("Task(TaskType.event, 'speed', [value])", str(caught.exception))
 
