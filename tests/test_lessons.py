@@ -15,6 +15,7 @@ import contextlib
 import importlib.util
 import io
 import math
+import re
 import unittest
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -150,15 +151,32 @@ class TestRunAsAStudentDoes(SNRTestCase):
     def test_the_wall_follower_sets_off(self) -> None:
         text, frames = self.run_main(wall_follower, 0.4)
         self.assertIn(f"Pictures: PNG frames in {frames.resolve()}", text)
-        x = float(text.split("the robot is at (")[1].split(",")[0])
-        self.assertGreater(x, 0.5, text)  # it set off east from x = 0.5
+        simulated_s, x = summary(r"After ([\d.]+) s the robot is at \(([\d.]+), ", text)
+        if simulated_s >= 0.2:  # 2 cm by then (a busy machine may take fewer steps)
+            self.assertGreater(x, 0.5, text)  # it set off east from x = 0.5
         if HAS_PYGAME:
             self.assertTrue(list(frames.glob("frame_*.png")), "no frames were written")
 
     def test_go_to_goal_sets_off(self) -> None:
         text, _ = self.run_main(go_to_goal, 0.4)
-        left_m = float(text.split("the robot is ")[1].split(" m from")[0])
-        self.assertLess(left_m, 3.9, text)  # it started 3.9 m away
+        simulated_s, left_m = summary(r"After ([\d.]+) s the robot is ([\d.]+) m from", text)
+        if simulated_s >= 0.2:
+            self.assertLess(left_m, 3.9, text)  # it started 3.90 m away
+
+
+def summary(pattern: str, text: str) -> Tuple[float, float]:
+    """The simulated seconds and the position a lesson's last line gives.
+
+    The node runs in real time, so how many steps it took in its time
+    depends on the machine; at least one, or nothing ran.
+    """
+    match = re.search(pattern, text)
+    if match is None:
+        raise AssertionError(f"no summary line in {text!r}")
+    simulated_s, where = float(match.group(1)), float(match.group(2))
+    if not simulated_s > 0:
+        raise AssertionError(f"the simulator took no step: {text!r}")
+    return simulated_s, where
 
 
 @unittest.skipUnless(HAS_PYGAME, "pygame is not installed: the demo would draw nothing")
@@ -177,7 +195,9 @@ class TestSimDemo(SNRTestCase):
         frames = (folder / "sim_frames").resolve()
         self.assertIn(f"Pictures: PNG frames in {frames}", lines)
         self.assertTrue(list(frames.glob("frame_*.png")), result.stdout)
-        self.assertRegex(lines[-1], r"^After 0\.5 s the robot is at \(0\.[5-9]\d, ", result.stdout)
+        simulated_s, x = summary(r"After ([\d.]+) s the robot is at \(([\d.]+), ", lines[-1])
+        if simulated_s >= 0.2:
+            self.assertGreater(x, 0.5, result.stdout)  # it set off from x = 0.5
         self.assertEqual(result.stderr, "", "quiet unless --verbose")
 
 
