@@ -5,6 +5,8 @@ Commands::
     python -m snr demo [--seconds N] [--verbose] [--view [--view-port P]]
                                        run the UROV demo system (no hardware needed);
                                        --view: watch it live in Foxglove or Lichtblick
+    python -m snr demo --sim [--seconds N] [--frames DIR]
+                                       a simulated rover follows the walls of a room
     python -m snr console HOST:PORT    type commands into a running node (snr-console)
     python -m snr graph FILE [--role R] [--format mermaid|dot|text] [-- ARGS...]
                                        draw the system FILE runs, without running it
@@ -30,7 +32,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     """Entry point of ``python -m snr`` and the ``snr`` command."""
     parser = argparse.ArgumentParser(prog="snr", description="SNR is Not ROS")
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
-    demo_parser = sub.add_parser("demo", help="run the demo system of nodes")
+    demo_parser = sub.add_parser(
+        "demo",
+        help="run the demo system of nodes",
+        description="By default: the UROV of the thesis, two nodes in two processes "
+        "talking over TCP, which is what SNR is for. --sim: one node, a simulated rover "
+        "driven by the wall follower of the first lesson (docs/lessons.md).",
+    )
     demo_parser.add_argument("--seconds", type=float, default=15.0, help="how long to run")
     demo_parser.add_argument(
         "--verbose", action="store_true", help="show the nodes' whole log, not only warnings"
@@ -43,6 +51,18 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     )
     demo_parser.add_argument(
         "--view-port", type=int, default=8765, help="the live view's port (default 8765)"
+    )
+    demo_parser.add_argument(
+        "--sim",
+        action="store_true",
+        help="a simulated rover follows walls, in a window or as PNG frames "
+        "(needs pip install 'snr[controller]' to draw)",
+    )
+    demo_parser.add_argument(
+        "--frames",
+        metavar="DIR",
+        default=None,
+        help="with --sim: write PNG frames to DIR instead of opening a window",
     )
     sub.add_parser("console", help="type commands into a running node (same as snr-console)")
     docs_parser = sub.add_parser("docs", help="build (if needed) and open the docs offline")
@@ -80,8 +100,14 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         convert.add_arguments(convert_parser)
     args = parser.parse_args(words)
     if args.command == "demo":
-        from snr.demo import run_demo  # only the demo needs it
+        from snr.demo import run_demo, run_sim_demo  # only the demo needs it
 
+        if args.sim:
+            if args.view:
+                demo_parser.error("--view watches the UROV demo; it does not go with --sim")
+            return run_sim_demo(args.seconds, verbose=args.verbose, frames_dir=args.frames)
+        if args.frames is not None:
+            demo_parser.error("--frames goes with --sim")
         view_port = args.view_port if args.view else None
         return run_demo(args.seconds, verbose=args.verbose, view_port=view_port)
     if args.command == "graph":

@@ -9,7 +9,9 @@ pseudo-terminal, and noisy depth and heading sensors). It ships inside the
 
 * `snr.demo.urov`: the components and the simulated hardware;
 * `snr.demo.system`: which components each node runs (thesis listing 5.1);
-* `snr.demo.run`: the demo itself: ports, the banner, quiet or verbose logs.
+* `snr.demo.run`: the demo itself: ports, the banner, quiet or verbose logs;
+* `snr.demo.wall_follower`: ``--sim``'s rover, a copy of the first lesson
+  (``examples/lessons/wall_follower.py``).
 
 Example::
 
@@ -17,7 +19,7 @@ Example::
     run_demo(seconds=5)        # what `python -m snr demo --seconds 5` does
 """
 
-from snr.demo.run import run_demo
+from snr.demo.run import run_demo, run_sim_demo
 from snr.demo.system import make_components
 
-__all__ = ["make_components", "run_demo"]
+__all__ = ["make_components", "run_demo", "run_sim_demo"]

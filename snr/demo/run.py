@@ -3,6 +3,9 @@
 By default the screen shows a one-line banner and the live telemetry; the
 nodes log only warnings and errors. ``verbose=True`` (``--verbose``) shows
 their whole log: listening, connecting, the simulated serial port.
+
+``python -m snr demo --sim`` (`run_sim_demo`) runs lesson 1's wall follower
+on the simulated rover instead: one node, in a window or as PNG frames.
 """
 
 from __future__ import annotations
@@ -15,7 +18,7 @@ from typing import Optional
 import snr
 from snr.demo.system import make_components
 
-__all__ = ["LogLevel", "LogLevelFactory", "free_port_pair", "run_demo"]
+__all__ = ["LogLevel", "LogLevelFactory", "free_port_pair", "run_demo", "run_sim_demo"]
 
 
 def free_port_pair(host: str = "127.0.0.1") -> int:
@@ -133,3 +136,35 @@ def run_demo(seconds: float = 15.0, verbose: bool = False, view_port: Optional[i
     runner.run()
     failed = [code for code in runner.exitcodes if code not in (0, None)]
     return 1 if failed else 0
+
+
+def run_sim_demo(
+    seconds: float = 15.0, verbose: bool = False, frames_dir: Optional[str] = None
+) -> int:
+    """Lesson 1's wall follower drives the simulated rover: ``python -m snr demo --sim``.
+
+    One node in this process: the simulator, its view and the brain of
+    ``examples/lessons/wall_follower.py`` (shipped as `snr.demo.wall_follower`).
+    With a screen the rover drives in a window (closing it stops the demo);
+    without one, or with ``frames_dir``, the pictures are PNG frames and the
+    folder is printed. The default demo stays the UROV: it shows what SNR is
+    for (two nodes in two processes, talking over TCP), where this one shows
+    a student's first robot program. Returns 0 once the time is up.
+
+    Example::
+
+        run_sim_demo(seconds=5)                       # a window, or frames in sim_frames/
+        run_sim_demo(seconds=5, frames_dir="frames")  # PNG frames in frames/
+    """
+    from snr.demo import wall_follower  # only this demo needs it
+
+    if not verbose:  # the node keeps a level set before it starts: warnings only
+        logging.getLogger("snr.sim").setLevel(logging.WARNING)
+    hint = "" if verbose else "; --verbose shows the log"
+    print(
+        f"SNR demo --sim: lesson 1's wall follower (docs/lessons.md) drives a simulated "
+        f"rover round a room for {seconds:g} s (Ctrl-C stops it{hint}).",
+        flush=True,
+    )
+    wall_follower.run(seconds, frames_dir)
+    return 0
