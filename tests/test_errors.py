@@ -58,7 +58,7 @@ from snr.prelude.errors import (
     find_unserializable,
     not_serializable_error,
 )
-from tests.helpers import StopWhenDrainedFactory, StopWhenFactory
+from tests.helpers import StopWhenDrainedFactory, StopWhenFactory, StopWhenTrueFactory
 from tests.quiet import capture_test_logs, captured_logs
 
 HERE = "test_errors.py"
@@ -521,14 +521,26 @@ class TestMissingDataKey(SNRTestCase):
         """Run a node whose loop reads ``key``; the hints it logged.
 
         A run that expects a hint ends 0.05 s after one is logged (within 3 s);
-        one that expects none runs 0.15 s, well past ``typo_s``/``missing_s``.
+        one that expects none ends after 20 reads (0.1 s at 200 Hz, or longer
+        on a busy machine), well past ``typo_s``/``missing_s``.
         """
+        readers: List[Reader] = []
+
+        def read_enough() -> bool:
+            return bool(readers) and len(readers[0].seen) >= 20
+
+        def make_reader(factory: LoopFactory, parent: AbstractNode) -> Reader:
+            readers.append(Reader(factory, parent, key))
+            return readers[-1]
+
         node = Node(
             "test",
             self.get_config(
                 [
-                    LoopFactoryOf(lambda f, p: Reader(f, p, key)),
-                    TimeoutLoopFactory(seconds=3.0 if hint_expected else 0.15),
+                    LoopFactoryOf(make_reader),
+                    TimeoutLoopFactory(seconds=3.0)
+                    if hint_expected
+                    else StopWhenTrueFactory(read_enough, within_s=3.0),
                     *([KeyWatcherFactory(list(handled))] if handled else []),
                 ],
                 Mode.DEBUG,

@@ -32,7 +32,7 @@ import time
 import traceback
 import unittest
 from pathlib import Path
-from typing import Any, Callable, Dict, List, NamedTuple, Optional, Tuple
+from typing import Any, Callable, Dict, List, NamedTuple, Optional, Sequence, Tuple
 from unittest import mock
 
 import snr
@@ -233,25 +233,39 @@ _add_catalogue_tests()
 
 # -- the mechanisms, on mistakes the catalogue does not list ------------------------
 class LogLines(logging.Handler):
-    def __init__(self) -> None:
+    def __init__(self, until: Sequence[str] = (), then: Callable[[], None] = lambda: None) -> None:
         super().__init__()
         self.lines: List[str] = []
+        self.until, self.then = until, then
 
     def emit(self, record: logging.LogRecord) -> None:
         self.lines.append(record.getMessage())
+        text = "\n".join(self.lines)
+        if self.until and all(part in text for part in self.until):
+            self.then()
 
 
 def run_node(
-    factories: List[Any], mode: Mode = Mode.DEBUG, timeout_ms: float = 100
+    factories: List[Any],
+    mode: Mode = Mode.DEBUG,
+    timeout_ms: float = 100,
+    until: Sequence[str] = (),
 ) -> Tuple[Node, List[str]]:
-    """Run a node of ``factories`` plus a timeout (0.1 s); the node and its log lines."""
-    lines = LogLines()
+    """Run a node of ``factories`` plus a timeout; the node and its log lines.
+
+    The timeout is 0.1 s, or with ``until`` 5 s, and the node ends as soon as
+    every part of ``until`` has been logged (a loaded machine may be slow).
+    """
+    node_box: List[Node] = []
+    lines = LogLines(until, lambda: node_box[0].set_terminate_flag("seen") if node_box else None)
+    timeout_ms = 5000 if until else timeout_ms
     # Only to `lines`, not to the run's output; the level a DEBUG node sets is put back.
     with captured_logs("snr.silence"):
         # Before the node is built: classes are read as it adds them.
         logging.getLogger("snr.silence").addHandler(lines)
         config = Config({"silence": [*factories, TimeoutLoopFactory(ms=timeout_ms)]}, mode)
         node = Node("silence", config)
+        node_box.append(node)
         node.loop()
     return node, lines.lines
 
@@ -340,7 +354,7 @@ class HandMadeTask(Endpoint):
 
 class TestMechanisms(unittest.TestCase):
     def test_dropped_work_and_a_name_differing_in_capitals_are_said(self) -> None:
-        _, lines = run_node([Builds(DropsATask)])
+        _, lines = run_node([Builds(DropsATask)], until=["Did you mean 'Go'?"])
         text = "\n".join(lines)
         self.assertIn("builds a task, `Task(TaskType.event, 'went')`, and drops it", text)
         self.assertIn("builds a page, `self.page('went', True)`", text)
