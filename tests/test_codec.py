@@ -193,6 +193,16 @@ class TestStrictWriting(BackendCase):
                 codec.page_to_line(Page("tree", too_deep, "urov", 1.0))
             self.assertIn(f"more than {codec.MAX_DEPTH - 1} deep", str(ctx.exception))
 
+    def test_data_that_contains_itself_is_refused_not_looped_over(self) -> None:
+        loop: List[Any] = [1.0]
+        loop.append(loop)
+        for _ in self.backends():
+            for value in (loop, {"history": loop}):
+                with self.subTest(value=repr(value)[:20]):
+                    with self.assertRaises(NotSerializableError) as ctx:
+                        encode_page(Page("k", value, "urov", 1.0))
+                    self.assertIn("contains itself", str(ctx.exception))
+
     def test_other_things_json_cannot_hold(self) -> None:
         class Colour(enum.Enum):
             RED = 1

@@ -18,7 +18,7 @@ from snr.std_mods.comms.wire import (
     FrameDecoder,
     Hello,
     decode_body,
-    encode_frame,
+    encode_bye,
     encode_hello,
     encode_page,
 )
@@ -68,7 +68,7 @@ class TestCodec(unittest.TestCase):
             b'{"v":1,"kind":"page","key":"x","data":[1,2],"origin":"robot",'
             b'"created_at_s":1.5,"process":true}',
         )
-        self.assertEqual(encode_frame(b"{}"), b"\x00\x00\x00\x02{}")
+        self.assertEqual(encode_bye(), b'\x00\x00\x00\x14{"v":1,"kind":"bye"}')
 
     def test_hello(self) -> None:
         frame = encode_hello("receiver")

@@ -53,11 +53,10 @@ from snr import (
 )
 from snr.core import MissingKeyHints
 from snr.prelude.errors import (
-    check_serializable,
     explain_os_error,
-    find_unserializable,
     not_serializable_error,
 )
+from snr.std_mods.codec import page_json
 from tests.helpers import StopWhenDrainedFactory, StopWhenFactory, StopWhenTrueFactory
 from tests.quiet import capture_test_logs, captured_logs
 
@@ -843,8 +842,10 @@ class TestOsErrors(unittest.TestCase):
 # -- 13. data that cannot be sent between nodes -----------------------------------------
 class TestNotSerializable(unittest.TestCase):
     def test_path_to_the_bad_part(self) -> None:
-        self.assertEqual(find_unserializable({"pose": [1.0, 2.0, {3}]}), ("data['pose'][2]", {3}))
-        self.assertIsNone(find_unserializable({"pose": (1.0, 2.0), "ok": [None, True, "x"]}))
+        with self.assertRaises(NotSerializableError) as ctx:
+            page_json(Page("pose", {"pose": [1.0, 2.0, {3}]}, "urov", 0.0))
+        self.assertIn("data['pose'][2] is a set ({3})", str(ctx.exception))
+        page_json(Page("pose", {"pose": (1.0, 2.0), "ok": [None, True, "x"]}, "urov", 0.0))
 
     def test_message_names_key_path_type_and_fix(self) -> None:
         message = str(not_serializable_error("pose", {"pose": [1.0, 2.0, {3}]}))
@@ -865,7 +866,7 @@ class TestNotSerializable(unittest.TestCase):
             (loop, "contains itself"),
         ):
             with self.subTest(part=part), self.assertRaises(NotSerializableError) as ctx:
-                check_serializable("k", data)
+                page_json(Page("k", data, "urov", 0.0))
             self.assertIn(part, str(ctx.exception))
 
     def test_page_serialize_names_the_path(self) -> None:

@@ -53,12 +53,10 @@ __all__ = [
     "WireFormatError",
     "caller_block",
     "caller_location",
-    "check_serializable",
     "closest_match",
     "describe_callable",
     "describe_class",
     "explain_os_error",
-    "find_unserializable",
     "frame_location",
     "is_runtime_file",
     "not_serializable_error",
@@ -534,24 +532,6 @@ _TEXT_PROBLEM = "text"  # a lone surrogate: not Unicode text, UTF-8 cannot hold 
 _Found = Tuple[str, Any, str]  # (path, offending value, which problem)
 
 
-def find_unserializable(value: Any, path: str = "data") -> Optional[Tuple[str, Any]]:
-    """Where JSON cannot hold ``value``: ``(path, the offending part)``, or None.
-
-    JSON holds dicts (with str, int, float, bool or None keys), lists,
-    tuples, str, int, float, bool and None: finite floats only (no NaN or
-    infinity) and text only (no lone surrogates such as ``"\\ud800"``).
-
-    Example::
-
-        find_unserializable({"pose": [1.0, 2.0, {3}]})
-        # ("data['pose'][2]", {3})
-
-    For a dict key JSON cannot hold, the path is the dict's and the part is the key.
-    """
-    found = _find(value, path, set(), 0)
-    return None if found is None else (found[0], found[1])
-
-
 def _scalar_problem(value: Any) -> Optional[str]:
     if isinstance(value, float) and not math.isfinite(value):
         return _NUMBER_PROBLEM
@@ -663,15 +643,3 @@ def not_serializable_error(
     return NotSerializableError(
         f"{head}: {what}, which JSON cannot hold. {_serializable_hint(bad, problem)} {allowed}"
     )
-
-
-def check_serializable(key: str, data: Any, where: str = "") -> None:
-    """Raise a NotSerializableError unless ``data`` can be sent as JSON.
-
-    Example::
-
-        check_serializable("pose", {"x": 1.0})      # fine
-        check_serializable("pose", {"x": {1.0}})    # NotSerializableError: data['x'] is a set
-    """
-    if find_unserializable(data) is not None:
-        raise not_serializable_error(key, data, where)

@@ -16,7 +16,7 @@ module.
 from __future__ import annotations
 
 import enum
-from typing import TYPE_CHECKING, Any, Callable, Dict, List, Sequence, Tuple, Union
+from typing import TYPE_CHECKING, Callable, Dict, List, Sequence, Tuple, Union
 
 if TYPE_CHECKING:  # pragma: no cover - only for the type checker
     import snr.prelude.abstract
@@ -141,9 +141,6 @@ DataDict = Dict[DataKey, "snr.prelude.page.Page"]
 
 ComponentsByRole = Dict[Role, Sequence["snr.prelude.abstract.AbstractFactory"]]
 """A whole system: for every role, the factories that build its components."""
-
-JsonValue = Any
-"""Data that can cross between nodes: numbers, strings, bools, None, lists, dicts."""
 
 StatsCell = List[float]
 """A profiler's tally for one handler or loop: ``[times_called, total_seconds]``.

@@ -257,13 +257,19 @@ def _dump_std(obj: Any) -> bytes:
 
 
 def _plain(value: Any) -> bool:
-    """True when ``value`` holds only exact JSON types: orjson writes it as json does."""
+    """True when ``value`` holds only exact JSON types: orjson writes it as json does.
+
+    False, too, for data nested deeper than `MAX_DEPTH` (or containing itself,
+    which is endlessly deep): json then gives the verdict.
+    """
     kind = type(value)
     if kind in _PLAIN:
         return True
-    stack = [value]
+    stack = [(value, 1)]
     while stack:
-        node = stack.pop()
+        node, depth = stack.pop()
+        if depth > MAX_DEPTH:
+            return False
         kind = type(node)
         if kind is dict:
             if node and set(map(type, node)) != {str}:
@@ -276,7 +282,7 @@ def _plain(value: Any) -> bool:
             continue
         if not types <= _PLAIN | {list, tuple, dict}:
             return False
-        stack.extend(item for item in node if type(item) not in _PLAIN)
+        stack.extend((item, depth + 1) for item in node if type(item) not in _PLAIN)
     return True
 
 

@@ -44,7 +44,6 @@ __all__ = [
     "decode_body",
     "encode_beat",
     "encode_bye",
-    "encode_frame",
     "encode_hello",
     "encode_page",
 ]
@@ -109,16 +108,6 @@ Message = Union[Page, Hello, Beat, Bye]
 """What a frame carries: a `Page`, a `Hello`, a `Beat` or a `Bye`."""
 
 
-def encode_frame(body: bytes) -> bytes:
-    """``body`` with its 4-byte length header in front: one frame, ready to send.
-
-    Example::
-
-        encode_frame(b'{}')   # b'\\x00\\x00\\x00\\x02{}'
-    """
-    return _HEADER.pack(len(body)) + body
-
-
 def _frame(body: bytes, what: str) -> bytes:
     if len(body) > MAX_FRAME_BYTES:
         raise NotSerializableError(
@@ -167,7 +156,7 @@ def encode_hello(role: str, beat_s: Optional[float] = None, bye: bool = False) -
     return _frame(dump_json(fields, "the hello frame"), "the hello frame")
 
 
-_BEAT_FRAME = encode_frame(b'{"v":1,"kind":"beat"}')
+_BEAT_FRAME = _frame(b'{"v":1,"kind":"beat"}', "a beat")
 
 
 def encode_beat() -> bytes:
@@ -180,7 +169,7 @@ def encode_beat() -> bytes:
     return _BEAT_FRAME
 
 
-_BYE_FRAME = encode_frame(b'{"v":1,"kind":"bye"}')
+_BYE_FRAME = _frame(b'{"v":1,"kind":"bye"}', "a bye")
 
 
 def encode_bye() -> bytes:
