@@ -317,7 +317,7 @@ class TestReceiverSetup(unittest.TestCase):
     def test_port_in_use_is_explained(self) -> None:
         with NodeInThread([]) as run:
             clash = Config({"b": [CommandReceiverFactory(port=run.port)]}, mode=Mode.TEST)
-            with self.assertRaisesRegex(CommsError, "already uses this port"):
+            with self.assertRaisesRegex(CommsError, "is in use.*CommandReceiverFactory"):
                 Node("b", clash).loop()
 
     def test_port_in_use_when_deployed_keeps_the_node_running(self) -> None:
@@ -390,13 +390,13 @@ class TestRemoteConsoleProgram(unittest.TestCase):
         with self.assertRaises(ConsoleConnectionError) as caught:
             RemoteConsole("127.0.0.1", port, timeout_s=2).connect()
         message = str(caught.exception)
-        self.assertIn("connection refused", message)
+        self.assertIn("the connection was refused", message)
         self.assertIn(f"CommandReceiverFactory(port={port})", message)
 
         err = io.StringIO()
         code = main([f"127.0.0.1:{port}", "-c", "help"], stdout=io.StringIO(), stderr=err)
         self.assertEqual(code, EXIT_CONNECTION)
-        self.assertIn("connection refused", err.getvalue())
+        self.assertIn("the connection was refused", err.getvalue())
 
     def test_bad_address_is_a_usage_error(self) -> None:
         err = io.StringIO()
@@ -436,7 +436,7 @@ class TestRemoteConsoleProgram(unittest.TestCase):
             cwd=os.path.dirname(os.path.dirname(os.path.abspath(__file__))),
         )
         self.assertEqual(result.returncode, EXIT_CONNECTION)
-        self.assertIn("connection refused", result.stderr)
+        self.assertIn("the connection was refused", result.stderr)
 
 
 if __name__ == "__main__":

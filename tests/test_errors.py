@@ -20,8 +20,11 @@ import time
 import unittest
 from abc import ABC, abstractmethod
 from functools import partial
-from typing import Any, Callable, Dict, List, Optional, Sequence
+from pathlib import Path
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+from unittest import mock
 
+import tests.test_errors_silence as silence
 from snr import (
     AbstractEndpoint,
     AbstractFactory,
@@ -52,11 +55,14 @@ from snr import (
     tasks,
 )
 from snr.core import MissingKeyHints
-from snr.prelude.errors import (
-    explain_os_error,
-    not_serializable_error,
-)
+from snr.prelude.errors import not_serializable_error
+from snr.prelude.os_errors import OsAction, explain_os_error
 from snr.std_mods.codec import page_json
+from snr.std_mods.comms import serial_link
+from snr.std_mods.comms.sockets import _listen as sockets_listen
+from snr.std_mods.io.console_protocol import ConsoleConnectionError
+from snr.std_mods.io.live_view import _listen as live_view_listen
+from snr.std_mods.io.remote_console import RemoteConsole
 from tests.helpers import StopWhenDrainedFactory, StopWhenFactory, StopWhenTrueFactory
 from tests.quiet import capture_test_logs, captured_logs
 
@@ -759,84 +765,105 @@ class TestBlockingHandler(SNRTestCase):
                     self.assertIn(part, slow[0])
 
 
-# -- 12. ports and serial devices -----------------------------------------------------
-class TestOsErrors(unittest.TestCase):
-    def test_port_in_use(self) -> None:
-        with socket.socket() as first, socket.socket() as second:
-            first.bind(("127.0.0.1", 0))
-            first.listen()
-            port = first.getsockname()[1]
-            with self.assertRaises(OSError) as ctx:
-                second.bind(("127.0.0.1", port))
-        error = explain_os_error(
-            ctx.exception,
-            action="bind",
-            target=f"127.0.0.1:{port}",
-            role="urov",
-            component="server",
-        )
-        self.assertIsInstance(error, CommsError)
-        message = str(error)
-        for part in (
-            f"Cannot serve on 127.0.0.1:{port}",
-            "node 'urov'",
-            "'server'",
-            "already in use",
-            f"lsof -i :{port}",
-            "choose another port",
-        ):
-            self.assertIn(part, message)
-        self.assertIs(error.__cause__, ctx.exception)
+# -- 12. ports and serial devices: the real components ---------------------------------
+def catalogue_section(number: int) -> str:
+    """Section ``number`` of docs/errors.md, as text."""
+    text = Path(ROOT, "docs", "errors.md").read_text("utf-8")
+    start = text.index(f"\n## {number}. ")
+    return text[start : text.index("\n## ", start + 1)]
 
-    def test_connection_refused(self) -> None:
-        with socket.socket() as probe:
+
+def shown_messages(section: str, heading: str) -> List[str]:
+    """The messages of the first text block under ``heading``, one per paragraph."""
+    block = section.split(heading, 1)[1].split("```text\n", 1)[1].split("```", 1)[0]
+    return [line for line in block.splitlines() if line.strip()]
+
+
+class TestOsErrors(unittest.TestCase):
+    """docs/errors.md section 12: each message as the real component gives it."""
+
+    def setUp(self) -> None:
+        self.section = catalogue_section(12)
+
+    def test_12a_a_port_in_use_prints_what_the_page_shows(self) -> None:
+        entry = self.section.split("### 12a.", 1)[1]
+        program = entry.split("```python\n", 1)[1].split("```", 1)[0]
+        shown = entry.split("```text\n", 1)[1].split("```", 1)[0].splitlines()
+        self.assertIn("9000", program)
+        with socket.socket() as holder:  # the earlier run that still holds the port
+            holder.bind(("127.0.0.1", 0))
+            holder.listen()
+            port = str(holder.getsockname()[1])
+            lines, status = silence.run_program(program.replace("9000", port), [])
+        got = {silence.comparable(line.replace(port, "9000")) for line in lines}
+        wanted = [c for c in map(silence.comparable, shown[1:-2]) if c is not None]
+        self.assertEqual([w for w in wanted if w not in got], [], "\n".join(lines))
+        self.assertEqual(status, int(shown[-1]))
+
+    def test_12b_a_refused_console_connection(self) -> None:
+        with socket.socket() as probe:  # a port nothing listens on
             probe.bind(("127.0.0.1", 0))
             port = probe.getsockname()[1]
-        with socket.socket() as client, self.assertRaises(OSError) as ctx:
-            client.connect(("127.0.0.1", port))
-        message = str(explain_os_error(ctx.exception, action="connect", target=f"127.0.0.1:{port}"))
-        for part in (f"Cannot connect to 127.0.0.1:{port}", "refused", "Start the node"):
-            self.assertIn(part, message)
+        console = RemoteConsole("127.0.0.1", port, timeout_s=1.0)
+        with self.assertRaises(ConsoleConnectionError) as ctx:
+            console.connect()
+        message = str(ctx.exception).replace(str(port), "9124")
+        self.assertEqual(message, shown_messages(self.section, "### 12b.")[0])
 
-    def test_serial_port_missing(self) -> None:
-        path = "/dev/snr-no-such-port"
-        with self.assertRaises(OSError) as ctx:
-            open(path, "rb").close()
-        message = str(explain_os_error(ctx.exception, action="serial", target=path, role="urov"))
-        for part in (
-            f"Cannot open serial port {path}",
-            "no such serial port",
-            "plugged in",
-            "serial.tools.list_ports",
-        ):
-            self.assertIn(part, message)
-
-    def test_serial_port_missing_from_pyserial(self) -> None:
+    def test_12b_a_missing_serial_port(self) -> None:
         try:
-            import serial
+            import serial  # noqa: F401 - only to know pyserial is there
         except ImportError:  # pragma: no cover - pyserial is an extra
             self.skipTest("pyserial is not installed")
-        with self.assertRaises(OSError) as ctx:
-            serial.Serial("/dev/snr-no-such-port", 9600, timeout=0.1)
-        path = "/dev/snr-no-such-port"
-        message = str(explain_os_error(ctx.exception, action="serial", target=path))
-        self.assertIn("no such serial port", message)
+        missing = "/dev/snr-no-such-port"
+        with mock.patch.object(serial_link, "available_ports", lambda: ["/dev/ttyACM0"]):
+            with self.assertRaises(CommsError) as ctx:
+                serial_link.open_serial_port(missing, 115200, 0.1, 0.1, "urov")
+        message = str(ctx.exception).replace(missing, "/dev/ttyUSB0")
+        self.assertEqual(message, shown_messages(self.section, "### 12b.")[1])
 
-    def test_serial_permission_denied(self) -> None:
-        denied = PermissionError(errno.EACCES, "Permission denied", "/dev/ttyUSB0")
-        message = str(explain_os_error(denied, action="serial", target="/dev/ttyUSB0"))
-        for part in ("permission denied", "dialout", "usermod"):
-            self.assertIn(part, message)
+    def test_12b_a_serial_port_not_permitted(self) -> None:
+        denied = PermissionError(errno.EACCES, "Permission denied", "/dev/ttyACM0")
+        message = str(serial_link.describe_open_error("/dev/ttyACM0", denied, "urov"))
+        self.assertEqual(message, shown_messages(self.section, "### 12b.")[2])
 
-    def test_low_port_needs_rights(self) -> None:
-        denied = PermissionError(errno.EACCES, "Permission denied")
-        message = str(explain_os_error(denied, action="bind", target="0.0.0.0:80"))
-        self.assertIn("1024", message)
+    def test_every_place_that_listens_words_a_port_in_use_the_same(self) -> None:
+        with socket.socket() as holder:
+            holder.bind(("127.0.0.1", 0))
+            holder.listen()
+            port = holder.getsockname()[1]
+            with self.assertRaises(CommsError) as sockets_error:
+                sockets_listen(("127.0.0.1", port), "urov")
+            with self.assertRaises(CommsError) as view_error:
+                live_view_listen("127.0.0.1", port, "urov", "live_view")
+        for error, who, setting in (
+            (sockets_error, "The sockets server of node 'urov'", "SocketsPair("),
+            (view_error, "The live view 'live_view' of node 'urov'", "FoxgloveBridgeFactory("),
+        ):
+            message = str(error.exception)
+            self.assertTrue(message.startswith(f"{who} cannot listen on 127.0.0.1:{port}"))
+            for part in (f"port {port} is in use", f"lsof -i :{port}", setting):
+                self.assertIn(part, message)
+            self.assertIsInstance(error.exception.__cause__, OSError)
 
-    def test_unknown_host(self) -> None:
-        error = socket.gaierror(socket.EAI_NONAME, "Name or service not known")
-        message = str(explain_os_error(error, action="connect", target="robto.local:9000"))
-        self.assertIn("host name cannot be found", message)
+    def test_the_rarer_failures(self) -> None:
+        cases: List[Tuple[OSError, OsAction, str, str]] = [
+            (PermissionError(errno.EACCES, "Permission denied"), "listen", "0.0.0.0:80", "1024"),
+            (
+                socket.gaierror(socket.EAI_NONAME, "Name or service not known"),
+                "connect",
+                "robto.local:9000",
+                "'robto.local' cannot be found",
+            ),
+            (OSError(errno.EADDRNOTAVAIL, "x"), "listen", "10.9.9.9:9000", "not an address"),
+            (OSError(errno.EHOSTUNREACH, "x"), "connect", "10.9.9.9:9000", "did not answer"),
+            (OSError(errno.ECONNRESET, "x"), "connect", "10.9.9.9:9000", "closed the connection"),
+            (OSError(errno.EBUSY, "x"), "open", "/dev/ttyUSB0", "another program has it open"),
+        ]
+        for error, action, target, part in cases:
+            with self.subTest(part=part):
+                message = explain_os_error(error, action=action, target=target, who="It")
+                self.assertIn(part, message)
 
 
 # -- 13. data that cannot be sent between nodes -----------------------------------------

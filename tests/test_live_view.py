@@ -113,7 +113,7 @@ class TestConfiguration(SNRTestCase):
         with socket.create_server(("127.0.0.1", 0)) as taken:
             port = taken.getsockname()[1]
             node = Node("robot", Config({"robot": [FoxgloveBridgeFactory("x", port=port)]}))
-            with self.assertRaisesRegex(Exception, f"127.0.0.1:{port}.*already in use"):
+            with self.assertRaisesRegex(Exception, f"127.0.0.1:{port}: port {port} is in use"):
                 node.loop()
 
 

@@ -463,8 +463,9 @@ class TestErrors(SNRTestCase):
         with self.assertRaises(CommsError) as caught:
             run_role("robot", [SerialLinkFactory("/dev/ttyNOPE42")])
         message = str(caught.exception)
-        self.assertIn("'/dev/ttyNOPE42' does not exist", message)
-        self.assertRegex(message, "Serial ports on this computer|No serial ports were found")
+        self.assertIn("node 'robot' cannot open serial port /dev/ttyNOPE42", message)
+        self.assertIn("there is no such serial port", message)
+        self.assertIn("Serial ports on this computer: ", message)
 
     def test_permission_denied_explains_the_dialout_group(self) -> None:
         # The tests may run as root, who is never denied, so make the error by hand.
@@ -472,11 +473,11 @@ class TestErrors(SNRTestCase):
 
         denied = serial.SerialException(errno.EACCES, "could not open port /dev/ttyUSB0")
         message = str(describe_open_error("/dev/ttyUSB0", denied))
-        self.assertIn("Permission denied", message)
+        self.assertIn("permission denied", message)
         self.assertIn("usermod -a -G dialout", message)
         self.assertIn("log out and back in", message)
         busy = serial.SerialException(errno.EBUSY, "could not open port")
-        self.assertIn("busy", str(describe_open_error("/dev/ttyUSB0", busy)))
+        self.assertIn("another program has it open", str(describe_open_error("/dev/ttyUSB0", busy)))
 
     def test_a_bad_url_is_a_clear_error(self) -> None:
         with self.assertRaises(CommsError) as caught:

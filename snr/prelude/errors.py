@@ -30,14 +30,13 @@ from __future__ import annotations
 
 import dataclasses
 import enum
-import errno
 import inspect
 import math
 import os
 import sys
 import traceback
 from types import FrameType, TracebackType
-from typing import Any, Iterable, List, Literal, Optional, Set, Tuple
+from typing import Any, Iterable, List, Optional, Set, Tuple
 
 __all__ = [
     "CommsError",
@@ -56,7 +55,6 @@ __all__ = [
     "closest_match",
     "describe_callable",
     "describe_class",
-    "explain_os_error",
     "frame_location",
     "is_runtime_file",
     "not_serializable_error",
@@ -367,156 +365,6 @@ def short_repr(value: Any, limit: int = 120) -> str:
     except Exception as error:  # a broken __repr__ must not hide the real error
         return f"<{type(value).__name__} whose repr() raised {type(error).__name__}>"
     return text if len(text) <= limit else text[: limit - 1] + "…"
-
-
-# ---------------------------------------------------------------------------
-# Ports, connections and serial devices
-# ---------------------------------------------------------------------------
-OsAction = Literal["bind", "connect", "serial"]
-
-_VERBS = {"bind": "serve on", "connect": "connect to", "serial": "open serial port"}
-_UNREACHABLE = {
-    errno.ETIMEDOUT,
-    errno.EHOSTUNREACH,
-    errno.ENETUNREACH,
-    getattr(errno, "EHOSTDOWN", errno.EHOSTUNREACH),
-}
-_CLOSED = {errno.ECONNRESET, errno.EPIPE, errno.ECONNABORTED}
-_NO_DEVICE = {errno.ENOENT, errno.ENODEV, errno.ENXIO}
-_DENIED = {errno.EACCES, errno.EPERM}
-
-
-def _port_of(target: str) -> str:
-    port = target.rsplit(":", 1)[-1]
-    return port if port.isdigit() else "PORT"
-
-
-def _errno_of(error: OSError) -> Optional[int]:
-    if isinstance(error.errno, int):
-        return error.errno
-    # pyserial on some systems wraps the OS error in text only.
-    text = str(error)
-    if isinstance(error, FileNotFoundError) or "No such file" in text:
-        return errno.ENOENT
-    denied = "Permission denied" in text or "Access is denied" in text
-    if isinstance(error, PermissionError) or denied:
-        return errno.EACCES
-    return None
-
-
-def _os_problem(action: OsAction, target: str, error: OSError) -> Tuple[str, str]:
-    """(what is wrong, what to do) for an OSError, in plain words."""
-    import socket  # only needed here; keeps `import snr` light
-
-    code = _errno_of(error)
-    if isinstance(error, socket.gaierror):
-        return (
-            "the host name cannot be found",
-            "Check its spelling, or use the other machine's IP address, e.g. 192.168.1.20.",
-        )
-    if action == "bind":
-        if code == errno.EADDRINUSE:
-            port = _port_of(target)
-            return (
-                "the port is already in use",
-                "Another program has it: often an earlier run of this node that is still "
-                "running, or two components in the config serving on the same port. Stop "
-                f"the other program (find it with `lsof -i :{port}` on Linux and macOS, "
-                "`netstat -ano` on Windows) or choose another port in the config.",
-            )
-        if code == errno.EADDRNOTAVAIL:
-            return (
-                "that address does not belong to this machine",
-                "Serve on '0.0.0.0' (every network interface) or on this machine's own "
-                "IP address; check the host in the config.",
-            )
-        if code in _DENIED:
-            return (
-                "permission denied",
-                "Ports below 1024 need administrator rights: use a port from 1024 to 65535.",
-            )
-    if action == "connect":
-        if code == errno.ECONNREFUSED:
-            return (
-                "the connection was refused: nothing is listening there",
-                "Start the node that serves on that port, and check that both sides of "
-                "the link use the same host and port.",
-            )
-        if code in _UNREACHABLE:
-            return (
-                "the other machine did not answer",
-                "Check that it is switched on and on the same network, and that the IP "
-                "address in the config is right (try `ping` with it).",
-            )
-    if code in _CLOSED:
-        return (
-            "the other side closed the connection",
-            "The other node probably stopped or crashed: look at its output.",
-        )
-    if action == "serial":
-        if code in _NO_DEVICE:
-            return (
-                "there is no such serial port",
-                "Is the device plugged in and powered? List the ports with "
-                "`python -m serial.tools.list_ports`: on Linux they look like "
-                "/dev/ttyUSB0 or /dev/ttyACM0, on macOS /dev/cu.usbmodem..., on "
-                "Windows COM3. Put the right one in the config.",
-            )
-        if code in _DENIED:
-            return (
-                "permission denied",
-                "On Linux, add your user to the dialout group "
-                "(`sudo usermod -aG dialout $USER`), then log out and back in. On "
-                "Windows, close any other program that has the port open.",
-            )
-        if code == errno.EBUSY:
-            return (
-                "another program is using the port",
-                "Close it (an Arduino serial monitor, screen, minicom, another node) "
-                "and try again.",
-            )
-    reason = os.strerror(code) if code is not None else str(error)
-    return (reason[:1].lower() + reason[1:], "Check the host, port or device name in the config.")
-
-
-def explain_os_error(
-    error: OSError,
-    *,
-    action: OsAction,
-    target: str,
-    role: str = "",
-    component: str = "",
-) -> CommsError:
-    """Turn an OSError from bind, connect or a serial open into a CommsError.
-
-    The message says what failed (port or device, node, component), what is
-    wrong in plain words, and what to do. The OSError becomes its ``__cause__``.
-
-    Args:
-        error: what ``socket.bind``/``connect`` or ``serial.Serial()`` raised.
-        action: ``"bind"`` (serving), ``"connect"`` or ``"serial"`` (opening a port).
-        target: ``"127.0.0.1:9000"`` or ``"/dev/ttyUSB0"``.
-        role: the node's role, e.g. ``parent.role``.
-        component: the component's name.
-
-    Example::
-
-        try:
-            server.bind((host, port))
-        except OSError as error:
-            raise explain_os_error(
-                error, action="bind", target=f"{host}:{port}", role=self.parent.role,
-                component=self.name,
-            ) from error
-    """
-    what, fix = _os_problem(action, target, error)
-    where = f" for node {role!r}" if role else ""
-    if component:
-        where += f" (component {component!r})"
-    original = f"{type(error).__name__}: {error}"
-    comms_error = CommsError(f"Cannot {_VERBS[action]} {target}{where}: {what}. {fix} ({original})")
-    comms_error.__cause__ = error
-    return comms_error
 
 
 # ---------------------------------------------------------------------------

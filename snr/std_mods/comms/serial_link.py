@@ -25,7 +25,6 @@ pyserial is an optional dependency: ``pip install 'snr[serial]'``.
 from __future__ import annotations
 
 import collections
-import errno
 import json
 import logging
 import sys
@@ -49,6 +48,7 @@ from snr.prelude import (
     WireFormatError,
 )
 from snr.prelude.errors import closest_match
+from snr.prelude.os_errors import explain_os_error
 from snr.std_mods.codec import header_line, page_from_line, page_to_line
 from snr.std_mods.comms.board_protocol import (
     HEARTBEAT_KEY,
@@ -119,49 +119,36 @@ def available_ports() -> List[str]:
     return ports
 
 
-def _ports_hint() -> str:
+def _ports_or_none() -> Optional[List[str]]:
     try:
-        ports = available_ports()
+        return list(available_ports())
     except Exception:  # listing is only a hint; never hide the real error
-        return ""
-    if not ports:
-        return " No serial ports were found on this computer: is the device plugged in?"
-    return " Serial ports on this computer: " + ", ".join(ports) + "."
+        return None
 
 
-def describe_open_error(port: str, error: Exception) -> CommsError:
+def describe_open_error(port: str, error: Exception, role: str = "") -> CommsError:
     """A CommsError that explains why ``port`` could not be opened, and the fix.
 
     Example::
 
-        describe_open_error("/dev/ttyUSB0", SerialException(13, "denied"))
-        # CommsError("Permission denied opening serial port '/dev/ttyUSB0'. ...")
+        describe_open_error("/dev/ttyUSB0", SerialException(13, "denied"), "urov")
+        # CommsError("The serial link of node 'urov' cannot open serial port
+        #  /dev/ttyUSB0: permission denied. On Linux, ...")
     """
-    code = getattr(error, "errno", None)
-    text = str(error)
-    if code in (errno.EACCES, errno.EPERM) or "PermissionError" in text or "denied" in text:
-        return CommsError(
-            f"Permission denied opening serial port {port!r}. On Linux, serial ports belong "
-            "to the 'dialout' group: add yourself with  sudo usermod -a -G dialout $USER  "
-            "then log out and back in (`groups` should list dialout). On Windows this "
-            "means another program (e.g. a serial monitor) has the port open: close it."
+    return CommsError(
+        explain_os_error(
+            error,
+            action="open",
+            target=port,
+            who=f"The serial link of node {role!r}" if role else "The serial link",
+            setting="SerialLinkFactory(port=...)",
+            ports=_ports_or_none(),
         )
-    if code == errno.EBUSY:
-        return CommsError(
-            f"Serial port {port!r} is busy: another program has it open (a serial monitor, "
-            "another SNR node?). Close that program and try again."
-        )
-    if code in (errno.ENOENT, errno.ENODEV, errno.ENXIO) or "FileNotFoundError" in text:
-        return CommsError(
-            f"Serial port {port!r} does not exist.{_ports_hint()} Check the cable and the "
-            "name: Linux /dev/ttyUSB0 or /dev/ttyACM0, macOS /dev/cu.usbmodem..., Windows "
-            "COM3."
-        )
-    return CommsError(f"Cannot open serial port {port!r}: {text}.{_ports_hint()}")
+    )
 
 
 def open_serial_port(
-    port: str, baudrate: int, read_timeout_s: float, write_timeout_s: float
+    port: str, baudrate: int, read_timeout_s: float, write_timeout_s: float, role: str = ""
 ) -> Any:
     """Open ``port`` (a device or pyserial URL) or raise a CommsError that explains.
 
@@ -180,7 +167,7 @@ def open_serial_port(
             "name such as '/dev/ttyACM0' or 'COM3', or a pyserial URL such as 'loop://'."
         ) from error
     except (serial.SerialException, OSError) as error:
-        raise describe_open_error(port, error) from error
+        raise describe_open_error(port, error, role) from error
 
 
 class _Entry:
@@ -398,7 +385,9 @@ class SerialLinkLoop(ThreadLoop):
 
     def _open(self) -> None:
         link = self.link
-        port = open_serial_port(link.port, link.baudrate, link.read_timeout_s, link.write_timeout_s)
+        port = open_serial_port(
+            link.port, link.baudrate, link.read_timeout_s, link.write_timeout_s, self.parent.role
+        )
         self._buffer.clear()
         self._cut = False
         self._watch.opened(time.monotonic())

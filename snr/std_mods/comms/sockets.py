@@ -18,7 +18,6 @@ every client over the same connections.
 
 from __future__ import annotations
 
-import errno
 import os
 import socket
 from typing import Optional, Tuple
@@ -26,6 +25,7 @@ from typing import Optional, Tuple
 from snr.core import LoopFactory
 from snr.core.logs import LossReport
 from snr.prelude import AbstractNode, CommsError, ConfigError
+from snr.prelude.os_errors import explain_os_error
 from snr.std_mods.comms.link import (
     DEFAULT_DEAD_AFTER_S,
     DEFAULT_MAX_BACKLOG_BYTES,
@@ -136,33 +136,26 @@ class SocketTransport:
 
 def _listen(address: Address, role: str) -> socket.socket:
     """A listening socket on ``address``, or a CommsError saying what to do."""
-    where = f"The sockets server of node {role!r} cannot listen on {_describe(address)}"
+    listener: Optional[socket.socket] = None
     try:
         infos = socket.getaddrinfo(address[0], address[1], type=socket.SOCK_STREAM)
-    except OSError as error:
-        raise CommsError(
-            f"{where}: the host name {address[0]!r} is unknown ({error}). Use an address "
-            "of this machine, e.g. ('localhost', 9000) or ('0.0.0.0', 9000) for all."
-        ) from error
-    family, _, _, _, sockaddr = infos[0]
-    listener = socket.socket(family, socket.SOCK_STREAM)
-    try:
+        family, _, _, _, sockaddr = infos[0]
+        listener = socket.socket(family, socket.SOCK_STREAM)
         if os.name != "nt":  # lets a restarted server reuse the port at once
             listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
         listener.bind(sockaddr)
         listener.listen()
     except OSError as error:
-        listener.close()
-        if error.errno in (errno.EADDRINUSE, getattr(errno, "WSAEADDRINUSE", -1)):
-            raise CommsError(
-                f"{where}: port {address[1]} is in use. Another program, or another SNR "
-                "node still running (check your other terminals), is listening there. "
-                "Stop it, or give both sides another port in "
-                "SocketsPair(server_tuple=(host, port))."
-            ) from error
+        if listener is not None:
+            listener.close()
         raise CommsError(
-            f"{where}: {error}. Is {address[0]!r} an address of this machine? The server "
-            "side listens on its own address; the client side connects to it."
+            explain_os_error(
+                error,
+                action="listen",
+                target=_describe(address),
+                who=f"The sockets server of node {role!r}",
+                setting="SocketsPair(server_tuple=(host, port)), on both sides",
+            )
         ) from error
     listener.settimeout(_ACCEPT_WAKE_S)
     return listener

@@ -14,7 +14,6 @@ Example::
 from __future__ import annotations
 
 import codecs
-import errno
 import logging
 import os
 import select
@@ -28,6 +27,7 @@ from typing import IO, Any, Dict, Optional, Tuple
 from snr.core import LoopFactory
 from snr.core.logs import RepeatFilter
 from snr.prelude import AbstractNode, CommsError, ComponentName, ConfigError, Mode
+from snr.prelude.os_errors import explain_os_error
 from snr.std_mods.io.console_commands import ConsoleLoop, ConsoleSession
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
@@ -359,16 +359,12 @@ class CommandReceiverLoop(ConsoleLoop):
         super().begin()
 
     def _cannot_listen(self, error: OSError) -> None:
-        in_use = error.errno in (errno.EADDRINUSE, getattr(errno, "WSAEADDRINUSE", None))
-        hint = (
-            "Another program (or another node) already uses this port: stop it, or give "
-            "this node another one, e.g. CommandReceiverFactory(port=9124)."
-            if in_use
-            else "Check that the host is an address of this machine."
-        )
-        message = (
-            f"Console receiver {self.name!r} cannot listen on {self.host}:{self.port}: "
-            f"{error.strerror or error}. {hint}"
+        message = explain_os_error(
+            error,
+            action="listen",
+            target=f"{self.host}:{self.port}",
+            who=f"Console receiver {self.name!r}",
+            setting="CommandReceiverFactory(port=...)",
         )
         if self.parent.mode is Mode.DEPLOYED:
             self.err("%s The node runs on without a console.", message)

@@ -30,8 +30,18 @@ from typing import TYPE_CHECKING, Any, List, Optional, Sequence, Union
 from urllib.parse import quote
 
 from snr.core import Endpoint, EndpointFactory
-from snr.prelude import AbstractNode, ConfigError, DataKey, Page, SomeTasks, Task, TaskId, TaskType
-from snr.prelude.errors import explain_os_error
+from snr.prelude import (
+    AbstractNode,
+    CommsError,
+    ConfigError,
+    DataKey,
+    Page,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskType,
+)
+from snr.prelude.os_errors import explain_os_error
 
 if TYPE_CHECKING:
     from snr.std_mods.io.live_view_server import LiveViewServer, LiveViewStats
@@ -143,8 +153,14 @@ def _listen(host: str, port: int, role: str, name: str) -> socket.socket:
         # read waits in SNR's newest-per-key buffer, not as stale pages in the OS.
         listener.setsockopt(socket.SOL_SOCKET, socket.SO_SNDBUF, _SEND_BUFFER)
     except OSError as error:
-        raise explain_os_error(
-            error, action="bind", target=f"{host}:{port}", role=role, component=name
+        raise CommsError(
+            explain_os_error(
+                error,
+                action="listen",
+                target=f"{host}:{port}",
+                who=f"The live view {name!r} of node {role!r}",
+                setting="FoxgloveBridgeFactory(port=...)",
+            )
         ) from error
     return listener
 

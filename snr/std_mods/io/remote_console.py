@@ -20,6 +20,7 @@ import sys
 from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequence
 
 from snr.prelude import WireFormatError
+from snr.prelude.os_errors import explain_os_error
 from snr.std_mods.io.console_commands import COMMANDS
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
@@ -110,22 +111,15 @@ class RemoteConsole:
         """
         try:
             self._sock = socket.create_connection((self.host, self.port), self.timeout_s)
-        except ConnectionRefusedError:
-            raise ConsoleConnectionError(
-                f"Could not connect to an SNR node at {self.where}: connection refused. "
-                "Is the node running, and does its config include "
-                f"CommandReceiverFactory(port={self.port})?"
-            ) from None
-        except socket.gaierror as error:
-            raise ConsoleConnectionError(
-                f"Could not connect to {self.where}: unknown host {self.host!r} "
-                f"({error.strerror}). Check the spelling, or use its IP address."
-            ) from None
         except OSError as error:
             raise ConsoleConnectionError(
-                f"Could not connect to an SNR node at {self.where}: "
-                f"{error.strerror or error}. Check the address, and that no firewall "
-                "blocks the port."
+                explain_os_error(
+                    error,
+                    action="connect",
+                    target=self.where,
+                    who="The console",
+                    setting=f"the node's CommandReceiverFactory(port={self.port})",
+                )
             ) from None
         greeting = self._receive()
         if greeting.status is Status.AUTH:
