@@ -10,6 +10,7 @@ import contextlib
 import errno
 import io
 import logging
+import math
 import os
 import socket
 import subprocess
@@ -33,6 +34,7 @@ from snr import (
     CommsError,
     ComponentError,
     ComponentsByRole,
+    Config,
     ConfigError,
     Endpoint,
     EndpointFactory,
@@ -44,6 +46,7 @@ from snr import (
     NotSerializableError,
     Page,
     SNRTestCase,
+    SocketsPair,
     SomeTasks,
     SynchronousRunner,
     Task,
@@ -57,12 +60,14 @@ from snr import (
 from snr.core import MissingKeyHints
 from snr.prelude.errors import not_serializable_error
 from snr.prelude.os_errors import OsAction, explain_os_error
-from snr.std_mods.codec import page_json
+from snr.std_mods.codec import page_json, page_to_line
 from snr.std_mods.comms import serial_link
+from snr.std_mods.comms.board_protocol import compact_line
 from snr.std_mods.comms.sockets import _listen as sockets_listen
 from snr.std_mods.io.console_protocol import ConsoleConnectionError
 from snr.std_mods.io.live_view import _listen as live_view_listen
 from snr.std_mods.io.remote_console import RemoteConsole
+from tests.comms_helpers import free_port
 from tests.helpers import StopWhenDrainedFactory, StopWhenFactory, StopWhenTrueFactory
 from tests.quiet import capture_test_logs, captured_logs
 
@@ -867,6 +872,55 @@ class TestOsErrors(unittest.TestCase):
 
 
 # -- 13. data that cannot be sent between nodes -----------------------------------------
+class TestNotSerializableAsPrinted(unittest.TestCase):
+    """docs/errors.md section 13a, run as printed against a real topside node."""
+
+    def test_13a_a_set_inside_a_list_prints_what_the_page_shows(self) -> None:
+        entry = catalogue_section(13).split("### 13a.", 1)[1]
+        program = entry.split("```python\n", 1)[1].split("```", 1)[0]
+        shown = entry.split("```text\n", 1)[1].split("```", 1)[0].splitlines()
+        port = str(free_port())
+        topside = Node(
+            "topside",
+            Config({"topside": [SocketsPair(server_tuple=("127.0.0.1", int(port))).server()]}),
+        )
+        with captured_logs("snr.topside"):
+            serving = threading.Thread(target=topside.loop, daemon=True)
+            serving.start()
+            try:
+                wanted = [c for c in map(silence.comparable, shown[1:-2]) if c is not None]
+                expected = [line.replace("9000", port) for line in wanted]
+                lines, status = silence.run_program(program.replace("9000", port), expected)
+            finally:
+                topside.set_terminate_flag("test over")
+                serving.join(5.0)
+        got = {silence.comparable(line.replace(port, "9000")) for line in lines}
+        self.assertEqual([w for w in wanted if w not in got], [], "\n".join(lines))
+        self.assertEqual(status, int(shown[-1]))
+
+    def test_every_way_out_words_it_the_same(self) -> None:
+        data = {"pose": [1.0, 2.0, {3}]}
+        page = Page("pose", data, "robot", 0.0)
+        shown = catalogue_section(13).split("ERROR: ", 1)[1].split(" The page was dropped")[0]
+        with self.assertRaises(NotSerializableError) as by_serialize:
+            page.serialize()
+        with self.assertRaises(NotSerializableError) as by_line:
+            page_to_line(page)
+        with self.assertRaises(NotSerializableError) as by_compact:
+            compact_line(page)
+        self.assertEqual(str(by_serialize.exception), shown)
+        to_a_file = shown.replace("to another node", "to a recording or serial link")
+        self.assertEqual(str(by_line.exception), to_a_file)
+        self.assertEqual(str(by_compact.exception), shown.replace("another node", "a serial link"))
+
+    def test_serialize_no_longer_turns_a_set_into_a_list(self) -> None:
+        for data in ({3}, math.nan, {"x": [math.inf]}, {(1, 2): "a"}):
+            with self.subTest(data=data), self.assertRaises(NotSerializableError):
+                Page("k", data, "robot", 0.0).serialize()
+        page = Page("k", {"x": [1, 2.5, None, True, "t"], "n": (1, 2)}, "robot", 0.0)
+        self.assertEqual(Page.deserialize(page.serialize()).data["x"], [1, 2.5, None, True, "t"])
+
+
 class TestNotSerializable(unittest.TestCase):
     def test_path_to_the_bad_part(self) -> None:
         with self.assertRaises(NotSerializableError) as ctx:

@@ -52,6 +52,7 @@ __all__ = [
     "WireFormatError",
     "caller_block",
     "caller_location",
+    "check_serializable",
     "closest_match",
     "describe_callable",
     "describe_class",
@@ -491,3 +492,18 @@ def not_serializable_error(
     return NotSerializableError(
         f"{head}: {what}, which JSON cannot hold. {_serializable_hint(bad, problem)} {allowed}"
     )
+
+
+def check_serializable(key: str, data: Any, to: str = "to another node") -> None:
+    """Raise `not_serializable_error`'s error unless ``data`` is plain JSON.
+
+    For writers that would otherwise quietly change the data (a set written
+    as a list, NaN written as ``NaN``), such as `Page.serialize`.
+
+    Example::
+
+        check_serializable("pose", {"x": 1.0})     # fine
+        check_serializable("pose", {"x": {1.0}})   # NotSerializableError: data['x'] is a set
+    """
+    if _find(data, "data", set(), 0) is not None:
+        raise not_serializable_error(key, data, to=to)

@@ -7,7 +7,7 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from snr.prelude.errors import not_serializable_error
+from snr.prelude.errors import check_serializable, not_serializable_error
 from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import DataKey
 
@@ -57,6 +57,9 @@ class Page(JsonDataclass):
             NotSerializableError: naming the key and where in the data the
                 part JSON cannot hold is, e.g. ``data['pose'][2] is a set``.
         """
+        # dataclasses-json would write a set as a list and NaN as NaN (not
+        # JSON): refuse what pages sent between nodes may not hold, as they are.
+        check_serializable(self.key, self.data)
         try:
             return self.to_json()
         except (TypeError, ValueError, OverflowError, RecursionError) as error:

@@ -72,6 +72,7 @@ __all__ = [
     "available_backends",
     "backend",
     "check_header",
+    "data_json",
     "decode_line",
     "dump_json",
     "header_line",
@@ -472,6 +473,26 @@ def dump_json(obj: Mapping[str, Any], what: str = "it") -> bytes:
 
 
 # -- pages ----------------------------------------------------------------------------
+
+
+def data_json(key: str, data: Any, to: str) -> bytes:
+    """A page's ``data`` alone as compact, ASCII-only JSON bytes, refused as pages are.
+
+    For formats that send the data without the rest of the page (a serial
+    link's plain lines, a board's compact lines).
+
+    Raises:
+        NotSerializableError: the same message as `page_json` (naming ``key``,
+            the part of the data and the fix).
+
+    Example::
+
+        data_json("motor", [50, -50], to="to a serial link")   # b'[50,-50]'
+    """
+    try:
+        return _dump_std(data)
+    except _Refused as error:
+        raise not_serializable_error(key, data, to=to, reason=str(error)) from None
 
 
 def page_json(

@@ -23,7 +23,7 @@ from __future__ import annotations
 from typing import List, Optional
 
 from snr.prelude import ConfigError, Page
-from snr.std_mods.codec import dump_json, header_line
+from snr.std_mods.codec import data_json, dump_json, header_line
 
 __all__ = [
     "FAILSAFE_S",
@@ -80,6 +80,9 @@ def is_heartbeat_line(text: str) -> bool:
     return text.startswith(_HEARTBEAT_START)
 
 
+_TO_BOARD = "to a serial link"
+
+
 def compact_line(page: Page) -> str:
     """``page`` as a page line with only its key and data: short enough for an Uno.
 
@@ -93,7 +96,8 @@ def compact_line(page: Page) -> str:
         compact_line(Page("motor", [50, -50, 0], "pi", 0.0))
         # '{"key":"motor","data":[50,-50,0]}'
     """
-    return dump_json({"key": page.key, "data": page.data}, f"the page {page.key!r}").decode("utf-8")
+    key = dump_json({"key": page.key}, f"the key {page.key!r:.40}")[:-1]  # b'{"key":"motor"'
+    return (key + b',"data":' + data_json(page.key, page.data, to=_TO_BOARD) + b"}").decode("ascii")
 
 
 class BoardWatch:

@@ -25,7 +25,6 @@ pyserial is an optional dependency: ``pip install 'snr[serial]'``.
 from __future__ import annotations
 
 import collections
-import json
 import logging
 import sys
 import threading
@@ -49,7 +48,7 @@ from snr.prelude import (
 )
 from snr.prelude.errors import closest_match
 from snr.prelude.os_errors import explain_os_error
-from snr.std_mods.codec import header_line, page_from_line, page_to_line
+from snr.std_mods.codec import data_json, header_line, page_from_line, page_to_line
 from snr.std_mods.comms.board_protocol import (
     HEARTBEAT_KEY,
     BoardWatch,
@@ -681,13 +680,7 @@ class SerialLinkLoop(ThreadLoop):
                     "it into two lines: send one line per page, or use mode='pages'."
                 )
             return data
-        try:
-            return json.dumps(data, separators=(",", ":"), allow_nan=False)
-        except (TypeError, ValueError) as error:
-            raise NotSerializableError(
-                f"the data under {page.key!r} is a {type(data).__name__}, which cannot be "
-                f"written as a line ({error}). Send strings, numbers, lists or dicts."
-            ) from error
+        return data_json(page.key, data, to="to a serial link").decode("ascii")
 
     def _write_lines(self) -> None:
         """The writer thread: write queued lines until the outbox is closed and empty."""
