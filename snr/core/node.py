@@ -235,6 +235,9 @@ class Node(AbstractNode):
         except KeyboardInterrupt:
             self.set_terminate_flag("interrupted by user (Ctrl-C)")
             raise
+        except Exception as error:  # e.g. a server that cannot listen: say so, not "terminate()"
+            self.set_terminate_flag(f"{type(error).__name__} (below)")
+            raise
         finally:
             if wiring_check is not None:
                 wiring_check.cancel()
