@@ -11,7 +11,7 @@ import os
 import subprocess
 import sys
 from types import ModuleType
-from typing import Dict, List, Optional, Sequence
+from typing import Dict, Optional, Sequence
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXAMPLES = os.path.join(ROOT, "examples")
@@ -51,6 +51,79 @@ def script_env(extra: Optional[Dict[str, str]] = None) -> Dict[str, str]:
     return env
 
 
+class StartedScript:
+    """A script started now, in the background; `result` waits for it.
+
+    Tests that only read a script's output can start it when their module is
+    imported, so several such scripts run while other tests do (the suite
+    waits on them once, not one after another).
+
+    Example::
+
+        DEMO = start_script(["-m", "snr", "demo", "--seconds", "1"])   # at import
+        ...
+        done = DEMO.result()   # in the test: a CompletedProcess
+    """
+
+    def __init__(
+        self,
+        args: Sequence[str],
+        cwd: Optional[str] = None,
+        timeout_s: float = 30.0,
+        env: Optional[Dict[str, str]] = None,
+        allow_hints: bool = False,
+    ) -> None:
+        self.args = list(args)
+        self.timeout_s = timeout_s
+        self.allow_hints = allow_hints
+        self._done: Optional[subprocess.CompletedProcess[str]] = None
+        self._process = subprocess.Popen(
+            [sys.executable, *args],
+            cwd=cwd or ROOT,
+            stdout=subprocess.PIPE,
+            stderr=subprocess.PIPE,
+            text=True,
+            env=env or script_env(),
+        )
+
+    def result(self) -> subprocess.CompletedProcess[str]:
+        """Wait (at most ``timeout_s``) for the script; its output, checked for hints."""
+        if self._done is None:
+            try:
+                out, err = self._process.communicate(timeout=self.timeout_s)
+            except subprocess.TimeoutExpired:
+                self._process.kill()
+                out, err = self._process.communicate()
+                raise AssertionError(
+                    f"{' '.join(self.args)} ran over {self.timeout_s} s:\n{out}\n{err}"
+                ) from None
+            self._done = subprocess.CompletedProcess(
+                self._process.args, self._process.returncode, out, err
+            )
+        if not self.allow_hints:
+            hints = [
+                line
+                for line in (self._done.stdout + self._done.stderr).splitlines()
+                if "Did you mean" in line
+            ]
+            if hints:
+                raise AssertionError(
+                    f"{' '.join(self.args)} logged a false hint:\n" + "\n".join(hints)
+                )
+        return self._done
+
+
+def start_script(
+    args: Sequence[str],
+    cwd: Optional[str] = None,
+    timeout_s: float = 30.0,
+    env: Optional[Dict[str, str]] = None,
+    allow_hints: bool = False,
+) -> StartedScript:
+    """Start ``python *args`` now; ``.result()`` waits for it (see `StartedScript`)."""
+    return StartedScript(args, cwd, timeout_s, env, allow_hints)
+
+
 def run_script(
     args: Sequence[str],
     cwd: Optional[str] = None,
@@ -64,21 +137,4 @@ def run_script(
     false alarm that teaches students to ignore hints. Unless ``allow_hints``,
     such a line fails the test that ran the script.
     """
-    command: List[str] = [sys.executable, *args]
-    done = subprocess.run(
-        command,
-        cwd=cwd or ROOT,
-        capture_output=True,
-        text=True,
-        timeout=timeout_s,
-        env=env or script_env(),
-    )
-    if not allow_hints:
-        hints = [
-            line
-            for line in (done.stdout + done.stderr).splitlines()
-            if "Did you mean" in line
-        ]
-        if hints:
-            raise AssertionError(f"{' '.join(args)} logged a false hint:\n" + "\n".join(hints))
-    return done
+    return start_script(args, cwd, timeout_s, env, allow_hints).result()

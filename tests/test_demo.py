@@ -12,14 +12,12 @@ virtualenv with ``pip install .`` and runs the demo, and builds the docs, there.
 import os
 import re
 import shutil
-import subprocess
-import sys
 import tempfile
 import unittest
 from pathlib import Path
 from typing import Any, List
 
-from tests.examples_support import ROOT, run_script, script_env
+from tests.examples_support import ROOT, script_env, start_script
 
 TELEMETRY = re.compile(r"t=\s*([\d.]+) s \| depth\s+([\d.]+) m \| heading\s+([\d.]+)°")
 
@@ -41,6 +39,29 @@ def log_lines(stderr: str, level: str) -> List[str]:
     return [line for line in stderr.splitlines() if f" {level}: " in line]
 
 
+def _installed_copy() -> Path:
+    """The ``snr/`` folder alone (and the guide), as an install puts it, in a temp folder."""
+    folder = Path(tempfile.mkdtemp(prefix="snr-installed-"))
+    lib = folder / "site-packages"
+    shutil.copytree(Path(ROOT, "snr"), lib / "snr", ignore=shutil.ignore_patterns("__pycache__"))
+    shutil.copytree(
+        Path(ROOT, "docs"), lib / "snr" / "guide", ignore=shutil.ignore_patterns("api")
+    )
+    return folder
+
+
+# Both demo runs start when this module is imported and run while other tests
+# do: each takes seconds of waiting, which the suite then pays only once.
+INSTALLED = _installed_copy()
+PACKAGE_DEMO = start_script(
+    ["-c", RUN_DEMO, str(INSTALLED / "site-packages"), "--seconds", "2.5"],
+    cwd=str(INSTALLED),
+    timeout_s=40,
+    env=script_env({"PYTHONPATH": str(INSTALLED / "site-packages")}),
+)
+VERBOSE_DEMO = start_script(["-m", "snr", "demo", "--seconds", "0.6", "--verbose"], timeout_s=40)
+
+
 class TestDemoShipsInThePackage(unittest.TestCase):
     """The ``snr/`` folder alone, as an install puts it, run from a folder outside the checkout."""
 
@@ -49,17 +70,12 @@ class TestDemoShipsInThePackage(unittest.TestCase):
 
     @classmethod
     def setUpClass(cls) -> None:
-        cls.folder = Path(tempfile.mkdtemp(prefix="snr-installed-"))
+        cls.folder = INSTALLED
         cls.lib = cls.folder / "site-packages"
-        shutil.copytree(
-            Path(ROOT, "snr"), cls.lib / "snr", ignore=shutil.ignore_patterns("__pycache__")
-        )
-        shutil.copytree(
-            Path(ROOT, "docs"), cls.lib / "snr" / "guide", ignore=shutil.ignore_patterns("api")
-        )
 
     @classmethod
     def tearDownClass(cls) -> None:
+        PACKAGE_DEMO.result()  # the demo has finished with the folder
         shutil.rmtree(cls.folder, ignore_errors=True)
 
     def test_the_wheel_is_the_whole_snr_folder_and_the_guide(self) -> None:
@@ -85,15 +101,7 @@ class TestDemoShipsInThePackage(unittest.TestCase):
 
     def test_the_demo_runs_from_the_package_alone(self) -> None:
         """CI's smoke run, on the installed copy: a banner and the telemetry, no log chatter."""
-        env = script_env({"PYTHONPATH": str(self.lib)})
-        result = subprocess.run(
-            [sys.executable, "-c", RUN_DEMO, str(self.lib), "--seconds", "2.5"],
-            cwd=self.folder,
-            capture_output=True,
-            text=True,
-            timeout=40,
-            env=env,
-        )
+        result = PACKAGE_DEMO.result()
         self.assertEqual(result.returncode, 0, result.stderr)
         out = result.stdout.splitlines()
         self.assertTrue(out and out[0].startswith("SNR demo: "), result.stdout)
@@ -108,7 +116,7 @@ class TestDemoShipsInThePackage(unittest.TestCase):
 
 class TestVerboseDemo(unittest.TestCase):
     def test_verbose_shows_the_nodes_log(self) -> None:
-        result = run_script(["-m", "snr", "demo", "--seconds", "0.6", "--verbose"], timeout_s=40)
+        result = VERBOSE_DEMO.result()
         self.assertEqual(result.returncode, 0, result.stderr)
         self.assertIn("Listening for sockets clients on 127.0.0.1:", result.stderr)
         self.assertIn("Connected to the sockets server", result.stderr)

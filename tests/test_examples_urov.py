@@ -10,8 +10,13 @@ import snr.demo.urov
 from snr import Mode, SNRTestCase, TaskType, tasks
 from snr.utils import ListReplayerFactory
 from tests.comms_helpers import free_port
-from tests.examples_support import example_path, load_module, run_script
+from tests.examples_support import example_path, load_module, start_script
 from tests.helpers import StopWhenFactory
+
+# Started when this module is imported; it runs while other tests do.
+VEHICLE_ALONE = start_script(
+    [example_path("urov", "main.py"), "urov", "--port", str(free_port()), "--seconds", "1"]
+)
 
 
 class TestUrovParts(SNRTestCase):
@@ -88,9 +93,7 @@ class TestUrovSystem(unittest.TestCase):
         planned (the serial link handles those pages), not a misspelt 'speed'.
         run_script fails on any "Did you mean" line.
         """
-        port = free_port()
-        script = example_path("urov", "main.py")
-        result = run_script([script, "urov", "--port", str(port), "--seconds", "1"])
+        result = VEHICLE_ALONE.result()
         self.assertEqual(result.returncode, 0, result.stderr)
         self.assertIn("terminated: Timeout", result.stderr)
 

@@ -16,10 +16,12 @@ import importlib.util
 import io
 import math
 import re
+import shutil
+import tempfile
 import unittest
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Any, List, Tuple
+from typing import Any, List, Optional, Tuple
 
 from snr import AbstractFactory, TaskType, World
 from snr.std_mods.sim import (
@@ -32,7 +34,14 @@ from snr.std_mods.sim import (
     wheel_command,
 )
 from snr.utils import MockNode, SNRTestCase
-from tests.examples_support import ROOT, example_path, load_module, run_script, script_env
+from tests.examples_support import (
+    ROOT,
+    StartedScript,
+    example_path,
+    load_module,
+    script_env,
+    start_script,
+)
 from tests.quiet import captured_logs
 
 wall_follower: Any = load_module(
@@ -179,16 +188,28 @@ def summary(pattern: str, text: str) -> Tuple[float, float]:
     return simulated_s, where
 
 
+def _start_sim_demo() -> Tuple[Path, Optional[StartedScript]]:
+    """``python -m snr demo --sim`` for half a second in a temp folder, headless."""
+    folder = Path(tempfile.mkdtemp(prefix="snr-sim-demo-"))
+    if not HAS_PYGAME:
+        return folder, None
+    env = script_env({"SDL_VIDEODRIVER": "dummy", "PYGAME_HIDE_SUPPORT_PROMPT": "1"})
+    # Half a second, not the default 15: enough to set off and draw frames.
+    command = ["-m", "snr", "demo", "--sim", "--seconds", "0.5"]
+    return folder, start_script(command, cwd=str(folder), env=env)
+
+
+# Started when this module is imported; it runs while other tests do.
+SIM_DEMO_FOLDER, SIM_DEMO = _start_sim_demo()
+
+
 @unittest.skipUnless(HAS_PYGAME, "pygame is not installed: the demo would draw nothing")
 class TestSimDemo(SNRTestCase):
     def test_python_m_snr_demo_sim_drives_the_rover_and_says_where_the_frames_are(self) -> None:
-        folder = Path(self.temp_file("demo"))
-        folder.mkdir()
-        env = script_env({"SDL_VIDEODRIVER": "dummy", "PYGAME_HIDE_SUPPORT_PROMPT": "1"})
-        # Half a second, not the default 15: enough to set off and draw frames.
-        result = run_script(
-            ["-m", "snr", "demo", "--sim", "--seconds", "0.5"], cwd=str(folder), env=env
-        )
+        assert SIM_DEMO is not None
+        folder = SIM_DEMO_FOLDER
+        result = SIM_DEMO.result()
+        self.addCleanup(shutil.rmtree, folder, True)
         self.assertEqual(result.returncode, 0, result.stderr)
         lines = result.stdout.splitlines()
         self.assertTrue(lines[0].startswith("SNR demo --sim: "), result.stdout)

@@ -6,7 +6,7 @@ import shutil
 import tempfile
 import unittest
 
-from tests.examples_support import ROOT, run_script
+from tests.examples_support import ROOT, StartedScript, start_script
 
 README = os.path.join(ROOT, "README.md")
 
@@ -14,6 +14,22 @@ README = os.path.join(ROOT, "README.md")
 def without_ages(text: str) -> str:
     """``text`` with every page's age, e.g. ``(0.0 s ago)``, replaced by ``(AGE)``."""
     return re.sub(r"\(\d+\.\d s ago\)", "(AGE)", text).strip()
+
+
+def _start_readme_robot() -> "tuple[str, StartedScript]":
+    """The README's robot, written to a temp folder and started (it runs for 1 s)."""
+    with open(README, encoding="utf-8") as f:
+        code = re.search(r"```python\n(.*?)```", f.read(), re.S)
+    assert code is not None
+    folder = tempfile.mkdtemp(prefix="snr-readme-")
+    path = os.path.join(folder, "robot.py")
+    with open(path, "w", encoding="utf-8") as f:
+        f.write(code.group(1))
+    return folder, start_script([path, "robot"], cwd=folder, timeout_s=20)
+
+
+# Started when this module is imported; it runs while other tests do.
+README_FOLDER, README_ROBOT = _start_readme_robot()
 
 
 class TestReadme(unittest.TestCase):
@@ -45,14 +61,8 @@ class TestReadme(unittest.TestCase):
         self.assertEqual(before.count("\n"), 0, "only the title comes before the commands")
 
     def test_example_robot_runs_as_shown(self) -> None:
-        code = re.search(r"```python\n(.*?)```", self.text, re.S)
-        assert code is not None
-        folder = tempfile.mkdtemp(prefix="snr-readme-")
-        self.addCleanup(shutil.rmtree, folder, True)
-        path = os.path.join(folder, "robot.py")
-        with open(path, "w", encoding="utf-8") as f:
-            f.write(code.group(1))
-        result = run_script([path, "robot"], cwd=folder, timeout_s=20)
+        result = README_ROBOT.result()
+        self.addCleanup(shutil.rmtree, README_FOLDER, True)
         self.assertEqual(result.returncode, 0, result.stderr)
         # The output block after the code, exactly, but for the pages' ages.
         shown = re.search(r"```python\n.*?```.*?```text\n(.*?)```", self.text, re.S)
