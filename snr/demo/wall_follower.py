@@ -10,9 +10,11 @@ Run it (a window if you have a screen, else PNG frames in ``sim_frames/``)::
     python examples/lessons/wall_follower.py --seconds 30
     python examples/lessons/wall_follower.py --seconds 5 --frames my_frames
 
-``python -m snr demo --sim`` runs this same file: a copy ships inside the
-package as ``snr/demo/wall_follower.py``, and ``tests/test_lessons.py``
-checks the two are the same, word for word.
+This file ships inside the package, so ``python -m snr demo --sim`` runs it
+from an installed SNR too; ``examples/lessons/wall_follower.py`` runs it from
+the lessons' folder. To change the controller, copy this file next to your
+own code (``python -c "import snr.demo.wall_follower as m; print(m.__file__)"``
+says where it is) and edit the copy.
 """
 
 from __future__ import annotations
