@@ -27,8 +27,8 @@ from snr import (
     RemoteConsole,
     TimeoutLoopFactory,
 )
-from snr.std_mods.io.console import MAX_CONSOLES, _TokenThrottle
-from snr.std_mods.io.console_commands import CommandProcessorFactory
+from snr.std_mods.io.command_processor import CommandProcessorFactory
+from snr.std_mods.io.command_receiver import MAX_CONSOLES, _TokenThrottle
 from snr.std_mods.io.console_protocol import (
     MAX_LINE_BYTES,
     MAX_REPLY_BYTES,
@@ -355,7 +355,7 @@ class TestToken(unittest.TestCase):
         quick = functools.partial(_TokenThrottle, first_delay_s=0.05)  # 0.25 s by default
         with (
             mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}),
-            mock.patch("snr.std_mods.io.console._TokenThrottle", quick),
+            mock.patch("snr.std_mods.io.command_receiver._TokenThrottle", quick),
         ):
             with self.assertLogs("snr.robot", "WARNING") as logs:
                 with NodeInThread([], token="s3cret-word") as run:

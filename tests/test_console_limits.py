@@ -18,13 +18,13 @@ from typing import List, Optional
 from unittest import mock
 
 from snr import CommandReceiverFactory, ConfigError, RemoteConsole, TimeoutLoopFactory
-from snr.std_mods.io.console import (
+from snr.std_mods.io.command_processor import REPLY_BUDGET_CHARS
+from snr.std_mods.io.command_receiver import (
     MAX_SEND_BUFFER_BYTES,
     MAX_UNANSWERED,
     CommandReceiverLoop,
     _TokenThrottle,
 )
-from snr.std_mods.io.console_commands import REPLY_BUDGET_CHARS
 from snr.std_mods.io.console_protocol import (
     TOKEN_ENV_VAR,
     ConsoleConnectionError,
@@ -36,7 +36,7 @@ from tests.console_helpers import NodeInThread, wait_for
 from tests.quiet import captured_logs
 
 TOKEN = "s3cret-word"
-THROTTLE = "snr.std_mods.io.console._TokenThrottle"  # wrong tokens: first wait 0.25 s
+THROTTLE = "snr.std_mods.io.command_receiver._TokenThrottle"  # wrong tokens: first wait 0.25 s
 
 
 def connect_until_in(run: NodeInThread, token: Optional[str], timeout_s: float) -> RemoteConsole:
@@ -201,7 +201,7 @@ class TestFloods(unittest.TestCase):
         # The flooder is dropped after 0.25 s without taking a reply (2 s by default).
         with (
             self.assertLogs("snr.robot", logging.WARNING) as logs,
-            mock.patch("snr.std_mods.io.console._SEND_TIMEOUT_S", 0.25),
+            mock.patch("snr.std_mods.io.command_receiver._SEND_TIMEOUT_S", 0.25),
             NodeInThread([]) as run,
             run.console() as operator,
         ):
@@ -240,7 +240,7 @@ class TestFloods(unittest.TestCase):
     def test_pipelined_commands_are_answered_in_order_a_few_at_a_time(self) -> None:
         # Without the receiver's periodic wake-up, a line left waiting after
         # its wake-up was read would wait for good: read_frames would time out.
-        with mock.patch("snr.std_mods.io.console._POLL_S", 60.0), NodeInThread([]) as run:
+        with mock.patch("snr.std_mods.io.command_receiver._POLL_S", 60.0), NodeInThread([]) as run:
             with socket.create_connection((run.host, run.port), timeout=5) as sock:
                 lines = [f"task store_page k {i}" for i in range(5 * MAX_UNANSWERED)]
                 sock.sendall("".join(line + "\n" for line in lines).encode())

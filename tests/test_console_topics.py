@@ -24,7 +24,7 @@ from snr import (
     TaskType,
     ThreadLoop,
 )
-from snr.std_mods.io.console_commands import CommandProcessorEndpoint, CommandProcessorFactory
+from snr.std_mods.io.command_processor import CommandProcessorEndpoint, CommandProcessorFactory
 from snr.std_mods.io.console_protocol import Status
 from snr.utils.mock_node import MockNode
 from tests.comms_helpers import free_port

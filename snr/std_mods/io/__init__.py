@@ -5,14 +5,12 @@ Example::
     from snr.std_mods.io import ControllerLoopFactory, SimulatedJoystick
 """
 
-from snr.std_mods.io.console import (
+from snr.std_mods.io.command_processor import (
+    CommandProcessorEndpoint,
+)
+from snr.std_mods.io.command_receiver import (
     CommandReceiverFactory,
     CommandReceiverLoop,
-    LocalConsole,
-    LocalConsoleFactory,
-)
-from snr.std_mods.io.console_commands import (
-    CommandProcessorEndpoint,
 )
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
@@ -40,6 +38,10 @@ from snr.std_mods.io.joystick import (
 from snr.std_mods.io.live_view import (
     FoxgloveBridge,
     FoxgloveBridgeFactory,
+)
+from snr.std_mods.io.local_console import (
+    LocalConsole,
+    LocalConsoleFactory,
 )
 from snr.std_mods.io.recorder import (
     RecorderEndpoint,

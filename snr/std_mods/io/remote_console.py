@@ -21,7 +21,7 @@ from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequen
 
 from snr.prelude import WireFormatError
 from snr.prelude.os_errors import explain_os_error
-from snr.std_mods.io.console_commands import COMMANDS
+from snr.std_mods.io.command_table import COMMANDS
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
     MAX_LINE_BYTES,

@@ -16,8 +16,9 @@ the console's `ConsoleSession`. Thesis 6.4.3 lists the commands::
     hz KEY [WINDOW_S]               how often a key is stored, and the jitter
     help [command]                  the commands, or one command in detail
 
-Consoles are `ConsoleLoop` subclasses: each adds its own processor when it
-begins, so several consoles never run one command twice.
+The commands and their help are listed in ``command_table.py``; consoles
+are ``ConsoleLoop`` subclasses (``console_loop.py``), each of which adds its own
+processor when it begins, so several consoles never run one command twice.
 
 Example::
 
@@ -30,7 +31,6 @@ import contextlib
 import logging
 import reprlib
 import time
-from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 
@@ -39,7 +39,6 @@ from snr.core.logs import RepeatFilter
 from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
     AbstractComponent,
-    AbstractFactory,
     AbstractNode,
     ComponentName,
     DataKey,
@@ -52,7 +51,9 @@ from snr.prelude import (
 )
 from snr.prelude.errors import closest_match
 from snr.std_mods.comms.link import CommsLoop
+from snr.std_mods.io.command_table import COMMANDS, commands_table
 from snr.std_mods.io.console_protocol import Reply, Status, parse_values, split_command
+from snr.std_mods.io.console_session import ConsoleSession
 from snr.std_mods.io.key_watch import (
     ECHO_DEFAULT_PAGES,
     ECHO_MAX_PAGES,
@@ -63,86 +64,12 @@ from snr.std_mods.io.key_watch import (
 )
 
 __all__ = [
-    "COMMANDS",
     "REPLY_BUDGET_CHARS",
     "REPLY_BUDGET_S",
     "CommandProcessorEndpoint",
     "CommandProcessorFactory",
-    "ConsoleLoop",
-    "ConsoleSession",
 ]
 
-
-@dataclass(frozen=True)
-class CommandHelp:
-    """How to type one command, and what it does (for ``help``)."""
-
-    usage: str
-    summary: str
-    details: str = ""
-
-
-COMMANDS: Dict[str, CommandHelp] = {
-    "exit": CommandHelp("exit", "Stop the node and close this console."),
-    "task": CommandHelp(
-        "task <type> <name> [values...]",
-        "Schedule a task on the node.",
-        "Types: event, store_page (alias store_data), process_data, reload, terminate.\n"
-        'Values are JSON where they parse (1, 2.5, true, null, "two words", [1, 2],\n'
-        '{"k": 1}), otherwise plain words (A, hello). Examples:\n'
-        "  task event button_pressed A\n"
-        "  task store_page depth_m 3.2\n"
-        "  task terminate done",
-    ),
-    "reload": CommandHelp(
-        "reload all|<component>",
-        "Reload a component's code from disk; its factory's state is kept.",
-        "`reload all` reloads every component whose factory names modules to reload\n"
-        "(super().__init__(my_module)). If the new code fails to load (a syntax error,\n"
-        "an exception), the old version keeps running and the reply says why.",
-    ),
-    "list": CommandHelp(
-        "list commands|endpoints", "List these commands, or the node's components."
-    ),
-    "dump": CommandHelp(
-        "dump profiler|datastore [KEY|PREFIX*]",
-        "Show handler timings, or the newest page of every key.",
-        "`dump datastore` shows every key with a short preview of its value, up to the\n"
-        "reply's limit. `dump datastore KEY` shows one key's value in full;\n"
-        "`dump datastore PREFIX*` shows the keys that start with PREFIX.",
-    ),
-    "stats": CommandHelp(
-        "stats",
-        "Show the node's queue and every comms link: pages sent, received, dropped.",
-        "Dropped pages are counted per link and per key (a slow peer whose backlog was\n"
-        "full); 'heard' is how long ago the peer last sent anything (a beat at least).",
-    ),
-    "graph": CommandHelp(
-        "graph [text|mermaid|dot]",
-        "Show the node's components, the data keys each stores and handles, and its links.",
-        "`text` (the default) is for reading here; `mermaid` can be pasted into a\n"
-        "Markdown file (GitHub draws it), `dot` into Graphviz. Keys read but never\n"
-        "stored, or stored but never read, are marked (!). `python -m snr graph main.py`\n"
-        "draws the whole system without running it.",
-    ),
-    "echo": CommandHelp(
-        "echo KEY [N]",
-        "Show the next pages stored under KEY (snr-console repeats it until Ctrl-C).",
-        f"One reply carries at most N pages (default {ECHO_DEFAULT_PAGES}, at most "
-        f"{ECHO_MAX_PAGES}): it comes\nwhen N pages have come, a quarter second after the "
-        "first, or after 1 s\nwithout one. Pages that come between two `echo KEY` wait "
-        "for the next one,\nso repeating it shows every page.",
-    ),
-    "hz": CommandHelp(
-        "hz KEY [WINDOW_S]",
-        "Measure how often KEY is stored, and the jitter of the time between pages.",
-        f"Counts pages for WINDOW_S seconds (default {HZ_DEFAULT_WINDOW_S:g}, at most "
-        f"{HZ_MAX_WINDOW_S:g}), then replies with\nthe rate and the period's mean, min, max "
-        "and standard deviation, timed when\nthis node stores each page.",
-    ),
-    "help": CommandHelp("help [command]", "Show the commands, or one command in detail."),
-}
-"""Every console command, in the order ``help`` lists them."""
 
 _LIST_CHOICES = ["commands", "endpoints"]
 _DUMP_CHOICES = ["profiler", "datastore"]
@@ -183,24 +110,6 @@ _whole_values.maxlist = _whole_values.maxtuple = 2000
 _whole_values.maxdict = _whole_values.maxset = 2000
 
 
-class ConsoleSession(ABC):
-    """One console the node is talking to: where a command's reply goes.
-
-    ``send`` is called on the node's thread, so it must be quick and must
-    never block or raise, even when the console has gone away.
-
-    Example::
-
-        class PrintSession(ConsoleSession):
-            def send(self, reply: Reply) -> None:
-                print(reply.text)
-    """
-
-    @abstractmethod
-    def send(self, reply: Reply) -> None:
-        """Deliver ``reply`` to the console (a ``BYE`` reply also closes it)."""
-
-
 @dataclass
 class _Outcome:
     status: Status
@@ -238,6 +147,7 @@ class CommandProcessorEndpoint(Endpoint):
         self, factory: CommandProcessorFactory, parent: AbstractNode, task_name: TaskName
     ) -> None:
         super().__init__(factory, parent, factory.name)
+        self.console_name = factory.console
         self.watches = KeyWatches(self, f"{task_name}:tick", _preview)
         self.task_handlers = {
             (TaskType.event, task_name): self.on_command,
@@ -382,7 +292,7 @@ class CommandProcessorEndpoint(Endpoint):
             names = [
                 name
                 for name, component in node.components.items()
-                if component.factory.reload_targets and not _is_console_part(component)
+                if component.factory.reload_targets and not _is_console_part(component, node)
             ]
             if not names:
                 return _ok(
@@ -410,7 +320,7 @@ class CommandProcessorEndpoint(Endpoint):
                 "it the node would run on deaf. To stop the node, type `exit`."
             )
         component = self.parent.components.get(name)
-        if component is not None and _is_console_part(component):
+        if component is not None and _is_console_part(component, self.parent):
             self._refuse(
                 f"Refused: {name!r} is part of a console; removing it would cut off the "
                 "consoles that use it, maybe this one. Type `quit` to leave this console, "
@@ -444,7 +354,7 @@ class CommandProcessorEndpoint(Endpoint):
                 f"No component named {name!r} in node {node.role!r}.{hint} "
                 f"Components: {self._component_names()}."
             )
-        if _is_console_part(component):
+        if _is_console_part(component, self.parent):
             self._refuse(
                 f"{name!r} is part of the console, which cannot reload itself while it "
                 "carries this command. Restart the node to load new console code."
@@ -471,7 +381,7 @@ class CommandProcessorEndpoint(Endpoint):
         """``list commands|endpoints``."""
         choice = _one_choice("list", args, _LIST_CHOICES)
         if choice == "commands":
-            return _ok(_commands_table())
+            return _ok(commands_table())
         lines = [f"Components of node {self.parent.role!r} ({len(self.parent.components)}):"]
         width = max((len(name) for name in self.parent.components), default=0)
         for name, component in self.parent.components.items():
@@ -586,7 +496,7 @@ class CommandProcessorEndpoint(Endpoint):
         """``help [command]``."""
         topic = args.strip().lower()
         if not topic:
-            return _ok("Commands (type `help <command>` for details):\n" + _commands_table())
+            return _ok("Commands (type `help <command>` for details):\n" + commands_table())
         entry = COMMANDS.get(topic)
         if entry is None:
             guess = closest_match(topic, COMMANDS)
@@ -615,59 +525,38 @@ class CommandProcessorEndpoint(Endpoint):
 class CommandProcessorFactory(EndpointFactory):
     """Builds a `CommandProcessorEndpoint` (consoles add one for themselves).
 
+    Args:
+        name: the endpoint's name.
+        task_name: the name of the command tasks it handles.
+        console: the name of the console loop it serves, if any; the
+            console refuses to remove or reload that loop (or itself).
+
     Example::
 
         tasks.add_component(CommandProcessorFactory("console_commands", "console:console"))
     """
 
-    def __init__(self, name: ComponentName, task_name: TaskName) -> None:
+    def __init__(
+        self, name: ComponentName, task_name: TaskName, console: Optional[ComponentName] = None
+    ) -> None:
         super().__init__()
         self.name = name
         self.task_name = task_name
+        self.console = console
 
     def get(self, parent: AbstractNode) -> CommandProcessorEndpoint:
         return CommandProcessorEndpoint(self, parent, self.task_name)
 
 
-class ConsoleLoop(ThreadLoop):
-    """Base of the consoles: adds a processor at ``begin`` and submits lines to it.
-
-    Subclasses read lines in ``loop()`` and call ``self.submit(line, session)``.
-
-    Example::
-
-        class MyConsole(ConsoleLoop):
-            def loop(self) -> None:
-                self.submit(read_a_line(), self.session)
-    """
-
-    # For the graph: a console stores only what its user types (`task store_page ...`).
-    produces: Sequence[DataKey] = ()
-    reads: Sequence[DataKey] = ()
-
-    def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:
-        super().__init__(factory, parent, name)
-        self.processor_name = f"{name}_commands"
-        self.command_task_name = f"console_command:{name}"
-
-    def begin(self) -> None:
-        """Ask the node to add this console's processor (if it has none yet).
-
-        The add task is queued before any command this loop can submit, so
-        the processor exists by the time the first command runs.
-        """
-        if self.processor_name not in self.parent.components:
-            factory = CommandProcessorFactory(self.processor_name, self.command_task_name)
-            self.schedule(tasks.add_component(factory))
-
-    def submit(self, line: str, session: ConsoleSession) -> None:
-        """Queue a command line; the processor replies to ``session``."""
-        self.schedule(Task(TaskType.event, self.command_task_name, [line, session]))
-
-
 # -- module helpers ---------------------------------------------------------------
-def _is_console_part(component: AbstractComponent) -> bool:
-    return isinstance(component, (ConsoleLoop, CommandProcessorEndpoint))
+def _is_console_part(component: AbstractComponent, node: AbstractNode) -> bool:
+    """A command processor, or a console loop one of them serves."""
+    if isinstance(component, CommandProcessorEndpoint):
+        return True
+    return any(
+        isinstance(other, CommandProcessorEndpoint) and other.console_name == component.name
+        for other in list(node.components.values())
+    )
 
 
 def _no_arguments(command: str, args: str) -> None:
@@ -699,11 +588,6 @@ def _number(word: str, command: str, name: str, low: float, high: float, kind: t
             f"Usage: {COMMANDS[command].usage}."
         )
     return float(value)
-
-
-def _commands_table() -> str:
-    width = max(len(entry.usage) for entry in COMMANDS.values())
-    return "\n".join(f"  {e.usage:<{width}}  {e.summary}" for e in COMMANDS.values())
 
 
 def _describe_component(component: AbstractComponent) -> str:

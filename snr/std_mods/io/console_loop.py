@@ -1,0 +1,62 @@
+"""`ConsoleLoop`: the base of every console (remote over TCP, or local on stdin).
+
+A console only turns the lines a user types into tasks; the command
+processor it adds to the node runs them on the node's thread. Each console
+adds its own processor when it begins, so several consoles never run one
+command twice.
+
+Example::
+
+    class MyConsole(ConsoleLoop):
+        def loop(self) -> None:
+            self.submit(read_a_line(), self.session)
+"""
+
+from __future__ import annotations
+
+from typing import Sequence
+
+from snr.core import ThreadLoop, tasks
+from snr.prelude import AbstractFactory, AbstractNode, ComponentName, DataKey, Task, TaskType
+from snr.std_mods.io.command_processor import CommandProcessorFactory
+from snr.std_mods.io.console_session import ConsoleSession
+
+__all__ = ["ConsoleLoop"]
+
+
+class ConsoleLoop(ThreadLoop):
+    """Base of the consoles: adds a processor at ``begin`` and submits lines to it.
+
+    Subclasses read lines in ``loop()`` and call ``self.submit(line, session)``.
+
+    Example::
+
+        class MyConsole(ConsoleLoop):
+            def loop(self) -> None:
+                self.submit(read_a_line(), self.session)
+    """
+
+    # For the graph: a console stores only what its user types (`task store_page ...`).
+    produces: Sequence[DataKey] = ()
+    reads: Sequence[DataKey] = ()
+
+    def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:
+        super().__init__(factory, parent, name)
+        self.processor_name = f"{name}_commands"
+        self.command_task_name = f"console_command:{name}"
+
+    def begin(self) -> None:
+        """Ask the node to add this console's processor (if it has none yet).
+
+        The add task is queued before any command this loop can submit, so
+        the processor exists by the time the first command runs.
+        """
+        if self.processor_name not in self.parent.components:
+            factory = CommandProcessorFactory(
+                self.processor_name, self.command_task_name, console=self.name
+            )
+            self.schedule(tasks.add_component(factory))
+
+    def submit(self, line: str, session: ConsoleSession) -> None:
+        """Queue a command line; the processor replies to ``session``."""
+        self.schedule(Task(TaskType.event, self.command_task_name, [line, session]))
