@@ -51,7 +51,7 @@ from snr.prelude import (
     TaskType,
 )
 from snr.prelude.errors import closest_match
-from snr.std_mods.comms.link import CommsLoop
+from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.io.console_protocol import Reply, Status, parse_values, split_command
 from snr.std_mods.io.key_watch import (
     ECHO_DEFAULT_PAGES,
