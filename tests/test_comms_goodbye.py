@@ -13,7 +13,7 @@ import unittest
 from typing import Callable, List
 
 from snr import Config, Mode, SocketsPair, WireFormatError
-from snr.std_mods.comms.link import CommsLoop
+from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.comms.wire import HEADER_BYTES, Bye, Hello, decode_body, encode_bye
 from tests.comms_helpers import free_port
 from tests.test_comms_local import LocalNodes, connect_when_listening

@@ -31,8 +31,9 @@ from snr import (
     tasks,
 )
 from snr.prelude import ConfigError
+from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.comms.io_loop import IOLoop
-from snr.std_mods.comms.link import CommsLoop, Outbox
+from snr.std_mods.comms.link import Outbox
 from snr.std_mods.comms.pipe import PipeTransport
 from snr.std_mods.comms.wire import encode_hello
 from tests.comms_helpers import free_port

@@ -31,7 +31,7 @@ from snr import (
     TaskType,
     ThreadLoop,
 )
-from snr.std_mods.comms.link import CommsLoop
+from snr.std_mods.comms.comms_loop import CommsLoop
 from tests.comms_helpers import free_port
 from tests.quiet import capture_test_logs
 from tests.test_comms_local import LocalNodes, connect_when_listening

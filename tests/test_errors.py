@@ -61,7 +61,7 @@ from snr.core import MissingKeyHints
 from snr.prelude.errors import not_serializable_error
 from snr.prelude.os_errors import OsAction, explain_os_error
 from snr.std_mods.codec import page_json, page_to_line
-from snr.std_mods.comms import serial_link
+from snr.std_mods.comms import serial_port
 from snr.std_mods.comms.board_protocol import compact_line
 from snr.std_mods.comms.sockets import _listen as sockets_listen
 from snr.std_mods.io.console_protocol import ConsoleConnectionError
@@ -835,15 +835,15 @@ class TestOsErrors(unittest.TestCase):
         except ImportError:  # pragma: no cover - pyserial is an extra
             self.skipTest("pyserial is not installed")
         missing = "/dev/snr-no-such-port"
-        with mock.patch.object(serial_link, "available_ports", lambda: ["/dev/ttyACM0"]):
+        with mock.patch.object(serial_port, "available_ports", lambda: ["/dev/ttyACM0"]):
             with self.assertRaises(CommsError) as ctx:
-                serial_link.open_serial_port(missing, 115200, 0.1, 0.1, "urov")
+                serial_port.open_serial_port(missing, 115200, 0.1, 0.1, "urov")
         message = str(ctx.exception).replace(missing, "/dev/ttyUSB0")
         self.assertEqual(message, shown_messages(self.section, "### 12b.")[1])
 
     def test_12b_a_serial_port_not_permitted(self) -> None:
         denied = PermissionError(errno.EACCES, "Permission denied", "/dev/ttyACM0")
-        message = str(serial_link.describe_open_error("/dev/ttyACM0", denied, "urov"))
+        message = str(serial_port.describe_open_error("/dev/ttyACM0", denied, "urov"))
         self.assertEqual(message, shown_messages(self.section, "### 12b.")[2])
 
     def test_every_place_that_listens_words_a_port_in_use_the_same(self) -> None:

@@ -5,7 +5,7 @@ Example::
     from snr.std_mods.comms import SerialLinkFactory
 """
 
-from snr.std_mods.comms.link import (
+from snr.std_mods.comms.comms_loop import (
     COMMS_CONNECTED,
     COMMS_DISCONNECTED,
     CommsLoop,
@@ -14,7 +14,7 @@ from snr.std_mods.comms.pipe import (
     PipeLoop,
     PipeLoopFactory,
 )
-from snr.std_mods.comms.serial_link import (
+from snr.std_mods.comms.serial_link_loop import (
     SerialLinkFactory,
     SerialLinkLoop,
 )

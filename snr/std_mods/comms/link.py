@@ -1,31 +1,17 @@
-"""Links and the comms loop: what pipe and socket comms have in common.
+"""`Link`: one live connection to one peer node, and the `Outbox` of frames waiting for it.
 
-A `Link` is one live connection to one peer node. It owns a *transport* (a
-TCP socket or a pipe end) and an `Outbox` of frames waiting to be written,
-and has no thread of its own: the node's one `IOLoop` thread reads the
-transport when bytes arrive (cutting them into frames and handing pages to
-its `CommsLoop`) and writes queued frames when the transport has room, for
+A `Link` owns a *transport* (a TCP socket or a pipe end, see `Transport`) and
+an `Outbox` of frames waiting to be written, and has no thread of its own:
+the node's one `IOLoop` thread reads the transport when bytes arrive
+(cutting them into frames and handing pages to its `CommsLoop`, in
+``comms_loop.py``) and writes queued frames when the transport has room, for
 every link of the node together.
 
-A `CommsLoop` (thesis 6.4.1) is the component a node gets: it forwards every
-page stored under its keys to each open link, and stores every page a link
-receives, with the page's original origin and time.
+Example (a `CommsLoop` opens its links with ``open_link``)::
 
-How a page travels::
-
-    node thread                          peer's I/O thread         peer's node thread
-    store_page → CommsLoop.forward_page  →  frame bytes  →  decode → schedule(store_page)
-                 (encodes the very page       (written at once, or     → datastore
-                  that was stored)             by the I/O thread)      → process_data
-
-Example (what `SocketsPair` and `PipeLoopFactory` build for you)::
-
-    class MyLoop(CommsLoop):
-        def begin(self) -> None:
-            self.open_link(my_transport)
-
-        def loop(self) -> None:
-            self.wait_s(0.5)
+    link = comms_loop.open_link(transport)
+    link.send(encode_page(page), key=page.key)
+    link.close()              # flush, then end the connection
 """
 
 from __future__ import annotations
@@ -37,6 +23,7 @@ import selectors
 import threading
 import time
 from typing import (
+    TYPE_CHECKING,
     Any,
     Callable,
     Deque,
@@ -44,76 +31,26 @@ from typing import (
     List,
     Optional,
     Protocol,
-    Sequence,
     Set,
-    Tuple,
-    Union,
 )
 
-from snr.core import ThreadLoop, tasks
 from snr.core.logs import LossReport, RepeatFilter
-from snr.prelude import (
-    AbstractFactory,
-    AbstractNode,
-    CommsError,
-    ComponentName,
-    ConfigError,
-    DataKey,
-    NotSerializableError,
-    Page,
-    SomeTasks,
-    Task,
-    TaskId,
-    TaskType,
-    WireFormatError,
-)
+from snr.prelude import CommsError, DataKey, Page, WireFormatError
 from snr.std_mods.comms.io_loop import IOLoop, IOTimer
 from snr.std_mods.comms.link_hints import watch_link
 from snr.std_mods.comms.wire import (
     Bye,
     FrameDecoder,
     Hello,
-    Message,
-    decode_body,
     encode_beat,
     encode_bye,
     encode_hello,
-    encode_page,
 )
 
-__all__ = [
-    "COMMS_CONNECTED",
-    "COMMS_DISCONNECTED",
-    "DEFAULT_DEAD_AFTER_S",
-    "DEFAULT_MAX_BACKLOG_BYTES",
-    "CommsLoop",
-    "Keys",
-    "Link",
-    "LinkState",
-    "Outbox",
-    "Transport",
-    "normalize_keys",
-]
+if TYPE_CHECKING:
+    from snr.std_mods.comms.comms_loop import CommsLoop
 
-COMMS_CONNECTED = "comms_connected"
-"""Event a comms loop schedules when a link opens: ``[component name, peer address]``.
-
-Example::
-
-    self.task_handlers = {(TaskType.event, COMMS_CONNECTED): self.on_connected}
-"""
-
-COMMS_DISCONNECTED = "comms_disconnected"
-"""Event a comms loop schedules when a link closes: ``[component name, peer address]``."""
-
-DEFAULT_MAX_BACKLOG_BYTES = 8 * 1024 * 1024
-"""How many bytes of frames may wait for one slow peer before pages are dropped (8 MiB)."""
-
-DEFAULT_DEAD_AFTER_S = 4.0
-"""Seconds of silence after which a peer that promised beats counts as lost."""
-
-Keys = Union[DataKey, Sequence[DataKey], None]
-"""What a comms factory takes as ``keys``: one data key, a list of them, or None."""
+__all__ = ["Link", "LinkState", "Outbox", "Transport"]
 
 _MAX_CHUNK_BYTES = 1024 * 1024  # queued frames are joined into chunks up to this size
 _BURST_S = 0.0002  # a frame this soon after the last send joins a batch for the I/O thread
@@ -122,31 +59,6 @@ _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
 _SHOWN_BAD_FRAMES = 5  # per link, log the first few bad frames in full, then a count every 5 s
 _MAX_KEYS_NOTED = 1000  # DEBUG: how many received keys a link remembers for the hints
-
-
-def normalize_keys(keys: Keys, where: str) -> Tuple[str, ...]:
-    """``keys`` as a tuple of data keys: a single key, a list of keys, or None.
-
-    Example::
-
-        normalize_keys("depth", "client")             # ('depth',)
-        normalize_keys(["a", "b"], "client")          # ('a', 'b')
-    """
-    if keys is None:
-        return ()
-    listed = [keys] if isinstance(keys, str) else keys
-    if not isinstance(listed, (list, tuple)):
-        raise ConfigError(
-            f"{where} got keys={keys!r} ({type(keys).__name__}). Give one data key or "
-            'a list of them, e.g. ["controller_data"].'
-        )
-    for key in listed:
-        if not isinstance(key, str) or not key:
-            raise ConfigError(
-                f"{where} got {key!r} among its keys; every key must be a non-empty "
-                'string naming data to forward, e.g. ["controller_data"].'
-            )
-    return tuple(dict.fromkeys(listed))  # without duplicates, in order
 
 
 class Transport(Protocol):
@@ -450,7 +362,7 @@ class Link:
                 "(it was never started, or it has stopped)."
             )
         self.owner = owner
-        self.io = io
+        self.io: IOLoop = io
         self.transport = transport
         self.peer_role: Optional[str] = None
         self.peer_beat_s: Optional[float] = None
@@ -851,241 +763,3 @@ class Link:
             return
         what = f"Bad frames from {self.label}"
         repeats.report("bad frame", what, logging.WARNING, message, *args)
-
-
-class CommsLoop(ThreadLoop):
-    """Base of the comms components: forwards pages by key over its links.
-
-    Subclasses open links (``open_link``) from ``begin()`` or ``loop()``:
-    a sockets server per accepted client, a sockets client per connection,
-    a pipe loop once. Pages stored under ``keys`` go to every open link,
-    except back to the link they came from or to the node they came from.
-
-    Example::
-
-        SocketsPair(("localhost", 9000)).client(["controller_data"])  # builds one
-
-    Attributes:
-        keys: the data keys forwarded to peers.
-        links: the links not yet closed (read-only tuple, replaced on change).
-        dead_after_s: a peer that promised beats and is silent this long is lost.
-        beat_s: how often a quiet link sends a beat (a quarter of ``dead_after_s``,
-            at most 1 s); promised to the peer in the hello.
-    """
-
-    hello_timeout_s: float = 5.0
-    """A connection that sends nothing at all for this long is closed."""
-
-    recovered_after_s: float = 1.0
-    """After drops, a link logs "Recovered" once nothing was dropped for this long."""
-
-    checks_keys_per_link = True
-    """In DEBUG mode its keys are checked once a link is up (link_hints.py), not at start."""
-
-    def __init__(
-        self,
-        factory: AbstractFactory,
-        parent: AbstractNode,
-        name: ComponentName,
-        keys: Sequence[DataKey],
-        max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
-        dead_after_s: float = DEFAULT_DEAD_AFTER_S,
-    ) -> None:
-        super().__init__(factory, parent, name)
-        if not dead_after_s > 0:
-            raise ConfigError(
-                f"{type(self).__name__} {name!r} got dead_after_s={dead_after_s!r}; give the "
-                "seconds of silence after which a peer counts as lost, e.g. 4.0."
-            )
-        self.keys: Tuple[DataKey, ...] = tuple(keys)
-        self.max_backlog_bytes = max_backlog_bytes
-        self.dead_after_s = dead_after_s
-        self.beat_s = min(1.0, dead_after_s / 4)
-        self.links: Tuple[Link, ...] = ()
-        self.io_loop: Optional[IOLoop] = None  # the node's, while this component runs
-        self._links_lock = threading.Lock()
-        self._opened: List[Link] = []  # every link that may not have ended yet
-        self._forwarded = frozenset(self.keys)
-        # Pages a link delivered under a forwarded key, until forward_page sees
-        # them: {id(page): (page, link)} so they are not sent back to that link.
-        self._arrived: Dict[int, Tuple[Page, Link]] = {}
-        self._unsent_reported = False
-        self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
-        self.task_handlers = {(TaskType.store_page, key): self.forward_page for key in self.keys}
-        if parent.profiler is not None:  # the profile also tells what was sent and dropped
-            parent.profiler.add_report(name, self.stats_text)
-
-    # -- node thread: sending -------------------------------------------------
-    def forward_page(self, task: Task, key: TaskId) -> SomeTasks:
-        """Send the page just stored to every open link it did not come from."""
-        page = task.val_list[0] if task.val_list else None
-        if not isinstance(page, Page):
-            return None  # the node core has already reported the bad task
-        arrived = self._arrived.pop(id(page), None)
-        source = arrived[1] if arrived is not None and arrived[0] is page else None
-        targets = [
-            link
-            for link in self.links
-            if link is not source and link.state is LinkState.OPEN and link.peer_role != page.origin
-        ]
-        if not targets:
-            if source is None and not any(link.state is LinkState.OPEN for link in self.links):
-                self._report_unsent(page)
-            return None
-        try:
-            frame = encode_page(page)
-        except NotSerializableError as error:
-            self._report_unsendable(page, error)
-            return None
-        for link in targets:
-            link.send(frame, True, page.key)  # a drop is counted and reported by the link
-        return None
-
-    def _report_unsent(self, page: Page) -> None:
-        if not self._unsent_reported:
-            self._unsent_reported = True
-            self.info(
-                "No peer is connected, so the page under %r (and any others stored "
-                "before a peer connects) is not sent. Pages are sent live, never late.",
-                page.key,
-            )
-
-    def _report_unsendable(self, page: Page, error: NotSerializableError) -> None:
-        kind = (page.key, type(page.data))
-        if kind not in self._unsendable_reported:
-            self._unsendable_reported.add(kind)
-            self.err("%s The page was dropped; the node keeps running.", error)
-
-    # -- I/O thread: receiving -------------------------------------------------
-    def deliver(self, link: Link, pages: List[Page]) -> None:
-        """Store pages a link received (called on the node's I/O thread).
-
-        The link calls it only while the node's queue has room: while the
-        queue is over its high-water mark the link stops reading instead (the
-        bytes stay in the OS, TCP slows the sender, and nothing is lost on
-        this side), so the I/O thread never waits here.
-        """
-        batch: List[Task] = []
-        for page in pages:
-            if page.key in self._forwarded:
-                self._arrived[id(page)] = (page, link)
-            batch.append(Task(TaskType.store_page, page.key, [page]))
-        self.schedule(batch)
-
-    # -- opening and closing links --------------------------------------------
-    def _snr_start(self) -> None:
-        # Links need the node's I/O loop from begin() on; a restart after a
-        # failed reload keeps the one it has.
-        if self.io_loop is None:
-            self.io_loop = IOLoop.acquire(self.parent)
-        try:
-            super()._snr_start()
-        except BaseException:
-            self._release_io_loop()
-            raise
-
-    def _release_io_loop(self) -> None:
-        with self._links_lock:
-            io, self.io_loop = self.io_loop, None
-        if io is not None:
-            io.release()
-
-    def open_link(self, transport: Transport) -> Link:
-        """Start a link over ``transport`` and start forwarding pages to it.
-
-        Raises:
-            CommsError: the component is not running (the transport is closed).
-        """
-        with self._links_lock:
-            try:
-                link = Link(self, transport)
-            except CommsError:
-                transport.close()
-                raise
-            self.links = (*self.links, link)
-            self._opened = [old for old in self._opened if old.is_alive()] + [link]
-        self._unsent_reported = False
-        link.start()
-        self.schedule(tasks.event(COMMS_CONNECTED, [self.name, transport.peer]))
-        return link
-
-    def link_closed(self, link: Link, reason: str) -> None:
-        """A link has closed (called on the I/O thread); log it once."""
-        with self._links_lock:
-            self.links = tuple(other for other in self.links if other is not link)
-        if not self.is_terminated():
-            self.on_link_lost(link, reason)
-            self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
-
-    def on_hello(self, link: Link) -> None:
-        """The peer said which node it is (called on the node's I/O thread)."""
-        self.info("Linked to node %r at %s", link.peer_role, link.transport.peer)
-
-    def on_link_lost(self, link: Link, reason: str) -> None:
-        """Log that the peer went away (subclasses say what happens next).
-
-        A warning, unless the peer said goodbye (``link.peer_said_bye``): a
-        node that stops in order is news, not a fault.
-        """
-        if link.peer_said_bye:
-            self.info("The link to %s ended: %s.", link.label, reason)
-        else:
-            self.warn("Lost the link to %s: %s.", link.label, reason)
-
-    def decode_message(self, body: bytes) -> Message:
-        """The message in one frame's body (`decode_body`); a subclass may accept more.
-
-        Raises:
-            WireFormatError: the body is not a frame of docs/wire-format.md.
-        """
-        return decode_body(body)
-
-    def stats(self) -> List[Dict[str, Any]]:
-        """The counters of every open link (see `Link.stats`).
-
-        Example::
-
-            for link in comms.stats():
-                print(link["peer"], link["dropped"], link["dropped_by_key"])
-        """
-        return [link.stats() for link in self.links]
-
-    def stats_text(self) -> str:
-        """`stats` as lines for people: the console's ``stats`` and the profiler's dump.
-
-        Example::
-
-            print(comms.stats_text())
-            # 1 link
-            #   'receiver' at 127.0.0.1:9000 (open): sent 1,204, received 0, dropped 0, ...
-        """
-        links = self.stats()
-        lines = [f"{len(links)} link{'s' if len(links) != 1 else ''}"]
-        for link in links:
-            by_key = ", ".join(f"{key}: {n}" for key, n in link["dropped_by_key"].items())
-            lines.append(
-                f"  {link['peer']} ({link['state']}): sent {link['pages_sent']:,}, "
-                f"received {link['pages_received']:,}, dropped {link['dropped']:,}"
-                f"{f' ({by_key})' if by_key else ''}, waiting {link['waiting_frames']} "
-                f"frames, bad frames {link['bad_frames']}, "
-                f"heard {link['heard_s_ago']:.1f} s ago"
-            )
-        return "\n".join(lines)
-
-    # -- shutdown -------------------------------------------------------------
-    def halt(self) -> None:
-        """Flush and close every link (the node is stopping)."""
-        for link in self.links:
-            link.close()
-
-    def terminate(self) -> None:
-        """Wait (bounded) for links to finish closing, force the rest, give back the I/O loop."""
-        deadline = time.monotonic() + Link.flush_timeout_s
-        for link in self.links:
-            if not link.wait_closed(max(0.0, deadline - time.monotonic())):
-                link.abort()
-        with self._links_lock:
-            opened = list(self._opened)
-        for link in opened:  # aborted ones end on the I/O thread's next pass
-            link.join(max(0.1, deadline - time.monotonic()))
-        self._release_io_loop()

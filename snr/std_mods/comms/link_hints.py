@@ -25,7 +25,8 @@ from snr.core import MissingKeyHints, Node, tasks
 from snr.prelude import DataKey, TaskHandler, TaskType
 
 if TYPE_CHECKING:
-    from snr.std_mods.comms.link import CommsLoop, Link
+    from snr.std_mods.comms.comms_loop import CommsLoop
+    from snr.std_mods.comms.link import Link
 
 __all__ = ["check_link", "watch_link"]
 
@@ -70,7 +71,7 @@ def check_link(comms: CommsLoop, link: Link) -> None:
 
         check_link(comms_loop, link)   # see MissingKeyHints.check_link for the messages
     """
-    from snr.std_mods.comms.link import CommsLoop  # here: link.py imports this module
+    from snr.std_mods.comms.comms_loop import CommsLoop  # here: comms_loop.py imports this module
 
     node = comms.parent
     hints = _hints_of(comms)

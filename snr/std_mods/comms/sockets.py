@@ -26,14 +26,14 @@ from snr.core import LoopFactory
 from snr.core.logs import LossReport
 from snr.prelude import AbstractNode, CommsError, ConfigError
 from snr.prelude.os_errors import explain_os_error
-from snr.std_mods.comms.link import (
+from snr.std_mods.comms.comms_loop import (
     DEFAULT_DEAD_AFTER_S,
     DEFAULT_MAX_BACKLOG_BYTES,
     CommsLoop,
     Keys,
-    Link,
     normalize_keys,
 )
+from snr.std_mods.comms.link import Link
 
 __all__ = [
     "DEFAULT_MAX_CONNECTIONS",

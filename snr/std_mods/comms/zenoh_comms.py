@@ -45,7 +45,7 @@ from snr.prelude import (
     WireFormatError,
 )
 from snr.std_mods.codec import load_object, page_from_fields, page_json
-from snr.std_mods.comms.link import (
+from snr.std_mods.comms.comms_loop import (
     COMMS_CONNECTED,
     COMMS_DISCONNECTED,
     DEFAULT_DEAD_AFTER_S,

@@ -37,7 +37,8 @@ from snr.core import Config, Node, ThreadLoop
 from snr.core.component import Component
 from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import AbstractComponent, AbstractConfig, DataKey, Role, TaskType
-from snr.std_mods.comms.link import CommsLoop, LinkState
+from snr.std_mods.comms.comms_loop import CommsLoop
+from snr.std_mods.comms.link import LinkState
 from snr.std_mods.comms.sockets import SocketsClientLoop, SocketsServerLoop
 from snr.std_mods.graph.source_keys import key_uses, resolve
 

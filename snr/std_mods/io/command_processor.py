@@ -50,7 +50,7 @@ from snr.prelude import (
     TaskType,
 )
 from snr.prelude.errors import closest_match
-from snr.std_mods.comms.link import CommsLoop
+from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.io.command_table import COMMANDS, commands_table
 from snr.std_mods.io.console_protocol import Reply, Status, parse_values, split_command
 from snr.std_mods.io.console_session import ConsoleSession

@@ -47,7 +47,6 @@ from snr.prelude import (
     WireFormatError,
 )
 from snr.prelude.errors import closest_match
-from snr.prelude.os_errors import explain_os_error
 from snr.std_mods.codec import data_json, header_line, page_from_line, page_to_line
 from snr.std_mods.comms.board_protocol import (
     HEARTBEAT_KEY,
@@ -56,6 +55,7 @@ from snr.std_mods.comms.board_protocol import (
     heartbeat_line,
     is_heartbeat_line,
 )
+from snr.std_mods.comms.serial_port import import_pyserial, open_serial_port
 
 __all__ = [
     "DEFAULT_OUTBOX_BYTES",
@@ -63,10 +63,6 @@ __all__ = [
     "LineOutbox",
     "SerialLinkFactory",
     "SerialLinkLoop",
-    "available_ports",
-    "describe_open_error",
-    "import_pyserial",
-    "open_serial_port",
 ]
 
 SERIAL_MODES = ("pages", "lines")
@@ -82,91 +78,6 @@ _ECHO_GUARD_SIZE = 10_000
 _RECONNECT_MAX_S = 5.0
 _FLUSH_S = 0.25  # after halt, how long lines already queued may still go out
 _WRITER_WAKE_S = 0.1  # how often a writer holding lines for a starting board looks up
-
-
-def import_pyserial() -> Any:
-    """The ``serial`` module, or a CommsError saying how to install it.
-
-    Example::
-
-        serial = import_pyserial()
-        serial.serial_for_url("loop://")
-    """
-    try:
-        import serial
-        import serial.tools.list_ports
-    except ImportError as error:
-        raise CommsError(
-            "The serial link needs the pyserial package, which is not installed. Install "
-            "it with:  pip install 'snr[serial]'   (or: pip install pyserial)"
-        ) from error
-    return serial
-
-
-def available_ports() -> List[str]:
-    """The serial ports of this computer, e.g. ``['/dev/ttyACM0 (Arduino Uno)']``.
-
-    Example::
-
-        print(available_ports())
-    """
-    serial = import_pyserial()
-    ports = []
-    for info in sorted(serial.tools.list_ports.comports(), key=lambda p: p.device):
-        described = info.description and info.description != "n/a"
-        ports.append(f"{info.device} ({info.description})" if described else info.device)
-    return ports
-
-
-def _ports_or_none() -> Optional[List[str]]:
-    try:
-        return list(available_ports())
-    except Exception:  # listing is only a hint; never hide the real error
-        return None
-
-
-def describe_open_error(port: str, error: Exception, role: str = "") -> CommsError:
-    """A CommsError that explains why ``port`` could not be opened, and the fix.
-
-    Example::
-
-        describe_open_error("/dev/ttyUSB0", SerialException(13, "denied"), "urov")
-        # CommsError("The serial link of node 'urov' cannot open serial port
-        #  /dev/ttyUSB0: permission denied. On Linux, ...")
-    """
-    return CommsError(
-        explain_os_error(
-            error,
-            action="open",
-            target=port,
-            who=f"The serial link of node {role!r}" if role else "The serial link",
-            setting="SerialLinkFactory(port=...)",
-            ports=_ports_or_none(),
-        )
-    )
-
-
-def open_serial_port(
-    port: str, baudrate: int, read_timeout_s: float, write_timeout_s: float, role: str = ""
-) -> Any:
-    """Open ``port`` (a device or pyserial URL) or raise a CommsError that explains.
-
-    Example::
-
-        link = open_serial_port("loop://", 115200, 0.1, 1.0)
-    """
-    serial = import_pyserial()
-    try:
-        return serial.serial_for_url(
-            port, baudrate=baudrate, timeout=read_timeout_s, write_timeout=write_timeout_s
-        )
-    except ValueError as error:  # bad URL scheme, impossible baud rate
-        raise CommsError(
-            f"Cannot open serial port {port!r} at {baudrate} baud: {error}. Give a device "
-            "name such as '/dev/ttyACM0' or 'COM3', or a pyserial URL such as 'loop://'."
-        ) from error
-    except (serial.SerialException, OSError) as error:
-        raise describe_open_error(port, error, role) from error
 
 
 class _Entry:
