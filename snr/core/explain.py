@@ -6,7 +6,8 @@ forgets to return, or a loop thread calls a method it must not. Kept apart so
 
 Example::
 
-    task_label(tasks.event("go"))   # "(event, 'go')"
+    slow_handler_text(motor.forward, tasks.event("forward"), 0.5)
+    # "Task handler Motor.forward (robot.py:14) took 0.500 s handling (event, 'forward'). ..."
 """
 
 from __future__ import annotations
@@ -44,6 +45,7 @@ from snr.prelude.errors import (
     student_frames,
     trim_runtime_frames,
 )
+from snr.prelude.task import format_task
 
 __all__ = [
     "THREAD_SAFE_INSTEAD",
@@ -58,16 +60,10 @@ __all__ = [
     "returning_lines",
     "running_line",
     "slow_handler_text",
-    "task_label",
     "task_values",
     "wrong_get_result_error",
     "wrong_get_signature",
 ]
-
-
-def task_label(task: Task) -> str:
-    """``(event, 'go')``: a task's id as students see it printed."""
-    return f"({task.type.name}, {task.name!r})"
 
 
 def task_values(task: Task) -> str:
@@ -168,7 +164,7 @@ def handler_failure(
     frames = student_frames(error.__traceback__)
     message = (
         f"Task handler {describe_callable(handler)}{where} raised "
-        f"{exception_text(error)}\nwhile handling the task {task_label(task)} "
+        f"{exception_text(error)}\nwhile handling the task {format_task(task, values='none')} "
         f"{task_values(task)}.{_values_hint(task)}\n"
         f"Where it happened (most recent call last):\n{frames}"
     )
@@ -218,7 +214,7 @@ def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerEr
         "something, return tasks.event('name', [value])."
     )
     returned = describe_bad_result(result)
-    handling = f"while handling {task_label(task)}"
+    handling = f"while handling {format_task(task, values='none')}"
     code = getattr(getattr(handler, "__func__", handler), "__code__", None)
     lines = returning_lines(handler, result) if code is not None else []
     if code is None or not lines:
@@ -325,9 +321,9 @@ def slow_handler_text(handler: TaskHandler, task: Task, took_s: float) -> str:
     """The warning for a handler that held the node's thread too long."""
     return (
         f"Task handler {describe_callable(handler)} took {took_s:.3f} s handling "
-        f"{task_label(task)}. While it runs the node can run no other task. Move slow or "
-        "blocking work (time.sleep, waiting for a device) into a ThreadLoop, and let the "
-        "handler only read and store data."
+        f"{format_task(task, values='none')}. While it runs the node can run no other task. "
+        "Move slow or blocking work (time.sleep, waiting for a device) into a ThreadLoop, "
+        "and let the handler only read and store data."
     )
 
 

@@ -59,12 +59,13 @@ import time
 from types import CodeType, FrameType
 from typing import TYPE_CHECKING, Dict, FrozenSet, Iterable, List, Optional, Set, Tuple
 
-from snr.core.explain import running_line, task_label
+from snr.core.explain import running_line
 from snr.core.handler_runner import HandlerRunner
 from snr.core.loop import ThreadLoop
 from snr.core.task_queue import TaskQueue
 from snr.prelude import AbstractComponent, AbstractLoop, DataKey, Task, TaskType
 from snr.prelude.errors import describe_callable, describe_class, frame_location
+from snr.prelude.task import format_task
 
 if TYPE_CHECKING:
     from snr.core.node import Node
@@ -203,7 +204,7 @@ class Watchdog:
         if isinstance(component, AbstractComponent):
             kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
             who += f" of {kind} {component.name!r}"
-        doing = f" handling {task_label(task)}" if isinstance(task, Task) else ""
+        doing = f" handling {format_task(task, values='none')}" if isinstance(task, Task) else ""
         where = running_line(self._node_thread) or frame_location(frame)
         text = (
             f"Task handler {who} has been running for {self.stuck_s:g} s{doing}, and has "

@@ -199,8 +199,8 @@ class KeyWatches:
     # -- handlers (node thread) ----------------------------------------------------
     def on_page(self, task: Task, key: TaskId) -> SomeTasks:
         """A page of a watched key was stored: note it for every watch of that key."""
-        page = task.val_list[0] if task.val_list else None
-        if not isinstance(page, Page):
+        page = task.page()
+        if page is None:
             return None
         now = time.perf_counter()
         for rate in self._rates:
