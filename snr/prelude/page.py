@@ -7,9 +7,9 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from snr.prelude.errors import check_serializable, not_serializable_error
 from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import DataKey
+from snr.prelude.not_serializable import check_serializable, not_serializable_error
 
 __all__ = ["Page", "preview"]
 

@@ -32,7 +32,7 @@ from typing import (
 )
 
 from snr.prelude import TaskId, TaskName, TaskType
-from snr.prelude.errors import closest_match
+from snr.prelude.error_text import closest_match
 from snr.prelude.task import format_task
 
 if TYPE_CHECKING:  # unittest and multiprocessing cost ~20 ms to import

@@ -46,7 +46,7 @@ from snr.prelude import (
     TaskType,
     WireFormatError,
 )
-from snr.prelude.errors import closest_match
+from snr.prelude.error_text import closest_match
 from snr.prelude.os_errors import explain_os_error
 from snr.std_mods.codec import data_json, header_line, page_from_line, page_to_line
 from snr.std_mods.comms.board_protocol import (

@@ -50,7 +50,7 @@ from snr.prelude import (
     TaskName,
     TaskType,
 )
-from snr.prelude.errors import closest_match
+from snr.prelude.error_text import closest_match
 from snr.prelude.task import format_task
 from snr.std_mods.comms.link import CommsLoop
 from snr.std_mods.io.console_protocol import Reply, Status, parse_values, split_command

@@ -37,7 +37,7 @@ from typing import Any, Callable, Deque, Dict, List, Optional, Tuple
 
 from snr.core.component import Component
 from snr.prelude import DataKey, Page, SomeTasks, Task, TaskId, TaskType
-from snr.prelude.errors import closest_match
+from snr.prelude.error_text import closest_match
 from snr.std_mods.io.console_protocol import Reply, Status
 
 __all__ = [
