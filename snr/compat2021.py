@@ -53,7 +53,8 @@ from typing import (
     runtime_checkable,
 )
 
-from snr.prelude import DataKey, SNRError, TaskId
+from snr.prelude import DataKey, TaskId
+from snr.prelude.errors import RemovedApiError
 from snr.std_mods.filters.moving_average import DEFAULT_FILTER_LENGTH, MovingAvgFilterFactory
 from snr.utils.expector import Expector, MultiProcExpector
 
@@ -168,20 +169,6 @@ class MovingAvgEndpointFactory(MovingAvgFilterFactory):
 
 
 # -- refused ------------------------------------------------------------------
-class RemovedApiError(SNRError):
-    """A name of the 2021 release was used whose job SNR now does another way.
-
-    The message names the replacement.
-
-    Example::
-
-        try:
-            SocketsLoopFactory(("localhost", 9000), ["depth"])
-        except RemovedApiError as e:
-            print(e)   # ... replaced by SocketsPair(server_tuple).client(keys) ...
-    """
-
-
 class _RemovedMeta(type):
     """Fails on a removed class's attributes (``Settings.NODE_SLEEP_TIME``)."""
 

@@ -64,7 +64,7 @@ class TestExpectorNames(unittest.TestCase):
             self.assertIn("'a': expected 3, saw 1", str(ctx.exception))
         with self.assertRaises(AssertionError) as ctx, Expector[TaskId]({(EV, "go"): 1}):
             pass
-        self.assertIn("TaskType.event(go): expected 1, saw 0", str(ctx.exception))
+        self.assertIn("(event, 'go'): expected 1, saw 0", str(ctx.exception))
 
     def test_mp_expector_is_the_multiprocess_expector(self) -> None:
         self.assertIs(MPExpector, MultiProcExpector)

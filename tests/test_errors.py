@@ -58,7 +58,7 @@ from snr import (
     tasks,
 )
 from snr.core import MissingKeyHints
-from snr.prelude.errors import not_serializable_error
+from snr.prelude.not_serializable import not_serializable_error
 from snr.prelude.os_errors import OsAction, explain_os_error
 from snr.std_mods.codec import page_json, page_to_line
 from snr.std_mods.comms import serial_port

@@ -39,8 +39,8 @@ class TestBenchmarkExample(unittest.TestCase):
         self.assertGreaterEqual(figures["terminate handled"], TIME_TARGET_S * 1000)
         self.assertGreaterEqual(figures["total time"], figures["terminate handled"])
         self.assertIn("Times called,          Avg runtime, Task/Loop type,", printed)
-        self.assertRegex(printed, r"\d+ x +[\d.]+ us -> +[\d.]+%: TaskType.event\(stress\)")
-        self.assertRegex(printed, r"TaskType.event\(add_component\):snr.core.node_core")
+        self.assertRegex(printed, r"\d+ x +[\d.]+ us -> +[\d.]+%: \(event, 'stress'\)")
+        self.assertRegex(printed, r"\(event, 'add_component'\):snr.core.node_core")
         self.assertRegex(printed, r"ms: \S+BenchStressEndpointFac.test_stress_endpoint\n")
         self.assertRegex(printed, r"ms: \S+BenchStressEndpointFac.test_stress_endpoint_init\n")
 

@@ -342,9 +342,9 @@ class TestBenchmarkListing(unittest.TestCase):
         self.assertRegex(out, r"[\d.]+ ms total time\n")
         self.assertIn("Times called,", out)
         self.assertRegex(
-            out, r"\d+ x +[\d.]+ us -> +[\d.]+%: TaskType.event\(stress\):bench_stress"
+            out, r"\d+ x +[\d.]+ us -> +[\d.]+%: \(event, 'stress'\):bench_stress"
         )
-        self.assertRegex(out, r"TaskType.event\(add_component\):snr.core.node_core")
+        self.assertRegex(out, r"\(event, 'add_component'\):snr.core.node_core")
 
 
 class TestControllerListings(SNRTestCase):

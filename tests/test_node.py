@@ -362,10 +362,10 @@ class TestProfiler(SNRTestCase):
         assert node.profiler is not None
         dump = node.profiler.dump()
         self.assertTrue(dump.startswith("Times called,"))
-        self.assertIn("TaskType.store_page:snr.core.node_core", dump)
-        self.assertIn("TaskType.terminate:snr.core.node_core", dump)
+        self.assertIn("(store_page):snr.core.node_core", dump)
+        self.assertIn("(terminate):snr.core.node_core", dump)
         self.assertIn("Loop(ticker)", dump)
-        self.assertRegex(dump, r"\n +1 x +[\d.]+ us -> +[\d.]+%: TaskType.store_page")
+        self.assertRegex(dump, r"\n +1 x +[\d.]+ us -> +[\d.]+%: \(store_page\)")
 
     def test_no_profiler_when_deployed(self) -> None:
         capture_test_logs(self)  # and the INFO level a DEPLOYED node gives "snr.t" goes

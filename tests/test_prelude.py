@@ -1,6 +1,8 @@
 """Page, Task, TaskType and the Serializable protocol."""
 
+import re
 import unittest
+from typing import List
 
 from snr import Page, Serializable, Task, TaskPriority, TaskType, tasks
 
@@ -67,3 +69,58 @@ class TestTaskType(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class TestTaskPage(unittest.TestCase):
+    def test_the_page_a_store_task_carries(self) -> None:
+        page = Page("depth", 2.5, "robot", 0.0)
+        self.assertIs(tasks.store_page(page).page(), page)
+
+    def test_none_when_the_task_carries_no_page(self) -> None:
+        for task in (
+            tasks.event("go"),
+            tasks.event("go", [3, Page("k", 1, "r", 0.0)]),  # a page that is not first
+            Task(TaskType.store_page, "k", "not a list"),  # type: ignore[arg-type]
+        ):
+            with self.subTest(task=task):
+                self.assertIsNone(task.page())
+
+
+class TestErrorTree(unittest.TestCase):
+    """snr/prelude/errors.py draws the tree of every SNR error; it must stay complete."""
+
+    def test_every_snr_error_in_the_package_is_in_the_drawing(self) -> None:
+        import importlib
+        import pkgutil
+
+        import snr
+        import snr.prelude.errors as errors
+        from snr.prelude.errors import SNRError
+
+        for module in pkgutil.walk_packages(snr.__path__, "snr."):
+            if module.name.endswith("__main__"):  # a program, not a module to import
+                continue
+            try:
+                importlib.import_module(module.name)
+            except ImportError:  # an optional extra that is not installed
+                continue
+        found: List[type] = []
+        todo: List[type] = [SNRError]
+        while todo:
+            cls = todo.pop()
+            found.append(cls)
+            # Not counted: the tests' own errors; the docs builder's (a tool, not the runtime).
+            subclasses: List[type] = cls.__subclasses__()
+            todo.extend(
+                k
+                for k in subclasses
+                if k.__module__.startswith("snr.") and k.__module__ != "snr.docsite"
+            )
+        drawing = (errors.__doc__ or "").split("The tree::", 1)[1]
+        drawn = re.findall(r"(?:^ +|\+-- )([A-Z]\w+Error)\b", drawing, re.M)
+        self.assertEqual(sorted(drawn), sorted(errors.__all__))
+        self.assertGreaterEqual(len(found), 13)
+        for cls in found:
+            with self.subTest(error=cls.__name__):
+                self.assertIn(cls.__name__, drawn)
+                self.assertEqual(cls.__module__, "snr.prelude.errors", "define it in the tree")

@@ -70,7 +70,7 @@ class TestProfileShares(unittest.TestCase):
             # Each row is rounded to 0.001%: the sum may be off by a few thousandths.
             self.assertAlmostEqual(sum(shares), 100.0, delta=0.5, msg=f"{name}:\n{dump}")
         node_rows = dump.split("node thread:\n")[1].split("loop thread")[0]
-        self.assertIn("TaskType.store_page(x):snr.std_mods.filters", node_rows)
+        self.assertIn("(store_page, 'x'):snr.std_mods.filters", node_rows)
         self.assertNotIn("Loop(", node_rows)  # loops are in sections of their own
 
     def test_times_that_nest_are_said_to_add_up_to_more(self) -> None:

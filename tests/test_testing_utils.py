@@ -38,7 +38,7 @@ class TestExpector(unittest.TestCase):
                 with Expector({(EV, "a"): 2}) as expector:
                     for _ in range(calls):
                         expector.call((EV, "a"))
-            self.assertIn(f"TaskType.event(a): expected 2, saw {calls}", str(ctx.exception))
+            self.assertIn(f"(event, 'a'): expected 2, saw {calls}", str(ctx.exception))
 
     def test_exception_inside_is_not_masked(self) -> None:
         with self.assertRaises(KeyError), Expector({(EV, "a"): 1}):
@@ -67,23 +67,23 @@ class TestWhatWasSeenInstead(unittest.TestCase):
         self.assertEqual(
             str(ctx.exception),
             "Expectations not met:\n"
-            "  TaskType.event(beep): expected 2, saw 0 (closest seen instead: "
-            "TaskType.event(Beep), 2 times)\n"
-            "Seen but not expected: TaskType.event(Beep) 2 times, TaskType.event(go) once.",
+            "  (event, 'beep'): expected 2, saw 0 (closest seen instead: "
+            "(event, 'Beep'), 2 times)\n"
+            "Seen but not expected: (event, 'Beep') 2 times, (event, 'go') once.",
         )
 
     def test_nothing_close_names_nothing(self) -> None:
         expector = Expector({(TaskType.store_page, "depth"): 1})
         expector.call((TaskType.store_page, "heading"))
-        self.assertEqual(expector.problems(), ["TaskType.store_page(depth): expected 1, saw 0"])
+        self.assertEqual(expector.problems(), ["(store_page, 'depth'): expected 1, saw 0"])
         self.assertEqual(
-            expector.seen_instead(), "Seen but not expected: TaskType.store_page(heading) once."
+            expector.seen_instead(), "Seen but not expected: (store_page, 'heading') once."
         )
 
     def test_the_same_name_under_another_type(self) -> None:
         expector = Expector({(TaskType.store_page, "depth"): 1})
         expector.call((TaskType.process_data, "depth"))
-        self.assertIn("closest seen instead: TaskType.process_data(depth)", expector.problems()[0])
+        self.assertIn("closest seen instead: (process_data, 'depth')", expector.problems()[0])
 
     def test_keys_that_are_not_task_ids(self) -> None:
         expector = Expector[str]({"beep": 1})
@@ -98,10 +98,7 @@ class TestWhatWasSeenInstead(unittest.TestCase):
         expector.call((EV, "stat"))
         self.assertEqual(
             expector.problems(),
-            [
-                "missing at the end: TaskType.event(start) "
-                "(closest seen instead: TaskType.event(stat), once)"
-            ],
+            ["missing at the end: (event, 'start') (closest seen instead: (event, 'stat'), once)"],
         )
 
     def test_what_is_seen_instead_is_bounded(self) -> None:
@@ -175,7 +172,7 @@ class TestRunTestNodeTimeLimit(SNRTestCase):
         self.assertFailsWith(
             [ListReplayerFactory([1], "x"), ExpectorEndpointFactory(expector)],
             "It waited the whole time limit, and the expectations of expector_endpoint were "
-            "still not met: TaskType.store_page(x): expected 2, saw 1.",
+            "still not met: (store_page, 'x'): expected 2, saw 1.",
             timeout_s=0.1,
         )
 

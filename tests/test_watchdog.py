@@ -390,8 +390,8 @@ class TestAnUnmetExpectation(unittest.TestCase):
         self.assertEqual([line.replace("of 0.5 s", "of 2 s") for line in real], expected)
         for part in (
             "It waited the whole time limit",
-            "closest seen instead: TaskType.store_page(depth_avg), 4 times",
-            "Seen but not expected: TaskType.store_page(depth) 4 times",
+            "closest seen instead: (store_page, 'depth_avg'), 4 times",
+            "Seen but not expected: (store_page, 'depth') 4 times",
         ):
             self.assertIn(part, real[0])
         # The traceback points at the test's own line, not at SNR's.

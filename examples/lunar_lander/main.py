@@ -272,8 +272,8 @@ def read_radar(task: Task) -> Optional[Radar]:
 
         read_radar(tasks.store_data("radar_data", (50.0, -1.0)))   # (50.0, -1.0)
     """
-    page = task.val_list[0] if task.val_list else None
-    if not isinstance(page, Page):
+    page = task.page()
+    if page is None:
         return None
     data = page.data
     if not (isinstance(data, (tuple, list)) and len(data) == 2):

@@ -24,7 +24,6 @@ from snr import (
     DataKey,
     Endpoint,
     EndpointFactory,
-    Page,
     SomeTasks,
     Task,
     TaskId,
@@ -98,10 +97,10 @@ class MovingAvgEndpoint(Endpoint):
 
     def update_filter(self, task: Task, key: TaskId) -> SomeTasks:
         """Add the stored number to the filter, then store the new mean."""
-        page = task.val_list[0] if task.val_list else None
+        page = task.page()
         # Check the data first: after this, the type checker knows it is a number.
         if not (
-            isinstance(page, Page)
+            page is not None
             and isinstance(page.data, (int, float))
             and not isinstance(page.data, bool)
         ):

@@ -41,7 +41,8 @@ from snr.prelude import (
     AbstractLoop,
     ComponentError,
 )
-from snr.prelude.errors import closest_match, describe_class, source_block
+from snr.prelude.error_text import closest_match
+from snr.prelude.student_code import describe_class, source_block
 
 __all__ = ["check_component", "framework_names"]
 

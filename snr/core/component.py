@@ -24,7 +24,8 @@ from snr.prelude import (
     Task,
     TaskHandlerMap,
 )
-from snr.prelude.errors import caller_block, describe_class, short_repr
+from snr.prelude.error_text import short_repr
+from snr.prelude.student_code import caller_block, describe_class
 
 __all__ = ["Component"]
 

@@ -47,11 +47,11 @@ from snr.prelude import (
 )
 from snr.prelude.abstract import explain_abstract_error
 from snr.prelude.error_text import exception_text
-from snr.prelude.errors import (
+from snr.prelude.student_code import (
+    def_block,
     describe_callable,
     describe_class,
     is_runtime_file,
-    source_block,
     student_frames,
     trim_runtime_frames,
 )
@@ -466,5 +466,4 @@ def _init_block(cls: type) -> str:
     code = getattr(init, "__code__", None)
     if code is None or is_runtime_file(code.co_filename):
         return ""
-    name = getattr(code, "co_qualname", f"{cls.__qualname__}.__init__")
-    return "\n" + source_block(code.co_filename, code.co_firstlineno, name)
+    return "\n" + def_block(init)

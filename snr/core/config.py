@@ -13,8 +13,7 @@ from snr.prelude import (
     Mode,
     Role,
 )
-from snr.prelude.error_text import wrong_call
-from snr.prelude.errors import closest_match
+from snr.prelude.error_text import closest_match, wrong_call
 
 __all__ = ["Config"]
 

@@ -44,13 +44,8 @@ from snr.prelude import (
     TaskId,
     TaskType,
 )
-from snr.prelude.errors import (
-    caller_block,
-    closest_match,
-    describe_callable,
-    describe_class,
-    source_block,
-)
+from snr.prelude.error_text import closest_match
+from snr.prelude.student_code import caller_block, def_block, describe_callable, describe_class
 
 __all__ = ["Entry", "HandlerMap", "HandlerTable", "check_handler", "check_task_id"]
 
@@ -226,10 +221,7 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
         self_ = "self, " if hasattr(handler, "__self__") else ""
         if hasattr(handler, "__self__"):
             params.insert(0, "self")
-        code_line = ""
-        if code is not None:
-            qualname = getattr(code, "co_qualname", getattr(handler, "__qualname__", name))
-            code_line = "\n" + source_block(code.co_filename, code.co_firstlineno, qualname)
+        code_line = "\n" + def_block(handler) if code is not None else ""
         raise ComponentError(
             f"Task handler {where} for {key!r} is written as "
             f"`def {name}({', '.join(params)})`, but SNR calls a handler with two "

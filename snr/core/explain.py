@@ -6,7 +6,8 @@ forgets to return, or a loop thread calls a method it must not. Kept apart so
 
 Example::
 
-    task_label(tasks.event("go"))   # "(event, 'go')"
+    slow_handler_text(motor.forward, tasks.event("forward"), 0.5)
+    # "Task handler Motor.forward (robot.py:14) took 0.500 s handling (event, 'forward'). ..."
 """
 
 from __future__ import annotations
@@ -16,8 +17,7 @@ import dis
 import functools
 import inspect
 import linecache
-import sys
-from types import CodeType, FrameType
+from types import CodeType
 from typing import Any, Dict, Iterator, List, Optional, Union
 
 from snr.prelude import (
@@ -32,18 +32,18 @@ from snr.prelude import (
     Task,
     TaskHandler,
 )
-from snr.prelude.error_text import exception_text
-from snr.prelude.errors import (
+from snr.prelude.error_text import exception_text, short_repr
+from snr.prelude.student_code import (
+    code_name,
+    def_block,
     describe_callable,
     describe_class,
-    frame_location,
-    is_runtime_file,
     short_path,
-    short_repr,
     source_block,
     student_frames,
     trim_runtime_frames,
 )
+from snr.prelude.task import format_task
 
 __all__ = [
     "THREAD_SAFE_INSTEAD",
@@ -56,18 +56,11 @@ __all__ = [
     "only_returns_none",
     "reload_failure",
     "returning_lines",
-    "running_line",
     "slow_handler_text",
-    "task_label",
     "task_values",
     "wrong_get_result_error",
     "wrong_get_signature",
 ]
-
-
-def task_label(task: Task) -> str:
-    """``(event, 'go')``: a task's id as students see it printed."""
-    return f"({task.type.name}, {task.name!r})"
 
 
 def task_values(task: Task) -> str:
@@ -168,7 +161,7 @@ def handler_failure(
     frames = student_frames(error.__traceback__)
     message = (
         f"Task handler {describe_callable(handler)}{where} raised "
-        f"{exception_text(error)}\nwhile handling the task {task_label(task)} "
+        f"{exception_text(error)}\nwhile handling the task {format_task(task, values='none')} "
         f"{task_values(task)}.{_values_hint(task)}\n"
         f"Where it happened (most recent call last):\n{frames}"
     )
@@ -218,13 +211,13 @@ def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerEr
         "something, return tasks.event('name', [value])."
     )
     returned = describe_bad_result(result)
-    handling = f"while handling {task_label(task)}"
+    handling = f"while handling {format_task(task, values='none')}"
     code = getattr(getattr(handler, "__func__", handler), "__code__", None)
     lines = returning_lines(handler, result) if code is not None else []
     if code is None or not lines:
         where = describe_callable(handler)
         return HandlerError(f"Task handler {where} {returned} {handling}. {fix}")
-    name = getattr(code, "co_qualname", None) or describe_callable(handler).split(" (")[0]
+    name = code_name(code, getattr(handler, "__qualname__", code.co_name))
     short = short_path(code.co_filename)
     at = f"at {short}:{lines[0]}"
     if len(lines) > 1:  # the source cannot tell which: show each
@@ -325,9 +318,9 @@ def slow_handler_text(handler: TaskHandler, task: Task, took_s: float) -> str:
     """The warning for a handler that held the node's thread too long."""
     return (
         f"Task handler {describe_callable(handler)} took {took_s:.3f} s handling "
-        f"{task_label(task)}. While it runs the node can run no other task. Move slow or "
-        "blocking work (time.sleep, waiting for a device) into a ThreadLoop, and let the "
-        "handler only read and store data."
+        f"{format_task(task, values='none')}. While it runs the node can run no other task. "
+        "Move slow or blocking work (time.sleep, waiting for a device) into a ThreadLoop, "
+        "and let the handler only read and store data."
     )
 
 
@@ -402,12 +395,8 @@ def wrong_get_signature(factory: AbstractFactory, error: TypeError) -> Optional[
         pass
     except ValueError:
         return None
-    code = getattr(get, "__code__", None)
     params = ", ".join(inspect.signature(get).parameters)
-    block = ""
-    if code is not None:
-        qualname = getattr(code, "co_qualname", get.__qualname__)
-        block = "\n" + source_block(code.co_filename, code.co_firstlineno, qualname)
+    block = "\n" + def_block(get) if hasattr(get, "__code__") else ""
     return ComponentError(
         f"{describe_callable(get)} is written as `def get({params})`, but the node calls "
         "get(parent) with itself as the one argument. Write it as `def get(self, "
@@ -444,32 +433,3 @@ def reload_failure(error: BaseException) -> str:
         return f"{error.filename}:{error.lineno}: SyntaxError: {error.msg}{shown}"
     frames = student_frames(error.__traceback__)
     return f"{exception_text(error)}\nWhere it happened (most recent call last):\n{frames}"
-
-
-def running_line(thread_id: Optional[int]) -> str:
-    """``sensor.py:12 in Sonar.loop: `reading = port.read()```: where a thread is now.
-
-    The innermost frame outside SNR and the standard library is shown (a
-    loop blocked in ``socket.recv`` is shown at the student's line that
-    called it); "" when the thread is not running.
-    """
-    if thread_id is None:
-        return ""
-    frame: Optional[FrameType] = sys._current_frames().get(thread_id)
-    innermost = frame
-    while frame is not None and (
-        is_runtime_file(frame.f_code.co_filename) or _is_stdlib(frame.f_code.co_filename)
-    ):
-        frame = frame.f_back
-    frame = frame or innermost
-    if frame is None:
-        return ""
-    code = linecache.getline(frame.f_code.co_filename, frame.f_lineno).strip()
-    return f"{frame_location(frame)}" + (f": `{code}`" if code else "")
-
-
-def _is_stdlib(filename: str) -> bool:
-    prefixes = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}
-    return filename.startswith("<") or any(
-        filename.startswith(f"{prefix}/lib/python") for prefix in prefixes
-    )

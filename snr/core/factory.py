@@ -15,7 +15,7 @@ from types import ModuleType
 from typing import Any, Dict, List, Optional, Sequence, Union
 
 from snr.prelude import AbstractComponent, AbstractFactory, AbstractNode, ComponentError
-from snr.prelude.errors import describe_class
+from snr.prelude.student_code import describe_class
 
 __all__ = ["EndpointFactory", "Factory", "LoopFactory", "ReloadTargets"]
 

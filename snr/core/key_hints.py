@@ -33,7 +33,8 @@ import threading
 from typing import Callable, Dict, Iterable, List, Mapping, Optional, Set, Tuple
 
 from snr.prelude import DataKey, TaskHandler
-from snr.prelude.errors import caller_location, closest_match, describe_callable
+from snr.prelude.error_text import closest_match
+from snr.prelude.student_code import caller_location, describe_callable
 
 __all__ = ["MissingKeyHints"]
 

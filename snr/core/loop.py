@@ -9,7 +9,6 @@ from typing import Optional
 
 from snr.core import tasks
 from snr.core.component import Component
-from snr.core.explain import running_line
 from snr.prelude import (
     AbstractFactory,
     AbstractLoop,
@@ -20,7 +19,7 @@ from snr.prelude import (
     Task,
     TaskType,
 )
-from snr.prelude.errors import describe_class
+from snr.prelude.student_code import describe_class, running_line
 
 __all__ = ["LoopState", "ThreadLoop"]
 

@@ -60,7 +60,7 @@ from snr.prelude import (
     ThreadSafetyError,
 )
 from snr.prelude.error_text import bad_data_key, page_as_data, wrong_call
-from snr.prelude.errors import caller_location
+from snr.prelude.student_code import caller_location
 
 __all__ = ["Node", "NodeState"]
 

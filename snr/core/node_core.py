@@ -9,12 +9,11 @@ from __future__ import annotations
 
 import dataclasses
 import threading
-from typing import Any
 
 from snr.core import tasks
 from snr.core.endpoint import Endpoint
 from snr.core.factory import EndpointFactory
-from snr.prelude import AbstractFactory, AbstractNode, Page, SomeTasks, Task, TaskId, TaskType
+from snr.prelude import AbstractFactory, AbstractNode, SomeTasks, Task, TaskId, TaskType
 
 __all__ = ["NODE_CORE_NAME", "NodeCoreEndpoint", "NodeCoreFactory"]
 
@@ -46,13 +45,13 @@ class NodeCoreEndpoint(Endpoint):
 
     def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Put the task's page in the datastore; then process_data if asked."""
-        page: Any = task.val_list[0] if task.val_list else None
-        if not isinstance(page, Page):
+        page = task.page()
+        if page is None:
             self.err(
                 "A store_page task for %r carries %r instead of a Page; dropped it. "
                 "Make these tasks with tasks.store_page(page) or self.store_data_task().",
                 task.name,
-                page,
+                task.val_list,
             )
             return None
         if not page.origin:  # made by tasks.store_data(), which has no node

@@ -7,9 +7,9 @@ listing 5.2, one section per thread::
     Times called,          Avg runtime, Task/Loop type,
     (share: of the 0.526 s since the node was made; each thread's lines add up to 100%)
     node thread:
-          200475 x      1.358 us ->  51.780%: TaskType.event(stress):__main__
-           10475 x     13.823 us ->  27.538%: TaskType.event(add_component):snr.core.node_core
-               1 x     43.164 us ->   0.008%: TaskType.terminate:snr.core.node_core
+          200475 x      1.358 us ->  51.780%: (event, 'stress'):__main__
+           10475 x     13.823 us ->  27.538%: (event, 'add_component'):snr.core.node_core
+               1 x     43.164 us ->   0.008%: (terminate):snr.core.node_core
                                  ->  20.673%: (outside handlers: the node's own work, ...)
     loop thread timeout_loop:
                1 x 504193.137 us ->  95.890%: Loop(timeout_loop)
@@ -37,9 +37,10 @@ import threading
 import time
 from typing import Callable, Dict, List, Tuple
 
-from snr.prelude import AbstractProfiler, ComponentName, StatsCell, TaskId, TaskType
+from snr.prelude import AbstractProfiler, ComponentName, StatsCell, TaskId
+from snr.prelude.task import format_task
 
-__all__ = ["Profiler", "format_task_id"]
+__all__ = ["Profiler"]
 
 Row = Tuple[str, int, float]  # (label, times_called, total_s)
 
@@ -48,18 +49,6 @@ _HEADER = "Times called,          Avg runtime, Task/Loop type,"  # thesis listin
 _COUNT_AND_AVG_WIDTH = len(f"{0:>12} x {0.0:>10.3f} us")  # where " -> share" starts
 _OUTSIDE_HANDLERS = "(outside handlers: the node's own work, waiting for tasks)"
 _OUTSIDE_LOOP = "(outside loop(): waiting between passes)"
-
-
-def format_task_id(task_id: TaskId) -> str:
-    """``TaskType.event(stress)`` for a tuple id, ``TaskType.terminate`` for a type.
-
-    Example::
-
-        format_task_id((TaskType.event, "beep"))   # 'TaskType.event(beep)'
-    """
-    if isinstance(task_id, TaskType):
-        return f"TaskType.{task_id.name}"
-    return f"TaskType.{task_id[0].name}({task_id[1]})"
 
 
 class Profiler(AbstractProfiler):
@@ -96,7 +85,7 @@ class Profiler(AbstractProfiler):
 
     def task_cell(self, task_id: TaskId, where: str) -> StatsCell:
         """The cell of the handlers for ``task_id`` in module ``where``."""
-        return self.cell(f"{format_task_id(task_id)}:{where}")
+        return self.cell(f"{format_task(task_id)}:{where}")
 
     def loop_cell(self, name: ComponentName) -> StatsCell:
         """The cell of the loop called ``name``."""
@@ -150,7 +139,7 @@ class Profiler(AbstractProfiler):
             # Times called,          Avg runtime, Task/Loop type,
             # (share: of the 0.501 s since the node was made; each thread's lines add up ...)
             # node thread:
-            #            1 x      8.383 us ->   0.002%: TaskType.store_page:snr.core.node_core
+            #            1 x      8.383 us ->   0.002%: (store_page):snr.core.node_core
             #                              ->  99.998%: (outside handlers: the node's own ...)
             # loop thread timeout_loop:
             #            1 x 499281.445 us ->  99.739%: Loop(timeout_loop)

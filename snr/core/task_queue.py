@@ -38,7 +38,7 @@ from typing import Deque, Dict, Optional, Set, Tuple
 
 from snr.core.logs import LossReport
 from snr.prelude import AbstractTaskQueue, HandlerError, IdleWaiter, SomeTasks, Task
-from snr.prelude.errors import is_runtime_file
+from snr.prelude.student_code import outside_runtime
 
 __all__ = ["TaskQueue"]
 
@@ -174,9 +174,7 @@ class TaskQueue(AbstractTaskQueue):
             self.waits_by_thread.clear()
             self.waited_at.clear()
         self.waits_by_thread[me] = self.waits_by_thread.get(me, 0) + 1
-        frame: Optional[FrameType] = sys._getframe(2)  # schedule(); then out of SNR's code
-        while frame is not None and is_runtime_file(frame.f_code.co_filename):
-            frame = frame.f_back
+        frame = outside_runtime(sys._getframe(2))  # schedule(); then out of SNR's code
         if frame is not None:
             self.waited_at[me] = (frame, frame.f_lineno)
 

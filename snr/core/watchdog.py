@@ -59,12 +59,18 @@ import time
 from types import CodeType, FrameType
 from typing import TYPE_CHECKING, Dict, FrozenSet, Iterable, List, Optional, Set, Tuple
 
-from snr.core.explain import running_line, task_label
 from snr.core.handler_runner import HandlerRunner
 from snr.core.loop import ThreadLoop
 from snr.core.task_queue import TaskQueue
 from snr.prelude import AbstractComponent, AbstractLoop, DataKey, Task, TaskType
-from snr.prelude.errors import describe_callable, describe_class, frame_location
+from snr.prelude.student_code import (
+    code_name,
+    describe_callable,
+    describe_class,
+    frame_location,
+    running_line,
+)
+from snr.prelude.task import format_task
 
 if TYPE_CHECKING:
     from snr.core.node import Node
@@ -190,7 +196,7 @@ class Watchdog:
             return
         self.handler_stuck = True  # the same call as at the last look
         if now - self._handler_since >= self.stuck_s:
-            name = getattr(handler.f_code, "co_qualname", handler.f_code.co_name)
+            name = code_name(handler.f_code, handler.f_code.co_name)
             self._say(handler.f_code, f"handler {name}", self._stuck_text(handler))
 
     def _stuck_text(self, frame: FrameType) -> str:
@@ -203,7 +209,7 @@ class Watchdog:
         if isinstance(component, AbstractComponent):
             kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
             who += f" of {kind} {component.name!r}"
-        doing = f" handling {task_label(task)}" if isinstance(task, Task) else ""
+        doing = f" handling {format_task(task, values='none')}" if isinstance(task, Task) else ""
         where = running_line(self._node_thread) or frame_location(frame)
         text = (
             f"Task handler {who} has been running for {self.stuck_s:g} s{doing}, and has "

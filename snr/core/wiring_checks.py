@@ -32,7 +32,8 @@ from typing import Iterator, List, Mapping, Optional, Set, Tuple
 
 from snr.core.dispatch import HandlerTable
 from snr.prelude import DataKey, Page, Task, TaskName, TaskType
-from snr.prelude.errors import closest_match, describe_callable, short_repr
+from snr.prelude.error_text import closest_match, short_repr
+from snr.prelude.student_code import describe_callable
 
 __all__ = ["OPTIONAL_EVENTS", "WiringChecks"]
 

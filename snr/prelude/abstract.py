@@ -22,12 +22,7 @@ from abc import ABCMeta, abstractmethod
 from types import ModuleType
 from typing import Any, Callable, Dict, List, Optional, Protocol
 
-from snr.prelude.errors import (
-    ComponentError,
-    caller_location,
-    describe_class,
-    frame_location,
-)
+from snr.prelude.errors import ComponentError
 from snr.prelude.names import (
     ComponentName,
     DataKey,
@@ -40,6 +35,7 @@ from snr.prelude.names import (
     TaskId,
 )
 from snr.prelude.page import Page
+from snr.prelude.student_code import caller_location, describe_class, frame_location
 from snr.prelude.task import Task
 
 __all__ = [

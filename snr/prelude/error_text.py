@@ -22,19 +22,18 @@ from __future__ import annotations
 
 import builtins
 import enum
-import os
-import sys
 import traceback
 from typing import Any, Iterable, List, Optional
 
-from snr.prelude.errors import closest_match, frame_location, short_repr
+from snr.prelude.student_code import call_site
 
 __all__ = [
     "bad_data_key",
-    "call_site",
+    "closest_match",
     "exception_text",
     "page_as_data",
     "plain_signature",
+    "short_repr",
     "values_not_a_list",
     "wrong_call",
 ]
@@ -118,6 +117,33 @@ def _guess_name(error: BaseException) -> Optional[str]:
     return closest_match(name, choices)
 
 
+def closest_match(word: str, choices: Iterable[str]) -> Optional[str]:
+    """The choice most like ``word``, or None: used for "did you mean" hints.
+
+    Example::
+
+        closest_match("urv", ["urov", "topside"])  # 'urov'
+    """
+    import difflib  # here, not at the top: hints are only made when something is wrong
+
+    found: List[str] = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
+    return found[0] if found else None
+
+
+def short_repr(value: Any, limit: int = 120) -> str:
+    """``repr(value)``, cut to ``limit`` characters so messages stay readable.
+
+    Example::
+
+        short_repr(list(range(1000)), 20)   # '[0, 1, 2, 3, 4, 5, …'
+    """
+    try:
+        text = repr(value)
+    except Exception as error:  # a broken __repr__ must not hide the real error
+        return f"<{type(value).__name__} whose repr() raised {type(error).__name__}>"
+    return text if len(text) <= limit else text[: limit - 1] + "…"
+
+
 def plain_signature(name: str, function: Any) -> str:
     """``"CliRunner(components_or_config, argv=None)"``: a call as a student writes it.
 
@@ -168,26 +194,6 @@ def wrong_call(name: str, function: Any, args: Iterable[Any], problem: str) -> s
         f"{name}({shown}) at {call_site()}: {problem} "
         f"Write it as {plain_signature(name, function)}."
     )
-
-
-_SNR_PACKAGE = os.path.dirname(os.path.dirname(os.path.abspath(__file__))) + os.sep
-
-
-def call_site() -> str:
-    """``"robot.py:12 in Sonar.loop"``: the nearest caller outside the whole ``snr`` package.
-
-    Unlike `caller_location`, SNR's ready-made components (``snr/std_mods``,
-    ``snr/utils``) are skipped too: a wrong call to one of their constructors
-    is the student's call.
-
-    Example::
-
-        raise ConfigError(f"... at {call_site()} ...")
-    """
-    frame = sys._getframe(1)
-    while frame.f_back is not None and frame.f_code.co_filename.startswith(_SNR_PACKAGE):
-        frame = frame.f_back
-    return frame_location(frame)
 
 
 def values_not_a_list(name: str, values: Any) -> str:

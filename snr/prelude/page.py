@@ -7,11 +7,11 @@ import time
 from dataclasses import dataclass
 from typing import Any
 
-from snr.prelude.errors import check_serializable, not_serializable_error
 from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import DataKey
+from snr.prelude.not_serializable import check_serializable, not_serializable_error
 
-__all__ = ["Page"]
+__all__ = ["Page", "preview"]
 
 _PREVIEW_CHARS = 1000  # str(page) shows a game pad's buttons, not a camera frame
 
@@ -84,7 +84,7 @@ class Page(JsonDataclass):
             # "Page 'depth' = 2.5 from 'robot' (made 1970-01-01 00:00:00 UTC)"
         """
         age = _age_text(self.created_at_s, time.time())
-        return f"Page {self.key!r} = {_preview(self.data)} from {self.origin!r} ({age})"
+        return f"Page {self.key!r} = {preview(self.data)} from {self.origin!r} ({age})"
 
 
 def _age_text(created_at_s: float, now_s: float) -> str:
@@ -115,8 +115,14 @@ def _age_text(created_at_s: float, now_s: float) -> str:
     return f"made {made} UTC"
 
 
-def _preview(data: Any) -> str:
-    """``repr(data)``, cut short after `_PREVIEW_CHARS` characters."""
+def preview(data: Any) -> str:
+    """``repr(data)``, cut short after 1,000 characters: how a page's data is printed.
+
+    Example::
+
+        preview(list(range(5)))      # '[0, 1, 2, 3, 4]'
+        len(preview(bytes(10_000)))  # 1000, ending in '...'
+    """
     text = repr(data)
     if len(text) > _PREVIEW_CHARS:
         text = text[: _PREVIEW_CHARS - 3] + "..."

@@ -3,13 +3,13 @@
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, List, Tuple
+from typing import Any, List, Literal, Optional, Tuple, Union
 
 from snr.prelude.json_dataclass import JsonDataclass
-from snr.prelude.names import TaskName, TaskPriority, TaskType
-from snr.prelude.page import Page
+from snr.prelude.names import TaskId, TaskName, TaskPriority, TaskType
+from snr.prelude.page import Page, preview
 
-__all__ = ["Task"]
+__all__ = ["Task", "format_task"]
 
 
 @dataclass
@@ -37,6 +37,25 @@ class Task(JsonDataclass):
         """The specific task id ``(type, name)`` this task matches first."""
         return (self.type, self.name)
 
+    def page(self) -> Optional[Page]:
+        """The page this task carries (a ``store_page`` or ``process_data`` task's), or None.
+
+        None when the first value is not a `Page` or there is none, so a
+        handler checks once instead of indexing ``val_list`` and testing types.
+
+        Example::
+
+            def update_filter(self, task: Task, key: TaskId) -> SomeTasks:
+                page = task.page()
+                if page is None:
+                    return None
+                return self.store_data_task("depth_avg", self.average(page.data))
+        """
+        values: object = self.val_list  # a task built by hand may hold anything
+        if isinstance(values, list) and values and isinstance(values[0], Page):
+            return values[0]
+        return None
+
     def serialize(self) -> str:
         """This task as JSON text (``val_list`` must hold JSON-able values)."""
         return self.to_json()
@@ -47,19 +66,47 @@ class Task(JsonDataclass):
         return cls.from_json(text)
 
     def __str__(self) -> str:
-        """The task in one line, as thesis figure 5.4 prints it; pages in their short form.
+        """The task in one line, as thesis figure 5.4 prints it: `format_task`.
 
         ``repr(task)`` shows every field in full, for debugging.
-
-        Example::
-
-            str(Task(TaskType.event, "button_pressed", ["A"]))
-            # "(event, 'button_pressed'): ['A']"
-            str(tasks.store_page(Page("depth", 2.5, "robot", time.time())))
-            # "(store_page, 'depth'): [Page 'depth' = 2.5 from 'robot' (0.0 s ago)]"
         """
-        values: object = self.val_list  # a task built by hand may hold anything
-        if isinstance(values, list):
-            shown = ", ".join(str(v) if isinstance(v, Page) else repr(v) for v in values)
-            return f"({self.type.name}, {self.name!r}): [{shown}]"
-        return f"({self.type.name}, {self.name!r}): {values!r}"
+        return format_task(self)
+
+
+ValuesShown = Literal["all", "data", "none"]
+"""How much of a task `format_task` shows: every value, a page's data only, or none."""
+
+
+def format_task(task: Union[Task, TaskId], values: ValuesShown = "all") -> str:
+    """A task (or a task id) in one line: the one way SNR prints tasks.
+
+    Messages, the printer, the console and the profiler all use it, so a
+    task reads the same wherever it shows up. Pages show in their short form
+    (see `Page`); ``values="data"`` shows only a page's data, ``"none"`` only
+    the id.
+
+    Example::
+
+        format_task(Task(TaskType.event, "button_pressed", ["A"]))
+        # "(event, 'button_pressed'): ['A']"
+        format_task(tasks.store_page(Page("depth", 2.5, "robot", time.time())))
+        # "(store_page, 'depth'): [Page 'depth' = 2.5 from 'robot' (0.0 s ago)]"
+        format_task(tasks.store_data("depth", 2.5), values="data")   # "(store_page, 'depth'): 2.5"
+        format_task((TaskType.event, "go"))                          # "(event, 'go')"
+        format_task(TaskType.terminate)                              # "(terminate)"
+    """
+    if isinstance(task, TaskType):
+        return f"({task.name})"
+    if isinstance(task, tuple):
+        return f"({task[0].name}, {task[1]!r})"
+    label = f"({task.type.name}, {task.name!r})"
+    page = task.page()
+    if values == "none":
+        return label
+    if values == "data" and page is not None:
+        return f"{label}: {preview(page.data)}"
+    shown: object = task.val_list  # a task built by hand may hold anything
+    if isinstance(shown, list):
+        items = ", ".join(str(v) if isinstance(v, Page) else repr(v) for v in shown)
+        return f"{label}: [{items}]"
+    return f"{label}: {shown!r}"

@@ -55,7 +55,7 @@ from typing import (
 )
 
 from snr.prelude import NotSerializableError, Page, WireFormatError
-from snr.prelude.errors import not_serializable_error
+from snr.prelude.not_serializable import not_serializable_error
 
 _orjson: Any
 try:

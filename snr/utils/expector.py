@@ -31,9 +31,9 @@ from typing import (
     cast,
 )
 
-from snr.core.profiler import format_task_id
 from snr.prelude import TaskId, TaskName, TaskType
-from snr.prelude.errors import closest_match
+from snr.prelude.error_text import closest_match
+from snr.prelude.task import format_task
 
 if TYPE_CHECKING:  # unittest and multiprocessing cost ~20 ms to import
     import unittest
@@ -70,13 +70,13 @@ def format_key(key: Hashable) -> str:
 
     Example::
 
-        format_key((TaskType.event, "beep"))   # 'TaskType.event(beep)'
+        format_key((TaskType.event, "beep"))   # "(event, 'beep')"
         format_key("beep")                     # "'beep'"
     """
     if isinstance(key, TaskType) or (
         isinstance(key, tuple) and len(key) == 2 and isinstance(key[0], TaskType)
     ):
-        return format_task_id(cast(TaskId, key))
+        return format_task(cast(TaskId, key))
     return repr(key)
 
 
@@ -205,7 +205,7 @@ class Expector(Generic[K]):
         Example::
 
             expector.seen_instead()
-            # 'Seen but not expected: TaskType.store_page(in) 4 times, ...'
+            # "Seen but not expected: (store_page, 'in') 4 times, ..."
         """
         with self._lock:
             others = list(self.others.items())

@@ -169,8 +169,8 @@ class CommsLoop(ThreadLoop):
     # -- node thread: sending -------------------------------------------------
     def forward_page(self, task: Task, key: TaskId) -> SomeTasks:
         """Send the page just stored to every open link it did not come from."""
-        page = task.val_list[0] if task.val_list else None
-        if not isinstance(page, Page):
+        page = task.page()
+        if page is None:
             return None  # the node core has already reported the bad task
         arrived = self._arrived.pop(id(page), None)
         source = arrived[1] if arrived is not None and arrived[0] is page else None

@@ -46,7 +46,7 @@ from snr.prelude import (
     TaskType,
     WireFormatError,
 )
-from snr.prelude.errors import closest_match
+from snr.prelude.error_text import closest_match
 from snr.std_mods.codec import data_json, header_line, page_from_line, page_to_line
 from snr.std_mods.comms.board_protocol import (
     HEARTBEAT_KEY,
@@ -555,9 +555,10 @@ class SerialLinkLoop(ThreadLoop):
     # -- sending: the node's thread queues, the writer thread writes -----------
     def send_page(self, task: Task, key: TaskId) -> SomeTasks:
         """Queue the stored page (or its data, in lines mode) as one line; never blocks."""
-        page = task.val_list[0] if task.val_list else None
-        if not isinstance(page, Page):
-            self.warn("A store_page task for %r carries %r, not a Page; not sent", task.name, page)
+        page = task.page()
+        if page is None:
+            what = task.val_list
+            self.warn("A store_page task for %r carries %r, not a Page; not sent", task.name, what)
             return None
         if self._received.pop(id(page), None) is page:
             return None  # it came from the port; sending it back would echo forever

@@ -453,8 +453,8 @@ class ZenohComms(Endpoint):
     # -- node thread: publishing --------------------------------------------------
     def publish_page(self, task: Task, key: TaskId) -> SomeTasks:
         """Publish the page just stored, unless it came from Zenoh."""
-        page = task.val_list[0] if task.val_list else None
-        if not isinstance(page, Page):
+        page = task.page()
+        if page is None:
             return None  # the node core has already reported the bad task
         if self._arrived.pop(id(page), None) is page:
             return None  # it came from Zenoh: never send it back

@@ -20,7 +20,6 @@ from snr.prelude import (
     AbstractNode,
     ConfigError,
     DataKey,
-    Page,
     SomeTasks,
     Task,
     TaskId,
@@ -121,8 +120,8 @@ class KalmanFilterEndpoint(Endpoint):
 
     def update_filter(self, task: Task, key: TaskId) -> SomeTasks:
         """Feed the stored number to the filter and store the new estimate."""
-        page = task.val_list[0] if task.val_list else None
-        data = page.data if isinstance(page, Page) else None
+        page = task.page()
+        data = page.data if page is not None else None
         if isinstance(data, bool) or not isinstance(data, (int, float)) or not math.isfinite(data):
             self.warn("Skipped %r under %r: expected a finite number", data, self.input)
             return None

@@ -17,7 +17,6 @@ from snr.prelude import (
     AbstractNode,
     ComponentError,
     DataKey,
-    Page,
     SomeTasks,
     Task,
     TaskId,
@@ -60,10 +59,10 @@ class MovingAvgEndpoint(Endpoint):
 
     def update_filter(self, task: Task, key: TaskId) -> SomeTasks:
         """Add the stored number to the filter and store the new mean."""
-        page = task.val_list[0] if task.val_list else None
+        page = task.page()
         if not (
             task.name == self.input
-            and isinstance(page, Page)
+            and page is not None
             and isinstance(page.data, (int, float))
             and not isinstance(page.data, bool)
         ):

@@ -49,7 +49,8 @@ from snr.prelude import (
     TaskName,
     TaskType,
 )
-from snr.prelude.errors import closest_match
+from snr.prelude.error_text import closest_match
+from snr.prelude.task import format_task
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.io.command_table import COMMANDS, commands_table
 from snr.std_mods.io.console_protocol import Reply, Status, parse_values, split_command
@@ -248,7 +249,7 @@ class CommandProcessorEndpoint(Endpoint):
                 f"Types: {', '.join(TaskType.__members__)}."
             )
         task = self._build_task(words[0], words[1], words[2] if len(words) == 3 else "")
-        return _ok(f"Scheduled {_describe_task(task)}", task)
+        return _ok(f"Scheduled {format_task(task, values='data')}", task)
 
     def _build_task(self, type_word: str, name: str, rest: str) -> Task:
         task_type = TaskType.__members__.get(type_word.lower())
@@ -599,13 +600,6 @@ def _describe_component(component: AbstractComponent) -> str:
     if modules:
         text += f"  reloads: {', '.join(modules)}"
     return text
-
-
-def _describe_task(task: Task) -> str:
-    """A task as typed: ``(store_page, 'depth'): 3.2`` rather than a whole Page."""
-    if task.val_list and isinstance(task.val_list[0], Page):
-        return f"({task.type.name}, {task.name!r}): {_preview(task.val_list[0].data)}"
-    return str(task)
 
 
 def _preview(data: Any) -> str:

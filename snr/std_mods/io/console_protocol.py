@@ -24,7 +24,8 @@ import json
 from dataclasses import dataclass
 from typing import Any, List, Optional, Tuple
 
-from snr.prelude import CommsError, ConfigError, WireFormatError
+from snr.prelude import ConfigError, WireFormatError
+from snr.prelude.errors import ConsoleConnectionError  # in the tree of every SNR error
 
 __all__ = [
     "DEFAULT_CONSOLE_PORT",
@@ -61,18 +62,6 @@ _TRUNCATION_ROOM = 256  # the "(reply cut)" note added to a reply at the limit
 
 TOKEN_ENV_VAR = "SNR_CONSOLE_TOKEN"
 """Environment variable holding the shared console token (node and console)."""
-
-
-class ConsoleConnectionError(CommsError):
-    """A console could not connect to a node, lost it, or was turned away.
-
-    Example::
-
-        try:
-            RemoteConsole("127.0.0.1", 9123).connect()
-        except ConsoleConnectionError as e:
-            print(e)     # "Could not connect ... connection refused. Is the node running..."
-    """
 
 
 class Status(enum.Enum):

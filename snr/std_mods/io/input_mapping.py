@@ -22,7 +22,6 @@ from snr.prelude import (
     AbstractNode,
     ComponentError,
     DataKey,
-    Page,
     SomeTasks,
     Task,
     TaskId,
@@ -69,8 +68,8 @@ def stored_dict(task: Task) -> Optional[Dict[str, Any]]:
 
         stored_dict(tasks.store_data("controller_input", {"A": 1}))   # {'A': 1}
     """
-    page = task.val_list[0] if task.val_list else None
-    if isinstance(page, Page) and isinstance(page.data, dict):
+    page = task.page()
+    if page is not None and isinstance(page.data, dict):
         return page.data
     return None
 

@@ -37,7 +37,7 @@ from typing import Any, Callable, Deque, Dict, List, Optional, Tuple
 
 from snr.core.component import Component
 from snr.prelude import DataKey, Page, SomeTasks, Task, TaskId, TaskType
-from snr.prelude.errors import closest_match
+from snr.prelude.error_text import closest_match
 from snr.std_mods.io.console_protocol import Reply, Status
 
 __all__ = [
@@ -199,8 +199,8 @@ class KeyWatches:
     # -- handlers (node thread) ----------------------------------------------------
     def on_page(self, task: Task, key: TaskId) -> SomeTasks:
         """A page of a watched key was stored: note it for every watch of that key."""
-        page = task.val_list[0] if task.val_list else None
-        if not isinstance(page, Page):
+        page = task.page()
+        if page is None:
             return None
         now = time.perf_counter()
         for rate in self._rates:

@@ -35,7 +35,6 @@ from snr.prelude import (
     CommsError,
     ConfigError,
     DataKey,
-    Page,
     SomeTasks,
     Task,
     TaskId,
@@ -117,9 +116,9 @@ class FoxgloveBridge(Endpoint):
 
     def forward_page(self, task: Task, key: TaskId) -> SomeTasks:
         """Hand the stored page to the server; never waits for a viewer."""
-        page = task.val_list[0] if task.val_list else None
+        page = task.page()
         server = self._server
-        if isinstance(page, Page) and server is not None:
+        if page is not None and server is not None:
             server.publish(page)
         return None
 

@@ -109,9 +109,9 @@ class RecorderEndpoint(Endpoint):
         hold, nesting too deep, a time that is not a number) is logged with
         its key and skipped, whatever the error: recording goes on.
         """
-        page = task.val_list[0] if task.val_list else None
-        if not isinstance(page, Page):
-            self.warn("A store_page task for %r carries %r, not a Page", task.name, page)
+        page = task.page()
+        if page is None:
+            self.warn("A store_page task for %r carries %r, not a Page", task.name, task.val_list)
             return None
         try:
             _check_fields(page)

@@ -7,23 +7,9 @@ from typing import List, Optional, TextIO
 
 from snr.core import Endpoint, EndpointFactory
 from snr.prelude import AbstractNode, SomeTasks, Task, TaskId
+from snr.prelude.task import format_task  # the one task formatter, exported here too
 
 __all__ = ["PrinterEndpoint", "PrinterEndpointFactory", "format_task"]
-
-
-def format_task(task: Task) -> str:
-    """One line for a task, as in thesis figure 5.4 (``str(task)``).
-
-    Pages show in their short form (see `Page`): key, data, origin and age.
-
-    Example::
-
-        format_task(tasks.event("button_pressed", ["A"]))
-        # "(event, 'button_pressed'): ['A']"
-        format_task(tasks.store_page(Page("depth", 2.5, "robot", time.time())))
-        # "(store_page, 'depth'): [Page 'depth' = 2.5 from 'robot' (0.0 s ago)]"
-    """
-    return str(task)
 
 
 class PrinterEndpoint(Endpoint):
