@@ -82,7 +82,7 @@ def drive(brain: AbstractFactory, world: World, seconds: float, seed: int = 1) -
     run = Drive(robot)
     for _ in range(round(seconds / STEP_S)):
         for key, data in sensor_pages(robot, world, sensor, odometry).items():
-            task = node.task_store_data(key, data)
+            task = node.store_data_task(key, data)
             node.datastore[key] = task.val_list[0]  # stored before handlers run, as in a node
             node.execute_task(task)
         for task in node.scheduled:

@@ -494,6 +494,14 @@ class TestPseudoCodeListings(unittest.TestCase):
                 checked += 1
         self.assertEqual(checked, 14)
 
+    def test_6_3_names_are_aliases_of_the_store_task_builders(self) -> None:
+        node = Node("robot", snr.Config({"robot": [snr.TimeoutLoopFactory(seconds=1)]}))
+        page = node.page("depth", 2.5)
+        self.assertEqual(node.task_store_page(page), node.store_page_task(page))
+        by_thesis, by_snr = node.task_store_data("depth", 2.5), node.store_data_task("depth", 2.5)
+        self.assertEqual((by_thesis.type, by_thesis.name), (by_snr.type, by_snr.name))
+        self.assertEqual(by_thesis.val_list[0].data, 2.5)
+
 
 if __name__ == "__main__":
     unittest.main()

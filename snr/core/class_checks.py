@@ -66,7 +66,13 @@ _TASK_BUILDERS = {
     "add_component",
     "remove_component",
 }
-_SELF_BUILDERS = {"store_data_task", "page", "task_store_data", "task_store_page"}
+_SELF_BUILDERS = {
+    "page",
+    "store_data_task",
+    "store_page_task",
+    "task_store_data",  # the thesis's names (listing 6.3) for the two above
+    "task_store_page",
+}
 
 _checked: Dict[type, List[Tuple[str, bool]]] = {}  # class -> [(message, is_error)]
 _MAX_CACHED = 1000

@@ -189,7 +189,7 @@ class Component(AbstractComponent):
 
     def store_page(self, page: Page) -> None:
         """Queue storing ``page`` on the node; safe from any thread."""
-        self.parent.schedule(self.parent.task_store_page(page))
+        self.parent.schedule(self.parent.store_page_task(page))
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
         """Queue storing ``data`` under ``key``; safe from any thread.
@@ -207,7 +207,16 @@ class Component(AbstractComponent):
 
             return self.store_data_task("speed", 0.5)
         """
-        return self.parent.task_store_data(key, data, process)
+        return self.parent.store_data_task(key, data, process)
+
+    def store_page_task(self, page: Page) -> Task:
+        """A task that stores ``page``: return it from a handler.
+
+        Example::
+
+            return self.store_page_task(self.page("speed", 0.5))
+        """
+        return self.parent.store_page_task(page)
 
     def get_page(self, key: DataKey) -> Optional[Page]:
         """The newest page under ``key``, or None. Read-only; any thread."""

@@ -417,13 +417,13 @@ class Node(AbstractNode):
         """
         return self.queue.wait_for_room(timeout_s)
 
-    def task_store_page(self, page: Page) -> Task:
-        """A task that stores ``page`` when it runs."""
+    def store_page_task(self, page: Page) -> Task:
+        """A task that stores ``page`` when it runs (thesis: ``task_store_page``)."""
         return Task(TaskType.store_page, page.key, [page])
 
-    def task_store_data(self, key: DataKey, data: Any, process: bool = True) -> Task:
-        """A task that stores ``data`` under ``key`` when it runs."""
-        return self.task_store_page(self.page(key, data, process))
+    def store_data_task(self, key: DataKey, data: Any, process: bool = True) -> Task:
+        """A task that stores ``data`` under ``key`` when it runs (thesis: ``task_store_data``)."""
+        return self.store_page_task(self.page(key, data, process))
 
     # ------------------------------------------------------------------
     # Datastore (thesis listing 6.4)
@@ -448,7 +448,7 @@ class Node(AbstractNode):
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
         """Queue storing ``data`` under ``key``; safe from any thread."""
-        self.queue.schedule(self.task_store_data(key, data, process))
+        self.queue.schedule(self.store_data_task(key, data, process))
 
     def get_page(self, key: DataKey) -> Optional[Page]:
         """The newest page under ``key``, or None; safe from any thread.

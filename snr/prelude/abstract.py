@@ -403,12 +403,20 @@ class AbstractNode(_FriendlyABC):
         """Queue tasks (thread-safe)."""
 
     @abstractmethod
-    def task_store_page(self, page: Page) -> Task:
+    def store_page_task(self, page: Page) -> Task:
         """A task that stores ``page`` when it runs."""
 
     @abstractmethod
-    def task_store_data(self, key: DataKey, data: Any, process: bool = True) -> Task:
+    def store_data_task(self, key: DataKey, data: Any, process: bool = True) -> Task:
         """A task that stores ``data`` under ``key`` when it runs."""
+
+    def task_store_page(self, page: Page) -> Task:
+        """The thesis's name (listing 6.3) for `store_page_task`, kept as an alias."""
+        return self.store_page_task(page)
+
+    def task_store_data(self, key: DataKey, data: Any, process: bool = True) -> Task:
+        """The thesis's name (listing 6.3) for `store_data_task`, kept as an alias."""
+        return self.store_data_task(key, data, process)
 
     # -- datastore (listing 6.4) ------------------------------------------
     @abstractmethod

@@ -94,18 +94,18 @@ class MockNode(AbstractNode):
         elif t is not None:
             self.scheduled.extend(t)
 
-    def task_store_page(self, page: Page) -> Task:
+    def store_page_task(self, page: Page) -> Task:
         return Task(TaskType.store_page, page.key, [page])
 
-    def task_store_data(self, key: DataKey, data: Any, process: bool = True) -> Task:
-        return self.task_store_page(self.page(key, data, process))
+    def store_data_task(self, key: DataKey, data: Any, process: bool = True) -> Task:
+        return self.store_page_task(self.page(key, data, process))
 
     def page(self, key: DataKey, data: Any, process: bool = True) -> Page:
         return Page(key, data, self.role, time.time(), process)
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
         """Store at once (so ``get_data`` sees it) and record the task."""
-        task = self.task_store_data(key, data, process)
+        task = self.store_data_task(key, data, process)
         self.datastore[key] = task.val_list[0]
         self.scheduled.append(task)
 

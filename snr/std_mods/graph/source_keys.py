@@ -39,7 +39,8 @@ __all__ = ["KeyUse", "KeysInCode", "key_uses", "resolve"]
 
 _STORE_CALLS = frozenset({"store_data", "store_data_task", "task_store_data", "page", "Page"})
 _READ_CALLS = frozenset({"get_data", "get_page"})
-_OPAQUE_STORE_CALLS = frozenset({"store_page"})  # stores a page built somewhere else
+# These store a page built somewhere else.
+_OPAQUE_STORE_CALLS = frozenset({"store_page", "store_page_task", "task_store_page"})
 _SNR_MACHINERY = ("snr.core", "snr.prelude")  # the base classes: not a component's own keys
 
 # How a key is written in the call: a string, a path of attributes from
