@@ -23,7 +23,6 @@ from typing import List, Optional, Sequence
 
 import snr
 import snr.console
-import snr.docsite
 
 __all__ = ["main"]
 
@@ -66,7 +65,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     )
     sub.add_parser("console", help="type commands into a running node (same as snr-console)")
     docs_parser = sub.add_parser("docs", help="build (if needed) and open the docs offline")
-    snr.docsite.add_arguments(docs_parser)
     graph_parser = sub.add_parser(
         "graph",
         usage="snr graph FILE [--role ROLE] [--format {mermaid,dot,text}] [-- ARGS...]",
@@ -98,6 +96,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         from snr.std_mods.io import convert
 
         convert.add_arguments(convert_parser)
+    if words[:1] == ["docs"]:  # the docs builder is loaded only to build docs
+        from snr.tools import docsite
+
+        docsite.add_arguments(docs_parser)
     args = parser.parse_args(words)
     if args.command == "demo":
         from snr.demo import run_demo, run_sim_demo  # only the demo needs it
@@ -113,7 +115,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.command == "graph":
         return _graph(args.file, file_args, args.role, args.format)
     if args.command == "docs":
-        return snr.docsite.run(args)
+        return docsite.run(args)
     if args.command == "convert":
         return convert.run(args)
     if args.command == "version":

@@ -95,9 +95,9 @@ class TestDemoShipsInThePackage(unittest.TestCase):
         self.assertEqual(sorted(os.listdir(self.lib)), ["snr"], "no examples/ beside it")
 
     def test_the_installed_copy_finds_its_guide(self) -> None:
-        import snr.docsite
+        import snr.tools.docsite
 
-        self.assertEqual(snr.docsite.find_guide(self.lib / "snr"), self.lib / "snr" / "guide")
+        self.assertEqual(snr.tools.docsite.find_guide(self.lib / "snr"), self.lib / "snr" / "guide")
 
     def test_the_demo_runs_from_the_package_alone(self) -> None:
         """CI's smoke run, on the installed copy: a banner and the telemetry, no log chatter."""

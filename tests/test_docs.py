@@ -15,8 +15,8 @@ from pathlib import Path
 from typing import List
 from unittest import mock
 
-import snr.docsite
 from snr.__main__ import main
+from snr.tools import docsite
 from tests.examples_support import ROOT
 from tests.optional import needs
 
@@ -34,9 +34,7 @@ class TestDocsBuild(unittest.TestCase):
         # Without source listings and with one small API page: the same checks
         # in a fraction of the time (the `snr` page documents every export).
         # CI's `python -m snr docs --build-only` step builds all of it.
-        cls.problems = snr.docsite.build(
-            cls.output, DOCS, show_source=False, modules=("snr.utils",)
-        )
+        cls.problems = docsite.build(cls.output, DOCS, show_source=False, modules=("snr.utils",))
 
     @classmethod
     def tearDownClass(cls) -> None:
@@ -56,7 +54,7 @@ class TestDocsBuild(unittest.TestCase):
         self.assertIn('href="../snr.html"', index)  # and api/ links into the reference
 
     def test_a_clean_build_is_not_rebuilt(self) -> None:
-        self.assertFalse(snr.docsite.is_stale(self.output, DOCS))
+        self.assertFalse(docsite.is_stale(self.output, DOCS))
         out = io.StringIO()
         with contextlib.redirect_stdout(out):
             code = main(["docs", "--no-open", "--output", str(self.output)])
@@ -65,7 +63,7 @@ class TestDocsBuild(unittest.TestCase):
         self.assertIn("guide/index.html", out.getvalue())
 
     def test_served_on_localhost(self) -> None:
-        with snr.docsite.make_server(self.output, 0) as server:
+        with docsite.make_server(self.output, 0) as server:
             host, port = server.server_address[:2]
             self.assertEqual(host, "127.0.0.1")
             # serve_forever checks for shutdown() every poll_interval (0.5 s by default).
@@ -84,19 +82,19 @@ class TestDocsBuild(unittest.TestCase):
         self.addCleanup(shutil.rmtree, guide, True)
         (guide / "index.md").write_text("# Home\n", encoding="utf-8")
         output = guide / "api"
-        snr.docsite.render_guide(guide, output)
-        (output / snr.docsite.STAMP_FILE).write_text(snr.docsite._fingerprint(guide), "utf-8")
-        self.assertFalse(snr.docsite.is_stale(output, guide))
+        docsite.render_guide(guide, output)
+        (output / docsite.STAMP_FILE).write_text(docsite._fingerprint(guide), "utf-8")
+        self.assertFalse(docsite.is_stale(output, guide))
         later = time.time() + 5
         os.utime(guide / "index.md", (later, later))
-        self.assertTrue(snr.docsite.is_stale(output, guide))
+        self.assertTrue(docsite.is_stale(output, guide))
 
 
 class TestDocsChecks(unittest.TestCase):
     def test_without_pdoc_the_error_says_what_to_install(self) -> None:
         with mock.patch.dict(sys.modules, {"pdoc": None, "pdoc.render": None}):
-            with self.assertRaises(snr.docsite.DocsBuildError) as caught:
-                snr.docsite.build(Path(tempfile.mkdtemp(prefix="snr-docs-")), None)
+            with self.assertRaises(docsite.DocsBuildError) as caught:
+                docsite.build(Path(tempfile.mkdtemp(prefix="snr-docs-")), None)
         self.assertIn("pip install 'snr[docs]'", str(caught.exception))
 
     def test_a_misspelt_name_in_a_docstring_is_reported(self) -> None:
@@ -107,7 +105,7 @@ class TestDocsChecks(unittest.TestCase):
 
         handler.__module__ = "student_module"
         vars(module)["handler"] = handler
-        problems = snr.docsite.check_docstring_references([module])
+        problems = docsite.check_docstring_references([module])
         self.assertEqual(len(problems), 2, problems)
         self.assertIn("`Endpont`", problems[0])
         self.assertIn("`Task.val_lst`", problems[1])
@@ -121,7 +119,7 @@ class TestDocsChecks(unittest.TestCase):
             encoding="utf-8",
         )
         (guide / "other.md").write_text("# Other\n[back](index.md#home)\n", encoding="utf-8")
-        problems = snr.docsite.render_guide(guide, guide / "api")
+        problems = docsite.render_guide(guide, guide / "api")
         self.assertEqual(len(problems), 1, problems)
         self.assertIn("'missing.md#top'", problems[0])
         other = (guide / "api" / "guide" / "other.html").read_text("utf-8")
@@ -135,7 +133,7 @@ class TestDocsChecks(unittest.TestCase):
             "# Home\n[node](api/snr/core/node.html) [nope](api/snr/core/nodes.html)\n",
             encoding="utf-8",
         )
-        problems = snr.docsite.render_guide(guide, guide / "api")
+        problems = docsite.render_guide(guide, guide / "api")
         self.assertEqual(len(problems), 1, problems)
         self.assertIn("'api/snr/core/nodes.html'", problems[0])
 

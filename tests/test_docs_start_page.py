@@ -5,8 +5,8 @@ import tempfile
 import unittest
 from pathlib import Path
 
-import snr.docsite
 from snr.api_topics import TOPICS, Topic, check_topics, full_entry, summary
+from snr.tools import docsite
 from tests.examples_support import ROOT
 from tests.optional import needs
 
@@ -50,7 +50,7 @@ class TestTopics(unittest.TestCase):
 class TestStartPage(unittest.TestCase):
     def test_the_start_page_lists_names_by_topic_with_links(self) -> None:
         output = _temp_dir(self)
-        self.assertEqual(snr.docsite.render_api_start_page(output), [])
+        self.assertEqual(docsite.render_api_start_page(output), [])
         page = (output / "snr.html").read_text("utf-8")
         self.assertIn('<h3 id="building-a-robot">Building a robot</h3>', page)
         self.assertIn('<a href="snr/core.html#Node"><code>Node</code></a>: Builds its', page)
@@ -62,22 +62,22 @@ class TestStartPage(unittest.TestCase):
         output = _temp_dir(self)
         (output / "snr").mkdir()
         (output / "snr" / "utils.html").write_text('<div id="Expector"></div>', "utf-8")
-        problems = snr.docsite.render_api_start_page(output)
+        problems = docsite.render_api_start_page(output)
         self.assertIn("The start page links to snr/utils.html#MockNode, which", "\n".join(problems))
 
 
 class TestGuideLookup(unittest.TestCase):
     def test_a_checkout_uses_its_docs_folder(self) -> None:
-        self.assertEqual(snr.docsite.find_guide(Path(ROOT, "snr")), Path(ROOT, "docs"))
+        self.assertEqual(docsite.find_guide(Path(ROOT, "snr")), Path(ROOT, "docs"))
 
     def test_an_installed_package_uses_its_shipped_copy(self) -> None:
         site = _temp_dir(self)
         package = site / "snr"
         (package / "guide").mkdir(parents=True)
         (package / "__init__.py").write_text("", "utf-8")
-        self.assertIsNone(snr.docsite.find_guide(package))
+        self.assertIsNone(docsite.find_guide(package))
         (package / "guide" / "index.md").write_text("# Home\n", "utf-8")
-        self.assertEqual(snr.docsite.find_guide(package), package / "guide")
+        self.assertEqual(docsite.find_guide(package), package / "guide")
 
     @needs("pdoc")
     def test_the_shipped_copy_names_the_examples_it_cannot_link_to(self) -> None:
@@ -90,7 +90,7 @@ class TestGuideLookup(unittest.TestCase):
             "utf-8",
         )
         output = package / "built"
-        problems = snr.docsite.render_guide(package / "guide", output)
+        problems = docsite.render_guide(package / "guide", output)
         self.assertEqual(len(problems), 1, problems)  # only the page missing from the guide
         self.assertIn("'gone.md'", problems[0])
         page = (output / "guide" / "index.html").read_text("utf-8")
