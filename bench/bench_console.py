@@ -18,7 +18,8 @@ import time
 from functools import partial
 from typing import Callable, List, Tuple
 
-from snr import CommandReceiverFactory, Config, Mode, Node, RemoteConsole
+from snr import CommandReceiverFactory, Config, Mode, Node
+from snr.std_mods.io import RemoteConsole
 
 
 def echo_server() -> Tuple[socket.socket, threading.Thread]:

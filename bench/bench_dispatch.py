@@ -31,10 +31,8 @@ from typing import Callable, Deque, Dict, List, Optional, Tuple
 from snr import (
     AbstractNode,
     Config,
-    DummyEndpointFactory,
     Endpoint,
     EndpointFactory,
-    MockNode,
     Mode,
     Node,
     SomeTasks,
@@ -43,6 +41,7 @@ from snr import (
     TaskType,
     tasks,
 )
+from snr.utils import DummyEndpointFactory, MockNode
 
 PING = (TaskType.event, "ping")
 PONG = (TaskType.event, "pong")

@@ -21,7 +21,8 @@ import random
 import time
 from typing import Callable, List, Tuple
 
-from snr import KalmanFilter, MovingAvgFilter
+from snr.core import MovingAvgFilter
+from snr.std_mods.filters import KalmanFilter
 
 SAMPLES = 2000
 NOISE_SD = 0.5

@@ -46,11 +46,11 @@ from snr import (
     Mode,
     MovingAvgFilterFactory,
     TaskType,
-    TestRunner,
     ThreadLoop,
     TimeoutLoopFactory,
     tasks,
 )
+from snr.core import TestRunner
 
 ROLE = "bench"
 TARGET_MS = 20.0

@@ -4,6 +4,13 @@ Everything a student needs is here::
 
     from snr import *
 
+That gives the names of ``__all__`` below: what the thesis's listings, the
+tutorial and the examples use, and the names kept for code written against
+the 2021 release (``snr.compat2021``). The rest of SNR, the machinery and the
+less common components, is imported from its own module, e.g.
+``from snr.std_mods.comms import SocketsServerFactory`` or
+``from snr.core.task_queue import TaskQueue``.
+
 ``python -m snr docs`` builds this documentation, offline, and opens it in a
 browser: the guide (concepts, a tutorial, each ready-made component) and
 the API reference. ``python -m snr demo`` runs a whole system of nodes, the
@@ -11,95 +18,56 @@ thesis's underwater vehicle; its code is the ``snr.demo`` package. In a copy
 of SNR's source, the guide's pages are ``docs/*.md`` and the thesis's
 listings are in ``examples/``.
 
-``import snr`` is kept light: what only some programs need (the ready-made
-components of ``snr.std_mods``, ``unittest`` behind ``SNRTestCase``,
-dataclasses-json behind ``Page.serialize()``) is imported the first time it
-is used; ``from snr import *`` imports everything it names.
-
-Code written against the 2021 release of SNR runs too: the names it used
-that the thesis does not print (``ExpectorProtocol``, ``MPExpector``,
-``MovingAvgEndpointFactory``, ...) are kept in ``snr.compat2021``, and
-exported here.
+``import snr`` is kept light: the ready-made components (``snr.std_mods``),
+``SNRTestCase`` (with ``unittest``) and the 2021 names are imported the
+first time one is used; ``from snr import *`` imports everything it names.
 """
 
-from typing import TYPE_CHECKING, Any, Dict, List
+# This file is the one list of the public names (docs/design.md, "The public
+# names"). To add one: import it below from its package, add it to __all__ and,
+# if it is loaded on first use, to _LAZY; tests/test_public_api.py and the docs
+# build say what is missing.
+
+from typing import TYPE_CHECKING, Any, Dict, List, Tuple
 
 from snr.core import (
     CliRunner,
-    Clock,
     Config,
     Endpoint,
     EndpointFactory,
     LoopFactory,
-    LoopState,
-    MissingKeyHints,
     MultiProcRunner,
     Node,
-    NodeState,
-    Profiler,
     SynchronousRunner,
-    TaskQueue,
-    TestRunner,
     ThreadLoop,
     Timer,
     tasks,
 )
 from snr.prelude import (
-    AbstractComponent,
-    AbstractConfig,
     AbstractEndpoint,
     AbstractFactory,
-    AbstractLoop,
-    AbstractMultiRunner,
     AbstractNode,
-    AbstractProfiler,
-    AbstractRunner,
-    AbstractTaskQueue,
-    CommsError,
-    ComponentError,
     ComponentName,
     ComponentsByRole,
-    ConfigError,
-    DataDict,
     DataKey,
-    HandlerError,
-    LoopError,
-    MissingSuperInitError,
     Mode,
-    NodeStateError,
-    NotSerializableError,
     Page,
-    Role,
-    Serializable,
     SNRError,
     SomeTasks,
     Task,
-    TaskHandler,
-    TaskHandlerMap,
     TaskId,
     TaskName,
-    TaskPriority,
-    TaskScheduler,
     TaskType,
-    ThreadSafetyError,
-    WireFormatError,
 )
 from snr.utils import (
-    DummyEndpoint,
-    DummyEndpointFactory,
     ExpecterEndpointFactory,
     Expector,
-    ExpectorEndpoint,
     ExpectorEndpointFactory,
     ListReplayerFactory,
-    ListReplayerLoop,
-    MockNode,
     MultiProcExpector,
-    OrderedExpector,
-    TempFile,
 )
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers see them
     from snr.compat2021 import (
         AbstractContext,
         Consumer,
@@ -115,326 +83,171 @@ if TYPE_CHECKING:
         TaskExpectations,
         TaskExpector,
     )
-    from snr.std_mods import (
+    from snr.std_mods.comms import (
         COMMS_CONNECTED,
         COMMS_DISCONNECTED,
-        DEFAULT_CONSOLE_PORT,
-        DEFAULT_FILTER_LENGTH,
-        DEFAULT_JOYSTICK_SCRIPT,
-        STEAM_CONTROLLER_BUTTONS,
-        STEAM_CONTROLLER_MAPPING,
-        CommandProcessorEndpoint,
+        PipeLoopFactory,
+        SerialLinkFactory,
+        SocketsPair,
+        ZenohCommsFactory,
+    )
+    from snr.std_mods.filters import KalmanFilterFactory, MovingAvgFilterFactory
+    from snr.std_mods.io import (
         CommandReceiverFactory,
-        CommandReceiverLoop,
-        CommsLoop,
-        ControllerLoop,
         ControllerLoopFactory,
-        ControlProcessorEndpoint,
         ControlProcessorFactory,
-        FoxgloveBridge,
         FoxgloveBridgeFactory,
-        InputMappingEndpoint,
         InputMappingFactory,
         Joystick,
-        JoystickStep,
-        KalmanFilter,
-        KalmanFilterEndpoint,
-        KalmanFilterFactory,
-        LocalConsole,
         LocalConsoleFactory,
-        MovingAvgEndpoint,
-        MovingAvgFilter,
-        MovingAvgFilterFactory,
-        PageReader,
-        PipeLoop,
-        PipeLoopFactory,
-        PrinterEndpoint,
-        PrinterEndpointFactory,
-        RecorderEndpoint,
         RecorderEndpointFactory,
-        RemoteConsole,
-        ReplayerLoop,
         ReplayerLoopFactory,
-        SerialLinkFactory,
-        SerialLinkLoop,
-        SimRobotFactory,
-        SimRobotLoop,
         SimulatedJoystick,
-        SimViewFactory,
-        SimViewLoop,
-        SocketsClientFactory,
-        SocketsClientLoop,
-        SocketsPair,
-        SocketsServerFactory,
-        SocketsServerLoop,
-        StopwatchEndpoint,
+    )
+    from snr.std_mods.sim import SimRobotFactory, SimViewFactory, World
+    from snr.std_mods.utils import (
+        PrinterEndpointFactory,
         StopwatchEndpointFactory,
-        TextReader,
-        TextReplayerFactory,
-        TextReplayerLoop,
-        TimeoutLoop,
         TimeoutLoopFactory,
-        World,
-        ZenohComms,
-        ZenohCommsFactory,
-        format_task,
     )
     from snr.utils.test_case import SNRTestCase
 
-_LAZY: Dict[str, str] = {
-    **dict.fromkeys(
-        (
-            "COMMS_CONNECTED",
-            "COMMS_DISCONNECTED",
-            "CommandProcessorEndpoint",
-            "CommandReceiverFactory",
-            "CommandReceiverLoop",
-            "CommsLoop",
-            "ControlProcessorEndpoint",
-            "ControlProcessorFactory",
-            "ControllerLoop",
-            "ControllerLoopFactory",
-            "DEFAULT_CONSOLE_PORT",
-            "DEFAULT_FILTER_LENGTH",
-            "DEFAULT_JOYSTICK_SCRIPT",
-            "FoxgloveBridge",
-            "FoxgloveBridgeFactory",
-            "InputMappingEndpoint",
-            "InputMappingFactory",
-            "Joystick",
-            "JoystickStep",
-            "KalmanFilter",
-            "KalmanFilterEndpoint",
-            "KalmanFilterFactory",
-            "LocalConsole",
-            "LocalConsoleFactory",
-            "MovingAvgEndpoint",
-            "MovingAvgFilter",
-            "MovingAvgFilterFactory",
-            "PageReader",
-            "PipeLoop",
-            "PipeLoopFactory",
-            "PrinterEndpoint",
-            "PrinterEndpointFactory",
-            "RecorderEndpoint",
-            "RecorderEndpointFactory",
-            "RemoteConsole",
-            "ReplayerLoop",
-            "ReplayerLoopFactory",
-            "STEAM_CONTROLLER_BUTTONS",
-            "STEAM_CONTROLLER_MAPPING",
-            "SerialLinkFactory",
-            "SerialLinkLoop",
-            "SimRobotFactory",
-            "SimRobotLoop",
-            "SimViewFactory",
-            "SimViewLoop",
-            "SimulatedJoystick",
-            "SocketsClientFactory",
-            "SocketsClientLoop",
-            "SocketsPair",
-            "SocketsServerFactory",
-            "SocketsServerLoop",
-            "StopwatchEndpoint",
-            "StopwatchEndpointFactory",
-            "TextReader",
-            "TextReplayerFactory",
-            "TextReplayerLoop",
-            "TimeoutLoop",
-            "TimeoutLoopFactory",
-            "World",
-            "ZenohComms",
-            "ZenohCommsFactory",
-            "format_task",
-        ),
-        "snr.std_mods",
+_LAZY: Dict[str, Tuple[str, ...]] = {
+    "snr.compat2021": (
+        "AbstractContext",
+        "Consumer",
+        "Context",
+        "ExpectorProtocol",
+        "MovingAvgEndpointFactory",
+        "MPExpector",
+        "RemovedApiError",
+        "Settings",
+        "SocketsListenerFactory",
+        "SocketsLoopFactory",
+        "SocketsWrapper",
+        "TaskExpectations",
+        "TaskExpector",
     ),
-    **dict.fromkeys(
-        (
-            "AbstractContext",
-            "Consumer",
-            "Context",
-            "ExpectorProtocol",
-            "MPExpector",
-            "MovingAvgEndpointFactory",
-            "RemovedApiError",
-            "Settings",
-            "SocketsListenerFactory",
-            "SocketsLoopFactory",
-            "SocketsWrapper",
-            "TaskExpectations",
-            "TaskExpector",
-        ),
-        "snr.compat2021",
+    "snr.std_mods.comms": (
+        "COMMS_CONNECTED",
+        "COMMS_DISCONNECTED",
+        "PipeLoopFactory",
+        "SerialLinkFactory",
+        "SocketsPair",
+        "ZenohCommsFactory",
     ),
-    "SNRTestCase": "snr.utils.test_case",
+    "snr.std_mods.filters": ("KalmanFilterFactory", "MovingAvgFilterFactory"),
+    "snr.std_mods.io": (
+        "CommandReceiverFactory",
+        "ControllerLoopFactory",
+        "ControlProcessorFactory",
+        "FoxgloveBridgeFactory",
+        "InputMappingFactory",
+        "Joystick",
+        "LocalConsoleFactory",
+        "RecorderEndpointFactory",
+        "ReplayerLoopFactory",
+        "SimulatedJoystick",
+    ),
+    "snr.std_mods.sim": ("SimRobotFactory", "SimViewFactory", "World"),
+    "snr.std_mods.utils": (
+        "PrinterEndpointFactory",
+        "StopwatchEndpointFactory",
+        "TimeoutLoopFactory",
+    ),
+    "snr.utils.test_case": ("SNRTestCase",),
 }
-"""Public names imported on first use, and the module each comes from.
+"""The public names imported on first use, by the module each comes from.
 
-The ready-made components (``snr.std_mods``: sockets, consoles, serial,
-recorders, filters) and ``SNRTestCase`` (``unittest``) cost more to import
-than the rest of SNR together; a program pays for them only when it uses
-them. The names kept for code written against the 2021 release
-(``snr.compat2021``) come with the ready-made components they alias."""
+The ready-made components (``snr.std_mods``) and ``SNRTestCase``
+(``unittest``) cost more to import than the rest of SNR together; a program
+pays for them only when it uses them. The names kept for code written
+against the 2021 release (``snr.compat2021``) come with the components they
+alias."""
 
 __version__ = "0.1.0"
 
 __all__ = [
-    "AbstractComponent",
-    "AbstractConfig",
     "AbstractContext",
     "AbstractEndpoint",
     "AbstractFactory",
-    "AbstractLoop",
-    "AbstractMultiRunner",
     "AbstractNode",
-    "AbstractProfiler",
-    "AbstractRunner",
-    "AbstractTaskQueue",
     "COMMS_CONNECTED",
     "COMMS_DISCONNECTED",
     "CliRunner",
-    "Clock",
-    "CommandProcessorEndpoint",
     "CommandReceiverFactory",
-    "CommandReceiverLoop",
-    "CommsError",
-    "CommsLoop",
-    "ComponentError",
     "ComponentName",
     "ComponentsByRole",
     "Config",
-    "ConfigError",
     "Consumer",
     "Context",
-    "ControlProcessorEndpoint",
     "ControlProcessorFactory",
-    "ControllerLoop",
     "ControllerLoopFactory",
-    "DEFAULT_CONSOLE_PORT",
-    "DEFAULT_FILTER_LENGTH",
-    "DEFAULT_JOYSTICK_SCRIPT",
-    "DataDict",
     "DataKey",
-    "DummyEndpoint",
-    "DummyEndpointFactory",
     "Endpoint",
     "EndpointFactory",
     "ExpecterEndpointFactory",
     "Expector",
-    "ExpectorEndpoint",
     "ExpectorEndpointFactory",
     "ExpectorProtocol",
-    "FoxgloveBridge",
     "FoxgloveBridgeFactory",
-    "HandlerError",
-    "InputMappingEndpoint",
     "InputMappingFactory",
     "Joystick",
-    "JoystickStep",
-    "KalmanFilter",
-    "KalmanFilterEndpoint",
     "KalmanFilterFactory",
     "ListReplayerFactory",
-    "ListReplayerLoop",
-    "LocalConsole",
     "LocalConsoleFactory",
-    "LoopError",
     "LoopFactory",
-    "LoopState",
     "MPExpector",
-    "MissingKeyHints",
-    "MissingSuperInitError",
-    "MockNode",
     "Mode",
-    "MovingAvgEndpoint",
     "MovingAvgEndpointFactory",
-    "MovingAvgFilter",
     "MovingAvgFilterFactory",
     "MultiProcExpector",
     "MultiProcRunner",
     "Node",
-    "NodeState",
-    "NodeStateError",
-    "NotSerializableError",
-    "OrderedExpector",
     "Page",
-    "PageReader",
-    "PipeLoop",
     "PipeLoopFactory",
-    "PrinterEndpoint",
     "PrinterEndpointFactory",
-    "Profiler",
-    "RecorderEndpoint",
     "RecorderEndpointFactory",
-    "RemoteConsole",
     "RemovedApiError",
-    "ReplayerLoop",
     "ReplayerLoopFactory",
-    "Role",
     "SNRError",
     "SNRTestCase",
-    "STEAM_CONTROLLER_BUTTONS",
-    "STEAM_CONTROLLER_MAPPING",
     "SerialLinkFactory",
-    "SerialLinkLoop",
-    "Serializable",
     "Settings",
     "SimRobotFactory",
-    "SimRobotLoop",
     "SimViewFactory",
-    "SimViewLoop",
     "SimulatedJoystick",
-    "SocketsClientFactory",
-    "SocketsClientLoop",
     "SocketsListenerFactory",
     "SocketsLoopFactory",
     "SocketsPair",
-    "SocketsServerFactory",
-    "SocketsServerLoop",
     "SocketsWrapper",
     "SomeTasks",
-    "StopwatchEndpoint",
     "StopwatchEndpointFactory",
     "SynchronousRunner",
     "Task",
     "TaskExpectations",
     "TaskExpector",
-    "TaskHandler",
-    "TaskHandlerMap",
     "TaskId",
     "TaskName",
-    "TaskPriority",
-    "TaskQueue",
-    "TaskScheduler",
     "TaskType",
-    "TempFile",
-    "TestRunner",
-    "TextReader",
-    "TextReplayerFactory",
-    "TextReplayerLoop",
     "ThreadLoop",
-    "ThreadSafetyError",
-    "TimeoutLoop",
     "TimeoutLoopFactory",
     "Timer",
-    "WireFormatError",
     "World",
-    "ZenohComms",
     "ZenohCommsFactory",
-    "__version__",
-    "format_task",
     "tasks",
 ]
 
+_HOME: Dict[str, str] = {name: module for module, names in _LAZY.items() for name in names}
+
 
 def __getattr__(name: str) -> Any:
-    """Import a name of ``_LAZY`` (or ``snr.std_mods``) on first use (PEP 562)."""
+    """Import a name of ``_LAZY`` (or the ``snr.std_mods`` package) on first use (PEP 562)."""
     import importlib
 
     if name == "std_mods":
         return importlib.import_module("snr.std_mods")
-    module = _LAZY.get(name)
+    module = _HOME.get(name)
     if module is None:
         raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
     value = getattr(importlib.import_module(module), name)

@@ -57,76 +57,61 @@ TOPICS: Tuple[Topic, ...] = (
         "tasks, loops run beside the node; a runner starts the nodes.",
         _names(
             "Node Config Endpoint EndpointFactory ThreadLoop LoopFactory "
-            "SynchronousRunner MultiProcRunner CliRunner TestRunner Mode Role "
-            "ComponentName ComponentsByRole"
+            "SynchronousRunner MultiProcRunner CliRunner Mode ComponentName "
+            "ComponentsByRole Timer"
         ),
         _names("concepts tutorial"),
     ),
     Topic(
         "Tasks and pages",
         "Tasks are events handed to endpoints; pages are data stored under a key.",
-        _names(
-            "Task TaskType TaskPriority tasks TaskId TaskName TaskHandler "
-            "TaskHandlerMap TaskScheduler SomeTasks Page DataKey DataDict "
-            "Serializable"
-        ),
+        _names("Task TaskType tasks TaskId TaskName SomeTasks Page DataKey"),
         _names("concepts"),
     ),
     Topic(
         "Talking to other nodes",
         "Comms components forward pages by key between nodes: TCP sockets, "
-        "pipes between processes, a serial port to a device, Zenoh.",
+        "pipes between processes, a serial port to a device, Zenoh. (The "
+        "sockets server and client factories alone, and the loops, are in "
+        "snr.std_mods.comms.)",
         _names(
-            "SocketsPair SocketsServerFactory SocketsServerLoop "
-            "SocketsClientFactory SocketsClientLoop PipeLoopFactory PipeLoop "
-            "CommsLoop COMMS_CONNECTED COMMS_DISCONNECTED SerialLinkFactory "
-            "SerialLinkLoop ZenohCommsFactory ZenohComms"
+            "SocketsPair PipeLoopFactory SerialLinkFactory ZenohCommsFactory "
+            "COMMS_CONNECTED COMMS_DISCONNECTED"
         ),
         _names("comms serial wire-format"),
     ),
     Topic(
         "Filters",
         "Smooth a stream of numbers stored under one key into another key.",
-        _names(
-            "MovingAvgFilterFactory MovingAvgEndpoint MovingAvgFilter "
-            "DEFAULT_FILTER_LENGTH KalmanFilterFactory KalmanFilterEndpoint "
-            "KalmanFilter"
-        ),
+        _names("MovingAvgFilterFactory KalmanFilterFactory"),
         _names("filters"),
     ),
     Topic(
         "Recording and replaying",
-        "Record pages to a file and play them back later, or feed a text file in.",
-        _names(
-            "RecorderEndpointFactory RecorderEndpoint ReplayerLoopFactory "
-            "ReplayerLoop PageReader TextReplayerFactory TextReplayerLoop "
-            "TextReader"
-        ),
+        "Record pages to a file and play them back later (text files and MCAP "
+        "readers are in snr.std_mods.io).",
+        _names("RecorderEndpointFactory ReplayerLoopFactory"),
         _names("recording"),
     ),
     Topic(
         "Seeing your robot",
         "Watch a node's pages live in Foxglove or Lichtblick.",
-        _names("FoxgloveBridgeFactory FoxgloveBridge"),
+        _names("FoxgloveBridgeFactory"),
         _names("viewing"),
     ),
     Topic(
         "The console",
-        "Type commands into a running node, from its terminal or over TCP.",
-        _names(
-            "CommandReceiverFactory CommandReceiverLoop CommandProcessorEndpoint "
-            "LocalConsoleFactory LocalConsole RemoteConsole DEFAULT_CONSOLE_PORT"
-        ),
+        "Type commands into a running node, from its terminal or over TCP (the "
+        "client for scripts, RemoteConsole, is in snr.std_mods.io).",
+        _names("CommandReceiverFactory LocalConsoleFactory"),
         _names("console"),
     ),
     Topic(
         "Game controllers",
         "Read a game controller (or a scripted one), rename its controls, react to buttons.",
         _names(
-            "ControllerLoopFactory ControllerLoop InputMappingFactory "
-            "InputMappingEndpoint ControlProcessorFactory ControlProcessorEndpoint "
-            "Joystick SimulatedJoystick JoystickStep DEFAULT_JOYSTICK_SCRIPT "
-            "STEAM_CONTROLLER_BUTTONS STEAM_CONTROLLER_MAPPING"
+            "ControllerLoopFactory InputMappingFactory ControlProcessorFactory "
+            "Joystick SimulatedJoystick"
         ),
         _names("controller"),
     ),
@@ -135,54 +120,37 @@ TOPICS: Tuple[Topic, ...] = (
         "A 2-D differential-drive robot among walls, storing the pages a real "
         "robot would; drawn in a window or to PNG files (the physics, sensors and "
         "robot spec are in snr.std_mods.sim).",
-        _names("SimRobotFactory SimRobotLoop SimViewFactory SimViewLoop World"),
+        _names("SimRobotFactory SimViewFactory World"),
         _names("simulator"),
     ),
     Topic(
         "Small helpers: timeout, stopwatch, printer",
         "End a node after a while, time tasks, print them.",
-        _names(
-            "TimeoutLoopFactory TimeoutLoop StopwatchEndpointFactory "
-            "StopwatchEndpoint PrinterEndpointFactory PrinterEndpoint format_task"
-        ),
+        _names("TimeoutLoopFactory StopwatchEndpointFactory PrinterEndpointFactory"),
         _names("utilities"),
     ),
     Topic(
         "Testing",
-        "Run a node in a test, expect the tasks it should run, feed it values.",
+        "Run a node in a test, expect the tasks it should run, feed it values "
+        "(more tools in snr.utils).",
         _names(
-            "SNRTestCase Expector OrderedExpector MultiProcExpector "
-            "ExpectorEndpointFactory ExpecterEndpointFactory ExpectorEndpoint "
-            "ListReplayerFactory ListReplayerLoop DummyEndpointFactory "
-            "DummyEndpoint MockNode TempFile"
+            "SNRTestCase Expector MultiProcExpector ExpectorEndpointFactory "
+            "ExpecterEndpointFactory ListReplayerFactory"
         ),
         _names("tutorial utilities"),
     ),
     Topic(
-        "Inside a node: time, queues, profiling",
-        "What a node uses to run its tasks and loops, and to tell you how it went.",
-        _names("Timer Clock Profiler TaskQueue NodeState LoopState MissingKeyHints"),
-        _names("design performance"),
-    ),
-    Topic(
         "Errors",
-        "Every error SNR raises on purpose is an SNRError; each says what to fix.",
-        _names(
-            "SNRError ConfigError ComponentError MissingSuperInitError HandlerError "
-            "LoopError NodeStateError ThreadSafetyError CommsError WireFormatError "
-            "NotSerializableError"
-        ),
+        "Every error SNR raises on purpose is an SNRError and says what to fix; "
+        "the kinds of SNRError are in snr.prelude.",
+        _names("SNRError"),
         _names("errors"),
     ),
     Topic(
         "The interfaces",
-        "The abstract classes of ``snr.prelude``: what a node, a component or a "
-        "runner must do, for writing a new kind of one.",
-        _names(
-            "AbstractComponent AbstractEndpoint AbstractLoop AbstractFactory "
-            "AbstractNode AbstractConfig AbstractRunner AbstractMultiRunner "
-            "AbstractTaskQueue AbstractProfiler"
-        ),
+        "The abstract classes a node, a factory and an endpoint meet; the "
+        "others (loops, runners, configs) are in snr.prelude.",
+        _names("AbstractNode AbstractFactory AbstractEndpoint"),
         _names("design"),
     ),
     Topic(
@@ -209,8 +177,6 @@ PAGE_MODULES: Tuple[str, ...] = (
 )
 """The modules documented in full, one page each, in the order a name is looked up."""
 
-_NOT_LISTED = {"__version__"}
-
 
 def check_topics(topics: Sequence[Topic] = TOPICS) -> List[str]:
     """One problem per export of ``snr`` in no topic or two, and per topic name not exported.
@@ -221,7 +187,7 @@ def check_topics(topics: Sequence[Topic] = TOPICS) -> List[str]:
     """
     problems: List[str] = []
     seen: Dict[str, str] = {}
-    exported = set(snr.__all__) - _NOT_LISTED
+    exported = set(snr.__all__)
     for topic in topics:
         for name in topic.names:
             if name in seen:
@@ -246,22 +212,34 @@ def check_topics(topics: Sequence[Topic] = TOPICS) -> List[str]:
 def full_entry(name: str) -> Optional[str]:
     """Where the export ``name`` is documented in full, relative to the reference's root.
 
-    The page of the module that defines it, if that is one of
-    `PAGE_MODULES`; else the first of them that exports it. None if none does.
+    The page of the package nearest the top that exports it on the way to the
+    module that defines it (``snr.std_mods.comms`` for `SocketsPair`, defined
+    in ``snr.std_mods.comms.sockets``); else the first of `PAGE_MODULES` that
+    exports it. None if none does.
 
     Example::
 
-        full_entry("Node")     # 'snr/core.html#Node'
-        full_entry("tasks")    # 'snr/core/tasks.html'
+        full_entry("Node")          # 'snr/core.html#Node'
+        full_entry("SocketsPair")   # 'snr/std_mods/comms.html#SocketsPair'
+        full_entry("tasks")         # 'snr/core/tasks.html'
     """
     value = getattr(snr, name)
     if inspect.ismodule(value):
         return value.__name__.replace(".", "/") + ".html"
     defined_in = getattr(value, "__module__", None) or ""
-    exporters = [m for m in PAGE_MODULES if name in _exports(m)]
-    home = [m for m in exporters if defined_in == m or defined_in.startswith(m + ".")]
-    chosen = home or exporters
+    if not defined_in.startswith("snr."):
+        # A constant or an alias (COMMS_CONNECTED = "..."): where snr loads it from.
+        defined_in = snr._HOME.get(name, "")
+    parts = defined_in.split(".")
+    on_the_way = [".".join(parts[:end]) for end in range(2, len(parts) + 1)]
+    home = [m for m in on_the_way if _on_a_page(m) and name in _exports(m)]
+    chosen = home or [m for m in PAGE_MODULES if name in _exports(m)]
     return f"{chosen[0].replace('.', '/')}.html#{name}" if chosen else None
+
+
+def _on_a_page(module_name: str) -> bool:
+    """True if pdoc writes a page for ``module_name`` (one of `PAGE_MODULES` or inside one)."""
+    return any(module_name == m or module_name.startswith(m + ".") for m in PAGE_MODULES)
 
 
 def _exports(module_name: str) -> Sequence[str]:

@@ -19,7 +19,7 @@ Kept, on top of today's classes:
 
 Elsewhere, in the classes themselves: ``Expector[str](...)`` (expectors are
 generic), ``SNRTestCase.temp_file(filename, overwrite, cleanup)`` (it returns a
-`TempFile`) and ``TimeoutLoopFactory()`` with no time.
+``snr.utils.TempFile``) and ``TimeoutLoopFactory()`` with no time.
 
 Refused, with an error that names the replacement (`RemovedApiError`):
 ``Settings``, ``Context``, ``AbstractContext``, ``SocketsLoopFactory``,
@@ -84,7 +84,7 @@ class ExpectorProtocol(Protocol):
     """What an expector does: count keys, and check the counts.
 
     The 2021 release's type for "an expector", as students' endpoints take
-    one; every SNR expector (`Expector`, `OrderedExpector`,
+    one; every SNR expector (`Expector`, ``OrderedExpector``,
     `MultiProcExpector`) is one.
 
     Example::

@@ -6,14 +6,8 @@ import threading
 import time
 from typing import Any, Callable, List, Optional, Sequence
 
-from snr import (
-    AbstractFactory,
-    CommandReceiverFactory,
-    Config,
-    Mode,
-    Node,
-    RemoteConsole,
-)
+from snr import AbstractFactory, CommandReceiverFactory, Config, Mode, Node
+from snr.std_mods.io import RemoteConsole
 
 STOP_TIMEOUT_S = 5.0
 

@@ -17,9 +17,11 @@ import tempfile
 import unittest
 from typing import Any, Callable, Iterator, List, Optional, Tuple
 
-from snr import NotSerializableError, Page, PageReader, WireFormatError
+from snr import Page
+from snr.prelude import NotSerializableError, WireFormatError
 from snr.std_mods import codec
 from snr.std_mods.comms.wire import HEADER_BYTES, decode_body, encode_hello, encode_page
+from snr.std_mods.io import PageReader
 from tests.optional import example, given, settings, st
 
 BACKENDS = codec.available_backends()

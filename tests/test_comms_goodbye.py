@@ -12,7 +12,8 @@ import time
 import unittest
 from typing import Callable, List
 
-from snr import Config, Mode, SocketsPair, WireFormatError
+from snr import Config, Mode, SocketsPair
+from snr.prelude import WireFormatError
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.comms.wire import HEADER_BYTES, Bye, Hello, decode_body, encode_bye
 from tests.comms_helpers import free_port

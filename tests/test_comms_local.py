@@ -11,9 +11,7 @@ from typing import Any, List, Optional, Sequence
 from snr import (
     COMMS_CONNECTED,
     AbstractNode,
-    CommsError,
     Config,
-    ConfigError,
     Endpoint,
     EndpointFactory,
     Mode,
@@ -28,6 +26,7 @@ from snr import (
     TimeoutLoopFactory,
     tasks,
 )
+from snr.prelude import CommsError, ConfigError
 from tests.comms_helpers import StopAfterFactory, free_port
 from tests.quiet import capture_test_logs
 

@@ -6,16 +6,9 @@ import threading
 import time
 import unittest
 
-from snr import (
-    Config,
-    ConfigError,
-    Mode,
-    MultiProcRunner,
-    Node,
-    PipeLoop,
-    PipeLoopFactory,
-    TimeoutLoopFactory,
-)
+from snr import Config, Mode, MultiProcRunner, Node, PipeLoopFactory, TimeoutLoopFactory
+from snr.prelude import ConfigError
+from snr.std_mods.comms import PipeLoop
 from tests.comms_helpers import (
     EchoFactory,
     ReporterFactory,

@@ -10,7 +10,8 @@ import struct
 import unittest
 from typing import Any, List
 
-from snr import NotSerializableError, Page, WireFormatError
+from snr import Page
+from snr.prelude import NotSerializableError, WireFormatError
 from snr.std_mods.comms.wire import (
     HEADER_BYTES,
     MAX_FRAME_BYTES,

@@ -24,11 +24,9 @@ from snr import (
     COMMS_DISCONNECTED,
     AbstractNode,
     Config,
-    ConfigError,
     Endpoint,
     EndpointFactory,
     LoopFactory,
-    MockNode,
     Mode,
     Page,
     SomeTasks,
@@ -37,8 +35,9 @@ from snr import (
     TaskType,
     ThreadLoop,
     TimeoutLoopFactory,
-    WireFormatError,
 )
+from snr.prelude import ConfigError, WireFormatError
+from snr.utils import MockNode
 from tests.comms_helpers import (
     EventReporterFactory,
     NodeProcess,
@@ -54,7 +53,8 @@ NEEDS_ZENOH = "needs the Zenoh extra: pip install 'snr[zenoh]'"
 PLAIN_CLIENT = os.path.join(os.path.dirname(__file__), "zenoh_plain_client.py")
 
 if HAVE_ZENOH:
-    from snr import ZenohComms, ZenohCommsFactory
+    from snr import ZenohCommsFactory
+    from snr.std_mods.comms import ZenohComms
     from snr.std_mods.comms.zenoh_comms import _zenoh_module, page_from_sample
 
 

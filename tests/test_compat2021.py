@@ -16,7 +16,6 @@ from snr import (
     MovingAvgFilterFactory,
     MPExpector,
     MultiProcExpector,
-    OrderedExpector,
     RemovedApiError,
     Settings,
     SNRError,
@@ -29,6 +28,8 @@ from snr import (
     TaskId,
     TaskType,
 )
+from snr.prelude import ComponentError
+from snr.utils import OrderedExpector
 
 EV = TaskType.event
 
@@ -93,7 +94,7 @@ class TestMovingAvgEndpointFactory(SNRTestCase):
         self.assertIsInstance(factory, MovingAvgFilterFactory)
         self.assertEqual((factory.input, factory.output), ("raw", "avg"))
         self.assertEqual(factory.backing_deque.maxlen, 2)
-        with self.assertRaises(snr.ComponentError):
+        with self.assertRaises(ComponentError):
             MovingAvgEndpointFactory("raw", "avg", 0)
 
     def test_filters_in_a_node(self) -> None:
@@ -156,7 +157,7 @@ class TestExported(unittest.TestCase):
 
         for name in snr.compat2021.__all__:
             self.assertIn(name, snr.__all__)
-            self.assertEqual(snr._LAZY[name], "snr.compat2021")
+            self.assertEqual(snr._HOME[name], "snr.compat2021")
         self.assertIn("2021 release", snr.compat2021.__doc__ or "")
 
 

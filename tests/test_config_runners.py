@@ -14,16 +14,16 @@ from typing import List, Tuple, Union
 from snr import (
     CliRunner,
     Config,
-    ConfigError,
     Mode,
     MultiProcExpector,
     MultiProcRunner,
     SNRTestCase,
     SynchronousRunner,
     TaskType,
-    TestRunner,
     TimeoutLoopFactory,
 )
+from snr.core import TestRunner
+from snr.prelude import ConfigError
 from snr.utils import DummyEndpointFactory, ExpectorEndpointFactory, ListReplayerFactory
 from tests.comms_helpers import StopAfterFactory
 

@@ -14,19 +14,10 @@ import unittest
 from typing import List, Optional
 from unittest import mock
 
-from snr import (
-    CommandReceiverFactory,
-    CommsError,
-    Config,
-    ConfigError,
-    LocalConsoleFactory,
-    MockNode,
-    Mode,
-    Node,
-    NodeState,
-    RemoteConsole,
-    TimeoutLoopFactory,
-)
+from snr import CommandReceiverFactory, Config, LocalConsoleFactory, Mode, Node, TimeoutLoopFactory
+from snr.core import NodeState
+from snr.prelude import CommsError, ConfigError
+from snr.std_mods.io import RemoteConsole
 from snr.std_mods.io.command_processor import CommandProcessorFactory
 from snr.std_mods.io.command_receiver import MAX_CONSOLES, _TokenThrottle
 from snr.std_mods.io.console_protocol import (
@@ -45,6 +36,7 @@ from snr.std_mods.io.console_protocol import (
     tokens_match,
 )
 from snr.std_mods.io.remote_console import EXIT_CONNECTION, EXIT_OK, EXIT_USAGE, main
+from snr.utils import MockNode
 from tests.console_helpers import NodeInThread, wait_for
 
 
@@ -81,7 +73,7 @@ class TestProtocol(unittest.TestCase):
         self.assertEqual(Reply(Status.ERROR, "no").encode(), f"{PROTOCOL} error 2\nno".encode())
 
     def test_bad_header_is_a_wire_format_error(self) -> None:
-        from snr import WireFormatError
+        from snr.prelude import WireFormatError
 
         for junk in (b"HTTP/1.1 200 OK\r\n", b"snr-console/1 maybe 3\nabc", b"x" * 100):
             with self.assertRaises(WireFormatError, msg=junk):

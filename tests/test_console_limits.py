@@ -17,7 +17,9 @@ import unittest
 from typing import List, Optional
 from unittest import mock
 
-from snr import CommandReceiverFactory, ConfigError, RemoteConsole, TimeoutLoopFactory
+from snr import CommandReceiverFactory, TimeoutLoopFactory
+from snr.prelude import ConfigError
+from snr.std_mods.io import RemoteConsole
 from snr.std_mods.io.command_processor import REPLY_BUDGET_CHARS
 from snr.std_mods.io.command_receiver import (
     MAX_SEND_BUFFER_BYTES,

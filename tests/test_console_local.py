@@ -7,16 +7,8 @@ import os
 import threading
 import unittest
 
-from snr import (
-    Config,
-    LocalConsoleFactory,
-    LoopState,
-    Mode,
-    Node,
-    NodeState,
-    SNRTestCase,
-    ThreadLoop,
-)
+from snr import Config, LocalConsoleFactory, Mode, Node, SNRTestCase, ThreadLoop
+from snr.core import LoopState, NodeState
 from tests.console_helpers import wait_for
 
 

@@ -15,7 +15,8 @@ import tempfile
 import unittest
 from typing import Any
 
-from snr import NodeState, RemoteConsole
+from snr.core import NodeState
+from snr.std_mods.io import RemoteConsole
 from snr.std_mods.io.console_protocol import Status
 from tests.console_helpers import NodeInThread, wait_for
 

@@ -9,11 +9,7 @@ from typing import Any, Callable, Dict, List, Tuple
 from unittest import mock
 
 from snr import (
-    STEAM_CONTROLLER_BUTTONS,
-    STEAM_CONTROLLER_MAPPING,
-    ComponentError,
     ControllerLoopFactory,
-    ControlProcessorEndpoint,
     ControlProcessorFactory,
     ExpectorEndpointFactory,
     InputMappingFactory,
@@ -28,6 +24,12 @@ from snr import (
     TaskType,
     TimeoutLoopFactory,
     tasks,
+)
+from snr.prelude import ComponentError
+from snr.std_mods.io import (
+    STEAM_CONTROLLER_BUTTONS,
+    STEAM_CONTROLLER_MAPPING,
+    ControlProcessorEndpoint,
 )
 from snr.std_mods.io.joystick import read_joystick
 from tests.helpers import StopWhenTrueFactory

@@ -21,7 +21,6 @@ os.environ["PYGAME_HIDE_SUPPORT_PROMPT"] = "1"
 
 from snr import (
     AbstractNode,
-    ComponentError,
     ControllerLoopFactory,
     ControlProcessorFactory,
     ExpectorEndpointFactory,
@@ -32,6 +31,7 @@ from snr import (
     TaskType,
     ThreadLoop,
 )
+from snr.prelude import ComponentError
 
 try:
     pygame: Any = importlib.import_module("pygame")

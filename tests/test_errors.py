@@ -31,19 +31,13 @@ from snr import (
     AbstractFactory,
     AbstractNode,
     CliRunner,
-    CommsError,
-    ComponentError,
     ComponentsByRole,
     Config,
-    ConfigError,
     Endpoint,
     EndpointFactory,
-    HandlerError,
-    LoopError,
     LoopFactory,
     Mode,
     Node,
-    NotSerializableError,
     Page,
     SNRTestCase,
     SocketsPair,
@@ -53,11 +47,19 @@ from snr import (
     TaskId,
     TaskType,
     ThreadLoop,
-    ThreadSafetyError,
     TimeoutLoopFactory,
     tasks,
 )
 from snr.core import MissingKeyHints
+from snr.prelude import (
+    CommsError,
+    ComponentError,
+    ConfigError,
+    HandlerError,
+    LoopError,
+    NotSerializableError,
+    ThreadSafetyError,
+)
 from snr.prelude.not_serializable import not_serializable_error
 from snr.prelude.os_errors import OsAction, explain_os_error
 from snr.std_mods.codec import page_json, page_to_line

@@ -38,11 +38,9 @@ from unittest import mock
 import snr
 from snr import (
     AbstractNode,
-    ComponentError,
     Config,
     Endpoint,
     EndpointFactory,
-    HandlerError,
     LoopFactory,
     Mode,
     Node,
@@ -54,6 +52,7 @@ from snr import (
     TimeoutLoopFactory,
     tasks,
 )
+from snr.prelude import ComponentError, HandlerError
 from snr.std_mods.utils.timeout import TimeoutLoop
 from tests.examples_support import ROOT
 from tests.quiet import captured_logs

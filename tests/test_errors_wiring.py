@@ -17,11 +17,9 @@ from typing import Any, Callable, List, Sequence, Tuple
 
 from snr import (
     AbstractNode,
-    ComponentError,
     Config,
     Endpoint,
     EndpointFactory,
-    HandlerError,
     ListReplayerFactory,
     Mode,
     Node,
@@ -36,7 +34,7 @@ from snr import (
 )
 from snr.core import MissingKeyHints
 from snr.core.explain import returning_lines
-from snr.prelude import MissingSuperInitError
+from snr.prelude import ComponentError, HandlerError, MissingSuperInitError
 from snr.std_mods.comms.link_hints import watch_link
 from tests.comms_helpers import free_port
 from tests.quiet import capture_test_logs

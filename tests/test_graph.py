@@ -16,7 +16,6 @@ import snr
 from snr import (
     AbstractNode,
     Config,
-    ConfigError,
     Endpoint,
     EndpointFactory,
     LoopFactory,
@@ -28,6 +27,7 @@ from snr import (
     ThreadLoop,
 )
 from snr.__main__ import main as snr_main
+from snr.prelude import ConfigError
 from snr.std_mods.graph import (
     UNKNOWN_PEER,
     SystemGraph,

@@ -6,16 +6,9 @@ import math
 import random
 from typing import List, Tuple
 
-from snr import (
-    ConfigError,
-    KalmanFilter,
-    KalmanFilterFactory,
-    ListReplayerFactory,
-    SNRTestCase,
-    Task,
-    TaskType,
-    tasks,
-)
+from snr import KalmanFilterFactory, ListReplayerFactory, SNRTestCase, Task, TaskType, tasks
+from snr.prelude import ConfigError
+from snr.std_mods.filters import KalmanFilter
 from tests.page_collector import PageCollectorFactory
 
 NOISE_SD = 0.5

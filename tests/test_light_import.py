@@ -12,7 +12,8 @@ import sys
 import unittest
 from typing import Dict, List
 
-from snr import Page, Task, TaskPriority, TaskType
+from snr import Page, Task, TaskType
+from snr.prelude import TaskPriority
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -60,9 +61,10 @@ class TestLightImport(unittest.TestCase):
     def test_serialize_loads_dataclasses_json_and_round_trips(self) -> None:
         code = (
             "import snr\n"
+            "from snr.prelude import TaskPriority\n"
             "page = snr.Page('depth', {'m': [1.5, 2]}, 'urov', 12.5, process=False)\n"
             "assert snr.Page.deserialize(page.serialize()) == page\n"
-            "task = snr.Task(snr.TaskType.event, 'go', [1], snr.TaskPriority.high)\n"
+            "task = snr.Task(snr.TaskType.event, 'go', [1], TaskPriority.high)\n"
             "assert snr.Task.deserialize(task.serialize()) == task\n"
         )
         self.assertEqual(loaded_after(code, ["dataclasses_json"]), {"dataclasses_json": True})
@@ -72,7 +74,7 @@ class TestLightImport(unittest.TestCase):
             "import snr\n"
             "assert snr.SNRTestCase.__name__ == 'SNRTestCase'\n"
             "assert snr.TimeoutLoopFactory.__name__ == 'TimeoutLoopFactory'\n"
-            "assert snr.std_mods.SocketsPair is snr.SocketsPair\n"
+            "assert snr.SocketsPair is snr.std_mods.comms.SocketsPair\n"
             "assert snr.MPExpector is snr.MultiProcExpector\n"
         )
         self.assertEqual(

@@ -244,10 +244,10 @@ class TestMovingAverageListings(SNRTestCase):
     def test_a2_reloads_the_endpoint_and_the_2021_filter_module(self) -> None:
         a2 = self.listing_a2()
         factory = a2.MovingAvgFilterFactory("in", "out", 3)
-        from snr.core import moving_avg_filter
+        from snr.core import MovingAvgFilter, moving_avg_filter
 
         self.assertEqual(factory.reload_targets, [a2.moving_avg_endpoint, moving_avg_filter])
-        self.assertIs(a2.moving_avg_filter.MovingAvgFilter, snr.MovingAvgFilter)
+        self.assertIs(a2.moving_avg_filter.MovingAvgFilter, MovingAvgFilter)
 
     def test_a2_in_a_node_as_a3_tests_it(self) -> None:
         expectations = {(TaskType.store_page, "out"): 4, (TaskType.process_data, "out"): 4}
@@ -428,7 +428,7 @@ class TestControllerListings(SNRTestCase):
                 pad.handle = None
                 if "input_device" in nodes.nodes:
                     loop = nodes.nodes["input_device"].components["controller_loop"]
-                    assert isinstance(loop, snr.AbstractLoop)  # A.9 builds a ThreadLoop
+                    assert isinstance(loop, snr.ThreadLoop)  # A.9 builds a ThreadLoop
                     loop.set_terminate_flag("the test is done")
                     loop.join(2.0)
                 nodes.stop()

@@ -16,7 +16,8 @@ import unittest
 from typing import Any, Dict, List, Tuple
 from unittest import mock
 
-from snr import Config, ConfigError, Mode, Node, Page, SNRTestCase, tasks
+from snr import Config, Mode, Node, Page, SNRTestCase, tasks
+from snr.prelude import ConfigError
 from snr.std_mods.codec import page_json
 from snr.std_mods.io.live_view import FoxgloveBridgeFactory, foxglove_app_url
 from snr.std_mods.io.page_schema import data_schema, page_schema

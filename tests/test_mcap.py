@@ -14,17 +14,11 @@ import unittest
 from typing import Any, Dict, List, Tuple
 from unittest import mock
 
-from snr import (
-    ConfigError,
-    ListReplayerFactory,
-    Page,
-    PageReader,
-    RecorderEndpointFactory,
-    ReplayerLoopFactory,
-    SNRTestCase,
-)
+from snr import ListReplayerFactory, Page, RecorderEndpointFactory, ReplayerLoopFactory, SNRTestCase
 from snr.__main__ import main
+from snr.prelude import ConfigError
 from snr.std_mods.codec import MAX_DEPTH, header_line, page_to_line
+from snr.std_mods.io import PageReader
 from snr.std_mods.io.convert import convert_recording
 from snr.std_mods.io.mcap_files import (
     INSTALL_HINT,

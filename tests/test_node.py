@@ -11,23 +11,20 @@ from snr import (
     Config,
     Endpoint,
     EndpointFactory,
-    HandlerError,
-    LoopError,
     LoopFactory,
     Mode,
     Node,
-    NodeStateError,
     SNRTestCase,
     SomeTasks,
     Task,
     TaskId,
     TaskType,
     ThreadLoop,
-    ThreadSafetyError,
     TimeoutLoopFactory,
     tasks,
 )
 from snr.core import NodeState
+from snr.prelude import HandlerError, LoopError, NodeStateError, ThreadSafetyError
 from tests.helpers import (
     DRAINED,
     Log,

@@ -4,7 +4,8 @@ import re
 import unittest
 from typing import List
 
-from snr import Page, Serializable, Task, TaskPriority, TaskType, tasks
+from snr import Page, Task, TaskType, tasks
+from snr.prelude import Serializable, TaskPriority
 
 
 class TestPage(unittest.TestCase):

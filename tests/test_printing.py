@@ -3,7 +3,8 @@
 import time
 import unittest
 
-from snr import Page, Task, TaskType, format_task, tasks
+from snr import Page, Task, TaskType, tasks
+from snr.std_mods.utils import format_task
 
 
 class TestPagePrinting(unittest.TestCase):

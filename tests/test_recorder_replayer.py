@@ -16,14 +16,12 @@ from snr import (
     AbstractFactory,
     AbstractNode,
     Config,
-    ConfigError,
     Endpoint,
     EndpointFactory,
     ListReplayerFactory,
     Mode,
     MovingAvgFilterFactory,
     Page,
-    PageReader,
     RecorderEndpointFactory,
     ReplayerLoopFactory,
     SNRTestCase,
@@ -31,14 +29,12 @@ from snr import (
     Task,
     TaskId,
     TaskType,
-    TestRunner,
-    TextReader,
-    TextReplayerFactory,
-    WireFormatError,
     tasks,
 )
+from snr.core import TestRunner
+from snr.prelude import ConfigError, WireFormatError
 from snr.std_mods import codec
-from snr.std_mods.io import replayer
+from snr.std_mods.io import PageReader, TextReader, TextReplayerFactory, replayer
 from snr.std_mods.io.replayer import MAX_GAP_S, MAX_PROBLEMS
 from tests.page_collector import PageCollectorFactory
 

@@ -21,7 +21,8 @@ import unittest
 from types import ModuleType
 from typing import Any, Callable, List, Tuple
 
-from snr import ConfigError, Page, SerialLinkFactory, SNRTestCase, tasks
+from snr import Page, SerialLinkFactory, SNRTestCase, tasks
+from snr.prelude import ConfigError
 from snr.std_mods.comms import board_protocol
 from snr.std_mods.comms.board_protocol import READY_LINE, BoardWatch, compact_line
 from tests.examples_support import ROOT

@@ -17,9 +17,7 @@ from unittest import mock
 from snr import (
     AbstractFactory,
     AbstractNode,
-    CommsError,
     Config,
-    ConfigError,
     Endpoint,
     EndpointFactory,
     ListReplayerFactory,
@@ -31,10 +29,11 @@ from snr import (
     Task,
     TaskId,
     TaskType,
-    TestRunner,
     TimeoutLoopFactory,
     tasks,
 )
+from snr.core import TestRunner
+from snr.prelude import CommsError, ConfigError
 from tests.helpers import StopWhenTrueFactory
 from tests.page_collector import PageCollectorFactory
 from tests.quiet import capture_test_logs, captured_logs

@@ -11,6 +11,7 @@ import unittest
 from typing import List
 
 import snr
+from snr.prelude import ComponentError
 
 
 def _public_classes() -> List[type]:
@@ -66,7 +67,7 @@ class TestRealSignatures(unittest.TestCase):
         class NoLoop(snr.ThreadLoop):
             pass
 
-        with self.assertRaises(snr.ComponentError):
+        with self.assertRaises(ComponentError):
             # No factory or node: the missing method is reported before they are used.
             NoLoop(None, None, "x")  # type: ignore[arg-type]
 

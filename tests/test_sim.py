@@ -8,7 +8,8 @@ import random
 import unittest
 from typing import Any, Dict, List
 
-from snr import ComponentError, SimRobotFactory, SNRTestCase, World
+from snr import SimRobotFactory, SNRTestCase, World
+from snr.prelude import ComponentError
 from snr.std_mods.sim import (
     DiffDriveRobot,
     Odometry,

@@ -17,7 +17,8 @@ from typing import Any, Callable, Iterator
 os.environ["SDL_VIDEODRIVER"] = "dummy"  # before pygame is imported
 os.environ["PYGAME_HIDE_SUPPORT_PROMPT"] = "1"
 
-from snr import ComponentError, SimRobotFactory, SimViewFactory, SNRTestCase, TaskType, World
+from snr import SimRobotFactory, SimViewFactory, SNRTestCase, TaskType, World
+from snr.prelude import ComponentError
 from snr.std_mods.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
 from snr.std_mods.sim.draw import WALL, WorldView, import_pygame, render_scene, save_png
 from tests.examples_support import example_path, load_module

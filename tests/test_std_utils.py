@@ -6,7 +6,6 @@ import unittest
 from typing import List
 
 from snr import (
-    ComponentError,
     Config,
     Mode,
     Node,
@@ -15,9 +14,10 @@ from snr import (
     StopwatchEndpointFactory,
     TaskType,
     TimeoutLoopFactory,
-    format_task,
     tasks,
 )
+from snr.prelude import ComponentError
+from snr.std_mods.utils import format_task
 from tests.helpers import StopWhenDrainedFactory
 
 

@@ -4,8 +4,9 @@ import threading
 import unittest
 from typing import List, Optional
 
-from snr import HandlerError, Task, tasks
+from snr import Task, tasks
 from snr.core import TaskQueue
+from snr.prelude import HandlerError
 
 
 class TestTaskQueue(unittest.TestCase):

@@ -7,18 +7,16 @@ from typing import Sequence
 
 from snr import (
     AbstractFactory,
-    DummyEndpointFactory,
     Expector,
     ExpectorEndpointFactory,
     ListReplayerFactory,
-    MockNode,
     MovingAvgFilterFactory,
-    OrderedExpector,
     SNRTestCase,
     TaskType,
     TimeoutLoopFactory,
     tasks,
 )
+from snr.utils import DummyEndpointFactory, MockNode, OrderedExpector
 
 EV = TaskType.event
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

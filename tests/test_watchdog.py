@@ -175,6 +175,7 @@ CliRunner({"robot": [BeeperFactory()]}).run()
 
 SERVER_WAITING_FOR_CLIENTS = """
 from snr import *
+from snr.std_mods.comms import SocketsServerFactory
 
 CliRunner({"robot": [SocketsServerFactory(("127.0.0.1", 0), ["x"])]}).run()
 """

@@ -1,52 +1,65 @@
 """Layer 1 of SNR: the runtime (nodes, components, factories, runners).
 
+The package gives what its modules below export (each module's ``__all__``),
+so a name is listed once, in the module that defines it; the names for
+students are chosen in ``snr/__init__.py``. ``from snr.core import *`` works
+as in the 2021 release (thesis listing A.1 gets ``MovingAvgFilter`` from it).
+
 Example::
 
     from snr.core import Config, Node, Endpoint, EndpointFactory, tasks
 """
 
-from snr.core import tasks
-from snr.core.component import Component
-from snr.core.config import Config
-from snr.core.dispatch import HandlerMap, HandlerTable
-from snr.core.endpoint import Endpoint
-from snr.core.factory import EndpointFactory, Factory, LoopFactory
-from snr.core.key_hints import MissingKeyHints
-from snr.core.logs import ensure_log_handler
-from snr.core.loop import LoopState, ThreadLoop
-from snr.core.moving_avg_filter import MovingAvgFilter
-from snr.core.node import Node, NodeState
-from snr.core.node_core import NodeCoreEndpoint, NodeCoreFactory
-from snr.core.profiler import Profiler
-from snr.core.runners import CliRunner, MultiProcRunner, SynchronousRunner, TestRunner
-from snr.core.task_queue import TaskQueue
-from snr.core.timer import Clock, Timer
+# ruff: noqa: F403  (each module's names, by its own __all__)
+from typing import List
 
-__all__ = [
-    "CliRunner",
-    "Clock",
-    "Component",
-    "Config",
-    "Endpoint",
-    "EndpointFactory",
-    "Factory",
-    "HandlerMap",
-    "HandlerTable",
-    "LoopFactory",
-    "LoopState",
-    "MissingKeyHints",
-    "MovingAvgFilter",
-    "MultiProcRunner",
-    "Node",
-    "NodeCoreEndpoint",
-    "NodeCoreFactory",
-    "NodeState",
-    "Profiler",
-    "SynchronousRunner",
-    "TaskQueue",
-    "TestRunner",
-    "ThreadLoop",
-    "Timer",
-    "ensure_log_handler",
-    "tasks",
-]
+from snr.core import (
+    component,
+    config,
+    dispatch,
+    endpoint,
+    factory,
+    key_hints,
+    logs,
+    loop,
+    moving_avg_filter,
+    node,
+    node_core,
+    profiler,
+    runners,
+    task_queue,
+    tasks,
+    timer,
+)
+from snr.core.component import *
+from snr.core.config import *
+from snr.core.dispatch import *
+from snr.core.endpoint import *
+from snr.core.factory import *
+from snr.core.key_hints import *
+from snr.core.logs import *
+from snr.core.loop import *
+from snr.core.moving_avg_filter import *
+from snr.core.node import *
+from snr.core.node_core import *
+from snr.core.profiler import *
+from snr.core.runners import *
+from snr.core.task_queue import *
+from snr.core.timer import *
+
+__all__: List[str] = ["tasks"]
+__all__ += component.__all__
+__all__ += config.__all__
+__all__ += dispatch.__all__
+__all__ += endpoint.__all__
+__all__ += factory.__all__
+__all__ += key_hints.__all__
+__all__ += logs.__all__
+__all__ += loop.__all__
+__all__ += moving_avg_filter.__all__
+__all__ += node.__all__
+__all__ += node_core.__all__
+__all__ += profiler.__all__
+__all__ += runners.__all__
+__all__ += task_queue.__all__
+__all__ += timer.__all__

@@ -17,6 +17,7 @@ from typing import Optional
 
 import snr
 from snr.demo.system import make_components
+from snr.prelude import CommsError, ConfigError
 
 __all__ = ["LogLevel", "LogLevelFactory", "free_port_pair", "run_demo", "run_sim_demo"]
 
@@ -43,7 +44,7 @@ def free_port_pair(host: str = "127.0.0.1") -> int:
             except OSError:
                 continue
         return port
-    raise snr.CommsError(f"Could not find two free neighbouring ports on {host}.")
+    raise CommsError(f"Could not find two free neighbouring ports on {host}.")
 
 
 class LogLevel(snr.Endpoint):
@@ -112,7 +113,7 @@ def run_demo(seconds: float = 15.0, verbose: bool = False, view_port: Optional[i
                 view_port = int(probe.getsockname()[1])
         try:
             bridge = snr.FoxgloveBridgeFactory(VIEWED_KEYS, port=view_port)
-        except snr.ConfigError as error:
+        except ConfigError as error:
             print(error, file=sys.stderr)
             return 2
         topside = components["topside"]

@@ -34,7 +34,6 @@ from snr import (
     DataKey,
     Endpoint,
     EndpointFactory,
-    JoystickStep,
     LoopFactory,
     Page,
     SimulatedJoystick,
@@ -44,6 +43,7 @@ from snr import (
     TaskType,
     ThreadLoop,
 )
+from snr.std_mods.io import JoystickStep
 
 __all__ = [
     "PILOT_SCRIPT",

@@ -1,96 +1,30 @@
 """Layer 0 of SNR: data types, type aliases, errors and interfaces.
 
-Nothing here imports from the rest of ``snr``. Example::
+Nothing here imports from the rest of ``snr``. The package gives what its
+modules export (each module's ``__all__``), so a name is listed once, in the
+module that defines it; the names for students are chosen in ``snr/__init__.py``.
+``from snr.prelude import *`` works as in the 2021 release (thesis listing A.1).
+
+Example::
 
     from snr.prelude import Page, Task, TaskType
 """
 
-from snr.prelude.abstract import (
-    AbstractComponent,
-    AbstractConfig,
-    AbstractEndpoint,
-    AbstractFactory,
-    AbstractLoop,
-    AbstractMultiRunner,
-    AbstractNode,
-    AbstractProfiler,
-    AbstractRunner,
-    AbstractTaskQueue,
-    IdleWaiter,
-)
-from snr.prelude.errors import (
-    CommsError,
-    ComponentError,
-    ConfigError,
-    HandlerError,
-    LoopError,
-    MissingSuperInitError,
-    NodeStateError,
-    NotSerializableError,
-    SNRError,
-    ThreadSafetyError,
-    WireFormatError,
-)
-from snr.prelude.names import (
-    ComponentName,
-    ComponentsByRole,
-    DataDict,
-    DataKey,
-    Mode,
-    Role,
-    SomeTasks,
-    StatsCell,
-    TaskHandler,
-    TaskHandlerMap,
-    TaskId,
-    TaskName,
-    TaskPriority,
-    TaskScheduler,
-    TaskType,
-)
-from snr.prelude.page import Page
-from snr.prelude.serializable import Serializable
-from snr.prelude.task import Task
+# ruff: noqa: F403  (each module's names, by its own __all__)
+from typing import List
 
-__all__ = [
-    "AbstractComponent",
-    "AbstractConfig",
-    "AbstractEndpoint",
-    "AbstractFactory",
-    "AbstractLoop",
-    "AbstractMultiRunner",
-    "AbstractNode",
-    "AbstractProfiler",
-    "AbstractRunner",
-    "AbstractTaskQueue",
-    "IdleWaiter",
-    "CommsError",
-    "ComponentError",
-    "ComponentName",
-    "ComponentsByRole",
-    "ConfigError",
-    "DataDict",
-    "DataKey",
-    "HandlerError",
-    "LoopError",
-    "MissingSuperInitError",
-    "Mode",
-    "NodeStateError",
-    "NotSerializableError",
-    "Page",
-    "Role",
-    "SNRError",
-    "Serializable",
-    "SomeTasks",
-    "StatsCell",
-    "Task",
-    "TaskHandler",
-    "TaskHandlerMap",
-    "TaskId",
-    "TaskName",
-    "TaskPriority",
-    "TaskScheduler",
-    "TaskType",
-    "ThreadSafetyError",
-    "WireFormatError",
-]
+from snr.prelude import abstract, errors, names, page, serializable, task
+from snr.prelude.abstract import *
+from snr.prelude.errors import *
+from snr.prelude.names import *
+from snr.prelude.page import *
+from snr.prelude.serializable import *
+from snr.prelude.task import *
+
+__all__: List[str] = []
+__all__ += abstract.__all__
+__all__ += errors.__all__
+__all__ += names.__all__
+__all__ += page.__all__
+__all__ += serializable.__all__
+__all__ += task.__all__

@@ -1,148 +1,16 @@
 """Layer 2 of SNR: ready-made components (thesis 6.4).
 
 Sub-packages: ``comms`` (talk between nodes), ``filters``, ``io`` (console,
-recorder, replayer, serial, controller) and ``utils`` (timeout, stopwatch,
-printer). Students import them from ``snr`` directly.
+recorder, replayer, serial, controller, live view), ``sim`` (a simulated
+robot) and ``utils`` (timeout, stopwatch, printer). Each sub-package gives
+its components; the common ones are also in ``snr`` (``from snr import *``).
+Importing this package imports none of them: a program pays only for the
+components it uses.
 
 Example::
 
-    from snr.std_mods import TimeoutLoopFactory
+    from snr.std_mods.comms import SocketsServerFactory
+    from snr.std_mods.io import TextReplayerFactory
 """
 
-from snr.std_mods.comms import (
-    COMMS_CONNECTED,
-    COMMS_DISCONNECTED,
-    CommsLoop,
-    PipeLoop,
-    PipeLoopFactory,
-    SerialLinkFactory,
-    SerialLinkLoop,
-    SocketsClientFactory,
-    SocketsClientLoop,
-    SocketsPair,
-    SocketsServerFactory,
-    SocketsServerLoop,
-    ZenohComms,
-    ZenohCommsFactory,
-)
-from snr.std_mods.filters import (
-    DEFAULT_FILTER_LENGTH,
-    KalmanFilter,
-    KalmanFilterEndpoint,
-    KalmanFilterFactory,
-    MovingAvgEndpoint,
-    MovingAvgFilter,
-    MovingAvgFilterFactory,
-)
-from snr.std_mods.io import (
-    DEFAULT_CONSOLE_PORT,
-    DEFAULT_JOYSTICK_SCRIPT,
-    STEAM_CONTROLLER_BUTTONS,
-    STEAM_CONTROLLER_MAPPING,
-    CommandProcessorEndpoint,
-    CommandReceiverFactory,
-    CommandReceiverLoop,
-    ControllerLoop,
-    ControllerLoopFactory,
-    ControlProcessorEndpoint,
-    ControlProcessorFactory,
-    FoxgloveBridge,
-    FoxgloveBridgeFactory,
-    InputMappingEndpoint,
-    InputMappingFactory,
-    Joystick,
-    JoystickStep,
-    LocalConsole,
-    LocalConsoleFactory,
-    PageReader,
-    RecorderEndpoint,
-    RecorderEndpointFactory,
-    RemoteConsole,
-    ReplayerLoop,
-    ReplayerLoopFactory,
-    SimulatedJoystick,
-    TextReader,
-    TextReplayerFactory,
-    TextReplayerLoop,
-)
-from snr.std_mods.sim import (
-    SimRobotFactory,
-    SimRobotLoop,
-    SimViewFactory,
-    SimViewLoop,
-    World,
-)
-from snr.std_mods.utils import (
-    PrinterEndpoint,
-    PrinterEndpointFactory,
-    StopwatchEndpoint,
-    StopwatchEndpointFactory,
-    TimeoutLoop,
-    TimeoutLoopFactory,
-    format_task,
-)
-
-__all__ = [
-    "COMMS_CONNECTED",
-    "COMMS_DISCONNECTED",
-    "CommandProcessorEndpoint",
-    "CommandReceiverFactory",
-    "CommandReceiverLoop",
-    "CommsLoop",
-    "ControlProcessorEndpoint",
-    "ControlProcessorFactory",
-    "ControllerLoop",
-    "ControllerLoopFactory",
-    "DEFAULT_CONSOLE_PORT",
-    "DEFAULT_FILTER_LENGTH",
-    "DEFAULT_JOYSTICK_SCRIPT",
-    "FoxgloveBridge",
-    "FoxgloveBridgeFactory",
-    "InputMappingEndpoint",
-    "InputMappingFactory",
-    "Joystick",
-    "JoystickStep",
-    "KalmanFilter",
-    "KalmanFilterEndpoint",
-    "KalmanFilterFactory",
-    "LocalConsole",
-    "LocalConsoleFactory",
-    "MovingAvgEndpoint",
-    "MovingAvgFilter",
-    "MovingAvgFilterFactory",
-    "PageReader",
-    "PipeLoop",
-    "PipeLoopFactory",
-    "PrinterEndpoint",
-    "PrinterEndpointFactory",
-    "RecorderEndpoint",
-    "RecorderEndpointFactory",
-    "RemoteConsole",
-    "ReplayerLoop",
-    "ReplayerLoopFactory",
-    "STEAM_CONTROLLER_BUTTONS",
-    "STEAM_CONTROLLER_MAPPING",
-    "SerialLinkFactory",
-    "SerialLinkLoop",
-    "SimRobotFactory",
-    "SimRobotLoop",
-    "SimViewFactory",
-    "SimViewLoop",
-    "SimulatedJoystick",
-    "SocketsClientFactory",
-    "SocketsClientLoop",
-    "SocketsPair",
-    "SocketsServerFactory",
-    "SocketsServerLoop",
-    "StopwatchEndpoint",
-    "StopwatchEndpointFactory",
-    "TextReader",
-    "TextReplayerFactory",
-    "TextReplayerLoop",
-    "TimeoutLoop",
-    "TimeoutLoopFactory",
-    "World",
-    "ZenohComms",
-    "ZenohCommsFactory",
-    "format_task",
-]
+__all__ = ["comms", "filters", "io", "sim", "utils"]

@@ -46,6 +46,7 @@ from types import ModuleType
 from typing import Any, Dict, Iterable, Iterator, List, Optional, Sequence, Tuple
 
 import snr
+from snr import prelude
 from snr.api_topics import PAGE_MODULES, TOPICS, check_topics, full_entry, summary
 from snr.prelude import SNRError
 
@@ -202,8 +203,10 @@ def _resolves(reference: str, namespace: Dict[str, Any]) -> bool:
 def check_docstring_references(modules: Iterable[ModuleType]) -> List[str]:
     """One warning per name in single backticks, in a docstring, that names nothing.
 
-    A name counts as found if the docstring's module, ``snr`` or the builtins
-    define it (``Name.attr`` must then have ``attr``). Double backticks
+    A name counts as found if the docstring's module, a package it is in
+    (``snr.std_mods.io`` for ``snr.std_mods.io.console``), ``snr``, the
+    prelude (whose types and errors every layer uses) or the builtins define
+    it (``Name.attr`` must then have ``attr``). Double backticks
     (``literal``) are code samples and are not checked.
 
     Example::
@@ -214,7 +217,10 @@ def check_docstring_references(modules: Iterable[ModuleType]) -> List[str]:
     # getattr, not vars(snr): snr binds some exports only on first use (PEP 562).
     exports = {name: getattr(snr, name) for name in snr.__all__}
     for module in modules:
-        namespace: Dict[str, Any] = {**vars(builtins), **vars(snr), **exports, **vars(module)}
+        namespace: Dict[str, Any] = {**vars(builtins), **vars(prelude), **vars(snr), **exports}
+        for package in _packages_of(module.__name__):
+            namespace.update(vars(importlib.import_module(package)))
+        namespace.update(vars(module))
         for obj in _documented_objects(module):
             doc = inspect.getdoc(obj) or ""
             for reference in _DOC_REFERENCE.findall(doc):
@@ -228,6 +234,12 @@ def check_docstring_references(modules: Iterable[ModuleType]) -> List[str]:
                         "builtins. Fix the name, or use ``double backticks`` for code."
                     )
     return problems
+
+
+def _packages_of(module_name: str) -> List[str]:
+    """The packages ``module_name`` is in, below ``snr``: ``snr.std_mods``, ``snr.std_mods.io``."""
+    parts = module_name.split(".")
+    return [".".join(parts[:end]) for end in range(2, len(parts))]
 
 
 def _snr_modules() -> List[ModuleType]:
