@@ -189,13 +189,14 @@ def summary(pattern: str, text: str) -> Tuple[float, float]:
 
 
 def _start_sim_demo() -> Tuple[Path, Optional[StartedScript]]:
-    """``python -m snr demo --sim`` for half a second in a temp folder, headless."""
+    """``python -m snr demo --sim`` for 1.5 s in a temp folder, headless."""
     folder = Path(tempfile.mkdtemp(prefix="snr-sim-demo-"))
     if not HAS_PYGAME:
         return folder, None
     env = script_env({"SDL_VIDEODRIVER": "dummy", "PYGAME_HIDE_SUPPORT_PROMPT": "1"})
-    # Half a second, not the default 15: enough to set off and draw frames.
-    command = ["-m", "snr", "demo", "--sim", "--seconds", "0.5"]
+    # 1.5 s, not the default 15: enough to set off and draw frames even when
+    # the machine is busy (it runs beside other tests, so it costs no wall time).
+    command = ["-m", "snr", "demo", "--sim", "--seconds", "1.5"]
     return folder, start_script(command, cwd=str(folder), env=env)
 
 
