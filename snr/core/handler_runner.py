@@ -69,8 +69,8 @@ class HandlerRunner:
         runner.failure        # the HandlerError/LoopError that stopped the node, or None
 
     Attributes:
-        running: False once the node is stopping: `run_queued` returns after
-            the current task.
+        running: False once the node is stopping, or pausing (``StepMode``):
+            `run_queued` returns after the current task.
         failure: the first error that stopped the node (DEBUG/TEST), or None.
         slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
         on_unhandled: called with each task no handler matched, or None (the

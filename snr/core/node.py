@@ -32,6 +32,7 @@ from snr.core.handler_runner import HandlerRunner
 from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.node_core import NodeCoreFactory
+from snr.core.step_mode import StepMode
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Timer
 from snr.core.watchdog import Watchdog, queued_page_keys
@@ -105,6 +106,8 @@ class Node(AbstractNode):
         wiring_checks: in DEBUG mode, the `WiringChecks` that warn about an
             event nothing handles and a handler nothing can reach (None in
             other modes).
+        step_mode: the `StepMode` a console uses to pause the node, run its
+            tasks one at a time and resume it.
         watchdog: in DEBUG mode, the `Watchdog` that says when the node is
             stuck without a word: a handler that does not return, a ``loop()``
             that never returns, a loop flooding the queue, a node nothing will
@@ -157,6 +160,7 @@ class Node(AbstractNode):
             self.set_terminate_flag,
             timed=self.profiler is not None or self.mode is not Mode.DEPLOYED,
         )
+        self.step_mode = StepMode(self.queue, self._runner, self._lookup, self.is_terminated)
         debug = self.mode is Mode.DEBUG
         self.key_hints: Optional[MissingKeyHints] = (
             MissingKeyHints(
@@ -343,7 +347,11 @@ class Node(AbstractNode):
     def _run_tasks(self) -> None:
         queue = self.queue
         run_queued = self._runner.run_queued
+        step_mode = self.step_mode
         while self._running:
+            if step_mode.paused:  # a console paused the node: see step_mode.py
+                step_mode.run_paused(self.idle_wake_s)
+                continue
             run_queued()
             if self._running and not queue:
                 queue.wait(self.idle_wake_s)  # a producer's task or stop wakes it

@@ -257,15 +257,19 @@ class TaskQueue(AbstractTaskQueue):
         if old is not None:
             old.wake()
 
-    def wait(self, timeout_s: Optional[float]) -> None:
-        """Sleep until a task arrives, ``wake()`` is called, or the timeout."""
+    def wait(self, timeout_s: Optional[float], urgent_only: bool = False) -> None:
+        """Sleep until a task arrives, ``wake()`` is called, or the timeout.
+
+        ``urgent_only``: sleep even if normal tasks wait (a paused node runs
+        none of them; each new task still wakes it once).
+        """
         waiter = self._waiter
         self._rung = False
         self._sleeping = True
         try:
             # Check again now that producers will ring: one may have appended
             # just before it saw us sleeping.
-            if self.normal or self.urgent:
+            if self.urgent or (self.normal and not urgent_only):
                 return
             if waiter is not None:
                 waiter.wait(timeout_s)

@@ -286,9 +286,10 @@ class Watchdog:
                 waited.append(loop)
         behind = len(queue.normal) >= queue.high_water // 10 or queue.waits != self._waits
         self._loop_waits, self._waits = counts, queue.waits
-        if self.handler_stuck or (not behind and now - self._behind_s > self.FLOOD_GRACE_S):
+        held = self.handler_stuck or self.node.step_mode.paused
+        if held or (not behind and now - self._behind_s > self.FLOOD_GRACE_S):
             # Keeping up; or the node's thread is held by one handler (rule
-            # 1), and the loops wait for it, not it for them.
+            # 1) or paused by a console: the loops wait for it, not it for them.
             self._flood_since = None
             self._flooders = []
             return

@@ -14,6 +14,7 @@ the console's `ConsoleSession`. Thesis 6.4.3 lists the commands::
     graph [text|mermaid|dot]        the node's components, data keys and links
     echo KEY [N]                    the next pages of a key (snr-console repeats it)
     hz KEY [WINDOW_S]               how often a key is stored, and the jitter
+    pause / step [N] / resume       run a paused node's tasks one at a time
     help [command]                  the commands, or one command in detail
 
 The commands and their help are listed in ``command_table.py``; consoles
@@ -37,6 +38,7 @@ from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tupl
 from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, tasks
 from snr.core.logs import RepeatFilter
 from snr.core.node_core import NODE_CORE_NAME
+from snr.core.step_mode import MAX_STEPS, Step
 from snr.prelude import (
     AbstractComponent,
     AbstractNode,
@@ -164,6 +166,9 @@ class CommandProcessorEndpoint(Endpoint):
             "graph": self.cmd_graph,
             "echo": self.cmd_echo,
             "hz": self.cmd_hz,
+            "pause": self.cmd_pause,
+            "step": self.cmd_step,
+            "resume": self.cmd_resume,
             "help": self.cmd_help,
         }
         self._current_session = "console"
@@ -442,6 +447,8 @@ class CommandProcessorEndpoint(Endpoint):
             f"{queue.high_water:,}); loops waited for room {queue.waits} times; "
             f"{queue.loss.total} tasks dropped."
         ]
+        if node.step_mode.paused:
+            lines.append(f"The node is paused. {_loss_while_paused(node)}")
         comms = [c for c in node.components.values() if isinstance(c, CommsLoop)]
         if not comms:
             lines.append("No comms links.")
@@ -492,6 +499,53 @@ class CommandProcessorEndpoint(Endpoint):
             return start(self._session)
         except WatchRefused as refused:
             raise _CommandFailed(str(refused)) from None
+
+    def cmd_pause(self, args: str) -> _Outcome:
+        """``pause``: hold the node's tasks (the console's own still run)."""
+        _no_arguments("pause", args)
+        node = self._full_node("pause")
+        if node.step_mode.paused:
+            return _ok(f"Node {node.role!r} is already paused. {_loss_while_paused(node)}")
+        node.step_mode.pause()
+        return _ok(
+            f"Paused node {node.role!r}: its tasks wait in its queue (high-water mark "
+            f"{node.queue.high_water:,}) until you step or resume.\n"
+            f"{_next_line(node.step_mode.next_tasks(), len(node.queue))}\n"
+            "Type `step` to run the next task, `resume` to let the node run on."
+        )
+
+    def cmd_step(self, args: str) -> _Outcome:
+        """``step [N]``: run the next task(s) of a paused node; the reply says what they did."""
+        words = args.split()
+        if len(words) > 1:
+            raise _CommandFailed(f"Usage: {COMMANDS['step'].usage}, e.g. `step` or `step 5`.")
+        count = int(_number(words[0], "step", "N", 1, MAX_STEPS, int)) if words else 1
+        step_mode = self._full_node("step").step_mode
+        if not step_mode.paused:
+            raise _CommandFailed(
+                f"Node {self.parent.role!r} is running, so there is nothing to step: "
+                "type `pause` first."
+            )
+        session = self._session
+        if session is None:
+            raise _CommandFailed("`step` replies once its tasks ran: type it in a console.")
+        try:
+            step_mode.step(count, lambda steps: session.send(Reply(Status.OK, _steps_text(steps))))
+        except ValueError as refused:
+            raise _CommandFailed(str(refused)) from None
+        return _Outcome(Status.OK, "", later=True)
+
+    def cmd_resume(self, args: str) -> _Outcome:
+        """``resume``: let a paused node run freely again."""
+        _no_arguments("resume", args)
+        node = self._full_node("resume")
+        if not node.step_mode.paused:
+            return _ok(f"Node {node.role!r} is not paused.")
+        waiting = len(node.queue)
+        lost = _loss_while_paused(node)
+        node.step_mode.resume()
+        plural = "s" if waiting != 1 else ""
+        return _ok(f"Resumed node {node.role!r} with {waiting:,} task{plural} waiting. {lost}")
 
     def cmd_help(self, args: str) -> _Outcome:
         """``help [command]``."""
@@ -600,6 +654,46 @@ def _describe_component(component: AbstractComponent) -> str:
     if modules:
         text += f"  reloads: {', '.join(modules)}"
     return text
+
+
+def _steps_text(steps: List[Step]) -> str:
+    """What ``step`` did, task by task, and what waits next."""
+    lines: List[str] = []
+    for step in steps:
+        if step.task is None:
+            lines.append(
+                "Nothing to step: no task waits. Tasks you schedule (`task ...`) and the "
+                "pages of loops wait here while the node is paused."
+            )
+            continue
+        lines.append(f"Ran {format_task(step.task, values='data')}")
+        went_to = ", ".join(step.handlers) or "no handler (nothing handles this task)"
+        lines.append(f"  went to: {went_to}")
+        if step.returned:
+            lines.append(
+                f"  returned: {', '.join(format_task(t, values='data') for t in step.returned)}"
+            )
+    if steps and steps[-1].task is not None:
+        last = steps[-1]
+        lines.append(_next_line(last.next_tasks, last.waiting))
+    return "\n".join(lines)
+
+
+def _loss_while_paused(node: Node) -> str:
+    """How the loops fared since the pause: their waits for room and their dropped tasks."""
+    waits, dropped = node.step_mode.since_pause()
+    return (
+        f"Since the pause, loops waited for room in the queue {waits:,} times and "
+        f"{dropped:,} of their tasks were dropped."
+    )
+
+
+def _next_line(next_tasks: List[Task], waiting: int) -> str:
+    """``Next: <task> (N tasks waiting)``, or that nothing waits."""
+    if not next_tasks:
+        return "Next: nothing waits."
+    plural = "s" if waiting != 1 else ""
+    return f"Next: {format_task(next_tasks[0], values='data')} ({waiting:,} task{plural} waiting)"
 
 
 def _preview(data: Any) -> str:

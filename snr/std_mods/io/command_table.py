@@ -96,6 +96,21 @@ COMMANDS: Dict[str, CommandHelp] = {
         f"{HZ_MAX_WINDOW_S:g}), then replies with\nthe rate and the period's mean, min, max "
         "and standard deviation, timed when\nthis node stores each page.",
     ),
+    "pause": CommandHelp(
+        "pause",
+        "Pause the node: it runs no task but the console's until `step` or `resume`.",
+        "The node finishes the task it is running, then holds every other task in its\n"
+        "queue, in order. dump, list, stats, graph and exit keep working. Loops keep\n"
+        "running: their pages wait in the queue (a full queue makes them wait, then\n"
+        "drops and counts their pages; the replies say how many).",
+    ),
+    "step": CommandHelp(
+        "step [N]",
+        "Run the next task (or N, at most 100) of a paused node and show what it did.",
+        "For each task: which task ran, the handlers it went to, what they returned;\n"
+        "then what waits next in the queue.",
+    ),
+    "resume": CommandHelp("resume", "Let a paused node run freely again."),
     "help": CommandHelp("help [command]", "Show the commands, or one command in detail."),
 }
 """Every console command, in the order ``help`` lists them."""

@@ -17,6 +17,7 @@ from __future__ import annotations
 from typing import Sequence
 
 from snr.core import ThreadLoop, tasks
+from snr.core.step_mode import console_priority
 from snr.prelude import AbstractFactory, AbstractNode, ComponentName, DataKey, Task, TaskType
 from snr.std_mods.io.command_processor import CommandProcessorFactory
 from snr.std_mods.io.console_session import ConsoleSession
@@ -58,5 +59,10 @@ class ConsoleLoop(ThreadLoop):
             self.schedule(tasks.add_component(factory))
 
     def submit(self, line: str, session: ConsoleSession) -> None:
-        """Queue a command line; the processor replies to ``session``."""
-        self.schedule(Task(TaskType.event, self.command_task_name, [line, session]))
+        """Queue a command line; the processor replies to ``session``.
+
+        While the node is paused (``pause``) the command is urgent, so it
+        runs although the node's other tasks wait.
+        """
+        priority = console_priority(self.parent)
+        self.schedule(Task(TaskType.event, self.command_task_name, [line, session], priority))

@@ -36,6 +36,7 @@ from dataclasses import dataclass, field
 from typing import Any, Callable, Deque, Dict, List, Optional, Tuple
 
 from snr.core.component import Component
+from snr.core.step_mode import console_priority
 from snr.prelude import DataKey, Page, SomeTasks, Task, TaskId, TaskType
 from snr.prelude.error_text import closest_match
 from snr.std_mods.io.console_protocol import Reply, Status
@@ -263,10 +264,14 @@ class KeyWatches:
 
     def _arm(self) -> None:
         if self._timer is None and not self._closed:
-            tick = Task(TaskType.event, self.tick_name)
-            self._timer = threading.Timer(TICK_S, self.owner.schedule, args=(tick,))
+            self._timer = threading.Timer(TICK_S, self._tick)
             self._timer.daemon = True
             self._timer.start()
+
+    def _tick(self) -> None:
+        """The timer's task; urgent while the node is paused, as the console's commands."""
+        priority = console_priority(self.owner.parent)
+        self.owner.schedule(Task(TaskType.event, self.tick_name, priority=priority))
 
     def _answer_echo(self, echo: _Echo) -> None:
         session = echo.session
