@@ -151,6 +151,14 @@ class TestRoverExample(unittest.TestCase):
                     "WandererFactory",
                     "TimeoutLoopFactory",
                 ],
+                "drive": [
+                    "SimRobotFactory",
+                    "SimViewFactory",
+                    "ControllerLoopFactory",
+                    "InputMappingFactory",
+                    "StickDriveFactory",
+                    "TimeoutLoopFactory",
+                ],
                 "rover": ["SerialLinkFactory", "WandererFactory", "TimeoutLoopFactory"],
             },
         )

@@ -5,6 +5,11 @@ Run it in the simulator (a window if you have a screen, else PNG frames in
 
     python examples/rover/main.py sim --seconds 20
 
+or drive the simulated rover yourself with the arrow keys (or WASD) of its
+window::
+
+    python examples/rover/main.py drive
+
 or drive a real rover whose microcontroller, on a serial port, reads
 ``wheel_cmd`` pages and writes ``range``, ``bump`` and ``wheel_encoders``
 pages (one JSON page per line, see docs/serial.md)::
@@ -25,6 +30,7 @@ from typing import List, Optional
 
 import snr
 from snr import AbstractNode, Endpoint, EndpointFactory, SomeTasks, Task, TaskId, TaskType
+from snr.std_mods.sim import StickDriveFactory
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 
@@ -86,14 +92,24 @@ class WandererFactory(EndpointFactory):
 def make_components(
     seconds: Optional[float] = None, port: str = "/dev/ttyACM0", seed: int = 1
 ) -> snr.ComponentsByRole:
-    """The components of each role: ``sim`` (simulated robot) and ``rover`` (real one)."""
+    """The components of each role: ``sim`` (simulated robot), ``drive`` (the same,
+    driven from the keyboard) and ``rover`` (a real one)."""
     world = snr.World.load(os.path.join(HERE, "room.json"))
     stop = [snr.TimeoutLoopFactory(seconds=seconds)] if seconds else []
+    view = snr.SimViewFactory(world)
     return {
         "sim": [
             snr.SimRobotFactory(world, seed=seed),
             snr.SimViewFactory(world),
             WandererFactory(),
+            *stop,
+        ],
+        "drive": [  # the teleop path of a game controller, fed by the window's keys
+            snr.SimRobotFactory(world, seed=seed),
+            view,
+            snr.ControllerLoopFactory("raw_controller_input", joystick=view.keyboard),
+            snr.InputMappingFactory("raw_controller_input", "controller_input"),
+            StickDriveFactory("controller_input"),
             *stop,
         ],
         "rover": [

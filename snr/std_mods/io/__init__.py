@@ -35,6 +35,9 @@ from snr.std_mods.io.joystick import (
     JoystickStep,
     SimulatedJoystick,
 )
+from snr.std_mods.io.keyboard import (
+    KeyboardJoystick,
+)
 from snr.std_mods.io.live_view import (
     FoxgloveBridge,
     FoxgloveBridgeFactory,
@@ -75,6 +78,7 @@ __all__ = [
     "InputMappingFactory",
     "Joystick",
     "JoystickStep",
+    "KeyboardJoystick",
     "LocalConsole",
     "LocalConsoleFactory",
     "PageReader",

@@ -1,8 +1,9 @@
 """A 2-D robot simulator: a differential-drive robot among walls, as pages.
 
 ``world`` (walls, the world file), ``robot`` (the physics), ``sensors`` (the
-pages it stores), ``draw`` (pygame pictures) and ``components`` (the
-factories a config lists). Pure Python; pygame only to draw.
+pages it stores), ``draw`` (pygame pictures), ``components`` (the
+factories a config lists) and ``teleop`` (a controller's stick to wheels).
+Pure Python; pygame only to draw.
 
 Example::
 
@@ -32,6 +33,7 @@ from snr.std_mods.sim.sensors import (
     sensor_pages,
     wheel_command,
 )
+from snr.std_mods.sim.teleop import StickDriveEndpoint, StickDriveFactory
 from snr.std_mods.sim.world import Segment, World
 
 __all__ = [
@@ -48,6 +50,8 @@ __all__ = [
     "SimRobotLoop",
     "SimViewFactory",
     "SimViewLoop",
+    "StickDriveEndpoint",
+    "StickDriveFactory",
     "TRUE_POSE",
     "WHEEL_CMD",
     "WHEEL_ENCODERS",

@@ -32,6 +32,7 @@ from typing import Any, Deque, Dict, Optional, Tuple, Union
 
 from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.prelude import AbstractNode, ComponentError, DataKey
+from snr.std_mods.io.keyboard import KeyboardJoystick
 from snr.std_mods.sim.draw import INSTALL_HINT, WorldView, import_pygame, render_scene, save_png
 from snr.std_mods.sim.robot import DiffDriveRobot, Pose, RobotSpec
 from snr.std_mods.sim.sensors import (
@@ -231,7 +232,13 @@ class SimViewLoop(ThreadLoop):
         if self.window is not None:
             pygame.display.flip()
             # Reading events keeps the window alive; closing it stops the node.
-            if any(event.type == pygame.QUIT for event in pygame.event.get()):
+            # The arrow keys / WASD go to the keyboard "controller" (teleop).
+            closed = False
+            for event in pygame.event.get():
+                closed = closed or event.type == pygame.QUIT
+                self.settings.keyboard.handle(event)
+            if closed:
+                self.settings.keyboard.release_all()
                 self.schedule(tasks.terminate("simulator window closed"))
                 self.set_terminate_flag("window closed")
         elif self.settings.frames_written < self.settings.max_frames:
@@ -269,6 +276,12 @@ class SimViewFactory(LoopFactory):
         radius_m: the robot's radius, as drawn.
         trail_points: how many of its past positions are drawn as its path.
 
+    Attributes:
+        keyboard: the window's arrow keys / WASD as a `KeyboardJoystick`:
+            give it to ``ControllerLoopFactory(joystick=view.keyboard)`` to
+            drive the robot from the keyboard (docs/simulator.md, "Drive it
+            yourself"). Without a window no key is ever pressed.
+
     Example::
 
         SimViewFactory(world)                                   # window if possible
@@ -303,6 +316,7 @@ class SimViewFactory(LoopFactory):
         self.radius_m = radius_m
         self.trail_points = max(0, trail_points)
         self.name = name or "sim_view"
+        self.keyboard = KeyboardJoystick()
         # Counted here, on the factory, so they can be read after the run.
         self.frames_written = 0
         """PNG frames written so far."""
