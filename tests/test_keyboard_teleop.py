@@ -1,5 +1,6 @@
 """Keyboard teleop: the simulator window's arrow keys drive the rover through the
-controller components (docs/simulator.md, "Drive it yourself").
+controller components (docs/simulator.md, "Drive it yourself"); and the window
+drawn on the main thread, with the node on another (`run_in_window`).
 
 Headless: SDL's dummy video driver gives the window, and the test posts key
 events to it as a keyboard would.
@@ -12,12 +13,13 @@ import os
 import threading
 import time
 import unittest
-from typing import Any, Callable, Dict
+from typing import Any, Callable, Dict, List, Tuple
 
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")  # before pygame is imported
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
 from snr import (
+    AbstractFactory,
     Config,
     ControllerLoopFactory,
     InputMappingFactory,
@@ -25,10 +27,11 @@ from snr import (
     Node,
     SimRobotFactory,
     SimViewFactory,
+    TimeoutLoopFactory,
     World,
 )
 from snr.std_mods.io import KeyboardJoystick
-from snr.std_mods.sim import SimViewLoop, StickDriveFactory
+from snr.std_mods.sim import SimViewLoop, StickDriveFactory, run_in_window
 from snr.utils.mock_node import MockNode
 
 try:
@@ -42,6 +45,18 @@ def wait_for(condition: Callable[[], Any], timeout_s: float = 5.0) -> Any:
     while not condition() and time.monotonic() < deadline:
         time.sleep(0.01)
     return condition()
+
+
+def teleop_rover() -> Tuple[SimRobotFactory, SimViewFactory, List[AbstractFactory]]:
+    """A simulated rover, its window, and the keyboard teleop path that drives it."""
+    world = World.box(4.0, 3.0)
+    view = SimViewFactory(world, window=True, rate_hz=50)
+    teleop: List[AbstractFactory] = [
+        ControllerLoopFactory("raw_controller_input", view.keyboard, max_tick_rate_hz=50),
+        InputMappingFactory("raw_controller_input", "controller_input"),
+        StickDriveFactory("controller_input"),
+    ]
+    return SimRobotFactory(world, seed=1), view, teleop
 
 
 def window_of(node: Node) -> Any:
@@ -80,14 +95,7 @@ class TestKeyboardJoystick(unittest.TestCase):
 @unittest.skipIf(pygame is None, "pygame is not installed")
 class TestTeleopInTheSimulatorWindow(unittest.TestCase):
     def test_arrow_keys_drive_the_rover_and_letting_go_stops_it(self) -> None:
-        world = World.box(4.0, 3.0)
-        view = SimViewFactory(world, window=True, rate_hz=50)
-        sim = SimRobotFactory(world, seed=1)
-        teleop = [
-            ControllerLoopFactory("raw_controller_input", view.keyboard, max_tick_rate_hz=50),
-            InputMappingFactory("raw_controller_input", "controller_input"),
-            StickDriveFactory("controller_input"),
-        ]
+        sim, view, teleop = teleop_rover()
         node = Node("sim", Config({"sim": [sim, view, *teleop]}, mode=Mode.TEST))
         thread = threading.Thread(target=node.loop, name="teleop-node", daemon=True)
         thread.start()
@@ -105,3 +113,31 @@ class TestTeleopInTheSimulatorWindow(unittest.TestCase):
             node.set_terminate_flag("test finished")
             thread.join(5.0)
         self.assertFalse(thread.is_alive())
+
+
+@unittest.skipIf(pygame is None, "pygame is not installed")
+class TestWindowOnTheMainThread(unittest.TestCase):
+    """What ``python -m snr demo --sim`` does on every platform (macOS requires it)."""
+
+    def test_the_window_is_drawn_and_read_here_while_the_node_runs_beside_it(self) -> None:
+        sim, view, teleop = teleop_rover()
+        components = [sim, *teleop, TimeoutLoopFactory(seconds=10.0)]  # if it never closes
+        start_x = sim.robot.pose.x
+        seen: Dict[str, Any] = {}
+
+        def keyboard_user() -> None:  # presses Up, then closes the window
+            if wait_for(lambda: pygame.display.get_init() and pygame.display.get_surface()):
+                seen["window"] = pygame.display.get_surface().get_size()
+                pygame.event.post(pygame.event.Event(pygame.KEYDOWN, key=pygame.K_UP))
+                seen["moved"] = wait_for(lambda: sim.robot.pose.x > start_x + 0.01)
+            pygame.event.post(pygame.event.Event(pygame.QUIT))
+
+        user = threading.Thread(target=keyboard_user, daemon=True)
+        user.start()
+        node = run_in_window("sim", Config({"sim": components}, mode=Mode.TEST), view)
+        user.join(5.0)
+        self.assertIs(threading.current_thread(), threading.main_thread())
+        self.assertEqual(seen.get("window"), view.scene(pygame).view.size_px)
+        self.assertTrue(seen.get("moved"), "the keys did not drive the rover")
+        self.assertEqual(node.terminate_reason, "simulator window closed")
+        self.assertFalse(pygame.display.get_init(), "the window was not closed")

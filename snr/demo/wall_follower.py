@@ -27,6 +27,7 @@ from typing import Any, Dict, List, Optional
 
 import snr
 from snr import AbstractNode, Endpoint, EndpointFactory, SomeTasks, Task, TaskId, TaskType
+from snr.std_mods.sim import run_in_window
 
 __all__ = ["WallFollowerEndpoint", "WallFollowerFactory", "main", "make_world", "run"]
 
@@ -130,7 +131,9 @@ def run(seconds: float, frames_dir: Optional[str] = None, seed: int = 1) -> snr.
     """Run the lesson in one node for ``seconds``; returns the simulated robot.
 
     With ``frames_dir`` the view writes PNG frames there; without it, a
-    window if there is a screen, else frames in ``sim_frames/``.
+    window if there is a screen (drawn on this thread, which must be the
+    main one on macOS, while the node runs on another), else frames in
+    ``sim_frames/``.
 
     Example::
 
@@ -143,10 +146,13 @@ def run(seconds: float, frames_dir: Optional[str] = None, seed: int = 1) -> snr.
         view = snr.SimViewFactory(world)
     else:
         view = snr.SimViewFactory(world, frames_dir=frames_dir, window=False)
-    if not view.window:
+    brain = [WallFollowerFactory(), snr.TimeoutLoopFactory(seconds=seconds)]
+    if view.window:
+        # The window on this (the main) thread, as macOS requires; the node beside it.
+        run_in_window("sim", snr.Config({"sim": [sim, *brain]}), view)
+    else:
         print(f"Pictures: PNG frames in {Path(view.frames_dir).resolve()}", flush=True)
-    components = [sim, view, WallFollowerFactory(), snr.TimeoutLoopFactory(seconds=seconds)]
-    snr.SynchronousRunner("sim", snr.Config({"sim": components})).run()
+        snr.SynchronousRunner("sim", snr.Config({"sim": [sim, view, *brain]})).run()
     pose = sim.robot.pose
     print(
         f"After {sim.steps / sim.rate_hz:.1f} s the robot is at ({pose.x:.2f}, {pose.y:.2f})"

@@ -2,7 +2,8 @@
 
 ``world`` (walls, the world file), ``robot`` (the physics), ``sensors`` (the
 pages it stores), ``draw`` (pygame pictures), ``components`` (the
-factories a config lists) and ``teleop`` (a controller's stick to wheels).
+factories a config lists), ``teleop`` (a controller's stick to wheels) and
+``main_window`` (the window on the main thread, as macOS requires).
 Pure Python; pygame only to draw.
 
 Example::
@@ -20,6 +21,7 @@ from snr.std_mods.sim.components import (
     SimViewLoop,
     has_display,
 )
+from snr.std_mods.sim.main_window import run_in_window
 from snr.std_mods.sim.robot import DiffDriveRobot, Pose, RobotSpec
 from snr.std_mods.sim.sensors import (
     BUMP,
@@ -57,6 +59,7 @@ __all__ = [
     "WHEEL_ENCODERS",
     "World",
     "has_display",
+    "run_in_window",
     "sensor_pages",
     "wheel_command",
 ]

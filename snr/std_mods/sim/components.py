@@ -24,22 +24,24 @@ Example::
 
 from __future__ import annotations
 
-import collections
 import os
 import sys
 from pathlib import Path
-from typing import Any, Deque, Dict, Optional, Tuple, Union
+from typing import Any, Optional, Union
 
 from snr.core import LoopFactory, ThreadLoop, tasks
-from snr.prelude import AbstractNode, ComponentError, DataKey
+from snr.prelude import AbstractNode, ComponentError
 from snr.std_mods.io.keyboard import KeyboardJoystick
-from snr.std_mods.sim.draw import INSTALL_HINT, WorldView, import_pygame, render_scene, save_png
+from snr.std_mods.sim.draw import (
+    INSTALL_HINT,
+    Scene,
+    import_pygame,
+    open_window,
+    save_png,
+    window_closed,
+)
 from snr.std_mods.sim.robot import DiffDriveRobot, Pose, RobotSpec
 from snr.std_mods.sim.sensors import (
-    BUMP,
-    ODOMETRY,
-    RANGE,
-    TRUE_POSE,
     WHEEL_CMD,
     Odometry,
     RangeSensor,
@@ -184,15 +186,12 @@ class SimViewLoop(ThreadLoop):
     def __init__(self, factory: SimViewFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name, max_tick_rate_hz=factory.rate_hz)
         self.settings = factory
-        self.view = WorldView(factory.world, factory.width_px)
-        self.pygame: Optional[Any] = None
-        # The path drawn behind the robot: the newest points, a bounded number.
-        self.trail: Deque[Tuple[float, float]] = collections.deque(maxlen=factory.trail_points)
+        self.scene: Optional[Scene] = None
         self.window: Optional[Any] = None
 
     def setup(self) -> None:
         try:
-            self.pygame = import_pygame()
+            pygame = import_pygame()
         except ComponentError:
             self.warn(
                 "The simulator runs, but draws nothing: pygame is not installed. %s.",
@@ -200,50 +199,27 @@ class SimViewLoop(ThreadLoop):
             )
             self.set_terminate_flag("no pygame")
             return
+        self.scene = self.settings.scene(pygame)
         if self.settings.window:
             # pygame's display belongs to this loop's thread from here on.
-            self.pygame.display.init()
-            self.window = self.pygame.display.set_mode(self.view.size_px)
-            self.pygame.display.set_caption(f"SNR simulator: {self.settings.world.name}")
+            self.window = open_window(pygame, self.scene.view.size_px, self.settings.title)
         else:
             self.info("Drawing the simulator into %s", self.settings.frames_dir)
 
     def loop(self) -> None:
-        pygame = self.pygame
-        if pygame is None:
+        scene = self.scene
+        if scene is None:
             return
-        pages: Dict[DataKey, Any] = {}
-        for key in (TRUE_POSE, ODOMETRY, RANGE, BUMP):
-            data = self.get_data(key)
-            if data is not None:
-                pages[key] = data
-        pose = pages.get(TRUE_POSE) or pages.get(ODOMETRY)
-        if isinstance(pose, dict) and "x" in pose and "y" in pose:
-            self.trail.append((pose["x"], pose["y"]))
-        surface = render_scene(
-            pygame,
-            self.view,
-            self.settings.world,
-            pages,
-            self.settings.radius_m,
-            self.window,
-            list(self.trail),
-        )
+        surface = scene.draw(self.get_data, self.window)
         if self.window is not None:
-            pygame.display.flip()
-            # Reading events keeps the window alive; closing it stops the node.
+            scene.pygame.display.flip()
             # The arrow keys / WASD go to the keyboard "controller" (teleop).
-            closed = False
-            for event in pygame.event.get():
-                closed = closed or event.type == pygame.QUIT
-                self.settings.keyboard.handle(event)
-            if closed:
-                self.settings.keyboard.release_all()
+            if window_closed(scene.pygame, self.settings.keyboard):
                 self.schedule(tasks.terminate("simulator window closed"))
                 self.set_terminate_flag("window closed")
         elif self.settings.frames_written < self.settings.max_frames:
             name = f"frame_{self.settings.frames_written:05d}.png"
-            save_png(pygame, surface, self.settings.frames_dir / name)
+            save_png(scene.pygame, surface, self.settings.frames_dir / name)
             self.settings.frames_written += 1
             if self.settings.frames_written == self.settings.max_frames:
                 self.warn(
@@ -255,8 +231,8 @@ class SimViewLoop(ThreadLoop):
             self.settings.frames_skipped += 1
 
     def terminate(self) -> None:
-        if self.window is not None and self.pygame is not None:
-            self.pygame.display.quit()
+        if self.window is not None and self.scene is not None:
+            self.scene.pygame.display.quit()
             self.window = None
 
 
@@ -322,6 +298,15 @@ class SimViewFactory(LoopFactory):
         """PNG frames written so far."""
         self.frames_skipped = 0
         """Frames not written because ``max_frames`` were already on disk."""
+
+    @property
+    def title(self) -> str:
+        """The window's title."""
+        return f"SNR simulator: {self.world.name}"
+
+    def scene(self, pygame: Any) -> Scene:
+        """A `Scene` drawn as these settings say (for a loop, or a window on the main thread)."""
+        return Scene(pygame, self.world, self.width_px, self.radius_m, self.trail_points)
 
     def get(self, parent: AbstractNode) -> SimViewLoop:
         return SimViewLoop(self, parent)

@@ -20,18 +20,29 @@ Example::
 
 from __future__ import annotations
 
+import collections
 import importlib
 import math
 import os
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Deque, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 from snr.prelude import ComponentError, DataKey
+from snr.std_mods.io.keyboard import KeyboardJoystick
 from snr.std_mods.sim.sensors import BUMP, ODOMETRY, RANGE, TRUE_POSE
 from snr.std_mods.sim.world import World
 
-__all__ = ["INSTALL_HINT", "WorldView", "import_pygame", "render_scene", "save_png"]
+__all__ = [
+    "INSTALL_HINT",
+    "Scene",
+    "WorldView",
+    "import_pygame",
+    "open_window",
+    "render_scene",
+    "save_png",
+    "window_closed",
+]
 
 INSTALL_HINT = (
     "Install pygame to see it: `pip install 'snr[controller]'` (or `pip install pygame`; "
@@ -151,6 +162,84 @@ def render_scene(
         nose = view.to_px(x + radius_m * math.cos(theta), y + radius_m * math.sin(theta))
         pygame.draw.line(surface, BACKGROUND, centre, nose, 2)
     return surface
+
+
+class Scene:
+    """What a view draws each frame: the world, the robot's newest pages and its trail.
+
+    Args:
+        pygame: the pygame module.
+        world: the walls.
+        width_px: the picture's width.
+        radius_m: the robot's radius, as drawn.
+        trail_points: how many past positions are kept and drawn as its path.
+
+    Example::
+
+        scene = Scene(pygame, world)
+        surface = scene.draw(node.get_data)    # reads true_pose, odometry, range, bump
+    """
+
+    def __init__(
+        self,
+        pygame: Any,
+        world: World,
+        width_px: int = 640,
+        radius_m: float = 0.1,
+        trail_points: int = 1000,
+    ) -> None:
+        self.pygame = pygame
+        self.world = world
+        self.view = WorldView(world, width_px)
+        self.radius_m = radius_m
+        # The path drawn behind the robot: the newest points, a bounded number.
+        self.trail: Deque[Tuple[float, float]] = collections.deque(maxlen=max(0, trail_points))
+
+    def draw(self, get_data: Callable[[DataKey], Any], surface: Optional[Any] = None) -> Any:
+        """Draw the pages ``get_data`` returns on ``surface`` (or a new one); returns it."""
+        pages: Dict[DataKey, Any] = {}
+        for key in (TRUE_POSE, ODOMETRY, RANGE, BUMP):
+            data = get_data(key)
+            if data is not None:
+                pages[key] = data
+        pose = pages.get(TRUE_POSE) or pages.get(ODOMETRY)
+        if isinstance(pose, dict) and "x" in pose and "y" in pose:
+            self.trail.append((pose["x"], pose["y"]))
+        return render_scene(
+            self.pygame, self.view, self.world, pages, self.radius_m, surface, list(self.trail)
+        )
+
+
+def open_window(pygame: Any, size_px: Tuple[int, int], title: str) -> Any:
+    """Open pygame's window (macOS: on the main thread only); returns its surface.
+
+    Example::
+
+        window = open_window(pygame, scene.view.size_px, "SNR simulator")
+    """
+    pygame.display.init()
+    window = pygame.display.set_mode(size_px)
+    pygame.display.set_caption(title)
+    return window
+
+
+def window_closed(pygame: Any, keyboard: KeyboardJoystick) -> bool:
+    """Read the window's events (on its thread): keys go to ``keyboard``; True once it is closed.
+
+    Reading them also keeps the window alive (answering the system).
+
+    Example::
+
+        if window_closed(pygame, view.keyboard):
+            node.schedule(tasks.terminate("simulator window closed"))
+    """
+    closed = False
+    for event in pygame.event.get():
+        closed = closed or event.type == pygame.QUIT
+        keyboard.handle(event)
+    if closed:
+        keyboard.release_all()
+    return closed
 
 
 def _draw_rays(
