@@ -110,11 +110,10 @@ class TestErrorTree(unittest.TestCase):
             cls = todo.pop()
             found.append(cls)
             # Not counted: the tests' own errors; the docs builder's (a tool, not the runtime).
-            todo.extend(
-                k
-                for k in cls.__subclasses__()
-                if k.__module__.startswith("snr.") and k.__module__ != "snr.docsite"
-            )
+            subclasses: List[type] = cls.__subclasses__()
+            for sub in subclasses:
+                if sub.__module__.startswith("snr.") and sub.__module__ != "snr.docsite":
+                    todo.append(sub)
         drawing = (errors.__doc__ or "").split("The tree::", 1)[1]
         drawn = re.findall(r"(?:^ +|\+-- )([A-Z]\w+Error)\b", drawing, re.M)
         self.assertEqual(sorted(drawn), sorted(errors.__all__))
