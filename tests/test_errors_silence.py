@@ -32,7 +32,7 @@ import time
 import traceback
 import unittest
 from pathlib import Path
-from typing import Any, Callable, Dict, List, NamedTuple, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, Iterable, List, NamedTuple, Optional, Sequence, Tuple
 from unittest import mock
 
 import snr
@@ -111,8 +111,20 @@ class Capture(io.StringIO):
             return self.getvalue()
 
 
-def run_program(source: str, wanted: List[str]) -> Tuple[List[str], int]:
-    """Run ``source`` as ``python robot.py robot`` would; its output lines and exit status."""
+def run_program(
+    source: str,
+    wanted: List[str],
+    argv: Sequence[str] = ("robot.py", "robot"),
+    tune: Callable[[AbstractNode], None] = lambda node: None,
+    done: Optional[Callable[[str], bool]] = None,
+) -> Tuple[List[str], int]:
+    """Run ``source`` as ``python robot.py robot`` would; its output lines and exit status.
+
+    ``argv`` is the command line (``python`` left out); ``tune(node)`` runs as
+    the program's `TimeoutLoopFactory` builds its loop, to cut a node's hint
+    times short; ``done(output)``, if given, tells that loop when to end the
+    node instead of ``wanted``.
+    """
     folder = tempfile.mkdtemp(prefix="snr-student-")
     path = os.path.join(folder, "robot.py")
     Path(path).write_text(source, "utf-8")
@@ -121,7 +133,7 @@ def run_program(source: str, wanted: List[str]) -> Tuple[List[str], int]:
 
     def seen_all() -> bool:
         text = capture.text().replace(folder, STUDENT_DIR)
-        return all(w in text for w in waiting_for)
+        return done(text) if done is not None else all(w in text for w in waiting_for)
 
     handler = logging.StreamHandler(capture)
     handler.setFormatter(logging.Formatter("%(name)s %(levelname)s: %(message)s"))
@@ -137,9 +149,11 @@ def run_program(source: str, wanted: List[str]) -> Tuple[List[str], int]:
         with contextlib.ExitStack() as stack:
             stack.enter_context(contextlib.redirect_stdout(capture))
             stack.enter_context(contextlib.redirect_stderr(capture))
-            stack.enter_context(mock.patch.object(sys, "argv", ["robot.py", "robot"]))
+            stack.enter_context(mock.patch.object(sys, "argv", list(argv)))
+            # As `python robot.py`: sys.argv[0] stays as typed (runpy would make it the path).
+            stack.enter_context(mock.patch.object(runpy, "_ModifiedArgv0", _ArgvAsTyped))
             stack.enter_context(
-                mock.patch.object(snr, "TimeoutLoopFactory", fast_timeout(seen_all))
+                mock.patch.object(snr, "TimeoutLoopFactory", fast_timeout(seen_all, tune))
             )
             try:
                 runpy.run_path(path, run_name="__main__")
@@ -161,7 +175,16 @@ def run_program(source: str, wanted: List[str]) -> Tuple[List[str], int]:
     return lines, status
 
 
-def fast_timeout(done: Callable[[], bool]) -> type:
+class _ArgvAsTyped(contextlib.nullcontext):  # type: ignore[type-arg]
+    """Leaves ``sys.argv[0]`` alone where runpy would set it to the program's path."""
+
+    def __init__(self, value: object) -> None:
+        super().__init__()
+
+
+def fast_timeout(
+    done: Callable[[], bool], tune: Callable[[AbstractNode], None] = lambda node: None
+) -> type:
     """A TimeoutLoopFactory whose loop ends the node once ``done()`` (at most BOUND_S)."""
 
     class ExpectingTimeoutLoop(TimeoutLoop):
@@ -188,6 +211,7 @@ def fast_timeout(done: Callable[[], bool]) -> type:
             hints = getattr(parent, "key_hints", None)
             if hints is not None:
                 hints.handlers_s = 3 * BOUND_S  # the loop above runs the check sooner
+            tune(parent)
             return ExpectingTimeoutLoop(self, parent, self.seconds)
 
     # Printed in messages as the student wrote it: TimeoutLoopFactory(...).
@@ -218,16 +242,17 @@ class TestCatalogue(unittest.TestCase):
         self.assertEqual(status, entry.status, label)
 
 
-def _add_catalogue_tests() -> None:
-    for label in catalogue():
+def add_entry_tests(test_class: type, labels: Iterable[str]) -> None:
+    """Give ``test_class`` a ``test_<label>`` calling ``self.check(label)`` for each label."""
+    for label in labels:
 
-        def test(self: TestCatalogue, label: str = label) -> None:
+        def test(self: Any, label: str = label) -> None:
             self.check(label)
 
-        setattr(TestCatalogue, f"test_{label}", test)
+        setattr(test_class, f"test_{label}", test)
 
 
-_add_catalogue_tests()
+add_entry_tests(TestCatalogue, catalogue())
 
 
 # -- the mechanisms, on mistakes the catalogue does not list ------------------------

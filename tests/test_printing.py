@@ -56,6 +56,16 @@ class TestTaskPrinting(unittest.TestCase):
         )
         self.assertIn("Page(key='depth'", repr(tasks.store_page(page)))
 
+    def test_one_formatter_for_tasks_and_ids(self) -> None:
+        store = tasks.store_page(Page("depth", 2.5, "robot", time.time()))
+        self.assertEqual(format_task(store, values="data"), "(store_page, 'depth'): 2.5")
+        self.assertEqual(format_task(store, values="none"), "(store_page, 'depth')")
+        self.assertEqual(format_task(tasks.event("b", [1]), values="data"), "(event, 'b'): [1]")
+        self.assertEqual(format_task((TaskType.event, "go")), "(event, 'go')")
+        self.assertEqual(format_task(TaskType.terminate), "(terminate)")
+        odd = Task(TaskType.event, "x", "not a list")  # type: ignore[arg-type]
+        self.assertEqual(format_task(odd), "(event, 'x'): 'not a list'")
+
 
 if __name__ == "__main__":
     unittest.main()

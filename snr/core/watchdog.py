@@ -68,6 +68,7 @@ from snr.prelude.student_code import (
     describe_callable,
     describe_class,
     frame_location,
+    line_with_code,
     running_line,
 )
 from snr.prelude.task import format_task
@@ -304,12 +305,8 @@ class Watchdog:
 
     def _flood_text(self, loop: ThreadLoop) -> str:
         place = self.node.queue.waited_at.get(loop.thread_id or -1)
-        if place is None:
-            where = running_line(loop.thread_id)
-        else:  # the line that had to wait (the loop may have moved on since)
-            frame, line = place
-            code = linecache.getline(frame.f_code.co_filename, line).strip()
-            where = frame_location(frame, line) + (f": `{code}`" if code else "")
+        # The line that had to wait (the loop may have moved on since), else where it is.
+        where = running_line(loop.thread_id) if place is None else line_with_code(*place)
         rate = loop.max_tick_rate_hz
         if rate > 0:
             fix = (

@@ -37,6 +37,7 @@ __all__ = [
     "describe_class",
     "frame_location",
     "is_runtime_file",
+    "line_with_code",
     "outside_runtime",
     "running_line",
     "short_path",
@@ -294,10 +295,22 @@ def running_line(thread_id: Optional[int]) -> str:
     ):
         frame = frame.f_back
     frame = frame or innermost
-    if frame is None:
-        return ""
-    code = linecache.getline(frame.f_code.co_filename, frame.f_lineno).strip()
-    return f"{frame_location(frame)}" + (f": `{code}`" if code else "")
+    return "" if frame is None else line_with_code(frame)
+
+
+def line_with_code(frame: FrameType, line: Optional[int] = None) -> str:
+    """``sensor.py:12 in Sonar.loop: `reading = port.read()```: a frame's place and code.
+
+    At ``line``, or where the frame is now; the code is left out when the
+    source cannot be read.
+
+    Example::
+
+        line_with_code(sys._getframe())   # "robot.py:30 in Depth.loop: `x = line_with_code(...)`"
+    """
+    at = frame.f_lineno if line is None else line
+    code = linecache.getline(frame.f_code.co_filename, at).strip()
+    return frame_location(frame, at) + (f": `{code}`" if code else "")
 
 
 def _is_stdlib(filename: str) -> bool:
