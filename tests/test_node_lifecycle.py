@@ -340,6 +340,11 @@ class TestBoundedQueue(unittest.TestCase):
         queue.schedule([tasks.event(str(i)) for i in range(10)])
 
         def consume() -> None:
+            # Start only once the producer waits: on a busy machine it may be
+            # scheduled late, after a consumer that did not wait drained the lane.
+            deadline = time.monotonic() + 2.0
+            while queue.waits == 0 and time.monotonic() < deadline:
+                time.sleep(0.001)
             for _ in range(8):
                 time.sleep(0.002)
                 queue.pop()
