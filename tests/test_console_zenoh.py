@@ -62,7 +62,7 @@ class TestZenohConsole(unittest.TestCase):
             wrong.connect()
         nobody = self.console(role="camera")
         assert isinstance(nobody, ZenohConsole)
-        nobody.timeout_s = 0.5
+        nobody.timeout_s = 0.2
         with self.assertRaisesRegex(ConsoleConnectionError, "No node 'camera'"):
             nobody.connect()
 
