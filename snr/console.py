@@ -1,17 +1,43 @@
 """``python -m snr.console HOST:PORT``: the remote console (also ``snr-console``).
 
+With ``--zenoh SYSTEM [ROLE]`` it reaches a node by its role over Zenoh
+instead (``snr/std_mods/io/zenoh_console.py``).
+
 Example::
 
     $ python -m snr.console 127.0.0.1:9123 -c "list endpoints"
+    $ python -m snr.console --zenoh team7 urov -c stats
 """
 
 from __future__ import annotations
 
 import sys
+from typing import IO, Optional, Sequence
 
-from snr.std_mods.io.remote_console import main
+from snr.std_mods.io import remote_console
 
 __all__ = ["main"]
+
+
+def main(
+    argv: Optional[Sequence[str]] = None,
+    stdin: Optional[IO[str]] = None,
+    stdout: Optional[IO[str]] = None,
+    stderr: Optional[IO[str]] = None,
+) -> int:
+    """Entry point of ``snr-console``: over TCP, or over Zenoh with ``--zenoh``.
+
+    Example::
+
+        main(["127.0.0.1:9123", "-c", "stats"])
+    """
+    words = list(sys.argv[1:] if argv is None else argv)
+    if any(word == "--zenoh" or word.startswith("--zenoh=") for word in words):
+        from snr.std_mods.io import zenoh_console  # needs the zenoh extra
+
+        return zenoh_console.main(words, stdin, stdout, stderr)
+    return remote_console.main(words, stdin, stdout, stderr)
+
 
 if __name__ == "__main__":
     sys.exit(main())

@@ -147,6 +147,37 @@ class TestZenohCounting(unittest.TestCase):
         self.assertEqual(self.comms.stats()["lost"], 2)
         self.assertIn("Lost 2 pages from Zenoh", logs.output[0])
 
+    def test_samples_reach_the_node_in_bounded_batches_in_order_and_a_full_inbox_drops(
+        self,
+    ) -> None:
+        from snr.std_mods.comms import zenoh_comms as zc
+
+        node = MockNode()
+        comms = ZenohCommsFactory("lab", subscribe="**", max_wait_s=0).get(node)
+
+        def sample(i: int) -> Any:
+            body = json.dumps({"data": i}).encode()
+            payload = mock.Mock(to_bytes=mock.Mock(return_value=body))
+            return mock.Mock(key_expr="snr/lab/n", payload=payload, attachment=None)
+
+        count = zc._BATCH + 3
+        for i in range(count):
+            comms._on_sample(sample(i))
+        self.assertEqual(len(node.scheduled), 1, "one task asks for the whole burst")
+        first = comms.take_inbox(node.scheduled[0], node.scheduled[0].id())
+        assert isinstance(first, list)
+        self.assertEqual([t.val_list[0].data for t in first[:-1]], list(range(zc._BATCH)))
+        self.assertEqual(first[-1].name, "zenoh_comms_arrived", "the rest queues behind")
+        rest = comms.take_inbox(first[-1], first[-1].id())
+        assert isinstance(rest, list)
+        self.assertEqual([t.val_list[0].data for t in rest], list(range(zc._BATCH, count)))
+        self.assertEqual(comms.stats()["received"], count)
+
+        with mock.patch.object(zc, "_INBOX_LIMIT", 2), self.assertLogs("snr", "WARNING"):
+            for i in range(3):  # the third finds the inbox full and max_wait_s is 0
+                comms._on_sample(sample(i))
+        self.assertEqual(comms.stats()["dropped"], 1)
+
     def test_bad_samples_are_counted_and_the_first_five_explained(self) -> None:
         with self.assertLogs("snr", "WARNING") as logs:
             for _ in range(7):

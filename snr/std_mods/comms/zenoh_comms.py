@@ -12,21 +12,35 @@ docs/wire-format.md (``{"v":1,"kind":"page","key":...,"data":...,...}``),
 declared as ``application/json``, so any Zenoh program in any language can read
 SNR pages and publish pages to SNR nodes (docs/comms.md, "Zenoh").
 
-Zenoh runs its own threads. Received samples are decoded on them and handed to
-the node through its task queue, which they respect: while the node is behind
-they wait (Zenoh then slows the sender), and after ``max_wait_s`` a page is
-dropped and counted. Pages published here are never received here, and a page
-that came from Zenoh is never published again (no echo).
+Zenoh runs its own threads. A received sample is only put in the component's
+inbox there (a bounded deque); the node's thread decodes and stores what the
+inbox holds in batches, one queued task per batch, so the two threads take
+turns on the GIL once a batch instead of once a page. While the inbox is full
+Zenoh's thread waits (Zenoh then slows the sender), and after ``max_wait_s`` a
+page is dropped and counted. Pages published here are never received here,
+and a page that came from Zenoh is never published again (no echo).
 """
 
 from __future__ import annotations
 
+import collections
 import json
 import os
 import struct
 import threading
 import time
-from typing import TYPE_CHECKING, Any, Dict, List, Mapping, Optional, Sequence, Set, Tuple
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    Deque,
+    Dict,
+    List,
+    Mapping,
+    Optional,
+    Sequence,
+    Set,
+    Tuple,
+)
 
 from snr.core import EndpointFactory, tasks
 from snr.core.endpoint import Endpoint
@@ -41,6 +55,7 @@ from snr.prelude import (
     SomeTasks,
     Task,
     TaskId,
+    TaskPriority,
     TaskType,
     WireFormatError,
 )
@@ -79,6 +94,8 @@ _MAX_ECHO_GUARD = (
     10_000  # pages from Zenoh waiting to be stored, remembered so they are not re-sent
 )
 _MAX_SENDERS = 10_000  # (sender, key) pairs whose sequence is followed for lost pages
+_INBOX_LIMIT = 10_000  # samples waiting for the node's thread; Zenoh's thread waits above it
+_BATCH = 500  # samples decoded per task on the node's thread (then the pages, then the rest)
 _BAD_CHARS = set("*$?#")
 _MODES = ("peer", "client", "router")
 _INSTALL = "pip install 'snr[zenoh]'"
@@ -350,7 +367,16 @@ class ZenohComms(Endpoint):
         self._published_keys = frozenset(factory.publish)
         self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
         self._bad_reported = 0
-        self._lock = threading.Lock()
+        # Samples (and liveliness changes, as tuples) from Zenoh's threads, in
+        # arrival order, waiting for the node's thread to decode them.
+        self._inbox: Deque[Any] = collections.deque()
+        self._batch_queued = False  # a task to take the inbox is queued or running
+        self._closed = threading.Event()
+        batch_event = f"{factory.name}_arrived"
+        # The first task of a burst jumps the queue (it never waits for room,
+        # so it is never dropped); the next one queues behind its batch's pages.
+        self._first_batch = Task(TaskType.event, batch_event, priority=TaskPriority.high)
+        self._next_batch = Task(TaskType.event, batch_event)
         self.lost_report = LossReport(
             self.log,
             "pages from Zenoh",
@@ -366,6 +392,7 @@ class ZenohComms(Endpoint):
         self.task_handlers = {
             (TaskType.store_page, key): self.publish_page for key in factory.publish
         }
+        self.task_handlers[(TaskType.event, batch_event)] = self.take_inbox
         if parent.profiler is not None:
             parent.profiler.add_report(self.name, self.stats_text)
 
@@ -403,11 +430,14 @@ class ZenohComms(Endpoint):
                 congestion_control=congestion,
             )
         remote = zenoh.Locality.REMOTE  # never hear our own pages
+        # Zenoh calls this on a Python thread of its own, fed by its network
+        # threads through a channel; calling it on a network thread itself
+        # (Callback(indirect=False)) was slower: that thread then waits for
+        # the GIL while the node's thread works, and stops reading the link.
+        on_sample = self._on_sample
         for pattern in spec.subscribe:
             self._declared.append(
-                session.declare_subscriber(
-                    self.prefix + pattern, self._on_sample, allowed_origin=remote
-                )
+                session.declare_subscriber(self.prefix + pattern, on_sample, allowed_origin=remote)
             )
         me = str(session.zid())
         liveliness = session.liveliness()
@@ -436,6 +466,7 @@ class ZenohComms(Endpoint):
         self._close()
 
     def _close(self) -> None:
+        self._closed.set()  # Zenoh's threads stop waiting for room in the inbox
         session, self.session = self.session, None
         if session is None:
             return
@@ -456,7 +487,8 @@ class ZenohComms(Endpoint):
         page = task.page()
         if page is None:
             return None  # the node core has already reported the bad task
-        if self._arrived.pop(id(page), None) is page:
+        arrived = self._arrived
+        if arrived and arrived.pop(id(page), None) is page:
             return None  # it came from Zenoh: never send it back
         publisher = self._publishers.get(page.key)
         if publisher is None:
@@ -475,45 +507,98 @@ class ZenohComms(Endpoint):
         publisher.put(body, attachment=_SEQ.pack(self._sender_id, count))
         return None
 
-    # -- Zenoh's threads: receiving ---------------------------------------------
+    # -- Zenoh's threads: into the inbox --------------------------------------------
     def _on_sample(self, sample: zenoh.Sample) -> None:
+        inbox = self._inbox
+        if len(inbox) >= _INBOX_LIMIT and not self._wait_for_room():
+            self.queue_report.dropped()
+            return
+        inbox.append(sample)
+        self._ask_for_batch()
+
+    def _on_liveliness(self, sample: zenoh.Sample) -> None:
+        # Never dropped (one per peer coming or going), and queued behind the
+        # pages that came before it.
+        self._inbox.append((sample.kind, str(sample.key_expr)))
+        self._ask_for_batch()
+
+    def _ask_for_batch(self) -> None:
+        """Queue a task to take the inbox, unless one is queued (one task a burst)."""
+        if not self._batch_queued:
+            self._batch_queued = True
+            self.parent.schedule(self._first_batch)
+
+    def _wait_for_room(self) -> bool:
+        """Hold Zenoh's thread (Zenoh then slows the sender) until the inbox is half empty.
+
+        False after ``max_wait_s``: the page is dropped. The node's thread
+        empties the inbox; nothing here needs a lock.
+        """
+        inbox, low = self._inbox, _INBOX_LIMIT // 2
+        deadline = time.monotonic() + self.spec.max_wait_s
+        while len(inbox) > low:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return False
+            if self._closed.wait(min(left, 0.005)):
+                return True
+        if self.queue_report.dropping:
+            self.queue_report.recovered()
+        return True
+
+    # -- node thread: receiving ---------------------------------------------------
+    def take_inbox(self, task: Task, key: TaskId) -> SomeTasks:
+        """Decode up to a batch of received samples; return their store_page tasks.
+
+        What is left waits for the next batch, queued behind these pages, so
+        the node's queue holds at most a batch of pages from Zenoh at a time.
+        """
+        # Cleared first: a sample put in after this asks for a new batch, and
+        # one put in before is taken below.
+        self._batch_queued = False
+        inbox = self._inbox
+        out: List[Task] = []
+        for _ in range(min(len(inbox), _BATCH)):
+            item = inbox.popleft()
+            if item.__class__ is tuple:
+                out.extend(self._peer_changed(*item))
+                continue
+            page = self._page_of(item)
+            if page is not None:
+                out.append(Task(TaskType.store_page, page.key, [page]))
+        if inbox and not self._batch_queued:
+            self._batch_queued = True
+            out.append(self._next_batch)
+        return out
+
+    def _page_of(self, sample: zenoh.Sample) -> Optional[Page]:
         key_expr = str(sample.key_expr)
         key = key_expr[len(self.prefix) :]
         try:
             page = page_from_sample(key, sample.payload.to_bytes())
         except WireFormatError as error:
             self._bad_sample(key_expr, error)
-            return
+            return None
         attachment = sample.attachment
         if attachment is not None:
             self._follow_sequence(key, attachment.to_bytes())
         self.received += 1
-        parent = self.parent
-        if not parent.wait_for_room(0):
-            # The node is behind: hold this Zenoh thread (Zenoh then slows the
-            # sender) until there is room, for at most max_wait_s.
-            if not parent.wait_for_room(self.spec.max_wait_s):
-                self.queue_report.dropped()
-                return
-            if self.queue_report.dropping:
-                self.queue_report.recovered()
         if key in self._published_keys:
             arrived = self._arrived
             if len(arrived) >= _MAX_ECHO_GUARD:  # their tasks were dropped: forget them
                 arrived.clear()
             arrived[id(page)] = page
-        self.parent.schedule(Task(TaskType.store_page, page.key, [page]))
+        return page
 
     def _follow_sequence(self, key: str, attachment: bytes) -> None:
         if len(attachment) != _SEQ.size:
             return  # not an SNR sender's count
         sender, count = _SEQ.unpack(attachment)
-        with self._lock:  # samples of different senders may come on different threads
-            seen = self._last_seq
-            last = seen.get((sender, key))
-            if last is None and len(seen) >= _MAX_SENDERS:
-                seen.clear()
-            seen[(sender, key)] = count
+        seen = self._last_seq
+        last = seen.get((sender, key))
+        if last is None and len(seen) >= _MAX_SENDERS:
+            seen.clear()
+        seen[(sender, key)] = count
         if last is not None and count > last + 1:
             self.lost_report.dropped(count - last - 1)
         elif self.lost_report.dropping and time.monotonic() - self.lost_report.last_drop > 1.0:
@@ -531,26 +616,26 @@ class ZenohComms(Endpoint):
                 "" if self._bad_reported < 5 else ". Further bad samples are only counted",
             )
 
-    def _on_liveliness(self, sample: zenoh.Sample) -> None:
-        parts = str(sample.key_expr)[len(self.prefix) :].split("/")
+    def _peer_changed(self, kind: Any, key_expr: str) -> List[Task]:
+        """A node of the system appeared or went: note it, and the event to announce it."""
+        parts = key_expr[len(self.prefix) :].split("/")
         if len(parts) != 3 or self.session is None:
-            return
+            return []
         _, role, zid = parts
         if zid == str(self.session.zid()):
-            return
-        if sample.kind == self.zenoh.SampleKind.PUT:
+            return []
+        if kind == self.zenoh.SampleKind.PUT:
             self.peers[zid] = role
             self.info("Node %r joined system %r over Zenoh", role, self.spec.system)
-            self.parent.schedule(tasks.event(COMMS_CONNECTED, [self.name, role]))
-        else:
-            self.peers.pop(zid, None)
-            self.info(
-                "Node %r left system %r (it stopped, or nothing was heard from it for %g s)",
-                role,
-                self.spec.system,
-                self.spec.dead_after_s,
-            )
-            self.parent.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, role]))
+            return [tasks.event(COMMS_CONNECTED, [self.name, role])]
+        self.peers.pop(zid, None)
+        self.info(
+            "Node %r left system %r (it stopped, or nothing was heard from it for %g s)",
+            role,
+            self.spec.system,
+            self.spec.dead_after_s,
+        )
+        return [tasks.event(COMMS_DISCONNECTED, [self.name, role])]
 
     # -- counters ---------------------------------------------------------------
     def stats(self) -> Dict[str, Any]:

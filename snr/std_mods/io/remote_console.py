@@ -44,6 +44,7 @@ __all__ = [
     "EXIT_USAGE",
     "RemoteConsole",
     "main",
+    "run_console",
 ]
 
 EXIT_OK = 0
@@ -407,10 +408,26 @@ def main(
         _say(err, f"snr-console: error: {error}")
         return EXIT_USAGE
     console = RemoteConsole(host, port, args.token, args.timeout)
+    return run_console(console, args.command, stdin, out, err)
+
+
+def run_console(
+    console: RemoteConsole,
+    commands: Sequence[str],
+    stdin: Optional[IO[str]],
+    out: IO[str],
+    err: IO[str],
+) -> int:
+    """Connect, then run ``commands``, or what stdin gives (typed, or piped); the exit code.
+
+    Example::
+
+        run_console(RemoteConsole("127.0.0.1", 9123), ["stats"], None, sys.stdout, sys.stderr)
+    """
     try:
         greeting = console.connect()
-        if args.command:
-            return _run_commands(console, args.command, out)
+        if commands:
+            return _run_commands(console, commands, out)
         _say(out, greeting.text)
         source = stdin if stdin is not None else sys.stdin
         if source.isatty() and stdin is None:

@@ -1,0 +1,429 @@
+"""The console over Zenoh: reach any node of a system by its role (``pip install 'snr[zenoh]'``).
+
+A node that adds `ZenohConsoleFactory` answers console commands asked as
+Zenoh queries on ``snr/<system>/@console/<role>``; `ZenohConsole` asks them.
+So a teacher's laptop on the robots' network reaches every node of every
+team's system without knowing an address::
+
+    python -m snr console --zenoh team7            # the roles that answer
+    python -m snr console --zenoh team7 urov       # type commands into 'urov'
+
+The commands, their replies and their limits are the TCP console's
+(docs/console.md): the query's payload is the command line, the reply's
+payload a reply frame of the console protocol (``snr-console/1 ok 4\\npong``).
+A node given a token (or ``SNR_CONSOLE_TOKEN``) only answers queries that
+carry it as their attachment.
+
+Example::
+
+    Config({"urov": [..., ZenohConsoleFactory("team7", connect=["tcp/10.0.0.2:7447"])]})
+    with ZenohConsole("team7", "urov", connect=["tcp/10.0.0.2:7447"]) as console:
+        print(console.send("list endpoints").text)
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import threading
+import time
+from typing import IO, Any, List, Optional, Sequence
+
+from snr.core import LoopFactory
+from snr.prelude import AbstractNode, CommsError
+from snr.std_mods.comms.zenoh_comms import (
+    KEY_PREFIX,
+    _check_chunk_text,
+    _zenoh_module,
+    zenoh_config,
+)
+from snr.std_mods.io.console_commands import ConsoleLoop, ConsoleSession
+from snr.std_mods.io.console_protocol import (
+    MAX_LINE_BYTES,
+    TOKEN_ENV_VAR,
+    ConsoleConnectionError,
+    Reply,
+    ReplyDecoder,
+    Status,
+    tokens_match,
+)
+from snr.std_mods.io.remote_console import (
+    EXIT_CONNECTION,
+    EXIT_OK,
+    RemoteConsole,
+    _say,
+    run_console,
+)
+
+__all__ = ["ZenohConsole", "ZenohConsoleFactory", "ZenohConsoleLoop", "console_key", "main"]
+
+MAX_WAITING_QUERIES = 16  # commands queued on one node and not answered yet; more are refused
+
+
+def console_key(system: str, role: str) -> str:
+    """The key expression a node's console answers on.
+
+    Example::
+
+        console_key("team7", "urov")   # 'snr/team7/@console/urov'
+    """
+    return f"{KEY_PREFIX}/{system}/@console/{role}"
+
+
+class _QueryReply(ConsoleSession):
+    """Where one command's reply goes: the query it came in (answered once, then finished)."""
+
+    def __init__(self, owner: ZenohConsoleLoop, query: Any) -> None:
+        self.owner = owner
+        self.query: Any = query
+
+    def send(self, reply: Reply) -> None:
+        query, self.query = self.query, None
+        if query is None:
+            return
+        try:
+            query.reply(self.owner.key, reply.encode())
+            query.drop()  # finished: the console stops waiting for more replies
+        except Exception:  # the console gave up waiting, or the session closed
+            pass
+        self.owner.answered()
+
+
+class ZenohConsoleLoop(ConsoleLoop):
+    """Answers console commands that come as Zenoh queries (built by `ZenohConsoleFactory`).
+
+    Example::
+
+        loop = ZenohConsoleFactory("team7").get(node)
+        loop.key     # 'snr/team7/@console/<the node's role>'
+    """
+
+    def __init__(self, factory: ZenohConsoleFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, factory.name)
+        self.spec = factory
+        self.zenoh = _zenoh_module()
+        self.key = console_key(factory.system, parent.role)
+        self.session: Any = None
+        self._queryable: Any = None
+        self._waiting = 0
+        self._lock = threading.Lock()
+
+    def begin(self) -> None:
+        """Add the command processor; open a Zenoh session and answer on `key`."""
+        super().begin()
+        spec = self.spec
+        config = zenoh_config(spec.mode, spec.connect, spec.listen, spec.scouting)
+        try:
+            self.session = self.zenoh.open(config)
+        except self.zenoh.ZError as error:
+            raise CommsError(
+                f"Node {self.parent.role!r} could not open the Zenoh session of its console "
+                f"(listen={spec.listen}, connect={spec.connect}): {str(error).split(' at /')[0]}"
+            ) from None
+        self._queryable = self.session.declare_queryable(self.key, self._on_query)
+        self.info("Console answers over Zenoh on %s", self.key)
+
+    def loop(self) -> None:
+        """Nothing to do here: queries come on Zenoh's threads."""
+        self.wait_s(1.0)
+
+    def halt(self) -> None:
+        """Stop answering and close the session."""
+        queryable, self._queryable = self._queryable, None
+        if queryable is not None:
+            queryable.undeclare()
+        session, self.session = self.session, None
+        if session is not None:
+            session.close()
+
+    def terminate(self) -> None:
+        """Close the session if it is still open."""
+        self.halt()
+
+    def answered(self) -> None:
+        """A command's reply went out (any thread)."""
+        with self._lock:
+            self._waiting -= 1
+
+    def _on_query(self, query: Any) -> None:
+        """Zenoh's thread: check the query, then queue its command for the node's thread."""
+        token = self.spec.token
+        if token is not None:
+            given = query.attachment
+            if given is None or not tokens_match(
+                given.to_bytes().decode("utf-8", "replace"), token
+            ):
+                self._answer_now(query, Status.ERROR, "This node needs its console token.")
+                return
+        payload = query.payload
+        line = payload.to_bytes().decode("utf-8", "replace") if payload is not None else ""
+        if not line.strip():
+            text = (
+                f"Connected to node {self.parent.role!r} over Zenoh ({self.key}). "
+                "Type 'help' for the commands, 'exit' to stop the node."
+            )
+            self._answer_now(query, Status.HELLO, text)
+            return
+        if len(line.encode("utf-8")) > MAX_LINE_BYTES or "\n" in line:
+            self._answer_now(
+                query, Status.ERROR, f"A command is one line of at most {MAX_LINE_BYTES} bytes."
+            )
+            return
+        with self._lock:
+            busy = self._waiting >= MAX_WAITING_QUERIES
+            if not busy:
+                self._waiting += 1
+        if busy:
+            self._answer_now(
+                query, Status.ERROR, "The node is busy with other consoles' commands; try again."
+            )
+            return
+        self.submit(line, _QueryReply(self, query))
+
+    def _answer_now(self, query: Any, status: Status, text: str) -> None:
+        try:
+            query.reply(self.key, Reply(status, text).encode())
+            query.drop()
+        except Exception:  # the console gave up waiting
+            pass
+
+
+class ZenohConsoleFactory(LoopFactory):
+    """Lets consoles reach this node over Zenoh, by system and role.
+
+    Args:
+        system: the system's name, as in `ZenohCommsFactory`.
+        mode, connect, listen, scouting: the Zenoh session's set-up, as in
+            `ZenohCommsFactory` (peer mode with multicast scouting by default).
+        token: a shared secret queries must carry (default: ``SNR_CONSOLE_TOKEN``
+            if set, else none: anyone on the Zenoh network can type commands).
+        name: the component name (default ``"zenoh_console"``).
+
+    Example::
+
+        ZenohConsoleFactory("team7")
+        ZenohConsoleFactory("team7", connect=["tcp/192.168.1.10:7447"], scouting=False)
+    """
+
+    def __init__(
+        self,
+        system: str,
+        *,
+        mode: str = "peer",
+        connect: Sequence[str] = (),
+        listen: Sequence[str] = (),
+        scouting: bool = True,
+        token: Optional[str] = None,
+        name: Optional[str] = None,
+    ) -> None:
+        super().__init__()
+        _check_chunk_text(system, "The system name", wildcards=False)
+        self.system = system
+        self.mode = mode
+        self.connect = list(connect)
+        self.listen = list(listen)
+        self.scouting = scouting
+        self.token = token if token is not None else os.environ.get(TOKEN_ENV_VAR) or None
+        self.name = name or "zenoh_console"
+
+    def get(self, parent: AbstractNode) -> ZenohConsoleLoop:
+        return ZenohConsoleLoop(self, parent)
+
+
+class ZenohConsole(RemoteConsole):
+    """A console that reaches a node by system and role over Zenoh.
+
+    It talks like `RemoteConsole` (``send``, ``stream``, ``interact``): each
+    command is one Zenoh query, its reply one reply frame.
+
+    Example::
+
+        with ZenohConsole("team7", "urov", connect=["tcp/127.0.0.1:7447"], scouting=False) as c:
+            print(c.send("stats").text)
+        ZenohConsole("team7").roles()   # ['camera', 'urov']
+    """
+
+    def __init__(
+        self,
+        system: str,
+        role: str = "*",
+        *,
+        mode: str = "peer",
+        connect: Sequence[str] = (),
+        listen: Sequence[str] = (),
+        scouting: bool = True,
+        token: Optional[str] = None,
+        timeout_s: float = 10.0,
+    ) -> None:
+        super().__init__(token=token, timeout_s=timeout_s)
+        self.system, self.role = system, role
+        self.zenoh = _zenoh_module()
+        self._config = zenoh_config(mode, connect, listen, scouting)
+        self.session: Any = None
+
+    @property
+    def where(self) -> str:
+        """``"system/role"``, for messages and the prompt."""
+        return f"{self.system}/{self.role}"
+
+    def connect(self) -> Reply:
+        """Open the Zenoh session and greet the node; returns its greeting.
+
+        Raises:
+            ConsoleConnectionError: no node of that role answered in time.
+        """
+        self._open()
+        greeting = self._ask("", self.timeout_s, until_answered=True)
+        if greeting.status is not Status.HELLO:
+            self.close()
+            raise ConsoleConnectionError(
+                f"The node {self.where} turned the console away: {greeting.text}"
+            )
+        self.greeting = greeting
+        return greeting
+
+    def roles(self, timeout_s: float = 2.0) -> List[str]:
+        """The roles of the system's nodes that answer consoles now, sorted.
+
+        Example::
+
+            ZenohConsole("team7", scouting=False, connect=[...]).roles()   # ['urov']
+        """
+        self._open()
+        deadline = time.monotonic() + timeout_s
+        key = console_key(self.system, "*")
+        while True:  # until some node answers: the session may still be meeting its peers
+            answers = self._replies(key, "", max(0.1, deadline - time.monotonic()))
+            if answers or time.monotonic() >= deadline:
+                return sorted({str(answer.key_expr).rsplit("/", 1)[-1] for answer in answers})
+            time.sleep(0.05)
+
+    def _open(self) -> None:
+        if self.session is None:
+            self.session = self.zenoh.open(self._config)
+
+    def send(self, line: str) -> Reply:
+        """Send one command line and wait for its reply (see `RemoteConsole.send`)."""
+        if "\n" in line or "\r" in line:
+            raise ValueError("A console command is one line: remove the line breaks.")
+        if len(line.encode("utf-8")) > MAX_LINE_BYTES:
+            raise ValueError(f"A console command may be at most {MAX_LINE_BYTES} bytes long.")
+        if self.session is None:
+            raise ConsoleConnectionError(
+                f"The console is not connected to {self.where}: call connect() first."
+            )
+        reply = self._ask(line, self._reply_timeout_s(line))
+        if reply.status is Status.BYE:
+            self.close()
+        return reply
+
+    def _ask(self, line: str, timeout_s: float, until_answered: bool = False) -> Reply:
+        """The node's reply to ``line``; asked again until it answers if ``until_answered``.
+
+        A query sent before the session has met the node's ends at once with
+        no reply: a greeting (which changes nothing) may be asked again.
+        """
+        deadline = time.monotonic() + timeout_s
+        key = console_key(self.system, self.role)
+        while True:
+            left = max(0.1, deadline - time.monotonic())
+            for answer in self._replies(key, line, left):
+                replies = ReplyDecoder().feed(answer.payload.to_bytes())
+                if replies:
+                    return replies[0]
+            if not until_answered or time.monotonic() >= deadline:
+                break
+            time.sleep(0.05)
+        raise ConsoleConnectionError(
+            f"No node {self.role!r} of system {self.system!r} answered within {timeout_s:g} s. "
+            "Is it running with a ZenohConsoleFactory, on the same network (or the same "
+            "connect endpoints)? `python -m snr console --zenoh SYSTEM` lists the roles "
+            "that answer."
+        )
+
+    def _replies(self, key: str, line: str, timeout_s: float) -> List[Any]:
+        token = self.token.encode("utf-8") if self.token else None
+        answers = self.session.get(
+            key, payload=line.encode("utf-8"), attachment=token, timeout=timeout_s
+        )
+        return [reply.ok for reply in answers if reply.ok is not None]
+
+    def close(self) -> None:
+        """Close the Zenoh session (the node keeps running). Safe to call twice."""
+        session, self.session = self.session, None
+        if session is not None:
+            session.close()
+
+    def is_connected(self) -> bool:
+        """True until closed, or the node said bye."""
+        return self.session is not None
+
+
+def _parser() -> argparse.ArgumentParser:
+    parser = argparse.ArgumentParser(
+        prog="snr console --zenoh",
+        description="Type commands into a node of a system, found by its role over Zenoh.",
+    )
+    parser.add_argument("--zenoh", metavar="SYSTEM", required=True, help="the system's name")
+    parser.add_argument("role", nargs="?", help="the node's role (leave out to list the roles)")
+    parser.add_argument(
+        "--connect",
+        action="append",
+        default=[],
+        metavar="ENDPOINT",
+        help="a Zenoh endpoint to connect to, e.g. tcp/192.168.1.10:7447",
+    )
+    parser.add_argument("--listen", action="append", default=[], metavar="ENDPOINT")
+    parser.add_argument(
+        "--no-scouting",
+        action="store_true",
+        help="do not look for peers by multicast (give --connect instead)",
+    )
+    parser.add_argument("--mode", default="peer", choices=["peer", "client"])
+    parser.add_argument(
+        "--token", default=None, help=f"the console token (default: ${TOKEN_ENV_VAR})"
+    )
+    parser.add_argument("-c", "--command", action="append", default=[], metavar="COMMAND")
+    parser.add_argument("--timeout", type=float, default=10.0)
+    return parser
+
+
+def main(
+    argv: Optional[Sequence[str]] = None,
+    stdin: Optional[IO[str]] = None,
+    stdout: Optional[IO[str]] = None,
+    stderr: Optional[IO[str]] = None,
+) -> int:
+    """``python -m snr console --zenoh SYSTEM [ROLE]``; returns the exit code.
+
+    Example::
+
+        main(["--zenoh", "team7", "urov", "-c", "stats"])
+    """
+    out = stdout if stdout is not None else sys.stdout
+    err = stderr if stderr is not None else sys.stderr
+    args = _parser().parse_args(argv)
+    try:
+        console = ZenohConsole(
+            args.zenoh,
+            args.role or "*",
+            mode=args.mode,
+            connect=args.connect,
+            listen=args.listen,
+            scouting=not args.no_scouting,
+            token=args.token,
+            timeout_s=args.timeout,
+        )
+    except Exception as error:  # a ConfigError: no zenoh, a bad endpoint
+        _say(err, f"snr console: {error}")
+        return EXIT_CONNECTION
+    if args.role is None:
+        try:
+            roles = console.roles(min(args.timeout, 2.0))
+        finally:
+            console.close()
+        found = ", ".join(roles) or "none"
+        _say(out, f"Nodes of system {args.zenoh!r} with a Zenoh console: {found}")
+        return EXIT_OK if roles else EXIT_CONNECTION
+    return run_console(console, args.command, stdin, out, err)
