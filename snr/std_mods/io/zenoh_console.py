@@ -38,7 +38,7 @@ from snr.std_mods.comms.zenoh_comms import (
     _zenoh_module,
     zenoh_config,
 )
-from snr.std_mods.io.console_commands import ConsoleLoop, ConsoleSession
+from snr.std_mods.io.console_loop import ConsoleLoop
 from snr.std_mods.io.console_protocol import (
     MAX_LINE_BYTES,
     TOKEN_ENV_VAR,
@@ -48,6 +48,7 @@ from snr.std_mods.io.console_protocol import (
     Status,
     tokens_match,
 )
+from snr.std_mods.io.console_session import ConsoleSession
 from snr.std_mods.io.remote_console import (
     EXIT_CONNECTION,
     EXIT_OK,
