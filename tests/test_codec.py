@@ -361,6 +361,50 @@ class TestBackendsAgree(BackendCase):
         self.assertEqual(read("json", raw), read("orjson", raw))
 
 
+class TestPageEncoder(BackendCase):
+    """The encoder that keeps the JSON around the data writes exactly what page_json writes."""
+
+    HEAD = {"v": 1, "kind": "page"}
+    PAGES = [
+        Page("bench", {"seq": 1, "value": 0.5}, "sender", 1700000000.25),
+        Page("bench", {"seq": 2, "value": 0.5}, "sender", 1700000000.5, process=False),
+        Page("bench", [1, 2.5], "other", 3),  # an int time, a second origin under the key
+        Page("bench", 1e-5, "sender", 1.0),  # a tiny float: json's spelling
+        Page("bench", 2**70, "sender", 1.0),  # beyond 64 bits: orjson refuses, json writes
+        Page("bench", {1: "a"}, "sender", 1.0),  # a non-str dict key
+        Page("k\u00e9y", "x", "sender", 1.0),  # a key orjson would write unescaped
+        Page("bench", "x", "\x7f", 1.0),
+        Page("bench", 0.5, "sender", 5e-324),
+        Page("bench", list(range(40)), "sender", 1.0),  # past the small-page checks
+    ]
+
+    def test_the_same_bytes_as_page_json(self) -> None:
+        for _ in self.backends():
+            encode = codec.PageEncoder(self.HEAD)
+            for page in self.PAGES * 2:  # the second time from what it learned
+                with self.subTest(page=page):
+                    self.assertEqual(encode(page), codec.page_json(page, self.HEAD))
+
+    def test_the_same_refusal(self) -> None:
+        for _ in self.backends():
+            encode = codec.PageEncoder(self.HEAD)
+            for data in ({1, 2}, math.nan, [math.inf], "\ud800"):
+                page = Page("bench", data, "sender", 1.0)
+                with self.subTest(data=data):
+                    with self.assertRaises(NotSerializableError) as expected:
+                        codec.page_json(page, self.HEAD)
+                    with self.assertRaises(NotSerializableError) as got:
+                        encode(page)
+                    self.assertEqual(str(got.exception), str(expected.exception))
+
+    def test_what_it_keeps_is_bounded(self) -> None:
+        encode = codec.PageEncoder(self.HEAD)
+        for number in range(3000):
+            page = Page(f"key{number}", number, "sender", 1.0)
+            self.assertEqual(encode(page), codec.page_json(page, self.HEAD))
+        self.assertLessEqual(len(encode._parts), 1024)
+
+
 class TestChoosingTheBackend(BackendCase):
     def test_the_environment_variable_forces_the_stdlib(self) -> None:
         code = "from snr.std_mods import codec; print(codec.backend())"

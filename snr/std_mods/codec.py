@@ -68,6 +68,7 @@ __all__ = [
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "MAX_DEPTH",
+    "PageEncoder",
     "PathLike",
     "available_backends",
     "backend",
@@ -543,6 +544,74 @@ def page_json(
         return _dump_std(fields)
     except _Refused as error:
         raise not_serializable_error(page.key, data, to=to, reason=str(error)) from None
+
+
+_MAX_KNOWN_PAGE_KINDS = 1024  # (key, origin) pairs a PageEncoder keeps the JSON around the data of
+
+
+class PageEncoder:
+    """`page_json` with fixed leading fields, faster for pages that come again and again.
+
+    A node sends pages under a few keys, each from one origin, over and over:
+    everything in the JSON of such a page except the data and the time is the
+    same every time. With orjson, the text before the data and between the
+    data and the time is made once per key and origin and kept (up to 1,024
+    pairs; then it starts again), so a page costs two orjson calls and a
+    join. The bytes are exactly `page_json`'s: the short path is taken only
+    where `page_json` would take orjson's output as it is (the same checks),
+    and everything else goes through `page_json` itself.
+
+    Example::
+
+        encode = PageEncoder({"v": 1, "kind": "page"})
+        encode(Page("x", 1.5, "robot", 0.5))
+        # b'{"v":1,"kind":"page","key":"x","data":1.5,"origin":"robot","created_at_s":0.5,...}'
+    """
+
+    def __init__(self, head: Mapping[str, Any], to: str = "to another node") -> None:
+        self.head = dict(head)
+        self.to = to
+        self._parts: Dict[Tuple[str, str], Optional[Tuple[bytes, bytes]]] = {}
+
+    def __call__(self, page: Page) -> bytes:
+        """The page's JSON; raises `NotSerializableError` as `page_json` does."""
+        key, origin, data, created = page.key, page.origin, page.data, page.created_at_s
+        if (
+            _dump_plain is _dump_orjson
+            and type(key) is str
+            and type(origin) is str
+            and type(page.process) is bool
+        ):
+            try:
+                parts = self._parts[(key, origin)]
+            except KeyError:
+                parts = self._learn(key, origin)
+            if parts is not None and _exact((data, created)):
+                assert _orjson is not None
+                try:
+                    data_json, created_json = _orjson.dumps(data), _orjson.dumps(created)
+                except TypeError:  # integers beyond 64 bits, non-str keys: json decides
+                    return page_json(page, self.head, self.to)
+                tail = b',"process":true}' if page.process else b',"process":false}'
+                return b"".join((parts[0], data_json, parts[1], created_json, tail))
+        return page_json(page, self.head, self.to)
+
+    def _learn(self, key: str, origin: str) -> Optional[Tuple[bytes, bytes]]:
+        """The JSON before the data and between the data and the time (None: not exact)."""
+        if len(self._parts) >= _MAX_KNOWN_PAGE_KINDS:
+            self._parts.clear()
+        parts: Optional[Tuple[bytes, bytes]] = None
+        fields = {**self.head, "key": key}
+        if _exact(fields.values()) and _exact((origin,)):
+            assert _orjson is not None
+            try:
+                before = _orjson.dumps(fields)[:-1] + b',"data":'
+                between = b',"origin":' + _orjson.dumps(origin) + b',"created_at_s":'
+                parts = (before, between)
+            except TypeError:  # a head value orjson refuses: page_json decides
+                parts = None
+        self._parts[(key, origin)] = parts
+        return parts
 
 
 def _bad_type(name: str, value: Any, expected: str) -> WireFormatError:

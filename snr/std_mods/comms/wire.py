@@ -30,7 +30,7 @@ from dataclasses import dataclass
 from typing import Any, Dict, Optional, Union
 
 from snr.prelude import NotSerializableError, Page, WireFormatError
-from snr.std_mods.codec import dump_json, load_object, page_from_fields, page_json
+from snr.std_mods.codec import PageEncoder, dump_json, load_object, page_from_fields
 
 __all__ = [
     "HEADER_BYTES",
@@ -58,7 +58,7 @@ MAX_FRAME_BYTES = 16 * 1024 * 1024
 """Largest body accepted or sent (16 MiB); a longer length header resets the link."""
 
 _HEADER = struct.Struct(">I")
-_PAGE_HEAD = {"v": WIRE_VERSION, "kind": "page"}
+_page_body = PageEncoder({"v": WIRE_VERSION, "kind": "page"})
 
 
 @dataclass(frozen=True)
@@ -130,7 +130,7 @@ def encode_page(page: Page) -> bytes:
         encode_page(Page("x", [1, 2], "robot", 1.5))
         # b'\\x00\\x00\\x00a{"v":1,"kind":"page","key":"x","data":[1,2],...}'
     """
-    body = page_json(page, _PAGE_HEAD)
+    body = _page_body(page)
     if len(body) > MAX_FRAME_BYTES:  # the message is only built when it is needed
         _frame(body, f"the page under key {page.key!r}")  # raises
     return _HEADER.pack(len(body)) + body
