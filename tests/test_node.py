@@ -161,6 +161,40 @@ class TestPages(SNRTestCase):
         self.assertEqual(node.get_data("n"), 99)
         self.assertEqual(len(log), 100)
 
+    def test_a_batch_of_pages_is_stored_as_one_task_per_page_would_be(self) -> None:
+        def run(schedule: Any) -> tuple[Log, Any]:
+            log: Log = []
+            watched: List[TaskId] = [
+                (TaskType.store_page, "b"),
+                TaskType.process_data,
+                (EV, "between"),
+            ]
+            node = Node(
+                "test",
+                self.get_config([RecorderFactory("r", watched, log), StopWhenDrainedFactory()]),
+            )
+            pages = [node.page("a", 1), node.page("b", 2), node.page("a", 3, process=False)]
+            pages.append(node.page("c", 4))
+            schedule(node, pages)
+            node.schedule(tasks.event("between"))  # queued after the pages
+            node.loop()
+            return log, {key: node.get_data(key) for key in "abc"}
+
+        one_each = run(lambda node, pages: node.schedule([tasks.store_page(p) for p in pages]))
+        batch = run(lambda node, pages: node.schedule(tasks.store_pages(pages)))
+        self.assertEqual(batch, one_each)
+        self.assertEqual(one_each[1], {"a": 3, "b": 2, "c": 4})
+        self.assertEqual(
+            [entry[1][:2] for entry in batch[0] if entry[1][:2] != DRAINED],
+            [
+                (TaskType.store_page, "b"),  # 'b' has a handler: it sees its page, in its turn
+                (EV, "between"),
+                (TaskType.process_data, "a"),
+                (TaskType.process_data, "b"),
+                (TaskType.process_data, "c"),
+            ],
+        )
+
 
 class TestLifeCycle(SNRTestCase):
     def test_terminate_task_stops_node_and_jumps_queue(self) -> None:

@@ -9,11 +9,22 @@ from __future__ import annotations
 
 import dataclasses
 import threading
+from typing import Any, Dict, List
 
 from snr.core import tasks
 from snr.core.endpoint import Endpoint
 from snr.core.factory import EndpointFactory
-from snr.prelude import AbstractFactory, AbstractNode, SomeTasks, Task, TaskId, TaskType
+from snr.core.task_queue import TaskQueue
+from snr.prelude import (
+    AbstractFactory,
+    AbstractNode,
+    DataKey,
+    Page,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskType,
+)
 
 __all__ = ["NODE_CORE_NAME", "NodeCoreEndpoint", "NodeCoreFactory"]
 
@@ -35,6 +46,7 @@ class NodeCoreEndpoint(Endpoint):
         self.node = parent
         self.task_handlers = {
             TaskType.store_page: self.store_page_handler,
+            (TaskType.event, tasks.STORE_PAGES): self.store_pages_handler,
             (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
             (TaskType.event, tasks.REMOVE_COMPONENT): self.remove_component_handler,
             (TaskType.event, tasks.CAUGHT_UP): self.caught_up_handler,
@@ -59,6 +71,44 @@ class NodeCoreEndpoint(Endpoint):
             task.val_list[0] = page
         self.node.write_page(page)
         return tasks.process_data(page) if page.process else None
+
+    def store_pages_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Store a burst of pages (`tasks.store_pages`) in order, in one handler call.
+
+        Each page is stored and its ``process_data`` task queued, exactly as
+        its own ``store_page`` task would have done, but without a dispatch
+        per page. When a page's key has ``store_page`` handlers besides this
+        core (a comms component forwarding it, a recorder), that page and the
+        ones after it go back to the front of the queue as one ``store_page``
+        task each, so every handler sees them in the usual order.
+        """
+        processed: List[Task] = []
+        alone: Dict[DataKey, bool] = {}  # key -> only this core handles its store_page
+        pages = task.val_list
+        for index, page in enumerate(pages):
+            if not isinstance(page, Page) or not page.origin:
+                self._store_one_by_one(pages[index:])  # the usual handler explains or fixes it
+                break
+            only_core = alone.get(page.key)
+            if only_core is None:
+                handlers = self.node.get_task_handlers(Task(TaskType.store_page, page.key))
+                only_core = alone[page.key] = [h for h, _ in handlers] == [self.store_page_handler]
+            if not only_core:
+                self._store_one_by_one(pages[index:])
+                break
+            self.node.write_page(page)
+            if page.process:
+                processed.append(Task(TaskType.process_data, page.key, [page]))
+        return processed
+
+    def _store_one_by_one(self, pages: List[Any]) -> None:
+        """Queue one store_page task per page, first in line, in order."""
+        queue = getattr(self.node, "queue", None)
+        one_each = [Task(TaskType.store_page, str(getattr(p, "key", "")), [p]) for p in pages]
+        if isinstance(queue, TaskQueue):
+            queue.normal.extendleft(reversed(one_each))
+        else:  # not a Node: the end of the queue is the best there is
+            self.node.schedule(one_each)
 
     def add_component_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Build a component with the factory in the task and add it."""

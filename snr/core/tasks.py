@@ -31,6 +31,7 @@ __all__ = [
     "CAUGHT_UP",
     "CHECK_WIRING",
     "REMOVE_COMPONENT",
+    "STORE_PAGES",
     "add_component",
     "event",
     "process_data",
@@ -38,6 +39,7 @@ __all__ = [
     "remove_component",
     "store_data",
     "store_page",
+    "store_pages",
     "terminate",
 ]
 
@@ -56,6 +58,9 @@ CHECK_WIRING: TaskName = "snr_check_wiring"
 core then looks for handlers of data keys that look misspelled. A comms component
 sends it too, a few seconds after a link comes up, carrying its check of that link
 (a function the node core calls on the node's thread)."""
+
+STORE_PAGES: TaskName = "snr_store_pages"
+"""Name of the event task that stores several pages in order (see `store_pages`)."""
 
 
 def event(name: TaskName, val_list: Optional[List[Any]] = None) -> Task:
@@ -79,6 +84,22 @@ def store_page(page: Page) -> Task:
         return tasks.store_page(self.page("depth_m", 3.2))
     """
     return Task(TaskType.store_page, page.key, [page])
+
+
+def store_pages(pages: List[Page]) -> Task:
+    """One task that stores ``pages`` in order, as one `store_page` task each would.
+
+    For a burst of pages that arrive together (a comms link queues what one
+    read brought this way): the node core stores them in one handler call
+    instead of one dispatch per page. Handlers see the same thing in the same
+    order: each page is stored, every ``store_page`` handler of its key runs,
+    and its ``process_data`` task is queued.
+
+    Example::
+
+        node.schedule(tasks.store_pages([page_a, page_b]))
+    """
+    return Task(TaskType.event, STORE_PAGES, pages)
 
 
 def store_data(key: DataKey, data: Any, process: bool = True) -> Task:

@@ -59,10 +59,11 @@ import time
 from types import CodeType, FrameType
 from typing import TYPE_CHECKING, Dict, FrozenSet, Iterable, List, Optional, Set, Tuple
 
+from snr.core import tasks
 from snr.core.handler_runner import HandlerRunner
 from snr.core.loop import ThreadLoop
 from snr.core.task_queue import TaskQueue
-from snr.prelude import AbstractComponent, AbstractLoop, DataKey, Task, TaskType
+from snr.prelude import AbstractComponent, AbstractLoop, DataKey, Page, Task, TaskType
 from snr.prelude.student_code import (
     code_name,
     describe_callable,
@@ -376,7 +377,13 @@ def queued_page_keys(queue: TaskQueue) -> Set[DataKey]:
     """
     # deque.copy() runs in C without letting go of the GIL: a consistent snapshot
     # even while loops append.
-    return {task.name for task in queue.normal.copy() if task.type is TaskType.store_page}
+    keys: Set[DataKey] = set()
+    for task in queue.normal.copy():
+        if task.type is TaskType.store_page:
+            keys.add(task.name)
+        elif task.type is TaskType.event and task.name == tasks.STORE_PAGES:
+            keys.update(page.key for page in task.val_list if isinstance(page, Page))
+    return keys
 
 
 def enclosing_while(frame: FrameType) -> Optional[int]:

@@ -209,19 +209,25 @@ class CommsLoop(ThreadLoop):
 
     # -- I/O thread: receiving -------------------------------------------------
     def deliver(self, link: Link, pages: List[Page]) -> None:
-        """Store pages a link received (called on the node's I/O thread).
+        """Store pages a link received (called by the thread that read them).
 
         The link calls it only while the node's queue has room: while the
         queue is over its high-water mark the link stops reading instead (the
         bytes stay in the OS, TCP slows the sender, and nothing is lost on
         this side), so the I/O thread never waits here.
         """
-        batch: List[Task] = []
-        for page in pages:
-            if page.key in self._forwarded:
-                self._arrived[id(page)] = (page, link)
-            batch.append(Task(TaskType.store_page, page.key, [page]))
-        self.schedule(batch)
+        forwarded = self._forwarded
+        if forwarded:
+            for page in pages:
+                if page.key in forwarded:
+                    self._arrived[id(page)] = (page, link)
+        if len(pages) > 1 and not link.io.in_loop_thread():
+            # The node's thread read these while its queue was empty: one task
+            # for the lot, which the node core stores without a dispatch per
+            # page. (At most one read's worth: the queue stays bounded.)
+            self.schedule(tasks.store_pages(pages))
+        else:  # the I/O thread: one task each, so the queue's high-water mark counts pages
+            self.schedule([Task(TaskType.store_page, page.key, [page]) for page in pages])
 
     # -- opening and closing links --------------------------------------------
     def _snr_start(self) -> None:
