@@ -58,8 +58,17 @@ RECV_BYTES = 256 * 1024
 ROOM_CHECK_S = 0.015
 """While a link has stopped reading because the node is behind, how often room is checked."""
 
+BUSY_READS_S = 0.05
+"""After the node's thread has been busy this long, the I/O thread reads its links too."""
+
+IDLE_CHECK_S = 0.25
+"""While the node's thread sleeps, how often the I/O thread looks whether it is busy again."""
+
 JOIN_TIMEOUT_S = 1.0
 """How long the last `IOLoop.release` waits for the thread to end."""
+
+WRITE_DELAY_S = 0.001
+"""How long frames queued by another thread wait for it to write them before the loop does."""
 
 _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
@@ -86,6 +95,9 @@ class IOHandler(Protocol):
 
     def on_io_stop(self) -> None:
         """The loop is stopping: close now (a last resort; owners close links first)."""
+
+    def write_waiting(self) -> None:
+        """Not the loop's thread: write what waits, without blocking (see `IOLoop.write_soon`)."""
 
 
 class IOTimer:
@@ -159,6 +171,9 @@ class IOLoop:
         self._timers: List[Tuple[float, int, IOTimer]] = []
         self._order = itertools.count()  # ties in the timer heap never compare IOTimers
         self._waiting_for_room: List[Callable[[], None]] = []
+        # Handlers with frames another thread queued (write_soon): a dict, so
+        # that a handler is listed once however many bursts it queues.
+        self._to_write: Dict[IOHandler, None] = {}
         self._room_timer: Optional[IOTimer] = None
         self._stopping = False
         self._wake_r, self._wake_w = socket.socketpair()
@@ -168,10 +183,12 @@ class IOLoop:
         self._selector.register(self._wake_r, _READ, None)
         self._thread = threading.Thread(target=self._run, name=f"snr-{node.role}-io", daemon=True)
         # With node reads: every link watched for reading is in `_reads` (an
-        # epoll set), never in the selector. The selector watches `_gate`,
-        # which holds `_reads` while the I/O thread has the read role; the
-        # node's thread takes `_reads` out of it before it reads, so the two
-        # threads are never woken for the same bytes.
+        # epoll set) and in `_node_poll`, never in the selector. The selector
+        # watches `_gate`, which holds `_reads` while the I/O thread reads the
+        # links (the node's thread has been busy for BUSY_READS_S); the
+        # node's thread takes `_reads` out of it before it waits, so the two
+        # threads are never woken for the same bytes. Between two short busy
+        # spells the gate stays shut: no epoll_ctl calls per task.
         self._reads: Any = None
         self._gate: Any = None
         self._node_poll: Any = None
@@ -181,17 +198,22 @@ class IOLoop:
         self._role_wanted = False  # the loop's thread waits for the role: leave it
         self._waiter_installed = False  # the node waits on this loop when idle
         self._node_ready: List[Tuple[int, int]] = []
+        self._gate_lock = threading.Lock()  # opening and shutting the gate, and _node_idle
+        self._gate_open = False  # `_reads` is in `_gate`: the I/O thread reads
+        self._node_idle = False  # the node's thread is in wait(): never open the gate
+        self._busy_since = 0.0  # when the node's thread last left wait()
+        self._busy_timer: Optional[IOTimer] = None
         if self.node_reads:
             self._reads = select.epoll()
             self._gate = select.epoll()
             self._gate.register(self._reads.fileno(), select.EPOLLIN)
+            self._gate_open = True  # until the node's thread first waits
             self._selector.register(self._gate.fileno(), _READ, _READS)
             self._node_wake_r, self._node_wake_w = socket.socketpair()
             self._node_wake_r.setblocking(False)
             self._node_wake_w.setblocking(False)
             self._node_poll = select.epoll()
             self._node_poll.register(self._node_wake_r.fileno(), select.EPOLLIN)
-            self._node_poll.register(self._reads.fileno(), select.EPOLLIN)
             self._node_wake_only = select.epoll()  # while the loop's thread wants the role
             self._node_wake_only.register(self._node_wake_r.fileno(), select.EPOLLIN)
 
@@ -281,6 +303,39 @@ class IOLoop:
         if not self._woken:
             self._wake()
 
+    def write_soon(self, handler: IOHandler) -> None:
+        """``handler`` has frames to write, queued by a thread that is not the loop's.
+
+        The node's thread writes them itself when it next goes idle (`wait`),
+        or sooner (a link writes a big backlog at once); the loop's thread
+        writes what is still waiting `WRITE_DELAY_S` later. So a burst of
+        pages stored by the node's handlers goes out in a few ``send`` calls,
+        made by the thread that already holds the interpreter, instead of
+        waking the I/O thread for each handful of pages.
+
+        Example::
+
+            io.write_soon(link)   # link.write_waiting() or link.on_writable() will follow
+        """
+        self._to_write[handler] = None
+        self.call_soon(lambda: self._write_later(handler))
+
+    def _write_later(self, handler: IOHandler) -> None:
+        self.call_later(WRITE_DELAY_S, handler.on_writable)
+
+    def write_waiting(self) -> None:
+        """Not the loop's thread: let every handler given to `write_soon` write what waits."""
+        to_write = self._to_write
+        while to_write:
+            try:
+                handler = to_write.popitem()[0]
+            except KeyError:  # emptied meanwhile
+                return
+            try:
+                handler.write_waiting()
+            except Exception:  # a bug in one link must not stop the node
+                self.log.exception("A comms link's write failed; the I/O thread retries it")
+
     def _wake(self) -> None:
         self._woken = True
         try:
@@ -301,8 +356,10 @@ class IOLoop:
                 if events & _READ:
                     self._readers[fd] = handler
                     self._reads.register(fd, select.EPOLLIN)
+                    self._node_poll.register(fd, select.EPOLLIN)
                 else:
                     self._reads.unregister(fd)
+                    self._node_poll.unregister(fd)
                     self._readers.pop(fd, None)
             old, events = old & _WRITE, events & _WRITE
         if old:
@@ -350,42 +407,75 @@ class IOLoop:
     def wait(self, timeout_s: Optional[float]) -> None:
         """Node thread, its queue empty: wait for a task or for bytes on a link.
 
-        The read set leaves the I/O thread's gate first, so that thread is
-        not woken for bytes the node's thread reads; then the node's thread
-        takes the read role (waiting, briefly, for a read the I/O thread has
-        begun) and waits on the read set and its own wake-up socket.
+        The read set leaves the I/O thread's gate first (if it was in it), so
+        that thread is not woken for bytes the node's thread reads; then the
+        node's thread takes the read role (waiting, briefly, for a read the
+        I/O thread has begun) and waits on the links and its own wake-up
+        socket.
         """
+        if self._to_write:  # what the handlers just queued goes before the node sleeps
+            self.write_waiting()
         timeout = -1.0 if timeout_s is None else timeout_s
         if self._role_wanted:  # the loop's thread is closing a link: wait without reading
             self._node_ready = _poll(self._node_wake_only, timeout)
             _drain(self._node_wake_r)
             return
-        try:
-            self._gate.unregister(self._reads.fileno())
-        except (OSError, ValueError):  # closed: the loop has stopped
-            return
+        with self._gate_lock:
+            self._node_idle = True
+            if self._gate_open:
+                try:
+                    self._gate.unregister(self._reads.fileno())
+                except (OSError, ValueError):  # closed: the loop has stopped
+                    return
+                self._gate_open = False
         self._role.acquire()
         self._node_waiting = True
         self._node_ready = _poll(self._node_poll, timeout)
 
     def woken(self) -> None:
-        """Node thread, no longer marked sleeping: read what arrived, give the role back."""
+        """Node thread, no longer marked sleeping: read what arrived, give the role back.
+
+        The gate stays shut: the node's thread will read again when it next
+        waits, which is soon unless a handler takes long; after
+        `BUSY_READS_S` of work the I/O thread opens it and reads meanwhile.
+        """
         if not self._node_waiting:
             return
         try:
-            for fd, _ in self._node_ready:
-                if fd == self._node_wake_r.fileno():
-                    _drain(self._node_wake_r)
-                else:
-                    self._read_ready(self._reads.poll(0), on_node=True)
+            wake_fd = self._node_wake_r.fileno()
+            ready = [event for event in self._node_ready if event[0] != wake_fd]
+            if len(ready) < len(self._node_ready):
+                _drain(self._node_wake_r)
+            if ready:
+                self._read_ready(ready, on_node=True)
+        except (OSError, ValueError):  # closed: the loop has stopped
+            pass
         finally:
             self._node_ready = []
             self._node_waiting = False
+            self._busy_since = time.monotonic()
+            self._node_idle = False
             self._role.release()
+
+    def _check_busy(self) -> None:
+        """Loop thread: once the node's thread has worked `BUSY_READS_S`, read its links too.
+
+        Runs every `BUSY_READS_S` while the node's thread works, every
+        `IDLE_CHECK_S` while it sleeps (an idle node costs next to nothing).
+        """
+        with self._gate_lock:
+            idle = self._node_idle
+        self._busy_timer = self.call_later(IDLE_CHECK_S if idle else BUSY_READS_S, self._check_busy)
+        with self._gate_lock:
+            if self._node_idle or self._gate_open:
+                return
+            if time.monotonic() - self._busy_since < BUSY_READS_S:
+                return
             try:
                 self._gate.register(self._reads.fileno(), select.EPOLLIN)
-            except (OSError, ValueError):  # closed: the loop has stopped
-                pass
+            except (OSError, ValueError):  # closed: the loop is stopping
+                return
+            self._gate_open = True
 
     def wake(self) -> None:
         """End the node thread's idle wait (any thread; the queue rings it once per sleep)."""
@@ -459,6 +549,8 @@ class IOLoop:
         # This thread serves every link and stops reading a link by itself
         # while the node is behind: the tasks it schedules must never wait.
         self.node._snr_never_wait()
+        if self._reads is not None:
+            self._busy_timer = self.call_later(BUSY_READS_S, self._check_busy)
         select, monotonic = self._selector.select, time.monotonic
         calls, timers, handlers = self._calls, self._timers, self._handlers
         try:

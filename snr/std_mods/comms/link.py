@@ -53,6 +53,7 @@ if TYPE_CHECKING:
 __all__ = ["Link", "LinkState", "Outbox", "Transport"]
 
 _MAX_CHUNK_BYTES = 1024 * 1024  # queued frames are joined into chunks up to this size
+_WRITE_NOW_BYTES = 64 * 1024  # the node's thread writes a backlog this big before it goes idle
 _BURST_S = 0.0002  # a frame this soon after the last send joins a batch for the I/O thread
 _TICK_S = 0.25  # how often a link checks its peer's silence and whether it owes a beat
 _READ = selectors.EVENT_READ
@@ -389,6 +390,7 @@ class Link:
         # These belong to the I/O loop's thread (set before the hello, which may wake it).
         self._decoder = FrameDecoder()
         self._attached = False
+        self._io_writes = False  # the loop's thread watches for room: leave the writing to it
         self._paused = False
         self._held: List[Page] = []  # decoded while the node was behind: delivered first
         self._timer: Optional[IOTimer] = None
@@ -422,8 +424,14 @@ class Link:
         """
         if self.state is not LinkState.OPEN:
             return False
-        outcome = self.outbox.put(frame, now, key)
-        if outcome in ("sent", "queued"):
+        outbox = self.outbox
+        outcome = outbox.put(frame, now, key)
+        if outcome == "queued":
+            self.pages_sent += 1
+            if outbox.queued_bytes >= _WRITE_NOW_BYTES and not self._io_writes:
+                self.write_waiting()  # a long burst: do not wait for the node to go idle
+            return True
+        if outcome == "sent":
             self.pages_sent += 1
             return True
         if outcome == "replaced":
@@ -495,10 +503,30 @@ class Link:
         self.on_writable()  # the hello goes at once
 
     def _wake_writer(self) -> None:
-        # Any thread, when the outbox stops being empty: watch for room to write.
+        # Any thread, when the outbox stops being empty. Another thread than
+        # the loop's (the node's, storing a burst) writes it itself before it
+        # sleeps, or the loop's thread a moment later (IOLoop.write_soon).
         if self.io.in_loop_thread():
             self._want_write()
         else:
+            self.io.write_soon(self)
+
+    def write_waiting(self) -> None:
+        """Write queued frames now without blocking (not on the loop's thread).
+
+        What does not fit is left to the loop's thread, which writes it when
+        the transport has room. Frames leave in order either way (the
+        outbox's lock); after the link has ended the outbox is empty, so
+        nothing is written to a closed transport.
+        """
+        if not len(self.outbox):
+            return
+        try:
+            done = self.outbox.write_some()
+        except OSError:  # broken: the loop's thread finds out and ends the link
+            done = False
+        if not done:
+            self._io_writes = True
             self.io.call_soon(self._want_write)
 
     def _want_write(self) -> None:
@@ -617,14 +645,17 @@ class Link:
             self._finish(f"{type(error).__name__}: {error}")
             return
         if done:
+            self._io_writes = False
             events = self.io.events(self)
             if events & _WRITE:
                 self.io.watch(self, events & ~_WRITE)
             self._check_recovered()
             if self.state is LinkState.CLOSING and self.outbox.closed:
                 self._end_writing()
-        elif not self.io.events(self) & _WRITE:
-            self.io.watch(self, self.io.events(self) | _WRITE)
+        else:
+            self._io_writes = True
+            if not self.io.events(self) & _WRITE:
+                self.io.watch(self, self.io.events(self) | _WRITE)
 
     # -- I/O loop thread: reading ---------------------------------------------
     def _read(self) -> None:
