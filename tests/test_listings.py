@@ -31,7 +31,7 @@ from unittest import mock
 import snr
 from snr import AbstractNode, Node, SNRTestCase, Task, TaskType, tasks
 from snr.utils import ExpectorEndpointFactory, ListReplayerFactory
-from tests.comms_helpers import free_port
+from tests.helpers import free_port
 from tests.quiet import capture_test_logs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))

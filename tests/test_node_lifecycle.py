@@ -25,6 +25,7 @@ from snr import (
     tasks,
 )
 from snr.core import TaskQueue
+from tests.helpers import wait_until
 
 
 class Ticker(ThreadLoop):
@@ -83,15 +84,6 @@ class ScriptFactory(EndpointFactory):
 
     def get(self, parent: AbstractNode) -> Script:
         return Script(self, parent)
-
-
-def wait_until(condition: Callable[[], bool], timeout_s: float = 2.0) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.005)
-    return condition()
 
 
 def run_node(factories: List[Any], mode: Mode = Mode.TEST, join_timeout_s: float = 1.0) -> Node:

@@ -57,13 +57,6 @@ def serial_threads() -> List[threading.Thread]:
     return [t for t in threading.enumerate() if "serial_link" in t.name and t.is_alive()]
 
 
-def wait_until(condition: Any, timeout_s: float = 5.0) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while not condition() and time.monotonic() < deadline:
-        time.sleep(0.01)
-    return bool(condition())
-
-
 class Ticker(Endpoint):
     """Handles ``count`` unrelated tasks, storing a page for the device on each."""
 

@@ -35,7 +35,7 @@ from snr import (
     ThreadLoop,
 )
 from tests.examples_support import ROOT, script_env
-from tests.helpers import StopWhenFactory
+from tests.helpers import LoopFactoryOf, StopWhenFactory
 
 HERE = "test_watchdog.py"
 ERRORS_MD = os.path.join(ROOT, "docs", "errors.md")
@@ -211,15 +211,6 @@ class _Lines(logging.Handler):
         self.lines.append(message)
         if SAID_ONCE in message:
             self.on_warning()
-
-
-class LoopFactoryOf(LoopFactory):
-    def __init__(self, build: Callable[[LoopFactory, AbstractNode], ThreadLoop]) -> None:
-        super().__init__()
-        self.build = build
-
-    def get(self, parent: AbstractNode) -> ThreadLoop:
-        return self.build(self, parent)
 
 
 class Flooder(ThreadLoop):
