@@ -215,9 +215,9 @@ class TestSimDemo(SNRTestCase):
         self.assertTrue(lines[0].startswith("SNR demo --sim: "), result.stdout)
         frames = (folder / "sim_frames").resolve()
         self.assertIn(f"Pictures: PNG frames in {frames}", lines)
-        self.assertTrue(list(frames.glob("frame_*.png")), result.stdout)
         simulated_s, x = summary(r"After ([\d.]+) s the robot is at \(([\d.]+), ", lines[-1])
-        if simulated_s >= 0.2:
+        if simulated_s >= 0.2:  # on a machine too busy to simulate that much, no frame may be due
+            self.assertTrue(list(frames.glob("frame_*.png")), result.stdout)
             self.assertGreater(x, 0.5, result.stdout)  # it set off from x = 0.5
         self.assertEqual(result.stderr, "", "quiet unless --verbose")
 
