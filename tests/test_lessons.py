@@ -189,13 +189,13 @@ def summary(pattern: str, text: str) -> Tuple[float, float]:
 
 
 def _start_sim_demo() -> Tuple[Path, Optional[StartedScript]]:
-    """``python -m snr demo --sim`` for half a second in a temp folder, headless."""
+    """``python -m snr demo --sim`` for a second in a temp folder, headless."""
     folder = Path(tempfile.mkdtemp(prefix="snr-sim-demo-"))
     if not HAS_PYGAME:
         return folder, None
     env = script_env({"SDL_VIDEODRIVER": "dummy", "PYGAME_HIDE_SUPPORT_PROMPT": "1"})
-    # Half a second, not the default 15: enough to set off and draw frames.
-    command = ["-m", "snr", "demo", "--sim", "--seconds", "0.5"]
+    # A second, not the default 15: enough to set off and draw frames.
+    command = ["-m", "snr", "demo", "--sim", "--seconds", "1"]
     return folder, start_script(command, cwd=str(folder), env=env)
 
 
@@ -216,9 +216,11 @@ class TestSimDemo(SNRTestCase):
         frames = (folder / "sim_frames").resolve()
         self.assertIn(f"Pictures: PNG frames in {frames}", lines)
         simulated_s, x = summary(r"After ([\d.]+) s the robot is at \(([\d.]+), ", lines[-1])
-        if simulated_s >= 0.2:  # on a machine too busy to simulate that much, no frame may be due
-            self.assertTrue(list(frames.glob("frame_*.png")), result.stdout)
+        # On a machine too busy to simulate that much, it may not have got that far.
+        if simulated_s >= 0.2:
             self.assertGreater(x, 0.5, result.stdout)  # it set off from x = 0.5
+        if simulated_s >= 0.5:
+            self.assertTrue(list(frames.glob("frame_*.png")), result.stdout)
         self.assertEqual(result.stderr, "", "quiet unless --verbose")
 
 
