@@ -38,3 +38,7 @@ def pytest_cmdline_main(config: pytest.Config) -> None:
     if _names_tests(config) or config.option.collectonly or config.option.usepdb:
         return
     config.option.numprocesses = WORKERS
+    if config.option.dist == "no":
+        # A class's tests stay on one worker, so its setUpClass (a docs build,
+        # a started program) runs once, not once on every worker.
+        config.option.dist = "loadscope"
