@@ -332,8 +332,9 @@ class TestBoundedQueue(unittest.TestCase):
         queue.schedule([tasks.event(str(i)) for i in range(10)])
 
         def consume() -> None:
+            # Only once the producer waits: popping sooner would leave it room.
+            wait_until(lambda: queue.waits == 1, 2.0)
             for _ in range(8):
-                time.sleep(0.002)
                 queue.pop()
 
         consumer = threading.Thread(target=consume)
