@@ -2,12 +2,13 @@
 
 from __future__ import annotations
 
+import socket
 import threading
-import time
-from typing import Any, Callable, List, Optional, Sequence
+from typing import Any, List, Optional, Sequence
 
 from snr import AbstractFactory, CommandReceiverFactory, Config, Mode, Node
 from snr.std_mods.io import RemoteConsole
+from snr.std_mods.io.console_protocol import Reply, ReplyDecoder
 
 STOP_TIMEOUT_S = 5.0
 
@@ -64,11 +65,14 @@ class NodeInThread:
         assert not self.thread.is_alive(), "the node did not stop"
 
 
-def wait_for(condition: Callable[[], Any], timeout_s: float = 5.0) -> Any:
-    """Poll ``condition`` until it is truthy (bounded); return its value."""
-    deadline = time.monotonic() + timeout_s
-    while True:
-        value = condition()
-        if value or time.monotonic() > deadline:
-            return value
-        time.sleep(0.01)
+def read_replies(sock: socket.socket, count: int, timeout_s: float = 5.0) -> List[Reply]:
+    """Read ``count`` reply frames from a raw console socket (fewer if the node hangs up)."""
+    decoder = ReplyDecoder()
+    replies: List[Reply] = []
+    sock.settimeout(timeout_s)
+    while len(replies) < count:
+        data = sock.recv(65536)
+        if not data:
+            break
+        replies += decoder.feed(data)
+    return replies

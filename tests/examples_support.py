@@ -6,6 +6,7 @@ from their paths, or run them as a student would, in a subprocess.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import os
 import subprocess
@@ -77,7 +78,8 @@ class StartedScript:
         self.timeout_s = timeout_s
         self.allow_hints = allow_hints
         self._done: Optional[subprocess.CompletedProcess[str]] = None
-        self._process = subprocess.Popen(
+        self._start = functools.partial(
+            subprocess.Popen,
             [sys.executable, *args],
             cwd=cwd or ROOT,
             stdout=subprocess.PIPE,
@@ -85,9 +87,16 @@ class StartedScript:
             text=True,
             env=env or script_env(),
         )
+        # Every pytest-xdist worker imports every test module, but only one
+        # runs a given test: there, the script starts when its test asks.
+        self._process: Optional[subprocess.Popen[str]] = None
+        if "PYTEST_XDIST_WORKER" not in os.environ:
+            self._process = self._start()
 
     def result(self) -> subprocess.CompletedProcess[str]:
         """Wait (at most ``timeout_s``) for the script; its output, checked for hints."""
+        if self._process is None:
+            self._process = self._start()
         if self._done is None:
             try:
                 out, err = self._process.communicate(timeout=self.timeout_s)

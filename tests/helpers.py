@@ -1,8 +1,10 @@
-"""Small components shared by the core tests (not part of the library)."""
+"""Small components and waits shared by the tests (not part of the library)."""
 
 from __future__ import annotations
 
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+import socket
+import time
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, TypeVar
 
 from snr import (
     AbstractNode,
@@ -18,6 +20,51 @@ from snr import (
 )
 
 Log = List[Tuple[str, Any]]
+T = TypeVar("T")
+
+
+def wait_until(condition: Callable[[], T], timeout_s: float = 5.0) -> T:
+    """Poll ``condition`` every 5 ms until it is truthy or ``timeout_s`` has passed; its last value.
+
+    Tests wait on what they need to see, never for a fixed time: the wait ends
+    as soon as the condition holds, and the deadline only bounds a failure.
+    """
+    deadline = time.monotonic() + timeout_s
+    while True:
+        value = condition()
+        if value or time.monotonic() > deadline:
+            return value
+        time.sleep(0.005)
+
+
+def free_port() -> int:
+    """A TCP port that was free a moment ago on 127.0.0.1 (bound, then released)."""
+    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
+        probe.bind(("127.0.0.1", 0))
+        port: int = probe.getsockname()[1]
+        return port
+
+
+class FactoryOf(EndpointFactory):
+    """Builds whatever ``build(factory, parent)`` returns: one factory for many components."""
+
+    def __init__(self, build: Callable[[Any, AbstractNode], Any]) -> None:
+        super().__init__()
+        self.build = build
+
+    def get(self, parent: AbstractNode) -> Any:
+        return self.build(self, parent)
+
+
+class LoopFactoryOf(LoopFactory):
+    """`FactoryOf` for loops: builds whatever ``build(factory, parent)`` returns."""
+
+    def __init__(self, build: Callable[[Any, AbstractNode], Any]) -> None:
+        super().__init__()
+        self.build = build
+
+    def get(self, parent: AbstractNode) -> Any:
+        return self.build(self, parent)
 
 
 class Recorder(Endpoint):

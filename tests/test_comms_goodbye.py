@@ -8,23 +8,15 @@ from __future__ import annotations
 
 import logging
 import socket
-import time
 import unittest
-from typing import Callable, List
+from typing import List
 
 from snr import Config, Mode, SocketsPair
 from snr.prelude import WireFormatError
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.comms.wire import HEADER_BYTES, Bye, Hello, decode_body, encode_bye
-from tests.comms_helpers import free_port
+from tests.helpers import free_port, wait_until
 from tests.test_comms_local import LocalNodes, connect_when_listening
-
-
-def wait_until(condition: Callable[[], bool], timeout_s: float = 5.0) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while not condition() and time.monotonic() < deadline:
-        time.sleep(0.005)
-    return condition()
 
 
 def read_to_end(sock: socket.socket) -> bytes:

@@ -22,9 +22,9 @@ from tests.comms_helpers import (
     Reports,
     SendOnConnectFactory,
     context,
-    free_port,
     pages_of,
 )
+from tests.helpers import free_port
 from tests.optional import HealthCheck, given, needs, settings, st
 
 

@@ -36,8 +36,7 @@ from snr.std_mods.comms.io_loop import IOLoop
 from snr.std_mods.comms.link import Outbox
 from snr.std_mods.comms.pipe import PipeTransport
 from snr.std_mods.comms.wire import encode_hello
-from tests.comms_helpers import free_port
-from tests.test_comms_liveness import wait_until
+from tests.helpers import free_port, wait_until
 from tests.test_comms_local import LocalNodes, connect_when_listening
 
 IDLE_PEERS = 300

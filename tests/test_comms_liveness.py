@@ -14,7 +14,7 @@ import socket
 import threading
 import time
 import unittest
-from typing import Any, Callable, Dict, List, Optional
+from typing import Any, Dict, List, Optional
 
 from snr import (
     AbstractNode,
@@ -32,7 +32,8 @@ from snr import (
     ThreadLoop,
 )
 from snr.std_mods.comms.comms_loop import CommsLoop
-from tests.comms_helpers import free_port
+from snr.utils import MemoryLinkPair
+from tests.helpers import free_port, wait_until
 from tests.quiet import capture_test_logs
 from tests.test_comms_local import LocalNodes, connect_when_listening
 
@@ -171,15 +172,6 @@ class CounterFactory(EndpointFactory):
         return Counter(self, parent)
 
 
-def wait_until(condition: Callable[[], bool], timeout_s: float) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.01)
-    return condition()
-
-
 class CommsFaultTest(unittest.TestCase):
     def setUp(self) -> None:
         capture_test_logs(self)  # the lines these tests read stay out of the run's output
@@ -241,18 +233,18 @@ class TestDeadPath(CommsFaultTest):
         )
 
     def test_beats_keep_a_quiet_link_alive(self) -> None:
-        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.15)  # a beat every 0.0375 s
-        config = Config({"a": [pair.server()], "b": [pair.client()]}, mode=Mode.TEST)
+        pair = MemoryLinkPair(dead_after_s=0.15)  # a beat every 0.0375 s
+        self.addCleanup(pair.close)
+        config = Config({"a": [pair.first()], "b": [pair.second()]}, mode=Mode.TEST)
         nodes = self.run_nodes(config, ["a", "b"])
-        self.assertTrue(wait_until(lambda: bool(self.log.matching("Client node 'b'")), 5.0))
+        self.assertTrue(wait_until(lambda: len(self.log.matching("Linked to node")) == 2, 5.0))
         cpu_before, wall_before = time.process_time(), time.monotonic()
         time.sleep(0.3)  # nothing is stored: only beats cross (twice the silence limit)
         cpu_share = (time.process_time() - cpu_before) / (time.monotonic() - wall_before)
         self.assertEqual(self.log.matching("Lost the link"), [])
-        self.assertEqual(self.log.matching("disconnected"), [])
-        server = nodes.nodes[0].components["sockets_server_" + str(self.port)]
-        assert isinstance(server, CommsLoop)
-        [stats] = server.stats()
+        link = nodes.nodes[0].components["memory_link_a"]
+        assert isinstance(link, CommsLoop)
+        [stats] = link.stats()
         self.assertLess(stats["heard_s_ago"], 0.15)
         self.assertLess(cpu_share, 0.05, "an idle pair with beats costs little CPU")
 
@@ -311,30 +303,31 @@ class TestSlowReader(CommsFaultTest):
         original_quiet = CommsLoop.recovered_after_s
         CommsLoop.recovered_after_s = 0.15  # the default is 1 s
         self.addCleanup(setattr, CommsLoop, "recovered_after_s", original_quiet)
-        pair = SocketsPair(("127.0.0.1", self.port), max_backlog_bytes=256 * 1024)
+        pair = MemoryLinkPair(max_backlog_bytes=256 * 1024)
+        self.addCleanup(pair.close)
         flood = FloodFactory(count=3000)
         counter = CounterFactory("flood", pause_s=0.3)
         original = Node.max_queued_tasks
         Node.max_queued_tasks = 100
         self.addCleanup(setattr, Node, "max_queued_tasks", original)
         config = Config(
-            {"receiver": [pair.server(), counter], "sender": [flood, pair.client("flood")]},
+            {"receiver": [pair.first(), counter], "sender": [flood, pair.second("flood")]},
             mode=Mode.TEST,
         )
         nodes = self.run_nodes(config, ["receiver", "sender"])
-        self.assertTrue(wait_until(lambda: bool(self.log.matching("Client node 'sender'")), 5))
+        self.assertTrue(wait_until(lambda: len(self.log.matching("Linked to node")) == 2, 5))
         flood.started.set()
         self.assertTrue(wait_until(lambda: counter.seen[-1:] == ["last"], 15.0), "caught up")
 
-        client = nodes.nodes[1].components["sockets_client_" + str(self.port)]
-        assert isinstance(client, CommsLoop)
-        [stats] = client.stats()
+        sender = nodes.nodes[1].components["memory_link_b"]
+        assert isinstance(sender, CommsLoop)
+        [stats] = sender.stats()
         dropped = stats["dropped"]
         self.assertGreater(dropped, 0, "the receiver paused for 0.3 s: some pages had to go")
         self.assertEqual(stats["dropped_by_key"], {"flood": dropped})
         self.assertEqual(len(counter.seen) + dropped, 3001, "every page arrived or was counted")
         drops = self.log.matching("Dropped")
-        self.assertTrue(drops and "pages for 127.0.0.1" in drops[0], drops)
+        self.assertTrue(drops and "pages for memory-a" in drops[0], drops)
         self.assertLessEqual(len(drops), 5, "at most one line a second")
         self.assertTrue(
             wait_until(lambda: bool(self.log.matching("Recovered:")), 3.0),

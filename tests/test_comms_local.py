@@ -27,7 +27,8 @@ from snr import (
     tasks,
 )
 from snr.prelude import CommsError, ConfigError
-from tests.comms_helpers import StopAfterFactory, free_port
+from tests.comms_helpers import StopAfterFactory
+from tests.helpers import free_port
 from tests.quiet import capture_test_logs
 
 PAGE = Page("pose", {"x": 1.5, "tags": ["a", "b"]}, "robot", 1234.5, process=False)

@@ -22,8 +22,7 @@ from snr import (
 )
 from snr.std_mods.comms.io_loop import IOLoop
 from snr.std_mods.comms.link import Link
-from tests.comms_helpers import free_port
-from tests.test_comms_liveness import wait_until
+from tests.helpers import free_port, wait_until
 from tests.test_comms_local import LocalNodes
 
 ROUND_TRIPS = 30

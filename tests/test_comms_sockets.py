@@ -19,9 +19,9 @@ from tests.comms_helpers import (
     SendOnConnectFactory,
     TickerFactory,
     context,
-    free_port,
     pages_of,
 )
+from tests.helpers import free_port
 
 
 class SocketsProcessTest(unittest.TestCase):

@@ -44,8 +44,8 @@ from tests.comms_helpers import (
     Reports,
     SendOnConnectFactory,
     StopAfterFactory,
-    free_port,
 )
+from tests.helpers import free_port
 from tests.test_comms_local import LocalNodes
 
 HAVE_ZENOH = importlib.util.find_spec("zenoh") is not None

@@ -9,9 +9,10 @@ import sys
 import textwrap
 import time
 import unittest
-from typing import List, Tuple, Union
+from typing import Any, List, Tuple, Union
 
 from snr import (
+    AbstractNode,
     CliRunner,
     Config,
     Mode,
@@ -107,7 +108,16 @@ class TestCliRunner(unittest.TestCase):
         self.assertIn("Did you mean 'urov'?", err)
 
     def test_runs_the_role(self) -> None:
-        CliRunner(self.components, ["main.py", "urov", "--mode", "test"]).run()
+        built: List[Tuple[str, Mode]] = []  # (role, mode) of each node the timeout was built for
+
+        class Noted(TimeoutLoopFactory):
+            def get(self, parent: AbstractNode) -> Any:
+                built.append((parent.role, Mode(parent.mode)))
+                return super().get(parent)
+
+        components = {"urov": [Noted(seconds=0.05)], "topside": [Noted(seconds=0.05)]}
+        CliRunner(components, ["main.py", "urov", "--mode", "test"]).run()
+        self.assertEqual(built, [("urov", Mode.TEST)])
 
     def test_ctrl_c_exits_cleanly(self) -> None:
         script = READY + textwrap.dedent(

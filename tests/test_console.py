@@ -37,27 +37,8 @@ from snr.std_mods.io.console_protocol import (
 )
 from snr.std_mods.io.remote_console import EXIT_CONNECTION, EXIT_OK, EXIT_USAGE, main
 from snr.utils import MockNode
-from tests.console_helpers import NodeInThread, wait_for
-
-
-def read_replies(sock: socket.socket, count: int) -> List[Reply]:
-    """Read ``count`` reply frames (or fewer if the node hangs up)."""
-    decoder = ReplyDecoder()
-    replies: List[Reply] = []
-    while len(replies) < count:
-        data = sock.recv(65536)
-        if not data:
-            break
-        replies += decoder.feed(data)
-    return replies
-
-
-def free_port() -> int:
-    """A port nothing listens on (bound, then released)."""
-    with socket.socket() as probe:
-        probe.bind(("127.0.0.1", 0))
-        port: int = probe.getsockname()[1]
-    return port
+from tests.console_helpers import NodeInThread, read_replies
+from tests.helpers import free_port, wait_until
 
 
 class TestProtocol(unittest.TestCase):
@@ -160,7 +141,7 @@ class TestCommands(unittest.TestCase):
             self.assertEqual(reply, Reply(Status.OK, "Scheduled (store_page, 'depth_m'): 3.25"))
             reply = console.send('task event beep A 2 [1, 2] "a b"')
             self.assertIn("(event, 'beep'): ['A', 2, [1, 2], 'a b']", reply.text)
-            self.assertEqual(wait_for(lambda: run.node.get_data("depth_m")), 3.25)
+            self.assertEqual(wait_until(lambda: run.node.get_data("depth_m")), 3.25)
             dump = console.send("dump datastore").text
             self.assertIn("depth_m = 3.25", dump)
             self.assertIn("from 'robot'", dump)
@@ -230,7 +211,7 @@ class TestCommands(unittest.TestCase):
 class TestStats(unittest.TestCase):
     def test_stats_shows_the_queue_and_every_link(self) -> None:
         from snr import SocketsPair
-        from tests.comms_helpers import free_port
+
 
         pair = SocketsPair(("127.0.0.1", free_port()))
         with NodeInThread([pair.server()]) as run, run.console() as console:
@@ -239,7 +220,7 @@ class TestStats(unittest.TestCase):
             thread = threading.Thread(target=peer.loop, daemon=True)
             thread.start()
             try:
-                self.assertTrue(wait_for(lambda: "1 link" in console.send("stats").text))
+                self.assertTrue(wait_until(lambda: "1 link" in console.send("stats").text))
 
                 def arrived() -> bool:
                     # The server may see the link before the client has heard its
@@ -247,7 +228,7 @@ class TestStats(unittest.TestCase):
                     peer.store_data("hello", "world")
                     return run.node.get_data("hello") == "world"
 
-                self.assertTrue(wait_for(arrived))
+                self.assertTrue(wait_until(arrived))
                 text = console.send("stats").text
             finally:
                 peer.set_terminate_flag("test over")
@@ -290,7 +271,7 @@ class TestRobustness(unittest.TestCase):
                     run.console()
                 consoles.pop().close()
                 # The freed slot is usable again (the close may take a moment to be seen).
-                self.assertTrue(wait_for(lambda: _try_connect(run)))
+                self.assertTrue(wait_until(lambda: _try_connect(run)))
             finally:
                 for console in consoles:
                     console.close()
@@ -358,7 +339,7 @@ class TestToken(unittest.TestCase):
                     # The wrong guess makes this address wait a moment before its next try.
                     with self.assertRaisesRegex(ConsoleConnectionError, "next one is checked in"):
                         run.console(token="s3cret-word")
-                    self.assertTrue(wait_for(lambda: _try_connect(run, "s3cret-word")))
+                    self.assertTrue(wait_until(lambda: _try_connect(run, "s3cret-word")))
                     with run.console(token="s3cret-word") as console:
                         self.assertEqual(console.send("help").status, Status.OK)
         self.assertIn("gave a wrong token (1 in a row from 127.0.0.1)", logs.output[0])

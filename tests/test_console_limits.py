@@ -30,11 +30,10 @@ from snr.std_mods.io.command_receiver import (
 from snr.std_mods.io.console_protocol import (
     TOKEN_ENV_VAR,
     ConsoleConnectionError,
-    Reply,
-    ReplyDecoder,
     Status,
 )
-from tests.console_helpers import NodeInThread, wait_for
+from tests.console_helpers import NodeInThread, read_replies
+from tests.helpers import wait_until
 from tests.quiet import captured_logs
 
 TOKEN = "s3cret-word"
@@ -186,18 +185,6 @@ class TestTokenGuessing(unittest.TestCase):
         self.assertIn("refused it unchecked", text)
 
 
-def read_frames(sock: socket.socket, count: int, timeout_s: float = 5.0) -> List[Reply]:
-    decoder = ReplyDecoder()
-    replies: List[Reply] = []
-    sock.settimeout(timeout_s)
-    while len(replies) < count:
-        data = sock.recv(65536)
-        if not data:
-            break
-        replies += decoder.feed(data)
-    return replies
-
-
 class TestFloods(unittest.TestCase):
     def test_a_console_that_does_not_read_is_dropped_and_delays_nobody(self) -> None:
         # The flooder is dropped after 0.25 s without taking a reply (2 s by default).
@@ -209,7 +196,7 @@ class TestFloods(unittest.TestCase):
         ):
             for i in range(3000):
                 run.node.store_data(f"key_{i:04d}", "x" * 200)
-            self.assertTrue(wait_for(lambda: run.node.get_data("key_2999") is not None))
+            self.assertTrue(wait_until(lambda: run.node.get_data("key_2999") is not None))
             before = [_timed(operator, "help") for _ in range(20)]
             flooder = socket.create_connection((run.host, run.port), timeout=5)
             try:
@@ -241,18 +228,18 @@ class TestFloods(unittest.TestCase):
 
     def test_pipelined_commands_are_answered_in_order_a_few_at_a_time(self) -> None:
         # Without the receiver's periodic wake-up, a line left waiting after
-        # its wake-up was read would wait for good: read_frames would time out.
+        # its wake-up was read would wait for good: read_replies would time out.
         with mock.patch("snr.std_mods.io.command_receiver._POLL_S", 60.0), NodeInThread([]) as run:
             with socket.create_connection((run.host, run.port), timeout=5) as sock:
                 lines = [f"task store_page k {i}" for i in range(5 * MAX_UNANSWERED)]
                 sock.sendall("".join(line + "\n" for line in lines).encode())
-                replies = read_frames(sock, len(lines) + 1)
+                replies = read_replies(sock, len(lines) + 1)
             self.assertEqual(replies[0].status, Status.HELLO)
             self.assertEqual(
                 [r.text for r in replies[1:]],
                 [f"Scheduled (store_page, 'k'): {i}" for i in range(len(lines))],
             )
-            self.assertTrue(wait_for(lambda: run.node.get_data("k") == len(lines) - 1))
+            self.assertTrue(wait_until(lambda: run.node.get_data("k") == len(lines) - 1))
 
 
 def _timed(console: RemoteConsole, line: str) -> float:
@@ -286,7 +273,7 @@ class TestProtectedComponents(unittest.TestCase):
             self.assertIn("node_core", run.node.components)
             self.assertIn("timeout_loop", run.node.components)  # nothing was half-done
             self.assertEqual(console.send("task store_page depth_m 2.5").status, Status.OK)
-            self.assertEqual(wait_for(lambda: run.node.get_data("depth_m")), 2.5)
+            self.assertEqual(wait_until(lambda: run.node.get_data("depth_m")), 2.5)
             self.assertEqual(console.send("exit").status, Status.BYE)
             run.wait_stopped()  # `exit` still stops the node
         self.assertIn("Refused: 'command_receiver_commands'", "\n".join(later_logs.output))
@@ -298,7 +285,7 @@ class TestDumpDatastore(unittest.TestCase):
             for i in range(3000):
                 run.node.store_data(f"key_{i:04d}", "x" * 200)
             run.node.store_data("big", list(range(100_000)))
-            self.assertTrue(wait_for(lambda: run.node.get_data("big") is not None))
+            self.assertTrue(wait_until(lambda: run.node.get_data("big") is not None))
             text = console.send("dump datastore").text
             self.assertLessEqual(len(text), REPLY_BUDGET_CHARS)
             note = text.splitlines()[-1]

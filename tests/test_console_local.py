@@ -9,7 +9,7 @@ import unittest
 
 from snr import Config, LocalConsoleFactory, Mode, Node, SNRTestCase, ThreadLoop
 from snr.core import LoopState, NodeState
-from tests.console_helpers import wait_for
+from tests.helpers import wait_until
 
 
 class TestLocalConsole(SNRTestCase):
@@ -48,7 +48,7 @@ class TestLocalConsole(SNRTestCase):
             keyboard.flush()
             keyboard.write("go\nlist endpoints\n")
             keyboard.flush()
-            self.assertTrue(wait_for(lambda: "local_console_commands" in out.getvalue()))
+            self.assertTrue(wait_until(lambda: "local_console_commands" in out.getvalue()))
             self.assertIn("Scheduled (event, 'go'): []", out.getvalue())
             keyboard.write("exit\n")
             keyboard.flush()

@@ -18,7 +18,8 @@ from typing import Any
 from snr.core import NodeState
 from snr.std_mods.io import RemoteConsole
 from snr.std_mods.io.console_protocol import Status
-from tests.console_helpers import NodeInThread, wait_for
+from tests.console_helpers import NodeInThread
+from tests.helpers import wait_until
 
 MODULE = "snr_console_reload_target"
 
@@ -74,7 +75,7 @@ class TestReloadFromConsole(unittest.TestCase):
     def ping(self, run: NodeInThread, console: RemoteConsole, expected: Any) -> None:
         reply = console.send("task event ping")
         self.assertEqual(reply.status, Status.OK, reply.text)
-        got = wait_for(lambda: run.node.get_data("pong") == expected and expected)
+        got = wait_until(lambda: run.node.get_data("pong") == expected and expected)
         self.assertEqual(run.node.get_data("pong"), expected)
         self.assertTrue(got)
 

@@ -17,7 +17,8 @@ from typing import Any, Dict, List, Tuple
 import snr
 from snr import AbstractNode, LoopFactory, ThreadLoop
 from snr.std_mods.io.console_protocol import Status
-from tests.console_helpers import NodeInThread, wait_for
+from tests.console_helpers import NodeInThread
+from tests.helpers import wait_until
 
 ROOT = Path(__file__).resolve().parent.parent
 DOCS = ROOT / "docs" / "console.md"
@@ -94,7 +95,7 @@ class TestWhilePaused(unittest.TestCase):
         with self.assertLogs("snr.robot", logging.WARNING) as logs, run:
             with run.console() as console:
                 self.assertEqual(console.send("pause").status, Status.OK)
-                self.assertTrue(wait_for(lambda: queue.loss.total > 0), "nothing was dropped")
+                self.assertTrue(wait_until(lambda: queue.loss.total > 0), "nothing was dropped")
                 # Bounded: the lane never grows past its mark (plus what was in flight).
                 self.assertLessEqual(len(queue.normal), queue.high_water + 2)
                 stats = console.send("stats").text  # a console command runs, queue full or not
@@ -110,7 +111,7 @@ class TestWhilePaused(unittest.TestCase):
                 self.assertIn("went to: node_core.store_page_handler", step)
                 resumed = console.send("resume").text
                 self.assertIn("Resumed node 'robot'", resumed)
-                self.assertTrue(wait_for(lambda: run.node.get_data("n") not in (None, 1)))
+                self.assertTrue(wait_until(lambda: run.node.get_data("n") not in (None, 1)))
         self.assertTrue(
             any("the node is paused (step mode)" in line for line in logs.output), logs.output
         )

@@ -27,8 +27,8 @@ from snr import (
 from snr.std_mods.io.command_processor import CommandProcessorEndpoint, CommandProcessorFactory
 from snr.std_mods.io.console_protocol import Status
 from snr.utils.mock_node import MockNode
-from tests.comms_helpers import free_port
-from tests.console_helpers import NodeInThread, wait_for
+from tests.console_helpers import NodeInThread
+from tests.helpers import free_port, wait_until
 
 
 class Counter(ThreadLoop):
@@ -78,7 +78,7 @@ def values(text: str) -> List[int]:
 
 class ConsoleTopicsTest(unittest.TestCase):
     def processor(self, node: Node) -> CommandProcessorEndpoint:
-        found = wait_for(lambda: node.components.get("command_receiver_commands"))
+        found = wait_until(lambda: node.components.get("command_receiver_commands"))
         assert isinstance(found, CommandProcessorEndpoint)
         return found
 
@@ -113,14 +113,14 @@ class ConsoleTopicsTest(unittest.TestCase):
             processor = self.processor(running.node)
             processor.watches.echo_wait_s = processor.watches.echo_keep_s = 0.05
             with running.console() as console:
-                wait_for(lambda: "depth" in running.node.datastore)
+                wait_until(lambda: "depth" in running.node.datastore)
                 reply = console.send("echo dept")
                 self.assertEqual(reply.status, Status.OK)
                 self.assertIn("No page under 'dept' in the last 0.05 s.", reply.text)
                 self.assertIn("Did you mean 'depth'?", reply.text)
                 # The watch ends (its handler is removed) once nobody asks again.
                 watched = (TaskType.store_page, "dept")
-                self.assertTrue(wait_for(lambda: watched not in processor.task_handlers))
+                self.assertTrue(wait_until(lambda: watched not in processor.task_handlers))
                 bad = console.send("echo depth 0")
                 self.assertEqual(bad.status, Status.ERROR)
                 self.assertIn("`echo` takes N from 1 to 100; got '0'", bad.text)
@@ -182,7 +182,7 @@ class LiveLinkGraphTest(unittest.TestCase):
         thread.start()
         try:
             with NodeInThread([pair.client(["depth"]), CounterFactory()]) as running:
-                wait_for(lambda: "sonar" in running.node.datastore)
+                wait_until(lambda: "sonar" in running.node.datastore)
                 with running.console() as console:
                     text = console.send("graph").text
         finally:

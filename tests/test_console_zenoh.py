@@ -10,7 +10,7 @@ import io
 import unittest
 
 from snr import Config, Mode, TimeoutLoopFactory
-from tests.comms_helpers import free_port
+from tests.helpers import free_port
 from tests.optional import needs
 from tests.quiet import capture_test_logs
 from tests.test_comms_local import LocalNodes

@@ -69,8 +69,7 @@ from snr.std_mods.comms.sockets import _listen as sockets_listen
 from snr.std_mods.io.console_protocol import ConsoleConnectionError
 from snr.std_mods.io.live_view import _listen as live_view_listen
 from snr.std_mods.io.remote_console import RemoteConsole
-from tests.comms_helpers import free_port
-from tests.helpers import StopWhenDrainedFactory, StopWhenFactory, StopWhenTrueFactory
+from tests.helpers import StopWhenDrainedFactory, StopWhenFactory, StopWhenTrueFactory, free_port
 from tests.quiet import capture_test_logs, captured_logs
 
 HERE = "test_errors.py"
@@ -79,7 +78,11 @@ EV = TaskType.event
 
 
 class FactoryOf(EndpointFactory):
-    """Builds whatever ``build(factory, parent)`` returns: one factory for many mistakes."""
+    """Builds whatever ``build(factory, parent)`` returns: one factory for many mistakes.
+
+    Not tests/helpers.py's: the messages under test point at this file's
+    ``get``, as they point at a student's own factory.
+    """
 
     def __init__(self, build: Callable[[Any, AbstractNode], Any]) -> None:
         super().__init__()

@@ -36,7 +36,7 @@ from snr.core import MissingKeyHints
 from snr.core.explain import returning_lines
 from snr.prelude import ComponentError, HandlerError, MissingSuperInitError
 from snr.std_mods.comms.link_hints import watch_link
-from tests.comms_helpers import free_port
+from tests.helpers import FactoryOf, free_port
 from tests.quiet import capture_test_logs
 
 HERE = "test_errors_wiring.py"
@@ -47,17 +47,6 @@ def line_of(func: Callable[..., Any], text: str) -> int:
     """The line number of the first line of ``func``'s source containing ``text``."""
     lines, first = inspect.getsourcelines(func)
     return first + next(i for i, line in enumerate(lines) if text in line)
-
-
-class FactoryOf(EndpointFactory):
-    """Builds whatever ``build(factory, parent)`` returns."""
-
-    def __init__(self, build: Callable[[Any, AbstractNode], Any]) -> None:
-        super().__init__()
-        self.build = build
-
-    def get(self, parent: AbstractNode) -> Any:
-        return self.build(self, parent)
 
 
 # -- components with a mistake on one line ------------------------------------------

@@ -18,6 +18,7 @@ from typing import Callable, List
 
 import snr
 from snr import ExpectorEndpointFactory, SimulatedJoystick, SNRTestCase, TaskType
+from tests.helpers import free_port
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXAMPLE = os.path.join(ROOT, "examples", "controller", "main.py")
@@ -48,13 +49,6 @@ def stepping_clock(step_s: float) -> Callable[[], float]:
         return now[0]
 
     return clock
-
-
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        port: int = probe.getsockname()[1]
-        return port
 
 
 class TestControllerExample(SNRTestCase):

@@ -4,7 +4,9 @@ import contextlib
 import io
 import unittest
 
+from snr import TaskType
 from tests.examples_support import example_path, load_module, run_script
+from tests.helpers import StopWhenFactory
 from tests.quiet import captured_logs
 
 FOLDER = example_path("moving_average")
@@ -24,7 +26,12 @@ class TestMovingAverageExample(unittest.TestCase):
         out = io.StringIO()
         # A DEBUG node: its INFO lines (e.g. "terminated: Timeout") are kept here.
         with contextlib.redirect_stdout(out), captured_logs("snr.filter_demo"):
-            demo.SynchronousRunner("filter_demo", demo.make_config(readings, 0.0, 0.1)).run()
+            # 10 s is only a bound: the node stops once the tenth mean is shown.
+            config = demo.make_config(readings, 0.0, 10.0)
+            config.factories["filter_demo"].append(
+                StopWhenFactory((TaskType.store_page, "depth"), count=10)
+            )
+            demo.SynchronousRunner("filter_demo", config).run()
         lines = out.getvalue().splitlines()
         # Each line ends with the mean of the newest five readings so far.
         expected = [sum(readings[max(0, i - 4) : i + 1]) / min(i + 1, 5) for i in range(10)]

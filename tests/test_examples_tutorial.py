@@ -21,7 +21,6 @@ import re
 import runpy
 import shutil
 import signal
-import socket
 import subprocess
 import sys
 import tempfile
@@ -33,19 +32,13 @@ from typing import Callable, Dict, Iterator, List, Optional
 from snr.core.logs import LOG_FORMAT
 from snr.std_mods.io.remote_console import RemoteConsole
 from tests.examples_support import ROOT, TUTORIAL, script_env
+from tests.helpers import free_port
 from tests.quiet import captured_logs
 from tests.tutorial_transcripts import compare, transcripts
 
 PAGE = os.path.join(ROOT, "docs", "tutorial.md")
 SENSOR_PORT = 9010  # the ports the page shows
 CONSOLE_PORT = 9123
-
-
-def free_port() -> int:
-    with socket.socket(socket.AF_INET, socket.SOCK_STREAM) as probe:
-        probe.bind(("127.0.0.1", 0))
-        port: int = probe.getsockname()[1]
-        return port
 
 
 @contextlib.contextmanager

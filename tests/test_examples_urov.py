@@ -9,9 +9,8 @@ from typing import Any
 import snr.demo.urov
 from snr import Mode, SNRTestCase, TaskType, tasks
 from snr.utils import ListReplayerFactory
-from tests.comms_helpers import free_port
 from tests.examples_support import example_path, load_module, start_script
-from tests.helpers import StopWhenFactory
+from tests.helpers import StopWhenFactory, free_port
 
 # Started when this module is imported; it runs while other tests do.
 VEHICLE_ALONE = start_script(

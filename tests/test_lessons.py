@@ -216,10 +216,12 @@ class TestSimDemo(SNRTestCase):
         self.assertTrue(lines[0].startswith("SNR demo --sim: "), result.stdout)
         frames = (folder / "sim_frames").resolve()
         self.assertIn(f"Pictures: PNG frames in {frames}", lines)
-        self.assertTrue(list(frames.glob("frame_*.png")), result.stdout)
         simulated_s, x = summary(r"After ([\d.]+) s the robot is at \(([\d.]+), ", lines[-1])
+        # On a machine too busy to simulate that much, it may not have got that far.
         if simulated_s >= 0.2:
             self.assertGreater(x, 0.5, result.stdout)  # it set off from x = 0.5
+        if simulated_s >= 0.5:
+            self.assertTrue(list(frames.glob("frame_*.png")), result.stdout)
         self.assertEqual(result.stderr, "", "quiet unless --verbose")
 
 

@@ -351,32 +351,6 @@ class TestHandlerFailures(SNRTestCase):
         self.assertIn("High velocity impact", str(ctx.exception))
         self.assertIn("ticker", str(ctx.exception))
 
-    def test_slow_handler_is_reported_in_debug_mode(self) -> None:
-        class Sleepy(Endpoint):
-            def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
-                super().__init__(factory, parent, "sleepy")
-                self.task_handlers = {(EV, "nap"): self.nap}
-
-            def nap(self, task: Task, key: TaskId) -> SomeTasks:
-                time.sleep(0.03)
-                return None
-
-        class SleepyFactory(EndpointFactory):
-            def get(self, parent: AbstractNode) -> Sleepy:
-                return Sleepy(self, parent)
-
-        capture_test_logs(self)  # and the INFO level a DEBUG node gives "snr.test" goes
-        naps = [tasks.event("nap"), tasks.event("nap")]
-        node = Node(
-            "test", self.get_config([SleepyFactory(), StopWhenDrainedFactory(naps)], Mode.DEBUG)
-        )
-        node.slow_handler_s = 0.02  # 0.1 s unless set
-        with self.assertLogs("snr.test", "WARNING") as logs:
-            node.loop()
-        slow = [line for line in logs.output if "Sleepy.nap" in line]
-        self.assertEqual(len(slow), 1)  # reported once, not for every call
-        self.assertIn("ThreadLoop", slow[0])
-
 
 class TestProfiler(SNRTestCase):
     def test_dump_lists_task_ids_and_loops(self) -> None:

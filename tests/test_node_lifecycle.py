@@ -25,6 +25,7 @@ from snr import (
     tasks,
 )
 from snr.core import TaskQueue
+from tests.helpers import wait_until
 
 
 class Ticker(ThreadLoop):
@@ -83,15 +84,6 @@ class ScriptFactory(EndpointFactory):
 
     def get(self, parent: AbstractNode) -> Script:
         return Script(self, parent)
-
-
-def wait_until(condition: Callable[[], bool], timeout_s: float = 2.0) -> bool:
-    deadline = time.monotonic() + timeout_s
-    while time.monotonic() < deadline:
-        if condition():
-            return True
-        time.sleep(0.005)
-    return condition()
 
 
 def run_node(factories: List[Any], mode: Mode = Mode.TEST, join_timeout_s: float = 1.0) -> Node:
@@ -340,13 +332,9 @@ class TestBoundedQueue(unittest.TestCase):
         queue.schedule([tasks.event(str(i)) for i in range(10)])
 
         def consume() -> None:
-            # Start only once the producer waits: on a busy machine it may be
-            # scheduled late, after a consumer that did not wait drained the lane.
-            deadline = time.monotonic() + 2.0
-            while queue.waits == 0 and time.monotonic() < deadline:
-                time.sleep(0.001)
+            # Only once the producer waits: popping sooner would leave it room.
+            wait_until(lambda: queue.waits == 1, 2.0)
             for _ in range(8):
-                time.sleep(0.002)
                 queue.pop()
 
         consumer = threading.Thread(target=consume)

@@ -91,7 +91,8 @@ class TestInANode(SNRTestCase):
                     (TaskType.store_page, "true_pose"),
                     when=lambda task: sim.steps >= 40 and view.frames_written >= 2 and drawn(),
                 ),
-            ]
+            ],
+            timeout_s=10,  # a bound for a busy machine: the node stops once the work is done
         )
         return sim
 

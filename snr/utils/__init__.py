@@ -6,9 +6,11 @@ Example::
 
 ``SNRTestCase`` is a ``unittest.TestCase``; it and ``unittest`` are imported
 the first time the name is used, so a node that never runs tests does not pay
-for them (PEP 562 module ``__getattr__``).
+for them (PEP 562 module ``__getattr__``). So are ``MemoryLinkPair`` and
+``memory_transport_pair``, which bring in the comms components.
 """
 
+import importlib
 from typing import TYPE_CHECKING, Any, List
 
 from snr.utils.dummy import DummyEndpoint, DummyEndpointFactory
@@ -23,6 +25,7 @@ from snr.utils.mock_node import MockNode
 from snr.utils.temp_file import TempFile
 
 if TYPE_CHECKING:
+    from snr.utils.memory_link import MemoryLinkPair, memory_transport_pair
     from snr.utils.test_case import SNRTestCase
 
 __all__ = [
@@ -34,21 +37,29 @@ __all__ = [
     "ExpectorEndpointFactory",
     "ListReplayerFactory",
     "ListReplayerLoop",
+    "MemoryLinkPair",
     "MockNode",
     "MultiProcExpector",
     "OrderedExpector",
     "SNRTestCase",
     "TempFile",
+    "memory_transport_pair",
 ]
 
 
-def __getattr__(name: str) -> Any:
-    """Import ``SNRTestCase`` (and with it ``unittest``) on first use."""
-    if name == "SNRTestCase":
-        from snr.utils.test_case import SNRTestCase
+_LAZY = {
+    "SNRTestCase": "snr.utils.test_case",
+    "MemoryLinkPair": "snr.utils.memory_link",
+    "memory_transport_pair": "snr.utils.memory_link",
+}
 
-        globals()[name] = SNRTestCase
-        return SNRTestCase
+
+def __getattr__(name: str) -> Any:
+    """Import ``SNRTestCase`` (with ``unittest``) or the memory link (with comms) on first use."""
+    if name in _LAZY:
+        value = getattr(importlib.import_module(_LAZY[name]), name)
+        globals()[name] = value
+        return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 
 

@@ -314,7 +314,10 @@ class MultiProcExpector(Expector[K]):
         if context is None:
             import multiprocessing
 
-            context = multiprocessing.get_context()
+            # Shared memory made for spawned children also serves forked ones,
+            # not the other way round; MultiProcRunner spawns when the test
+            # process runs threads (a forked child could deadlock).
+            context = multiprocessing.get_context("spawn")
         ctx = context
         self._keys: List[K] = list(self.expectations)
         self._shared: Any = ctx.Array("l", len(self._keys))

@@ -1,0 +1,221 @@
+"""An in-memory connection pair: link two nodes of one process with no port and no process.
+
+Comms logic (forwarding by key, hellos, beats, back-pressure, a peer that goes
+away) is the same whatever carries the bytes. To test it, two nodes running
+on threads of the test's process can be linked by a `MemoryLinkPair` instead
+of a `SocketsPair`: no port to pick, nothing that another program can take,
+no child process to start, and `MemoryLinkPair.cut` loses the peer on demand.
+
+The bytes travel through ``socket.socketpair()``, a connected pair of local
+stream sockets that lives in the kernel's memory only (no address, no
+network). It has a file descriptor, so the node's I/O loop serves it exactly
+as it serves a TCP connection or a pipe: the code under test is the real
+link code, not a stand-in.
+
+Example::
+
+    pair = MemoryLinkPair()
+    config = Config({"a": [ticker, pair.first("tick")], "b": [pair.second(), counter]})
+    # run Node("a", config) and Node("b", config) on two threads; pages under
+    # "tick" stored on "a" are stored on "b" too. pair.cut() ends the link.
+
+Like a pipe, a memory link cannot reconnect: once cut or closed, each side
+logs it and its loop stops; the nodes keep running.
+"""
+
+from __future__ import annotations
+
+import socket
+from typing import Optional, Tuple
+
+from snr.core import LoopFactory
+from snr.prelude import AbstractNode, ConfigError
+from snr.std_mods.comms.comms_loop import (
+    DEFAULT_DEAD_AFTER_S,
+    DEFAULT_MAX_BACKLOG_BYTES,
+    CommsLoop,
+    Keys,
+    normalize_keys,
+)
+from snr.std_mods.comms.link import Link
+from snr.std_mods.comms.sockets import SocketTransport
+
+__all__ = [
+    "MemoryLinkFactory",
+    "MemoryLinkLoop",
+    "MemoryLinkPair",
+    "MemoryTransport",
+    "memory_transport_pair",
+]
+
+
+class MemoryTransport(SocketTransport):
+    """One end of an in-memory byte stream, as a link ``Transport``.
+
+    Made in pairs by `memory_transport_pair`; what one end sends, the other
+    receives, in order. It reads, writes and ends like a TCP connection's
+    `SocketTransport`, without the TCP options (a local socket pair has none).
+
+    Example::
+
+        here, there = memory_transport_pair()
+        here.send(b"abc")          # 3
+        buffer = bytearray(8)
+        there.recv_into(buffer)    # 3: buffer starts with b"abc"
+    """
+
+    def __init__(self, sock: socket.socket, peer: str) -> None:
+        sock.setblocking(False)  # like every transport the I/O loop serves
+        self.sock = sock
+        self.peer = peer
+
+
+def memory_transport_pair(
+    names: Tuple[str, str] = ("memory-a", "memory-b"),
+) -> Tuple[MemoryTransport, MemoryTransport]:
+    """Two connected `MemoryTransport` ends (as trio's ``memory_stream_pair``).
+
+    Each end's ``peer`` is the name of the *other* end, for log messages.
+
+    Example::
+
+        here, there = memory_transport_pair()
+        link = comms_loop.open_link(here)   # a CommsLoop of your own
+    """
+    first, second = socket.socketpair()
+    return MemoryTransport(first, names[1]), MemoryTransport(second, names[0])
+
+
+class MemoryLinkLoop(CommsLoop):
+    """Forwards pages over one end of a `MemoryLinkPair`; built by `MemoryLinkFactory`.
+
+    Example::
+
+        MemoryLinkPair().first(["controller_input"]).get(node)
+    """
+
+    def __init__(self, factory: MemoryLinkFactory, parent: AbstractNode) -> None:
+        super().__init__(
+            factory,
+            parent,
+            factory.name,
+            factory.keys,
+            factory.max_backlog_bytes,
+            factory.dead_after_s,
+        )
+        self.transport = factory.take_transport()
+        self.link: Optional[Link] = None
+
+    def begin(self) -> None:
+        """Open the link at once: the pair is connected from the start."""
+        self.link = self.open_link(self.transport)
+
+    def loop(self) -> None:
+        """Wait; stop once the link has closed (a memory link cannot reconnect)."""
+        if self.link is None or self.link.wait_closed(0.5):
+            self.set_terminate_flag("the memory link closed")
+
+
+class MemoryLinkFactory(LoopFactory):
+    """Builds a `MemoryLinkLoop` on one end of a `MemoryLinkPair` (made by the pair).
+
+    Each end serves one node once: a second ``get`` (a second node, or a
+    reload) raises ConfigError, since the first loop owns the end.
+
+    Example::
+
+        pair = MemoryLinkPair()
+        {"a": [pair.first("ping")], "b": [pair.second("pong")]}
+    """
+
+    def __init__(
+        self,
+        transport: MemoryTransport,
+        keys: Keys,
+        name: str,
+        max_backlog_bytes: int,
+        dead_after_s: float,
+    ) -> None:
+        super().__init__()
+        self._transport: Optional[MemoryTransport] = transport
+        self.keys = normalize_keys(keys, "MemoryLinkPair")
+        self.name = name
+        self.max_backlog_bytes = max_backlog_bytes
+        self.dead_after_s = dead_after_s
+
+    def take_transport(self) -> MemoryTransport:
+        """The end this factory holds, once.
+
+        Raises:
+            ConfigError: it was already taken by an earlier loop.
+        """
+        transport, self._transport = self._transport, None
+        if transport is None:
+            raise ConfigError(
+                f"The memory link {self.name!r} was already used by a node; each end of a "
+                "MemoryLinkPair serves one node once. Make a new MemoryLinkPair() for each run."
+            )
+        return transport
+
+    def get(self, parent: AbstractNode) -> MemoryLinkLoop:
+        return MemoryLinkLoop(self, parent)
+
+
+class MemoryLinkPair:
+    """Two comms components linked in memory, for two nodes of one process.
+
+    Args:
+        max_backlog_bytes: how much may wait for a slow peer before pages are dropped.
+        dead_after_s: seconds of silence after which the other end counts as lost.
+
+    Example::
+
+        pair = MemoryLinkPair(dead_after_s=0.5)
+        config = Config({"a": [pair.first("ping")], "b": [pair.second("pong")]})
+        ...
+        pair.cut()   # both sides see the peer go, as when a cable is pulled
+        pair.close() # once the nodes have stopped
+    """
+
+    def __init__(
+        self,
+        max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
+        dead_after_s: float = DEFAULT_DEAD_AFTER_S,
+    ) -> None:
+        self.max_backlog_bytes = max_backlog_bytes
+        self.dead_after_s = dead_after_s
+        self._ends = memory_transport_pair()
+
+    def first(self, keys: Keys = None, name: str = "memory_link_a") -> MemoryLinkFactory:
+        """The factory for the first node's end, forwarding ``keys`` to the second."""
+        return self._factory(0, keys, name)
+
+    def second(self, keys: Keys = None, name: str = "memory_link_b") -> MemoryLinkFactory:
+        """The factory for the second node's end, forwarding ``keys`` to the first."""
+        return self._factory(1, keys, name)
+
+    def _factory(self, end: int, keys: Keys, name: str) -> MemoryLinkFactory:
+        return MemoryLinkFactory(
+            self._ends[end], keys, name, self.max_backlog_bytes, self.dead_after_s
+        )
+
+    def cut(self) -> None:
+        """Break the connection both ways at once: each side reads end of stream.
+
+        No goodbye is sent, so each side logs a lost link (a warning), as
+        when a peer crashes.
+        """
+        for end in self._ends:
+            try:
+                end.sock.shutdown(socket.SHUT_RDWR)
+            except OSError:  # that end is already closed
+                pass
+
+    def close(self) -> None:
+        """Close both ends, used or not (a link closes its own end when its node stops).
+
+        Call it once the nodes have stopped, e.g. ``self.addCleanup(pair.close)``
+        in a test, so that an end no node took is not left open.
+        """
+        for end in self._ends:
+            end.close()
