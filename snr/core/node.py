@@ -23,6 +23,7 @@ import enum
 import logging
 import threading
 import time
+from threading import get_ident
 from typing import Any, List, Optional
 
 from snr.core.components import ComponentSet
@@ -60,6 +61,9 @@ from snr.prelude import (
 from snr.prelude.error_text import bad_data_key, page_as_data
 
 __all__ = ["Node", "NodeState"]
+
+_STORE_PAGE = TaskType.store_page
+
 
 class NodeState(enum.Enum):
     """Where a node is in its life: CREATED → RUNNING → TERMINATING → TERMINATED.
@@ -332,11 +336,11 @@ class Node(AbstractNode):
 
     def task_store_page(self, page: Page) -> Task:
         """A task that stores ``page`` when it runs."""
-        return Task(TaskType.store_page, page.key, [page])
+        return Task(_STORE_PAGE, page.key, [page])
 
     def task_store_data(self, key: DataKey, data: Any, process: bool = True) -> Task:
         """A task that stores ``data`` under ``key`` when it runs."""
-        return self.task_store_page(self.page(key, data, process))
+        return Task(_STORE_PAGE, key, [self.page(key, data, process)])
 
     # ------------------------------------------------------------------
     # Datastore (thesis listing 6.4)
@@ -361,7 +365,8 @@ class Node(AbstractNode):
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
         """Queue storing ``data`` under ``key``; safe from any thread."""
-        self.queue.schedule(self.task_store_data(key, data, process))
+        # Few calls: the node's thread waits for the GIL until the loop blocks again.
+        self.queue.put(Task(_STORE_PAGE, key, [self.page(key, data, process)]))
 
     def get_page(self, key: DataKey) -> Optional[Page]:
         """The newest page under ``key``, or None; safe from any thread.
@@ -385,7 +390,8 @@ class Node(AbstractNode):
 
     def write_page(self, page: Page) -> None:
         """Put ``page`` in the datastore (the node core's store_page handler)."""
-        self._check_owner_thread("write_page")
+        if get_ident() != self._thread_id and self.state is NodeState.RUNNING:
+            raise wrong_thread_error(self.role, "write_page")
         self.datastore[page.key] = page
 
     # ------------------------------------------------------------------

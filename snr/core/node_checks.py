@@ -9,11 +9,11 @@ This module builds them and connects them to the node, so that ``node.py``
 keeps only its life cycle, its run loop and its datastore:
 
 * `check_component` (DEBUG and TEST) reads each student class once, when its
-  first component is added (`ComponentSet.check_added`);
+  first component is added (``ComponentSet.check_added``);
 * `MissingKeyHints` (DEBUG, ``node.key_hints``) hints at a data key that is
   read but never stored: the node's ``get_page`` tells it of each miss;
 * `WiringChecks` (DEBUG, ``node.wiring_checks``) hears of every task no
-  handler matched (`HandlerRunner.on_unhandled`);
+  handler matched (``HandlerRunner.on_unhandled``);
 * the wiring check: ``key_hints.handlers_s`` after the node starts, a timer
   queues a ``CHECK_WIRING`` event and the node core calls
   ``node.check_wiring()`` on the node's thread;
