@@ -24,6 +24,19 @@ class TestTaskQueue(unittest.TestCase):
         order = [queue.pop() for _ in range(3)]
         self.assertEqual([t.name for t in order if t], ["first", "second", "a"])
 
+    def test_put_queues_one_task_and_wakes_a_sleeping_consumer(self) -> None:
+        queue = TaskQueue()
+        got: List[Optional[Task]] = []
+        consumer = threading.Thread(target=lambda: got.append(queue.get(5.0)))
+        consumer.start()
+        queue.put(tasks.event("hello"))  # what a loop's store_data uses
+        consumer.join(5.0)
+        self.assertFalse(consumer.is_alive())
+        self.assertEqual([task.name if task else None for task in got], ["hello"])
+        queue.put(tasks.event("a"))
+        queue.put(tasks.terminate("urgent"))
+        self.assertEqual([t.name for t in (queue.pop(), queue.pop()) if t], ["urgent", "a"])
+
     def test_none_is_nothing(self) -> None:
         queue = TaskQueue()
         queue.schedule(None)

@@ -6,13 +6,15 @@ thread that writes the datastore or runs task handlers. Loop threads reach the
 node through the thread-safe queue (``schedule``, ``store_data``) and the
 read-only ``get_page``/``get_data``.
 
-The node keeps its life cycle, its run loop and its datastore; two helpers do
-the rest::
+The node keeps its life cycle, its run loop and its datastore; three helpers
+do the rest::
 
     Node ──► ComponentSet   build, add, remove, reload, start and stop components;
       │                     keep the HandlerTable in step with them
-      └────► HandlerRunner  run a task's handlers, time them, queue what they
-                            return, put failures into words
+      ├────► HandlerRunner  run a task's handlers, time them, queue what they
+      │                     return, put failures into words
+      └────► NodeChecks     wire in the checks for silent mistakes (key hints,
+                            wiring checks, watchdog: DEBUG mode)
 """
 
 from __future__ import annotations
@@ -21,21 +23,20 @@ import enum
 import logging
 import threading
 import time
-from typing import Any, List, Optional, Set, Tuple
+from threading import get_ident
+from typing import Any, List, Optional
 
-from snr.core import tasks
-from snr.core.class_checks import check_component
 from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerTable
-from snr.core.explain import THREAD_SAFE_INSTEAD
 from snr.core.handler_runner import HandlerRunner
 from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler, level_for_mode
+from snr.core.node_checks import NodeChecks, check_node_args, wrong_thread_error
 from snr.core.node_core import NodeCoreFactory
 from snr.core.step_mode import StepMode
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Timer
-from snr.core.watchdog import Watchdog, queued_page_keys
+from snr.core.watchdog import Watchdog
 from snr.core.wiring_checks import WiringChecks
 from snr.prelude import (
     AbstractComponent,
@@ -45,7 +46,6 @@ from snr.prelude import (
     AbstractNode,
     ComponentError,
     ComponentName,
-    ConfigError,
     DataDict,
     DataKey,
     IdleWaiter,
@@ -58,14 +58,12 @@ from snr.prelude import (
     TaskHandler,
     TaskId,
     TaskType,
-    ThreadSafetyError,
 )
-from snr.prelude.error_text import bad_data_key, page_as_data, wrong_call
-from snr.prelude.student_code import caller_location
+from snr.prelude.error_text import bad_data_key, page_as_data
 
 __all__ = ["Node", "NodeState"]
 
-_PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
+_STORE_PAGE = TaskType.store_page
 
 
 class NodeState(enum.Enum):
@@ -115,24 +113,16 @@ class Node(AbstractNode):
             to switch it off).
     """
 
+    key_hints: Optional[MissingKeyHints]
+    wiring_checks: Optional[WiringChecks]
+    watchdog: Optional[Watchdog]
     idle_wake_s: float = 1.0
     """How long an idle node sleeps before checking that it should still run."""
     max_queued_tasks: int = 10_000
     """The queue's high-water mark: loops wait (then drop) above it; see `TaskQueue`."""
 
     def __init__(self, role: Role, config: AbstractConfig) -> None:
-        if isinstance(role, AbstractConfig) and isinstance(config, str):
-            raise ConfigError(
-                wrong_call("Node", Node, (role, config), "the role and the config are swapped.")
-            )
-        if not isinstance(role, str) or not role:
-            raise ConfigError(f"A node's role must be a non-empty string, not {role!r}.")
-        if not isinstance(config, AbstractConfig):
-            raise ConfigError(
-                f"Node({role!r}, ...) needs a snr.Config as its second argument, not "
-                f"{type(config).__name__}. Wrap a dict of factories: "
-                "Config({'robot': [...]})."
-            )
+        check_node_args(Node, role, config)
         self.role = role
         self.config = config
         self.mode = config.mode
@@ -161,28 +151,9 @@ class Node(AbstractNode):
             timed=self.profiler is not None or self.mode is not Mode.DEPLOYED,
         )
         self.step_mode = StepMode(self.queue, self._runner, self._lookup, self.is_terminated)
-        debug = self.mode is Mode.DEBUG
-        self.key_hints: Optional[MissingKeyHints] = (
-            MissingKeyHints(
-                self.log, self.timer.current_s, role=role, on_its_way=self._page_on_its_way
-            )
-            if debug
-            else None
-        )
-        if self.key_hints is not None:
-            self.key_hints.expected_keys = self._handled_keys
-        self.wiring_checks: Optional[WiringChecks] = None
-        if self.mode is Mode.DEBUG:
-            self.wiring_checks = WiringChecks(
-                self.log, role, self._components.table, self.datastore
-            )
-            self._runner.on_unhandled = self.wiring_checks.unhandled
-        self.watchdog: Optional[Watchdog] = Watchdog(self) if debug else None
-        self._watching: Optional[Watchdog] = None
-
-        if self.mode is not Mode.DEPLOYED:
-            self._components.check_added = self._check_component
-        else:
+        # Sets key_hints, wiring_checks and watchdog (None outside DEBUG mode).
+        self._checks = NodeChecks(self, self._components, self._runner)
+        if self.mode is Mode.DEPLOYED:
             # A deployed robot's code was checked while it was developed: its
             # pages are made without the checks (on every store, they add ~25 ns).
             self.page = self._page_unchecked  # type: ignore[method-assign]
@@ -229,10 +200,7 @@ class Node(AbstractNode):
         self.state = NodeState.RUNNING
         self._thread_id = self.queue.owner_thread = threading.get_ident()
         self._running = not self._stop_requested
-        wiring_check = self._start_wiring_check()
-        self._watching = self.watchdog
-        if self._watching is not None:
-            self._watching.start(self._thread_id, [wiring_check] if wiring_check else [])
+        self._checks.start(self._thread_id)
         try:
             self._components.start_all(lambda: self._running)
             self._run_tasks()
@@ -243,21 +211,9 @@ class Node(AbstractNode):
             self.set_terminate_flag(f"{type(error).__name__} (below)")
             raise
         finally:
-            if wiring_check is not None:
-                wiring_check.cancel()
             self.terminate()
         if self._runner.failure is not None:
             raise self._runner.failure
-
-    def _start_wiring_check(self) -> Optional[threading.Timer]:
-        if self.key_hints is None:
-            return None
-        timer = threading.Timer(
-            self.key_hints.handlers_s, self.schedule, args=(tasks.event(tasks.CHECK_WIRING),)
-        )
-        timer.daemon = True
-        timer.start()
-        return timer
 
     def check_wiring(self) -> None:
         """In DEBUG mode, warn about handlers of data keys that look misspelled.
@@ -266,45 +222,7 @@ class Node(AbstractNode):
         `MissingKeyHints.check_handlers`), and about handlers registered so
         that they can never run (see `WiringChecks.check_never_ran`).
         """
-        if self.key_hints is None:
-            return
-        handled = self._page_handlers()
-        self.key_hints.check_handlers(handled, self.datastore)
-        if self.wiring_checks is not None:
-            self.wiring_checks.check_never_ran()
-
-    def _page_handlers(self) -> List[Tuple[DataKey, TaskHandler]]:
-        """(key, handler) for every handler registered for one data key's pages."""
-        handled: List[Tuple[DataKey, TaskHandler]] = []
-        for entries in list(self._components.table.table.values()):
-            for handler, task_id, _, _ in entries:
-                # Only handlers registered for this very key (not type-level ones).
-                if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
-                    handled.append((task_id[1], handler))
-        return handled
-
-    def _check_component(self, component: AbstractComponent) -> None:
-        """A name SNR uses raises; in DEBUG, work that can have no effect is logged once."""
-        warn = self._warn_once if self.mode is Mode.DEBUG else None
-        check_component(component, warn)
-
-    def _warn_once(self, message: str) -> None:
-        self.log.warning("%s\n(Said once per class, in DEBUG mode only.)", message)
-
-    def _handled_keys(self) -> Set[DataKey]:
-        return {key for key, _ in self._page_handlers()}
-
-    def _page_on_its_way(self, key: DataKey) -> bool:
-        """True if ``key``'s page may be late rather than missing (for the key hints).
-
-        It is late when a page for it waits in the queue, or when the node's
-        thread has been stuck in one handler since the watchdog's last look:
-        the node stores no page until that handler returns.
-        """
-        watchdog = self._watching
-        if watchdog is not None and watchdog.handler_stuck:
-            return True
-        return key in queued_page_keys(self.queue)
+        self._checks.check_wiring()
 
     def set_terminate_flag(self, reason: str) -> None:
         """Ask the node to stop after the current task; safe from any thread."""
@@ -331,8 +249,7 @@ class Node(AbstractNode):
             self.set_terminate_flag("terminate() called")
         self._running = False
         self.state = NodeState.TERMINATING
-        if self._watching is not None:
-            self._watching.stop()  # stopping loops and waiting for them is no mistake
+        self._checks.stop()  # stopping loops and waiting for them is no mistake
         self._components.shutdown()
         self._runner.repeats.flush()
         dropped = self.queue.clear()
@@ -427,11 +344,11 @@ class Node(AbstractNode):
 
     def store_page_task(self, page: Page) -> Task:
         """A task that stores ``page`` when it runs (thesis: ``task_store_page``)."""
-        return Task(TaskType.store_page, page.key, [page])
+        return Task(_STORE_PAGE, page.key, [page])
 
     def store_data_task(self, key: DataKey, data: Any, process: bool = True) -> Task:
         """A task that stores ``data`` under ``key`` when it runs (thesis: ``task_store_data``)."""
-        return self.store_page_task(self.page(key, data, process))
+        return Task(_STORE_PAGE, key, [self.page(key, data, process)])
 
     # ------------------------------------------------------------------
     # Datastore (thesis listing 6.4)
@@ -456,7 +373,8 @@ class Node(AbstractNode):
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
         """Queue storing ``data`` under ``key``; safe from any thread."""
-        self.queue.schedule(self.store_data_task(key, data, process))
+        # Few calls: the node's thread waits for the GIL until the loop blocks again.
+        self.queue.put(Task(_STORE_PAGE, key, [self.page(key, data, process)]))
 
     def get_page(self, key: DataKey) -> Optional[Page]:
         """The newest page under ``key``, or None; safe from any thread.
@@ -480,7 +398,8 @@ class Node(AbstractNode):
 
     def write_page(self, page: Page) -> None:
         """Put ``page`` in the datastore (the node core's store_page handler)."""
-        self._check_owner_thread("write_page")
+        if get_ident() != self._thread_id and self.state is NodeState.RUNNING:
+            raise wrong_thread_error(self.role, "write_page")
         self.datastore[page.key] = page
 
     # ------------------------------------------------------------------
@@ -529,14 +448,7 @@ class Node(AbstractNode):
             and self._thread_id is not None
             and threading.get_ident() != self._thread_id
         ):
-            instead = THREAD_SAFE_INSTEAD.get(method, "self.schedule(task)")
-            raise ThreadSafetyError(
-                f"{method}() was called on node {self.role!r} from thread "
-                f"{threading.current_thread().name!r} (at {caller_location()}), but only "
-                "the node's own thread may change the node, and a loop runs on a thread "
-                f"of its own. Use {instead} instead: it hands the work to the node's "
-                "thread and is safe from any thread."
-            )
+            raise wrong_thread_error(self.role, method)
 
     def __repr__(self) -> str:
         return f"<Node {self.role!r} {self.state.value}, {len(self.components)} components>"

@@ -28,6 +28,8 @@ from snr.prelude import (
 
 __all__ = ["NODE_CORE_NAME", "NodeCoreEndpoint", "NodeCoreFactory"]
 
+_PROCESS_DATA = TaskType.process_data
+
 NODE_CORE_NAME = "node_core"
 """The component name of every node's core endpoint."""
 
@@ -70,7 +72,8 @@ class NodeCoreEndpoint(Endpoint):
             page = dataclasses.replace(page, origin=self.node.role)
             task.val_list[0] = page
         self.node.write_page(page)
-        return tasks.process_data(page) if page.process else None
+        # tasks.process_data(page), inline: the handlers of a loop's page wait for this one.
+        return Task(_PROCESS_DATA, page.key, [page]) if page.process else None
 
     def store_pages_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Store a burst of pages (`tasks.store_pages`) in order, in one handler call.

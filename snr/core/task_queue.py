@@ -103,6 +103,29 @@ class TaskQueue(AbstractTaskQueue):
         self._rung = False
         self._closed = threading.Event()
 
+    def put(self, task: Task) -> None:
+        """Queue one task. Any thread; the path a loop's ``store_data`` takes.
+
+        `schedule` for a single `Task`, without looking at what it was given:
+        a loop thread holds the GIL, which the node's thread waits for, from
+        the moment it queues a page until it blocks again, so every step here
+        shows in the loop → handler latency. From a thread other than the
+        node's, this may wait while the queue is above its high-water mark,
+        and drop the task if it stays there.
+
+        Example::
+
+            queue.put(tasks.event("go"))
+        """
+        if task.priority:
+            self.urgent.append(task)
+        elif len(self.normal) < self.high_water or self._make_room():
+            self.normal.append(task)
+        else:
+            return
+        if self._sleeping and not self._rung:  # ring once per sleep
+            self._ring()
+
     def schedule(self, t: SomeTasks) -> None:
         """Queue a task, a list of tasks, or nothing (None). Any thread.
 
@@ -112,38 +135,40 @@ class TaskQueue(AbstractTaskQueue):
         if t is None:
             return
         if isinstance(t, Task):
-            if not t.priority and len(self.normal) >= self.high_water and not self._make_room():
-                return
-            (self.urgent if t.priority else self.normal).append(t)
-        elif isinstance(t, list):
-            for task in t:
-                if not isinstance(task, Task):
-                    raise HandlerError(
-                        f"Cannot schedule {task!r} ({type(task).__name__}): only Task "
-                        "objects can be queued. Build tasks with snr.tasks, e.g. "
-                        "tasks.event('name') or self.store_data_task(key, data)."
-                    )
-            if len(self.normal) >= self.high_water and not self._make_room(len(t)):
-                urgent = [task for task in t if task.priority]
-                self.urgent.extend(urgent)
-                if not urgent:
-                    return
-            else:
-                for task in t:
-                    (self.urgent if task.priority else self.normal).append(task)
-        else:
+            self.put(t)
+            return
+        if not isinstance(t, list):
             raise HandlerError(
                 f"Cannot schedule {t!r} ({type(t).__name__}): schedule() takes a Task, "
                 "a list of Tasks or None. Build tasks with snr.tasks, e.g. "
                 "tasks.event('name')."
             )
-        if self._sleeping and not self._rung:  # ring once per sleep
-            self._rung = True
-            waiter = self._waiter
-            if waiter is None:
-                self._bell.put(None)
-            else:
-                waiter.wake()
+        for task in t:
+            if not isinstance(task, Task):
+                raise HandlerError(
+                    f"Cannot schedule {task!r} ({type(task).__name__}): only Task "
+                    "objects can be queued. Build tasks with snr.tasks, e.g. "
+                    "tasks.event('name') or self.store_data_task(key, data)."
+                )
+        if len(self.normal) >= self.high_water and not self._make_room(len(t)):
+            urgent = [task for task in t if task.priority]
+            self.urgent.extend(urgent)
+            if not urgent:
+                return
+        else:
+            for task in t:
+                (self.urgent if task.priority else self.normal).append(task)
+        if self._sleeping and not self._rung:
+            self._ring()
+
+    def _ring(self) -> None:
+        """Wake the sleeping node, once per sleep (it sleeps on the bell or on its waiter)."""
+        self._rung = True
+        waiter = self._waiter
+        if waiter is None:
+            self._bell.put(None)
+        else:
+            waiter.wake()
 
     def _make_room(self, n: int = 1) -> bool:
         """Wait for the lane to drain below the low-water mark; False to drop ``n`` tasks."""

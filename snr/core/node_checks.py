@@ -1,0 +1,207 @@
+"""`NodeChecks`: wires the checks for silent mistakes into a node.
+
+(It also holds the words for two loud ones: `check_node_args` for a wrong
+``Node(role, config)`` and `wrong_thread_error` for a loop changing the node.)
+
+A node runs its tasks the same way in every mode; what DEBUG (and partly
+TEST) mode adds is helpers that watch it for mistakes that raise nothing.
+This module builds them and connects them to the node, so that ``node.py``
+keeps only its life cycle, its run loop and its datastore:
+
+* `check_component` (DEBUG and TEST) reads each student class once, when its
+  first component is added (``ComponentSet.check_added``);
+* `MissingKeyHints` (DEBUG, ``node.key_hints``) hints at a data key that is
+  read but never stored: the node's ``get_page`` tells it of each miss;
+* `WiringChecks` (DEBUG, ``node.wiring_checks``) hears of every task no
+  handler matched (``HandlerRunner.on_unhandled``);
+* the wiring check: ``key_hints.handlers_s`` after the node starts, a timer
+  queues a ``CHECK_WIRING`` event and the node core calls
+  ``node.check_wiring()`` on the node's thread;
+* `Watchdog` (DEBUG, ``node.watchdog``) samples the node's and its loops'
+  stacks from a thread of its own.
+
+Outside DEBUG mode those attributes are None. The node's attributes are the
+switches: set one to None before ``node.loop()`` and that helper stays off.
+
+Example (what `Node` does)::
+
+    self._checks = NodeChecks(self, components, runner)   # in __init__
+    self._checks.start(threading.get_ident())             # as loop() starts
+    self._checks.stop()                                   # in terminate()
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import TYPE_CHECKING, Any, List, Optional, Set, Tuple
+
+from snr.core import tasks
+from snr.core.class_checks import check_component
+from snr.core.components import ComponentSet
+from snr.core.explain import THREAD_SAFE_INSTEAD
+from snr.core.handler_runner import HandlerRunner
+from snr.core.key_hints import MissingKeyHints
+from snr.core.watchdog import Watchdog, queued_page_keys
+from snr.core.wiring_checks import WiringChecks
+from snr.prelude import (
+    AbstractComponent,
+    AbstractConfig,
+    ConfigError,
+    DataKey,
+    Mode,
+    TaskHandler,
+    TaskType,
+    ThreadSafetyError,
+)
+from snr.prelude.error_text import wrong_call
+from snr.prelude.student_code import caller_location
+
+if TYPE_CHECKING:
+    from snr.core.node import Node
+
+__all__ = ["NodeChecks", "check_node_args", "wrong_thread_error"]
+
+_PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
+
+
+class NodeChecks:
+    """Builds a node's checks for silent mistakes and starts and stops them with it.
+
+    Args:
+        node: the node to watch; its ``key_hints``, ``wiring_checks`` and
+            ``watchdog`` are set here (None outside DEBUG mode).
+        components: the node's `ComponentSet` (its handler table, its
+            ``check_added`` hook).
+        runner: the node's `HandlerRunner` (its ``on_unhandled`` hook).
+
+    Example::
+
+        checks = NodeChecks(node, components, runner)
+        node.key_hints is not None   # True in DEBUG mode
+    """
+
+    def __init__(self, node: Node, components: ComponentSet, runner: HandlerRunner) -> None:
+        self.node = node
+        self.components = components
+        self._wiring_timer: Optional[threading.Timer] = None
+        self._watching: Optional[Watchdog] = None
+        debug = node.mode is Mode.DEBUG
+        node.key_hints = None
+        node.wiring_checks = None
+        node.watchdog = None
+        if debug:
+            hints = MissingKeyHints(
+                node.log, node.timer.current_s, role=node.role, on_its_way=self.page_on_its_way
+            )
+            hints.expected_keys = self.handled_keys
+            node.key_hints = hints
+            node.wiring_checks = WiringChecks(node.log, node.role, components.table, node.datastore)
+            runner.on_unhandled = node.wiring_checks.unhandled
+            node.watchdog = Watchdog(node)
+        if node.mode is not Mode.DEPLOYED:
+            components.check_added = self.check_component
+
+    def start(self, node_thread: int) -> None:
+        """The node's thread starts running tasks: set the wiring check, start the watchdog."""
+        hints = self.node.key_hints
+        if hints is not None:
+            timer = threading.Timer(
+                hints.handlers_s, self.node.schedule, args=(tasks.event(tasks.CHECK_WIRING),)
+            )
+            timer.daemon = True
+            timer.start()
+            self._wiring_timer = timer
+        self._watching = self.node.watchdog
+        if self._watching is not None:
+            timer_threads = [self._wiring_timer] if self._wiring_timer is not None else []
+            self._watching.start(node_thread, timer_threads)
+
+    def stop(self) -> None:
+        """The node is stopping: cancel the wiring check, stop the watchdog."""
+        if self._wiring_timer is not None:
+            self._wiring_timer.cancel()
+        if self._watching is not None:
+            self._watching.stop()
+
+    def check_wiring(self) -> None:
+        """Warn about handlers of data keys that look misspelled and handlers that never ran."""
+        hints = self.node.key_hints
+        if hints is None:
+            return
+        hints.check_handlers(self.page_handlers(), self.node.datastore)
+        if self.node.wiring_checks is not None:
+            self.node.wiring_checks.check_never_ran()
+
+    def page_handlers(self) -> List[Tuple[DataKey, TaskHandler]]:
+        """(key, handler) for every handler registered for one data key's pages."""
+        handled: List[Tuple[DataKey, TaskHandler]] = []
+        for entries in list(self.components.table.table.values()):
+            for handler, task_id, _, _ in entries:
+                # Only handlers registered for this very key (not type-level ones).
+                if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
+                    handled.append((task_id[1], handler))
+        return handled
+
+    def handled_keys(self) -> Set[DataKey]:
+        """The data keys some handler waits for: reading them early is no mistake."""
+        return {key for key, _ in self.page_handlers()}
+
+    def page_on_its_way(self, key: DataKey) -> bool:
+        """True if ``key``'s page may be late rather than missing (for the key hints).
+
+        It is late when a page for it waits in the queue, or when the node's
+        thread has been stuck in one handler since the watchdog's last look:
+        the node stores no page until that handler returns.
+        """
+        watchdog = self._watching
+        if watchdog is not None and watchdog.handler_stuck:
+            return True
+        return key in queued_page_keys(self.node.queue)
+
+    def check_component(self, component: AbstractComponent) -> None:
+        """A name SNR uses raises; in DEBUG, work that can have no effect is logged once."""
+        warn = self._warn_once if self.node.mode is Mode.DEBUG else None
+        check_component(component, warn)
+
+    def _warn_once(self, message: str) -> None:
+        self.node.log.warning("%s\n(Said once per class, in DEBUG mode only.)", message)
+
+
+def check_node_args(node_class: Any, role: Any, config: Any) -> None:
+    """Raise a `ConfigError` that says what is wrong with ``Node(role, config)``'s arguments.
+
+    Example::
+
+        check_node_args(Node, "robot", Config({"robot": [...]}))   # fine: no error
+        check_node_args(Node, config, "robot")   # ConfigError: ... are swapped.
+    """
+    if isinstance(role, AbstractConfig) and isinstance(config, str):
+        raise ConfigError(
+            wrong_call("Node", node_class, (role, config), "the role and the config are swapped.")
+        )
+    if not isinstance(role, str) or not role:
+        raise ConfigError(f"A node's role must be a non-empty string, not {role!r}.")
+    if not isinstance(config, AbstractConfig):
+        raise ConfigError(
+            f"Node({role!r}, ...) needs a snr.Config as its second argument, not "
+            f"{type(config).__name__}. Wrap a dict of factories: "
+            "Config({'robot': [...]})."
+        )
+
+
+def wrong_thread_error(role: str, method: str) -> ThreadSafetyError:
+    """The error for ``method`` called on node ``role`` from a thread that is not the node's.
+
+    Example::
+
+        raise wrong_thread_error("robot", "write_page")
+        # write_page() was called on node 'robot' from thread 'snr-robot-clock' ...
+    """
+    instead = THREAD_SAFE_INSTEAD.get(method, "self.schedule(task)")
+    return ThreadSafetyError(
+        f"{method}() was called on node {role!r} from thread "
+        f"{threading.current_thread().name!r} (at {caller_location()}), but only "
+        "the node's own thread may change the node, and a loop runs on a thread "
+        f"of its own. Use {instead} instead: it hands the work to the node's "
+        "thread and is safe from any thread."
+    )
