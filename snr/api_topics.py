@@ -135,7 +135,7 @@ TOPICS: Tuple[Topic, ...] = (
         "A 2-D differential-drive robot among walls, storing the pages a real "
         "robot would; drawn in a window or to PNG files (the physics, sensors and "
         "robot spec are in snr.std_mods.sim).",
-        _names("SimRobotFactory SimRobotLoop SimViewFactory SimViewLoop World"),
+        _names("SimRobotFactory SimRobotLoop SimViewFactory SimViewLoop World SimClock"),
         _names("simulator"),
     ),
     Topic(

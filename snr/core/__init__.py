@@ -19,6 +19,7 @@ from snr.core.node import Node, NodeState
 from snr.core.node_core import NodeCoreEndpoint, NodeCoreFactory
 from snr.core.profiler import Profiler
 from snr.core.runners import CliRunner, MultiProcRunner, SynchronousRunner, TestRunner
+from snr.core.sim_clock import SimClock
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Clock, Timer
 
@@ -42,6 +43,7 @@ __all__ = [
     "NodeCoreFactory",
     "NodeState",
     "Profiler",
+    "SimClock",
     "SynchronousRunner",
     "TaskQueue",
     "TestRunner",
