@@ -13,8 +13,16 @@ wall is near), each for the same number of 20 ms steps:
   50 Hz simulation (off-screen, so no screen is needed);
 * simulator + drawing every step.
 
-The ratio to the bare loop is the price of the readable classes. Run:
-``python bench/bench_sim.py`` (``--steps N`` to change the workload).
+The ratio to the bare loop is the price of the readable classes.
+
+Then the whole node, as a student runs lesson 1 (docs/lessons.md) without its
+view: `SimRobotLoop` at 50 Hz, the wall follower's endpoint and a
+`TimeoutLoopFactory`, on a `SimClock` as fast as it goes, for 60 simulated
+seconds: simulated seconds per wall second, against the target of 20x real
+time, in the default DEBUG mode and in DEPLOYED mode.
+
+Run: ``python bench/bench_sim.py`` (``--steps N`` and ``--lesson-s S`` to
+change the workload).
 ``--picture docs/images/simulator.png`` also writes the guide's picture: the
 robot after 40 s of that controller, with its path.
 """
@@ -23,6 +31,7 @@ from __future__ import annotations
 
 import argparse
 import importlib.util
+import logging
 import math
 import os
 import random
@@ -33,7 +42,16 @@ from typing import Callable, List, Optional, Tuple
 os.environ.setdefault("SDL_VIDEODRIVER", "dummy")
 os.environ.setdefault("PYGAME_HIDE_SUPPORT_PROMPT", "1")
 
-from snr import World
+from snr import (
+    Config,
+    Mode,
+    SimClock,
+    SimRobotFactory,
+    SynchronousRunner,
+    TimeoutLoopFactory,
+    World,
+)
+from snr.demo import wall_follower
 from snr.std_mods.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
 from snr.std_mods.sim.draw import WorldView, import_pygame, render_scene
 
@@ -134,6 +152,22 @@ def picture(path: str, seconds: float = 40.0) -> None:
     print(f"Wrote {path}")
 
 
+def lesson_in_sim_time(seconds: float, mode: Mode) -> float:
+    """Lesson 1's node without its view, on a SimClock as fast as it goes; its wall seconds."""
+    clock = SimClock()
+    components = [
+        SimRobotFactory(wall_follower.make_world(), seed=SEED),
+        wall_follower.WallFollowerFactory(),
+        TimeoutLoopFactory(seconds=seconds),
+    ]
+    started = time.perf_counter()
+    SynchronousRunner("sim", Config({"sim": components}, mode=mode, clock=clock)).run()
+    took = time.perf_counter() - started
+    if clock() != seconds:
+        raise RuntimeError(f"the node stopped at {clock()} simulated s, not {seconds}")
+    return took
+
+
 def rate(run: Callable[[int], float], steps: int, rounds: int) -> float:
     """Best steps per second over ``rounds`` runs (the least disturbed one)."""
     best = 0.0
@@ -149,6 +183,9 @@ def main(argv: List[str]) -> int:
     parser.add_argument("--steps", type=int, default=10000)
     parser.add_argument("--rounds", type=int, default=3)
     parser.add_argument("--picture", metavar="PNG", help="also write a picture of a run")
+    parser.add_argument(
+        "--lesson-s", type=float, default=60.0, help="simulated seconds of lesson 1's node"
+    )
     options = parser.parse_args(argv)
     drawing = importlib.util.find_spec("pygame") is not None
     if options.picture and drawing:
@@ -175,6 +212,18 @@ def main(argv: List[str]) -> int:
             f"{name:<30} {steps_per_s:>10.0f} {steps_per_s * DT_S:>11.0f}x "
             f"{steps_per_s / bare:>7.2f}x"
         )
+    lesson_s = options.lesson_s
+    logging.getLogger("snr.sim").setLevel(logging.WARNING)  # no "terminated" lines
+    print()
+    print(
+        f"Lesson 1 as a node on a SimClock: robot at 50 Hz + wall follower, "
+        f"{lesson_s:g} simulated s, best of {options.rounds}"
+    )
+    print(f"{'mode':<30} {'wall s':>10} {'x real time':>12}")
+    for mode in (Mode.DEBUG, Mode.DEPLOYED):
+        took = min(lesson_in_sim_time(lesson_s, mode) for _ in range(options.rounds))
+        print(f"{mode.name:<30} {took:>10.3f} {lesson_s / took:>11.0f}x")
+    print("target: a 60 s lesson runs >= 20x faster than real time (a node on a SimClock)")
     return 0
 
 

@@ -120,7 +120,7 @@ TOPICS: Tuple[Topic, ...] = (
         "A 2-D differential-drive robot among walls, storing the pages a real "
         "robot would; drawn in a window or to PNG files (the physics, sensors and "
         "robot spec are in snr.std_mods.sim).",
-        _names("SimRobotFactory SimViewFactory World"),
+        _names("SimRobotFactory SimViewFactory World SimClock"),
         _names("simulator"),
     ),
     Topic(

@@ -83,7 +83,7 @@ class TestSimBench(unittest.TestCase):
         picture = os.path.join(tempfile.mkdtemp(prefix="snr-bench-sim-"), "sim.png")
         self.addCleanup(shutil.rmtree, os.path.dirname(picture), ignore_errors=True)
         done = run_script(
-            [os.path.join(BENCH, "bench_sim.py"), "--steps=50", "--rounds=1"]
+            [os.path.join(BENCH, "bench_sim.py"), "--steps=50", "--rounds=1", "--lesson-s=0.5"]
             + (["--picture", picture] if importlib.util.find_spec("pygame") else []),
             timeout_s=10.0,
         )
@@ -96,6 +96,10 @@ class TestSimBench(unittest.TestCase):
             for every in ("5th", "step"):
                 self.assertRegex(out, rf"\nsimulator \+ draw every {every} +\d+ +\d+x +[\d.]+x")
             self.assertGreater(os.path.getsize(picture), 1000)
+        self.assertIn("Lesson 1 as a node on a SimClock", out)
+        for mode in ("DEBUG", "DEPLOYED"):
+            self.assertRegex(out, rf"\n{mode} +[\d.]+ +\d+x")
+        self.assertIn("target: a 60 s lesson runs >= 20x faster than real time", out)
 
 
 if __name__ == "__main__":

@@ -1,12 +1,10 @@
 """The two simulator lessons (docs/lessons.md): graded in simulated time, and run as shipped.
 
-Simulated time for a whole node is not built yet (docs/sim-time.md), so the
-grading tests step the physics themselves: each step, the lesson's own
-endpoint gets the sensor pages through its handler table, as a node would
-hand them over, and the ``wheel_cmd`` it returns drives the robot. No node,
-no threads: 60 s of robot time takes a fraction of a second, and a seed makes
-every run the same. A short real-time run of each file checks that it runs
-the way a student runs it.
+The grading tests run each lesson's own endpoint and the simulated robot as a
+node, as a student's program runs them, on a `SimClock` as fast as it goes:
+60 simulated seconds take about a second, with the same pages every run
+(seed 1). A page collector keeps the robot's true pose and bumper for the
+grade. A short run of each file checks that it runs the way a student runs it.
 """
 
 from __future__ import annotations
@@ -23,17 +21,27 @@ from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any, List, Optional, Tuple
 
-from snr import AbstractFactory, TaskType, World
-from snr.std_mods.sim import (
-    DiffDriveRobot,
-    Odometry,
-    Pose,
-    RangeSensor,
-    RobotSpec,
-    sensor_pages,
-    wheel_command,
+from snr import (
+    AbstractFactory,
+    Config,
+    Mode,
+    RecorderEndpointFactory,
+    SimClock,
+    SimRobotFactory,
+    TimeoutLoopFactory,
+    World,
 )
-from snr.utils import MockNode, SNRTestCase
+from snr.core import TestRunner
+from snr.std_mods.sim import (
+    BUMP,
+    ODOMETRY,
+    RANGE,
+    TRUE_POSE,
+    WHEEL_CMD,
+    WHEEL_ENCODERS,
+    DiffDriveRobot,
+)
+from snr.utils import SNRTestCase
 from tests.examples_support import (
     StartedScript,
     example_path,
@@ -41,6 +49,7 @@ from tests.examples_support import (
     script_env,
     start_script,
 )
+from tests.page_collector import PageCollectorFactory
 from tests.quiet import captured_logs
 
 wall_follower: Any = load_module(
@@ -55,9 +64,10 @@ STEP_S = 0.02
 
 @dataclass
 class Drive:
-    """What happened in one run: the true path and every command the brain gave."""
+    """What happened in one run: the true path, the bumps and every command the brain gave."""
 
     robot: DiffDriveRobot
+    clock: SimClock
     path: List[Tuple[float, float]] = field(default_factory=list)
     bumped_steps: int = 0
     commands: int = 0
@@ -67,34 +77,27 @@ class Drive:
 
 
 def drive(brain: AbstractFactory, world: World, seconds: float, seed: int = 1) -> Drive:
-    """Run ``brain``'s endpoint against the physics for ``seconds`` of simulated time.
+    """Run ``brain`` and the simulated robot as one node for ``seconds`` of simulated time.
 
-    Each step stores the sensor pages in a `MockNode` and hands each to the
-    handlers registered for it (the node's own dispatch rule), then feeds the
-    newest ``wheel_cmd`` the endpoint returned to the robot's motors.
+    The node is what a lesson's ``run()`` builds, without the view: the robot
+    (`SimRobotFactory`), the lesson's endpoint and a `TimeoutLoopFactory`, on a
+    `SimClock` as fast as it goes. Each physics step stores a ``true_pose`` and
+    a ``bump`` page, which a collector keeps for grading.
     """
-    node = MockNode("sim")
-    endpoint = brain.get(node)
-    assert endpoint is not None
-    node.components[endpoint.name] = endpoint
-    robot = DiffDriveRobot(RobotSpec(), Pose(*world.start), seed=seed)
-    odometry, sensor = Odometry(robot.spec, robot.pose), RangeSensor()
-    run = Drive(robot)
-    for _ in range(round(seconds / STEP_S)):
-        for key, data in sensor_pages(robot, world, sensor, odometry).items():
-            task = node.store_data_task(key, data)
-            node.datastore[key] = task.val_list[0]  # stored before handlers run, as in a node
-            node.execute_task(task)
-        for task in node.scheduled:
-            if task.type is TaskType.store_page and task.name == "wheel_cmd":
-                command = wheel_command(task.val_list[0].data)
-                assert command is not None, task
-                robot.command(*command)
-                run.commands += 1
-        node.scheduled.clear()
-        robot.step(STEP_S, world)
-        run.path.append((robot.pose.x, robot.pose.y))
-        run.bumped_steps += robot.bumped
+    clock = SimClock()
+    robot = SimRobotFactory(world, seed=seed)
+    pages = PageCollectorFactory([TRUE_POSE, BUMP, WHEEL_CMD])
+    components = [robot, brain, TimeoutLoopFactory(seconds=seconds), pages]
+    runner = TestRunner("sim", Config({"sim": components}, mode=Mode.TEST, clock=clock), 30.0)
+    runner.run()
+    if runner.timed_out:
+        raise AssertionError(f"the node did not stop by itself: {clock!r}")
+    if clock() != seconds:
+        raise AssertionError(f"the node stopped at {clock()} simulated s, not {seconds}")
+    run = Drive(robot.robot, clock)
+    run.path = [(pose["x"], pose["y"]) for pose in pages.data(TRUE_POSE)]  # type: ignore[index]
+    run.bumped_steps = sum(1 for pressed in pages.data(BUMP) if pressed)
+    run.commands = len(pages.data(WHEEL_CMD))
     return run
 
 
@@ -102,6 +105,7 @@ class TestWallFollower(unittest.TestCase):
     def test_a_minute_along_the_walls_without_a_bump(self) -> None:
         world = wall_follower.make_world()
         run = drive(wall_follower.WallFollowerFactory(), world, seconds=60.0)
+        self.assertEqual(len(run.path), 3001, "a step every 20 simulated ms, 0 s to 60 s")
         self.assertEqual(run.bumped_steps, 0, "it touched a wall")
         self.assertGreater(run.commands, 2900, "the brain steered every step")
         # Round the room: about 14 m, past the divider (x = 2.6) and back west.
@@ -111,6 +115,10 @@ class TestWallFollower(unittest.TestCase):
         clearances = [world.clearance_m(x, y) for x, y in run.path[50:]]
         self.assertGreater(min(clearances), 0.18, "too close to a wall")
         self.assertLess(max(clearances), 0.5, "it left the wall")
+        # What makes it fast: simulated time jumped from tick to tick and never
+        # waited on the wall clock (the speed is measured by bench/bench_sim.py).
+        self.assertEqual(run.clock.jumps, 3000)
+        self.assertEqual((run.clock.wall_waits, run.clock.paced_waits), (0, 0))
 
     def test_the_demo_runs_this_file(self) -> None:
         """``python -m snr demo --sim`` and the lesson run the one controller."""
@@ -141,14 +149,48 @@ class TestGoToGoal(unittest.TestCase):
         self.assertLess(reached_s, 20.0)
 
 
-class TestRunAsAStudentDoes(SNRTestCase):
-    """Each lesson's ``main`` in a real node, in real time, briefly (frames, no window)."""
+class TestSameSeedSamePages(unittest.TestCase):
+    """Two runs with the same seed record the same pages, byte for byte."""
 
-    def run_main(self, lesson: Any, seconds: float) -> Tuple[str, Path]:
+    def record(self, folder: Path, name: str, seed: int) -> bytes:
+        path = folder / f"{name}.jsonl"
+        keys = [RANGE, BUMP, WHEEL_ENCODERS, ODOMETRY, TRUE_POSE, WHEEL_CMD]
+        components = [
+            SimRobotFactory(wall_follower.make_world(), seed=seed),
+            wall_follower.WallFollowerFactory(),
+            RecorderEndpointFactory(path, keys),
+            TimeoutLoopFactory(seconds=5),
+        ]
+        config = Config({"sim": components}, mode=Mode.TEST, clock=SimClock())
+        runner = TestRunner("sim", config, 30.0)
+        runner.run()
+        self.assertFalse(runner.timed_out)
+        return path.read_bytes()
+
+    def test_two_runs_with_one_seed_record_identical_pages(self) -> None:
+        folder = Path(tempfile.mkdtemp(prefix="snr-sim-time-"))
+        self.addCleanup(shutil.rmtree, folder, True)
+        first = self.record(folder, "first", seed=1)
+        second = self.record(folder, "second", seed=1)
+        other_seed = self.record(folder, "other_seed", seed=2)
+        lines = first.splitlines()
+        # The header, then 6 pages a step (5 sensor pages and the brain's
+        # command) for each of the 251 steps from 0 s to 5 s.
+        self.assertEqual(len(lines), 1 + 6 * 251)
+        self.assertIn(b'"created_at_s":5.0,', lines[-1])  # simulated time, epoch 0
+        self.assertEqual(first, second, "the same seed recorded different pages")
+        self.assertNotEqual(first, other_seed, "the seed changed nothing")
+
+
+class TestRunAsAStudentDoes(SNRTestCase):
+    """Each lesson's ``main`` in a real node, briefly (frames, no window)."""
+
+    def run_main(self, lesson: Any, seconds: float, *options: str) -> Tuple[str, Path]:
         frames = Path(self.temp_file("frames"))
         out = io.StringIO()
+        argv = ["lesson.py", "--seconds", str(seconds), "--frames", str(frames), *options]
         with captured_logs("snr.sim") as lines, contextlib.redirect_stdout(out):
-            lesson.main(["lesson.py", "--seconds", str(seconds), "--frames", str(frames)])
+            lesson.main(argv)
         problems = [line for line in lines if not line.startswith("INFO")]
         if HAS_PYGAME:
             self.assertEqual(problems, [], lines)
@@ -157,28 +199,24 @@ class TestRunAsAStudentDoes(SNRTestCase):
             self.assertIn("pip install 'snr[controller]'", problems[0])
         return out.getvalue(), frames
 
-    def test_the_wall_follower_sets_off(self) -> None:
-        text, frames = self.run_main(wall_follower, 0.4)
+    def test_the_wall_follower_sets_off_in_real_time(self) -> None:
+        text, frames = self.run_main(wall_follower, 0.4)  # the default: --speed 1
         self.assertIn(f"Pictures: PNG frames in {frames.resolve()}", text)
         simulated_s, x = summary(r"After ([\d.]+) s the robot is at \(([\d.]+), ", text)
-        if simulated_s >= 0.2:  # 2 cm by then (a busy machine may take fewer steps)
-            self.assertGreater(x, 0.5, text)  # it set off east from x = 0.5
-        if HAS_PYGAME:
-            self.assertTrue(list(frames.glob("frame_*.png")), "no frames were written")
+        self.assertEqual(simulated_s, 0.4, text)  # simulated time: however busy the machine
+        self.assertGreater(x, 0.5, text)  # it set off east from x = 0.5
+        if HAS_PYGAME:  # a frame at 0.0, 0.1, ... 0.4 simulated s
+            self.assertEqual(len(list(frames.glob("frame_*.png"))), 5, "frames written")
 
-    def test_go_to_goal_sets_off(self) -> None:
-        text, _ = self.run_main(go_to_goal, 0.4)
+    def test_go_to_goal_sets_off_as_fast_as_it_can(self) -> None:
+        text, _ = self.run_main(go_to_goal, 0.4, "--speed", "0")
         simulated_s, left_m = summary(r"After ([\d.]+) s the robot is ([\d.]+) m from", text)
-        if simulated_s >= 0.2:
-            self.assertLess(left_m, 3.9, text)  # it started 3.90 m away
+        self.assertEqual(simulated_s, 0.4, text)
+        self.assertLess(left_m, 3.9, text)  # it started 3.90 m away
 
 
 def summary(pattern: str, text: str) -> Tuple[float, float]:
-    """The simulated seconds and the position a lesson's last line gives.
-
-    The node runs in real time, so how many steps it took in its time
-    depends on the machine; at least one, or nothing ran.
-    """
+    """The simulated seconds and the position a lesson's last line gives."""
     match = re.search(pattern, text)
     if match is None:
         raise AssertionError(f"no summary line in {text!r}")
@@ -194,8 +232,8 @@ def _start_sim_demo() -> Tuple[Path, Optional[StartedScript]]:
     if not HAS_PYGAME:
         return folder, None
     env = script_env({"SDL_VIDEODRIVER": "dummy", "PYGAME_HIDE_SUPPORT_PROMPT": "1"})
-    # 1.5 s, not the default 15: enough to set off and draw frames even when
-    # the machine is busy (it runs beside other tests, so it costs no wall time).
+    # 1.5 simulated s at real speed, not the default 15: enough to set off and
+    # draw frames (it runs beside other tests, so it costs no wall time).
     command = ["-m", "snr", "demo", "--sim", "--seconds", "1.5"]
     return folder, start_script(command, cwd=str(folder), env=env)
 
@@ -217,11 +255,9 @@ class TestSimDemo(SNRTestCase):
         frames = (folder / "sim_frames").resolve()
         self.assertIn(f"Pictures: PNG frames in {frames}", lines)
         simulated_s, x = summary(r"After ([\d.]+) s the robot is at \(([\d.]+), ", lines[-1])
-        # On a machine too busy to simulate that much, it may not have got that far.
-        if simulated_s >= 0.2:
-            self.assertGreater(x, 0.5, result.stdout)  # it set off from x = 0.5
-        if simulated_s >= 0.5:
-            self.assertTrue(list(frames.glob("frame_*.png")), result.stdout)
+        self.assertEqual(simulated_s, 1.5, result.stdout)  # simulated time, at real speed
+        self.assertGreater(x, 0.5, result.stdout)  # it set off from x = 0.5
+        self.assertTrue(list(frames.glob("frame_*.png")), result.stdout)
         self.assertEqual(result.stderr, "", "quiet unless --verbose")
 
 

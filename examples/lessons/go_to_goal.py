@@ -9,6 +9,7 @@ Run it (a window if you have a screen, else PNG frames in ``sim_frames/``)::
 
     python examples/lessons/go_to_goal.py --seconds 30
     python examples/lessons/go_to_goal.py --seconds 5 --frames my_frames
+    python examples/lessons/go_to_goal.py --seconds 60 --speed 0   # as fast as it goes
 """
 
 from __future__ import annotations
@@ -173,8 +174,17 @@ class GoToGoalFactory(EndpointFactory):
         return GoToGoalEndpoint(self, parent)
 
 
-def run(seconds: float, frames_dir: Optional[str] = None, seed: int = 1) -> snr.SimRobotFactory:
+def run(
+    seconds: float,
+    frames_dir: Optional[str] = None,
+    seed: int = 1,
+    speed: Optional[float] = 1.0,
+) -> snr.SimRobotFactory:
     """Run the lesson in one node for ``seconds``; returns the simulated robot.
+
+    The node runs on a `SimClock`, ``speed`` simulated seconds per real
+    second (1.0: real time; None: as fast as the computer can), so ``seconds``
+    is simulated time and the same ``seed`` gives the same run.
 
     Example::
 
@@ -190,7 +200,8 @@ def run(seconds: float, frames_dir: Optional[str] = None, seed: int = 1) -> snr.
     if not view.window:
         print(f"Pictures: PNG frames in {Path(view.frames_dir).resolve()}", flush=True)
     components = [sim, view, GoToGoalFactory(world.goal), snr.TimeoutLoopFactory(seconds=seconds)]
-    snr.SynchronousRunner("sim", snr.Config({"sim": components})).run()
+    clock = snr.SimClock(speed=speed)
+    snr.SynchronousRunner("sim", snr.Config({"sim": components}, clock=clock)).run()
     pose = sim.robot.pose
     left = math.hypot(world.goal[0] - pose.x, world.goal[1] - pose.y)
     print(f"After {sim.steps / sim.rate_hz:.1f} s the robot is {left:.2f} m from the goal.")
@@ -198,13 +209,22 @@ def run(seconds: float, frames_dir: Optional[str] = None, seed: int = 1) -> snr.
 
 
 def main(argv: List[str]) -> None:
-    """``python go_to_goal.py [--seconds S] [--frames DIR] [--seed N]``."""
+    """``python go_to_goal.py [--seconds S] [--frames DIR] [--seed N] [--speed X]``."""
     parser = argparse.ArgumentParser(prog=argv[0], description="Lesson 2: go to a goal.")
     parser.add_argument("--seconds", type=float, default=30.0, help="how long to run")
     parser.add_argument("--frames", default=None, help="write PNG frames to this folder")
     parser.add_argument("--seed", type=int, default=1, help="the simulator's random seed")
+    parser.add_argument(
+        "--speed",
+        type=float,
+        default=1.0,
+        help="simulated seconds per real second: 1 is real time, 0.5 half speed, "
+        "0 as fast as the computer can",
+    )
     options = parser.parse_args(argv[1:])
-    run(options.seconds, options.frames, options.seed)
+    if options.speed < 0:
+        parser.error(f"--speed {options.speed:g}: use 0 (as fast as possible) or more")
+    run(options.seconds, options.frames, options.seed, options.speed or None)
 
 
 if __name__ == "__main__":

@@ -27,6 +27,7 @@ from snr.core import (
     node_core,
     profiler,
     runners,
+    sim_clock,
     task_queue,
     tasks,
     timer,
@@ -44,6 +45,7 @@ from snr.core.node import *
 from snr.core.node_core import *
 from snr.core.profiler import *
 from snr.core.runners import *
+from snr.core.sim_clock import *
 from snr.core.task_queue import *
 from snr.core.timer import *
 
@@ -61,5 +63,6 @@ __all__ += node.__all__
 __all__ += node_core.__all__
 __all__ += profiler.__all__
 __all__ += runners.__all__
+__all__ += sim_clock.__all__
 __all__ += task_queue.__all__
 __all__ += timer.__all__

@@ -5,6 +5,7 @@ from __future__ import annotations
 from typing import Dict, List, Mapping, Optional, Sequence
 
 from snr.core.profiler import Profiler
+from snr.core.sim_clock import SimClock
 from snr.prelude import (
     AbstractConfig,
     AbstractFactory,
@@ -25,6 +26,8 @@ class Config(AbstractConfig):
         factories: for every role, the factories of its components.
         mode: ``Mode.DEBUG`` (default), ``Mode.TEST`` or ``Mode.DEPLOYED``.
         profile: time every handler; defaults to on in DEBUG mode only.
+        clock: a `SimClock` to run every node built from this config in
+            simulated time (docs/simulator.md); None (the default): the wall clock.
 
     Example::
 
@@ -32,6 +35,8 @@ class Config(AbstractConfig):
             "lunar_module": [RadarSensorLoopFactory(100), ControllerFactory()],
         })
         snr.SynchronousRunner("lunar_module", config).run()
+
+        snr.Config({"sim": [...]}, clock=snr.SimClock())   # faster than real time
     """
 
     def __init__(
@@ -39,6 +44,7 @@ class Config(AbstractConfig):
         factories: Optional[Mapping[Role, Sequence[AbstractFactory]]] = None,
         mode: Mode = Mode.DEBUG,
         profile: Optional[bool] = None,
+        clock: Optional[SimClock] = None,
     ) -> None:
         if factories is None:
             factories = {}
@@ -79,11 +85,17 @@ class Config(AbstractConfig):
                         f"Role {role!r} lists {fac!r}, which is not a factory (an "
                         f"EndpointFactory or LoopFactory object).{hint}"
                     )
+        if clock is not None and not isinstance(clock, SimClock):
+            raise ConfigError(
+                f"Config(clock=...) got {clock!r}; it takes a snr.SimClock (simulated "
+                "time) or None (the wall clock)."
+            )
         self.factories: Dict[Role, List[AbstractFactory]] = {
             role: list(f) for role, f in factories.items()
         }
         self.mode = mode
         self.profile = (mode is Mode.DEBUG) if profile is None else profile
+        self.clock = clock
 
     def roles(self) -> List[Role]:
         """Every role in the config, in the order written."""
@@ -114,4 +126,5 @@ class Config(AbstractConfig):
         return Profiler() if self.profile else None
 
     def __repr__(self) -> str:
-        return f"Config(roles={self.roles()!r}, mode={self.mode})"
+        clock = "" if self.clock is None else f", clock={self.clock!r}"
+        return f"Config(roles={self.roles()!r}, mode={self.mode}{clock})"

@@ -5,10 +5,11 @@ from __future__ import annotations
 import enum
 import threading
 import time
-from typing import Optional
+from typing import ClassVar, Optional
 
 from snr.core import tasks
 from snr.core.component import Component
+from snr.core.sim_clock import LoopTurn, clock_of
 from snr.prelude import (
     AbstractFactory,
     AbstractLoop,
@@ -47,6 +48,12 @@ class ThreadLoop(Component, AbstractLoop):
     only with ``self.schedule(...)``, ``self.store_data(...)``,
     ``self.get_page(...)`` and ``self.get_data(...)``; they are thread-safe.
 
+    On a `SimClock` (simulated time), a loop with a tick rate ticks at exact
+    multiples of its period of simulated time, and takes turns with its node:
+    each pass of ``loop()`` runs while nothing else in the node runs. A loop
+    with no tick rate waits on the outside world (a socket, a serial port), so
+    it runs freely on the wall clock, unless its class sets `follows_clock`.
+
     Example::
 
         class Clock(ThreadLoop):
@@ -55,6 +62,15 @@ class ThreadLoop(Component, AbstractLoop):
 
             def loop(self) -> None:
                 self.store_data("time_s", self.parent.get_time_s())
+    """
+
+    follows_clock: ClassVar[bool] = False
+    """True for a loop with no tick rate that waits only on time (``wait_s``).
+
+    On a `SimClock` such a loop takes turns from its start, as loops with a
+    tick rate do, so its waits are simulated time and its order is fixed
+    (`TimeoutLoop` sets it). Leave it False for a loop that blocks on the
+    outside world: holding the clock while blocked would stop everything.
     """
 
     def __init__(
@@ -78,6 +94,7 @@ class ThreadLoop(Component, AbstractLoop):
             )
         self.max_tick_rate_hz = max_tick_rate_hz
         self.state = LoopState.NEW
+        self._clock_turn: Optional[LoopTurn] = None  # its place on a SimClock, if any
         self.terminate_reason = ""
         self._stop_event = threading.Event()
         # Held while the loop may run; released to stop it. Waiting between
@@ -120,6 +137,8 @@ class ThreadLoop(Component, AbstractLoop):
                 self._running_lock.release()
             except RuntimeError:
                 pass  # another thread stopped it at the same moment
+            if self._clock_turn is not None:
+                self._clock_turn.wake()
 
     def is_terminated(self) -> bool:
         """True once the loop has been asked to stop."""
@@ -129,8 +148,12 @@ class ThreadLoop(Component, AbstractLoop):
         """Sleep up to ``seconds``, waking early when the loop is stopped.
 
         Use it instead of ``time.sleep`` inside ``loop()`` so shutdown is quick.
-        Returns True if the loop was stopped while waiting.
+        Returns True if the loop was stopped while waiting. On a `SimClock`
+        the seconds are simulated (for a loop with a tick rate, or `follows_clock`).
         """
+        turn = self._clock_turn
+        if turn is not None and threading.current_thread() is self._thread:
+            return turn.sleep_until(turn.now_s() + seconds)
         if self._running_lock.acquire(timeout=max(0.0, seconds)):
             self._running_lock.release()  # stays released: the loop is stopped
             return True
@@ -147,6 +170,11 @@ class ThreadLoop(Component, AbstractLoop):
             self._resume_running()
         self.begin()
         self.state = LoopState.RUNNING
+        clock = clock_of(self.parent.config)
+        if clock is not None and (self.max_tick_rate_hz > 0 or self.follows_clock):
+            # Registered here, on the node's thread, so the clock cannot move
+            # on before the new thread is in line: the run stays the same.
+            self._clock_turn = clock.loop_turn(self.parent.role, self.name, self._stop_event)
         self._thread = threading.Thread(
             target=self._run, name=f"snr-{self.parent.role}-{self.name}", daemon=True
         )
@@ -202,7 +230,13 @@ class ThreadLoop(Component, AbstractLoop):
         The node handles tasks in order, so once it has handled a marker task
         scheduled now, it has handled everything ``setup()`` scheduled. The
         wait ends early if the loop is stopped, and after ``timeout_s`` anyway.
+        On a `SimClock` the loop gives its turn back for no time: its node,
+        which has work, goes first.
         """
+        turn = self._clock_turn
+        if turn is not None:
+            turn.sleep_until(turn.now_s())
+            return
         caught_up = threading.Event()
         self.schedule(Task(TaskType.event, tasks.CAUGHT_UP, [caught_up]))
         deadline = time.monotonic() + timeout_s
@@ -217,22 +251,39 @@ class ThreadLoop(Component, AbstractLoop):
         stop = self._stop_event
         wait_s = self.wait_s
         clock = time.perf_counter
+        turn = self._clock_turn
         try:
+            if turn is not None and not turn.first_turn():
+                return  # stopped before its first turn
             self.setup()
             if type(self).setup is not ThreadLoop.setup:
                 self._wait_for_setup_tasks()
-            while not stop.is_set():
-                started = clock()
-                self.loop()
-                took = clock() - started
-                if cell is not None:
-                    cell[0] += 1
-                    cell[1] += took
-                if period_s and period_s > took and wait_s(period_s - took):
-                    break
+            if turn is None:
+                while not stop.is_set():
+                    started = clock()
+                    self.loop()
+                    took = clock() - started
+                    if cell is not None:
+                        cell[0] += 1
+                        cell[1] += took
+                    if period_s and period_s > took and wait_s(period_s - took):
+                        break
+            else:  # simulated time: tick n is at first + n / rate, exactly
+                first_s, ticks, rate_hz = turn.now_s(), 0, self.max_tick_rate_hz
+                while not stop.is_set():
+                    started = clock()
+                    self.loop()
+                    if cell is not None:
+                        cell[0] += 1
+                        cell[1] += clock() - started
+                    ticks += 1
+                    if rate_hz and turn.sleep_until(first_s + ticks / rate_hz):
+                        break
         except BaseException as error:  # every way out is reported, in words
             # sys.exit() and KeyboardInterrupt included: either would end this
             # thread with no word (or a raw traceback), never the program.
             self.parent._snr_loop_failed(self, error)
         finally:
             self.state = LoopState.STOPPED
+            if turn is not None:
+                turn.leave()

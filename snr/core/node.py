@@ -24,7 +24,7 @@ import logging
 import threading
 import time
 from threading import get_ident
-from typing import Any, List, Optional
+from typing import Any, Callable, List, Optional
 
 from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerTable
@@ -33,6 +33,7 @@ from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.node_checks import NodeChecks, check_node_args, wrong_thread_error
 from snr.core.node_core import NodeCoreFactory
+from snr.core.sim_clock import NodeTurn, clock_of
 from snr.core.step_mode import StepMode
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Timer
@@ -131,7 +132,11 @@ class Node(AbstractNode):
         if self.log.level == logging.NOTSET:
             self.log.setLevel(level_for_mode(self.mode))
         self.profiler = config.get_profiler()
-        self.timer = Timer()
+        # The node's clock: the wall, or a SimClock (sim_clock.py) it takes turns on.
+        clock = clock_of(config)
+        self.timer = Timer() if clock is None else Timer(clock)
+        self._page_time: Callable[[], float] = time.time if clock is None else clock.stamp
+        self._clock_turn: Optional[NodeTurn] = None
         self.datastore: DataDict = {}
         self.queue = TaskQueue(high_water=self.max_queued_tasks, log=self.log)
         self.state = NodeState.CREATED
@@ -162,6 +167,9 @@ class Node(AbstractNode):
             component = self.build_component(factory)
             if component is not None:
                 self.add_component(component, start=False)
+        if clock is not None:  # built: in line for its first turn
+            self._clock_turn = clock.node_turn(role, self.queue, self.is_terminated)
+            self.queue.use_waiter(self._clock_turn)
 
     @property
     def join_timeout_s(self) -> float:
@@ -202,6 +210,8 @@ class Node(AbstractNode):
         self._running = not self._stop_requested
         self._checks.start(self._thread_id)
         try:
+            if self._clock_turn is not None:
+                self._clock_turn.begin()
             self._components.start_all(lambda: self._running)
             self._run_tasks()
         except KeyboardInterrupt:
@@ -211,7 +221,11 @@ class Node(AbstractNode):
             self.set_terminate_flag(f"{type(error).__name__} (below)")
             raise
         finally:
-            self.terminate()
+            try:
+                self.terminate()
+            finally:
+                if self._clock_turn is not None:
+                    self._clock_turn.end()
         if self._runner.failure is not None:
             raise self._runner.failure
 
@@ -329,7 +343,8 @@ class Node(AbstractNode):
         self.queue.never_wait(threading.get_ident())
 
     def _snr_use_idle_waiter(self, waiter: Optional[IdleWaiter]) -> None:
-        self.queue.use_waiter(waiter)
+        if self._clock_turn is None:  # on a SimClock the node's idle waits are its turns
+            self.queue.use_waiter(waiter)
 
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the queue is below its high-water mark.
@@ -354,7 +369,7 @@ class Node(AbstractNode):
     # Datastore (thesis listing 6.4)
     # ------------------------------------------------------------------
     def page(self, key: DataKey, data: Any, process: bool = True) -> Page:
-        """A new page from this node, stamped with the wall-clock time.
+        """A new page from this node, stamped with the node's clock (wall or `SimClock`).
 
         Raises:
             ComponentError: ``key`` is not a str (key and data swapped?), or
@@ -365,11 +380,11 @@ class Node(AbstractNode):
             raise ComponentError(bad_data_key(key, data))
         if data.__class__ is Page:
             raise ComponentError(page_as_data(key))
-        return Page(key, data, self.role, time.time(), process)
+        return Page(key, data, self.role, self._page_time(), process)
 
     def _page_unchecked(self, key: DataKey, data: Any, process: bool = True) -> Page:
         """`page` without its checks: what a DEPLOYED node uses."""
-        return Page(key, data, self.role, time.time(), process)
+        return Page(key, data, self.role, self._page_time(), process)
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
         """Queue storing ``data`` under ``key``; safe from any thread."""
@@ -393,7 +408,7 @@ class Node(AbstractNode):
         return None if page is None else page.data
 
     def get_time_s(self) -> float:
-        """Seconds since this node was created."""
+        """Seconds since this node was created (simulated seconds on a `SimClock`)."""
         return self.timer.current_s()
 
     def write_page(self, page: Page) -> None:

@@ -28,6 +28,7 @@ from typing import (
 
 from snr.core.config import Config
 from snr.core.node import Node
+from snr.core.sim_clock import clock_of
 from snr.prelude import (
     AbstractConfig,
     AbstractFactory,
@@ -352,6 +353,12 @@ class MultiProcRunner(AbstractMultiRunner):
         join_timeout_s: float = 5.0,
     ) -> None:
         self.config = _as_config(config)
+        if clock_of(self.config) is not None:
+            raise ConfigError(
+                "MultiProcRunner runs each node in a process of its own, but a SimClock "
+                "keeps the time of one process. Run the nodes in one process (each "
+                "node's loop() on a thread of its own) or build the Config without clock=."
+            )
         known = self.config.roles()
         for role in roles:
             if role not in known:
@@ -541,7 +548,9 @@ class CliRunner(AbstractRunner):
         args = self.parse()
         config = self.config
         if args.mode is not None and isinstance(config, Config):
-            config = Config(config.factories, mode=Mode(args.mode), profile=config.profile)
+            config = Config(
+                config.factories, mode=Mode(args.mode), profile=config.profile, clock=config.clock
+            )
         try:
             if len(args.roles) == 1:
                 SynchronousRunner(args.roles[0], config).run()

@@ -9,6 +9,7 @@ Run it (a window if you have a screen, else PNG frames in ``sim_frames/``)::
 
     python examples/lessons/wall_follower.py --seconds 30
     python examples/lessons/wall_follower.py --seconds 5 --frames my_frames
+    python examples/lessons/wall_follower.py --seconds 60 --speed 0   # as fast as it goes
 
 This file ships inside the package, so ``python -m snr demo --sim`` runs it
 from an installed SNR too; ``examples/lessons/wall_follower.py`` runs it from
@@ -127,13 +128,22 @@ class WallFollowerFactory(EndpointFactory):
         return WallFollowerEndpoint(self, parent)
 
 
-def run(seconds: float, frames_dir: Optional[str] = None, seed: int = 1) -> snr.SimRobotFactory:
+def run(
+    seconds: float,
+    frames_dir: Optional[str] = None,
+    seed: int = 1,
+    speed: Optional[float] = 1.0,
+) -> snr.SimRobotFactory:
     """Run the lesson in one node for ``seconds``; returns the simulated robot.
 
     With ``frames_dir`` the view writes PNG frames there; without it, a
     window if there is a screen (drawn on this thread, which must be the
     main one on macOS, while the node runs on another), else frames in
     ``sim_frames/``.
+
+    The node runs on a `SimClock`, ``speed`` simulated seconds per real
+    second (1.0: real time; None: as fast as the computer can), so ``seconds``
+    is simulated time and the same ``seed`` gives the same run.
 
     Example::
 
@@ -147,12 +157,13 @@ def run(seconds: float, frames_dir: Optional[str] = None, seed: int = 1) -> snr.
     else:
         view = snr.SimViewFactory(world, frames_dir=frames_dir, window=False)
     brain = [WallFollowerFactory(), snr.TimeoutLoopFactory(seconds=seconds)]
+    clock = snr.SimClock(speed=speed)
     if view.window:
         # The window on this (the main) thread, as macOS requires; the node beside it.
-        run_in_window("sim", snr.Config({"sim": [sim, *brain]}), view)
+        run_in_window("sim", snr.Config({"sim": [sim, *brain]}, clock=clock), view)
     else:
         print(f"Pictures: PNG frames in {Path(view.frames_dir).resolve()}", flush=True)
-        snr.SynchronousRunner("sim", snr.Config({"sim": [sim, view, *brain]})).run()
+        snr.SynchronousRunner("sim", snr.Config({"sim": [sim, view, *brain]}, clock=clock)).run()
     pose = sim.robot.pose
     print(
         f"After {sim.steps / sim.rate_hz:.1f} s the robot is at ({pose.x:.2f}, {pose.y:.2f})"
@@ -162,13 +173,22 @@ def run(seconds: float, frames_dir: Optional[str] = None, seed: int = 1) -> snr.
 
 
 def main(argv: List[str]) -> None:
-    """``python wall_follower.py [--seconds S] [--frames DIR] [--seed N]``."""
+    """``python wall_follower.py [--seconds S] [--frames DIR] [--seed N] [--speed X]``."""
     parser = argparse.ArgumentParser(prog=argv[0], description="Lesson 1: a wall follower.")
     parser.add_argument("--seconds", type=float, default=30.0, help="how long to run")
     parser.add_argument("--frames", default=None, help="write PNG frames to this folder")
     parser.add_argument("--seed", type=int, default=1, help="the simulator's random seed")
+    parser.add_argument(
+        "--speed",
+        type=float,
+        default=1.0,
+        help="simulated seconds per real second: 1 is real time, 0.5 half speed, "
+        "0 as fast as the computer can",
+    )
     options = parser.parse_args(argv[1:])
-    run(options.seconds, options.frames, options.seed)
+    if options.speed < 0:
+        parser.error(f"--speed {options.speed:g}: use 0 (as fast as possible) or more")
+    run(options.seconds, options.frames, options.seed, options.speed or None)
 
 
 if __name__ == "__main__":

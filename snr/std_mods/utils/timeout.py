@@ -17,7 +17,12 @@ class TimeoutLoop(ThreadLoop):
     Example::
 
         TimeoutLoopFactory(seconds=20)   # the node stops 20 s after it starts
+
+    On a `SimClock` the seconds are simulated: the node stops when the
+    clock reaches them, however fast that is.
     """
+
+    follows_clock = True  # it only waits on time: in simulated time, it takes turns
 
     def __init__(self, factory: TimeoutLoopFactory, parent: AbstractNode, seconds: float) -> None:
         super().__init__(factory, parent, factory.name)
