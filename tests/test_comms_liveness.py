@@ -257,7 +257,9 @@ class TestCountersInTheProfile(CommsFaultTest):
             {"a": [pair.server(), counter], "b": [pair.client("hello")]}, mode=Mode.DEBUG
         )
         nodes = self.run_nodes(config, ["a", "b"])
+        # Both ends linked: the client sends only once it has the server's hello.
         self.assertTrue(wait_until(lambda: bool(self.log.matching("Client node 'b'")), 5.0))
+        self.assertTrue(wait_until(lambda: bool(self.log.matching("Linked to node 'a'")), 5.0))
         nodes.nodes[1].store_data("hello", "world")
         self.assertTrue(wait_until(lambda: counter.seen == ["world"], 5.0))
         profiler = nodes.nodes[0].profiler
