@@ -1,8 +1,10 @@
 """A moving average filter endpoint and its factory (thesis 5.2, listings A.1, A.2).
 
 This is the filter a student writes in the thesis, importing only from
-``snr``. (SNR ships the same filter as ``snr.MovingAvgFilterFactory``; this
-file shows how it is built.) Three small classes, side by side:
+``snr``. SNR ships the same filter as ``snr.MovingAvgFilterFactory``; this
+file shows how it is built, and behaves the same (the README says where the
+two differ, and ``tests/test_moving_average_twins.py`` checks they give the
+same output). Three small classes, side by side:
 
 * `MovingAvgFilter` holds the numbers and computes their mean.
 * `MovingAvgEndpoint` (listing A.1) reacts when a number is stored under its
@@ -100,7 +102,8 @@ class MovingAvgEndpoint(Endpoint):
         page = task.page()
         # Check the data first: after this, the type checker knows it is a number.
         if not (
-            page is not None
+            task.name == self.input
+            and page is not None
             and isinstance(page.data, (int, float))
             and not isinstance(page.data, bool)
         ):
