@@ -59,7 +59,7 @@ from snr.prelude import (
     TaskType,
     WireFormatError,
 )
-from snr.std_mods.codec import load_object, page_from_fields, page_json
+from snr.std_mods.codec import PageEncoder, load_object, page_from_fields
 from snr.std_mods.comms.comms_loop import (
     COMMS_CONNECTED,
     COMMS_DISCONNECTED,
@@ -360,6 +360,9 @@ class ZenohComms(Endpoint):
         self.bad_samples = 0
         self._sender_id = os.urandom(8)
         self._counts: Dict[DataKey, int] = {}
+        # The JSON around a page's data is made once per key and origin: the
+        # same bytes as page_json, at a third of its cost.
+        self._encode = PageEncoder(_PAGE_HEAD, to="over Zenoh")
         self._publishers: Dict[DataKey, Any] = {}
         self._declared: List[Any] = []
         self._last_seq: Dict[Tuple[bytes, str], int] = {}
@@ -494,7 +497,7 @@ class ZenohComms(Endpoint):
         if publisher is None:
             return None  # not started, or stopping
         try:
-            body = page_json(page, _PAGE_HEAD, to="over Zenoh")
+            body = self._encode(page)
         except NotSerializableError as error:
             kind = (page.key, type(page.data))
             if kind not in self._unsendable_reported:
