@@ -259,7 +259,8 @@ class TestCountersInTheProfile(CommsFaultTest):
         nodes = self.run_nodes(config, ["a", "b"])
         # Both ends linked: the client sends only once it has the server's hello.
         self.assertTrue(wait_until(lambda: bool(self.log.matching("Client node 'b'")), 5.0))
-        self.assertTrue(wait_until(lambda: bool(self.log.matching("onnected to the sockets server, node 'a'")), 5.0))
+        client_linked = "onnected to the sockets server, node 'a'"
+        self.assertTrue(wait_until(lambda: bool(self.log.matching(client_linked)), 5.0))
         nodes.nodes[1].store_data("hello", "world")
         self.assertTrue(wait_until(lambda: counter.seen == ["world"], 5.0))
         profiler = nodes.nodes[0].profiler
