@@ -22,7 +22,7 @@ from snr.core import TestRunner
 from snr.prelude import ConfigError, LoopError
 from snr.utils import DummyEndpointFactory
 from tests.page_collector import PageCollectorFactory
-from tests.quiet import captured_logs
+from tests.quiet import capture_test_logs, captured_logs
 
 JOIN_S = 10.0
 """The most a test waits for a node's thread (a bound for a broken build, never reached)."""
@@ -155,6 +155,7 @@ class TestTicks(unittest.TestCase):
 
 class TestSeveralNodes(unittest.TestCase):
     def test_nodes_built_with_one_clock_take_turns_on_it(self) -> None:
+        capture_test_logs(self)  # an earlier test may have left role 'a' logging INFO
         clock = SimClock()
         fast, slow = TickerFactory(rate_hz=10, name="fast"), TickerFactory(rate_hz=4, name="slow")
         config = Config(
