@@ -6,11 +6,12 @@ on threads of the test's process can be linked by a `MemoryLinkPair` instead
 of a `SocketsPair`: no port to pick, nothing that another program can take,
 no child process to start, and `MemoryLinkPair.cut` loses the peer on demand.
 
-The bytes travel through ``socket.socketpair()``, a connected pair of local
-stream sockets that lives in the kernel's memory only (no address, no
-network). It has a file descriptor, so the node's I/O loop serves it exactly
-as it serves a TCP connection or a pipe: the code under test is the real
-link code, not a stand-in.
+A pair is the pipe component (`PipeLoopFactory`) on both ends of one
+``multiprocessing.Pipe()``, a connected pair of local stream sockets that
+lives in the kernel's memory only (no address, no network). The node's I/O
+loop serves it exactly as it serves a TCP connection: the code under test is
+the real link code, not a stand-in. `memory_transport_pair` gives the two
+raw ends, for a `CommsLoop` of your own.
 
 Example::
 
@@ -25,19 +26,21 @@ logs it and its loop stops; the nodes keep running.
 
 from __future__ import annotations
 
+import multiprocessing
+import os
 import socket
-from typing import Optional, Tuple
+from multiprocessing.connection import Connection
+from typing import Tuple
 
-from snr.core import LoopFactory
 from snr.prelude import AbstractNode, ConfigError
 from snr.std_mods.comms.comms_loop import (
     DEFAULT_DEAD_AFTER_S,
     DEFAULT_MAX_BACKLOG_BYTES,
     CommsLoop,
     Keys,
-    normalize_keys,
 )
 from snr.std_mods.comms.link import Link
+from snr.std_mods.comms.pipe import PipeLoop, PipeLoopFactory
 from snr.std_mods.comms.sockets import SocketTransport
 
 __all__ = [
@@ -86,37 +89,24 @@ def memory_transport_pair(
     return MemoryTransport(first, names[1]), MemoryTransport(second, names[0])
 
 
-class MemoryLinkLoop(CommsLoop):
+class MemoryLinkLoop(PipeLoop):
     """Forwards pages over one end of a `MemoryLinkPair`; built by `MemoryLinkFactory`.
+
+    It is the pipe component (`PipeLoop`): the pair is a ``multiprocessing.Pipe()``
+    whose two ends stay in one process. Only its log line for a lost peer is
+    the one a network link writes ("Lost the link to ..."), since a memory link
+    stands in for one in tests.
 
     Example::
 
         MemoryLinkPair().first(["controller_input"]).get(node)
     """
 
-    def __init__(self, factory: MemoryLinkFactory, parent: AbstractNode) -> None:
-        super().__init__(
-            factory,
-            parent,
-            factory.name,
-            factory.keys,
-            factory.max_backlog_bytes,
-            factory.dead_after_s,
-        )
-        self.transport = factory.take_transport()
-        self.link: Optional[Link] = None
-
-    def begin(self) -> None:
-        """Open the link at once: the pair is connected from the start."""
-        self.link = self.open_link(self.transport)
-
-    def loop(self) -> None:
-        """Wait; stop once the link has closed (a memory link cannot reconnect)."""
-        if self.link is None or self.link.wait_closed(0.5):
-            self.set_terminate_flag("the memory link closed")
+    def on_link_lost(self, link: Link, reason: str) -> None:
+        CommsLoop.on_link_lost(self, link, reason)
 
 
-class MemoryLinkFactory(LoopFactory):
+class MemoryLinkFactory(PipeLoopFactory):
     """Builds a `MemoryLinkLoop` on one end of a `MemoryLinkPair` (made by the pair).
 
     Each end serves one node once: a second ``get`` (a second node, or a
@@ -130,34 +120,33 @@ class MemoryLinkFactory(LoopFactory):
 
     def __init__(
         self,
-        transport: MemoryTransport,
+        connection: Connection,
         keys: Keys,
         name: str,
         max_backlog_bytes: int,
         dead_after_s: float,
+        peer: str,
     ) -> None:
-        super().__init__()
-        self._transport: Optional[MemoryTransport] = transport
-        self.keys = normalize_keys(keys, "MemoryLinkPair")
-        self.name = name
-        self.max_backlog_bytes = max_backlog_bytes
-        self.dead_after_s = dead_after_s
+        super().__init__(connection, keys, name, max_backlog_bytes, dead_after_s, peer)
+        self._taken = False
 
-    def take_transport(self) -> MemoryTransport:
+    def take_transport(self) -> Connection:
         """The end this factory holds, once.
 
         Raises:
             ConfigError: it was already taken by an earlier loop.
         """
-        transport, self._transport = self._transport, None
-        if transport is None:
+        if self._taken:
             raise ConfigError(
                 f"The memory link {self.name!r} was already used by a node; each end of a "
                 "MemoryLinkPair serves one node once. Make a new MemoryLinkPair() for each run."
             )
-        return transport
+        self._taken = True
+        connection: Connection = self.connection
+        return connection
 
     def get(self, parent: AbstractNode) -> MemoryLinkLoop:
+        self.take_transport()
         return MemoryLinkLoop(self, parent)
 
 
@@ -184,7 +173,7 @@ class MemoryLinkPair:
     ) -> None:
         self.max_backlog_bytes = max_backlog_bytes
         self.dead_after_s = dead_after_s
-        self._ends = memory_transport_pair()
+        self._ends: Tuple[Connection, Connection] = multiprocessing.Pipe()
 
     def first(self, keys: Keys = None, name: str = "memory_link_a") -> MemoryLinkFactory:
         """The factory for the first node's end, forwarding ``keys`` to the second."""
@@ -195,19 +184,21 @@ class MemoryLinkPair:
         return self._factory(1, keys, name)
 
     def _factory(self, end: int, keys: Keys, name: str) -> MemoryLinkFactory:
+        other = ("memory-a", "memory-b")[1 - end]  # the logs name the other end
         return MemoryLinkFactory(
-            self._ends[end], keys, name, self.max_backlog_bytes, self.dead_after_s
+            self._ends[end], keys, name, self.max_backlog_bytes, self.dead_after_s, other
         )
 
     def cut(self) -> None:
         """Break the connection both ways at once: each side reads end of stream.
 
         No goodbye is sent, so each side logs a lost link (a warning), as
-        when a peer crashes.
+        when a peer crashes. (Where a pipe is a socket pair: Linux and macOS.)
         """
         for end in self._ends:
-            try:
-                end.sock.shutdown(socket.SHUT_RDWR)
+            try:  # shut the socket down through a second descriptor of it
+                with socket.socket(fileno=os.dup(end.fileno())) as sock:
+                    sock.shutdown(socket.SHUT_RDWR)
             except OSError:  # that end is already closed
                 pass
 

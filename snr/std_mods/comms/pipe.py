@@ -168,11 +168,12 @@ class PipeLoop(CommsLoop):
             factory.dead_after_s,
         )
         self.connection = factory.connection
+        self.peer_name = factory.peer
         self.link: Optional[Link] = None
 
     def begin(self) -> None:
         """Open the link at once: the pipe is connected from the start."""
-        self.link = self.open_link(PipeTransport(self.connection))
+        self.link = self.open_link(PipeTransport(self.connection, self.peer_name))
 
     def loop(self) -> None:
         """Wait; stop once the pipe has closed (a pipe cannot reconnect)."""
@@ -222,6 +223,7 @@ class PipeLoopFactory(LoopFactory):
         name: the component name (default ``"pipe_loop"``).
         max_backlog_bytes: how much may wait for a slow peer before pages are dropped.
         dead_after_s: seconds of silence after which the other end counts as lost.
+        peer: what the logs call the other end (default ``"pipe"``).
 
     Example::
 
@@ -236,6 +238,7 @@ class PipeLoopFactory(LoopFactory):
         name: Optional[str] = None,
         max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
         dead_after_s: float = DEFAULT_DEAD_AFTER_S,
+        peer: str = "pipe",
     ) -> None:
         super().__init__()
         if not all(hasattr(connection, m) for m in ("send_bytes", "recv_bytes", "poll")):
@@ -255,6 +258,7 @@ class PipeLoopFactory(LoopFactory):
         self.name = name or "pipe_loop"
         self.max_backlog_bytes = max_backlog_bytes
         self.dead_after_s = dead_after_s
+        self.peer = peer
 
     def get(self, parent: AbstractNode) -> PipeLoop:
         return PipeLoop(self, parent)
