@@ -375,18 +375,38 @@ def _parser() -> argparse.ArgumentParser:
         metavar="ENDPOINT",
         help="a Zenoh endpoint to connect to, e.g. tcp/192.168.1.10:7447",
     )
-    parser.add_argument("--listen", action="append", default=[], metavar="ENDPOINT")
+    parser.add_argument(
+        "--listen",
+        action="append",
+        default=[],
+        metavar="ENDPOINT",
+        help="a Zenoh endpoint to listen on, e.g. tcp/0.0.0.0:7447",
+    )
     parser.add_argument(
         "--no-scouting",
         action="store_true",
         help="do not look for peers by multicast (give --connect instead)",
     )
-    parser.add_argument("--mode", default="peer", choices=["peer", "client"])
+    parser.add_argument(
+        "--mode",
+        default="peer",
+        choices=["peer", "client"],
+        help="peer (the default) or client, through a zenohd router given with --connect",
+    )
     parser.add_argument(
         "--token", default=None, help=f"the console token (default: ${TOKEN_ENV_VAR})"
     )
-    parser.add_argument("-c", "--command", action="append", default=[], metavar="COMMAND")
-    parser.add_argument("--timeout", type=float, default=10.0)
+    parser.add_argument(
+        "-c",
+        "--command",
+        action="append",
+        default=[],
+        metavar="COMMAND",
+        help="run this command and exit (may be repeated)",
+    )
+    parser.add_argument(
+        "--timeout", type=float, default=10.0, help="seconds to wait for the node (default 10)"
+    )
     return parser
 
 
