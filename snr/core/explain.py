@@ -17,23 +17,28 @@ import dis
 import functools
 import inspect
 import linecache
+import threading
 from types import CodeType
 from typing import Any, Dict, Iterator, List, Optional, Union
 
 from snr.prelude import (
     AbstractComponent,
+    AbstractConfig,
     AbstractFactory,
     AbstractLoop,
     ComponentError,
+    ConfigError,
     HandlerError,
     LoopError,
     Page,
     SNRError,
     Task,
     TaskHandler,
+    ThreadSafetyError,
 )
-from snr.prelude.error_text import exception_text, short_repr
+from snr.prelude.error_text import exception_text, short_repr, wrong_call
 from snr.prelude.student_code import (
+    caller_location,
     code_name,
     def_block,
     describe_callable,
@@ -49,6 +54,7 @@ __all__ = [
     "THREAD_SAFE_INSTEAD",
     "bad_result_error",
     "bad_result_hint",
+    "check_node_args",
     "describe_bad_result",
     "failed_get_error",
     "handler_failure",
@@ -60,6 +66,7 @@ __all__ = [
     "task_values",
     "wrong_get_result_error",
     "wrong_get_signature",
+    "wrong_thread_error",
 ]
 
 
@@ -433,3 +440,43 @@ def reload_failure(error: BaseException) -> str:
         return f"{error.filename}:{error.lineno}: SyntaxError: {error.msg}{shown}"
     frames = student_frames(error.__traceback__)
     return f"{exception_text(error)}\nWhere it happened (most recent call last):\n{frames}"
+
+
+def check_node_args(node_class: Any, role: Any, config: Any) -> None:
+    """Raise a `ConfigError` that says what is wrong with ``Node(role, config)``'s arguments.
+
+    Example::
+
+        check_node_args(Node, "robot", Config({"robot": [...]}))   # fine: no error
+        check_node_args(Node, config, "robot")   # ConfigError: ... are swapped.
+    """
+    if isinstance(role, AbstractConfig) and isinstance(config, str):
+        raise ConfigError(
+            wrong_call("Node", node_class, (role, config), "the role and the config are swapped.")
+        )
+    if not isinstance(role, str) or not role:
+        raise ConfigError(f"A node's role must be a non-empty string, not {role!r}.")
+    if not isinstance(config, AbstractConfig):
+        raise ConfigError(
+            f"Node({role!r}, ...) needs a snr.Config as its second argument, not "
+            f"{type(config).__name__}. Wrap a dict of factories: "
+            "Config({'robot': [...]})."
+        )
+
+
+def wrong_thread_error(role: str, method: str) -> ThreadSafetyError:
+    """The error for ``method`` called on node ``role`` from a thread that is not the node's.
+
+    Example::
+
+        raise wrong_thread_error("robot", "write_page")
+        # write_page() was called on node 'robot' from thread 'snr-robot-clock' ...
+    """
+    instead = THREAD_SAFE_INSTEAD.get(method, "self.schedule(task)")
+    return ThreadSafetyError(
+        f"{method}() was called on node {role!r} from thread "
+        f"{threading.current_thread().name!r} (at {caller_location()}), but only "
+        "the node's own thread may change the node, and a loop runs on a thread "
+        f"of its own. Use {instead} instead: it hands the work to the node's "
+        "thread and is safe from any thread."
+    )

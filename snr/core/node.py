@@ -28,10 +28,11 @@ from typing import Any, Callable, List, Optional
 
 from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerTable
+from snr.core.explain import check_node_args, wrong_thread_error
 from snr.core.handler_runner import HandlerRunner
 from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler, level_for_mode
-from snr.core.node_checks import NodeChecks, check_node_args, wrong_thread_error
+from snr.core.node_checks import NodeChecks
 from snr.core.node_core import NodeCoreFactory
 from snr.core.sim_clock import NodeTurn, clock_of
 from snr.core.step_mode import StepMode

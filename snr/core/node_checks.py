@@ -1,8 +1,5 @@
 """`NodeChecks`: wires the checks for silent mistakes into a node.
 
-(It also holds the words for two loud ones: `check_node_args` for a wrong
-``Node(role, config)`` and `wrong_thread_error` for a loop changing the node.)
-
 A node runs its tasks the same way in every mode; what DEBUG (and partly
 TEST) mode adds is helpers that watch it for mistakes that raise nothing.
 This module builds them and connects them to the node, so that ``node.py``
@@ -33,33 +30,27 @@ Example (what `Node` does)::
 from __future__ import annotations
 
 import threading
-from typing import TYPE_CHECKING, Any, List, Optional, Set, Tuple
+from typing import TYPE_CHECKING, List, Optional, Set, Tuple
 
 from snr.core import tasks
 from snr.core.class_checks import check_component
 from snr.core.components import ComponentSet
-from snr.core.explain import THREAD_SAFE_INSTEAD
 from snr.core.handler_runner import HandlerRunner
 from snr.core.key_hints import MissingKeyHints
 from snr.core.watchdog import Watchdog, queued_page_keys
 from snr.core.wiring_checks import WiringChecks
 from snr.prelude import (
     AbstractComponent,
-    AbstractConfig,
-    ConfigError,
     DataKey,
     Mode,
     TaskHandler,
     TaskType,
-    ThreadSafetyError,
 )
-from snr.prelude.error_text import wrong_call
-from snr.prelude.student_code import caller_location
 
 if TYPE_CHECKING:
     from snr.core.node import Node
 
-__all__ = ["NodeChecks", "check_node_args", "wrong_thread_error"]
+__all__ = ["NodeChecks"]
 
 _PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
 
@@ -165,43 +156,3 @@ class NodeChecks:
 
     def _warn_once(self, message: str) -> None:
         self.node.log.warning("%s\n(Said once per class, in DEBUG mode only.)", message)
-
-
-def check_node_args(node_class: Any, role: Any, config: Any) -> None:
-    """Raise a `ConfigError` that says what is wrong with ``Node(role, config)``'s arguments.
-
-    Example::
-
-        check_node_args(Node, "robot", Config({"robot": [...]}))   # fine: no error
-        check_node_args(Node, config, "robot")   # ConfigError: ... are swapped.
-    """
-    if isinstance(role, AbstractConfig) and isinstance(config, str):
-        raise ConfigError(
-            wrong_call("Node", node_class, (role, config), "the role and the config are swapped.")
-        )
-    if not isinstance(role, str) or not role:
-        raise ConfigError(f"A node's role must be a non-empty string, not {role!r}.")
-    if not isinstance(config, AbstractConfig):
-        raise ConfigError(
-            f"Node({role!r}, ...) needs a snr.Config as its second argument, not "
-            f"{type(config).__name__}. Wrap a dict of factories: "
-            "Config({'robot': [...]})."
-        )
-
-
-def wrong_thread_error(role: str, method: str) -> ThreadSafetyError:
-    """The error for ``method`` called on node ``role`` from a thread that is not the node's.
-
-    Example::
-
-        raise wrong_thread_error("robot", "write_page")
-        # write_page() was called on node 'robot' from thread 'snr-robot-clock' ...
-    """
-    instead = THREAD_SAFE_INSTEAD.get(method, "self.schedule(task)")
-    return ThreadSafetyError(
-        f"{method}() was called on node {role!r} from thread "
-        f"{threading.current_thread().name!r} (at {caller_location()}), but only "
-        "the node's own thread may change the node, and a loop runs on a thread "
-        f"of its own. Use {instead} instead: it hands the work to the node's "
-        "thread and is safe from any thread."
-    )
