@@ -43,6 +43,7 @@ __all__ = [
     "EXIT_OK",
     "EXIT_USAGE",
     "RemoteConsole",
+    "add_session_options",
     "main",
     "run_console",
 ]
@@ -353,6 +354,32 @@ def _enable_line_editing() -> None:
     readline.parse_and_bind("tab: complete")
 
 
+def add_session_options(parser: argparse.ArgumentParser) -> None:
+    """The options every console command line has: ``--token``, ``-c`` and ``--timeout``.
+
+    Shared by ``snr-console`` and its ``--zenoh`` form, so both read alike.
+
+    Example::
+
+        parser = argparse.ArgumentParser(prog="my-console")
+        add_session_options(parser)   # then parser.parse_args(["-c", "stats"])
+    """
+    parser.add_argument(
+        "--token", default=None, help=f"the node's console token (default: ${TOKEN_ENV_VAR})"
+    )
+    parser.add_argument(
+        "-c",
+        "--command",
+        action="append",
+        default=[],
+        metavar="COMMAND",
+        help="run this command and exit (may be repeated)",
+    )
+    parser.add_argument(
+        "--timeout", type=float, default=10.0, help="seconds to wait for the node (default 10)"
+    )
+
+
 def _parser() -> argparse.ArgumentParser:
     import argparse  # here, not at the top: only the snr-console command parses arguments
 
@@ -368,20 +395,7 @@ def _parser() -> argparse.ArgumentParser:
         default=f"127.0.0.1:{DEFAULT_CONSOLE_PORT}",
         help=f"the node's console address (default 127.0.0.1:{DEFAULT_CONSOLE_PORT})",
     )
-    parser.add_argument(
-        "--token", default=None, help=f"the node's console token (default: ${TOKEN_ENV_VAR})"
-    )
-    parser.add_argument(
-        "-c",
-        "--command",
-        action="append",
-        default=[],
-        metavar="COMMAND",
-        help="run this command and exit (may be repeated)",
-    )
-    parser.add_argument(
-        "--timeout", type=float, default=10.0, help="seconds to wait for the node (default 10)"
-    )
+    add_session_options(parser)
     return parser
 
 

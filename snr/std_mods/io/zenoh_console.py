@@ -54,6 +54,7 @@ from snr.std_mods.io.remote_console import (
     EXIT_OK,
     RemoteConsole,
     _say,
+    add_session_options,
     run_console,
 )
 
@@ -393,20 +394,7 @@ def _parser() -> argparse.ArgumentParser:
         choices=["peer", "client"],
         help="peer (the default) or client, through a zenohd router given with --connect",
     )
-    parser.add_argument(
-        "--token", default=None, help=f"the console token (default: ${TOKEN_ENV_VAR})"
-    )
-    parser.add_argument(
-        "-c",
-        "--command",
-        action="append",
-        default=[],
-        metavar="COMMAND",
-        help="run this command and exit (may be repeated)",
-    )
-    parser.add_argument(
-        "--timeout", type=float, default=10.0, help="seconds to wait for the node (default 10)"
-    )
+    add_session_options(parser)
     return parser
 
 
