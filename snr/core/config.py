@@ -14,7 +14,7 @@ from snr.prelude import (
     Mode,
     Role,
 )
-from snr.prelude.error_text import closest_match, wrong_call
+from snr.prelude.error_text import did_you_mean, wrong_call
 
 __all__ = ["Config"]
 
@@ -110,8 +110,7 @@ class Config(AbstractConfig):
         """
         if role not in self.factories:
             known = ", ".join(repr(r) for r in self.factories) or "(none)"
-            guess = closest_match(role, self.factories)
-            hint = f" Did you mean {guess!r}?" if guess else ""
+            hint = did_you_mean(role, self.factories)
             raise ConfigError(f"Unknown role {role!r}. This config has roles: {known}.{hint}")
         facs = self.factories[role]
         if not facs:

@@ -30,6 +30,7 @@ from snr.prelude.student_code import call_site
 __all__ = [
     "bad_data_key",
     "closest_match",
+    "did_you_mean",
     "exception_text",
     "page_as_data",
     "plain_signature",
@@ -128,6 +129,18 @@ def closest_match(word: str, choices: Iterable[str]) -> Optional[str]:
 
     found: List[str] = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
     return found[0] if found else None
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """`` Did you mean 'x'?`` for the choice most like ``word``, or "" if none is close.
+
+    Example::
+
+        f"There is no role 'urv'.{did_you_mean('urv', ['urov', 'topside'])}"
+        # "There is no role 'urv'. Did you mean 'urov'?"
+    """
+    guess = closest_match(word, choices)
+    return f" {_SUGGESTION} {guess!r}?" if guess else ""
 
 
 def short_repr(value: Any, limit: int = 120) -> str:

@@ -46,7 +46,7 @@ from snr.prelude import (
     TaskType,
     WireFormatError,
 )
-from snr.prelude.error_text import closest_match
+from snr.prelude.error_text import did_you_mean
 from snr.std_mods.codec import data_json, header_line, page_from_line, page_to_line
 from snr.std_mods.comms.board_protocol import (
     HEARTBEAT_KEY,
@@ -733,8 +733,7 @@ class SerialLinkFactory(LoopFactory):
     def _check(self) -> None:
         me = f"SerialLinkFactory({self.port!r})"
         if self.mode not in SERIAL_MODES:
-            guess = closest_match(str(self.mode), SERIAL_MODES)
-            hint = f" Did you mean {guess!r}?" if guess else ""
+            hint = did_you_mean(str(self.mode), SERIAL_MODES)
             raise ConfigError(f"{me}: mode={self.mode!r} is not one of {SERIAL_MODES}.{hint}")
         if self.mode == "lines" and self.receive_key in self.send_keys:
             raise ConfigError(

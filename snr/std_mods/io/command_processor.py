@@ -51,7 +51,7 @@ from snr.prelude import (
     TaskName,
     TaskType,
 )
-from snr.prelude.error_text import closest_match
+from snr.prelude.error_text import closest_match, did_you_mean
 from snr.prelude.task import format_task
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.io.command_table import COMMANDS, commands_table
@@ -216,8 +216,7 @@ class CommandProcessorEndpoint(Endpoint):
             return _ok("")
         command = self._commands.get(word)
         if command is None:
-            guess = closest_match(word, self._commands)
-            hint = f" Did you mean {guess!r}?" if guess else ""
+            hint = did_you_mean(word, self._commands)
             return _Outcome(
                 Status.ERROR,
                 f"Unknown command {word!r}.{hint} Type 'help' to see the commands.",
@@ -259,8 +258,7 @@ class CommandProcessorEndpoint(Endpoint):
     def _build_task(self, type_word: str, name: str, rest: str) -> Task:
         task_type = TaskType.__members__.get(type_word.lower())
         if task_type is None:
-            guess = closest_match(type_word.lower(), TaskType.__members__)
-            hint = f" Did you mean {guess!r}?" if guess else ""
+            hint = did_you_mean(type_word.lower(), TaskType.__members__)
             raise _CommandFailed(
                 f"Unknown task type {type_word!r}.{hint} Types: {', '.join(TaskType.__members__)}."
             )
@@ -354,8 +352,7 @@ class CommandProcessorEndpoint(Endpoint):
             )
         component = node.components.get(name)
         if component is None:
-            guess = closest_match(name, node.components)
-            hint = f" Did you mean {guess!r}?" if guess else ""
+            hint = did_you_mean(name, node.components)
             raise _CommandFailed(
                 f"No component named {name!r} in node {node.role!r}.{hint} "
                 f"Components: {self._component_names()}."
@@ -417,8 +414,7 @@ class CommandProcessorEndpoint(Endpoint):
     def _dump_one_key(self, datastore: Dict[str, Page], key: str) -> _Outcome:
         page = datastore.get(key)
         if page is None:
-            guess = closest_match(key, datastore)
-            hint = f" Did you mean {guess!r}?" if guess else ""
+            hint = did_you_mean(key, datastore)
             raise _CommandFailed(
                 f"Node {self.parent.role!r} has no data under {key!r}.{hint} "
                 "`dump datastore` lists the keys."
@@ -554,8 +550,7 @@ class CommandProcessorEndpoint(Endpoint):
             return _ok("Commands (type `help <command>` for details):\n" + commands_table())
         entry = COMMANDS.get(topic)
         if entry is None:
-            guess = closest_match(topic, COMMANDS)
-            hint = f" Did you mean {guess!r}?" if guess else ""
+            hint = did_you_mean(topic, COMMANDS)
             raise _CommandFailed(
                 f"There is no command {topic!r}.{hint} Commands: {', '.join(COMMANDS)}."
             )

@@ -38,7 +38,7 @@ from typing import Any, Callable, Deque, Dict, List, Optional, Tuple
 from snr.core.component import Component
 from snr.core.step_mode import console_priority
 from snr.prelude import DataKey, Page, SomeTasks, Task, TaskId, TaskType
-from snr.prelude.error_text import closest_match
+from snr.prelude.error_text import did_you_mean
 from snr.std_mods.io.console_protocol import Reply, Status
 
 __all__ = [
@@ -317,8 +317,7 @@ class KeyWatches:
         datastore = getattr(self.owner.parent, "datastore", {})
         if key in datastore:
             return ""
-        guess = closest_match(key, datastore) if isinstance(key, str) else None
-        maybe = f" Did you mean {guess!r}?" if guess else ""
+        maybe = did_you_mean(key, datastore) if isinstance(key, str) else ""
         return (
             f" The node has no data under {key!r} yet.{maybe} `dump datastore` lists the "
             "keys; `graph` shows who stores what."
