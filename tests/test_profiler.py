@@ -5,16 +5,18 @@ import unittest
 from typing import Dict, List
 
 from snr import (
+    AbstractNode,
     Config,
     ListReplayerFactory,
     Mode,
     MovingAvgFilterFactory,
     Node,
     TaskType,
+    ThreadLoop,
     TimeoutLoopFactory,
 )
 from snr.core.profiler import Profiler
-from tests.helpers import StopWhenFactory
+from tests.helpers import LoopFactoryOf, StopWhenFactory
 
 SHARE = re.compile(r" -> +([\d.]+)%: ")
 SECTION = re.compile(r"^(node thread|loop thread \S+):$")
@@ -81,6 +83,44 @@ class TestProfileShares(unittest.TestCase):
         dump = profiler.dump()
         self.assertIn("add up to more than 100%: some ran inside others", dump)
         self.assertIn("->   0.000%: (outside handlers", dump)  # never a negative share
+
+
+class Counting(ThreadLoop):
+    """Stores how many times its loop() ran, once every 20 s."""
+
+    def __init__(self, factory: LoopFactoryOf, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "counting", max_tick_rate_hz=0.05)
+        self.calls = 0
+        factory.built = self  # type: ignore[attr-defined]
+
+    def loop(self) -> None:
+        self.calls += 1
+        self.store_data("calls", self.calls)
+
+
+class TestLoopPasses(unittest.TestCase):
+    def test_a_pass_stopped_in_its_wait_is_counted_and_the_wait_ends(self) -> None:
+        """A loop counts a pass after the wait that follows it: a stop in that wait still counts it.
+
+        The node stops on the first page, while the loop waits out the rest of
+        its 20 s; the loop must wake from that wait (not sleep it out) and
+        its one pass must be in the profiler's table.
+        """
+        factory = LoopFactoryOf(Counting)
+        config = Config(
+            {"robot": [factory, StopWhenFactory((TaskType.store_page, "calls"))]},
+            mode=Mode.TEST,
+            profile=True,
+        )
+        node = Node("robot", config)
+        node.loop()
+        loop: Counting = factory.built  # type: ignore[attr-defined]
+        loop.join(5.0)
+        self.assertFalse(loop.is_alive(), "the loop slept out its wait instead of stopping")
+        self.assertEqual(loop.calls, 1)
+        assert node.profiler is not None
+        dump = node.profiler.dump()
+        self.assertRegex(dump, r"(?m)^ +1 x .*Loop\(counting\)$")
 
 
 if __name__ == "__main__":

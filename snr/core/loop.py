@@ -249,7 +249,6 @@ class ThreadLoop(Component, AbstractLoop):
         cell = profiler.loop_cell(self.name) if profiler is not None else None
         period_s = 1.0 / self.max_tick_rate_hz if self.max_tick_rate_hz > 0 else 0.0
         stop = self._stop_event
-        wait_s = self.wait_s
         clock = time.perf_counter
         turn = self._clock_turn
         try:
@@ -259,14 +258,24 @@ class ThreadLoop(Component, AbstractLoop):
             if type(self).setup is not ThreadLoop.setup:
                 self._wait_for_setup_tasks()
             if turn is None:
+                # Between loop() and the wait, as little as can be: a page that
+                # loop() stored reaches the node's thread only once this thread
+                # blocks and lets go of the GIL. So the wait is the lock's own
+                # (what wait_s does), and the pass is counted after it.
+                running = self._running_lock
                 while not stop.is_set():
                     started = clock()
                     self.loop()
-                    took = clock() - started
+                    ended = clock()
+                    if period_s and period_s > ended - started:
+                        stopped = running.acquire(True, period_s - (ended - started))
+                    else:
+                        stopped = False
                     if cell is not None:
                         cell[0] += 1
-                        cell[1] += took
-                    if period_s and period_s > took and wait_s(period_s - took):
+                        cell[1] += ended - started
+                    if stopped:
+                        running.release()  # stays released: the loop is stopped
                         break
             else:  # simulated time: tick n is at first + n / rate, exactly
                 first_s, ticks, rate_hz = turn.now_s(), 0, self.max_tick_rate_hz

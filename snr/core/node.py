@@ -163,6 +163,7 @@ class Node(AbstractNode):
             # A deployed robot's code was checked while it was developed: its
             # pages are made without the checks (on every store, they add ~25 ns).
             self.page = self._page_unchecked  # type: ignore[method-assign]
+        self._check_pages = self.mode is not Mode.DEPLOYED
         self.add_component(NodeCoreFactory().get(self), start=False)
         for factory in config.get(role):
             component = self.build_component(factory)
@@ -389,8 +390,16 @@ class Node(AbstractNode):
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
         """Queue storing ``data`` under ``key``; safe from any thread."""
-        # Few calls: the node's thread waits for the GIL until the loop blocks again.
-        self.queue.put(Task(_STORE_PAGE, key, [self.page(key, data, process)]))
+        # Written out (the checks of `page` inline): from a loop, the node's
+        # thread waits for the GIL until the loop blocks again, and a thread
+        # that has just woken runs each call many times slower than a warm one.
+        if self._check_pages:
+            if not isinstance(key, str):
+                raise ComponentError(bad_data_key(key, data))
+            if data.__class__ is Page:
+                raise ComponentError(page_as_data(key))
+        page = Page(key, data, self.role, self._page_time(), process)
+        self.queue.put(Task(_STORE_PAGE, key, [page]))
 
     def get_page(self, key: DataKey) -> Optional[Page]:
         """The newest page under ``key``, or None; safe from any thread.

@@ -59,7 +59,12 @@ class NodeCoreEndpoint(Endpoint):
 
     def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Put the task's page in the datastore; then process_data if asked."""
-        page = task.page()
+        # Every page a loop stores passes here: the usual case (a list holding
+        # one Page) is checked inline, anything else goes through task.page().
+        values = task.val_list
+        page = values[0] if values.__class__ is list and values else None
+        if page.__class__ is not Page:
+            page = task.page()
         if page is None:
             self.err(
                 "A store_page task for %r carries %r instead of a Page; dropped it. "
@@ -71,7 +76,7 @@ class NodeCoreEndpoint(Endpoint):
         if not page.origin:  # made by tasks.store_data(), which has no node
             page = dataclasses.replace(page, origin=self.node.role)
             task.val_list[0] = page
-        self.node.write_page(page)
+        self.node.datastore[page.key] = page  # node.write_page, on the node's own thread
         # tasks.process_data(page), inline: the handlers of a loop's page wait for this one.
         return Task(_PROCESS_DATA, page.key, [page]) if page.process else None
 
@@ -99,7 +104,7 @@ class NodeCoreEndpoint(Endpoint):
             if not only_core:
                 self._store_one_by_one(pages[index:])
                 break
-            self.node.write_page(page)
+            self.node.datastore[page.key] = page  # node.write_page, on the node's own thread
             if page.process:
                 processed.append(Task(TaskType.process_data, page.key, [page]))
         return processed

@@ -25,6 +25,7 @@ from typing import Any, Callable, Dict, List, Optional, Protocol
 from snr.prelude.errors import ComponentError
 from snr.prelude.names import (
     ComponentName,
+    DataDict,
     DataKey,
     Mode,
     Role,
@@ -302,6 +303,9 @@ class AbstractNode(_FriendlyABC):
         components: every endpoint and loop, by name, in start order.
         log: the node's logger (``logging.Logger``).
         profiler: the profiler, or None when profiling is off.
+        datastore: the newest page for each data key. Only the node's
+            thread writes it (the node core's ``store_page`` handler); read
+            it with ``get_page``.
 
     Example::
 
@@ -315,6 +319,7 @@ class AbstractNode(_FriendlyABC):
     components: Dict[ComponentName, AbstractComponent]
     log: logging.Logger
     profiler: Optional[AbstractProfiler]
+    datastore: DataDict
 
     # -- control flow (listing 6.1) -------------------------------------
     @abstractmethod

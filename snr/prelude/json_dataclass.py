@@ -58,6 +58,8 @@ class JsonDataclass:
         Reading.from_json('{"sensor": "depth", "value": 3.2}')
     """
 
+    __slots__ = ()  # so a slotted subclass (Page, Task) has no per-object dict
+
     def to_json(
         self,
         *,

@@ -16,7 +16,7 @@ __all__ = ["Page", "preview"]
 _PREVIEW_CHARS = 1000  # str(page) shows a game pad's buttons, not a camera frame
 
 
-@dataclass
+@dataclass(slots=True)
 class Page(JsonDataclass):
     """A value stored under a key, stamped with where and when it was made.
 

@@ -12,7 +12,7 @@ from snr.prelude.page import Page, preview
 __all__ = ["Task", "format_task"]
 
 
-@dataclass
+@dataclass(slots=True)
 class Task(JsonDataclass):
     """An ephemeral event handed to every endpoint that registered for it.
 
