@@ -195,6 +195,26 @@ class TestPages(SNRTestCase):
             ],
         )
 
+    def test_a_page_nobody_processes_makes_no_process_data_task(self) -> None:
+        """The node core makes a page's process_data task only while some handler waits for it."""
+        node = Node("test", self.get_config([StopWhenDrainedFactory()]))
+        core = node.components["node_core"]
+        store = core.task_handlers[TaskType.store_page]
+        self.assertFalse(node.is_handled(TaskType.process_data, "depth"))
+        self.assertIsNone(store(tasks.store_page(node.page("depth", 1.0)), TaskType.store_page))
+        self.assertEqual(node.get_data("depth"), 1.0)
+
+        log: Log = []
+        node.add_component(RecorderFactory("r", [(TaskType.process_data, "depth")], log).get(node))
+        self.assertTrue(node.is_handled(TaskType.process_data, "depth"))
+        self.assertFalse(node.is_handled(TaskType.process_data, "speed"))
+        follow_up = store(tasks.store_page(node.page("depth", 2.0)), TaskType.store_page)
+        assert isinstance(follow_up, Task)
+        self.assertEqual((follow_up.type, follow_up.name), (TaskType.process_data, "depth"))
+        # A handler for every process_data task (type-level) counts for every key.
+        node.add_component(RecorderFactory("all", [TaskType.process_data], log).get(node))
+        self.assertTrue(node.is_handled(TaskType.process_data, "speed"))
+
 
 class TestLifeCycle(SNRTestCase):
     def test_terminate_task_stops_node_and_jumps_queue(self) -> None:

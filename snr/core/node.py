@@ -293,6 +293,19 @@ class Node(AbstractNode):
         """Every (handler, matched task id) for ``task``, in component order."""
         return [(entry[0], entry[1]) for entry in self._lookup(task)]
 
+    def is_handled(self, task_type: TaskType, name: str) -> bool:
+        """True if some handler would run now for a task with this type and name.
+
+        Example::
+
+            node.is_handled(TaskType.process_data, "depth_m")   # a filter waits for it?
+        """
+        components = self._components
+        if components.table_stale:
+            components.refresh_table()
+        table = components.table.table
+        return (task_type, name) in table or task_type in table
+
     def _lookup(self, task: Task) -> List[Any]:
         if self._components.table_stale:
             self._components.refresh_table()

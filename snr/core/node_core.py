@@ -77,8 +77,11 @@ class NodeCoreEndpoint(Endpoint):
             page = dataclasses.replace(page, origin=self.node.role)
             task.val_list[0] = page
         self.node.datastore[page.key] = page  # node.write_page, on the node's own thread
-        # tasks.process_data(page), inline: the handlers of a loop's page wait for this one.
-        return Task(_PROCESS_DATA, page.key, [page]) if page.process else None
+        # tasks.process_data(page), inline: the handlers of a loop's page wait
+        # for this one. None when nothing handles it (a sender's page, say).
+        if page.process and self.node.is_handled(_PROCESS_DATA, page.key):
+            return Task(_PROCESS_DATA, page.key, [page])
+        return None
 
     def store_pages_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Store a burst of pages (`tasks.store_pages`) in order, in one handler call.
@@ -105,8 +108,8 @@ class NodeCoreEndpoint(Endpoint):
                 self._store_one_by_one(pages[index:])
                 break
             self.node.datastore[page.key] = page  # node.write_page, on the node's own thread
-            if page.process:
-                processed.append(Task(TaskType.process_data, page.key, [page]))
+            if page.process and self.node.is_handled(_PROCESS_DATA, page.key):
+                processed.append(Task(_PROCESS_DATA, page.key, [page]))
         return processed
 
     def _store_one_by_one(self, pages: List[Any]) -> None:

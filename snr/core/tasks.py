@@ -93,7 +93,7 @@ def store_pages(pages: List[Page]) -> Task:
     read brought this way): the node core stores them in one handler call
     instead of one dispatch per page. Handlers see the same thing in the same
     order: each page is stored, every ``store_page`` handler of its key runs,
-    and its ``process_data`` task is queued.
+    and its ``process_data`` task is queued (if some handler waits for it).
 
     Example::
 

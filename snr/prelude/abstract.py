@@ -34,6 +34,7 @@ from snr.prelude.names import (
     TaskHandler,
     TaskHandlerMap,
     TaskId,
+    TaskType,
 )
 from snr.prelude.page import Page
 from snr.prelude.student_code import caller_location, describe_class, frame_location
@@ -342,6 +343,19 @@ class AbstractNode(_FriendlyABC):
     @abstractmethod
     def get_task_handlers(self, task: Task) -> List[tuple[TaskHandler, TaskId]]:
         """Every handler that matches ``task``, in component order."""
+
+    def is_handled(self, task_type: TaskType, name: str) -> bool:
+        """True if some handler would run now for a task with this type and name.
+
+        The node core asks it before making a page's ``process_data`` task,
+        so a page nobody processes costs no task. A node answers it from its
+        handler table; this default asks `get_task_handlers`.
+
+        Example::
+
+            node.is_handled(TaskType.process_data, "depth_m")   # a filter waits for it?
+        """
+        return bool(self.get_task_handlers(Task(task_type, name)))
 
     @abstractmethod
     def handle_task(self, handler: TaskHandler, task: Task, key: TaskId) -> Optional[List[Task]]:
