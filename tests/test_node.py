@@ -199,7 +199,7 @@ class TestPages(SNRTestCase):
         """The node core makes a page's process_data task only while some handler waits for it."""
         node = Node("test", self.get_config([StopWhenDrainedFactory()]))
         core = node.components["node_core"]
-        store = core.task_handlers[TaskType.store_page]
+        store = core.store_page_handler  # type: ignore[attr-defined]
         self.assertFalse(node.is_handled(TaskType.process_data, "depth"))
         self.assertIsNone(store(tasks.store_page(node.page("depth", 1.0)), TaskType.store_page))
         self.assertEqual(node.get_data("depth"), 1.0)
@@ -387,10 +387,12 @@ class TestProfiler(SNRTestCase):
         assert node.profiler is not None
         dump = node.profiler.dump()
         self.assertTrue(dump.startswith("Times called,"))
-        self.assertIn("(store_page):snr.core.node_core", dump)
         self.assertIn("(terminate):snr.core.node_core", dump)
         self.assertIn("Loop(ticker)", dump)
-        self.assertRegex(dump, r"\n +1 x +[\d.]+ us -> +[\d.]+%: \(store_page\)")
+        self.assertRegex(dump, r"\n +1 x +[\d.]+ us -> +[\d.]+%: \(terminate\)")
+        # Storing a page is the node's own work (before the handlers), not a handler.
+        self.assertNotIn("(store_page", dump)
+        self.assertEqual(node.get_data("x"), 1)
 
     def test_no_profiler_when_deployed(self) -> None:
         capture_test_logs(self)  # and the INFO level a DEPLOYED node gives "snr.t" goes

@@ -3,6 +3,10 @@
 The one place where SNR calls a student's task handler. For every handler
 that matches a task it
 
+0. for a ``store_page`` task, first stores its page (the node core's
+   `store_page_handler`, called here directly: no table look-up, no timing)
+   and queues its ``process_data`` task, so every handler finds the page in
+   the datastore;
 1. calls ``handler(task, key)``, timing it unless the node is DEPLOYED
    without a profiler (the time goes to the handler's profiler cell, two
    additions, and a handler slower than ``slow_handler_s`` is reported once);
@@ -46,9 +50,12 @@ from snr.prelude import (
     Task,
     TaskHandler,
     TaskId,
+    TaskType,
 )
 
 __all__ = ["HandlerRunner"]
+
+_STORE_PAGE = TaskType.store_page
 
 
 class HandlerRunner:
@@ -75,6 +82,9 @@ class HandlerRunner:
         slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
         on_unhandled: called with each task no handler matched, or None (the
             default): a DEBUG node reports events nothing handles through it.
+        store_page: what stores a ``store_page`` task's page before its
+            handlers run (set by the node to its core's `store_page_handler`);
+            it returns the page's ``process_data`` task, or None.
         repeats: the `RepeatFilter` that keeps repeated failures from flooding the log.
     """
 
@@ -103,6 +113,8 @@ class HandlerRunner:
         self._slow_reported: Set[Any] = set()
         #: Called with a task that no handler matched (set by a DEBUG node).
         self.on_unhandled: Optional[Callable[[Task], None]] = None
+        #: Stores a store_page task's page before its handlers (set by the node).
+        self.store_page: Optional[TaskHandler] = None
 
     def run_queued(self, max_tasks: int = 100_000) -> None:
         """Run queued tasks until the queue is empty, the node stops, or ``max_tasks`` ran.
@@ -122,6 +134,7 @@ class HandlerRunner:
         clock = time.perf_counter
         slow_s = self.slow_handler_s
         on_unhandled = self.on_unhandled
+        store_page = self.store_page
         for _ in range(max_tasks):
             if urgent:
                 task = urgent.popleft()
@@ -129,6 +142,12 @@ class HandlerRunner:
                 task = normal.popleft()
             else:
                 return
+            if task.type is _STORE_PAGE and store_page is not None:
+                # The node core's part, before any handler and without a handler
+                # call: the page a loop stored reaches its reader sooner.
+                follow_up = store_page(task, _STORE_PAGE)
+                if follow_up.__class__ is Task:
+                    normal.append(follow_up)
             if components.table_stale:  # what the last task changed applies now
                 components.refresh_table()
             entries = lookup((task.type, task.name))
@@ -183,6 +202,24 @@ class HandlerRunner:
         if took > self.slow_handler_s:
             self.report_slow(handler, task, took)
         return self.check_result(result, handler, task)
+
+    def store_first(self, task: Task) -> Optional[Task]:
+        """For a ``store_page`` task: store its page now, queue and return what follows.
+
+        What `run_queued` does before a ``store_page`` task's handlers, for a
+        caller that runs them itself (the console's ``step``).
+
+        Example::
+
+            runner.store_first(tasks.store_page(page))   # (process_data, key) or None
+        """
+        if task.type is not _STORE_PAGE or self.store_page is None:
+            return None
+        follow_up = self.store_page(task, _STORE_PAGE)
+        if follow_up.__class__ is not Task:
+            return None
+        self.queue.normal.append(follow_up)
+        return follow_up
 
     def queue_all(self, tasks: Optional[List[Task]]) -> None:
         """Queue tasks a handler returned, in order (urgent ones jump ahead)."""

@@ -164,7 +164,9 @@ class Node(AbstractNode):
             # pages are made without the checks (on every store, they add ~25 ns).
             self.page = self._page_unchecked  # type: ignore[method-assign]
         self._check_pages = self.mode is not Mode.DEPLOYED
-        self.add_component(NodeCoreFactory().get(self), start=False)
+        core = NodeCoreFactory().get(self)
+        self.add_component(core, start=False)
+        self._runner.store_page = core.store_page_handler  # pages are stored before handlers
         for factory in config.get(role):
             component = self.build_component(factory)
             if component is not None:

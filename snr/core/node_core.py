@@ -47,7 +47,6 @@ class NodeCoreEndpoint(Endpoint):
         super().__init__(factory, parent, NODE_CORE_NAME)
         self.node = parent
         self.task_handlers = {
-            TaskType.store_page: self.store_page_handler,
             (TaskType.event, tasks.STORE_PAGES): self.store_pages_handler,
             (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
             (TaskType.event, tasks.REMOVE_COMPONENT): self.remove_component_handler,
@@ -58,7 +57,13 @@ class NodeCoreEndpoint(Endpoint):
         }
 
     def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Put the task's page in the datastore; then process_data if asked."""
+        """Put the task's page in the datastore; then process_data if asked.
+
+        Not in the handler table: the node's run loop calls it for every
+        ``store_page`` task before the task's handlers (``HandlerRunner``), so
+        they all find the page stored, and a loop's page reaches them with one
+        handler call less.
+        """
         # Every page a loop stores passes here: the usual case (a list holding
         # one Page) is checked inline, anything else goes through task.page().
         values = task.val_list
@@ -103,7 +108,7 @@ class NodeCoreEndpoint(Endpoint):
             only_core = alone.get(page.key)
             if only_core is None:
                 handlers = self.node.get_task_handlers(Task(TaskType.store_page, page.key))
-                only_core = alone[page.key] = [h for h, _ in handlers] == [self.store_page_handler]
+                only_core = alone[page.key] = not handlers
             if not only_core:
                 self._store_one_by_one(pages[index:])
                 break

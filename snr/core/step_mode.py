@@ -33,7 +33,7 @@ from typing import Any, Callable, Deque, List, Optional, Tuple
 
 from snr.core.handler_runner import HandlerRunner
 from snr.core.task_queue import TaskQueue
-from snr.prelude import AbstractNode, Task, TaskPriority
+from snr.prelude import AbstractNode, Task, TaskPriority, TaskType
 
 __all__ = ["MAX_STEPS", "Step", "StepMode", "console_priority"]
 
@@ -186,6 +186,13 @@ class StepMode:
         task = normal.popleft() if normal else None
         step = Step(task)
         if task is not None:
+            store = self.runner.store_page
+            if task.type is TaskType.store_page and store is not None:
+                # The page goes into the datastore first, as when running.
+                step.handlers.append(_handler_name(store, getattr(store, "__self__", None)))
+                stored = self.runner.store_first(task)
+                if stored is not None:
+                    step.returned.append(stored)
             entries = self.lookup(task)
             if not entries and self.runner.on_unhandled is not None:
                 self.runner.on_unhandled(task)  # DEBUG: an event nobody handles, as usual
