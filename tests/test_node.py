@@ -336,6 +336,23 @@ class TestHandlerFailures(SNRTestCase):
         self.assertIsInstance(ctx.exception.__cause__, ValueError)
         self.assertEqual(snr_threads(), [])
 
+    def test_a_page_that_cannot_be_stored_is_a_failure_in_words(self) -> None:
+        """Pages are stored before the handlers, outside the table: a failure still says so."""
+
+        class Refusing(dict):  # type: ignore[type-arg]
+            def __setitem__(self, key: Any, value: Any) -> None:
+                raise MemoryError("no room for another page")
+
+        node = Node("test", self.get_config([TimeoutLoopFactory(seconds=2)]))
+        node.datastore = Refusing()
+        node.store_data("depth", 1.0)
+        with self.assertRaises(HandlerError) as ctx, self.assertLogs("snr.test", "ERROR") as logs:
+            node.loop()
+        self.assertIn("NodeCoreEndpoint.store_page_handler", logs.output[0])
+        self.assertIn("MemoryError: no room for another page", str(ctx.exception))
+        self.assertIn("(store_page, 'depth')", str(ctx.exception))
+        self.assertEqual(snr_threads(), [])
+
     def test_deployed_mode_logs_and_keeps_running(self) -> None:
         capture_test_logs(self)  # and the INFO level a DEPLOYED node gives "snr.test" goes
         factory = BoomFactory()

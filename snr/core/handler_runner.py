@@ -144,8 +144,13 @@ class HandlerRunner:
                 return
             if task.type is _STORE_PAGE and store_page is not None:
                 # The node core's part, before any handler and without a handler
-                # call: the page a loop stored reaches its reader sooner.
-                follow_up = store_page(task, _STORE_PAGE)
+                # call (store_first, written out): a loop's page reaches its reader sooner.
+                try:
+                    follow_up = store_page(task, _STORE_PAGE)
+                except Exception as error:  # a page whose key cannot be a dict key...
+                    follow_up = None
+                    owner = getattr(store_page, "__self__", None)
+                    self.handler_failed(store_page, task, owner, error)
                 if follow_up.__class__ is Task:
                     normal.append(follow_up)
             if components.table_stale:  # what the last task changed applies now
@@ -213,9 +218,14 @@ class HandlerRunner:
 
             runner.store_first(tasks.store_page(page))   # (process_data, key) or None
         """
-        if task.type is not _STORE_PAGE or self.store_page is None:
+        store_page = self.store_page
+        if task.type is not _STORE_PAGE or store_page is None:
             return None
-        follow_up = self.store_page(task, _STORE_PAGE)
+        try:
+            follow_up = store_page(task, _STORE_PAGE)
+        except Exception as error:
+            self.handler_failed(store_page, task, getattr(store_page, "__self__", None), error)
+            return None
         if follow_up.__class__ is not Task:
             return None
         self.queue.normal.append(follow_up)
