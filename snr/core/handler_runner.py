@@ -159,8 +159,8 @@ class HandlerRunner:
             if entries is None:
                 entries = lookup(task.type)
                 if entries is None:
-                    if on_unhandled is not None:  # DEBUG: an event nobody handles
-                        on_unhandled(task)
+                    if on_unhandled is not None and task.type is not _STORE_PAGE:
+                        on_unhandled(task)  # DEBUG: an event nobody handles (a page was stored)
                     continue
             for handler, key, component, cell in entries:
                 if timed:
