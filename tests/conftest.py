@@ -39,6 +39,7 @@ def pytest_cmdline_main(config: pytest.Config) -> None:
         return
     config.option.numprocesses = WORKERS
     if config.option.dist == "no":
-        # A class's tests stay on one worker, so its setUpClass (a docs build,
-        # a started program) runs once, not once on every worker.
-        config.option.dist = "loadscope"
+        # A file's tests stay on one worker, so its setUpModule and a class's
+        # setUpClass (a docs build, started programs) run once, not once on
+        # every worker that runs a part of the file.
+        config.option.dist = "loadfile"
