@@ -5,17 +5,25 @@ node's loop), so with pytest-xdist installed (the ``dev`` extra) a plain
 ``python -m pytest`` runs the tests on `WORKERS` processes. Naming a file or
 a test (``python -m pytest tests/test_node.py``) runs it in this process, as
 does ``-n 0``; without pytest-xdist everything runs in this process.
+
+Workers take whole files, slowest first (by the times of the last run, kept
+in pytest's cache), so no long file starts near the end while the other
+workers run out of work.
 """
 
 from __future__ import annotations
 
+import math
 import os
+from collections import Counter, defaultdict
+from typing import DefaultDict, Dict, List
 
 import pytest
 
-WORKERS = 3
-"""Processes for a whole-suite run: one more than the 2 cores of the machines we
-test on, since a worker is often waiting rather than computing."""
+WORKERS = 4
+"""Processes for a whole-suite run: two for each of the 2 cores of the machines we
+test on, since a worker is mostly waiting rather than computing (a fifth saves
+little: the suite's CPU time then keeps both cores busy)."""
 
 
 def _names_tests(config: pytest.Config) -> bool:
@@ -39,6 +47,52 @@ def pytest_cmdline_main(config: pytest.Config) -> None:
         return
     config.option.numprocesses = WORKERS
     if config.option.dist == "no":
-        # A class's tests stay on one worker, so its setUpClass (a docs build,
-        # a started program) runs once, not once on every worker.
-        config.option.dist = "loadscope"
+        # A file's tests stay on one worker, so its setUpModule and a class's
+        # setUpClass (a docs build, started programs) run once, not once on
+        # every worker that runs a part of the file.
+        config.option.dist = "loadfile"
+        config.option.loadscopereorder = False  # the order is `pytest_collection_modifyitems`'s
+
+
+SECONDS_KEY = "snr/seconds_per_file"
+"""pytest's cache entry: each test file's seconds (setup, call, teardown) in the last run."""
+
+_seconds: DefaultDict[str, float] = defaultdict(float)
+
+
+def _file_of(nodeid: str) -> str:
+    return nodeid.split("::", 1)[0]
+
+
+def pytest_collection_modifyitems(config: pytest.Config, items: List[pytest.Item]) -> None:
+    """In an xdist worker: the files slowest first (by the cache; else the most tests first).
+
+    xdist hands out files in the order its workers collected them; every
+    worker reads the same cache, so they all agree on it. A file the cache
+    does not know yet goes first.
+    """
+    if not hasattr(config, "workerinput"):
+        return
+    cache = getattr(config, "cache", None)  # None with -p no:cacheprovider
+    known: Dict[str, float] = cache.get(SECONDS_KEY, {}) if cache is not None else {}
+    tests = Counter(_file_of(item.nodeid) for item in items)
+    if known:
+        items.sort(key=lambda item: -known.get(_file_of(item.nodeid), math.inf))
+    else:
+        items.sort(key=lambda item: -tests[_file_of(item.nodeid)])
+
+
+def pytest_runtest_logreport(report: pytest.TestReport) -> None:
+    _seconds[_file_of(report.nodeid)] += report.duration
+
+
+def pytest_sessionfinish(session: pytest.Session) -> None:
+    """In the process that ran xdist's workers: keep each file's seconds for the next run."""
+    config = session.config
+    if hasattr(config, "workerinput") or not getattr(config.option, "numprocesses", None):
+        return
+    cache = getattr(config, "cache", None)
+    if cache is not None and _seconds:
+        known: Dict[str, float] = cache.get(SECONDS_KEY, {})
+        known.update({name: round(seconds, 3) for name, seconds in _seconds.items()})
+        cache.set(SECONDS_KEY, known)

@@ -6,13 +6,14 @@ from their paths, or run them as a student would, in a subprocess.
 
 from __future__ import annotations
 
-import functools
 import importlib.util
 import os
 import subprocess
 import sys
 from types import ModuleType
-from typing import Dict, Optional, Sequence
+from typing import Callable, Dict, List, Optional, Sequence, TypeVar
+
+T = TypeVar("T")
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 EXAMPLES = os.path.join(ROOT, "examples")
@@ -52,18 +53,47 @@ def script_env(extra: Optional[Dict[str, str]] = None) -> Dict[str, str]:
     return env
 
 
-class StartedScript:
-    """A script started now, in the background; `result` waits for it.
+IN_XDIST_WORKER = "PYTEST_XDIST_WORKER" in os.environ
+"""True in a pytest-xdist worker, which imports every test module but runs only some."""
+
+
+def early(make: Callable[[], T]) -> Callable[[], T]:
+    """Runs ``make()`` once: now, or in a pytest-xdist worker at the first call; gives its value.
 
     Tests that only read a script's output can start it when their module is
-    imported, so several such scripts run while other tests do (the suite
-    waits on them once, not one after another).
+    imported, so the script runs while other tests do (the suite waits on it
+    once, not one after another). unittest and ``pytest -n 0`` import every
+    module before any test runs, so ``make`` runs at import there. A
+    pytest-xdist worker imports every module too, but runs only the files it
+    is given (``--dist loadfile``): there ``make`` runs at the first call,
+    which the module's ``setUpModule`` makes, so every script of the file
+    starts together, once, on the worker that runs the file.
 
     Example::
 
-        DEMO = start_script(["-m", "snr", "demo", "--seconds", "1"])   # at import
+        DEMO = early(lambda: start_script(["-m", "snr", "demo", "--seconds", "1"]))
+
+        def setUpModule() -> None:
+            DEMO()          # (started already, unless in a pytest-xdist worker)
         ...
-        done = DEMO.result()   # in the test: a CompletedProcess
+        done = DEMO().result()   # in the test: a CompletedProcess
+    """
+    made: List[T] = []
+
+    def value() -> T:
+        if not made:
+            made.append(make())
+        return made[0]
+
+    if not IN_XDIST_WORKER:
+        value()
+    return value
+
+
+class StartedScript:
+    """A script started now, in the background; `result` waits for it.
+
+    See `early` for starting one when a test module is imported.
     """
 
     def __init__(
@@ -78,8 +108,7 @@ class StartedScript:
         self.timeout_s = timeout_s
         self.allow_hints = allow_hints
         self._done: Optional[subprocess.CompletedProcess[str]] = None
-        self._start = functools.partial(
-            subprocess.Popen,
+        self._process = subprocess.Popen(
             [sys.executable, *args],
             cwd=cwd or ROOT,
             stdout=subprocess.PIPE,
@@ -87,16 +116,9 @@ class StartedScript:
             text=True,
             env=env or script_env(),
         )
-        # Every pytest-xdist worker imports every test module, but only one
-        # runs a given test: there, the script starts when its test asks.
-        self._process: Optional[subprocess.Popen[str]] = None
-        if "PYTEST_XDIST_WORKER" not in os.environ:
-            self._process = self._start()
 
     def result(self) -> subprocess.CompletedProcess[str]:
         """Wait (at most ``timeout_s``) for the script; its output, checked for hints."""
-        if self._process is None:
-            self._process = self._start()
         if self._done is None:
             try:
                 out, err = self._process.communicate(timeout=self.timeout_s)

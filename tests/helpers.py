@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+import os
 import socket
 import time
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, TypeVar
@@ -34,6 +35,25 @@ def wait_until(condition: Callable[[], T], timeout_s: float = 5.0) -> T:
         value = condition()
         if value or time.monotonic() > deadline:
             return value
+        time.sleep(0.005)
+
+
+def catches_signal(pid: int, signum: int, timeout_s: float = 10.0) -> Optional[bool]:
+    """Wait until process ``pid`` has a handler for ``signum``: True, or False after ``timeout_s``.
+
+    Reads ``SigCgt`` in ``/proc/PID/status``; None where there is no /proc (macOS).
+    """
+    status_path = f"/proc/{pid}/status"
+    if not os.path.exists(status_path):
+        return None
+    deadline = time.monotonic() + timeout_s
+    while True:
+        with open(status_path) as status:
+            caught = next(line for line in status if line.startswith("SigCgt:"))
+        if int(caught.split()[1], 16) & (1 << (signum - 1)):
+            return True
+        if time.monotonic() > deadline:
+            return False
         time.sleep(0.005)
 
 

@@ -1,4 +1,8 @@
-"""The benchmarks in bench/ still run: each one with a tiny workload, no timing checked."""
+"""The benchmarks in bench/ still run: each one with a tiny workload, no timing checked.
+
+All three start when this module is imported (`early`) and run side by side,
+and beside other tests: they are checked for what they print, not for speed.
+"""
 
 from __future__ import annotations
 
@@ -7,23 +11,60 @@ import os
 import shutil
 import tempfile
 import unittest
+from typing import Tuple
 
-from tests.examples_support import ROOT, run_script
+from tests.examples_support import ROOT, StartedScript, early, start_script
 
 BENCH = os.path.join(ROOT, "bench")
+
+LOOP_LATENCY = early(
+    lambda: start_script(
+        [
+            os.path.join(BENCH, "bench_loop_latency.py"),
+            "--samples=20",
+            "--rounds=1",
+            "--interval-ms=0.5",
+        ],
+        timeout_s=20.0,  # a bound, for a busy machine: it takes ~0.5 s
+    )
+)
+COMMS = early(
+    lambda: start_script(
+        [
+            os.path.join(BENCH, "bench_comms.py"),
+            "--quick",
+            "--pages=300",
+            "--round-trips=30",
+            "--rounds=1",
+            "--idle-s=0.1",
+            "--settle-s=0.02",
+        ],
+        timeout_s=8.0,
+    )
+)
+
+
+def _start_sim_bench() -> Tuple[str, StartedScript]:
+    """The folder for the picture, and bench_sim.py started."""
+    picture = os.path.join(tempfile.mkdtemp(prefix="snr-bench-sim-"), "sim.png")
+    return picture, start_script(
+        [os.path.join(BENCH, "bench_sim.py"), "--steps=50", "--rounds=1", "--lesson-s=0.5"]
+        + (["--picture", picture] if importlib.util.find_spec("pygame") else []),
+        timeout_s=10.0,
+    )
+
+
+SIM = early(_start_sim_bench)
+
+
+def setUpModule() -> None:
+    for started in (LOOP_LATENCY, COMMS, SIM):
+        started()  # (started already, unless in a pytest-xdist worker)
 
 
 class TestLoopLatencyBench(unittest.TestCase):
     def test_prints_the_table_and_the_target(self) -> None:
-        done = run_script(
-            [
-                os.path.join(BENCH, "bench_loop_latency.py"),
-                "--samples=20",
-                "--rounds=1",
-                "--interval-ms=0.5",
-            ],
-            timeout_s=20.0,  # a bound, for a busy machine: it takes ~0.5 s
-        )
+        done = LOOP_LATENCY().result()
         self.assertEqual(done.returncode, 0, done.stderr)
         out = done.stdout
         self.assertIn("Loop -> handler latency", out)
@@ -38,18 +79,7 @@ class TestLoopLatencyBench(unittest.TestCase):
 
 class TestCommsBench(unittest.TestCase):
     def test_prints_the_tables_and_the_targets(self) -> None:
-        done = run_script(
-            [
-                os.path.join(BENCH, "bench_comms.py"),
-                "--quick",
-                "--pages=300",
-                "--round-trips=30",
-                "--rounds=1",
-                "--idle-s=0.1",
-                "--settle-s=0.02",
-            ],
-            timeout_s=8.0,
-        )
+        done = COMMS().result()
         self.assertEqual(done.returncode, 0, done.stderr)
         out = done.stdout
         self.assertIn("Comms between two processes on 127.0.0.1: 300 pages one way", out)
@@ -80,13 +110,9 @@ class TestCommsBench(unittest.TestCase):
 
 class TestSimBench(unittest.TestCase):
     def test_prints_a_row_per_case_and_writes_the_picture(self) -> None:
-        picture = os.path.join(tempfile.mkdtemp(prefix="snr-bench-sim-"), "sim.png")
+        picture, started = SIM()
         self.addCleanup(shutil.rmtree, os.path.dirname(picture), ignore_errors=True)
-        done = run_script(
-            [os.path.join(BENCH, "bench_sim.py"), "--steps=50", "--rounds=1", "--lesson-s=0.5"]
-            + (["--picture", picture] if importlib.util.find_spec("pygame") else []),
-            timeout_s=10.0,
-        )
+        done = started.result()
         self.assertEqual(done.returncode, 0, done.stderr)
         out = done.stdout
         self.assertIn("Simulator speed: 50 steps of 20 ms, 9 walls, 5 range rays", out)

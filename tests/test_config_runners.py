@@ -27,6 +27,7 @@ from snr.core import TestRunner
 from snr.prelude import ConfigError
 from snr.utils import DummyEndpointFactory, ExpectorEndpointFactory, ListReplayerFactory
 from tests.comms_helpers import StopAfterFactory
+from tests.helpers import catches_signal
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
@@ -148,15 +149,12 @@ class TestCliRunner(unittest.TestCase):
         self.assertNotIn("Traceback", err)
 
     def test_ctrl_c_stops_every_role_and_says_so_once(self) -> None:
-        script = textwrap.dedent(
+        script = READY + textwrap.dedent(
             """
-            import sys
-            import snr
             components = {
-                "a": [snr.TimeoutLoopFactory(seconds=20)],
-                "b": [snr.TimeoutLoopFactory(seconds=20)],
+                "a": [snr.TimeoutLoopFactory(seconds=20), ReadyFactory()],
+                "b": [snr.TimeoutLoopFactory(seconds=20), ReadyFactory()],
             }
-            print("ready", flush=True)
             snr.CliRunner(components, sys.argv).run()
             """
         )
@@ -167,8 +165,12 @@ class TestCliRunner(unittest.TestCase):
         )  # fmt: skip
         try:
             assert proc.stdout is not None
-            self.assertEqual(proc.stdout.readline().strip(), "ready")
-            time.sleep(0.5)
+            for _ in "ab":  # both roles' nodes run
+                self.assertEqual(proc.stdout.readline().strip(), "ready")
+            # The parent sets its handlers (SIGINT's, then SIGTERM's) once it has
+            # started every child, which may be after the children's nodes run.
+            if catches_signal(proc.pid, signal.SIGTERM) is None:  # no /proc: give it time
+                time.sleep(0.5)
             os.killpg(proc.pid, signal.SIGINT)  # Ctrl-C reaches the whole group
             out, err = proc.communicate(timeout=10)
         finally:

@@ -162,7 +162,7 @@ class TestTokenGuessing(unittest.TestCase):
             with captured_logs("snr.robot"), NodeInThread([], token=TOKEN) as run:
                 with self.assertLogs("snr.robot.command_receiver", logging.WARNING) as logs:
                     started = time.monotonic()
-                    while time.monotonic() - started < 0.15:
+                    while time.monotonic() - started < 0.3:  # before the check at 0.35 s
                         attempts += 1
                         try:
                             run.console(token=f"guess-{attempts}").close()

@@ -15,9 +15,9 @@ import shutil
 import tempfile
 import unittest
 from pathlib import Path
-from typing import Any, List
+from typing import Any, List, Tuple
 
-from tests.examples_support import ROOT, script_env, start_script
+from tests.examples_support import ROOT, StartedScript, early, script_env, start_script
 
 TELEMETRY = re.compile(r"t=\s*([\d.]+) s \| depth\s+([\d.]+) m \| heading\s+([\d.]+)°")
 
@@ -50,16 +50,28 @@ def _installed_copy() -> Path:
     return folder
 
 
-# Both demo runs start when this module is imported and run while other tests
-# do: each takes seconds of waiting, which the suite then pays only once.
-INSTALLED = _installed_copy()
-PACKAGE_DEMO = start_script(
-    ["-c", RUN_DEMO, str(INSTALLED / "site-packages"), "--seconds", "2.5"],
-    cwd=str(INSTALLED),
-    timeout_s=40,
-    env=script_env({"PYTHONPATH": str(INSTALLED / "site-packages")}),
+def _start_package_demo() -> Tuple[Path, StartedScript]:
+    """The installed copy, and the demo started from it."""
+    installed = _installed_copy()
+    return installed, start_script(
+        ["-c", RUN_DEMO, str(installed / "site-packages"), "--seconds", "2.5"],
+        cwd=str(installed),
+        timeout_s=40,
+        env=script_env({"PYTHONPATH": str(installed / "site-packages")}),
+    )
+
+
+# Both demo runs start when this module is imported (`early`) and run while
+# other tests do: each takes seconds of waiting, which the suite then pays only once.
+PACKAGE_DEMO = early(_start_package_demo)
+VERBOSE_DEMO = early(
+    lambda: start_script(["-m", "snr", "demo", "--seconds", "0.6", "--verbose"], timeout_s=40)
 )
-VERBOSE_DEMO = start_script(["-m", "snr", "demo", "--seconds", "0.6", "--verbose"], timeout_s=40)
+
+
+def setUpModule() -> None:
+    PACKAGE_DEMO()  # (started already, unless in a pytest-xdist worker)
+    VERBOSE_DEMO()
 
 
 class TestDemoShipsInThePackage(unittest.TestCase):
@@ -70,12 +82,12 @@ class TestDemoShipsInThePackage(unittest.TestCase):
 
     @classmethod
     def setUpClass(cls) -> None:
-        cls.folder = INSTALLED
+        cls.folder = PACKAGE_DEMO()[0]
         cls.lib = cls.folder / "site-packages"
 
     @classmethod
     def tearDownClass(cls) -> None:
-        PACKAGE_DEMO.result()  # the demo has finished with the folder
+        PACKAGE_DEMO()[1].result()  # the demo has finished with the folder
         shutil.rmtree(cls.folder, ignore_errors=True)
 
     def test_the_wheel_is_the_whole_snr_folder_and_the_guide(self) -> None:
@@ -101,7 +113,7 @@ class TestDemoShipsInThePackage(unittest.TestCase):
 
     def test_the_demo_runs_from_the_package_alone(self) -> None:
         """CI's smoke run, on the installed copy: a banner and the telemetry, no log chatter."""
-        result = PACKAGE_DEMO.result()
+        result = PACKAGE_DEMO()[1].result()
         self.assertEqual(result.returncode, 0, result.stderr)
         out = result.stdout.splitlines()
         self.assertTrue(out and out[0].startswith("SNR demo: "), result.stdout)
@@ -116,7 +128,7 @@ class TestDemoShipsInThePackage(unittest.TestCase):
 
 class TestVerboseDemo(unittest.TestCase):
     def test_verbose_shows_the_nodes_log(self) -> None:
-        result = VERBOSE_DEMO.result()
+        result = VERBOSE_DEMO().result()
         self.assertEqual(result.returncode, 0, result.stderr)
         self.assertIn("Listening for sockets clients on 127.0.0.1:", result.stderr)
         self.assertIn("Connected to the sockets server", result.stderr)

@@ -9,13 +9,19 @@ from typing import Any
 import snr.demo.urov
 from snr import Mode, SNRTestCase, TaskType, tasks
 from snr.utils import ListReplayerFactory
-from tests.examples_support import example_path, load_module, start_script
+from tests.examples_support import early, example_path, load_module, start_script
 from tests.helpers import StopWhenFactory, free_port
 
-# Started when this module is imported; it runs while other tests do.
-VEHICLE_ALONE = start_script(
-    [example_path("urov", "main.py"), "urov", "--port", str(free_port()), "--seconds", "1"]
+# Started when this module is imported (`early`); it runs while other tests do.
+VEHICLE_ALONE = early(
+    lambda: start_script(
+        [example_path("urov", "main.py"), "urov", "--port", str(free_port()), "--seconds", "1"]
+    )
 )
+
+
+def setUpModule() -> None:
+    VEHICLE_ALONE()  # (started already, unless in a pytest-xdist worker)
 
 
 class TestUrovParts(SNRTestCase):
@@ -92,7 +98,7 @@ class TestUrovSystem(unittest.TestCase):
         planned (the serial link handles those pages), not a misspelt 'speed'.
         run_script fails on any "Did you mean" line.
         """
-        result = VEHICLE_ALONE.result()
+        result = VEHICLE_ALONE().result()
         self.assertEqual(result.returncode, 0, result.stderr)
         self.assertIn("terminated: Timeout", result.stderr)
 

@@ -44,6 +44,7 @@ from snr.std_mods.sim import (
 from snr.utils import SNRTestCase
 from tests.examples_support import (
     StartedScript,
+    early,
     example_path,
     load_module,
     script_env,
@@ -238,16 +239,20 @@ def _start_sim_demo() -> Tuple[Path, Optional[StartedScript]]:
     return folder, start_script(command, cwd=str(folder), env=env)
 
 
-# Started when this module is imported; it runs while other tests do.
-SIM_DEMO_FOLDER, SIM_DEMO = _start_sim_demo()
+# Started when this module is imported (`early`); it runs while other tests do.
+SIM_DEMO = early(_start_sim_demo)
+
+
+def setUpModule() -> None:
+    SIM_DEMO()  # (started already, unless in a pytest-xdist worker)
 
 
 @unittest.skipUnless(HAS_PYGAME, "pygame is not installed: the demo would draw nothing")
 class TestSimDemo(SNRTestCase):
     def test_python_m_snr_demo_sim_drives_the_rover_and_says_where_the_frames_are(self) -> None:
-        assert SIM_DEMO is not None
-        folder = SIM_DEMO_FOLDER
-        result = SIM_DEMO.result()
+        folder, demo = SIM_DEMO()
+        assert demo is not None
+        result = demo.result()
         self.addCleanup(shutil.rmtree, folder, True)
         self.assertEqual(result.returncode, 0, result.stderr)
         lines = result.stdout.splitlines()

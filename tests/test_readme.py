@@ -6,7 +6,7 @@ import shutil
 import tempfile
 import unittest
 
-from tests.examples_support import ROOT, StartedScript, start_script
+from tests.examples_support import ROOT, StartedScript, early, start_script
 
 README = os.path.join(ROOT, "README.md")
 
@@ -28,8 +28,12 @@ def _start_readme_robot() -> "tuple[str, StartedScript]":
     return folder, start_script([path, "robot"], cwd=folder, timeout_s=20)
 
 
-# Started when this module is imported; it runs while other tests do.
-README_FOLDER, README_ROBOT = _start_readme_robot()
+# Started when this module is imported (`early`); it runs while other tests do.
+README_ROBOT = early(_start_readme_robot)
+
+
+def setUpModule() -> None:
+    README_ROBOT()  # (started already, unless in a pytest-xdist worker)
 
 
 class TestReadme(unittest.TestCase):
@@ -61,8 +65,9 @@ class TestReadme(unittest.TestCase):
         self.assertEqual(before.count("\n"), 0, "only the title comes before the commands")
 
     def test_example_robot_runs_as_shown(self) -> None:
-        result = README_ROBOT.result()
-        self.addCleanup(shutil.rmtree, README_FOLDER, True)
+        folder, robot = README_ROBOT()
+        result = robot.result()
+        self.addCleanup(shutil.rmtree, folder, True)
         self.assertEqual(result.returncode, 0, result.stderr)
         # The output block after the code, exactly, but for the pages' ages.
         shown = re.search(r"```python\n.*?```.*?```text\n(.*?)```", self.text, re.S)

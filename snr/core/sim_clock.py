@@ -343,6 +343,11 @@ class SimClock:
         if best is None:
             return  # nothing can act: wait for the outside world
         if due_ns > self._now_ns:
+            if any(node.stopping() for node in self._nodes):
+                # A stopping node that gave up its place in line (it stops
+                # without the clock) still ends at the time it was told: the
+                # clock moves on once it has ended (`NodeTurn.end`).
+                return
             if self.speed is not None and self._wall_delay_s(due_ns) > 0:
                 self._pacer = best  # it sleeps on the wall clock, then jumps
                 best.bell.put(None)
