@@ -26,6 +26,7 @@ from types import ModuleType
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import snr
+from snr.prelude.student_code import parse_source
 
 __all__ = ["PAGE_MODULES", "TOPICS", "Topic", "check_topics", "full_entry", "summary"]
 
@@ -288,7 +289,7 @@ def _snr_modules() -> Tuple[ModuleType, ...]:
 def _attribute_docstrings(module_name: str) -> Dict[str, str]:
     """Name -> docstring of each top-level assignment of the module followed by a string."""
     try:
-        tree = ast.parse(inspect.getsource(importlib.import_module(module_name)))
+        tree = parse_source(inspect.getsource(importlib.import_module(module_name)))
     except (OSError, TypeError, SyntaxError):
         return {}
     found: Dict[str, str] = {}

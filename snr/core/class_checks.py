@@ -42,7 +42,7 @@ from snr.prelude import (
     ComponentError,
 )
 from snr.prelude.error_text import closest_match
-from snr.prelude.student_code import describe_class, source_block
+from snr.prelude.student_code import describe_class, parse_source, source_block
 
 __all__ = ["check_component", "framework_names"]
 
@@ -188,7 +188,7 @@ def _class_tree(cls: type) -> Optional[Tuple[str, ast.ClassDef]]:
     if filename is None:
         return None
     try:
-        tree = ast.parse(textwrap.dedent("".join(lines)))
+        tree = parse_source(textwrap.dedent("".join(lines)))
     except SyntaxError:
         return None
     ast.increment_lineno(tree, first - 1)

@@ -43,6 +43,7 @@ from snr.prelude.student_code import (
     def_block,
     describe_callable,
     describe_class,
+    parse_source,
     short_path,
     source_block,
     student_frames,
@@ -296,7 +297,7 @@ def _function_node(code: CodeType) -> Optional[Union[ast.FunctionDef, ast.AsyncF
     if not lines:
         return None
     try:
-        tree = ast.parse("".join(lines))
+        tree = parse_source("".join(lines))
     except (SyntaxError, ValueError):  # the file changed since it was loaded
         return None
     for node in ast.walk(tree):

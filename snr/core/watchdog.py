@@ -70,6 +70,7 @@ from snr.prelude.student_code import (
     describe_class,
     frame_location,
     line_with_code,
+    parse_source,
     running_line,
 )
 from snr.prelude.task import format_task
@@ -417,7 +418,7 @@ def _while_spans(code: CodeType) -> List[Tuple[int, int]]:
     spans = []
     try:
         lines, first = inspect.getsourcelines(code)
-        tree = ast.parse(textwrap.dedent("".join(lines)))
+        tree = parse_source(textwrap.dedent("".join(lines)))
     except (OSError, TypeError, SyntaxError):
         pass
     else:

@@ -19,10 +19,12 @@ Example::
 
 from __future__ import annotations
 
+import ast
 import inspect
 import linecache
 import os
 import sys
+import threading
 import traceback
 from types import CodeType, FrameType, TracebackType
 from typing import Any, Optional
@@ -39,6 +41,7 @@ __all__ = [
     "is_runtime_file",
     "line_with_code",
     "outside_runtime",
+    "parse_source",
     "running_line",
     "short_path",
     "source_block",
@@ -318,3 +321,23 @@ def _is_stdlib(filename: str) -> bool:
     return filename.startswith("<") or any(
         filename.startswith(f"{prefix}/lib/python") for prefix in prefixes
     )
+
+
+_PARSE_LOCK = threading.Lock()
+
+
+def parse_source(text: str) -> ast.Module:
+    """``ast.parse(text)``, one thread at a time.
+
+    SNR reads a student's source to explain a mistake (a class's checks, a
+    failure, the watchdog, the graph), and two nodes in one process may do it
+    at the same moment. CPython 3.11 before 3.11.8 keeps the parser's
+    recursion count in the interpreter, not the thread, so two parses at once
+    can fail with ``SystemError: AST constructor recursion depth mismatch``.
+
+    Example::
+
+        parse_source("x = 1").body[0]   # an ast.Assign
+    """
+    with _PARSE_LOCK:
+        return ast.parse(text)

@@ -34,6 +34,7 @@ from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Set, Tuple, Union
 
 from snr.prelude import DataKey
+from snr.prelude.student_code import parse_source
 
 __all__ = ["KeyUse", "KeysInCode", "key_uses", "resolve"]
 
@@ -173,7 +174,7 @@ def _class_node(klass: type) -> Optional[ast.ClassDef]:
     if version not in _trees:  # new, or edited since (a hot reload): read it again
         linecache.checkcache(filename)
         try:
-            _trees[version] = ast.parse("".join(linecache.getlines(filename)))
+            _trees[version] = parse_source("".join(linecache.getlines(filename)))
         except (SyntaxError, ValueError):
             _trees[version] = None
     tree = _trees[version]
