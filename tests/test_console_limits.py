@@ -155,14 +155,16 @@ class TestTokenGuessing(unittest.TestCase):
         attempts = checked = 0
         with (
             mock.patch.dict(os.environ, {TOKEN_ENV_VAR: ""}),
-            mock.patch(THROTTLE, functools.partial(_TokenThrottle, first_delay_s=0.05)),
+            mock.patch(THROTTLE, functools.partial(_TokenThrottle, first_delay_s=0.5)),
         ):
             # The operator's own tries while the address waits are counted; their
             # summary comes when the node stops: kept here, not printed.
             with captured_logs("snr.robot"), NodeInThread([], token=TOKEN) as run:
                 with self.assertLogs("snr.robot.command_receiver", logging.WARNING) as logs:
                     started = time.monotonic()
-                    while time.monotonic() - started < 0.3:  # before the check at 0.35 s
+                    # 60 tries, or until just before the third check (at 1.5 s), so
+                    # a slow machine makes fewer tries but never gets more checked.
+                    while attempts < 60 and time.monotonic() - started < 1.4:
                         attempts += 1
                         try:
                             run.console(token=f"guess-{attempts}").close()
@@ -170,15 +172,15 @@ class TestTokenGuessing(unittest.TestCase):
                             checked += "Wrong or missing" in str(error)
                     seconds = time.monotonic() - started
                     receiver_of(run)._repeats.flush()  # the summary line (due every 5 s)
-                # The operator gets in once the address's wait is over (here: at most 0.4 s).
+                # The operator gets in once the address's wait is over (here: at most 1.5 s).
                 with connect_until_in(run, TOKEN, 5.0) as console:
                     self.assertEqual(console.send("help").status, Status.OK)
         figures = (
             f"{attempts} tries in {seconds:.1f} s, {checked} checked "
             f"({checked / seconds:.1f} guesses/s); {len(logs.output)} warning lines"
         )
-        self.assertGreater(attempts, 50, figures)
-        self.assertLessEqual(checked, 4, figures)  # checked at 0, 0.05, 0.15 s (then 0.35 s)
+        self.assertGreaterEqual(attempts, 20, figures)
+        self.assertLessEqual(checked, 2, figures)  # checked at 0 and 0.5 s (then 1.5 s)
         self.assertLessEqual(len(logs.output), 10, figures)  # not one line per try
         text = "\n".join(logs.output)
         self.assertIn("more times in the last", text)
