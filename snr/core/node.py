@@ -159,10 +159,8 @@ class Node(AbstractNode):
         self.step_mode = StepMode(self.queue, self._runner, self._lookup, self.is_terminated)
         # Sets key_hints, wiring_checks and watchdog (None outside DEBUG mode).
         self._checks = NodeChecks(self, self._components, self._runner)
-        if self.mode is Mode.DEPLOYED:
-            # A deployed robot's code was checked while it was developed: its
-            # pages are made without the checks (on every store, they add ~25 ns).
-            self.page = self._page_unchecked  # type: ignore[method-assign]
+        # A deployed robot's code was checked while it was developed: its pages
+        # are made without the checks of `page` (on every store, they add ~25 ns).
         self._check_pages = self.mode is not Mode.DEPLOYED
         core = NodeCoreFactory().get(self)
         self.add_component(core, start=False)
@@ -393,14 +391,11 @@ class Node(AbstractNode):
                 ``data`` is a whole `Page` (store ``page.data``). DEBUG and
                 TEST modes only: DEPLOYED makes pages without these checks.
         """
-        if not isinstance(key, str):
-            raise ComponentError(bad_data_key(key, data))
-        if data.__class__ is Page:
-            raise ComponentError(page_as_data(key))
-        return Page(key, data, self.role, self._page_time(), process)
-
-    def _page_unchecked(self, key: DataKey, data: Any, process: bool = True) -> Page:
-        """`page` without its checks: what a DEPLOYED node uses."""
+        if self._check_pages:
+            if not isinstance(key, str):
+                raise ComponentError(bad_data_key(key, data))
+            if data.__class__ is Page:
+                raise ComponentError(page_as_data(key))
         return Page(key, data, self.role, self._page_time(), process)
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
@@ -437,7 +432,12 @@ class Node(AbstractNode):
         return self.timer.current_s()
 
     def write_page(self, page: Page) -> None:
-        """Put ``page`` in the datastore (the node core's store_page handler)."""
+        """Put ``page`` in the datastore now; only from the node's own thread while it runs.
+
+        The node's run loop stores every ``store_page`` task's page itself;
+        this is for a handler that must store one at once. Other threads use
+        ``store_page``/``store_data``, which queue it.
+        """
         if get_ident() != self._thread_id and self.state is NodeState.RUNNING:
             raise wrong_thread_error(self.role, "write_page")
         self.datastore[page.key] = page

@@ -305,8 +305,8 @@ class AbstractNode(_FriendlyABC):
         log: the node's logger (``logging.Logger``).
         profiler: the profiler, or None when profiling is off.
         datastore: the newest page for each data key. Only the node's
-            thread writes it (the node core's ``store_page`` handler); read
-            it with ``get_page``.
+            thread writes it (its run loop stores each ``store_page`` task's
+            page); read it with ``get_page``.
 
     Example::
 
@@ -460,7 +460,7 @@ class AbstractNode(_FriendlyABC):
 
     @abstractmethod
     def write_page(self, page: Page) -> None:
-        """Put ``page`` in the datastore now (the node core's ``store_page`` handler)."""
+        """Put ``page`` in the datastore now (from the node's own thread only)."""
 
 
 class AbstractComponent(_FriendlyABC):

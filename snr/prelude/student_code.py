@@ -331,9 +331,9 @@ def parse_source(text: str) -> ast.Module:
 
     SNR reads a student's source to explain a mistake (a class's checks, a
     failure, the watchdog, the graph), and two nodes in one process may do it
-    at the same moment. CPython 3.11 before 3.11.8 keeps the parser's
-    recursion count in the interpreter, not the thread, so two parses at once
-    can fail with ``SystemError: AST constructor recursion depth mismatch``.
+    at the same moment. On CPython 3.11.7 two parses at once can fail with
+    ``SystemError: AST constructor recursion depth mismatch`` (the AST
+    constructor's recursion count is not kept per thread there).
 
     Example::
 
