@@ -56,6 +56,7 @@ from snr.prelude import (
 __all__ = ["HandlerRunner"]
 
 _STORE_PAGE = TaskType.store_page
+_EVENT = TaskType.event
 
 
 class HandlerRunner:
@@ -80,8 +81,9 @@ class HandlerRunner:
             `run_queued` returns after the current task.
         failure: the first error that stopped the node (DEBUG/TEST), or None.
         slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
-        on_unhandled: called with each task no handler matched, or None (the
+        on_unhandled: called with each event no handler matched, or None (the
             default): a DEBUG node reports events nothing handles through it.
+            (A page nobody handles is normal: it was stored all the same.)
         store_page: what stores a ``store_page`` task's page before its
             handlers run (set by the node to its core's `store_page_handler`);
             it returns the page's ``process_data`` task, or None.
@@ -111,7 +113,7 @@ class HandlerRunner:
         self.failure: Optional[SNRError] = None
         self.repeats = RepeatFilter(log)
         self._slow_reported: Set[Any] = set()
-        #: Called with a task that no handler matched (set by a DEBUG node).
+        #: Called with an event that no handler matched (set by a DEBUG node).
         self.on_unhandled: Optional[Callable[[Task], None]] = None
         #: Stores a store_page task's page before its handlers (set by the node).
         self.store_page: Optional[TaskHandler] = None
@@ -159,8 +161,8 @@ class HandlerRunner:
             if entries is None:
                 entries = lookup(task.type)
                 if entries is None:
-                    if on_unhandled is not None and task.type is not _STORE_PAGE:
-                        on_unhandled(task)  # DEBUG: an event nobody handles (a page was stored)
+                    if on_unhandled is not None and task.type is _EVENT:
+                        on_unhandled(task)  # DEBUG: an event nobody handles
                     continue
             for handler, key, component, cell in entries:
                 if timed:

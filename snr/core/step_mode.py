@@ -194,7 +194,7 @@ class StepMode:
                 if stored is not None:
                     step.returned.append(stored)
             entries = self.lookup(task)
-            if not entries and self.runner.on_unhandled is not None:
+            if not entries and task.type is TaskType.event and self.runner.on_unhandled:
                 self.runner.on_unhandled(task)  # DEBUG: an event nobody handles, as usual
             for handler, key, component, cell in entries:
                 step.handlers.append(_handler_name(handler, component))

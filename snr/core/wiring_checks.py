@@ -90,7 +90,7 @@ class WiringChecks:
     def unhandled(self, task: Task) -> None:
         """Warn, once per name, about an event no handler on this node matches."""
         if task.type is not TaskType.event:
-            return  # process_data nobody waits for is normal; store_page is always handled
+            return  # only events are mistakes: a page or process_data nobody handles is normal
         name = task.name
         if (
             not isinstance(name, str)
