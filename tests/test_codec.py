@@ -376,6 +376,15 @@ class TestPageEncoder(BackendCase):
         Page("bench", "x", "\x7f", 1.0),
         Page("bench", 0.5, "sender", 5e-324),
         Page("bench", list(range(40)), "sender", 1.0),  # past the small-page checks
+        # flat dicts, checked in one call: each value kind, and what must fall back
+        Page("bench", {"a": None, "b": True, "c": "x", "d": 7}, "sender", 2.0),
+        Page("bench", {"tiny": 1e-5, "n": 1}, "sender", 2.0),
+        Page("bench", {"k\u00e9y": 1}, "sender", 2.0),
+        Page("bench", {"text": "caf\u00e9"}, "sender", 2.0),
+        Page("bench", {"axes": {"x": [0.5, 1.0]}}, "sender", 2.0),
+        Page("bench", {"big": 2**70}, "sender", 2.0),
+        Page("bench", 0.5, "sender", -2e-5),  # a tiny negative time
+        Page("bench", True, "sender", 0.0),
     ]
 
     def test_the_same_bytes_as_page_json(self) -> None:

@@ -378,7 +378,12 @@ class Node(AbstractNode):
 
     def store_data_task(self, key: DataKey, data: Any, process: bool = True) -> Task:
         """A task that stores ``data`` under ``key`` when it runs (thesis: ``task_store_data``)."""
-        return Task(_STORE_PAGE, key, [self.page(key, data, process)])
+        if self._check_pages:  # `page`, written out: a handler may return thousands
+            if not isinstance(key, str):
+                raise ComponentError(bad_data_key(key, data))
+            if data.__class__ is Page:
+                raise ComponentError(page_as_data(key))
+        return Task(_STORE_PAGE, key, [Page(key, data, self.role, self._page_time(), process)])
 
     # ------------------------------------------------------------------
     # Datastore (thesis listing 6.4)

@@ -353,6 +353,38 @@ def _exact(values: Iterable[Any], levels: int = 2) -> bool:
 _EXACT_MAX_ITEMS = 16  # above this, writing and searching the output is faster
 
 
+def _exact_data(data: Any) -> bool:
+    """``_exact((data,))`` for a page's data, in one call for a flat dict or a scalar.
+
+    Most pages hold a number or a small dict of numbers and names; this
+    checks those without the three nested calls `_exact` makes for a dict,
+    and hands anything deeper to `_exact` (the same verdict, never laxer).
+    Example: ``_exact_data({"seq": 1, "value": 0.5})`` is True.
+    """
+    kind = data.__class__
+    if kind is float:
+        return data - data == 0.0 and not (-1e-4 < data < 1e-4 and data != 0.0)
+    if kind is int or kind is bool or data is None:
+        return True
+    if kind is not dict or len(data) > _EXACT_MAX_ITEMS:
+        return _exact((data,))
+    for key, value in data.items():
+        if key.__class__ is not str or not key.isascii() or "\x7f" in key:
+            return False
+        kind = value.__class__
+        if kind is float:
+            if value - value != 0.0 or (-1e-4 < value < 1e-4 and value != 0.0):
+                return False
+        elif kind is int or kind is bool or value is None:
+            continue
+        elif kind is str:
+            if not value.isascii() or "\x7f" in value:
+                return False
+        elif not _exact((value,), 1):  # a list or dict inside: one level more, as _exact allows
+            return False
+    return True
+
+
 def _dump_exact(obj: Mapping[str, Any]) -> bytes:
     """orjson's bytes for ``obj``, whose values passed `_exact`; json's if orjson refuses."""
     assert _orjson is not None
@@ -586,7 +618,20 @@ class PageEncoder:
                 parts = self._parts[(key, origin)]
             except KeyError:
                 parts = self._learn(key, origin)
-            if parts is not None and _exact((data, created)):
+            # _exact((data, created)), with the time (a float, or an int) checked
+            # inline: one call less for every page sent.
+            if (
+                parts is not None
+                and (
+                    created.__class__ is int
+                    or (
+                        created.__class__ is float
+                        and created - created == 0.0
+                        and (created >= 1e-4 or created <= -1e-4 or created == 0.0)
+                    )
+                )
+                and _exact_data(data)
+            ):
                 assert _orjson is not None
                 try:
                     data_json, created_json = _orjson.dumps(data), _orjson.dumps(created)

@@ -48,6 +48,8 @@ from snr.std_mods.comms.io_loop import IOLoop
 from snr.std_mods.comms.link import Link, LinkState, Transport
 from snr.std_mods.comms.wire import Message, decode_body, encode_page
 
+_OPEN = LinkState.OPEN
+
 __all__ = [
     "COMMS_CONNECTED",
     "COMMS_DISCONNECTED",
@@ -169,18 +171,27 @@ class CommsLoop(ThreadLoop):
     # -- node thread: sending -------------------------------------------------
     def forward_page(self, task: Task, key: TaskId) -> SomeTasks:
         """Send the page just stored to every open link it did not come from."""
-        page = task.page()
-        if page is None:
-            return None  # the node core has already reported the bad task
-        arrived = self._arrived.pop(id(page), None)
-        source = arrived[1] if arrived is not None and arrived[0] is page else None
+        # Every page a node sends passes here, so the usual case (one Page in
+        # the task, no page waiting to be echo-checked) is checked inline.
+        values = task.val_list
+        page = values[0] if values.__class__ is list and values else None
+        if page.__class__ is not Page:
+            page = task.page()
+            if page is None:
+                return None  # the node core has already reported the bad task
+        source = None
+        if self._arrived:  # pages from a link, under a key this node forwards
+            arrived = self._arrived.pop(id(page), None)
+            if arrived is not None and arrived[0] is page:
+                source = arrived[1]
+        origin = page.origin
         targets = [
             link
             for link in self.links
-            if link is not source and link.state is LinkState.OPEN and link.peer_role != page.origin
+            if link is not source and link.state is _OPEN and link.peer_role != origin
         ]
         if not targets:
-            if source is None and not any(link.state is LinkState.OPEN for link in self.links):
+            if source is None and not any(link.state is _OPEN for link in self.links):
                 self._report_unsent(page)
             return None
         try:
@@ -188,8 +199,9 @@ class CommsLoop(ThreadLoop):
         except NotSerializableError as error:
             self._report_unsendable(page, error)
             return None
+        page_key = page.key
         for link in targets:
-            link.send(frame, True, page.key)  # a drop is counted and reported by the link
+            link.send(frame, True, page_key)  # a drop is counted and reported by the link
         return None
 
     def _report_unsent(self, page: Page) -> None:

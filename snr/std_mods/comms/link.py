@@ -42,6 +42,7 @@ from snr.std_mods.comms.wire import (
     Bye,
     FrameDecoder,
     Hello,
+    Message,
     encode_beat,
     encode_bye,
     encode_hello,
@@ -195,7 +196,12 @@ class Outbox:
                     self._live -= 1
                     self._count_drop(key)
                     outcome = "replaced"
-                self._append(key, frame)
+                entry: _Entry = [key, frame]  # _append, written out: once per page of a burst
+                self._entries.append(entry)
+                if key is not None:
+                    self._newest[key] = entry
+                self._queued_bytes += len(frame)
+                self._live += 1
             first = self._live == 1
         if first and self.on_queued is not None:  # was empty: ask for a writer
             self.on_queued()
@@ -688,10 +694,20 @@ class Link:
         self.outbox.answer_due = True
         decoder.feed(bytes(self.io.view[:count]))
         pages: List[Page] = []
+        decode = self.owner.decode_message
         try:
             body = decoder.next_frame()
             while body is not None:
-                self._decode_into(body, pages)
+                # Every frame received passes here: a page is the usual case.
+                try:
+                    message = decode(body)
+                except WireFormatError as error:
+                    self._bad_frame(error)
+                else:
+                    if message.__class__ is Page:
+                        pages.append(message)
+                    else:
+                        self._on_message(message)
                 body = decoder.next_frame()
         except WireFormatError as error:  # a bad length: the stream is lost
             self._bad_frame(error, resetting=True)
@@ -707,7 +723,10 @@ class Link:
         self.pages_received += len(pages)
         noted = self.keys_received
         if noted is not None and len(noted) < _MAX_KEYS_NOTED:
-            noted.update(page.key for page in pages)
+            if len(pages) == 1:  # the usual read: one page
+                noted.add(pages[0].key)
+            else:
+                noted.update([page.key for page in pages])
         if self._held or not self.owner.parent.wait_for_room(0):
             # The node is behind: keep these, read no more until it has room.
             self._held.extend(pages)
@@ -759,15 +778,9 @@ class Link:
             f"{at_risk} pages sent since it was last heard from may be lost"
         )
 
-    def _decode_into(self, body: bytes, pages: List[Page]) -> None:
-        try:
-            message = self.owner.decode_message(body)
-        except WireFormatError as error:
-            self._bad_frame(error)
-            return
-        if isinstance(message, Page):
-            pages.append(message)
-        elif isinstance(message, Hello):
+    def _on_message(self, message: Message) -> None:
+        """A frame that is not a page: a hello, a beat or a bye."""
+        if isinstance(message, Hello):
             self.peer_role = message.role
             self.peer_beat_s = message.beat_s
             self._peer_takes_bye = message.bye
