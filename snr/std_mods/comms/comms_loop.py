@@ -49,6 +49,7 @@ from snr.std_mods.comms.link import Link, LinkState, Transport
 from snr.std_mods.comms.wire import Message, decode_body, encode_page
 
 _OPEN = LinkState.OPEN
+_STORE_PAGE = TaskType.store_page
 
 __all__ = [
     "COMMS_CONNECTED",
@@ -185,11 +186,18 @@ class CommsLoop(ThreadLoop):
             if arrived is not None and arrived[0] is page:
                 source = arrived[1]
         origin = page.origin
-        targets = [
-            link
-            for link in self.links
-            if link is not source and link.state is _OPEN and link.peer_role != origin
-        ]
+        links = self.links
+        targets: Sequence[Link]
+        if len(links) == 1:  # the usual case, a pair: no list to build
+            link = links[0]
+            sendable = link is not source and link.state is _OPEN and link.peer_role != origin
+            targets = links if sendable else ()
+        else:
+            targets = [
+                link
+                for link in links
+                if link is not source and link.state is _OPEN and link.peer_role != origin
+            ]
         if not targets:
             if source is None and not any(link.state is _OPEN for link in self.links):
                 self._report_unsent(page)
@@ -233,13 +241,15 @@ class CommsLoop(ThreadLoop):
             for page in pages:
                 if page.key in forwarded:
                     self._arrived[id(page)] = (page, link)
-        if len(pages) > 1 and not link.io.in_loop_thread():
+        if len(pages) == 1:  # the usual read when pages come one at a time
+            self.parent.schedule(Task(_STORE_PAGE, pages[0].key, pages))
+        elif not link.io.in_loop_thread():
             # The node's thread read these while its queue was empty: one task
             # for the lot, which the node core stores without a dispatch per
             # page. (At most one read's worth: the queue stays bounded.)
             self.schedule(tasks.store_pages(pages))
         else:  # the I/O thread: one task each, so the queue's high-water mark counts pages
-            self.schedule([Task(TaskType.store_page, page.key, [page]) for page in pages])
+            self.schedule([Task(_STORE_PAGE, page.key, [page]) for page in pages])
 
     # -- opening and closing links --------------------------------------------
     def _snr_start(self) -> None:

@@ -443,9 +443,11 @@ class IOLoop:
             return
         try:
             wake_fd = self._node_wake_r.fileno()
-            ready = [event for event in self._node_ready if event[0] != wake_fd]
-            if len(ready) < len(self._node_ready):
-                _drain(self._node_wake_r)
+            ready = self._node_ready
+            if len(ready) != 1 or ready[0][0] == wake_fd:  # not just one link's bytes
+                ready = [event for event in ready if event[0] != wake_fd]
+                if len(ready) < len(self._node_ready):
+                    _drain(self._node_wake_r)
             if ready:
                 self._read_ready(ready, on_node=True)
         except (OSError, ValueError):  # closed: the loop has stopped
