@@ -192,6 +192,45 @@ class TestBadFrames(unittest.TestCase):
         self.assertIsNone(decoder.next_frame())
         self.assertEqual(decoder.pending_bytes(), 10)  # truncated: reported at EOF
 
+    @settings(max_examples=200, deadline=None, database=None)
+    @given(
+        st.lists(st.integers(min_value=0, max_value=12), min_size=1, max_size=6),
+        st.lists(st.integers(min_value=1, max_value=40), max_size=8),
+    )
+    def test_cut_frames_gives_what_feed_and_next_frame_give(
+        self, sizes: List[int], cuts: List[int]
+    ) -> None:
+        stream = b"".join(struct.pack(">I", n) + bytes([65 + n]) * n for n in sizes)
+        cut_at = sorted({min(c, len(stream)) for c in cuts} | {len(stream)})
+        fast, slow = FrameDecoder(), FrameDecoder()
+        fast_bodies: List[bytes] = []
+        slow_bodies: List[bytes] = []
+        start = 0
+        for end in cut_at:  # the stream in chunks, as recv might return it
+            fast.cut_frames(stream[start:end], fast_bodies)
+            slow.feed(stream[start:end])
+            body = slow.next_frame()
+            while body is not None:
+                slow_bodies.append(body)
+                body = slow.next_frame()
+            self.assertEqual(fast.pending_bytes(), slow.pending_bytes())
+            start = end
+        self.assertEqual(fast_bodies, slow_bodies)
+        self.assertEqual(fast_bodies, [bytes([65 + n]) * n for n in sizes])
+
+    def test_cut_frames_keeps_the_frames_before_a_bad_header(self) -> None:
+        good = encode_page(Page("a", 1, "o", 1.0))
+        for split in (0, 3):  # straight from the read, and behind a buffered part
+            with self.subTest(split=split):
+                decoder = FrameDecoder(max_frame_bytes=1000)
+                bodies: List[bytes] = []
+                data = good + struct.pack(">I", 1001) + b"{}"
+                decoder.cut_frames(data[:split], bodies)
+                with self.assertRaises(WireFormatError) as ctx:
+                    decoder.cut_frames(data[split:], bodies)
+                self.assertIn("maximum frame size", str(ctx.exception))
+                self.assertEqual(bodies, [good[HEADER_BYTES:]])
+
     def test_oversized_length_header(self) -> None:
         decoder = FrameDecoder()
         decoder.feed(struct.pack(">I", MAX_FRAME_BYTES + 1) + b"{}")

@@ -692,30 +692,33 @@ class Link:
         self._heard_anything = True
         self._sent_when_heard = self.pages_sent
         self.outbox.answer_due = True
-        decoder.feed(bytes(self.io.view[:count]))
+        bodies: List[bytes] = []
         pages: List[Page] = []
-        decode = self.owner.decode_message
         try:
-            body = decoder.next_frame()
-            while body is not None:
-                # Every frame received passes here: a page is the usual case.
-                try:
-                    message = decode(body)
-                except WireFormatError as error:
-                    self._bad_frame(error)
-                else:
-                    if message.__class__ is Page:
-                        pages.append(message)
-                    else:
-                        self._on_message(message)
-                body = decoder.next_frame()
+            decoder.cut_frames(self.io.view[:count].tobytes(), bodies)
         except WireFormatError as error:  # a bad length: the stream is lost
+            self._decode_bodies(bodies, pages)
             self._bad_frame(error, resetting=True)
             self._deliver(pages)
             self._end(f"reset after a bad frame ({error})")
             return
+        self._decode_bodies(bodies, pages)
         if pages:
             self._deliver(pages)
+
+    def _decode_bodies(self, bodies: List[bytes], pages: List[Page]) -> None:
+        """Decode each frame body: pages go to ``pages``, hellos and byes are acted on."""
+        decode = self.owner.decode_message
+        for body in bodies:  # every frame received passes here: a page is the usual case
+            try:
+                message = decode(body)
+            except WireFormatError as error:
+                self._bad_frame(error)
+                continue
+            if message.__class__ is Page:
+                pages.append(message)
+            else:
+                self._on_message(message)
 
     def _deliver(self, pages: List[Page]) -> None:
         if not pages:
