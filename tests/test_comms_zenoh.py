@@ -6,17 +6,19 @@ and ports chosen at run time. Skipped when the Zenoh extra is not installed.
 
 from __future__ import annotations
 
+import collections
 import importlib.util
 import json
 import multiprocessing
 import os
+import queue
 import signal
 import struct
 import subprocess
 import sys
 import threading
 import unittest
-from typing import Any, Callable, Dict, List, Sequence, Tuple
+from typing import Any, Callable, Deque, Dict, List, Sequence, Tuple
 from unittest import mock
 
 from snr import (
@@ -45,7 +47,7 @@ from tests.comms_helpers import (
     SendOnConnectFactory,
     StopAfterFactory,
 )
-from tests.helpers import free_port
+from tests.helpers import free_port, wait_until
 from tests.test_comms_local import LocalNodes
 
 HAVE_ZENOH = importlib.util.find_spec("zenoh") is not None
@@ -147,36 +149,89 @@ class TestZenohCounting(unittest.TestCase):
         self.assertEqual(self.comms.stats()["lost"], 2)
         self.assertIn("Lost 2 pages from Zenoh", logs.output[0])
 
-    def test_samples_reach_the_node_in_bounded_batches_in_order_and_a_full_inbox_drops(
+    def test_samples_reach_the_node_in_bounded_batches_in_order_and_a_stuck_node_drops(
         self,
     ) -> None:
         from snr.std_mods.comms import zenoh_comms as zc
 
         node = MockNode()
-        comms = ZenohCommsFactory("lab", subscribe="**", max_wait_s=0).get(node)
+        comms = ZenohCommsFactory("lab", subscribe="**").get(node)
 
         def sample(i: int) -> Any:
             body = json.dumps({"data": i}).encode()
             payload = mock.Mock(to_bytes=mock.Mock(return_value=body))
             return mock.Mock(key_expr="snr/lab/n", payload=payload, attachment=None)
 
+        fifo: Deque[Any] = collections.deque()  # a stand-in for Zenoh's FIFO
+        channel = zc.SampleChannel(mock.Mock(try_recv=lambda: fifo.popleft() if fifo else None))
+        comms._channels.append(channel)
         count = zc._BATCH + 3
-        for i in range(count):
-            comms._on_sample(sample(i))
+        fifo.extend(sample(i) for i in range(count))
+        comms._hand_over(channel, fifo.popleft())  # what the watcher does with a burst's first
         self.assertEqual(len(node.scheduled), 1, "one task asks for the whole burst")
         first = comms.take_inbox(node.scheduled[0], node.scheduled[0].id())
         assert isinstance(first, list)
         self.assertEqual([t.val_list[0].data for t in first[:-1]], list(range(zc._BATCH)))
         self.assertEqual(first[-1].name, "zenoh_comms_arrived", "the rest queues behind")
+        self.assertFalse(channel.emptied.is_set(), "the watcher waits: the node is not done")
         rest = comms.take_inbox(first[-1], first[-1].id())
         assert isinstance(rest, list)
         self.assertEqual([t.val_list[0].data for t in rest], list(range(zc._BATCH, count)))
+        self.assertTrue(channel.emptied.is_set(), "emptied: the watcher waits for the next")
         self.assertEqual(comms.stats()["received"], count)
 
-        with mock.patch.object(zc, "_INBOX_LIMIT", 2), self.assertLogs("snr", "WARNING"):
-            for i in range(3):  # the third finds the inbox full and max_wait_s is 0
-                comms._on_sample(sample(i))
-        self.assertEqual(comms.stats()["dropped"], 1)
+        # The node's thread is stuck: the watcher drops what waits, counted and said.
+        fifo.extend(sample(i) for i in range(4))
+        comms._hand_over(channel, fifo.popleft())
+        with self.assertLogs("snr", "WARNING") as logs:
+            comms._relieve(channel)
+        self.assertEqual(comms.stats()["dropped"], 3)
+        self.assertIn("Dropped 3 pages from Zenoh", logs.output[0])
+        back = comms.take_inbox(node.scheduled[-1], node.scheduled[-1].id())
+        assert isinstance(back, list)
+        self.assertEqual([t.val_list[0].data for t in back], [0], "the one handed over stays")
+
+    def test_a_watcher_wakes_the_node_once_a_burst_and_ends_with_the_subscriber(self) -> None:
+        from snr.std_mods.comms import zenoh_comms as zc
+
+        node = MockNode()
+        comms = ZenohCommsFactory("lab", subscribe="**").get(node)
+        fifo: queue.Queue[Any] = queue.Queue()
+        closed = object()
+
+        def recv() -> Any:  # as Zenoh's: waits; raises once the subscriber is undeclared
+            item = fifo.get(timeout=5)
+            if item is closed:
+                raise RuntimeError("channel is empty and closed")
+            return item
+
+        def try_recv() -> Any:
+            try:
+                item = fifo.get_nowait()
+            except queue.Empty:
+                return None
+            return None if item is closed else item
+
+        channel = zc.SampleChannel(mock.Mock(recv=recv, try_recv=try_recv))
+        comms._watch_channel(channel)
+        for i in range(3):
+            fifo.put(
+                mock.Mock(
+                    key_expr="snr/lab/n",
+                    attachment=None,
+                    payload=mock.Mock(
+                        to_bytes=mock.Mock(return_value=json.dumps({"data": i}).encode())
+                    ),
+                )
+            )
+        self.assertTrue(wait_until(lambda: len(node.scheduled) == 1), "the node was asked")
+        pages = comms.take_inbox(node.scheduled[0], node.scheduled[0].id())
+        assert isinstance(pages, list)
+        self.assertEqual([t.val_list[0].data for t in pages], [0, 1, 2], "one batch, in order")
+        self.assertEqual(len(node.scheduled), 1, "the burst woke the node once")
+        fifo.put(closed)
+        comms._watchers[0].join(5)
+        self.assertFalse(comms._watchers[0].is_alive(), "the watcher ended with its channel")
 
     def test_bad_samples_are_counted_and_the_first_five_explained(self) -> None:
         with self.assertLogs("snr", "WARNING") as logs:

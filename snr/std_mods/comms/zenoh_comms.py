@@ -12,13 +12,15 @@ docs/wire-format.md (``{"v":1,"kind":"page","key":...,"data":...,...}``),
 declared as ``application/json``, so any Zenoh program in any language can read
 SNR pages and publish pages to SNR nodes (docs/comms.md, "Zenoh").
 
-Zenoh runs its own threads. A received sample is only put in the component's
-inbox there (a bounded deque); the node's thread decodes and stores what the
-inbox holds in batches, one queued task per batch, so the two threads take
-turns on the GIL once a batch instead of once a page. While the inbox is full
-Zenoh's thread waits (Zenoh then slows the sender), and after ``max_wait_s`` a
-page is dropped and counted. Pages published here are never received here,
-and a page that came from Zenoh is never published again (no echo).
+Zenoh runs its own threads. Each subscription's samples wait in a bounded
+Zenoh FIFO (`SampleChannel`), which the node's thread empties in batches, one
+queued task per batch: a watcher thread only wakes the node for the first
+sample of a burst, so the threads take turns on the GIL once a batch instead
+of once a page. While a FIFO is full Zenoh's thread waits (Zenoh then slows
+the sender); if the node's thread takes nothing for ``max_wait_s`` (it is
+stuck in a handler), what waits is dropped and counted, so the senders are
+never held for ever. Pages published here are never received here, and a page
+that came from Zenoh is never published again (no echo).
 """
 
 from __future__ import annotations
@@ -75,6 +77,7 @@ if TYPE_CHECKING:  # imported when a node starts: the extra is optional
 __all__ = [
     "DEFAULT_ORIGIN",
     "KEY_PREFIX",
+    "SampleChannel",
     "ZenohComms",
     "ZenohCommsFactory",
     "key_expr_of",
@@ -94,10 +97,11 @@ _MAX_ECHO_GUARD = (
     10_000  # pages from Zenoh waiting to be stored, remembered so they are not re-sent
 )
 _MAX_SENDERS = 10_000  # (sender, key) pairs whose sequence is followed for lost pages
-_INBOX_LIMIT = 10_000  # samples waiting for the node's thread; Zenoh's thread waits above it
+_INBOX_LIMIT = 10_000  # samples a subscription's FIFO holds; Zenoh's thread waits above it
 _BATCH = 500  # samples decoded per task on the node's thread (then the pages, then the rest)
 _BAD_CHARS = set("*$?#")
 _MODES = ("peer", "client", "router")
+_STORE_PAGE = TaskType.store_page
 _INSTALL = "pip install 'snr[zenoh]'"
 
 
@@ -327,6 +331,36 @@ class ZenohCommsFactory(EndpointFactory):
         return ZenohComms(self, parent)
 
 
+class SampleChannel:
+    """One subscription's samples: a bounded Zenoh FIFO that the node's thread empties.
+
+    Zenoh's network thread puts each sample in ``handler`` (a
+    ``zenoh.handlers.FifoChannel``; it waits while the FIFO is full). The
+    channel's watcher thread waits in ``handler.recv()``, without the GIL,
+    for the first sample of a burst and hands it over in ``first``; from then
+    until ``emptied`` is set again the node's thread owns the channel and
+    takes the rest straight from the FIFO with ``try_recv()``. One hand-off
+    between threads a burst, where a Python callback per sample took the GIL
+    from the node's thread for every page.
+
+    Example::
+
+        channel = SampleChannel(subscriber.handler)   # then ZenohComms watches it
+
+    Attributes:
+        first: the sample the watcher handed over, taken first by the node.
+        emptied: set while the watcher owns the channel (the node emptied it).
+        taken: samples the node's thread has taken (the watcher sees progress).
+    """
+
+    def __init__(self, handler: Any) -> None:
+        self.handler = handler
+        self.first: Any = None
+        self.emptied = threading.Event()
+        self.emptied.set()
+        self.taken = 0
+
+
 class ZenohComms(Endpoint):
     """Publishes pages under its keys to Zenoh and stores the pages it subscribes to.
 
@@ -344,8 +378,8 @@ class ZenohComms(Endpoint):
         peers: the roles of the other nodes of the system now present, by Zenoh id.
         lost_report: counts pages that never arrived from a sender (gaps in its
             count: Zenoh dropped them under congestion, or the path broke).
-        queue_report: counts received pages dropped because the node's queue
-            stayed full.
+        queue_report: counts received pages dropped because the node's thread
+            took none for ``max_wait_s`` (it was stuck).
     """
 
     def __init__(self, factory: ZenohCommsFactory, parent: AbstractNode) -> None:
@@ -370,8 +404,10 @@ class ZenohComms(Endpoint):
         self._published_keys = frozenset(factory.publish)
         self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
         self._bad_reported = 0
-        # Samples (and liveliness changes, as tuples) from Zenoh's threads, in
-        # arrival order, waiting for the node's thread to decode them.
+        # Each subscription's samples, and the liveliness changes (as tuples)
+        # that Zenoh's threads report, waiting for the node's thread.
+        self._channels: List[SampleChannel] = []
+        self._watchers: List[threading.Thread] = []
         self._inbox: Deque[Any] = collections.deque()
         self._batch_queued = False  # a task to take the inbox is queued or running
         self._closed = threading.Event()
@@ -390,7 +426,7 @@ class ZenohComms(Endpoint):
         self.queue_report = LossReport(
             self.log,
             "pages from Zenoh",
-            f"the node's queue stayed full for {factory.max_wait_s:g} s; it cannot keep up",
+            f"the node's thread took none for {factory.max_wait_s:g} s (a handler is stuck)",
         )
         self.task_handlers = {
             (TaskType.store_page, key): self.publish_page for key in factory.publish
@@ -433,15 +469,17 @@ class ZenohComms(Endpoint):
                 congestion_control=congestion,
             )
         remote = zenoh.Locality.REMOTE  # never hear our own pages
-        # Zenoh calls this on a Python thread of its own, fed by its network
-        # threads through a channel; calling it on a network thread itself
-        # (Callback(indirect=False)) was slower: that thread then waits for
-        # the GIL while the node's thread works, and stops reading the link.
-        on_sample = self._on_sample
+        # A FIFO per subscription, emptied by the node's thread (SampleChannel):
+        # a Python callback per sample, on a thread of Zenoh's or on its
+        # network thread, took the GIL from the node's thread once a page.
         for pattern in spec.subscribe:
-            self._declared.append(
-                session.declare_subscriber(self.prefix + pattern, on_sample, allowed_origin=remote)
+            subscriber = session.declare_subscriber(
+                self.prefix + pattern,
+                zenoh.handlers.FifoChannel(_INBOX_LIMIT),
+                allowed_origin=remote,
             )
+            self._declared.append(subscriber)
+            self._watch_channel(SampleChannel(subscriber.handler))
         me = str(session.zid())
         liveliness = session.liveliness()
         self._declared.append(
@@ -469,12 +507,15 @@ class ZenohComms(Endpoint):
         self._close()
 
     def _close(self) -> None:
-        self._closed.set()  # Zenoh's threads stop waiting for room in the inbox
+        self._closed.set()  # the watchers stop waiting for the node
+        for channel in self._channels:
+            channel.emptied.set()
         session, self.session = self.session, None
         if session is None:
             return
         # Undeclare first: closing a session with callbacks still declared can
-        # hang (zenoh-python #434).
+        # hang (zenoh-python #434). A subscriber's FIFO closes with it, which
+        # ends its watcher's wait.
         for entity in reversed(self._declared):
             try:
                 entity.undeclare()
@@ -483,6 +524,10 @@ class ZenohComms(Endpoint):
         self._declared.clear()
         self._publishers.clear()
         session.close()
+        for watcher in self._watchers:
+            watcher.join(1.0)
+        self._watchers.clear()
+        self._channels.clear()
 
     # -- node thread: publishing --------------------------------------------------
     def publish_page(self, task: Task, key: TaskId) -> SomeTasks:
@@ -510,44 +555,64 @@ class ZenohComms(Endpoint):
         publisher.put(body, attachment=_SEQ.pack(self._sender_id, count))
         return None
 
-    # -- Zenoh's threads: into the inbox --------------------------------------------
-    def _on_sample(self, sample: zenoh.Sample) -> None:
-        inbox = self._inbox
-        if len(inbox) >= _INBOX_LIMIT and not self._wait_for_room():
-            self.queue_report.dropped()
-            return
-        inbox.append(sample)
+    # -- watcher threads: waking the node for a burst ------------------------------
+    def _watch_channel(self, channel: SampleChannel) -> None:
+        """Start the thread that wakes the node when ``channel`` has samples."""
+        self._channels.append(channel)
+        watcher = threading.Thread(
+            target=self._watch,
+            args=(channel,),
+            name=f"snr-{self.parent.role}-zenoh-{len(self._channels)}",
+            daemon=True,  # it ends when the subscriber is undeclared; never holds up an exit
+        )
+        self._watchers.append(watcher)
+        watcher.start()
+
+    def _watch(self, channel: SampleChannel) -> None:
+        """Watcher thread: hand over a burst's first sample; wait while the node takes it all."""
+        handler = channel.handler
+        while not self._closed.is_set():
+            try:
+                sample = handler.recv()  # waits without the GIL
+            except Exception:  # zenoh.ZError "channel is empty and closed": undeclared
+                return
+            self._hand_over(channel, sample)
+            wait_s = max(self.spec.max_wait_s, 0.01)
+            taken = channel.taken
+            while not channel.emptied.wait(wait_s) and not self._closed.is_set():
+                if channel.taken == taken:  # nothing taken for max_wait_s: stuck
+                    self._relieve(channel)
+                taken = channel.taken
+
+    def _hand_over(self, channel: SampleChannel, sample: Any) -> None:
+        """Give ``sample`` to the node's thread, which then owns the channel."""
+        channel.first = sample  # set before emptied is cleared: the node takes it
+        channel.emptied.clear()
         self._ask_for_batch()
 
+    def _relieve(self, channel: SampleChannel) -> None:
+        """The node's thread is stuck: drop and count what waits in the FIFO.
+
+        Zenoh's thread waits while the FIFO is full, and under ``"block"``
+        the senders wait with it; pages that waited this long are stale.
+        """
+        dropped = 0
+        while channel.handler.try_recv() is not None:
+            dropped += 1
+        if dropped:
+            self.queue_report.dropped(dropped)
+
     def _on_liveliness(self, sample: zenoh.Sample) -> None:
-        # Never dropped (one per peer coming or going), and queued behind the
-        # pages that came before it.
+        # Never dropped (one per peer coming or going); taken once the pages
+        # that wait in the channels have been.
         self._inbox.append((sample.kind, str(sample.key_expr)))
         self._ask_for_batch()
 
     def _ask_for_batch(self) -> None:
-        """Queue a task to take the inbox, unless one is queued (one task a burst)."""
+        """Queue a task to take what waits, unless one is queued (one task a burst)."""
         if not self._batch_queued:
             self._batch_queued = True
             self.parent.schedule(self._first_batch)
-
-    def _wait_for_room(self) -> bool:
-        """Hold Zenoh's thread (Zenoh then slows the sender) until the inbox is half empty.
-
-        False after ``max_wait_s``: the page is dropped. The node's thread
-        empties the inbox; nothing here needs a lock.
-        """
-        inbox, low = self._inbox, _INBOX_LIMIT // 2
-        deadline = time.monotonic() + self.spec.max_wait_s
-        while len(inbox) > low:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return False
-            if self._closed.wait(min(left, 0.005)):
-                return True
-        if self.queue_report.dropping:
-            self.queue_report.recovered()
-        return True
 
     # -- node thread: receiving ---------------------------------------------------
     def take_inbox(self, task: Task, key: TaskId) -> SomeTasks:
@@ -555,21 +620,40 @@ class ZenohComms(Endpoint):
 
         What is left waits for the next batch, queued behind these pages, so
         the node's queue holds at most a batch of pages from Zenoh at a time.
+        Peers coming and going are announced once no page waits before them.
         """
-        # Cleared first: a sample put in after this asks for a new batch, and
-        # one put in before is taken below.
+        # Cleared first: a hand-over after this asks for a new batch, and one
+        # before it is taken below.
         self._batch_queued = False
-        inbox = self._inbox
         out: List[Task] = []
-        for _ in range(min(len(inbox), _BATCH)):
-            item = inbox.popleft()
-            if item.__class__ is tuple:
-                out.extend(self._peer_changed(*item))
-                continue
-            page = self._page_of(item)
-            if page is not None:
-                out.append(Task(TaskType.store_page, page.key, [page]))
-        if inbox and not self._batch_queued:
+        budget = _BATCH
+        for channel in self._channels:
+            if channel.emptied.is_set():
+                continue  # its watcher waits for a sample: nothing here
+            samples: List[Any] = []
+            if channel.first is not None:
+                samples.append(channel.first)
+                channel.first = None
+            try_recv = channel.handler.try_recv
+            while len(samples) < budget:
+                sample = try_recv()
+                if sample is None:
+                    channel.emptied.set()  # the watcher waits for the next burst
+                    break
+                samples.append(sample)
+            channel.taken += len(samples)
+            budget -= len(samples)
+            for sample in samples:
+                page = self._page_of(sample)
+                if page is not None:
+                    out.append(Task(_STORE_PAGE, page.key, [page]))
+        if self.queue_report.dropping and budget > 0:
+            self.queue_report.recovered()
+        inbox = self._inbox
+        if budget > 0:  # every channel emptied: peers' news, after their pages
+            while inbox:
+                out.extend(self._peer_changed(*inbox.popleft()))
+        elif not self._batch_queued:
             self._batch_queued = True
             out.append(self._next_batch)
         return out
