@@ -180,6 +180,18 @@ def page_from_sample(key: str, payload: bytes) -> Page:
         raise WireFormatError(
             f"the page's key {named!r:.60} is not the key of its key expression {key!r}"
         )
+    # An SNR sender's page (every field, of the right type), inline: every
+    # sample received passes here; anything else is checked and named there.
+    origin, created = fields.get("origin"), fields.get("created_at_s")
+    process = fields.get("process", True)
+    if (
+        type(origin) is str
+        and origin
+        and type(created) is float
+        and type(process) is bool
+        and "data" in fields
+    ):
+        return Page(key, fields["data"], origin, created, process)
     return page_from_fields(fields, default_origin=DEFAULT_ORIGIN)
 
 
@@ -532,9 +544,12 @@ class ZenohComms(Endpoint):
     # -- node thread: publishing --------------------------------------------------
     def publish_page(self, task: Task, key: TaskId) -> SomeTasks:
         """Publish the page just stored, unless it came from Zenoh."""
-        page = task.page()
-        if page is None:
-            return None  # the node core has already reported the bad task
+        values = task.val_list  # the usual task (one Page) inline: every page sent passes here
+        page = values[0] if values.__class__ is list and values else None
+        if page.__class__ is not Page:
+            page = task.page()
+            if page is None:
+                return None  # the node core has already reported the bad task
         arrived = self._arrived
         if arrived and arrived.pop(id(page), None) is page:
             return None  # it came from Zenoh: never send it back
