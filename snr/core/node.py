@@ -352,7 +352,10 @@ class Node(AbstractNode):
         From a loop's thread this waits while the node's queue is full (see
         `TaskQueue`), so a loop cannot run ahead of its node.
         """
-        self.queue.schedule(t)
+        if t.__class__ is Task:  # one task, the usual case: one call less
+            self.queue.put(t)
+        else:
+            self.queue.schedule(t)
 
     def _snr_never_wait(self) -> None:
         self.queue.never_wait(threading.get_ident())
