@@ -17,6 +17,7 @@ import struct
 import subprocess
 import sys
 import threading
+import time
 import unittest
 from typing import Any, Callable, Deque, Dict, List, Sequence, Tuple
 from unittest import mock
@@ -37,6 +38,7 @@ from snr import (
     TaskType,
     ThreadLoop,
     TimeoutLoopFactory,
+    tasks,
 )
 from snr.prelude import ConfigError, WireFormatError
 from snr.utils import MockNode
@@ -48,6 +50,7 @@ from tests.comms_helpers import (
     StopAfterFactory,
 )
 from tests.helpers import free_port, wait_until
+from tests.quiet import capture_test_logs
 from tests.test_comms_local import LocalNodes
 
 HAVE_ZENOH = importlib.util.find_spec("zenoh") is not None
@@ -307,6 +310,38 @@ class TallyFactory(EndpointFactory):
         return Tally(self, parent)
 
 
+class Stall(Endpoint):
+    """Blocks the node's thread on the first page under ``key`` (a stuck handler),
+    then stops the node once ``resume_after`` more pages have come."""
+
+    def __init__(self, factory: StallFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "stall")
+        self.spec = factory
+        self.task_handlers = {(TaskType.store_page, factory.key): self.on_page}
+
+    def on_page(self, task: Task, key: TaskId) -> SomeTasks:
+        data = task.val_list[0].data
+        if self.spec.first is None:
+            self.spec.first = data
+            time.sleep(self.spec.stall_s)  # on purpose: what a stuck handler does
+            return None
+        self.spec.after.append(data)
+        if len(self.spec.after) >= self.spec.resume_after:
+            return tasks.terminate("pages flow again")
+        return None
+
+
+class StallFactory(EndpointFactory):
+    def __init__(self, key: str, stall_s: float, resume_after: int) -> None:
+        super().__init__()
+        self.key, self.stall_s, self.resume_after = key, stall_s, resume_after
+        self.first: Any = None
+        self.after: List[int] = []
+
+    def get(self, parent: AbstractNode) -> Stall:
+        return Stall(self, parent)
+
+
 @unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)
 class TestZenohInOneProcess(unittest.TestCase):
     """Nodes on threads of this process, each with its own Zenoh session."""
@@ -346,6 +381,32 @@ class TestZenohInOneProcess(unittest.TestCase):
         self.assertEqual((got["received"], got["lost"], got["dropped"]), (count, 0, 0))
         self.assertEqual(got["published"], 1, "only the ack: received pages are never re-sent")
         self.assertEqual((sent["published"], sent["received"]), (count, 1))
+
+    def test_a_stuck_receiver_drops_what_waits_counted_and_recovers(self) -> None:
+        logs = capture_test_logs(self)
+        ep = endpoint(free_port())
+        stall = StallFactory("n", stall_s=0.8, resume_after=20)
+        nodes = self.run_nodes(
+            {
+                "receiver": [comms("lab", subscribe="n", listen=[ep], max_wait_s=0.2), stall],
+                # "block": Zenoh would hold the sender while the receiver's FIFO is full
+                "sender": [
+                    comms("lab", publish="n", connect=[ep], congestion="block"),
+                    PulseFactory("n", 100_000, 1000),
+                ],
+            },
+            ["receiver", "sender"],
+        )
+        receiver = nodes.wait_first()
+        self.assertEqual(receiver.terminate_reason, "pages flow again")
+        dropped = zenoh_of(receiver).stats()["dropped"]
+        nodes.stop()
+        self.assertEqual(nodes.errors, [])
+        self.assertGreater(dropped, 0, "what waited while the node was stuck was dropped")
+        said = [line for line in logs if "Dropped" in line and "pages from Zenoh" in line]
+        self.assertTrue(said, f"the drop was said: {logs}")
+        self.assertIn("a handler is stuck", said[0])
+        self.assertGreater(stall.after[-1], stall.first + dropped, "later pages came through")
 
     def test_two_systems_on_the_same_endpoints_do_not_hear_each_other(self) -> None:
         ep = endpoint(free_port())
