@@ -87,6 +87,11 @@ def zenoh_of(node: Any) -> Any:
     return found[0]
 
 
+def data_of(task: Task) -> List[Any]:
+    """The data of the pages a ``store_pages`` task carries, in order."""
+    return [page.data for page in task.val_list]
+
+
 @unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)
 class TestZenohSettings(unittest.TestCase):
     """Bad settings fail at once with a clear message; samples decode strictly."""
@@ -174,12 +179,13 @@ class TestZenohCounting(unittest.TestCase):
         self.assertEqual(len(node.scheduled), 1, "one task asks for the whole burst")
         first = comms.take_inbox(node.scheduled[0], node.scheduled[0].id())
         assert isinstance(first, list)
-        self.assertEqual([t.val_list[0].data for t in first[:-1]], list(range(zc._BATCH)))
-        self.assertEqual(first[-1].name, "zenoh_comms_arrived", "the rest queues behind")
+        self.assertEqual([t.name for t in first], [tasks.STORE_PAGES, "zenoh_comms_arrived"])
+        self.assertEqual(data_of(first[0]), list(range(zc._BATCH)), "one burst, in order")
         self.assertFalse(channel.emptied.is_set(), "the watcher waits: the node is not done")
         rest = comms.take_inbox(first[-1], first[-1].id())
         assert isinstance(rest, list)
-        self.assertEqual([t.val_list[0].data for t in rest], list(range(zc._BATCH, count)))
+        self.assertEqual(data_of(rest[0]), list(range(zc._BATCH, count)), "the rest behind")
+        self.assertEqual(len(rest), 1, "nothing more to ask for")
         self.assertTrue(channel.emptied.is_set(), "emptied: the watcher waits for the next")
         self.assertEqual(comms.stats()["received"], count)
 
@@ -192,7 +198,7 @@ class TestZenohCounting(unittest.TestCase):
         self.assertIn("Dropped 3 pages from Zenoh", logs.output[0])
         back = comms.take_inbox(node.scheduled[-1], node.scheduled[-1].id())
         assert isinstance(back, list)
-        self.assertEqual([t.val_list[0].data for t in back], [0], "the one handed over stays")
+        self.assertEqual(data_of(back[0]), [0], "the one handed over stays")
 
     def test_a_watcher_wakes_the_node_once_a_burst_and_ends_with_the_subscriber(self) -> None:
         from snr.std_mods.comms import zenoh_comms as zc
@@ -228,9 +234,9 @@ class TestZenohCounting(unittest.TestCase):
                 )
             )
         self.assertTrue(wait_until(lambda: len(node.scheduled) == 1), "the node was asked")
-        pages = comms.take_inbox(node.scheduled[0], node.scheduled[0].id())
-        assert isinstance(pages, list)
-        self.assertEqual([t.val_list[0].data for t in pages], [0, 1, 2], "one batch, in order")
+        batch = comms.take_inbox(node.scheduled[0], node.scheduled[0].id())
+        assert isinstance(batch, list)
+        self.assertEqual(data_of(batch[0]), [0, 1, 2], "one batch, in order")
         self.assertEqual(len(node.scheduled), 1, "the burst woke the node once")
         fifo.put(closed)
         comms._watchers[0].join(5)

@@ -631,7 +631,7 @@ class ZenohComms(Endpoint):
 
     # -- node thread: receiving ---------------------------------------------------
     def take_inbox(self, task: Task, key: TaskId) -> SomeTasks:
-        """Decode up to a batch of received samples; return their store_page tasks.
+        """Decode up to a batch of received samples; return one task that stores them.
 
         What is left waits for the next batch, queued behind these pages, so
         the node's queue holds at most a batch of pages from Zenoh at a time.
@@ -658,10 +658,9 @@ class ZenohComms(Endpoint):
                 samples.append(sample)
             channel.taken += len(samples)
             budget -= len(samples)
-            for sample in samples:
-                page = self._page_of(sample)
-                if page is not None:
-                    out.append(Task(_STORE_PAGE, page.key, [page]))
+            pages = [page for page in map(self._page_of, samples) if page is not None]
+            if pages:  # stored by the node core in one call, as a link's burst is
+                out.append(tasks.store_pages(pages))
         if self.queue_report.dropping and budget > 0:
             self.queue_report.recovered()
         inbox = self._inbox
