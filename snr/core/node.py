@@ -357,6 +357,9 @@ class Node(AbstractNode):
         else:
             self.queue.schedule(t)
 
+    def _snr_schedule_first(self, tasks: List[Task]) -> None:
+        self.queue.normal.extendleft(reversed(tasks))
+
     def _snr_never_wait(self) -> None:
         self.queue.never_wait(threading.get_ident())
 

@@ -14,7 +14,6 @@ from typing import Any, Dict, List
 from snr.core import tasks
 from snr.core.endpoint import Endpoint
 from snr.core.factory import EndpointFactory
-from snr.core.task_queue import TaskQueue
 from snr.prelude import (
     AbstractFactory,
     AbstractNode,
@@ -119,12 +118,8 @@ class NodeCoreEndpoint(Endpoint):
 
     def _store_one_by_one(self, pages: List[Any]) -> None:
         """Queue one store_page task per page, first in line, in order."""
-        queue = getattr(self.node, "queue", None)
         one_each = [Task(TaskType.store_page, str(getattr(p, "key", "")), [p]) for p in pages]
-        if isinstance(queue, TaskQueue):
-            queue.normal.extendleft(reversed(one_each))
-        else:  # not a Node: the end of the queue is the best there is
-            self.node.schedule(one_each)
+        self.node._snr_schedule_first(one_each)
 
     def add_component_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Build a component with the factory in the task and add it."""

@@ -416,6 +416,13 @@ class AbstractNode(_FriendlyABC):
         """``loop``'s thread ended with ``error``: report it (the loop has stopped)."""
         self.log.error("Loop %r stopped: it raised %s: %s", loop.name, type(error).__name__, error)
 
+    def _snr_schedule_first(self, tasks: List[Task]) -> None:
+        """Node thread: queue ``tasks`` first in line, in order (the node core splitting a burst).
+
+        A node without a queue of its own (a mock) queues them as `schedule` does.
+        """
+        self.schedule(tasks)
+
     # -- scheduling (listing 6.3) ----------------------------------------
     @abstractmethod
     def schedule(self, t: SomeTasks) -> None:
