@@ -208,7 +208,10 @@ class TestZenohCounting(unittest.TestCase):
         fifo: queue.Queue[Any] = queue.Queue()
         closed = object()
 
+        waiting = threading.Event()
+
         def recv() -> Any:  # as Zenoh's: waits; raises once the subscriber is undeclared
+            waiting.set()
             item = fifo.get(timeout=5)
             if item is closed:
                 raise RuntimeError("channel is empty and closed")
@@ -238,9 +241,20 @@ class TestZenohCounting(unittest.TestCase):
         assert isinstance(batch, list)
         self.assertEqual(data_of(batch[0]), [0, 1, 2], "one batch, in order")
         self.assertEqual(len(node.scheduled), 1, "the burst woke the node once")
-        fifo.put(closed)
-        comms._watchers[0].join(5)
+        with self.assertLogs("snr", "ERROR") as logs:  # closed, but not by the component
+            fifo.put(closed)
+            comms._watchers[0].join(5)
         self.assertFalse(comms._watchers[0].is_alive(), "the watcher ended with its channel")
+        self.assertIn("Stopped taking samples from Zenoh", logs.output[0])
+
+        waiting.clear()
+        comms._watch_channel(zc.SampleChannel(mock.Mock(recv=recv, try_recv=try_recv)))
+        self.assertTrue(waiting.wait(5), "the second watcher waits for a sample")
+        comms._closed.set()  # the component closing: its watcher ends without a word
+        with self.assertNoLogs("snr", "ERROR"):
+            fifo.put(closed)
+            comms._watchers[-1].join(5)
+        self.assertFalse(comms._watchers[-1].is_alive())
 
     def test_bad_samples_are_counted_and_the_first_five_explained(self) -> None:
         with self.assertLogs("snr", "WARNING") as logs:

@@ -589,7 +589,14 @@ class ZenohComms(Endpoint):
         while not self._closed.is_set():
             try:
                 sample = handler.recv()  # waits without the GIL
-            except Exception:  # zenoh.ZError "channel is empty and closed": undeclared
+            except Exception as error:  # zenoh.ZError "channel is empty and closed"
+                if not self._closed.is_set():  # not undeclared by us: say it, never silent
+                    self.err(
+                        "Stopped taking samples from Zenoh for %s: %s. Pages under its keys "
+                        "no longer arrive; reload this component to subscribe again.",
+                        self.name,
+                        error,
+                    )
                 return
             self._hand_over(channel, sample)
             wait_s = max(self.spec.max_wait_s, 0.01)
