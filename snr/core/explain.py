@@ -36,7 +36,13 @@ from snr.prelude import (
     TaskHandler,
     ThreadSafetyError,
 )
-from snr.prelude.error_text import exception_text, short_repr, wrong_call
+from snr.prelude.error_text import (
+    bad_data_key,
+    exception_text,
+    page_as_data,
+    short_repr,
+    wrong_call,
+)
 from snr.prelude.student_code import (
     caller_location,
     code_name,
@@ -56,6 +62,7 @@ __all__ = [
     "bad_result_error",
     "bad_result_hint",
     "check_node_args",
+    "check_page_args",
     "describe_bad_result",
     "failed_get_error",
     "handler_failure",
@@ -441,6 +448,26 @@ def reload_failure(error: BaseException) -> str:
         return f"{error.filename}:{error.lineno}: SyntaxError: {error.msg}{shown}"
     frames = student_frames(error.__traceback__)
     return f"{exception_text(error)}\nWhere it happened (most recent call last):\n{frames}"
+
+
+def check_page_args(key: Any, data: Any) -> None:
+    """Refuse a data key that is not a str, or a whole `Page` given as data.
+
+    The one check behind ``store_data``, ``store_data_task``, ``tasks.store_data``
+    and ``Node.page``, worded by `bad_data_key` and `page_as_data`.
+
+    Raises:
+        ComponentError: saying where it was stored, and what to write instead.
+
+    Example::
+
+        check_page_args("depth_m", 3.2)   # fine: returns None
+        check_page_args(21.5, "depth_m")  # ComponentError: ... the key and the data look swapped
+    """
+    if not isinstance(key, str):
+        raise ComponentError(bad_data_key(key, data))
+    if data.__class__ is Page:
+        raise ComponentError(page_as_data(key))
 
 
 def check_node_args(node_class: Any, role: Any, config: Any) -> None:

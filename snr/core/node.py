@@ -28,7 +28,7 @@ from typing import Any, Callable, List, Optional
 
 from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerTable
-from snr.core.explain import check_node_args, wrong_thread_error
+from snr.core.explain import check_node_args, check_page_args, wrong_thread_error
 from snr.core.handler_runner import HandlerRunner
 from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler, level_for_mode
@@ -46,7 +46,6 @@ from snr.prelude import (
     AbstractFactory,
     AbstractLoop,
     AbstractNode,
-    ComponentError,
     ComponentName,
     DataDict,
     DataKey,
@@ -61,7 +60,6 @@ from snr.prelude import (
     TaskId,
     TaskType,
 )
-from snr.prelude.error_text import bad_data_key, page_as_data
 
 __all__ = ["Node", "NodeState"]
 
@@ -384,11 +382,8 @@ class Node(AbstractNode):
 
     def store_data_task(self, key: DataKey, data: Any, process: bool = True) -> Task:
         """A task that stores ``data`` under ``key`` when it runs (thesis: ``task_store_data``)."""
-        if self._check_pages:  # `page`, written out: a handler may return thousands
-            if not isinstance(key, str):
-                raise ComponentError(bad_data_key(key, data))
-            if data.__class__ is Page:
-                raise ComponentError(page_as_data(key))
+        if self._check_pages:  # as `page` does: a handler may return thousands of these
+            check_page_args(key, data)
         return Task(_STORE_PAGE, key, [Page(key, data, self.role, self._page_time(), process)])
 
     # ------------------------------------------------------------------
@@ -403,22 +398,16 @@ class Node(AbstractNode):
                 TEST modes only: DEPLOYED makes pages without these checks.
         """
         if self._check_pages:
-            if not isinstance(key, str):
-                raise ComponentError(bad_data_key(key, data))
-            if data.__class__ is Page:
-                raise ComponentError(page_as_data(key))
+            check_page_args(key, data)
         return Page(key, data, self.role, self._page_time(), process)
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
         """Queue storing ``data`` under ``key``; safe from any thread."""
-        # Written out (the checks of `page` inline): from a loop, the node's
-        # thread waits for the GIL until the loop blocks again, and a thread
-        # that has just woken runs each call many times slower than a warm one.
+        # `page`, written out: from a loop, the node's thread waits for the GIL
+        # until the loop blocks again, and a thread that has just woken runs
+        # each call many times slower than a warm one.
         if self._check_pages:
-            if not isinstance(key, str):
-                raise ComponentError(bad_data_key(key, data))
-            if data.__class__ is Page:
-                raise ComponentError(page_as_data(key))
+            check_page_args(key, data)
         page = Page(key, data, self.role, self._page_time(), process)
         self.queue.put(Task(_STORE_PAGE, key, [page]))
 

@@ -13,6 +13,7 @@ from __future__ import annotations
 import time
 from typing import Any, List, Optional
 
+from snr.core.explain import check_page_args
 from snr.prelude import (
     AbstractFactory,
     ComponentError,
@@ -24,7 +25,7 @@ from snr.prelude import (
     TaskPriority,
     TaskType,
 )
-from snr.prelude.error_text import bad_data_key, page_as_data, values_not_a_list
+from snr.prelude.error_text import values_not_a_list
 
 __all__ = [
     "ADD_COMPONENT",
@@ -112,10 +113,7 @@ def store_data(key: DataKey, data: Any, process: bool = True) -> Task:
     Raises:
         ComponentError: ``key`` is not a str, or ``data`` is a whole `Page`.
     """
-    if not isinstance(key, str):
-        raise ComponentError(bad_data_key(key, data))
-    if data.__class__ is Page:
-        raise ComponentError(page_as_data(key))
+    check_page_args(key, data)
     page = Page(key, data, origin="", created_at_s=time.time(), process=process)
     return Task(TaskType.store_page, key, [page])
 
