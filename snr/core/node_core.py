@@ -63,12 +63,7 @@ class NodeCoreEndpoint(Endpoint):
         they all find the page stored, and a loop's page reaches them with one
         handler call less.
         """
-        # Every page a loop stores passes here: the usual case (a list holding
-        # one Page) is checked inline, anything else goes through task.page().
-        values = task.val_list
-        page = values[0] if values.__class__ is list and values else None
-        if page.__class__ is not Page:
-            page = task.page()
+        page = task.page()
         if page is None:
             self.err(
                 "A store_page task for %r carries %r instead of a Page; dropped it. "

@@ -172,14 +172,9 @@ class CommsLoop(ThreadLoop):
     # -- node thread: sending -------------------------------------------------
     def forward_page(self, task: Task, key: TaskId) -> SomeTasks:
         """Send the page just stored to every open link it did not come from."""
-        # Every page a node sends passes here, so the usual case (one Page in
-        # the task, no page waiting to be echo-checked) is checked inline.
-        values = task.val_list
-        page = values[0] if values.__class__ is list and values else None
-        if page.__class__ is not Page:
-            page = task.page()
-            if page is None:
-                return None  # the node core has already reported the bad task
+        page = task.page()
+        if page is None:
+            return None  # the node core has already reported the bad task
         source = None
         if self._arrived:  # pages from a link, under a key this node forwards
             arrived = self._arrived.pop(id(page), None)

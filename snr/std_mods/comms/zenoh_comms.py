@@ -544,12 +544,9 @@ class ZenohComms(Endpoint):
     # -- node thread: publishing --------------------------------------------------
     def publish_page(self, task: Task, key: TaskId) -> SomeTasks:
         """Publish the page just stored, unless it came from Zenoh."""
-        values = task.val_list  # the usual task (one Page) inline: every page sent passes here
-        page = values[0] if values.__class__ is list and values else None
-        if page.__class__ is not Page:
-            page = task.page()
-            if page is None:
-                return None  # the node core has already reported the bad task
+        page = task.page()
+        if page is None:
+            return None  # the node core has already reported the bad task
         arrived = self._arrived
         if arrived and arrived.pop(id(page), None) is page:
             return None  # it came from Zenoh: never send it back
