@@ -215,20 +215,6 @@ def decode_body(body: bytes) -> Message:
         )
     kind = obj.get("kind")
     if kind == "page":
-        # page_from_fields' common case, inline (every page received passes
-        # here); anything unusual goes there to be checked and named.
-        key, origin, created = obj.get("key"), obj.get("origin"), obj.get("created_at_s")
-        process = obj.get("process", True)
-        if (
-            type(key) is str
-            and key
-            and type(origin) is str
-            and origin
-            and type(created) is float
-            and type(process) is bool
-            and "data" in obj
-        ):
-            return Page(key, obj["data"], origin, created, process)
         return page_from_fields(obj, default_origin=None)
     if kind == "beat":
         return Beat()

@@ -180,18 +180,6 @@ def page_from_sample(key: str, payload: bytes) -> Page:
         raise WireFormatError(
             f"the page's key {named!r:.60} is not the key of its key expression {key!r}"
         )
-    # An SNR sender's page (every field, of the right type), inline: every
-    # sample received passes here; anything else is checked and named there.
-    origin, created = fields.get("origin"), fields.get("created_at_s")
-    process = fields.get("process", True)
-    if (
-        type(origin) is str
-        and origin
-        and type(created) is float
-        and type(process) is bool
-        and "data" in fields
-    ):
-        return Page(key, fields["data"], origin, created, process)
     return page_from_fields(fields, default_origin=DEFAULT_ORIGIN)
 
 
