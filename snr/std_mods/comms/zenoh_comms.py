@@ -97,7 +97,7 @@ _MAX_ECHO_GUARD = (
     10_000  # pages from Zenoh waiting to be stored, remembered so they are not re-sent
 )
 _MAX_SENDERS = 10_000  # (sender, key) pairs whose sequence is followed for lost pages
-_INBOX_LIMIT = 10_000  # samples a subscription's FIFO holds; Zenoh's thread waits above it
+_FIFO_SAMPLES = 10_000  # samples a subscription's FIFO holds; Zenoh's thread waits above it
 _BATCH = 500  # samples decoded per task on the node's thread (then the pages, then the rest)
 _BAD_CHARS = set("*$?#")
 _MODES = ("peer", "client", "router")
@@ -408,8 +408,8 @@ class ZenohComms(Endpoint):
         # that Zenoh's threads report, waiting for the node's thread.
         self._channels: List[SampleChannel] = []
         self._watchers: List[threading.Thread] = []
-        self._inbox: Deque[Any] = collections.deque()
-        self._batch_queued = False  # a task to take the inbox is queued or running
+        self._peer_changes: Deque[Any] = collections.deque()  # (kind, key expression)
+        self._batch_queued = False  # a task to take what waits is queued or running
         self._closed = threading.Event()
         batch_event = f"{factory.name}_arrived"
         # The first task of a burst jumps the queue (it never waits for room,
@@ -431,7 +431,7 @@ class ZenohComms(Endpoint):
         self.task_handlers = {
             (TaskType.store_page, key): self.publish_page for key in factory.publish
         }
-        self.task_handlers[(TaskType.event, batch_event)] = self.take_inbox
+        self.task_handlers[(TaskType.event, batch_event)] = self.take_batch
         if parent.profiler is not None:
             parent.profiler.add_report(self.name, self.stats_text)
 
@@ -475,7 +475,7 @@ class ZenohComms(Endpoint):
         for pattern in spec.subscribe:
             subscriber = session.declare_subscriber(
                 self.prefix + pattern,
-                zenoh.handlers.FifoChannel(_INBOX_LIMIT),
+                zenoh.handlers.FifoChannel(_FIFO_SAMPLES),
                 allowed_origin=remote,
             )
             self._declared.append(subscriber)
@@ -612,7 +612,7 @@ class ZenohComms(Endpoint):
     def _on_liveliness(self, sample: zenoh.Sample) -> None:
         # Never dropped (one per peer coming or going); taken once the pages
         # that wait in the channels have been.
-        self._inbox.append((sample.kind, str(sample.key_expr)))
+        self._peer_changes.append((sample.kind, str(sample.key_expr)))
         self._ask_for_batch()
 
     def _ask_for_batch(self) -> None:
@@ -622,7 +622,7 @@ class ZenohComms(Endpoint):
             self.parent.schedule(self._first_batch)
 
     # -- node thread: receiving ---------------------------------------------------
-    def take_inbox(self, task: Task, key: TaskId) -> SomeTasks:
+    def take_batch(self, task: Task, key: TaskId) -> SomeTasks:
         """Decode up to a batch of received samples; return one task that stores them.
 
         What is left waits for the next batch, queued behind these pages, so
@@ -655,10 +655,10 @@ class ZenohComms(Endpoint):
                 out.append(tasks.store_pages(pages))
         if self.queue_report.dropping and budget > 0:
             self.queue_report.recovered()
-        inbox = self._inbox
+        changes = self._peer_changes
         if budget > 0:  # every channel emptied: peers' news, after their pages
-            while inbox:
-                out.extend(self._peer_changed(*inbox.popleft()))
+            while changes:
+                out.extend(self._peer_changed(*changes.popleft()))
         elif not self._batch_queued:
             self._batch_queued = True
             out.append(self._next_batch)
