@@ -6,12 +6,13 @@ from their paths, or run them as a student would, in a subprocess.
 
 from __future__ import annotations
 
+import functools
 import importlib.util
 import os
 import subprocess
 import sys
 from types import ModuleType
-from typing import Callable, Dict, List, Optional, Sequence, TypeVar
+from typing import Callable, Dict, Optional, Sequence, TypeVar
 
 T = TypeVar("T")
 
@@ -78,13 +79,7 @@ def early(make: Callable[[], T]) -> Callable[[], T]:
         ...
         done = DEMO().result()   # in the test: a CompletedProcess
     """
-    made: List[T] = []
-
-    def value() -> T:
-        if not made:
-            made.append(make())
-        return made[0]
-
+    value = functools.cache(make)  # made once, at the first call
     if not IN_XDIST_WORKER:
         value()
     return value

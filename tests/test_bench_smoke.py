@@ -11,36 +11,31 @@ import os
 import shutil
 import tempfile
 import unittest
-from typing import Tuple
+from typing import Callable, Tuple
 
 from tests.examples_support import ROOT, StartedScript, early, start_script
 
 BENCH = os.path.join(ROOT, "bench")
 
-LOOP_LATENCY = early(
-    lambda: start_script(
-        [
-            os.path.join(BENCH, "bench_loop_latency.py"),
-            "--samples=20",
-            "--rounds=1",
-            "--interval-ms=0.5",
-        ],
-        timeout_s=20.0,  # a bound, for a busy machine: it takes ~0.5 s
-    )
+
+def _bench(script: str, *args: str, timeout_s: float) -> Callable[[], StartedScript]:
+    """``bench/<script> args`` started early (see `early`)."""
+    return early(lambda: start_script([os.path.join(BENCH, script), *args], timeout_s=timeout_s))
+
+
+# The bounds are for a busy machine: each takes well under a second alone.
+LOOP_LATENCY = _bench(
+    "bench_loop_latency.py", "--samples=20", "--rounds=1", "--interval-ms=0.5", timeout_s=20.0
 )
-COMMS = early(
-    lambda: start_script(
-        [
-            os.path.join(BENCH, "bench_comms.py"),
-            "--quick",
-            "--pages=300",
-            "--round-trips=30",
-            "--rounds=1",
-            "--idle-s=0.1",
-            "--settle-s=0.02",
-        ],
-        timeout_s=8.0,
-    )
+COMMS = _bench(
+    "bench_comms.py",
+    "--quick",
+    "--pages=300",
+    "--round-trips=30",
+    "--rounds=1",
+    "--idle-s=0.1",
+    "--settle-s=0.02",
+    timeout_s=8.0,
 )
 
 
