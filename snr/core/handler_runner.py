@@ -136,7 +136,7 @@ class HandlerRunner:
         clock = time.perf_counter
         slow_s = self.slow_handler_s
         on_unhandled = self.on_unhandled
-        store_page = self.store_page
+        store_first = self.store_first
         for _ in range(max_tasks):
             if urgent:
                 task = urgent.popleft()
@@ -144,17 +144,10 @@ class HandlerRunner:
                 task = normal.popleft()
             else:
                 return
-            if task.type is _STORE_PAGE and store_page is not None:
+            if task.type is _STORE_PAGE:
                 # The node core's part, before any handler and without a handler
-                # call (store_first, written out): a loop's page reaches its reader sooner.
-                try:
-                    follow_up = store_page(task, _STORE_PAGE)
-                except Exception as error:  # a page whose key cannot be a dict key...
-                    follow_up = None
-                    owner = getattr(store_page, "__self__", None)
-                    self.handler_failed(store_page, task, owner, error)
-                if follow_up.__class__ is Task:
-                    normal.append(follow_up)
+                # call: no look-up, no timing, so a loop's page reaches its reader sooner.
+                store_first(task)
             if components.table_stale:  # what the last task changed applies now
                 components.refresh_table()
             entries = lookup((task.type, task.name))
@@ -213,8 +206,9 @@ class HandlerRunner:
     def store_first(self, task: Task) -> Optional[Task]:
         """For a ``store_page`` task: store its page now, queue and return what follows.
 
-        What `run_queued` does before a ``store_page`` task's handlers, for a
-        caller that runs them itself (the console's ``step``).
+        What `run_queued` does before a ``store_page`` task's handlers, and
+        the console's ``step`` too. A page that cannot be stored (a key that
+        cannot be a dict key...) is a handler failure, in words, as any other.
 
         Example::
 
