@@ -571,6 +571,7 @@ class ZenohComms(Endpoint):
     def _watch(self, channel: SampleChannel) -> None:
         """Watcher thread: hand over a burst's first sample; wait while the node takes it all."""
         handler = channel.handler
+        wait_s = max(self.spec.max_wait_s, 0.01)  # max_wait_s may be 0: never spin
         while not self._closed.is_set():
             try:
                 sample = handler.recv()  # waits without the GIL
@@ -584,7 +585,6 @@ class ZenohComms(Endpoint):
                     )
                 return
             self._hand_over(channel, sample)
-            wait_s = max(self.spec.max_wait_s, 0.01)
             taken = channel.taken
             while not channel.emptied.wait(wait_s) and not self._closed.is_set():
                 if channel.taken == taken:  # nothing taken for max_wait_s: stuck
