@@ -32,6 +32,7 @@ from snr import (
     LoopFactory,
     Mode,
     Page,
+    SocketsPair,
     SomeTasks,
     Task,
     TaskId,
@@ -43,11 +44,13 @@ from snr import (
 from snr.prelude import ConfigError, WireFormatError
 from snr.utils import MockNode
 from tests.comms_helpers import (
+    EchoFactory,
     EventReporterFactory,
     NodeProcess,
     Reports,
     SendOnConnectFactory,
     StopAfterFactory,
+    TickerFactory,
 )
 from tests.helpers import free_port, wait_until
 from tests.quiet import capture_test_logs
@@ -90,6 +93,41 @@ def zenoh_of(node: Any) -> Any:
 def data_of(task: Task) -> List[Any]:
     """The data of the pages a ``store_pages`` task carries, in order."""
     return [page.data for page in task.val_list]
+
+
+class FakeFifo:
+    """A stand-in for a Zenoh FIFO handler: ``recv`` waits, and raises once closed."""
+
+    def __init__(self) -> None:
+        self.items: queue.Queue[Any] = queue.Queue()
+        self.waiting = threading.Event()  # set each time recv() starts waiting
+
+    def put(self, item: Any) -> None:
+        self.items.put(item)
+
+    def close(self) -> None:
+        self.items.put(self)
+
+    def recv(self) -> Any:
+        self.waiting.set()
+        item = self.items.get(timeout=5)
+        if item is self:
+            raise RuntimeError("channel is empty and closed")
+        return item
+
+    def try_recv(self) -> Any:
+        try:
+            item = self.items.get_nowait()
+        except queue.Empty:
+            return None
+        return None if item is self else item
+
+
+def sample_of(data: Any, attachment: Any = None) -> Any:
+    """A stand-in for a Zenoh sample under ``snr/lab/n`` whose payload is ``{"data": data}``."""
+    body = json.dumps({"data": data}).encode()
+    payload = mock.Mock(to_bytes=mock.Mock(return_value=body))
+    return mock.Mock(key_expr="snr/lab/n", payload=payload, attachment=attachment)
 
 
 @unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)
@@ -165,11 +203,7 @@ class TestZenohCounting(unittest.TestCase):
         node = MockNode()
         comms = ZenohCommsFactory("lab", subscribe="**").get(node)
 
-        def sample(i: int) -> Any:
-            body = json.dumps({"data": i}).encode()
-            payload = mock.Mock(to_bytes=mock.Mock(return_value=body))
-            return mock.Mock(key_expr="snr/lab/n", payload=payload, attachment=None)
-
+        sample = sample_of
         fifo: Deque[Any] = collections.deque()  # a stand-in for Zenoh's FIFO
         channel = zc.SampleChannel(mock.Mock(try_recv=lambda: fifo.popleft() if fifo else None))
         comms._channels.append(channel)
@@ -205,56 +239,113 @@ class TestZenohCounting(unittest.TestCase):
 
         node = MockNode()
         comms = ZenohCommsFactory("lab", subscribe="**").get(node)
-        fifo: queue.Queue[Any] = queue.Queue()
-        closed = object()
-
-        waiting = threading.Event()
-
-        def recv() -> Any:  # as Zenoh's: waits; raises once the subscriber is undeclared
-            waiting.set()
-            item = fifo.get(timeout=5)
-            if item is closed:
-                raise RuntimeError("channel is empty and closed")
-            return item
-
-        def try_recv() -> Any:
-            try:
-                item = fifo.get_nowait()
-            except queue.Empty:
-                return None
-            return None if item is closed else item
-
-        channel = zc.SampleChannel(mock.Mock(recv=recv, try_recv=try_recv))
+        fifo = FakeFifo()
+        channel = zc.SampleChannel(fifo)
         comms._watch_channel(channel)
         for i in range(3):
-            fifo.put(
-                mock.Mock(
-                    key_expr="snr/lab/n",
-                    attachment=None,
-                    payload=mock.Mock(
-                        to_bytes=mock.Mock(return_value=json.dumps({"data": i}).encode())
-                    ),
-                )
-            )
+            fifo.put(sample_of(i))
         self.assertTrue(wait_until(lambda: len(node.scheduled) == 1), "the node was asked")
         batch = comms.take_batch(node.scheduled[0], node.scheduled[0].id())
         assert isinstance(batch, list)
         self.assertEqual(data_of(batch[0]), [0, 1, 2], "one batch, in order")
         self.assertEqual(len(node.scheduled), 1, "the burst woke the node once")
         with self.assertLogs("snr", "ERROR") as logs:  # closed, but not by the component
-            fifo.put(closed)
+            fifo.close()
             comms._watchers[0].join(5)
         self.assertFalse(comms._watchers[0].is_alive(), "the watcher ended with its channel")
         self.assertIn("Stopped taking samples from Zenoh", logs.output[0])
 
-        waiting.clear()
-        comms._watch_channel(zc.SampleChannel(mock.Mock(recv=recv, try_recv=try_recv)))
-        self.assertTrue(waiting.wait(5), "the second watcher waits for a sample")
+        second = FakeFifo()
+        comms._watch_channel(zc.SampleChannel(second))
+        self.assertTrue(second.waiting.wait(5), "the second watcher waits for a sample")
         comms._closed.set()  # the component closing: its watcher ends without a word
         with self.assertNoLogs("snr", "ERROR"):
-            fifo.put(closed)
+            second.close()
             comms._watchers[-1].join(5)
         self.assertFalse(comms._watchers[-1].is_alive())
+
+    def test_the_idle_node_waits_in_the_fifo_and_its_watcher_covers_while_it_works(self) -> None:
+        from snr.std_mods.comms import zenoh_comms as zc
+
+        node = MockNode()
+        comms = ZenohCommsFactory("lab", subscribe="n").get(node)
+        fifo = FakeFifo()
+        sample = sample_of
+        woken_by: List[str] = []
+        wake_sample = sample(None, mock.Mock(to_bytes=mock.Mock(return_value=zc._WAKE)))
+
+        def put_wake(key: str) -> None:  # what a session-local put does
+            woken_by.append(key)
+            fifo.put(wake_sample)
+
+        comms._put_wake = put_wake  # type: ignore[method-assign]
+        channel = zc.SampleChannel(fifo)
+        reader = zc.IdleReader(comms, channel, "snr/lab/n")
+        comms._reader = reader
+        reader.busy_since = time.monotonic() + 60  # "just started working": the watcher waits
+        comms._watch_channel(channel)
+        self.addCleanup(comms._closed.set)
+
+        # A burst while the node waits: its own thread takes it all, in order.
+        fifo.put(sample(0))
+        fifo.put(sample(1))
+        reader.wait(5.0)
+        reader.woken()
+        self.assertEqual(len(node.scheduled), 1)
+        self.assertEqual(data_of(node.scheduled[0]), [0, 1], "one burst, in order")
+        self.assertTrue(channel.emptied.is_set(), "the FIFO is empty: nothing owed")
+
+        # The wait ends by the time the node asked for: the watcher wakes it.
+        started = time.monotonic()
+        reader.wait(0.1)
+        reader.woken()
+        self.assertGreaterEqual(time.monotonic() - started, 0.1)
+        self.assertLess(time.monotonic() - started, 2.0)
+        self.assertEqual(woken_by, ["snr/lab/n"])
+        self.assertEqual(len(node.scheduled), 1, "a wake-up is no page")
+
+        # wake() from another thread ends a wait at once.
+        threading.Timer(0.05, reader.wake).start()
+        started = time.monotonic()
+        reader.wait(30.0)
+        reader.woken()
+        self.assertLess(time.monotonic() - started, 2.0)
+
+        # The node's thread has worked a while: the watcher hands a burst over.
+        reader.busy_since = time.monotonic() - 1.0
+        fifo.put(sample(2))
+        self.assertTrue(wait_until(lambda: len(node.scheduled) == 2), "the node was asked")
+        batch = comms.take_batch(node.scheduled[1], node.scheduled[1].id())
+        assert isinstance(batch, list)
+        self.assertEqual(batch[0].val_list[0].data, 2)
+        self.assertTrue(channel.emptied.is_set())
+
+        # While the node's thread holds the channel, the watcher takes nothing.
+        with channel.take_lock:
+            fifo.put(sample(3))
+            time.sleep(0.2)
+            self.assertEqual(len(node.scheduled), 2)
+        self.assertTrue(wait_until(lambda: len(node.scheduled) == 3), "then it does")
+
+        comms._closed.set()
+        comms._watchers[0].join(5)
+        self.assertFalse(comms._watchers[0].is_alive(), "the watcher ends with the component")
+
+    def test_a_wake_key_is_one_the_subscription_matches(self) -> None:
+        from snr.std_mods.comms.zenoh_comms import wake_key
+
+        zenoh = _zenoh_module()
+        for pattern, key in [
+            ("lab/cmd", "lab/cmd"),
+            ("lab/**", "lab/_snr_wake"),
+            ("lab/*/x", "lab/_snr_wake/x"),
+            ("lab/arm_$*", "lab/arm_"),
+            ("lab/x$*y/**", "lab/xy/_snr_wake"),
+        ]:
+            with self.subTest(pattern=pattern):
+                self.assertEqual(wake_key(pattern), key)
+                self.assertTrue(zenoh.KeyExpr(pattern).includes(zenoh.KeyExpr(key)))
+        self.assertIsNone(wake_key("lab/@node/**"), "verbatim chunks: no key is made up")
 
     def test_bad_samples_are_counted_and_the_first_five_explained(self) -> None:
         with self.assertLogs("snr", "WARNING") as logs:
@@ -401,6 +492,63 @@ class TestZenohInOneProcess(unittest.TestCase):
         self.assertEqual((got["received"], got["lost"], got["dropped"]), (count, 0, 0))
         self.assertEqual(got["published"], 1, "only the ack: received pages are never re-sent")
         self.assertEqual((sent["published"], sent["received"]), (count, 1))
+
+    def test_an_idle_node_waits_in_zenoh_yet_wakes_for_its_own_loops(self) -> None:
+        ep = endpoint(free_port())
+        nodes = self.run_nodes(
+            {
+                # Published keys ("pong", "tick") are not the one it subscribes to,
+                # so its thread waits in that subscription's FIFO when idle.
+                "caller": [
+                    comms("lab", publish="ping", subscribe="*", listen=[ep]),
+                    PulseFactory("ping", 20, 200),
+                    StopAfterFactory("tick", count=25, on_store=True),
+                ],
+                "echoer": [
+                    comms("lab", publish=["pong", "tick"], subscribe="ping", connect=[ep]),
+                    EchoFactory("ping", "pong"),
+                    TickerFactory("tick", 50),
+                ],
+            },
+            ["caller", "echoer"],
+        )
+        echoer = nodes.nodes[1]
+        self.assertTrue(
+            wait_until(lambda: zenoh_of(echoer)._reader is not None), "the echoer reads idle"
+        )
+        self.assertIs(echoer.queue.waiter, zenoh_of(echoer)._reader)
+        # 25 ticks at 50 Hz: a loop's page wakes the node at once. Were it woken
+        # only when its wait times out (1 s), 25 would take longer than the test.
+        caller = nodes.wait_first()
+        self.assertEqual(caller.terminate_reason, "got tick")
+        self.assertIsNone(zenoh_of(caller)._reader, "'*' matches its own 'ping': no idle read")
+        pong = caller.get_page("pong")
+        self.assertEqual(pong.data if pong else None, 19, "every ping answered")
+        nodes.stop()
+        self.assertEqual(nodes.errors, [])
+        self.assertIsNone(echoer.queue.waiter, "stopped: the node waits on its bell again")
+
+    def test_a_node_with_sockets_and_zenoh_waits_on_one_and_hears_both(self) -> None:
+        ep = endpoint(free_port())
+        pair = SocketsPair(server_tuple=("127.0.0.1", free_port()))
+        nodes = self.run_nodes(
+            {
+                "hub": [pair.server(), comms("lab", subscribe="z", listen=[ep])],
+                "by_socket": [pair.client("s"), SendOnConnectFactory("s", 30)],
+                "by_zenoh": [comms("lab", publish="z", connect=[ep]), PulseFactory("z", 30, 200)],
+            },
+            ["hub", "by_socket", "by_zenoh"],
+        )
+        hub = nodes.nodes[0]
+
+        def heard(key: str) -> bool:
+            page = hub.get_page(key)
+            return page is not None and page.data == 29
+
+        self.assertTrue(wait_until(lambda: heard("s") and heard("z"), 6.0), "both arrived")
+        self.assertIsNotNone(hub.queue.waiter, "the hub waits on one of them when idle")
+        nodes.stop()
+        self.assertEqual(nodes.errors, [])
 
     def test_a_stuck_receiver_drops_what_waits_counted_and_recovers(self) -> None:
         logs = capture_test_logs(self)

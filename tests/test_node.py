@@ -325,6 +325,23 @@ class TestLifeCycle(SNRTestCase):
         cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
         self.assertLess(cpu / (time.monotonic() - wall), 0.02, f"{cpu:.3f} s CPU")
 
+    def test_a_node_waits_on_one_idle_waiter_the_first_comms_to_ask(self) -> None:
+        class Waiter:
+            def wait(self, timeout_s: Optional[float]) -> None: ...
+            def woken(self) -> None: ...
+            def wake(self) -> None: ...
+
+        node = Node("test", self.get_config([TimeoutLoopFactory(seconds=1)]))
+        first, second = Waiter(), Waiter()
+        self.assertTrue(node._snr_use_idle_waiter(first))
+        self.assertFalse(node._snr_use_idle_waiter(second), "one at a time")
+        self.assertIs(node.queue.waiter, first)
+        node._snr_stop_idle_waiter(second)  # not the one: nothing changes
+        self.assertIs(node.queue.waiter, first)
+        node._snr_stop_idle_waiter(first)
+        self.assertIsNone(node.queue.waiter, "the bell again")
+        self.assertTrue(node._snr_use_idle_waiter(second))
+
 
 class TestHandlerFailures(SNRTestCase):
     def test_test_mode_fails_naming_endpoint_handler_and_task(self) -> None:

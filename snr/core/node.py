@@ -361,9 +361,16 @@ class Node(AbstractNode):
     def _snr_never_wait(self) -> None:
         self.queue.never_wait(threading.get_ident())
 
-    def _snr_use_idle_waiter(self, waiter: Optional[IdleWaiter]) -> None:
-        if self._clock_turn is None:  # on a SimClock the node's idle waits are its turns
-            self.queue.use_waiter(waiter)
+    def _snr_use_idle_waiter(self, waiter: IdleWaiter) -> bool:
+        # On a SimClock the node's idle waits are its turns; and one waiter at a time.
+        if self._clock_turn is not None or self.queue.waiter not in (None, waiter):
+            return False
+        self.queue.use_waiter(waiter)
+        return True
+
+    def _snr_stop_idle_waiter(self, waiter: IdleWaiter) -> None:
+        if self._clock_turn is None and self.queue.waiter is waiter:
+            self.queue.use_waiter(None)
 
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the queue is below its high-water mark.

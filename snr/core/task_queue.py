@@ -267,6 +267,11 @@ class TaskQueue(AbstractTaskQueue):
             return self.normal.popleft()
         return None
 
+    @property
+    def waiter(self) -> Optional[IdleWaiter]:
+        """What the node's thread sleeps on when idle instead of the bell (None: the bell)."""
+        return self._waiter
+
     def use_waiter(self, waiter: Optional[IdleWaiter]) -> None:
         """Sleep on ``waiter`` from now on instead of the bell (None: the bell again).
 

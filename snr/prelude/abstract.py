@@ -388,12 +388,19 @@ class AbstractNode(_FriendlyABC):
     def _snr_never_wait(self) -> None:
         """The calling thread holds back by itself: its tasks never wait for room."""
 
-    def _snr_use_idle_waiter(self, waiter: Optional[IdleWaiter]) -> None:
-        """Wait on ``waiter`` when idle instead of the queue's bell (None: the bell again).
+    def _snr_use_idle_waiter(self, waiter: IdleWaiter) -> bool:
+        """Wait on ``waiter`` when idle instead of the queue's bell; True if it now does.
 
-        A node that cannot (a mock) ignores it: its comms are then read by
-        the I/O thread alone, which is always correct, only a little slower.
+        One waiter at a time: False if the node already waits on another (a
+        node with sockets and Zenoh waits on whichever comms started first).
+        A node that cannot (a mock, a node on a `SimClock`) says False too.
+        Either way the caller's comms must then be read by a thread of their
+        own, which is always correct, only a little slower.
         """
+        return False
+
+    def _snr_stop_idle_waiter(self, waiter: IdleWaiter) -> None:
+        """Stop waiting on ``waiter`` (if the node does): the queue's bell again."""
 
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the node's queue has room; True if it has.

@@ -235,8 +235,7 @@ class IOLoop:
                 _registry[id(node)] = (node, loop)
                 loop._thread.start()
                 if loop._reads is not None:
-                    node._snr_use_idle_waiter(loop)
-                    loop._waiter_installed = True
+                    loop._waiter_installed = node._snr_use_idle_waiter(loop)
             loop._users += 1
             return loop
 
@@ -260,7 +259,7 @@ class IOLoop:
         """End the thread (it closes what is still watched) and wait up to ``timeout_s``."""
         if self._waiter_installed:
             self._waiter_installed = False
-            self.node._snr_use_idle_waiter(None)  # the node waits on its bell again
+            self.node._snr_stop_idle_waiter(self)  # the node waits on its bell again
         self._stopping = True
         self._wake()
         if self._thread.is_alive() and self._thread is not threading.current_thread():
@@ -465,6 +464,8 @@ class IOLoop:
         Runs every `BUSY_READS_S` while the node's thread works, every
         `IDLE_CHECK_S` while it sleeps (an idle node costs next to nothing).
         """
+        if not self._waiter_installed:  # the node waits on another's: the gate stays open
+            return
         with self._gate_lock:
             idle = self._node_idle
         self._busy_timer = self.call_later(IDLE_CHECK_S if idle else BUSY_READS_S, self._check_busy)

@@ -16,7 +16,9 @@ Zenoh runs its own threads. Each subscription's samples wait in a bounded
 Zenoh FIFO (`SampleChannel`), which the node's thread empties in batches, one
 queued task per batch: a watcher thread only wakes the node for the first
 sample of a burst, so the threads take turns on the GIL once a batch instead
-of once a page. While a FIFO is full Zenoh's thread waits (Zenoh then slows
+of once a page. While the node is idle its own thread waits in the FIFO of one
+subscription (`IdleReader`), as it waits on its sockets for `SocketsPair`: a
+page that arrives then reaches the handlers with no hand-off between threads. While a FIFO is full Zenoh's thread waits (Zenoh then slows
 the sender); if the node's thread takes nothing for ``max_wait_s`` (it is
 stuck in a handler), what waits is dropped and counted, so the senders are
 never held for ever. Pages published here are never received here, and a page
@@ -77,11 +79,13 @@ if TYPE_CHECKING:  # imported when a node starts: the extra is optional
 __all__ = [
     "DEFAULT_ORIGIN",
     "KEY_PREFIX",
+    "IdleReader",
     "SampleChannel",
     "ZenohComms",
     "ZenohCommsFactory",
     "key_expr_of",
     "page_from_sample",
+    "wake_key",
     "zenoh_config",
 ]
 
@@ -99,6 +103,10 @@ _MAX_ECHO_GUARD = (
 _MAX_SENDERS = 10_000  # (sender, key) pairs whose sequence is followed for lost pages
 _FIFO_SAMPLES = 10_000  # samples a subscription's FIFO holds; Zenoh's thread waits above it
 _BATCH = 500  # samples decoded per task on the node's thread (then the pages, then the rest)
+_WAKE = b"snr-wake"  # the attachment of a sample that only wakes the node's thread (IdleReader)
+_WAKE_CHUNK = "_snr_wake"  # what stands for a wildcard in the key of such a sample
+_POLL_S = 0.025  # how often the watcher of the subscription the node's thread reads looks in
+_BUSY_READS_S = 0.05  # then, once the node's thread has worked this long, it reads for it
 _BAD_CHARS = set("*$?#")
 _MODES = ("peer", "client", "router")
 _STORE_PAGE = TaskType.store_page
@@ -359,6 +367,123 @@ class SampleChannel:
         self.emptied = threading.Event()
         self.emptied.set()
         self.taken = 0
+        #: Held by whoever takes the first sample of a burst from the FIFO
+        #: when two threads may (`IdleReader`): so they never take two at once.
+        self.take_lock = threading.Lock()
+
+
+def wake_key(pattern: str) -> Optional[str]:
+    """A key that ``pattern`` (a subscription's key expression) matches, to wake a reader with.
+
+    Wildcards become ``_snr_wake``; None if the pattern has verbatim
+    (``@``) chunks, whose keys are not made up.
+
+    Example::
+
+        wake_key("team7/cmd")        # "team7/cmd"
+        wake_key("team7/**")         # "team7/_snr_wake"
+        wake_key("team7/arm_$*")     # "team7/arm_"
+    """
+    chunks = []
+    for chunk in pattern.split("/"):
+        if chunk.startswith("@"):
+            return None
+        if chunk in ("*", "**"):
+            chunk = _WAKE_CHUNK
+        chunk = chunk.replace("$*", "")
+        chunks.append(chunk or _WAKE_CHUNK)
+    return "/".join(chunks)
+
+
+def _is_wake(sample: Any) -> bool:
+    attachment = sample.attachment
+    return attachment is not None and attachment.to_bytes() == _WAKE
+
+
+class IdleReader:
+    """The node's thread, while idle, waits in one subscription's FIFO itself.
+
+    A node's `IdleWaiter` (as the socket links' I/O loop is): a sample that
+    arrives while the node is idle is taken by the node's own thread as
+    Zenoh hands it over, with no hand-off between Python threads. That takes
+    a thread switch (20-30 µs) off each side of a round trip. Zenoh's FIFO
+    has no timeout and nothing but a sample wakes it, so `wake` puts an
+    empty sample marked ``snr-wake`` under a key the subscription matches,
+    for this session only (``Locality.SESSION_LOCAL``: no other program sees
+    it); samples so marked are skipped wherever they are taken.
+
+    While the node's thread works, the channel's watcher takes over: once the
+    thread has worked `_BUSY_READS_S` without waiting, the watcher hands a
+    waiting burst over as other watchers do (`ZenohComms._watch_for_node`).
+
+    Example (what `ZenohComms.begin` does for one subscription)::
+
+        reader = IdleReader(comms, channel, "snr/team7/cmd")
+        node._snr_use_idle_waiter(reader)   # True: idle waits are now in its FIFO
+
+    Attributes:
+        reading: the node's thread is waiting in the FIFO now.
+        deadline: when that wait must end (``time.monotonic()``; None: never).
+        busy_since: when the node's thread last left its wait.
+    """
+
+    def __init__(self, comms: ZenohComms, channel: SampleChannel, wake_key: str) -> None:
+        self.comms = comms
+        self.channel = channel
+        self.wake_key = wake_key
+        self.reading = False
+        self.deadline: Optional[float] = None
+        self.busy_since = time.monotonic()
+        self._sample: Any = None  # what the wait took from the FIFO, for woken()
+        self._take = False  # woken() takes what the node's thread owns in the channel
+        self._nudge = threading.Event()  # wakes a wait that is not in the FIFO
+
+    def wait(self, timeout_s: Optional[float]) -> None:
+        """Node's thread, queue empty: wait in the FIFO for a sample or a wake-up."""
+        channel = self.channel
+        if not channel.emptied.is_set():
+            # Samples wait for the node's thread: take them now if its queue has
+            # room, else (a paused node with a full queue) wait as on the bell.
+            if self.comms.parent.wait_for_room(0):
+                self._take = True
+            else:
+                self._nudge.wait(timeout_s)
+                self._nudge.clear()
+            return
+        # The lock is held from the wait until woken() has taken the rest of the
+        # burst: the watcher cannot take a later sample first (it would be
+        # stored out of order).
+        channel.take_lock.acquire()
+        self.deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        self.reading = True
+        try:
+            sample = channel.handler.recv()  # waits without the GIL
+        except Exception:  # undeclared: the component is closing
+            sample = None
+        self.reading = False
+        self.busy_since = time.monotonic()
+        if sample is None or _is_wake(sample):
+            channel.take_lock.release()
+        else:
+            self._sample = sample
+
+    def woken(self) -> None:
+        """Node's thread, after its wait: queue the pages of what it took."""
+        sample = self._sample
+        if sample is not None:
+            self._sample = None
+            try:
+                self.comms._take_now(self.channel, sample)
+            finally:
+                self.channel.take_lock.release()
+        elif self._take:
+            self._take = False
+            self.comms._take_now(self.channel, None)
+
+    def wake(self) -> None:
+        """End the node thread's wait, in the FIFO or not (any thread)."""
+        self._nudge.set()
+        self.comms._put_wake(self.wake_key)
 
 
 class ZenohComms(Endpoint):
@@ -408,6 +533,7 @@ class ZenohComms(Endpoint):
         # that Zenoh's threads report, waiting for the node's thread.
         self._channels: List[SampleChannel] = []
         self._watchers: List[threading.Thread] = []
+        self._reader: Optional[IdleReader] = None  # the node's thread reads one channel when idle
         self._peer_changes: Deque[Any] = collections.deque()  # (kind, key expression)
         self._batch_queued = False  # a task to take what waits is queued or running
         self._closed = threading.Event()
@@ -468,18 +594,27 @@ class ZenohComms(Endpoint):
                 encoding=zenoh.Encoding.APPLICATION_JSON,
                 congestion_control=congestion,
             )
-        remote = zenoh.Locality.REMOTE  # never hear our own pages
         # A FIFO per subscription, emptied by the node's thread (SampleChannel):
         # a Python callback per sample, on a thread of Zenoh's or on its
         # network thread, took the GIL from the node's thread once a page.
-        for pattern in spec.subscribe:
+        # The node's thread waits in one of them while idle (IdleReader).
+        idle = self._idle_subscription()
+        for index, pattern in enumerate(spec.subscribe):
+            reads_idle = idle is not None and idle[0] == index
             subscriber = session.declare_subscriber(
                 self.prefix + pattern,
                 zenoh.handlers.FifoChannel(_FIFO_SAMPLES),
-                allowed_origin=remote,
+                # Never hear our own pages; the idle reader's wake-ups are ours, but
+                # its pattern matches none of the keys this node publishes.
+                allowed_origin=zenoh.Locality.ANY if reads_idle else zenoh.Locality.REMOTE,
             )
             self._declared.append(subscriber)
-            self._watch_channel(SampleChannel(subscriber.handler))
+            channel = SampleChannel(subscriber.handler)
+            if idle is not None and reads_idle:
+                reader = IdleReader(self, channel, idle[1])
+                if self.parent._snr_use_idle_waiter(reader):
+                    self._reader = reader
+            self._watch_channel(channel)
         me = str(session.zid())
         liveliness = session.liveliness()
         self._declared.append(
@@ -506,8 +641,45 @@ class ZenohComms(Endpoint):
         """Close the session if it is still open."""
         self._close()
 
+    def _idle_subscription(self) -> Optional[Tuple[int, str]]:
+        """The subscription the node's thread may wait in while idle, and the key that wakes it.
+
+        The first whose pattern matches none of the keys this node publishes
+        (its wake-ups come from this session, so its pages would too) and
+        has a key to wake it with; None if there is none.
+        """
+        zenoh = self.zenoh
+        published = [zenoh.KeyExpr(self.prefix + key) for key in self.spec.publish]
+        for index, pattern in enumerate(self.spec.subscribe):
+            key = wake_key(pattern)
+            if key is None:
+                continue
+            expr = zenoh.KeyExpr(self.prefix + pattern)
+            try:
+                matched = expr.includes(zenoh.KeyExpr(self.prefix + key))
+            except zenoh.ZError:  # not a valid key after all
+                continue
+            if matched and not any(expr.intersects(other) for other in published):
+                return index, self.prefix + key
+        return None
+
+    def _put_wake(self, key: str) -> None:
+        """Put a wake-up sample for the idle reader (see `IdleReader`)."""
+        session = self.session
+        if session is None:
+            return
+        try:
+            session.put(
+                key, b"", attachment=_WAKE, allowed_destination=self.zenoh.Locality.SESSION_LOCAL
+            )
+        except Exception:  # closed meanwhile: nobody waits any more
+            pass
+
     def _close(self) -> None:
         self._closed.set()  # the watchers stop waiting for the node
+        reader, self._reader = self._reader, None
+        if reader is not None:  # the node waits on its bell again
+            self.parent._snr_stop_idle_waiter(reader)
         for channel in self._channels:
             channel.emptied.set()
         session, self.session = self.session, None
@@ -559,8 +731,9 @@ class ZenohComms(Endpoint):
     def _watch_channel(self, channel: SampleChannel) -> None:
         """Start the thread that wakes the node when ``channel`` has samples."""
         self._channels.append(channel)
+        read_by_node = self._reader is not None and self._reader.channel is channel
         watcher = threading.Thread(
-            target=self._watch,
+            target=self._watch_for_node if read_by_node else self._watch,
             args=(channel,),
             name=f"snr-{self.parent.role}-zenoh-{len(self._channels)}",
             daemon=True,  # it ends when the subscriber is undeclared; never holds up an exit
@@ -590,6 +763,50 @@ class ZenohComms(Endpoint):
                 if channel.taken == taken:  # nothing taken for max_wait_s: stuck
                     self._relieve(channel)
                 taken = channel.taken
+
+    def _watch_for_node(self, channel: SampleChannel) -> None:
+        """Watcher of the channel the node's thread reads while idle: it reads while the node works.
+
+        It looks every `_POLL_S` (it cannot wait in the FIFO: the node's
+        thread does). While that thread waits in the FIFO, the watcher only
+        wakes it at the time it asked for. Once the thread has worked
+        `_BUSY_READS_S` without waiting, the watcher hands over a burst that
+        came meanwhile, as `_watch` does. If the node's thread takes nothing
+        of a burst for ``max_wait_s``, what waits is dropped and counted.
+        """
+        reader = self._reader
+        assert reader is not None
+        wait_s = max(self.spec.max_wait_s, 0.01)
+        taken, since = channel.taken, time.monotonic()
+        while not self._closed.wait(_POLL_S):
+            now = time.monotonic()
+            if not channel.emptied.is_set():  # the node's thread is taking a burst
+                if channel.taken != taken:
+                    taken, since = channel.taken, now
+                elif now - since >= wait_s:  # nothing taken for max_wait_s: stuck
+                    self._relieve(channel)
+                    since = now
+                continue
+            taken, since = channel.taken, now
+            if reader.reading:
+                deadline = reader.deadline
+                if deadline is not None and now >= deadline:
+                    reader.deadline = None
+                    reader.wake()
+                continue
+            if now - reader.busy_since < _BUSY_READS_S:
+                continue
+            if not channel.take_lock.acquire(blocking=False):
+                continue  # the node's thread is about to wait in the FIFO
+            try:
+                if channel.emptied.is_set():
+                    sample = channel.handler.try_recv()
+                    if sample is not None:
+                        self._hand_over(channel, sample)
+            except Exception:  # undeclared meanwhile: the component is closing
+                return
+            finally:
+                channel.take_lock.release()
 
     def _hand_over(self, channel: SampleChannel, sample: Any) -> None:
         """Give ``sample`` to the node's thread, which then owns the channel."""
@@ -629,15 +846,40 @@ class ZenohComms(Endpoint):
         the node's queue holds at most a batch of pages from Zenoh at a time.
         Peers coming and going are announced once no page waits before them.
         """
+        return self._take_waiting()
+
+    def _take_now(self, channel: SampleChannel, sample: Any) -> None:
+        """Node's thread, after its idle wait (`IdleReader`): queue what waits now.
+
+        ``sample``, if not None, came from ``channel``'s FIFO in that wait.
+        """
+        if self.parent.wait_for_room(0):
+            self.parent.schedule(self._take_waiting(channel, sample))
+        elif sample is not None:  # no room: the node's thread owns it, taken later
+            channel.first = sample
+            channel.emptied.clear()
+
+    def _take_waiting(
+        self, idle: Optional[SampleChannel] = None, idle_sample: Any = None
+    ) -> List[Task]:
+        """`take_batch`'s work: the tasks that store what waits, up to a batch.
+
+        ``idle_sample``, if not None, came from the FIFO of ``idle`` in the
+        node thread's idle wait: it comes first, and the channel stays the
+        watcher's unless more than a batch waits.
+        """
         # Cleared first: a hand-over after this asks for a new batch, and one
         # before it is taken below.
         self._batch_queued = False
         out: List[Task] = []
         budget = _BATCH
         for channel in self._channels:
-            if channel.emptied.is_set():
-                continue  # its watcher waits for a sample: nothing here
             samples: List[Any] = []
+            owned = not channel.emptied.is_set()
+            if idle_sample is not None and channel is idle:
+                samples.append(idle_sample)
+            elif not owned:
+                continue  # its watcher waits for a sample: nothing here
             if channel.first is not None:
                 samples.append(channel.first)
                 channel.first = None
@@ -645,13 +887,19 @@ class ZenohComms(Endpoint):
             while len(samples) < budget:
                 sample = try_recv()
                 if sample is None:
-                    channel.emptied.set()  # the watcher waits for the next burst
+                    if owned:
+                        channel.emptied.set()  # the watcher waits for the next burst
                     break
                 samples.append(sample)
+            else:
+                if not owned:  # more than a batch waits: the node's thread takes it on
+                    channel.emptied.clear()
             channel.taken += len(samples)
             budget -= len(samples)
             pages = [page for page in map(self._page_of, samples) if page is not None]
-            if pages:  # stored by the node core in one call, as a link's burst is
+            if len(pages) == 1:  # the usual page of a quiet link: no burst to split
+                out.append(tasks.store_page(pages[0]))
+            elif pages:  # stored by the node core in one call, as a link's burst is
                 out.append(tasks.store_pages(pages))
         if self.queue_report.dropping and budget > 0:
             self.queue_report.recovered()
@@ -665,6 +913,10 @@ class ZenohComms(Endpoint):
         return out
 
     def _page_of(self, sample: zenoh.Sample) -> Optional[Page]:
+        attachment = sample.attachment
+        counted = None if attachment is None else attachment.to_bytes()
+        if counted == _WAKE:  # only woke the node's thread (IdleReader)
+            return None
         key_expr = str(sample.key_expr)
         key = key_expr[len(self.prefix) :]
         try:
@@ -672,9 +924,8 @@ class ZenohComms(Endpoint):
         except WireFormatError as error:
             self._bad_sample(key_expr, error)
             return None
-        attachment = sample.attachment
-        if attachment is not None:
-            self._follow_sequence(key, attachment.to_bytes())
+        if counted is not None:
+            self._follow_sequence(key, counted)
         self.received += 1
         if key in self._published_keys:
             arrived = self._arrived
