@@ -18,10 +18,11 @@ queued task per batch: a watcher thread only wakes the node for the first
 sample of a burst, so the threads take turns on the GIL once a batch instead
 of once a page. While the node is idle its own thread waits in the FIFO of one
 subscription (`IdleReader`), as it waits on its sockets for `SocketsPair`: a
-page that arrives then reaches the handlers with no hand-off between threads. While a FIFO is full Zenoh's thread waits (Zenoh then slows
-the sender); if the node's thread takes nothing for ``max_wait_s`` (it is
-stuck in a handler), what waits is dropped and counted, so the senders are
-never held for ever. Pages published here are never received here, and a page
+page that arrives then reaches the handlers with no hand-off between threads.
+While a FIFO is full Zenoh's thread waits (Zenoh then slows the sender); if
+the node's thread takes nothing for ``max_wait_s`` (it is stuck in a
+handler), what waits is dropped and counted, so the senders are never held
+for ever. Pages published here are never received here, and a page
 that came from Zenoh is never published again (no echo).
 """
 
@@ -106,6 +107,7 @@ _BATCH = 500  # samples decoded per task on the node's thread (then the pages, t
 _WAKE = b"snr-wake"  # the attachment of a sample that only wakes the node's thread (IdleReader)
 _WAKE_CHUNK = "_snr_wake"  # what stands for a wildcard in the key of such a sample
 _POLL_S = 0.025  # how often the watcher of the subscription the node's thread reads looks in
+_IDLE_CHECK_S = 0.25  # ... while that thread waits in it (an idle node costs next to nothing)
 _BUSY_READS_S = 0.05  # then, once the node's thread has worked this long, it reads for it
 _BAD_CHARS = set("*$?#")
 _MODES = ("peer", "client", "router")
@@ -768,8 +770,8 @@ class ZenohComms(Endpoint):
         """Watcher of the channel the node's thread reads while idle: it reads while the node works.
 
         It looks every `_POLL_S` (it cannot wait in the FIFO: the node's
-        thread does). While that thread waits in the FIFO, the watcher only
-        wakes it at the time it asked for. Once the thread has worked
+        thread does), every `_IDLE_CHECK_S` while that thread waits in the
+        FIFO, and then only wakes it at the time it asked for. Once the thread has worked
         `_BUSY_READS_S` without waiting, the watcher hands over a burst that
         came meanwhile, as `_watch` does. If the node's thread takes nothing
         of a burst for ``max_wait_s``, what waits is dropped and counted.
@@ -778,8 +780,10 @@ class ZenohComms(Endpoint):
         assert reader is not None
         wait_s = max(self.spec.max_wait_s, 0.01)
         taken, since = channel.taken, time.monotonic()
-        while not self._closed.wait(_POLL_S):
+        pause = _POLL_S
+        while not self._closed.wait(pause):
             now = time.monotonic()
+            pause = _POLL_S
             if not channel.emptied.is_set():  # the node's thread is taking a burst
                 if channel.taken != taken:
                     taken, since = channel.taken, now
@@ -793,6 +797,9 @@ class ZenohComms(Endpoint):
                 if deadline is not None and now >= deadline:
                     reader.deadline = None
                     reader.wake()
+                    continue
+                left = _IDLE_CHECK_S if deadline is None else deadline - now
+                pause = min(max(left, _POLL_S), _IDLE_CHECK_S)
                 continue
             if now - reader.busy_since < _BUSY_READS_S:
                 continue
