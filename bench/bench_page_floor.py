@@ -1,0 +1,175 @@
+"""The least a sent page can cost in CPython, against a pyzmq PUSH sender's message.
+
+`bench_comms.py` compares two SNR nodes with pyzmq PUSH/PULL. This bench
+asks how much of SNR's cost no node design can avoid. Each row is a sending
+thread's CPU time (``time.thread_time``) per message, with a separate
+process draining the socket:
+
+* **pyzmq PUSH**: ``push.send(orjson.dumps(body))``, the PUSH/PULL row of
+  `bench_comms.py`; libzmq's own I/O thread does the system calls, off the
+  interpreter's lock, and is not counted (that is its advantage);
+* **SNR floor**: what every page a node sends must be, with nothing of the
+  node around it: its data, a `Page`, a `Task` holding it, the datastore
+  write, the frame (`encode_page`, the exact bytes of docs/wire-format.md)
+  and its share of one ``sendall`` per 1,000 frames;
+* **+ one handler call**: the floor plus one look-up and one call of a
+  handler per page (the comms component's), as the run loop makes.
+
+The targets of `bench_comms.py` are rates of the whole pipeline, where a
+sending node's thread costs what it costs (3.8 µs a page in DEBUG mode when
+this was written): the difference between that and the floor is the node's
+own work (dispatch, the outbox, the profiler's clock in DEBUG mode), which
+is what a faster node can still save. See docs/performance.md.
+
+Run: ``python bench/bench_page_floor.py [--messages N] [--rounds N]``
+(``--quick`` for a smoke run).
+"""
+
+from __future__ import annotations
+
+import argparse
+import multiprocessing
+import socket
+import statistics
+import sys
+import time
+from typing import Any, Callable, Dict, List
+
+from bench_comms import body, free_port, small_data
+
+from snr import Page, Task, TaskType
+from snr.std_mods.comms.wire import encode_page
+
+zmq: Any
+try:
+    import zmq
+except ImportError:  # a development dependency: that row is skipped
+    zmq = None
+
+KEY = "bench"
+BATCH = 1000  # frames joined per sendall in the floor rows
+
+
+def drain_tcp(port: int) -> None:
+    """Child process: accept one connection and read until it ends."""
+    with socket.create_server(("127.0.0.1", port)) as server:
+        conn, _ = server.accept()
+        with conn:
+            while conn.recv(1 << 20):
+                pass
+
+
+def drain_zmq(address: str) -> None:
+    """Child process: pull messages until an empty one."""
+    context = zmq.Context()
+    pull = context.socket(zmq.PULL)
+    pull.bind(address)
+    while pull.recv():
+        pass
+    pull.close(linger=0)
+    context.term()
+
+
+def pyzmq_push(count: int, wall: List[float]) -> float:
+    """CPU µs per message of a pyzmq PUSH sender (the drain runs in a child).
+
+    Appends to ``wall`` the µs per message from the first send until the
+    child has pulled the last: the rate of the whole PUSH/PULL pipeline.
+    """
+    port = free_port()
+    address = f"tcp://127.0.0.1:{port}"
+    child = multiprocessing.Process(target=drain_zmq, args=(address,), daemon=True)
+    child.start()
+    context = zmq.Context()
+    push = context.socket(zmq.PUSH)
+    push.connect(address)
+    push.send(b"warm-up")
+    started, started_wall = time.thread_time(), time.perf_counter()
+    for i in range(count):
+        push.send(body(i))
+    used = time.thread_time() - started
+    push.send(b"")
+    child.join(10)
+    wall.append((time.perf_counter() - started_wall) / count * 1e6)
+    push.close(linger=0)
+    context.term()
+    return used / count * 1e6
+
+
+def snr_floor(count: int, handler_call: bool) -> float:
+    """CPU µs per page of the floor (see the module docstring)."""
+    port = free_port()
+    child = multiprocessing.Process(target=drain_tcp, args=(port,), daemon=True)
+    child.start()
+    sock = _connect(port)
+    datastore: Dict[str, Page] = {}
+    frames: List[bytes] = []
+    store_page = TaskType.store_page
+
+    def forward(task: Task, key: Any) -> None:  # what a comms handler must do at least
+        frames.append(encode_page(task.val_list[0]))
+
+    handlers: Dict[Any, Callable[[Task, Any], None]] = {(store_page, KEY): forward}
+    started = time.thread_time()
+    for i in range(count):
+        page = Page(KEY, small_data(i), "sender", time.time(), True)
+        task = Task(store_page, KEY, [page])
+        datastore[page.key] = page
+        if handler_call:
+            handlers[(task.type, task.name)](task, KEY)
+        else:
+            frames.append(encode_page(page))
+        if len(frames) >= BATCH:
+            sock.sendall(b"".join(frames))
+            frames.clear()
+    sock.sendall(b"".join(frames))
+    used = time.thread_time() - started
+    sock.close()
+    child.join(10)
+    return used / count * 1e6
+
+
+def _connect(port: int) -> socket.socket:
+    for _ in range(200):  # the child may not listen yet
+        try:
+            return socket.create_connection(("127.0.0.1", port))
+        except ConnectionRefusedError:
+            time.sleep(0.01)
+    raise RuntimeError(f"the draining process never listened on port {port}")
+
+
+def main(argv: List[str]) -> None:
+    parser = argparse.ArgumentParser(description=__doc__.split("\n")[0])
+    parser.add_argument("--quick", action="store_true", help="a smoke run")
+    parser.add_argument("--messages", type=int, help="messages a row (200000; --quick 5000)")
+    parser.add_argument("--rounds", type=int, help="interleaved rounds (5; --quick 1)")
+    args = parser.parse_args(argv)
+    count = args.messages or (5000 if args.quick else 200_000)
+    rounds = args.rounds or (1 if args.quick else 5)
+    rows: Dict[str, Callable[[], float]] = {}
+    pipeline: List[float] = []  # µs a message, PUSH to PULL
+    if zmq is not None:
+        rows["pyzmq PUSH, one message"] = lambda: pyzmq_push(count, pipeline)
+    rows["SNR floor, one page"] = lambda: snr_floor(count, handler_call=False)
+    rows["+ one handler call"] = lambda: snr_floor(count, handler_call=True)
+    results: Dict[str, List[float]] = {name: [] for name in rows}
+    for _ in range(rounds):
+        for name, run in rows.items():
+            results[name].append(run())
+    print(f"Sending thread's CPU per message: {count:,} messages, {rounds} interleaved rounds.")
+    print(f"{'':28} {'us':>6} {'spread':>12} {'x pyzmq':>8}")
+    base = results.get("pyzmq PUSH, one message")
+    for name, values in results.items():
+        ratio = f"{statistics.median([v / b for v, b in zip(values, base)]):8.2f}" if base else ""
+        spread = f"{min(values):.2f}-{max(values):.2f}"
+        print(f"{name:28} {statistics.median(values):6.2f} {spread:>12} {ratio}")
+    if base:
+        per_message = statistics.median(pipeline)
+        print(
+            f"(pyzmq PUSH/PULL here: a message every {per_message:.2f} us end to end, "
+            f"{1e6 / per_message:,.0f}/s; libzmq's I/O threads and the puller set that pace.)"
+        )
+
+
+if __name__ == "__main__":
+    main(sys.argv[1:])
