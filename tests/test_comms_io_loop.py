@@ -364,3 +364,20 @@ class TestWhenAFrameGoesAtOnce(unittest.TestCase):
         self.assertEqual(outbox.put(b"pong", now=True), "sent")
         self.assertEqual(transport.sends[-1], b"pong")
         self.assertEqual(outbox.put(b"next", now=True), "queued", "one answer per ping")
+
+    def test_a_burst_is_queued_in_one_call_in_order_or_not_at_all(self) -> None:
+        transport = CountingTransport()
+        woken: List[int] = []
+        outbox = Outbox(transport, 9, on_queued=lambda: woken.append(1))
+        self.assertTrue(outbox.put_burst([b"ab", b"cd", b"ef"], "k"))
+        self.assertEqual(woken, [1], "the I/O thread was asked once")
+        self.assertEqual(outbox.queued_bytes, 6)
+        self.assertFalse(outbox.put_burst([b"gh", b"ij", b"kl"], "k"), "over the cap: not one")
+        self.assertEqual(outbox.queued_bytes, 6, "nothing of it was queued")
+        self.assertEqual(outbox.dropped, 0, "dropping is put's to decide, frame by frame")
+        self.assertEqual(outbox.put(b"mn", key="k"), "queued")
+        self.assertEqual(outbox.put(b"op", key="k"), "replaced", "newest wins, burst or not")
+        self.assertTrue(outbox.write_some())
+        self.assertEqual(transport.sends, [b"abcdefop"], "in order, in one call")
+        outbox.close(discard=True)
+        self.assertFalse(outbox.put_burst([b"qr"], "k"), "closed")

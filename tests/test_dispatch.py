@@ -1,24 +1,32 @@
 """Two-phase matching (thesis 4.4.1) and the O(1) handler table (8.1)."""
 
+from __future__ import annotations
+
 import random
 import unittest
 from typing import Any, List, Tuple
 
 from snr import (
+    AbstractNode,
     Config,
+    Endpoint,
+    EndpointFactory,
     Mode,
     Node,
     SNRTestCase,
+    SomeTasks,
     Task,
     TaskId,
     TaskType,
     tasks,
 )
 from snr.core import HandlerTable
+from snr.prelude import HandlerError
 from snr.utils import DummyEndpointFactory
 from tests.helpers import Log, RecorderFactory, StopWhenDrainedFactory
 
 EV = TaskType.event
+SP = TaskType.store_page
 
 
 def naive_match(components: List[Any], task: Task) -> List[Tuple[str, TaskId]]:
@@ -155,3 +163,89 @@ class TestHandlerTable(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class Burster(Endpoint):
+    """Logs the pages under "x" it forwards: one by one, or a run in one call."""
+
+    def __init__(self, factory: BursterFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "burster")
+        self.spec = factory
+        self.task_handlers = {(SP, "x"): self.one, (TaskType.process_data, "x"): self.processed}
+        self.burst_handlers = {(SP, "x"): self.many}
+
+    def one(self, task: Task, key: TaskId) -> SomeTasks:
+        self.spec.log.append(("one", task.val_list[0].data))
+        return None
+
+    def many(self, run: List[Task]) -> SomeTasks:
+        stored = self.parent.get_page("x")
+        data = [task.val_list[0].data for task in run]
+        self.spec.log.append(("many", data, stored.data if stored else None))
+        if self.spec.fail:
+            raise RuntimeError("the burst broke")
+        return tasks.event("burst_done")
+
+    def processed(self, task: Task, key: TaskId) -> SomeTasks:
+        self.spec.log.append(("processed", task.val_list[0].data))
+        return None
+
+
+class BursterFactory(EndpointFactory):
+    def __init__(self, log: List[Any], fail: bool = False) -> None:
+        super().__init__()
+        self.log, self.fail = log, fail
+
+    def get(self, parent: AbstractNode) -> Burster:
+        return Burster(self, parent)
+
+
+class TestBursts(SNRTestCase):
+    """A run of store_page tasks under one key may reach a component in one call."""
+
+    FIRST = [
+        *[tasks.store_data("x", i) for i in range(5)],
+        tasks.store_data("y", 9),  # another key ends the run
+        tasks.store_data("x", 5),  # alone: the usual handler
+    ]
+
+    def test_a_run_is_stored_first_then_handed_over_in_one_call(self) -> None:
+        log: List[Any] = []
+        node = self.run_test_node([BursterFactory(log), StopWhenDrainedFactory(self.FIRST)])
+        self.assertEqual(log[0], ("many", [0, 1, 2, 3, 4], 4), "every page stored first")
+        self.assertEqual(log[1], ("one", 5))
+        self.assertEqual([d for kind, d in log[2:] if kind == "processed"], [0, 1, 2, 3, 4, 5])
+        cell = node._components.table.table[(SP, "x")][0][3]
+        self.assertEqual(cell[0], 6, "timed as one call a task")
+
+    def test_no_run_when_another_component_handles_the_key_too(self) -> None:
+        log: List[Any] = []
+        other: Log = []
+        self.run_test_node(
+            [
+                BursterFactory(log),
+                RecorderFactory("other", [(SP, "x"), (EV, "burst_done")], other),
+                StopWhenDrainedFactory(self.FIRST),
+            ]
+        )
+        self.assertEqual([d for kind, d in log if kind == "one"], [0, 1, 2, 3, 4, 5])
+        self.assertNotIn("many", [entry[0] for entry in log])
+        self.assertEqual(len(other), 6, "each handler saw every page, in turn")
+
+    def test_what_a_burst_handler_returns_is_queued_and_what_it_raises_is_reported(
+        self,
+    ) -> None:
+        log: List[Any] = []
+        done: Log = []
+        self.run_test_node(
+            [
+                BursterFactory(log),
+                RecorderFactory("done", [(EV, "burst_done")], done),
+                StopWhenDrainedFactory(self.FIRST),
+            ]
+        )
+        self.assertEqual(len(done), 1, "the returned event ran")
+        with self.assertRaises(HandlerError) as raised, self.assertLogs("snr", "ERROR"):
+            self.run_test_node([BursterFactory([], fail=True), StopWhenDrainedFactory(self.FIRST)])
+        self.assertIn("many", str(raised.exception))
+        self.assertIn("the burst broke", str(raised.exception))

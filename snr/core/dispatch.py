@@ -38,6 +38,7 @@ from typing import (
 from snr.prelude import (
     AbstractComponent,
     AbstractProfiler,
+    BurstHandler,
     ComponentError,
     StatsCell,
     TaskHandler,
@@ -47,13 +48,25 @@ from snr.prelude import (
 from snr.prelude.error_text import closest_match
 from snr.prelude.student_code import caller_block, def_block, describe_callable, describe_class
 
-__all__ = ["Entry", "HandlerMap", "HandlerTable", "check_handler", "check_task_id"]
+__all__ = [
+    "BurstEntry",
+    "Entry",
+    "HandlerMap",
+    "HandlerTable",
+    "check_handler",
+    "check_task_id",
+]
 
 Entry = Tuple[TaskHandler, TaskId, AbstractComponent, StatsCell]
 """One matched handler: the function, the id it matched under, its component,
 and its profiler cell ``[times_called, total_s]``."""
 
+BurstEntry = Tuple[BurstHandler, AbstractComponent, StatsCell]
+"""A burst handler that may serve a run of ``store_page`` tasks under one key,
+its component, and the profiler cell of the same component's task handler."""
+
 SpecificId = Tuple[TaskType, str]
+_STORE_PAGE = TaskType.store_page
 
 
 class HandlerMap(Dict[TaskId, TaskHandler]):
@@ -247,6 +260,10 @@ class HandlerTable:
 
     def __init__(self, profiler: Optional[AbstractProfiler] = None) -> None:
         self.table: Dict[Hashable, List[Entry]] = {}
+        #: ``(TaskType.store_page, key)`` -> the burst handler for a run of those
+        #: tasks, where one component alone handles them and declares one
+        #: (`AbstractComponent.burst_handlers`). Refilled in place, as ``table``.
+        self.bursts: Dict[Hashable, BurstEntry] = {}
         self.profiler = profiler
         self._specific_by_type: Dict[TaskType, Set[SpecificId]] = {}
 
@@ -272,10 +289,23 @@ class HandlerTable:
                     self._specific_by_type.setdefault(key[0], set()).add(key)
         for component in ordered:
             self._extend(component, create_missing=False)
+        self._find_bursts()
 
     def add(self, component: AbstractComponent) -> None:
         """Extend the table for a component added after all the others."""
         self._extend(component, create_missing=True)
+        self._find_bursts()
+
+    def _find_bursts(self) -> None:
+        bursts = self.bursts
+        bursts.clear()
+        for key, entries in self.table.items():
+            if len(entries) != 1 or not isinstance(key, tuple) or key[0] is not _STORE_PAGE:
+                continue
+            _, matched, component, cell = entries[0]
+            burst = component.burst_handlers.get(matched)
+            if burst is not None:
+                bursts[key] = (burst, component, cell)
 
     def _extend(self, component: AbstractComponent, create_missing: bool) -> None:
         handlers = component.task_handlers

@@ -6,7 +6,10 @@ that matches a task it
 0. for a ``store_page`` task, first stores its page (the node core's
    `store_page_handler`, called here directly: no table look-up, no timing)
    and queues its ``process_data`` task, so every handler finds the page in
-   the datastore;
+   the datastore. When one component alone handles the task's key and has
+   a burst handler for it (``burst_handlers``), the ``store_page`` tasks
+   under that key right behind it are stored too and the burst handler is
+   called once for the run (`run_burst`);
 1. calls ``handler(task, key)``, timing it unless the node is DEPLOYED
    without a profiler (the time goes to the handler's profiler cell, two
    additions, and a handler slower than ``slow_handler_s`` is reported once);
@@ -30,9 +33,10 @@ from __future__ import annotations
 
 import logging
 import time
-from typing import Any, Callable, Hashable, List, Optional, Set
+from typing import Any, Callable, Hashable, List, Optional, Set, cast
 
 from snr.core.components import ComponentSet
+from snr.core.dispatch import BurstEntry
 from snr.core.explain import (
     bad_result_error,
     handler_failure,
@@ -57,6 +61,7 @@ __all__ = ["HandlerRunner"]
 
 _STORE_PAGE = TaskType.store_page
 _EVENT = TaskType.event
+_MAX_BURST = 256  # store_page tasks a burst handler gets at most in one call
 
 
 class HandlerRunner:
@@ -137,6 +142,7 @@ class HandlerRunner:
         slow_s = self.slow_handler_s
         on_unhandled = self.on_unhandled
         store_first = self.store_first
+        bursts = components.table.bursts  # refilled in place when the table changes
         for _ in range(max_tasks):
             if urgent:
                 task = urgent.popleft()
@@ -148,6 +154,15 @@ class HandlerRunner:
                 # The node core's part, before any handler and without a handler
                 # call: no look-up, no timing, so a loop's page reaches its reader sooner.
                 store_first(task)
+                if bursts and normal and normal[0].name == task.name:
+                    if components.table_stale:
+                        components.refresh_table()
+                    burst = bursts.get((_STORE_PAGE, task.name))
+                    if burst is not None and normal[0].type is _STORE_PAGE:
+                        self.run_burst(task, burst)
+                        if not self.running:
+                            return
+                        continue
             if components.table_stale:  # what the last task changed applies now
                 components.refresh_table()
             entries = lookup((task.type, task.name))
@@ -179,6 +194,43 @@ class HandlerRunner:
                     self.queue_all(self.check_result(result, handler, task))
             if not self.running:
                 return
+
+    def run_burst(self, first: Task, burst: BurstEntry) -> None:
+        """Run ``burst``'s handler for ``first`` and the run of tasks like it behind it.
+
+        ``first`` (a ``store_page`` task, its page stored) and every
+        ``store_page`` task under the same key at the head of the queue, up
+        to `_MAX_BURST`, each stored first as usual, go to the burst handler
+        in one call; it is timed as one call per task. What it returns is
+        queued as a handler's result is.
+        """
+        handler, component, cell = burst
+        normal = self.queue.normal
+        store_first = self.store_first
+        name = first.name
+        run = [first]
+        while normal and len(run) < _MAX_BURST:
+            task = normal[0]
+            if task.type is not _STORE_PAGE or task.name != name:
+                break
+            normal.popleft()
+            store_first(task)
+            run.append(task)
+        named = cast(TaskHandler, handler)  # reported by its name, as a task handler is
+        started = time.perf_counter()
+        try:
+            result = handler(run)
+        except Exception as error:
+            self.handler_failed(named, first, component, error)
+            return
+        if self.timed:
+            took = time.perf_counter() - started
+            cell[0] += len(run)
+            cell[1] += took
+            if took > self.slow_handler_s:
+                self.report_slow(named, first, took)
+        if result is not None:
+            self.queue_all(self.check_result(result, named, first))
 
     def run(
         self,

@@ -19,11 +19,12 @@ import inspect
 import logging
 import re
 from abc import ABCMeta, abstractmethod
-from types import ModuleType
-from typing import Any, Callable, Dict, List, Optional, Protocol
+from types import MappingProxyType, ModuleType
+from typing import Any, Callable, Dict, List, Mapping, Optional, Protocol
 
 from snr.prelude.errors import ComponentError
 from snr.prelude.names import (
+    BurstHandler,
     ComponentName,
     DataDict,
     DataKey,
@@ -488,6 +489,17 @@ class AbstractComponent(_FriendlyABC):
     factory: AbstractFactory
     parent: AbstractNode
     name: ComponentName
+    #: Handlers for a run of ``store_page`` tasks under one key, in one call,
+    #: by the same task id as in ``task_handlers`` (which must have it too).
+    #: The node uses one when this component is the only one that handles
+    #: the id and several such tasks wait one behind the other: it stores
+    #: every page of the run, then calls the burst handler once with the
+    #: tasks (at most 256, in order). For what gains from seeing a burst
+    #: whole, such as comms encoding and queueing pages in one go; a
+    #: student's component does not need it. Example (``CommsLoop``)::
+    #:
+    #:     self.burst_handlers = {(TaskType.store_page, "depth"): self.forward_burst}
+    burst_handlers: Mapping[TaskId, BurstHandler] = MappingProxyType({})
 
     @property
     @abstractmethod

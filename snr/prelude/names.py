@@ -30,6 +30,7 @@ __all__ = [
     "DataKey",
     "Mode",
     "Role",
+    "BurstHandler",
     "SomeTasks",
     "StatsCell",
     "TaskHandler",
@@ -132,6 +133,10 @@ TaskHandler = Callable[["snr.prelude.task.Task", TaskId], SomeTasks]
 
 TaskHandlerMap = Dict[TaskId, TaskHandler]
 """An endpoint's ``task_handlers``: which handler runs for which task id."""
+
+BurstHandler = Callable[[List["snr.prelude.task.Task"]], SomeTasks]
+"""A handler for a run of ``store_page`` tasks under one key, in one call (see
+`AbstractComponent.burst_handlers`): ``def forward_burst(self, run) -> SomeTasks``."""
 
 TaskScheduler = Callable[[SomeTasks], None]
 """Something that queues tasks on a node, such as ``endpoint.schedule``."""

@@ -207,6 +207,30 @@ class Outbox:
             self.on_queued()
         return outcome
 
+    def put_burst(self, frames: List[bytes], key: DataKey) -> bool:
+        """Queue ``frames`` (pages under ``key``, in order) with one lock; False if it did not.
+
+        Only when they all fit under ``max_bytes`` and the outbox is open:
+        otherwise nothing is queued, and the caller puts them one by one
+        (each drop decided and counted by `put`). Unlike ``put(now=True)``,
+        nothing is written straight away: a burst is worth one ``send``.
+        """
+        size = 0
+        for frame in frames:
+            size += len(frame)
+        with self._lock:
+            if self._closed or self._queued_bytes + size > self.max_bytes:
+                return False
+            burst: List[_Entry] = [[key, frame] for frame in frames]
+            self._entries.extend(burst)
+            self._newest[key] = burst[-1]
+            self._queued_bytes += size
+            first = self._live == 0
+            self._live += len(burst)
+        if first and self.on_queued is not None:  # was empty: ask for a writer
+            self.on_queued()
+        return True
+
     def _append(self, key: Optional[DataKey], frame: bytes) -> None:
         entry: _Entry = [key, frame]
         self._entries.append(entry)
@@ -447,6 +471,25 @@ class Link:
         if outcome == "dropped":
             self.loss.dropped()
         return False
+
+    def send_burst(self, frames: List[bytes], key: DataKey) -> None:
+        """`send` for the frames of a run of pages under ``key`` (node thread).
+
+        Queued with one call when they all fit in the backlog; else one by
+        one, so that each drop is decided, counted and reported as `send`
+        does. They leave when the node's thread next goes idle, or at once
+        once 64 KiB wait.
+        """
+        if self.state is not LinkState.OPEN:
+            return
+        outbox = self.outbox
+        if outbox.put_burst(frames, key):
+            self.pages_sent += len(frames)
+            if outbox.queued_bytes >= _WRITE_NOW_BYTES and not self._io_writes:
+                self.write_waiting()
+            return
+        for frame in frames:
+            self.send(frame, True, key)
 
     def close(self) -> None:
         """Send what is queued and a goodbye, then end the connection (graceful)."""
