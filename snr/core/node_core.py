@@ -28,6 +28,7 @@ from snr.prelude import (
 __all__ = ["NODE_CORE_NAME", "NodeCoreEndpoint", "NodeCoreFactory"]
 
 _PROCESS_DATA = TaskType.process_data
+_STORE_PAGE = TaskType.store_page
 
 NODE_CORE_NAME = "node_core"
 """The component name of every node's core endpoint."""
@@ -92,23 +93,30 @@ class NodeCoreEndpoint(Endpoint):
         ones after it go back to the front of the queue as one ``store_page``
         task each, so every handler sees them in the usual order.
         """
+        node = self.node
+        datastore = node.datastore
         processed: List[Task] = []
-        alone: Dict[DataKey, bool] = {}  # key -> only this core handles its store_page
+        # Per key, asked once a burst: only this core handles its store_page
+        # (else page by page from there), and someone handles its process_data.
+        alone: Dict[DataKey, bool] = {}
+        wanted: Dict[DataKey, bool] = {}
         pages = task.val_list
         for index, page in enumerate(pages):
-            if not isinstance(page, Page) or not page.origin:
+            if (page.__class__ is not Page and not isinstance(page, Page)) or not page.origin:
                 self._store_one_by_one(pages[index:])  # the usual handler explains or fixes it
                 break
-            only_core = alone.get(page.key)
+            data_key = page.key
+            only_core = alone.get(data_key)
             if only_core is None:
-                handlers = self.node.get_task_handlers(Task(TaskType.store_page, page.key))
-                only_core = alone[page.key] = not handlers
+                handlers = node.get_task_handlers(Task(_STORE_PAGE, data_key))
+                only_core = alone[data_key] = not handlers
+                wanted[data_key] = node.is_handled(_PROCESS_DATA, data_key)
             if not only_core:
                 self._store_one_by_one(pages[index:])
                 break
-            self.node.datastore[page.key] = page  # node.write_page, on the node's own thread
-            if page.process and self.node.is_handled(_PROCESS_DATA, page.key):
-                processed.append(Task(_PROCESS_DATA, page.key, [page]))
+            datastore[data_key] = page  # node.write_page, on the node's own thread
+            if page.process and wanted[data_key]:
+                processed.append(Task(_PROCESS_DATA, data_key, [page]))
         return processed
 
     def _store_one_by_one(self, pages: List[Any]) -> None:

@@ -313,17 +313,34 @@ class FrameDecoder:
             bodies: List[bytes] = []
             decoder.cut_frames(frame + frame[:3], bodies)   # [body]; 3 bytes wait
         """
-        if len(self._buffer) != self._start:  # part of a frame waits: join it
-            self.feed(data)
-            body = self.next_frame()
-            while body is not None:
-                bodies.append(body)
-                body = self.next_frame()
-            return
-        if self._start:  # everything buffered has been taken: start afresh
+        limit = self.max_frame_bytes
+        if len(self._buffer) != self._start:
+            # Part of a frame waits (a big read usually ends mid-frame): complete
+            # that one frame from the head of ``data``, then cut the rest
+            # straight from ``data``, not through the buffer.
+            buffer = self._buffer
+            if self._start:
+                del buffer[: self._start]
+                self._start = 0
+            if len(buffer) < HEADER_BYTES:
+                taken = HEADER_BYTES - len(buffer)
+                buffer += data[:taken]
+                data = data[taken:]
+                if len(buffer) < HEADER_BYTES:
+                    return
+            (length,) = _HEADER.unpack_from(buffer, 0)
+            if length > limit:
+                raise WireFormatError(_too_long(length, limit))
+            taken = HEADER_BYTES + length - len(buffer)
+            buffer += data[:taken]
+            if len(buffer) < HEADER_BYTES + length:
+                return  # the frame is not all there yet
+            data = data[taken:]
+            bodies.append(bytes(buffer[HEADER_BYTES:]))
+        if self._start or self._buffer:  # everything buffered has been taken: start afresh
             self._buffer = bytearray()
             self._start = 0
-        start, size, limit = 0, len(data), self.max_frame_bytes
+        start, size = 0, len(data)
         while size - start >= HEADER_BYTES:
             (length,) = _HEADER.unpack_from(data, start)
             if length > limit:
