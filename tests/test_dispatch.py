@@ -13,6 +13,7 @@ from snr import (
     EndpointFactory,
     Mode,
     Node,
+    Page,
     SNRTestCase,
     SomeTasks,
     Task,
@@ -21,7 +22,7 @@ from snr import (
     tasks,
 )
 from snr.core import HandlerTable
-from snr.prelude import HandlerError
+from snr.prelude import HandlerError, TaskPriority
 from snr.utils import DummyEndpointFactory
 from tests.helpers import Log, RecorderFactory, StopWhenDrainedFactory
 
@@ -217,6 +218,13 @@ class TestBursts(SNRTestCase):
         self.assertEqual([d for kind, d in log[2:] if kind == "processed"], [0, 1, 2, 3, 4, 5])
         cell = node._components.table.table[(SP, "x")][0][3]
         self.assertEqual(cell[0], 6, "timed as one call a task")
+
+    def test_an_urgent_page_never_starts_a_run(self) -> None:
+        log: List[Any] = []
+        urgent = Task(SP, "x", [Page("x", -1, "test", 0.0)], priority=TaskPriority.high)
+        self.run_test_node([BursterFactory(log), StopWhenDrainedFactory([urgent, *self.FIRST])])
+        self.assertEqual(log[0], ("one", -1), "the urgent page went alone")
+        self.assertEqual(log[1], ("many", [0, 1, 2, 3, 4], 4))
 
     def test_no_run_when_another_component_handles_the_key_too(self) -> None:
         log: List[Any] = []

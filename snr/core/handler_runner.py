@@ -154,7 +154,9 @@ class HandlerRunner:
                 # The node core's part, before any handler and without a handler
                 # call: no look-up, no timing, so a loop's page reaches its reader sooner.
                 store_first(task)
-                if bursts and normal and normal[0].name == task.name:
+                # A run starts only from the normal lane (a paused node runs
+                # urgent tasks one at a time, and must not run a burst).
+                if bursts and normal and normal[0].name == task.name and not task.priority:
                     if components.table_stale:
                         components.refresh_table()
                     burst = bursts.get((_STORE_PAGE, task.name))
