@@ -1,9 +1,9 @@
-"""The least a sent page can cost in CPython, against a pyzmq PUSH sender's message.
+"""The least a page can cost in CPython, sent and received, against pyzmq's message.
 
 `bench_comms.py` compares two SNR nodes with pyzmq PUSH/PULL. This bench
-asks how much of SNR's cost no node design can avoid. Each row is a sending
-thread's CPU time (``time.thread_time``) per message, with a separate
-process draining the socket:
+asks how much of SNR's cost no node design can avoid. Each row is one
+thread's CPU time (``time.thread_time``) per message. Sending, with a
+separate process draining the socket:
 
 * **pyzmq PUSH**: ``push.send(orjson.dumps(body))``, the PUSH/PULL row of
   `bench_comms.py`; libzmq's own I/O thread does the system calls, off the
@@ -14,6 +14,17 @@ process draining the socket:
   and its share of one ``sendall`` per 1,000 frames;
 * **+ one handler call**: the floor plus one look-up and one call of a
   handler per page (the comms component's), as the run loop makes.
+
+Receiving, with a separate process pushing (pyzmq) or from frames made
+beforehand (SNR: no socket, so the floor is lower than any node's):
+
+* **pyzmq PULL**: ``orjson.loads(pull.recv())`` and the benchmark's check
+  of the sequence number, the PUSH/PULL row's receiver;
+* **SNR floor**: the frames cut from 256 KiB reads (`FrameDecoder`), each
+  decoded as strictly as docs/wire-format.md says (`decode_body`), the page
+  written to the datastore, a ``process_data`` `Task` for it, and one
+  handler look-up and call doing the same check: what a page must go
+  through to reach a student's handler.
 
 The targets of `bench_comms.py` are rates of the whole pipeline, where a
 sending node's thread costs what it costs (3.8 µs a page in DEBUG mode when
@@ -33,12 +44,12 @@ import socket
 import statistics
 import sys
 import time
-from typing import Any, Callable, Dict, List
+from typing import Any, Callable, Dict, List, Optional
 
-from bench_comms import body, free_port, small_data
+from bench_comms import SeqCheck, body, free_port, loads, small_data
 
 from snr import Page, Task, TaskType
-from snr.std_mods.comms.wire import encode_page
+from snr.std_mods.comms.wire import FrameDecoder, decode_body, encode_page
 
 zmq: Any
 try:
@@ -48,6 +59,7 @@ except ImportError:  # a development dependency: that row is skipped
 
 KEY = "bench"
 BATCH = 1000  # frames joined per sendall in the floor rows
+READ_BYTES = 256 * 1024  # what a node's read takes at most
 
 
 def drain_tcp(port: int) -> None:
@@ -93,6 +105,72 @@ def pyzmq_push(count: int, wall: List[float]) -> float:
     wall.append((time.perf_counter() - started_wall) / count * 1e6)
     push.close(linger=0)
     context.term()
+    return used / count * 1e6
+
+
+def push_bodies(address: str, count: int) -> None:
+    """Child process: push ``count`` page bodies, then an empty message."""
+    context = zmq.Context()
+    push = context.socket(zmq.PUSH)
+    push.connect(address)
+    for i in range(count):
+        push.send(body(i))
+    push.send(b"")
+    push.close(linger=-1)
+    context.term()
+
+
+def pyzmq_pull(count: int) -> float:
+    """CPU µs per message of a pyzmq PULL receiver (the pusher runs in a child)."""
+    context = zmq.Context()
+    pull = context.socket(zmq.PULL)
+    port = pull.bind_to_random_port("tcp://127.0.0.1")
+    child = multiprocessing.Process(
+        target=push_bodies, args=(f"tcp://127.0.0.1:{port}", count), daemon=True
+    )
+    child.start()
+    check = SeqCheck(count)
+    first = pull.recv()  # not counted: the wait for the child to start
+    started = time.thread_time()
+    message = first
+    while message:
+        check.note(loads(message)["data"]["seq"])
+        message = pull.recv()
+    used = time.thread_time() - started
+    child.join(10)
+    pull.close(linger=0)
+    context.term()
+    return used / count * 1e6
+
+
+def snr_receive_floor(count: int) -> float:
+    """CPU µs per page of the receiving floor (see the module docstring)."""
+    stream = b"".join(
+        encode_page(Page(KEY, small_data(i), "sender", time.time())) for i in range(count)
+    )
+    reads = [stream[start : start + READ_BYTES] for start in range(0, len(stream), READ_BYTES)]
+    check = SeqCheck(count)
+    datastore: Dict[str, Page] = {}
+    process_data = TaskType.process_data
+
+    def handle(task: Task, key: Any) -> None:  # the benchmark's handler
+        check.note(task.val_list[0].data["seq"])
+
+    handlers: Dict[Any, Callable[[Task, Any], None]] = {(process_data, KEY): handle}
+    decoder = FrameDecoder()
+    started = time.thread_time()
+    for read in reads:
+        bodies: List[bytes] = []
+        decoder.cut_frames(read, bodies)
+        for frame_body in bodies:
+            page = decode_body(frame_body)
+            assert isinstance(page, Page)
+            datastore[page.key] = page
+            task = Task(process_data, page.key, [page])
+            handlers[(task.type, task.name)](task, KEY)
+    used = time.thread_time() - started
+    if check.counts() != (0, 0, 0):
+        raise RuntimeError(f"the floor lost pages: {check.counts()}")
     return used / count * 1e6
 
 
@@ -152,23 +230,36 @@ def main(argv: List[str]) -> None:
         rows["pyzmq PUSH, one message"] = lambda: pyzmq_push(count, pipeline)
     rows["SNR floor, one page"] = lambda: snr_floor(count, handler_call=False)
     rows["+ one handler call"] = lambda: snr_floor(count, handler_call=True)
+    received: Dict[str, Callable[[], float]] = {}
+    if zmq is not None:
+        received["pyzmq PULL, one message"] = lambda: pyzmq_pull(count)
+    received["SNR floor, one page"] = lambda: snr_receive_floor(count)
     results: Dict[str, List[float]] = {name: [] for name in rows}
+    results_in: Dict[str, List[float]] = {name: [] for name in received}
     for _ in range(rounds):
         for name, run in rows.items():
             results[name].append(run())
-    print(f"Sending thread's CPU per message: {count:,} messages, {rounds} interleaved rounds.")
-    print(f"{'':28} {'us':>6} {'spread':>12} {'x pyzmq':>8}")
+        for name, run in received.items():
+            results_in[name].append(run())
+    print(f"CPU of one thread per message: {count:,} messages, {rounds} interleaved rounds.")
+    print(f"{'sending':28} {'us':>6} {'spread':>12} {'x pyzmq':>8}")
+    _table(results, results.get("pyzmq PUSH, one message"))
+    print(f"{'receiving':28} {'us':>6} {'spread':>12} {'x pyzmq':>8}")
+    _table(results_in, results_in.get("pyzmq PULL, one message"))
     base = results.get("pyzmq PUSH, one message")
-    for name, values in results.items():
-        ratio = f"{statistics.median([v / b for v, b in zip(values, base)]):8.2f}" if base else ""
-        spread = f"{min(values):.2f}-{max(values):.2f}"
-        print(f"{name:28} {statistics.median(values):6.2f} {spread:>12} {ratio}")
     if base:
         per_message = statistics.median(pipeline)
         print(
             f"(pyzmq PUSH/PULL here: a message every {per_message:.2f} us end to end, "
             f"{1e6 / per_message:,.0f}/s; libzmq's I/O threads and the puller set that pace.)"
         )
+
+
+def _table(results: Dict[str, List[float]], base: Optional[List[float]]) -> None:
+    for name, values in results.items():
+        ratio = f"{statistics.median([v / b for v, b in zip(values, base)]):8.2f}" if base else ""
+        spread = f"{min(values):.2f}-{max(values):.2f}"
+        print(f"{name:28} {statistics.median(values):6.2f} {spread:>12} {ratio}")
 
 
 if __name__ == "__main__":
