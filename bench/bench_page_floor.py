@@ -32,6 +32,12 @@ this was written): the difference between that and the floor is the node's
 own work (dispatch, the outbox, the profiler's clock in DEBUG mode), which
 is what a faster node can still save. See docs/performance.md.
 
+With Zenoh installed (``pip install 'snr[zenoh]'``), two sending rows more,
+between two sessions of this process: **raw Zenoh put** (the raw row of
+`bench_zenoh.py`: ``publisher.put(orjson.dumps(body))``) and **SNR floor
+over Zenoh** (the page, its task, the datastore write, `PageEncoder` and a
+``put`` with the 16-byte count SNR attaches to every sample).
+
 Run: ``python bench/bench_page_floor.py [--messages N] [--rounds N]``
 (``--quick`` for a smoke run).
 """
@@ -39,9 +45,12 @@ Run: ``python bench/bench_page_floor.py [--messages N] [--rounds N]``
 from __future__ import annotations
 
 import argparse
+import importlib.util
+import json
 import multiprocessing
 import socket
 import statistics
+import struct
 import sys
 import time
 from typing import Any, Callable, Dict, List, Optional
@@ -49,6 +58,7 @@ from typing import Any, Callable, Dict, List, Optional
 from bench_comms import SeqCheck, body, free_port, loads, small_data
 
 from snr import Page, Task, TaskType
+from snr.std_mods.codec import PageEncoder
 from snr.std_mods.comms.wire import FrameDecoder, decode_body, encode_page
 
 zmq: Any
@@ -234,25 +244,90 @@ def main(argv: List[str]) -> None:
     if zmq is not None:
         received["pyzmq PULL, one message"] = lambda: pyzmq_pull(count)
     received["SNR floor, one page"] = lambda: snr_receive_floor(count)
-    results: Dict[str, List[float]] = {name: [] for name in rows}
-    results_in: Dict[str, List[float]] = {name: [] for name in received}
+    over_zenoh: Dict[str, Callable[[], float]] = {}
+    zenoh_pair: Optional[ZenohPair] = None
+    if importlib.util.find_spec("zenoh") is not None:
+        zenoh_pair = ZenohPair()
+        pair = zenoh_pair
+        over_zenoh["raw Zenoh put, one message"] = lambda: pair.raw(count)
+        over_zenoh["SNR floor over Zenoh"] = lambda: pair.snr_floor(count)
+    tables = (rows, over_zenoh, received)
+    results: List[Dict[str, List[float]]] = [{name: [] for name in table} for table in tables]
     for _ in range(rounds):
-        for name, run in rows.items():
-            results[name].append(run())
-        for name, run in received.items():
-            results_in[name].append(run())
+        for table, found in zip(tables, results):
+            for name, run in table.items():
+                found[name].append(run())
+    if zenoh_pair is not None:
+        zenoh_pair.close()
     print(f"CPU of one thread per message: {count:,} messages, {rounds} interleaved rounds.")
+    sent, sent_over_zenoh, got = results
     print(f"{'sending':28} {'us':>6} {'spread':>12} {'x pyzmq':>8}")
-    _table(results, results.get("pyzmq PUSH, one message"))
+    _table(sent, sent.get("pyzmq PUSH, one message"))
+    if sent_over_zenoh:
+        print(f"{'sending over Zenoh':28} {'us':>6} {'spread':>12} {'x raw':>8}")
+        _table(sent_over_zenoh, sent_over_zenoh.get("raw Zenoh put, one message"))
     print(f"{'receiving':28} {'us':>6} {'spread':>12} {'x pyzmq':>8}")
-    _table(results_in, results_in.get("pyzmq PULL, one message"))
-    base = results.get("pyzmq PUSH, one message")
-    if base:
+    _table(got, got.get("pyzmq PULL, one message"))
+    if sent.get("pyzmq PUSH, one message"):
         per_message = statistics.median(pipeline)
         print(
             f"(pyzmq PUSH/PULL here: a message every {per_message:.2f} us end to end, "
             f"{1e6 / per_message:,.0f}/s; libzmq's I/O threads and the puller set that pace.)"
         )
+
+
+class ZenohPair:
+    """Two Zenoh sessions of this process on 127.0.0.1, one publishing to the other."""
+
+    def __init__(self) -> None:
+        import zenoh as zenoh_module
+
+        self.zenoh = zenoh_module
+        endpoint = json.dumps([f"tcp/127.0.0.1:{free_port()}"])
+        self.sessions = []
+        for side in ("listen", "connect"):
+            config = zenoh_module.Config()
+            config.insert_json5("scouting/multicast/enabled", "false")
+            config.insert_json5(f"{side}/endpoints", endpoint)
+            self.sessions.append(zenoh_module.open(config))
+        key = f"snr/floor/{KEY}"
+        self.subscriber = self.sessions[1].declare_subscriber(
+            key, zenoh_module.handlers.RingChannel(1000)
+        )
+        self.publisher = self.sessions[0].declare_publisher(
+            key,
+            encoding=zenoh_module.Encoding.APPLICATION_JSON,
+            congestion_control=zenoh_module.CongestionControl.DROP,
+        )
+        time.sleep(0.5)  # the two sessions meet
+
+    def raw(self, count: int) -> float:
+        """CPU µs per message of ``put(orjson.dumps(body))``."""
+        put = self.publisher.put
+        started = time.thread_time()
+        for i in range(count):
+            put(body(i))
+        return (time.thread_time() - started) / count * 1e6
+
+    def snr_floor(self, count: int) -> float:
+        """CPU µs per page of the floor over Zenoh (see the module docstring)."""
+        put = self.publisher.put
+        encode = PageEncoder({"v": 1, "kind": "page"}, to="over Zenoh")
+        count_of = struct.Struct(">8sQ")  # what ZenohComms attaches: sender id, count
+        sender = b"floor-01"
+        datastore: Dict[str, Page] = {}
+        store_page = TaskType.store_page
+        started = time.thread_time()
+        for i in range(count):
+            page = Page(KEY, small_data(i), "sender", time.time(), True)
+            task = Task(store_page, KEY, [page])
+            datastore[page.key] = task.val_list[0]
+            put(encode(page), attachment=count_of.pack(sender, i))
+        return (time.thread_time() - started) / count * 1e6
+
+    def close(self) -> None:
+        for session in self.sessions:
+            session.close()
 
 
 def _table(results: Dict[str, List[float]], base: Optional[List[float]]) -> None:
