@@ -205,6 +205,12 @@ class HandlerRunner:
         to `_MAX_BURST`, each stored first as usual, go to the burst handler
         in one call; it is timed as one call per task. What it returns is
         queued as a handler's result is.
+
+        Example (what `run_queued` does when the table has a burst handler)::
+
+            burst = components.table.bursts.get((TaskType.store_page, "depth"))
+            if burst is not None:
+                runner.run_burst(task, burst)   # task and the "depth" pages behind it
         """
         handler, component, cell = burst
         normal = self.queue.normal

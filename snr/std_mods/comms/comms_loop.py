@@ -216,6 +216,10 @@ class CommsLoop(ThreadLoop):
         stored already. One link, open, and no page from a link to keep from
         echoing (the usual pair sending its own pages): the frames go to the
         link's outbox with one call. Anything else: page by page.
+
+        Example (the node calls it; a test may too)::
+
+            comms.forward_burst([tasks.store_page(page) for page in pages])
         """
         links = self.links
         if len(links) != 1 or self._arrived or links[0].state is not _OPEN:

@@ -214,6 +214,12 @@ class Outbox:
         otherwise nothing is queued, and the caller puts them one by one
         (each drop decided and counted by `put`). Unlike ``put(now=True)``,
         nothing is written straight away: a burst is worth one ``send``.
+
+        Example::
+
+            if not outbox.put_burst(frames, "depth"):
+                for frame in frames:
+                    outbox.put(frame, key="depth")   # over the cap: drops decided one by one
         """
         size = 0
         for frame in frames:
@@ -479,6 +485,10 @@ class Link:
         one, so that each drop is decided, counted and reported as `send`
         does. They leave when the node's thread next goes idle, or at once
         once 64 KiB wait.
+
+        Example::
+
+            link.send_burst([encode_page(page) for page in pages], "depth")
         """
         if self.state is not LinkState.OPEN:
             return

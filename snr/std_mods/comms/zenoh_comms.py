@@ -737,6 +737,10 @@ class ZenohComms(Endpoint):
 
         Each page is still its own sample (Zenoh has no batch put in Python);
         what a run saves is the node's dispatch and timing of every page.
+
+        Example (the node calls it for the pages a handler stored at once)::
+
+            comms.publish_burst([tasks.store_page(page) for page in pages])
         """
         publish = self.publish_page
         for task in run:
