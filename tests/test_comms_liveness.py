@@ -30,6 +30,7 @@ from snr import (
     TaskId,
     TaskType,
     ThreadLoop,
+    tasks,
 )
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.utils import MemoryLinkPair
@@ -301,14 +302,54 @@ class FloodFactory(LoopFactory):
         return Flood(self, parent)
 
 
+class BurstFlood(Endpoint):
+    """Stores ``count`` big pages under ``flood``, a hundred a handler call, then ``last``.
+
+    The pages of one call wait one behind the other: the comms link gets them
+    as a burst (`CommsLoop.forward_burst`), and a full outbox must still drop
+    and count them one by one.
+    """
+
+    def __init__(self, factory: BurstFloodFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "burst_flood")
+        self.flood_factory = factory
+        self.task_handlers = {(TaskType.event, "flood_more"): self.more}
+
+    def begin(self) -> None:
+        def start() -> None:
+            self.flood_factory.started.wait(10)
+            self.schedule(tasks.event("flood_more"))
+
+        threading.Thread(target=start, daemon=True).start()
+
+    def more(self, task: Task, key: TaskId) -> SomeTasks:
+        factory = self.flood_factory
+        if factory.sent == factory.count:
+            return self.store_data_task("flood", "last")
+        chunk = min(100, factory.count - factory.sent)
+        factory.sent += chunk
+        pages = [self.store_data_task("flood", "x" * 20_000) for _ in range(chunk)]
+        return [*pages, tasks.event("flood_more")]
+
+
+class BurstFloodFactory(FloodFactory):
+    def get(self, parent: AbstractNode) -> BurstFlood:  # type: ignore[override]
+        return BurstFlood(self, parent)
+
+
 class TestSlowReader(CommsFaultTest):
     def test_a_paused_reader_costs_bounded_memory_and_every_drop_is_counted(self) -> None:
+        self.check_a_paused_reader(FloodFactory(count=3000))
+
+    def test_bursts_to_a_paused_reader_are_dropped_and_counted_page_by_page(self) -> None:
+        self.check_a_paused_reader(BurstFloodFactory(count=3000))
+
+    def check_a_paused_reader(self, flood: FloodFactory) -> None:
         original_quiet = CommsLoop.recovered_after_s
         CommsLoop.recovered_after_s = 0.15  # the default is 1 s
         self.addCleanup(setattr, CommsLoop, "recovered_after_s", original_quiet)
         pair = MemoryLinkPair(max_backlog_bytes=256 * 1024)
         self.addCleanup(pair.close)
-        flood = FloodFactory(count=3000)
         counter = CounterFactory("flood", pause_s=0.3)
         original = Node.max_queued_tasks
         Node.max_queued_tasks = 100
