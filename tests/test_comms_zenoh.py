@@ -266,21 +266,23 @@ class TestZenohCounting(unittest.TestCase):
 
     def test_the_idle_node_waits_in_the_fifo_and_its_watcher_covers_while_it_works(self) -> None:
         from snr.std_mods.comms import zenoh_comms as zc
+        from snr.std_mods.comms.zenoh_inbox import WAKE
 
         node = MockNode()
         comms = ZenohCommsFactory("lab", subscribe="n").get(node)
         fifo = FakeFifo()
         sample = sample_of
         woken_by: List[str] = []
-        wake_sample = sample(None, mock.Mock(to_bytes=mock.Mock(return_value=zc._WAKE)))
+        wake_sample = sample(None, mock.Mock(to_bytes=mock.Mock(return_value=WAKE)))
 
         def put_wake(key: str) -> None:  # what a session-local put does
             woken_by.append(key)
             fifo.put(wake_sample)
 
-        comms._put_wake = put_wake  # type: ignore[method-assign]
         channel = zc.SampleChannel(fifo)
-        reader = zc.IdleReader(comms, channel, "snr/lab/n")
+        reader = zc.IdleReader(
+            channel, "snr/lab/n", take=comms._take_now, put_wake=put_wake, has_room=lambda: True
+        )
         comms._reader = reader
         reader.busy_since = time.monotonic() + 60  # "just started working": the watcher waits
         comms._watch_channel(channel)

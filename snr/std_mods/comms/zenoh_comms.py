@@ -73,6 +73,7 @@ from snr.std_mods.comms.comms_loop import (
     normalize_keys,
 )
 from snr.std_mods.comms.wire import WIRE_VERSION
+from snr.std_mods.comms.zenoh_inbox import WAKE, IdleReader, SampleChannel, wake_key
 
 if TYPE_CHECKING:  # imported when a node starts: the extra is optional
     import zenoh
@@ -104,8 +105,6 @@ _MAX_ECHO_GUARD = (
 _MAX_SENDERS = 10_000  # (sender, key) pairs whose sequence is followed for lost pages
 _FIFO_SAMPLES = 10_000  # samples a subscription's FIFO holds; Zenoh's thread waits above it
 _BATCH = 500  # samples decoded per task on the node's thread (then the pages, then the rest)
-_WAKE = b"snr-wake"  # the attachment of a sample that only wakes the node's thread (IdleReader)
-_WAKE_CHUNK = "_snr_wake"  # what stands for a wildcard in the key of such a sample
 _POLL_S = 0.025  # how often the watcher of the subscription the node's thread reads looks in
 _IDLE_CHECK_S = 0.25  # ... while that thread waits in it (an idle node costs next to nothing)
 _BUSY_READS_S = 0.05  # then, once the node's thread has worked this long, it reads for it
@@ -341,153 +340,6 @@ class ZenohCommsFactory(EndpointFactory):
         return ZenohComms(self, parent)
 
 
-class SampleChannel:
-    """One subscription's samples: a bounded Zenoh FIFO that the node's thread empties.
-
-    Zenoh's network thread puts each sample in ``handler`` (a
-    ``zenoh.handlers.FifoChannel``; it waits while the FIFO is full). The
-    channel's watcher thread waits in ``handler.recv()``, without the GIL,
-    for the first sample of a burst and hands it over in ``first``; from then
-    until ``emptied`` is set again the node's thread owns the channel and
-    takes the rest straight from the FIFO with ``try_recv()``. One hand-off
-    between threads a burst, where a Python callback per sample took the GIL
-    from the node's thread for every page.
-
-    Example::
-
-        channel = SampleChannel(subscriber.handler)   # then ZenohComms watches it
-
-    Attributes:
-        first: the sample the watcher handed over, taken first by the node.
-        emptied: set while the watcher owns the channel (the node emptied it).
-        taken: samples the node's thread has taken (the watcher sees progress).
-    """
-
-    def __init__(self, handler: Any) -> None:
-        self.handler = handler
-        self.first: Any = None
-        self.emptied = threading.Event()
-        self.emptied.set()
-        self.taken = 0
-        #: Held by whoever takes the first sample of a burst from the FIFO
-        #: when two threads may (`IdleReader`): so they never take two at once.
-        self.take_lock = threading.Lock()
-
-
-def wake_key(pattern: str) -> Optional[str]:
-    """A key that ``pattern`` (a subscription's key expression) matches, to wake a reader with.
-
-    Wildcards become ``_snr_wake``; None if the pattern has verbatim
-    (``@``) chunks, whose keys are not made up.
-
-    Example::
-
-        wake_key("team7/cmd")        # "team7/cmd"
-        wake_key("team7/**")         # "team7/_snr_wake"
-        wake_key("team7/arm_$*")     # "team7/arm_"
-    """
-    chunks = []
-    for chunk in pattern.split("/"):
-        if chunk.startswith("@"):
-            return None
-        if chunk in ("*", "**"):
-            chunk = _WAKE_CHUNK
-        chunk = chunk.replace("$*", "")
-        chunks.append(chunk or _WAKE_CHUNK)
-    return "/".join(chunks)
-
-
-def _is_wake(sample: Any) -> bool:
-    attachment = sample.attachment
-    return attachment is not None and attachment.to_bytes() == _WAKE
-
-
-class IdleReader:
-    """The node's thread, while idle, waits in one subscription's FIFO itself.
-
-    A node's `IdleWaiter` (as the socket links' I/O loop is): a sample that
-    arrives while the node is idle is taken by the node's own thread as
-    Zenoh hands it over, with no hand-off between Python threads. That takes
-    a thread switch (20-30 µs) off each side of a round trip. Zenoh's FIFO
-    has no timeout and nothing but a sample wakes it, so `wake` puts an
-    empty sample marked ``snr-wake`` under a key the subscription matches,
-    for this session only (``Locality.SESSION_LOCAL``: no other program sees
-    it); samples so marked are skipped wherever they are taken.
-
-    While the node's thread works, the channel's watcher takes over: once the
-    thread has worked `_BUSY_READS_S` without waiting, the watcher hands a
-    waiting burst over as other watchers do (`ZenohComms._watch_for_node`).
-
-    Example (what `ZenohComms.begin` does for one subscription)::
-
-        reader = IdleReader(comms, channel, "snr/team7/cmd")
-        node._snr_use_idle_waiter(reader)   # True: idle waits are now in its FIFO
-
-    Attributes:
-        reading: the node's thread is waiting in the FIFO now.
-        deadline: when that wait must end (``time.monotonic()``; None: never).
-        busy_since: when the node's thread last left its wait.
-    """
-
-    def __init__(self, comms: ZenohComms, channel: SampleChannel, wake_key: str) -> None:
-        self.comms = comms
-        self.channel = channel
-        self.wake_key = wake_key
-        self.reading = False
-        self.deadline: Optional[float] = None
-        self.busy_since = time.monotonic()
-        self._sample: Any = None  # what the wait took from the FIFO, for woken()
-        self._take = False  # woken() takes what the node's thread owns in the channel
-        self._nudge = threading.Event()  # wakes a wait that is not in the FIFO
-
-    def wait(self, timeout_s: Optional[float]) -> None:
-        """Node's thread, queue empty: wait in the FIFO for a sample or a wake-up."""
-        channel = self.channel
-        if not channel.emptied.is_set():
-            # Samples wait for the node's thread: take them now if its queue has
-            # room, else (a paused node with a full queue) wait as on the bell.
-            if self.comms.parent.wait_for_room(0):
-                self._take = True
-            else:
-                self._nudge.wait(timeout_s)
-                self._nudge.clear()
-            return
-        # The lock is held from the wait until woken() has taken the rest of the
-        # burst: the watcher cannot take a later sample first (it would be
-        # stored out of order).
-        channel.take_lock.acquire()
-        self.deadline = None if timeout_s is None else time.monotonic() + timeout_s
-        self.reading = True
-        try:
-            sample = channel.handler.recv()  # waits without the GIL
-        except Exception:  # undeclared: the component is closing
-            sample = None
-        self.reading = False
-        self.busy_since = time.monotonic()
-        if sample is None or _is_wake(sample):
-            channel.take_lock.release()
-        else:
-            self._sample = sample
-
-    def woken(self) -> None:
-        """Node's thread, after its wait: queue the pages of what it took."""
-        sample = self._sample
-        if sample is not None:
-            self._sample = None
-            try:
-                self.comms._take_now(self.channel, sample)
-            finally:
-                self.channel.take_lock.release()
-        elif self._take:
-            self._take = False
-            self.comms._take_now(self.channel, None)
-
-    def wake(self) -> None:
-        """End the node thread's wait, in the FIFO or not (any thread)."""
-        self._nudge.set()
-        self.comms._put_wake(self.wake_key)
-
-
 class ZenohComms(Endpoint):
     """Publishes pages under its keys to Zenoh and stores the pages it subscribes to.
 
@@ -616,7 +468,13 @@ class ZenohComms(Endpoint):
             self._declared.append(subscriber)
             channel = SampleChannel(subscriber.handler)
             if idle is not None and reads_idle:
-                reader = IdleReader(self, channel, idle[1])
+                reader = IdleReader(
+                    channel,
+                    idle[1],
+                    take=self._take_now,
+                    put_wake=self._put_wake,
+                    has_room=self._node_has_room,
+                )
                 if self.parent._snr_use_idle_waiter(reader):
                     self._reader = reader
             self._watch_channel(channel)
@@ -668,6 +526,10 @@ class ZenohComms(Endpoint):
                 return index, self.prefix + key
         return None
 
+    def _node_has_room(self) -> bool:
+        """The node's queue is below its high-water mark (for the idle reader)."""
+        return self.parent.wait_for_room(0)
+
     def _put_wake(self, key: str) -> None:
         """Put a wake-up sample for the idle reader (see `IdleReader`)."""
         session = self.session
@@ -675,7 +537,7 @@ class ZenohComms(Endpoint):
             return
         try:
             session.put(
-                key, b"", attachment=_WAKE, allowed_destination=self.zenoh.Locality.SESSION_LOCAL
+                key, b"", attachment=WAKE, allowed_destination=self.zenoh.Locality.SESSION_LOCAL
             )
         except Exception:  # closed meanwhile: nobody waits any more
             pass
@@ -940,7 +802,7 @@ class ZenohComms(Endpoint):
     def _page_of(self, sample: zenoh.Sample) -> Optional[Page]:
         attachment = sample.attachment
         counted = None if attachment is None else attachment.to_bytes()
-        if counted == _WAKE:  # only woke the node's thread (IdleReader)
+        if counted == WAKE:  # only woke the node's thread (IdleReader)
             return None
         key_expr = str(sample.key_expr)
         key = key_expr[len(self.prefix) :]

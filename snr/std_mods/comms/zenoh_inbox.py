@@ -1,0 +1,190 @@
+"""How a Zenoh subscription's samples reach a node's thread: FIFOs and the idle reader.
+
+Each subscription of a `ZenohComms` puts its samples in a bounded Zenoh FIFO,
+a `SampleChannel`. The node's thread empties it in batches; a watcher thread
+of `ZenohComms` wakes the node for the first sample of a burst. While the
+node is idle, its own thread may wait in one channel itself (`IdleReader`),
+woken for other work by a sample of its own that only wakes it (`wake_key`,
+`is_wake`). ``zenoh_comms.py`` uses them; nothing here imports Zenoh.
+
+Example::
+
+    channel = SampleChannel(subscriber.handler)
+    wake_key("team7/**")    # "team7/_snr_wake": a key that pattern matches
+"""
+
+from __future__ import annotations
+
+import threading
+import time
+from typing import Any, Callable, Optional
+
+__all__ = ["WAKE", "IdleReader", "SampleChannel", "is_wake", "wake_key"]
+
+WAKE = b"snr-wake"
+"""The attachment of a sample that only wakes a node's thread (`IdleReader`)."""
+
+_WAKE_CHUNK = "_snr_wake"  # what stands for a wildcard in the key of such a sample
+
+
+class SampleChannel:
+    """One subscription's samples: a bounded Zenoh FIFO that the node's thread empties.
+
+    Zenoh's network thread puts each sample in ``handler`` (a
+    ``zenoh.handlers.FifoChannel``; it waits while the FIFO is full). The
+    channel's watcher thread waits in ``handler.recv()``, without the GIL,
+    for the first sample of a burst and hands it over in ``first``; from then
+    until ``emptied`` is set again the node's thread owns the channel and
+    takes the rest straight from the FIFO with ``try_recv()``. One hand-off
+    between threads a burst, where a Python callback per sample took the GIL
+    from the node's thread for every page.
+
+    Example::
+
+        channel = SampleChannel(subscriber.handler)   # then ZenohComms watches it
+
+    Attributes:
+        first: the sample the watcher handed over, taken first by the node.
+        emptied: set while the watcher owns the channel (the node emptied it).
+        taken: samples the node's thread has taken (the watcher sees progress).
+    """
+
+    def __init__(self, handler: Any) -> None:
+        self.handler = handler
+        self.first: Any = None
+        self.emptied = threading.Event()
+        self.emptied.set()
+        self.taken = 0
+        #: Held by whoever takes the first sample of a burst from the FIFO
+        #: when two threads may (`IdleReader`): so they never take two at once.
+        self.take_lock = threading.Lock()
+
+
+def wake_key(pattern: str) -> Optional[str]:
+    """A key that ``pattern`` (a subscription's key expression) matches, to wake a reader with.
+
+    Wildcards become ``_snr_wake``; None if the pattern has verbatim
+    (``@``) chunks, whose keys are not made up.
+
+    Example::
+
+        wake_key("team7/cmd")        # "team7/cmd"
+        wake_key("team7/**")         # "team7/_snr_wake"
+        wake_key("team7/arm_$*")     # "team7/arm_"
+    """
+    chunks = []
+    for chunk in pattern.split("/"):
+        if chunk.startswith("@"):
+            return None
+        if chunk in ("*", "**"):
+            chunk = _WAKE_CHUNK
+        chunk = chunk.replace("$*", "")
+        chunks.append(chunk or _WAKE_CHUNK)
+    return "/".join(chunks)
+
+
+def is_wake(sample: Any) -> bool:
+    attachment = sample.attachment
+    return attachment is not None and attachment.to_bytes() == WAKE
+
+
+class IdleReader:
+    """The node's thread, while idle, waits in one subscription's FIFO itself.
+
+    A node's `IdleWaiter` (as the socket links' I/O loop is): a sample that
+    arrives while the node is idle is taken by the node's own thread as
+    Zenoh hands it over, with no hand-off between Python threads. That takes
+    a thread switch (20-30 µs) off each side of a round trip. Zenoh's FIFO
+    has no timeout and nothing but a sample wakes it, so `wake` puts an
+    empty sample marked ``snr-wake`` under a key the subscription matches,
+    for this session only (``Locality.SESSION_LOCAL``: no other program sees
+    it); samples so marked are skipped wherever they are taken.
+
+    While the node's thread works, the channel's watcher takes over: once the
+    thread has worked `_BUSY_READS_S` without waiting, the watcher hands a
+    waiting burst over as other watchers do (`ZenohComms._watch_for_node`).
+
+    Its owner (`ZenohComms`) gives it three things to call: ``take(channel,
+    sample)`` on the node's thread after a wait that took ``sample`` (or
+    None: samples wait in the channel for the node), ``put_wake(key)`` to
+    put a wake-up sample, and ``has_room()``: whether the node's queue has
+    room for what waits.
+
+    Example (what `ZenohComms.begin` does for one subscription)::
+
+        reader = IdleReader(channel, "snr/team7/cmd", comms._take_now, comms._put_wake,
+                            lambda: node.wait_for_room(0))
+        node._snr_use_idle_waiter(reader)   # True: idle waits are now in its FIFO
+
+    Attributes:
+        reading: the node's thread is waiting in the FIFO now.
+        deadline: when that wait must end (``time.monotonic()``; None: never).
+        busy_since: when the node's thread last left its wait.
+    """
+
+    def __init__(
+        self,
+        channel: SampleChannel,
+        wake_key: str,
+        take: Callable[[SampleChannel, Any], None],
+        put_wake: Callable[[str], None],
+        has_room: Callable[[], bool],
+    ) -> None:
+        self.channel = channel
+        self.wake_key = wake_key
+        self._take_from = take
+        self._put_wake = put_wake
+        self._has_room = has_room
+        self.reading = False
+        self.deadline: Optional[float] = None
+        self.busy_since = time.monotonic()
+        self._sample: Any = None  # what the wait took from the FIFO, for woken()
+        self._take = False  # woken() takes what the node's thread owns in the channel
+        self._nudge = threading.Event()  # wakes a wait that is not in the FIFO
+
+    def wait(self, timeout_s: Optional[float]) -> None:
+        """Node's thread, queue empty: wait in the FIFO for a sample or a wake-up."""
+        channel = self.channel
+        if not channel.emptied.is_set():
+            # Samples wait for the node's thread: take them now if its queue has
+            # room, else (a paused node with a full queue) wait as on the bell.
+            if self._has_room():
+                self._take = True
+            else:
+                self._nudge.wait(timeout_s)
+                self._nudge.clear()
+            return
+        # The lock is held from the wait until woken() has taken the rest of the
+        # burst: the watcher cannot take a later sample first (it would be
+        # stored out of order).
+        channel.take_lock.acquire()
+        self.deadline = None if timeout_s is None else time.monotonic() + timeout_s
+        self.reading = True
+        try:
+            sample = channel.handler.recv()  # waits without the GIL
+        except Exception:  # undeclared: the component is closing
+            sample = None
+        self.reading = False
+        self.busy_since = time.monotonic()
+        if sample is None or is_wake(sample):
+            channel.take_lock.release()
+        else:
+            self._sample = sample
+
+    def woken(self) -> None:
+        """Node's thread, after its wait: queue the pages of what it took."""
+        sample = self._sample
+        if sample is not None:
+            self._sample = None
+            try:
+                self._take_from(self.channel, sample)
+            finally:
+                self.channel.take_lock.release()
+        elif self._take:
+            self._take = False
+            self._take_from(self.channel, None)
+
+    def wake(self) -> None:
+        """End the node thread's wait, in the FIFO or not (any thread)."""
+        self._nudge.set()
+        self._put_wake(self.wake_key)
