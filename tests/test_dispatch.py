@@ -22,7 +22,7 @@ from snr import (
     tasks,
 )
 from snr.core import HandlerTable
-from snr.prelude import HandlerError, TaskPriority
+from snr.prelude import ComponentError, HandlerError, TaskPriority
 from snr.utils import DummyEndpointFactory
 from tests.helpers import Log, RecorderFactory, StopWhenDrainedFactory
 
@@ -141,6 +141,12 @@ class TestHandlerTable(unittest.TestCase):
                     keys.append(t if rng.random() < 0.3 else (t, rng.choice(names)))
                 factory = DummyEndpointFactory(f"e{i}", keys)
                 component = factory.get(node)
+                if rng.random() < 0.5:  # some take runs of their pages in one call
+                    component.burst_handlers = {
+                        key: lambda run: None
+                        for key in keys
+                        if isinstance(key, tuple) and key[0] is SP
+                    }
                 components.append(component)
                 if rng.random() < 0.5:
                     table.add(component)  # incremental, as when the node adds one
@@ -151,6 +157,41 @@ class TestHandlerTable(unittest.TestCase):
                     task = Task(t, n)
                     got = [(c.name, k) for _, k, c, _ in table.lookup(t, n)]
                     self.assertEqual(got, naive_match(components, task), f"trial {trial}: {task}")
+            # The burst handlers found one add at a time are those a rebuild finds:
+            # where exactly one component handles (store_page, name) and has one.
+            rebuilt = HandlerTable()
+            rebuilt.rebuild(components)
+            self.assertEqual(table.bursts, rebuilt.bursts, f"trial {trial}")
+            for n in names:
+                matched = naive_match(components, Task(SP, n))
+                expected = None
+                if len(matched) == 1:
+                    owner = next(c for c in components if c.name == matched[0][0])
+                    expected = owner.burst_handlers.get(matched[0][1])
+                found = table.bursts.get((SP, n))
+                self.assertIs(found[0] if found else None, expected, f"trial {trial}: {n}")
+
+    def test_a_later_component_handling_every_page_ends_the_bursts(self) -> None:
+        node = Node("r", Config({"r": [DummyEndpointFactory("x")]}, mode=Mode.TEST))
+        first = DummyEndpointFactory("first", [(SP, "a")]).get(node)
+        first.burst_handlers = {(SP, "a"): lambda run: None}
+        table = HandlerTable()
+        table.add(first)
+        self.assertIn((SP, "a"), table.bursts)
+        table.add(DummyEndpointFactory("every_page", [SP]).get(node))
+        self.assertNotIn((SP, "a"), table.bursts, "two components now handle its pages")
+
+    def test_a_burst_handler_needs_a_task_handler_for_its_id(self) -> None:
+        node = Node("r", Config({"r": [DummyEndpointFactory("x")]}, mode=Mode.TEST))
+        component = DummyEndpointFactory("lonely", [(SP, "a")]).get(node)
+        component.burst_handlers = {(SP, "b"): lambda run: None}
+        with self.assertRaises(ComponentError) as raised:
+            HandlerTable().add(component)
+        self.assertIn("no handler for it in task_handlers", str(raised.exception))
+        component.burst_handlers = {SP: lambda run: None}
+        with self.assertRaises(ComponentError) as raised:
+            HandlerTable().add(component)
+        self.assertIn("(TaskType.store_page, 'the_key')", str(raised.exception))
 
     def test_idle_endpoints_do_not_grow_the_lookup(self) -> None:
         node = Node(

@@ -289,26 +289,49 @@ class HandlerTable:
                     self._specific_by_type.setdefault(key[0], set()).add(key)
         for component in ordered:
             self._extend(component, create_missing=False)
-        self._find_bursts()
+        self.bursts.clear()
+        self._find_bursts(list(self.table))
 
     def add(self, component: AbstractComponent) -> None:
         """Extend the table for a component added after all the others."""
         self._extend(component, create_missing=True)
-        self._find_bursts()
+        # Only the ids this component handles can have changed (a type-level
+        # store_page handler joins every specific id of that type).
+        changed: Iterable[Hashable] = component.task_handlers
+        if _STORE_PAGE in component.task_handlers:
+            changed = self._specific_by_type.get(_STORE_PAGE, ())
+        self._find_bursts(changed)
 
-    def _find_bursts(self) -> None:
-        bursts = self.bursts
-        bursts.clear()
-        for key, entries in self.table.items():
-            if len(entries) != 1 or not isinstance(key, tuple) or key[0] is not _STORE_PAGE:
+    def _find_bursts(self, keys: Iterable[Hashable]) -> None:
+        """Say again, for each of ``keys``, whether a burst handler serves it."""
+        bursts, table = self.bursts, self.table
+        for key in keys:
+            if not isinstance(key, tuple) or key[0] is not _STORE_PAGE:
                 continue
+            bursts.pop(key, None)
+            entries = table.get(key)
+            if entries is None or len(entries) != 1:
+                continue  # no one, or more than one component: page by page
             _, matched, component, cell = entries[0]
-            burst = component.burst_handlers.get(matched)
+            burst = component.burst_handlers.get(matched)  # None for a type-level match
             if burst is not None:
                 bursts[key] = (burst, component, cell)
 
     def _extend(self, component: AbstractComponent, create_missing: bool) -> None:
         handlers = component.task_handlers
+        for key in component.burst_handlers:
+            if not isinstance(key, tuple) or key[0] is not _STORE_PAGE:
+                raise ComponentError(
+                    f"{describe_class(type(component))} has a burst handler for {key!r}; "
+                    "burst handlers are for pages under one key only: "
+                    "(TaskType.store_page, 'the_key')."
+                )
+            if key not in handlers:
+                raise ComponentError(
+                    f"{describe_class(type(component))} has a burst handler for {key!r} "
+                    "but no handler for it in task_handlers. Add one there too: it runs "
+                    "when a page under that key comes alone."
+                )
         table = self.table
         if create_missing:
             for key in handlers:

@@ -490,7 +490,8 @@ class AbstractComponent(_FriendlyABC):
     parent: AbstractNode
     name: ComponentName
     #: Handlers for a run of ``store_page`` tasks under one key, in one call,
-    #: by the same task id as in ``task_handlers`` (which must have it too).
+    #: by the same ``(TaskType.store_page, key)`` id as in ``task_handlers``
+    #: (which must have it too: else the node refuses the component, saying so).
     #: The node uses one when this component is the only one that handles
     #: the id and several such tasks wait one behind the other: it stores
     #: every page of the run, then calls the burst handler once with the
