@@ -389,9 +389,7 @@ class Node(AbstractNode):
 
     def store_data_task(self, key: DataKey, data: Any, process: bool = True) -> Task:
         """A task that stores ``data`` under ``key`` when it runs (thesis: ``task_store_data``)."""
-        if self._check_pages:  # as `page` does: a handler may return thousands of these
-            check_page_args(key, data)
-        return Task(_STORE_PAGE, key, [Page(key, data, self.role, self._page_time(), process)])
+        return Task(_STORE_PAGE, key, [self.page(key, data, process)])
 
     # ------------------------------------------------------------------
     # Datastore (thesis listing 6.4)

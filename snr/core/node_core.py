@@ -102,7 +102,7 @@ class NodeCoreEndpoint(Endpoint):
         wanted: Dict[DataKey, bool] = {}
         pages = task.val_list
         for index, page in enumerate(pages):
-            if (page.__class__ is not Page and not isinstance(page, Page)) or not page.origin:
+            if not isinstance(page, Page) or not page.origin:
                 self._store_one_by_one(pages[index:])  # the usual handler explains or fixes it
                 break
             data_key = page.key

@@ -24,13 +24,13 @@ if TYPE_CHECKING:  # pragma: no cover - only for the type checker
     import snr.prelude.task
 
 __all__ = [
+    "BurstHandler",
     "ComponentName",
     "ComponentsByRole",
     "DataDict",
     "DataKey",
     "Mode",
     "Role",
-    "BurstHandler",
     "SomeTasks",
     "StatsCell",
     "TaskHandler",

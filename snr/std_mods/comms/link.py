@@ -196,12 +196,7 @@ class Outbox:
                     self._live -= 1
                     self._count_drop(key)
                     outcome = "replaced"
-                entry: _Entry = [key, frame]  # _append, written out: once per page of a burst
-                self._entries.append(entry)
-                if key is not None:
-                    self._newest[key] = entry
-                self._queued_bytes += len(frame)
-                self._live += 1
+                self._append(key, frame)
             first = self._live == 1
         if first and self.on_queued is not None:  # was empty: ask for a writer
             self.on_queued()
