@@ -150,6 +150,8 @@ class HandlerRunner:
                 task = normal.popleft()
             else:
                 return
+            if components.table_stale:  # what the last task changed applies now
+                components.refresh_table()
             if task.type is _STORE_PAGE:
                 # The node core's part, before any handler and without a handler
                 # call: no look-up, no timing, so a loop's page reaches its reader sooner.
@@ -157,16 +159,12 @@ class HandlerRunner:
                 # A run starts only from the normal lane (a paused node runs
                 # urgent tasks one at a time, and must not run a burst).
                 if bursts and normal and normal[0].name == task.name and not task.priority:
-                    if components.table_stale:
-                        components.refresh_table()
                     burst = bursts.get((_STORE_PAGE, task.name))
                     if burst is not None and normal[0].type is _STORE_PAGE:
                         self.run_burst(task, burst)
                         if not self.running:
                             return
                         continue
-            if components.table_stale:  # what the last task changed applies now
-                components.refresh_table()
             entries = lookup((task.type, task.name))
             if entries is None:
                 entries = lookup(task.type)

@@ -650,11 +650,12 @@ class ZenohComms(Endpoint):
         """Watcher of the channel the node's thread reads while idle: it reads while the node works.
 
         It looks every `_POLL_S` (it cannot wait in the FIFO: the node's
-        thread does), every `_IDLE_CHECK_S` while that thread waits in the
-        FIFO, and then only wakes it at the time it asked for. Once the thread has worked
-        `_BUSY_READS_S` without waiting, the watcher hands over a burst that
-        came meanwhile, as `_watch` does. If the node's thread takes nothing
-        of a burst for ``max_wait_s``, what waits is dropped and counted.
+        thread does), and every `_IDLE_CHECK_S` while that thread waits in
+        the FIFO, when it only wakes the thread at the time it asked for.
+        Once the thread has worked `_BUSY_READS_S` without waiting, the
+        watcher hands over a burst that came meanwhile, as `_watch` does. If
+        the node's thread takes nothing of a burst for ``max_wait_s``, what
+        waits is dropped and counted.
         """
         reader = self._reader
         assert reader is not None
@@ -740,7 +741,7 @@ class ZenohComms(Endpoint):
 
         ``sample``, if not None, came from ``channel``'s FIFO in that wait.
         """
-        if self.parent.wait_for_room(0):
+        if self._node_has_room():
             self.parent.schedule(self._take_waiting(channel, sample))
         elif sample is not None:  # no room: the node's thread owns it, taken later
             channel.first = sample
@@ -771,16 +772,17 @@ class ZenohComms(Endpoint):
                 samples.append(channel.first)
                 channel.first = None
             try_recv = channel.handler.try_recv
-            while len(samples) < budget:
+            fifo_empty = False
+            while len(samples) < budget and not fifo_empty:
                 sample = try_recv()
                 if sample is None:
-                    if owned:
-                        channel.emptied.set()  # the watcher waits for the next burst
-                    break
-                samples.append(sample)
-            else:
-                if not owned:  # more than a batch waits: the node's thread takes it on
-                    channel.emptied.clear()
+                    fifo_empty = True
+                else:
+                    samples.append(sample)
+            if fifo_empty and owned:
+                channel.emptied.set()  # the watcher waits for the next burst
+            elif not fifo_empty and not owned:
+                channel.emptied.clear()  # more than a batch waits: the node's thread takes it on
             channel.taken += len(samples)
             budget -= len(samples)
             pages = [page for page in map(self._page_of, samples) if page is not None]
