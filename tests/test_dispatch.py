@@ -22,6 +22,7 @@ from snr import (
     tasks,
 )
 from snr.core import HandlerTable
+from snr.core.dispatch import check_burst_handlers
 from snr.prelude import ComponentError, HandlerError, TaskPriority
 from snr.utils import DummyEndpointFactory
 from tests.helpers import Log, RecorderFactory, StopWhenDrainedFactory
@@ -186,12 +187,17 @@ class TestHandlerTable(unittest.TestCase):
         component = DummyEndpointFactory("lonely", [(SP, "a")]).get(node)
         component.burst_handlers = {(SP, "b"): lambda run: None}
         with self.assertRaises(ComponentError) as raised:
-            HandlerTable().add(component)
+            node.add_component(component)
         self.assertIn("no handler for it in task_handlers", str(raised.exception))
         component.burst_handlers = {SP: lambda run: None}
         with self.assertRaises(ComponentError) as raised:
-            HandlerTable().add(component)
+            check_burst_handlers(component)
         self.assertIn("(TaskType.store_page, 'the_key')", str(raised.exception))
+        # The table itself never raises (it is built between two tasks): it
+        # leaves such a burst handler unused.
+        table = HandlerTable()
+        table.add(component)
+        self.assertEqual(table.bursts, {})
 
     def test_idle_endpoints_do_not_grow_the_lookup(self) -> None:
         node = Node(
@@ -201,10 +207,6 @@ class TestHandlerTable(unittest.TestCase):
             node.add_component(DummyEndpointFactory(f"idle{i}", [(EV, f"idle{i}")]).get(node))
         entries = node.get_task_handlers(tasks.event("ping"))
         self.assertEqual(len(entries), 1)  # one dict look-up, one handler: not 1000 checks
-
-
-if __name__ == "__main__":
-    unittest.main()
 
 
 class Burster(Endpoint):
@@ -298,3 +300,83 @@ class TestBursts(SNRTestCase):
             self.run_test_node([BursterFactory([], fail=True), StopWhenDrainedFactory(self.FIRST)])
         self.assertIn("many", str(raised.exception))
         self.assertIn("the burst broke", str(raised.exception))
+
+    def test_execute_task_runs_one_page_though_a_run_waits_behind_it(self) -> None:
+        log: List[Any] = []
+
+        def execute_one_page(task: Task, key: TaskId) -> SomeTasks:
+            node.schedule(tasks.terminate("stop first"))  # urgent: next after this one
+            node.execute_task(tasks.store_data("x", -1))
+            return None
+
+        trigger = RecorderFactory("trigger", [(EV, "go")], [], reply=execute_one_page)
+        waiting = [tasks.event("go"), *[tasks.store_data("x", i) for i in range(10)]]
+        node = Node("r", Config({"r": [BursterFactory(log), trigger]}, mode=Mode.TEST))
+        node.schedule(waiting)
+        node.loop()
+        self.assertEqual(log, [("one", -1)], "one task ran, then the terminate")
+        self.assertEqual(node.get_data("x"), -1)
+
+    def test_a_run_ends_where_a_failed_store_stopped_the_node(self) -> None:
+        log: List[Any] = []
+        unstorable = Task(SP, "x", [Page(["x"], 3, "test", 0.0)])  # type: ignore[arg-type]
+        first = [*[tasks.store_data("x", i) for i in range(3)], unstorable]
+        first += [tasks.store_data("x", i) for i in range(4, 10)]
+        with self.assertRaises(HandlerError), self.assertLogs("snr", "ERROR"):
+            self.run_test_node([BursterFactory(log), StopWhenDrainedFactory(first)])
+        self.assertEqual(len(log), 1)
+        kind, data, _ = log[0]
+        self.assertEqual((kind, data[:3], len(data)), ("many", [0, 1, 2], 4), "no page after it")
+
+    def test_a_failing_burst_handler_is_reported_with_the_size_of_its_run(self) -> None:
+        with self.assertRaises(HandlerError) as raised, self.assertLogs("snr", "ERROR"):
+            self.run_test_node([BursterFactory([], fail=True), StopWhenDrainedFactory(self.FIRST)])
+        self.assertIn("a run of 5 tasks given to it at once, the first", str(raised.exception))
+
+    def test_a_bad_burst_handler_added_or_made_at_run_time_is_an_error_the_node_survives(
+        self,
+    ) -> None:
+        class LosesItsHandler(Burster):
+            def processed(self, task: Task, key: TaskId) -> SomeTasks:
+                self.task_handlers = {(EV, "later"): self.processed}  # the burst's id is gone
+                return None
+
+        class LosesItsHandlerFactory(BursterFactory):
+            def get(self, parent: AbstractNode) -> Burster:
+                return LosesItsHandler(self, parent)
+
+        class Lonely(Burster):
+            def __init__(self, factory: BursterFactory, parent: AbstractNode) -> None:
+                super().__init__(factory, parent)
+                self.name = "lonely"
+                self.burst_handlers = {(SP, "nowhere"): self.many}
+
+        class LonelyFactory(BursterFactory):
+            def get(self, parent: AbstractNode) -> Burster:
+                return Lonely(self, parent)
+
+        for factory in (LosesItsHandlerFactory([]), LonelyFactory([])):
+            after: Log = []
+            first = [
+                tasks.store_data("x", 0),
+                tasks.add_component(factory),
+                tasks.event("after"),
+                tasks.store_data("x", 1),
+                tasks.store_data("x", 2),
+            ]
+            with self.subTest(type(factory).__name__), self.assertLogs("snr", "ERROR") as logs:
+                node = self.run_test_node(
+                    [
+                        RecorderFactory("after", [(EV, "after")], after),
+                        StopWhenDrainedFactory(first),
+                    ],
+                    mode=Mode.DEPLOYED,
+                )
+            self.assertEqual(node.terminate_reason, "queue drained")
+            self.assertEqual(len(after), 1, "the tasks after it still ran")
+            self.assertIn("no handler for it in task_handlers", "\n".join(logs.output))
+            self.assertIn("The node keeps running", "\n".join(logs.output))
+
+
+if __name__ == "__main__":
+    unittest.main()

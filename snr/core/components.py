@@ -26,7 +26,7 @@ from __future__ import annotations
 import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
-from snr.core.dispatch import HandlerTable
+from snr.core.dispatch import HandlerTable, check_burst_handlers
 from snr.core.explain import (
     failed_get_error,
     only_returns_none,
@@ -171,6 +171,7 @@ class ComponentSet:
             )
         if self.check_added is not None:
             self.check_added(component)
+        check_burst_handlers(component)
         self._check_name_free(component)
         self.by_name[component.name] = component
         if self.table_stale or self.running:
@@ -439,9 +440,15 @@ class ComponentSet:
 
     # -- the handler table ----------------------------------------------------
     def handlers_changed(self, component: AbstractComponent) -> None:
-        """``component`` changed its ``task_handlers``: rebuild the table before the next task."""
+        """``component`` changed its ``task_handlers``: rebuild the table before the next task.
+
+        Raises:
+            ComponentError: a burst handler of the component lost its task
+                handler (raised in the handler that made the change).
+        """
         if self.by_name.get(component.name) is component:
             self.mark_rebuild()
+            check_burst_handlers(component)
 
     def mark_rebuild(self) -> None:
         """Rebuild the whole table before the next task."""

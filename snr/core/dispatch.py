@@ -53,6 +53,7 @@ __all__ = [
     "Entry",
     "HandlerMap",
     "HandlerTable",
+    "check_burst_handlers",
     "check_handler",
     "check_task_id",
 ]
@@ -245,6 +246,38 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
         _checked_code.add(code)
 
 
+def check_burst_handlers(component: AbstractComponent) -> None:
+    """Refuse burst handlers the handler table could not use, saying what to write.
+
+    Each id in ``component.burst_handlers`` must be ``(TaskType.store_page,
+    key)`` and must be in its ``task_handlers`` too (that handler runs for a
+    page that comes alone). The node checks when a component is added and
+    when a running component changes its ``task_handlers``; a burst handler
+    left without its task handler would otherwise be unused without a word.
+
+    Raises:
+        ComponentError: naming the component, the id and the fix.
+
+    Example::
+
+        check_burst_handlers(comms)   # fine: returns None
+    """
+    handlers = component.task_handlers
+    for key in component.burst_handlers:
+        if not isinstance(key, tuple) or key[0] is not _STORE_PAGE:
+            raise ComponentError(
+                f"{describe_class(type(component))} has a burst handler for {key!r}; "
+                "burst handlers are for pages under one key only: "
+                "(TaskType.store_page, 'the_key')."
+            )
+        if key not in handlers:
+            raise ComponentError(
+                f"{describe_class(type(component))} has a burst handler for {key!r} "
+                "but no handler for it in task_handlers. Add one there too: it runs "
+                "when a page under that key comes alone."
+            )
+
+
 class HandlerTable:
     """Precomputed two-phase matches for every registered task id.
 
@@ -318,20 +351,9 @@ class HandlerTable:
                 bursts[key] = (burst, component, cell)
 
     def _extend(self, component: AbstractComponent, create_missing: bool) -> None:
+        # Never raises for a student's mistake: it runs between two tasks, where
+        # nothing could report it. `check_burst_handlers` refuses those earlier.
         handlers = component.task_handlers
-        for key in component.burst_handlers:
-            if not isinstance(key, tuple) or key[0] is not _STORE_PAGE:
-                raise ComponentError(
-                    f"{describe_class(type(component))} has a burst handler for {key!r}; "
-                    "burst handlers are for pages under one key only: "
-                    "(TaskType.store_page, 'the_key')."
-                )
-            if key not in handlers:
-                raise ComponentError(
-                    f"{describe_class(type(component))} has a burst handler for {key!r} "
-                    "but no handler for it in task_handlers. Add one there too: it runs "
-                    "when a page under that key comes alone."
-                )
         table = self.table
         if create_missing:
             for key in handlers:

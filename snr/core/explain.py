@@ -161,8 +161,12 @@ def handler_failure(
     component: Optional[AbstractComponent],
     error: Exception,
     deployed: bool,
+    run_size: int = 1,
 ) -> HandlerError:
     """The HandlerError for ``handler`` raising ``error`` on ``task``, with the fix.
+
+    ``run_size`` above 1: a burst handler was given a run of that many tasks,
+    ``task`` first.
 
     Example::
 
@@ -174,9 +178,12 @@ def handler_failure(
         kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
         where = f" of {kind} {component.name!r}"
     frames = student_frames(error.__traceback__)
+    handling = f"the task {format_task(task, values='none')}"
+    if run_size > 1:
+        handling = f"a run of {run_size} tasks given to it at once, the first being {handling}"
     message = (
         f"Task handler {describe_callable(handler)}{where} raised "
-        f"{exception_text(error)}\nwhile handling the task {format_task(task, values='none')} "
+        f"{exception_text(error)}\nwhile handling {handling} "
         f"{task_values(task)}.{_values_hint(task)}\n"
         f"Where it happened (most recent call last):\n{frames}"
     )

@@ -146,8 +146,10 @@ class HandlerRunner:
         for _ in range(max_tasks):
             if urgent:
                 task = urgent.popleft()
+                from_normal_lane = False
             elif normal:
                 task = normal.popleft()
+                from_normal_lane = True
             else:
                 return
             if components.table_stale:  # what the last task changed applies now
@@ -156,9 +158,9 @@ class HandlerRunner:
                 # The node core's part, before any handler and without a handler
                 # call: no look-up, no timing, so a loop's page reaches its reader sooner.
                 store_first(task)
-                # A run starts only from the normal lane (a paused node runs
-                # urgent tasks one at a time, and must not run a burst).
-                if bursts and normal and normal[0].name == task.name and not task.priority:
+                # A run starts only from the normal lane: a paused node runs
+                # urgent tasks one at a time, and `execute_task` runs one task.
+                if bursts and from_normal_lane and normal and normal[0].name == task.name:
                     burst = bursts.get((_STORE_PAGE, task.name))
                     if burst is not None and normal[0].type is _STORE_PAGE:
                         self.run_burst(task, burst)
@@ -215,7 +217,7 @@ class HandlerRunner:
         store_first = self.store_first
         name = first.name
         run = [first]
-        while normal and len(run) < _MAX_BURST:
+        while self.running and normal and len(run) < _MAX_BURST:  # a failed store stops it
             task = normal[0]
             if task.type is not _STORE_PAGE or task.name != name:
                 break
@@ -227,7 +229,7 @@ class HandlerRunner:
         try:
             result = handler(run)
         except Exception as error:
-            self.handler_failed(named, first, component, error)
+            self.handler_failed(named, first, component, error, run_size=len(run))
             return
         if self.timed:
             took = time.perf_counter() - started
@@ -309,10 +311,14 @@ class HandlerRunner:
         task: Task,
         component: Optional[AbstractComponent],
         error: Exception,
+        run_size: int = 1,
     ) -> None:
-        """Report ``error`` raised by ``handler`` (and stop the node unless DEPLOYED)."""
+        """Report ``error`` raised by ``handler`` (and stop the node unless DEPLOYED).
+
+        ``run_size``: how many tasks a burst handler was given, ``task`` first.
+        """
         deployed = self.mode is Mode.DEPLOYED
-        failure = handler_failure(handler, task, component, error, deployed)
+        failure = handler_failure(handler, task, component, error, deployed, run_size)
         self.record(failure, (_func_of(handler), type(error)))
 
     def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
