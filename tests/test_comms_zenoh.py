@@ -42,6 +42,7 @@ from snr import (
     tasks,
 )
 from snr.prelude import ConfigError, WireFormatError
+from snr.std_mods.comms.zenoh_inbox import WAKE, SequenceFollower
 from snr.utils import MockNode
 from tests.comms_helpers import (
     EchoFactory,
@@ -178,6 +179,39 @@ class TestZenohSettings(unittest.TestCase):
             self.assertIn(words, str(caught.exception))
 
 
+class TestSequenceFollower(unittest.TestCase):
+    """Gaps in a sender's count are lost pages, less those the node dropped itself."""
+
+    def test_gaps_less_what_was_dropped_here(self) -> None:
+        follow = SequenceFollower()
+        a, b = b"A" * 8, b"B" * 8
+        self.assertEqual([follow.taken(a, "x", n) for n in (1, 2, 5)], [0, 0, 2])
+        with follow.lock:
+            for n in (6, 7, 9, 12, 13):
+                follow.dropped(a, "x", n)
+        self.assertEqual(follow.taken(a, "x", 10), 1, "8 never came; 6, 7 and 9 dropped here")
+        self.assertEqual(follow.taken(a, "x", 14), 1, "11 never came; 12 and 13 dropped here")
+        self.assertEqual(follow.taken(b, "x", 40), 0, "a newcomer starts where it is")
+        self.assertEqual(follow.taken(a, "y", 3), 0, "each key is counted alone")
+        self.assertEqual(follow.taken(a, "x", 14), 0, "a repeat is no gap")
+
+    def test_dropped_runs_are_bounded_and_streams_too(self) -> None:
+        follow = SequenceFollower(max_streams=3)
+        sender = b"A" * 8
+        follow.taken(sender, "x", 0)
+        with follow.lock:
+            for n in range(1, 1000, 2):  # 500 runs of one page, 1 page apart
+                follow.dropped(sender, "x", n)
+        self.assertLessEqual(len(follow._dropped[(sender, "x")]), 65)
+        # Joined runs count what lay between the oldest ones as dropped: fewer
+        # pages said lost than the 499 really missing, never more.
+        self.assertLessEqual(follow.taken(sender, "x", 1000), 499)
+        self.assertEqual(follow.taken(sender, "x", 1003), 2, "a later gap counts in full")
+        for key in "abcdef":
+            follow.taken(sender, key, 1)
+        self.assertLessEqual(len(follow._last), 3)
+
+
 @unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)
 class TestZenohCounting(unittest.TestCase):
     """What a receiver counts, without a network: gaps in a sender's count, bad samples."""
@@ -194,6 +228,33 @@ class TestZenohCounting(unittest.TestCase):
             self.comms._follow_sequence("depth", b"not a count")  # ignored
         self.assertEqual(self.comms.stats()["lost"], 2)
         self.assertIn("Lost 2 pages from Zenoh", logs.output[0])
+
+    def test_pages_dropped_here_are_not_counted_again_as_lost(self) -> None:
+        from snr.std_mods.comms import zenoh_comms as zc
+
+        sender = b"A" * 8
+
+        def counted(i: int) -> Any:
+            return sample_of(i, mock.Mock(to_bytes=lambda: struct.pack(">8sQ", sender, i)))
+
+        comms = ZenohCommsFactory("lab", subscribe="**").get(MockNode())
+        fifo: Deque[Any] = collections.deque()
+        channel = zc.SampleChannel(mock.Mock(try_recv=lambda: fifo.popleft() if fifo else None))
+        comms._channels.append(channel)
+        fifo.append(counted(1))
+        comms._hand_over(channel, fifo.popleft())
+        comms._take_waiting()
+        wake = mock.Mock(to_bytes=lambda: WAKE)
+        fifo.extend([counted(2), counted(3), sample_of(None, wake), counted(4)])
+        with self.assertLogs("snr", "WARNING") as logs:
+            comms._relieve(channel)  # the node's thread was stuck
+            fifo.extend([counted(5), counted(8)])  # 6 and 7 never came
+            comms._hand_over(channel, fifo.popleft())
+            comms._take_waiting()
+        self.assertEqual(comms.stats()["dropped"], 3, "three pages; a wake is not a page")
+        self.assertEqual(comms.stats()["lost"], 2, "only 6 and 7")
+        self.assertIn("Dropped 3 pages from Zenoh", logs.output[0])
+        self.assertIn("Lost 2 pages from Zenoh", logs.output[1])
 
     def test_samples_reach_the_node_in_bounded_batches_in_order_and_a_stuck_node_drops(
         self,
@@ -266,7 +327,6 @@ class TestZenohCounting(unittest.TestCase):
 
     def test_the_idle_node_waits_in_the_fifo_and_its_watcher_covers_while_it_works(self) -> None:
         from snr.std_mods.comms import zenoh_comms as zc
-        from snr.std_mods.comms.zenoh_inbox import WAKE
 
         node = MockNode()
         comms = ZenohCommsFactory("lab", subscribe="n").get(node)
@@ -570,9 +630,11 @@ class TestZenohInOneProcess(unittest.TestCase):
         receiver = nodes.wait_first()
         self.assertEqual(receiver.terminate_reason, "pages flow again")
         dropped = zenoh_of(receiver).stats()["dropped"]
+        lost = zenoh_of(receiver).stats()["lost"]
         nodes.stop()
         self.assertEqual(nodes.errors, [])
         self.assertGreater(dropped, 0, "what waited while the node was stuck was dropped")
+        self.assertEqual(lost, 0, "dropped here (counted once), not lost on the way")
         said = [line for line in logs if "Dropped" in line and "pages from Zenoh" in line]
         self.assertTrue(said, f"the drop was said: {logs}")
         self.assertIn("a handler is stuck", said[0])

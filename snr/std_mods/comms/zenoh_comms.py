@@ -31,7 +31,6 @@ from __future__ import annotations
 import collections
 import json
 import os
-import struct
 import threading
 import time
 from typing import (
@@ -73,7 +72,14 @@ from snr.std_mods.comms.comms_loop import (
     normalize_keys,
 )
 from snr.std_mods.comms.wire import WIRE_VERSION
-from snr.std_mods.comms.zenoh_inbox import WAKE, IdleReader, SampleChannel, wake_key
+from snr.std_mods.comms.zenoh_inbox import (
+    SEQUENCE,
+    WAKE,
+    IdleReader,
+    SampleChannel,
+    SequenceFollower,
+    wake_key,
+)
 
 if TYPE_CHECKING:  # imported when a node starts: the extra is optional
     import zenoh
@@ -98,11 +104,9 @@ DEFAULT_ORIGIN = "zenoh"
 """The origin of a page whose sample says none (a program that is not SNR sent it)."""
 
 _PAGE_HEAD = {"v": WIRE_VERSION, "kind": "page"}
-_SEQ = struct.Struct(">8sQ")  # the attachment: the sender's random id, then its count under the key
 _MAX_ECHO_GUARD = (
     10_000  # pages from Zenoh waiting to be stored, remembered so they are not re-sent
 )
-_MAX_SENDERS = 10_000  # (sender, key) pairs whose sequence is followed for lost pages
 _FIFO_SAMPLES = 10_000  # samples a subscription's FIFO holds; Zenoh's thread waits above it
 _BATCH = 500  # samples decoded per task on the node's thread (then the pages, then the rest)
 _POLL_S = 0.025  # how often the watcher of the subscription the node's thread reads looks in
@@ -378,7 +382,7 @@ class ZenohComms(Endpoint):
         self._encode = PageEncoder(_PAGE_HEAD, to="over Zenoh")
         self._publishers: Dict[DataKey, Any] = {}
         self._declared: List[Any] = []
-        self._last_seq: Dict[Tuple[bytes, str], int] = {}
+        self._sequences = SequenceFollower()
         self._arrived: Dict[int, Page] = {}  # the echo guard: id(page) -> page
         self._published_keys = frozenset(factory.publish)
         self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
@@ -591,7 +595,7 @@ class ZenohComms(Endpoint):
         count = self._counts.get(page.key, 0) + 1
         self._counts[page.key] = count
         self.published += 1
-        publisher.put(body, attachment=_SEQ.pack(self._sender_id, count))
+        publisher.put(body, attachment=SEQUENCE.pack(self._sender_id, count))
         return None
 
     def publish_burst(self, run: List[Task]) -> SomeTasks:
@@ -709,8 +713,20 @@ class ZenohComms(Endpoint):
         the senders wait with it; pages that waited this long are stale.
         """
         dropped = 0
-        while channel.handler.try_recv() is not None:
-            dropped += 1
+        sequences = self._sequences
+        while True:
+            with sequences.lock:  # a gap the node's thread finds meanwhile waits for this count
+                sample = channel.handler.try_recv()
+                if sample is None:
+                    break
+                attachment = sample.attachment
+                counted = None if attachment is None else attachment.to_bytes()
+                if counted == WAKE:
+                    continue  # only woke the node's thread: not a page
+                dropped += 1
+                if counted is not None and len(counted) == SEQUENCE.size:
+                    sender, count = SEQUENCE.unpack(counted)
+                    sequences.dropped(sender, str(sample.key_expr)[len(self.prefix) :], count)
         if dropped:
             self.queue_report.dropped(dropped)
 
@@ -824,16 +840,12 @@ class ZenohComms(Endpoint):
         return page
 
     def _follow_sequence(self, key: str, attachment: bytes) -> None:
-        if len(attachment) != _SEQ.size:
+        if len(attachment) != SEQUENCE.size:
             return  # not an SNR sender's count
-        sender, count = _SEQ.unpack(attachment)
-        seen = self._last_seq
-        last = seen.get((sender, key))
-        if last is None and len(seen) >= _MAX_SENDERS:
-            seen.clear()
-        seen[(sender, key)] = count
-        if last is not None and count > last + 1:
-            self.lost_report.dropped(count - last - 1)
+        sender, count = SEQUENCE.unpack(attachment)
+        lost = self._sequences.taken(sender, key, count)
+        if lost:
+            self.lost_report.dropped(lost)
         elif self.lost_report.dropping and time.monotonic() - self.lost_report.last_drop > 1.0:
             self.lost_report.recovered()
 

@@ -5,7 +5,8 @@ a `SampleChannel`. The node's thread empties it in batches; a watcher thread
 of `ZenohComms` wakes the node for the first sample of a burst. While the
 node is idle, its own thread may wait in one channel itself (`IdleReader`),
 woken for other work by a sample of its own that only wakes it (`wake_key`,
-`is_wake`). ``zenoh_comms.py`` uses them; nothing here imports Zenoh.
+`is_wake`). A `SequenceFollower` counts the pages that never arrived.
+``zenoh_comms.py`` uses them; nothing here imports Zenoh.
 
 Example::
 
@@ -15,11 +16,23 @@ Example::
 
 from __future__ import annotations
 
+import struct
 import threading
 import time
-from typing import Any, Callable, Optional
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
-__all__ = ["WAKE", "IdleReader", "SampleChannel", "is_wake", "wake_key"]
+__all__ = [
+    "SEQUENCE",
+    "WAKE",
+    "IdleReader",
+    "SampleChannel",
+    "SequenceFollower",
+    "is_wake",
+    "wake_key",
+]
+
+SEQUENCE = struct.Struct(">8sQ")
+"""An SNR sender's attachment on a page: its random id, then its count of pages under the key."""
 
 WAKE = b"snr-wake"
 """The attachment of a sample that only wakes a node's thread (`IdleReader`)."""
@@ -188,3 +201,75 @@ class IdleReader:
         """End the node thread's wait, in the FIFO or not (any thread)."""
         self._nudge.set()
         self._put_wake(self.wake_key)
+
+
+_Stream = Tuple[bytes, str]  # (the sender's id, the key)
+_MAX_DROPPED_RUNS = 64  # runs of counts dropped here, kept a stream until its next page
+
+
+class SequenceFollower:
+    """Counts the pages that never arrived, from each sender's count under each key.
+
+    An SNR sender numbers the pages it publishes under a key (`SEQUENCE`, the
+    sample's attachment), so a gap between two counts the node takes is
+    pages lost on the way. Pages the node dropped itself (its thread was
+    stuck: `dropped`, from the watcher's thread) are counted as dropped
+    where they were dropped, so they are left out of the gap. Up to
+    ``max_streams`` (sender, key) pairs are followed; then it starts again.
+
+    Example::
+
+        follower = SequenceFollower()
+        follower.taken(b"sender01", "depth", 1)   # 0: the first count seen
+        follower.dropped(b"sender01", "depth", 2)  # the node dropped count 2 itself
+        follower.taken(b"sender01", "depth", 5)   # 2: counts 3 and 4 never arrived
+    """
+
+    def __init__(self, max_streams: int = 10_000) -> None:
+        self.max_streams = max_streams
+        self._last: Dict[_Stream, int] = {}
+        # Runs [first, last] of counts dropped here, per stream, oldest first;
+        # the node's thread reads them only for a gap, under the lock.
+        self._dropped: Dict[_Stream, List[List[int]]] = {}
+        self.lock = threading.Lock()
+
+    def taken(self, sender: bytes, key: str, count: int) -> int:
+        """Node's thread: the node took ``count``; how many pages before it never arrived."""
+        stream = (sender, key)
+        last = self._last.get(stream)
+        if last is None and len(self._last) >= self.max_streams:
+            self._last.clear()
+        self._last[stream] = count
+        if last is None or count <= last + 1:
+            return 0
+        with self.lock:  # rare: a gap
+            runs = self._dropped.pop(stream, None)
+            if not runs:
+                return count - last - 1
+            dropped_here = 0
+            later: List[List[int]] = []
+            for first, final in runs:
+                if first >= count:
+                    later.append([first, final])
+                else:
+                    dropped_here += max(0, min(final, count - 1) - max(first, last + 1) + 1)
+            if later:
+                self._dropped[stream] = later
+        return max(0, count - last - 1 - dropped_here)
+
+    def dropped(self, sender: bytes, key: str, count: int) -> None:
+        """Any thread, holding `lock`: the node dropped the page numbered ``count``."""
+        stream = (sender, key)
+        runs = self._dropped.get(stream)
+        if runs is None:
+            if len(self._dropped) >= self.max_streams:
+                self._dropped.clear()
+            runs = self._dropped[stream] = []
+        if runs and runs[-1][1] == count - 1:
+            runs[-1][1] = count
+            return
+        runs.append([count, count])
+        if len(runs) > _MAX_DROPPED_RUNS:  # join the two oldest (what lay between them counts too)
+            runs[0][1] = runs[1][1]
+            del runs[1]
+
