@@ -171,6 +171,7 @@ class TestBadFrames(unittest.TestCase):
             (body(**{**good, "process": "yes"}), "'process'"),
             (body(v=1, kind="hello"), "no 'role'"),
             (body(v=1, kind="hello", role=""), "must not be empty"),
+            (body(v=1, kind="hello", role="r", beat_s=10**400), "too large for a double"),
         ]
         for raw, words in cases:
             with self.subTest(raw=raw[:40]):

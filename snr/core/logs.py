@@ -208,6 +208,33 @@ class LossReport:
         )
         return True
 
+    def ended(self, how: str) -> bool:
+        """The source of the drops is gone (e.g. a link closed): say an open episode's total.
+
+        Drops counted in the last second are not yet in the log; without this
+        they would vanish with the link. Returns True if there was anything to say.
+
+        Example::
+
+            loss.ended("the link to 'urov' ended")
+            # "Dropped 12 pages for 'urov' over 0.4 s before the link to 'urov' ended (12 in all)."
+        """
+        with self._lock:
+            if self._episode_start is None:
+                return False
+            episode, since = self._episode, self._clock() - self._episode_start
+            self._episode, self._unsaid, self._episode_start = 0, 0, None
+        self.log.warning(
+            "%s %d %s over %.1f s before %s (%d in all).",
+            self.verb,
+            episode,
+            self.what,
+            since,
+            how,
+            self.total,
+        )
+        return True
+
     @property
     def dropping(self) -> bool:
         """True between the first drop and ``recovered()``."""

@@ -122,13 +122,16 @@ class CommsLoop(ThreadLoop):
     Attributes:
         keys: the data keys forwarded to peers.
         links: the links not yet closed (read-only tuple, replaced on change).
+        closed_totals: the counters of the links that have closed, added up
+            (``links``, ``pages_sent``, ``pages_received``, ``dropped``,
+            ``bad_frames``), so that what a dead link dropped is not forgotten.
         dead_after_s: a peer that promised beats and is silent this long is lost.
         beat_s: how often a quiet link sends a beat (a quarter of ``dead_after_s``,
             at most 1 s); promised to the peer in the hello.
     """
 
     hello_timeout_s: float = 5.0
-    """A connection that sends nothing at all for this long is closed."""
+    """A connection that sends no well-formed frame (not even a hello) for this long is closed."""
 
     recovered_after_s: float = 1.0
     """After drops, a link logs "Recovered" once nothing was dropped for this long."""
@@ -156,6 +159,9 @@ class CommsLoop(ThreadLoop):
         self.dead_after_s = dead_after_s
         self.beat_s = min(1.0, dead_after_s / 4)
         self.links: Tuple[Link, ...] = ()
+        self.closed_totals: Dict[str, int] = dict.fromkeys(
+            ("links", "pages_sent", "pages_received", "dropped", "bad_frames"), 0
+        )
         self.io_loop: Optional[IOLoop] = None  # the node's, while this component runs
         self._links_lock = threading.Lock()
         self._opened: List[Link] = []  # every link that may not have ended yet
@@ -321,13 +327,19 @@ class CommsLoop(ThreadLoop):
         """A link has closed (called on the I/O thread); log it once."""
         with self._links_lock:
             self.links = tuple(other for other in self.links if other is not link)
+            totals = self.closed_totals
+            totals["links"] += 1
+            totals["pages_sent"] += link.pages_sent
+            totals["pages_received"] += link.pages_received
+            totals["dropped"] += link.outbox.dropped
+            totals["bad_frames"] += link.bad_frames
         if not self.is_terminated():
             self.on_link_lost(link, reason)
             self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
 
     def on_hello(self, link: Link) -> None:
         """The peer said which node it is (called on the node's I/O thread)."""
-        self.info("Linked to node %r at %s", link.peer_role, link.transport.peer)
+        self.info("Linked to node %s at %s", link.peer_name, link.transport.peer)
 
     def on_link_lost(self, link: Link, reason: str) -> None:
         """Log that the peer went away (subclasses say what happens next).
@@ -366,6 +378,13 @@ class CommsLoop(ThreadLoop):
         """
         links = self.stats()
         lines = [f"{len(links)} link{'s' if len(links) != 1 else ''}"]
+        closed = dict(self.closed_totals)
+        if closed["links"]:
+            lines.append(
+                f"  {closed['links']:,} closed: sent {closed['pages_sent']:,}, received "
+                f"{closed['pages_received']:,}, dropped {closed['dropped']:,}, "
+                f"bad frames {closed['bad_frames']:,}"
+            )
         for link in links:
             by_key = ", ".join(f"{key}: {n}" for key, n in link["dropped_by_key"].items())
             lines.append(

@@ -20,6 +20,7 @@ import collections
 import enum
 import logging
 import selectors
+import struct
 import threading
 import time
 from typing import (
@@ -51,7 +52,15 @@ from snr.std_mods.comms.wire import (
 if TYPE_CHECKING:
     from snr.std_mods.comms.comms_loop import CommsLoop
 
-__all__ = ["Link", "LinkState", "Outbox", "Transport"]
+try:  # Linux and macOS say how many bytes wait unread; Windows has no fcntl
+    import fcntl
+    import termios
+
+    _FIONREAD: Optional[int] = termios.FIONREAD
+except ImportError:
+    _FIONREAD = None
+
+__all__ = ["Link", "LinkState", "Outbox", "Transport", "shown_role", "unread_bytes"]
 
 _MAX_CHUNK_BYTES = 1024 * 1024  # queued frames are joined into chunks up to this size
 _WRITE_NOW_BYTES = 64 * 1024  # the node's thread writes a backlog this big before it goes idle
@@ -61,6 +70,43 @@ _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
 _SHOWN_BAD_FRAMES = 5  # per link, log the first few bad frames in full, then a count every 5 s
 _MAX_KEYS_NOTED = 1000  # DEBUG: how many received keys a link remembers for the hints
+_PROGRESS_BYTES = 16 * 1024  # a read this big, even mid-frame, is a sign of life (a big frame)
+_SHOWN_ROLE_CHARS = 60  # a peer's role in log lines is cut to this many characters
+
+
+def shown_role(role: str) -> str:
+    """A peer's role as log lines show it: quoted, and cut short if it is long.
+
+    A role is whatever the peer's hello said; a hostile or broken peer may
+    send megabytes of it, which must not be copied into every log line.
+
+    Example::
+
+        shown_role("urov")        # "'urov'"
+        shown_role("x" * 5000)    # "'xxx…xxx'… (5,000 characters)"
+    """
+    if len(role) <= _SHOWN_ROLE_CHARS:
+        return repr(role)
+    return f"{role[:_SHOWN_ROLE_CHARS]!r}… ({len(role):,} characters)"
+
+
+def unread_bytes(fd: int) -> Optional[int]:
+    """How many received bytes wait unread in the OS for ``fd``; None where it cannot say.
+
+    A socket or pipe that is not read keeps what arrives; a link whose node is
+    behind uses this to tell a peer that still talks from one that fell silent.
+
+    Example::
+
+        unread_bytes(sock.fileno())   # 0 when nothing waits
+    """
+    if _FIONREAD is None:
+        return None
+    try:
+        answer = fcntl.ioctl(fd, _FIONREAD, b"\0\0\0\0")
+    except OSError:
+        return None
+    return int(struct.unpack("i", answer)[0])
 
 
 class Transport(Protocol):
@@ -352,7 +398,10 @@ class Link:
     `CommsLoop`.
 
     Liveness: both sides promise a sign of life in their hello (``beat_s``)
-    and a link that has sent nothing for that long sends a beat frame.
+    and a link that has sent nothing for that long sends a beat frame. A sign
+    of life is a whole frame, or a big read of one still arriving: a byte now
+    and then does not keep a link open, and a connection with no well-formed
+    frame (not even a hello) within ``hello_timeout_s`` is closed.
     A peer that promised beats and is then not heard from for
     ``max(dead_after_s, 3 * its beat_s)`` is declared lost — also while pages
     flow the other way, which is when a Wi-Fi link usually dies — and the
@@ -365,6 +414,10 @@ class Link:
     Backpressure: while the node's queue is over its high-water mark the
     link stops reading (the bytes wait in the OS and TCP slows the sender)
     and reads on once there is room; the I/O thread never waits for it.
+    Meanwhile bytes piling up in the OS are the peer's sign of life, and a
+    peer that sends nothing at all while nothing waits is judged silent as
+    usual; bytes that wait without growing (its last words, or a buffer so
+    full it cannot send) are judged once they are read.
 
     Example::
 
@@ -408,7 +461,7 @@ class Link:
         self.keys_received: Optional[Set[DataKey]] = None  # noted in DEBUG (link_hints.py)
         self.opened_at = time.monotonic()
         self.last_heard = self.opened_at
-        self._heard_anything = False
+        self._heard_frame = False  # a well-formed frame has arrived (for the hello timeout)
         self._sent_when_heard = 0
         self.loss = LossReport(
             owner.log,
@@ -423,6 +476,7 @@ class Link:
         self._attached = False
         self._io_writes = False  # the loop's thread watches for room: leave the writing to it
         self._paused = False
+        self._unread_seen = 0  # while paused: bytes the OS held for us at the last look
         self._held: List[Page] = []  # decoded while the node was behind: delivered first
         self._timer: Optional[IOTimer] = None
         self._tick_s = min(_TICK_S, owner.beat_s / 4)
@@ -434,10 +488,15 @@ class Link:
 
     @property
     def label(self) -> str:
-        """The peer for log lines: ``"receiver at 127.0.0.1:9000"``."""
+        """The peer for log lines: ``"'receiver' at 127.0.0.1:9000"``."""
         if self.peer_role:
-            return f"{self.peer_role!r} at {self.transport.peer}"
+            return f"{shown_role(self.peer_role)} at {self.transport.peer}"
         return self.transport.peer
+
+    @property
+    def peer_name(self) -> str:
+        """The peer's role for log lines (quoted, cut short), or ``"unknown"`` before its hello."""
+        return shown_role(self.peer_role) if self.peer_role else "unknown"
 
     def fileno(self) -> int:
         """The transport's file descriptor (what the I/O loop watches)."""
@@ -606,11 +665,10 @@ class Link:
         self._timer = None
         if self._finished:
             return
-        if not self._paused:  # a paused link reads nothing, so silence would mislead
-            silence = self._silence()
-            if silence is not None:
-                self._finish(silence)
-                return
+        silence = self._silence_while_paused() if self._paused else self._silence()
+        if silence is not None:
+            self._finish(silence)
+            return
         if self.state is LinkState.OPEN:
             if (
                 self.peer_beat_s is not None
@@ -658,6 +716,7 @@ class Link:
                 self.transport.close()
             except OSError:
                 pass
+        self.loss.ended("the link ended")  # drops not yet in the log are said now
         self._closed.set()
         self.owner.link_closed(self, reason)
 
@@ -736,9 +795,6 @@ class Link:
                 )
             self._end("the peer closed the connection")
             return
-        self.last_heard = time.monotonic()
-        self._heard_anything = True
-        self._sent_when_heard = self.pages_sent
         self.outbox.answer_due = True
         bodies: List[bytes] = []
         pages: List[Page] = []
@@ -750,8 +806,14 @@ class Link:
             self._deliver(pages)
             self._end(f"reset after a bad frame ({error})")
             return
+        if bodies or count >= _PROGRESS_BYTES:
+            # A sign of life is a whole frame (wire format 3.3), or a big read of
+            # one still arriving; a byte now and then keeps no link alive.
+            self.last_heard = time.monotonic()
+            self._sent_when_heard = self.pages_sent
         self._decode_bodies(bodies, pages)
         if pages:
+            self._heard_frame = True
             self._deliver(pages)
 
     def _decode_bodies(self, bodies: List[bytes], pages: List[Page]) -> None:
@@ -762,6 +824,10 @@ class Link:
                 message = decode(body)
             except WireFormatError as error:
                 self._bad_frame(error)
+                continue
+            except Exception as error:  # a bug in decoding: say so, and lose no other frame
+                self.owner.log.exception("Decoding a frame from %s failed", self.label)
+                self._bad_frame(WireFormatError(f"it could not be decoded ({error!r:.80})"))
                 continue
             if message.__class__ is Page:
                 pages.append(message)
@@ -796,25 +862,49 @@ class Link:
     def _stop_reading(self) -> None:
         if not self._finished:
             self.io.watch(self, self.io.events(self) & ~_READ)
+            self._unread_seen = 0
             self.io.when_room(self._resume)
 
     def _resume(self) -> None:
         if self._finished:
             return
         self._paused = False
-        self.last_heard = time.monotonic()  # what waited in the OS is news of the peer
+        if self._note_unread() != 0:  # what waits is read next: news of the peer
+            self.last_heard = time.monotonic()
         held, self._held = self._held, []
         if held:
             self.owner.deliver(self, held)
         self.io.watch(self, self.io.events(self) | _READ)
 
+    def _note_unread(self) -> Optional[int]:
+        """Bytes waiting unread in the OS (None if it cannot say); more than last time is life."""
+        unread = unread_bytes(self.transport.fileno())
+        if unread is not None and unread > self._unread_seen:
+            self.last_heard = time.monotonic()  # the peer sent something while we did not read
+        if unread is not None:
+            self._unread_seen = unread
+        return unread
+
+    def _silence_while_paused(self) -> Optional[str]:
+        """`_silence` for a link that does not read (its node is behind).
+
+        Bytes that arrive meanwhile are life. Bytes that wait but do not
+        grow may be the peer's last words or a full buffer stopping it: the
+        silence is judged once they are read. Nothing waiting, and nothing
+        arriving for the silence limit, is a dead path as when reading.
+        """
+        unread = self._note_unread()
+        if unread is None or unread:
+            return None
+        return self._silence()
+
     def _silence(self) -> Optional[str]:
         """Why the link is lost if the peer has been quiet too long, else None."""
         quiet_s = time.monotonic() - self.last_heard
-        if not self._heard_anything and quiet_s > self.owner.hello_timeout_s:
+        if not self._heard_frame and time.monotonic() - self.opened_at > self.owner.hello_timeout_s:
             return (
-                f"it sent nothing, not even a hello, within {self.owner.hello_timeout_s:g} s "
-                "of connecting"
+                f"it sent no well-formed frame, not even a hello, within "
+                f"{self.owner.hello_timeout_s:g} s of connecting"
             )
         if self.peer_beat_s is None:
             return None  # a peer that promised no beats may be quiet for ever
@@ -831,7 +921,17 @@ class Link:
 
     def _on_message(self, message: Message) -> None:
         """A frame that is not a page: a hello, a beat or a bye."""
+        self._heard_frame = True
         if isinstance(message, Hello):
+            if self.peer_role is not None:  # said once per connection; more is a mistake
+                if message.role != self.peer_role:
+                    self._bad_frame(
+                        WireFormatError(
+                            f"a second hello, from role {shown_role(message.role)}; this "
+                            f"connection is {shown_role(self.peer_role)}'s and stays so"
+                        )
+                    )
+                return
             self.peer_role = message.role
             self.peer_beat_s = message.beat_s
             self._peer_takes_bye = message.bye

@@ -95,5 +95,5 @@ def check_link(comms: CommsLoop, link: Link) -> None:
             handled = []  # a newer link to the same node: its own check comes later
         received.update(other.keys_received or ())
     places = sorted({other.transport.peer for other in peer_links} | {link.transport.peer})
-    peer = f"node {link.peer_role!r} at {' and '.join(places)}"
+    peer = f"node {link.peer_name} at {' and '.join(places)}"
     hints.check_link(repr(comms.name), peer, comms.keys, handled, node.datastore, received)

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import os
 import socket
+import time
 from typing import Optional, Tuple
 
 from snr.core import LoopFactory
@@ -54,6 +55,7 @@ _ACCEPT_WAKE_S = 0.5  # how often a waiting server checks whether it should stop
 _CONNECT_TIMEOUT_S = 0.5
 _FIRST_RETRY_S = 0.05
 _MAX_RETRY_S = 1.0
+_STABLE_S = 1.0  # a link that lasted this long (after a hello) resets the backoff
 
 
 def _describe(address: Address) -> str:
@@ -227,7 +229,7 @@ class SocketsServerLoop(CommsLoop):
         self.dbg("Accepted a connection from %s", link.transport.peer)
 
     def on_hello(self, link: Link) -> None:
-        self.info("Client node %r connected from %s", link.peer_role, link.transport.peer)
+        self.info("Client node %s connected from %s", link.peer_name, link.transport.peer)
 
     def on_link_lost(self, link: Link, reason: str) -> None:
         say = self.warn if link.went_silent else self.info  # a silent death is news
@@ -253,8 +255,11 @@ class SocketsClientLoop(CommsLoop):
     """Connects to a sockets server and keeps connecting; built by ``client()``.
 
     Until the server is up, and after a link drops, it retries with backoff
-    (0.05 s, doubling, at most 1 s between tries). It logs once when it starts
-    waiting and once when it (re)connects.
+    (0.05 s, doubling, at most 1 s between tries). The backoff starts again
+    from 0.05 s only after a link that lasted a second past the server's
+    hello, so a server that accepts and hangs up at once (one that is full)
+    is tried at most once a second, not thousands of times. It logs once
+    when it starts waiting and once when it (re)connects.
 
     Example::
 
@@ -280,23 +285,33 @@ class SocketsClientLoop(CommsLoop):
 
     def loop(self) -> None:
         """Watch the current link, or try to connect once (then back off)."""
-        if self.link is not None and not self.link.is_closed():
-            self.link.wait_closed(_ACCEPT_WAKE_S)
-            return
+        link = self.link
+        if link is not None:
+            if not link.is_closed():
+                link.wait_closed(_ACCEPT_WAKE_S)
+                return
+            self.link = None
+            if link.peer_role is not None and time.monotonic() - link.opened_at >= _STABLE_S:
+                self._retry_s = _FIRST_RETRY_S  # it worked for a while: try again at once
+            else:  # a server that accepts and then hangs up (e.g. full) is not hammered
+                self._back_off()
+                return
         sock = self._connect()
         if sock is None:
-            self.wait_s(self._retry_s)
-            self._retry_s = min(self._retry_s * 2, _MAX_RETRY_S)
+            self._back_off()
             return
         if self.is_terminated():
             sock.close()
             return
-        self._retry_s = _FIRST_RETRY_S
         self._waiting_reported = False
         self.link = self.open_link(
             SocketTransport(sock, _describe(self.address), self.dead_after_s)
         )
         self.dbg("TCP connection to %s made", _describe(self.address))
+
+    def _back_off(self) -> None:
+        self.wait_s(self._retry_s)
+        self._retry_s = min(self._retry_s * 2, _MAX_RETRY_S)
 
     def _connect(self) -> Optional[socket.socket]:
         try:
@@ -317,7 +332,7 @@ class SocketsClientLoop(CommsLoop):
         self._ever_connected = True
         self._loss_reported = False
         self.info(
-            "%s to the sockets server, node %r at %s", verb, link.peer_role, link.transport.peer
+            "%s to the sockets server, node %s at %s", verb, link.peer_name, link.transport.peer
         )
 
     def _report_waiting(self, reason: str) -> None:

@@ -241,7 +241,15 @@ def decode_body(body: bytes) -> Message:
         bye = obj.get("bye", False)
         if type(bye) is not bool:
             raise WireFormatError(f"the hello's 'bye' is {bye!r:.40}; it must be true or false")
-        return Hello(role, None if beat_s is None else float(beat_s), bye)
+        if beat_s is not None:
+            try:
+                beat_s = float(beat_s)  # a whole number past a double's range cannot be
+            except OverflowError:
+                raise WireFormatError(
+                    "the hello's 'beat_s' is a whole number too large for a double; it must "
+                    "be a number of seconds above 0"
+                ) from None
+        return Hello(role, beat_s, bye)
     raise WireFormatError(
         f"unknown frame kind {kind!r:.40}; known kinds are 'page', 'hello', 'beat' and 'bye'"
     )

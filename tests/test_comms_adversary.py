@@ -1,0 +1,254 @@
+"""Comms against peers that misbehave on purpose: odd hellos, trickled bytes,
+a server that hangs up at once, a reader that stops and then vanishes.
+
+Each peer here is a raw socket on 127.0.0.1 written by the test, so it can say
+what no SNR node would; the node under test must lose nothing it was given,
+close what only holds a connection, and log it all briefly.
+"""
+
+from __future__ import annotations
+
+import json
+import re
+import socket
+import threading
+import time
+import unittest
+from typing import Any, List
+
+from snr import Config, Mode, Node, SocketsPair
+from snr.std_mods.comms.comms_loop import CommsLoop
+from snr.std_mods.comms.link import shown_role, unread_bytes
+from tests.helpers import wait_until
+from tests.test_comms_liveness import CommsFaultTest, CounterFactory, FloodFactory
+from tests.test_comms_local import connect_when_listening
+
+
+def frame(**fields: Any) -> bytes:
+    """One frame as a plain program writes it: 4-byte big-endian length, then JSON."""
+    body = json.dumps(fields).encode("utf-8")
+    return len(body).to_bytes(4, "big") + body
+
+
+def page(key: str, data: Any) -> bytes:
+    return frame(v=1, kind="page", key=key, data=data, origin="tool", created_at_s=1.0)
+
+
+def read_until_closed(sock: socket.socket, limit_s: float) -> bool:
+    """Read (and drop) what comes until the peer closes; False if still open after ``limit_s``."""
+    deadline = time.monotonic() + limit_s
+    sock.settimeout(0.05)
+    while time.monotonic() < deadline:
+        try:
+            if not sock.recv(65536):
+                return True
+        except socket.timeout:
+            continue
+        except OSError:  # reset: closed too
+            return True
+    return False
+
+
+def comms_of(node: Node) -> CommsLoop:
+    [comms] = [part for part in node.components.values() if isinstance(part, CommsLoop)]
+    return comms
+
+
+def connect_with_small_buffer(port: int) -> socket.socket:
+    """A client whose receive buffer is small, so that a peer's frames soon back up."""
+    for _ in range(100):
+        sock = socket.socket()
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_RCVBUF, 4096)
+        try:
+            sock.connect(("127.0.0.1", port))
+            return sock
+        except ConnectionRefusedError:
+            sock.close()
+            time.sleep(0.02)
+    raise AssertionError(f"nothing listens on port {port}")
+
+
+class Trickler:
+    """Sends one byte every 0.02 s on ``sock`` until stopped or the socket breaks (at most 5 s)."""
+
+    def __init__(self, sock: socket.socket) -> None:
+        self.sock = sock
+        self.stop = threading.Event()
+        self.thread = threading.Thread(target=self._run, name="test-trickler", daemon=True)
+        self.thread.start()
+
+    def _run(self) -> None:
+        for _ in range(250):
+            if self.stop.wait(0.02):
+                return
+            try:
+                self.sock.send(b"x")
+            except OSError:
+                return
+
+    def close(self) -> None:
+        self.stop.set()
+        self.thread.join(2.0)
+
+
+class TestOddHellos(CommsFaultTest):
+    def serve(self, counter: CounterFactory, **options: Any) -> socket.socket:
+        pair = SocketsPair(("127.0.0.1", self.port), **options)
+        self.nodes = self.run_nodes(
+            Config({"server": [pair.server(), counter]}, mode=Mode.TEST), ["server"]
+        )
+        sock = connect_when_listening(self.port)
+        self.addCleanup(sock.close)
+        return sock
+
+    def server_links(self) -> List[Any]:
+        return list(comms_of(self.nodes.nodes[0]).links)
+
+    def test_a_hello_with_a_huge_beat_is_a_bad_frame_and_the_pages_behind_it_arrive(self) -> None:
+        counter = CounterFactory("tick")
+        sock = self.serve(counter)
+        hello = frame(v=1, kind="hello", role="tool", beat_s=10**400)
+        sock.sendall(hello + page("tick", 0) + page("tick", 1) + page("tick", 2))
+        self.assertTrue(wait_until(lambda: len(counter.seen) == 3, 5.0), self.log.lines)
+        self.assertEqual(counter.seen, [0, 1, 2])
+        [bad] = self.log.matching("Bad frame")
+        self.assertIn("'beat_s' is a whole number too large for a double", bad)
+        sock.sendall(page("tick", 3))  # the connection is still open
+        self.assertTrue(wait_until(lambda: len(counter.seen) == 4, 5.0))
+
+    def test_a_second_hello_changes_nothing_and_is_logged_briefly(self) -> None:
+        counter = CounterFactory("tick")
+        sock = self.serve(counter)
+        hellos = [frame(v=1, kind="hello", role="tool")]
+        hellos += [frame(v=1, kind="hello", role="intruder")] * 30
+        hellos += [frame(v=1, kind="hello", role="tool")] * 30
+        sock.sendall(b"".join(hellos) + page("tick", "after"))
+        self.assertTrue(wait_until(lambda: counter.seen == ["after"], 5.0), self.log.lines)
+        [link] = self.server_links()
+        self.assertEqual(link.peer_role, "tool", "the first hello names the connection")
+        self.assertEqual(link.bad_frames, 30, "each hello naming another role is a bad frame")
+        self.assertEqual(len(self.log.matching("Client node")), 1, "one line for the hello")
+        said = self.log.matching("a second hello, from role 'intruder'")
+        self.assertTrue(1 <= len(said) <= 5, said)
+
+    def test_a_huge_role_is_cut_short_in_every_log_line(self) -> None:
+        counter = CounterFactory("tick")
+        sock = self.serve(counter)
+        role = "r" * 1_000_000
+        sock.sendall(frame(v=1, kind="hello", role=role) + page("tick", 1))
+        self.assertTrue(wait_until(lambda: bool(self.log.matching("Client node")), 5.0))
+        [link] = self.server_links()
+        self.assertEqual(link.peer_role, role, "the role itself is kept whole")
+        longest = max(len(line) for _, line in self.log.lines)
+        self.assertLess(longest, 400, "no log line copies the megabyte")
+        self.assertIn("(1,000,000 characters)", self.log.matching("Client node")[0])
+
+    def test_shown_role_quotes_short_roles_as_they_are(self) -> None:
+        self.assertEqual(shown_role("urov"), "'urov'")
+        self.assertEqual(shown_role("x" * 61), f"{'x' * 60!r}… (61 characters)")
+
+
+class TestConnectionsThatOnlyHoldASlot(CommsFaultTest):
+    def serve(self, dead_after_s: float) -> socket.socket:
+        original = CommsLoop.hello_timeout_s
+        CommsLoop.hello_timeout_s = 0.1
+        self.addCleanup(setattr, CommsLoop, "hello_timeout_s", original)
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=dead_after_s)
+        self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
+        sock = connect_when_listening(self.port)
+        self.addCleanup(sock.close)
+        return sock
+
+    def test_bytes_that_never_make_a_frame_are_no_hello(self) -> None:
+        sock = self.serve(dead_after_s=0.4)
+        sock.sendall((1000).to_bytes(4, "big"))  # a frame of 1,000 bytes is coming...
+        trickle = Trickler(sock)  # ...one byte at a time
+        self.addCleanup(trickle.close)
+        self.assertTrue(read_until_closed(sock, 3.0), "the server closed the connection")
+        self.assertTrue(wait_until(lambda: bool(self.log.matching("not even a hello")), 2.0))
+
+    def test_a_trickle_after_the_hello_is_no_sign_of_life(self) -> None:
+        sock = self.serve(dead_after_s=0.25)
+        sock.sendall(frame(v=1, kind="hello", role="trickler", beat_s=0.05))
+        sock.sendall((1000).to_bytes(4, "big"))
+        trickle = Trickler(sock)
+        self.addCleanup(trickle.close)
+        self.assertTrue(read_until_closed(sock, 3.0), "the server closed the connection")
+        heard = "nothing heard from it for"
+        self.assertTrue(wait_until(lambda: self.log.matching(heard), 2.0), self.log.lines)
+        self.assertIn("'trickler'", self.log.matching(heard)[0])
+
+
+class TestAServerThatHangsUp(CommsFaultTest):
+    def test_a_client_backs_off_from_a_server_that_hangs_up_at_once(self) -> None:
+        listener = socket.socket()
+        listener.bind(("127.0.0.1", 0))
+        listener.listen(64)
+        listener.settimeout(0.05)
+        self.addCleanup(listener.close)
+        accepted = 0
+        window_s = 0.8
+
+        def hang_up_on_everyone() -> None:
+            nonlocal accepted
+            deadline = time.monotonic() + window_s
+            while time.monotonic() < deadline:
+                try:
+                    sock, _ = listener.accept()
+                except socket.timeout:
+                    continue
+                accepted += 1
+                sock.close()
+
+        pair = SocketsPair(("127.0.0.1", int(listener.getsockname()[1])))
+        server = threading.Thread(target=hang_up_on_everyone, daemon=True)
+        server.start()
+        self.run_nodes(Config({"client": [pair.client()]}, mode=Mode.TEST), ["client"])
+        server.join(window_s + 2.0)
+        # Tries at 0, 0.05, 0.15, 0.35 and 0.75 s; without backoff it was thousands.
+        self.assertGreaterEqual(accepted, 2)
+        self.assertLessEqual(accepted, 8)
+
+
+class TestDropsBeforeALinkEnds(CommsFaultTest):
+    def test_drops_just_before_a_link_ends_are_said_and_kept(self) -> None:
+        pair = SocketsPair(("127.0.0.1", self.port), max_backlog_bytes=64 * 1024)
+        flood = FloodFactory(count=600)  # 12 MB of pages for a reader that takes none
+        nodes = self.run_nodes(
+            Config({"server": [pair.server("flood"), flood]}, mode=Mode.TEST), ["server"]
+        )
+        sock = connect_with_small_buffer(self.port)
+        self.addCleanup(sock.close)
+        sock.sendall(frame(v=1, kind="hello", role="slow_tool"))
+        self.assertTrue(wait_until(lambda: bool(self.log.matching("Client node")), 5.0))
+        flood.started.set()
+        self.assertTrue(wait_until(lambda: bool(self.log.matching("Dropped")), 10.0))
+        sock.close()  # unread bytes: the server's side sees a reset
+        said = "before the link ended"
+        self.assertTrue(wait_until(lambda: bool(self.log.matching(said)), 5.0), self.log.lines)
+        [line] = self.log.matching(said)
+        match = re.search(r"Dropped (\d+) pages for 127.0.0.1:\d+ over [\d.]+ s before", line)
+        assert match is not None, line
+        comms = comms_of(nodes.nodes[0])
+        self.assertTrue(wait_until(lambda: comms.closed_totals["links"] == 1, 2.0))
+        # The whole episode is said, and the closed link's counters are kept.
+        self.assertEqual(comms.closed_totals["dropped"], int(match.group(1)))
+        self.assertIn(f"1 closed: sent {comms.closed_totals['pages_sent']:,}", comms.stats_text())
+
+
+class TestUnreadBytes(unittest.TestCase):
+    def test_it_counts_what_waits_in_the_os(self) -> None:
+        one, other = socket.socketpair()
+        self.addCleanup(one.close)
+        self.addCleanup(other.close)
+        if unread_bytes(one.fileno()) is None:
+            self.skipTest("this OS cannot say how many bytes wait")
+        self.assertEqual(unread_bytes(one.fileno()), 0)
+        other.sendall(b"hello")
+        self.assertTrue(wait_until(lambda: unread_bytes(one.fileno()) == 5, 2.0))
+        one.recv(5)
+        self.assertEqual(unread_bytes(one.fileno()), 0)
+
+
+if __name__ == "__main__":
+    unittest.main()
