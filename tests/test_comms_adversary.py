@@ -179,6 +179,32 @@ class TestConnectionsThatOnlyHoldASlot(CommsFaultTest):
         self.assertIn("'trickler'", self.log.matching(heard)[0])
 
 
+class TestAReceiverThatIsBehind(CommsFaultTest):
+    def test_a_peer_that_falls_silent_is_found_while_the_node_is_still_behind(self) -> None:
+        original = Node.max_queued_tasks
+        Node.max_queued_tasks = 2  # two waiting tasks and the link stops reading
+        self.addCleanup(setattr, Node, "max_queued_tasks", original)
+        counter = CounterFactory("tick", pause_s=1.5)  # the first page holds the node
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.25)
+        nodes = self.run_nodes(
+            Config({"server": [pair.server(), counter]}, mode=Mode.TEST), ["server"]
+        )
+        sock = connect_when_listening(self.port)
+        self.addCleanup(sock.close)
+        sock.sendall(frame(v=1, kind="hello", role="sender", beat_s=0.05) + page("tick", 0))
+        self.assertTrue(wait_until(lambda: counter.seen == [0], 5.0), "the node is stuck")
+        sock.sendall(b"".join(page("tick", n) for n in range(1, 6)))  # the queue fills
+        [link] = comms_of(nodes.nodes[0]).links
+        self.assertTrue(wait_until(lambda: link.pages_received == 6, 5.0))
+        sock.sendall(page("tick", 6))  # read, held: the link pauses
+        self.assertTrue(wait_until(lambda: link._paused, 5.0))
+        silent_since = time.monotonic()  # and the peer says nothing more, beats included
+        heard = "nothing heard from it for"
+        self.assertTrue(wait_until(lambda: self.log.matching(heard), 1.2), self.log.lines)
+        self.assertLess(self.log.first(heard) or 0.0, silent_since + 1.2, "within the bound")
+        self.assertEqual(counter.seen, [0], "found while the node was still behind")
+
+
 class TestAServerThatHangsUp(CommsFaultTest):
     def test_a_client_backs_off_from_a_server_that_hangs_up_at_once(self) -> None:
         listener = socket.socket()
