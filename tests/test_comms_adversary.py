@@ -143,6 +143,23 @@ class TestOddHellos(CommsFaultTest):
         self.assertLess(longest, 400, "no log line copies the megabyte")
         self.assertIn("(1,000,000 characters)", self.log.matching("Client node")[0])
 
+    def test_a_flood_of_connections_is_logged_in_brief(self) -> None:
+        counter = CounterFactory("tick")
+        sock = self.serve(counter)
+        sock.close()
+        for n in range(40):  # hello, goodbye, forty times
+            with connect_when_listening(self.port) as client:
+                client.sendall(frame(v=1, kind="hello", role=f"churn{n}"))
+                read_until_closed(client, 0.0)  # no wait: close at once
+        comms = comms_of(self.nodes.nodes[0])
+        self.assertTrue(wait_until(lambda: comms.closed_totals["links"] == 41, 5.0))
+        self.nodes.stop()  # the node's last words count what was not said
+        connected = self.log.matching("Client node")
+        self.assertEqual(len(connected), 5, connected)
+        [count] = self.log.matching("Clients connected:")
+        self.assertIn("(40 in all)", count)
+        self.assertLessEqual(len(self.log.matching("disconnected")), 6)
+
     def test_shown_role_quotes_short_roles_as_they_are(self) -> None:
         self.assertEqual(shown_role("urov"), "'urov'")
         self.assertEqual(shown_role("x" * 61), f"{'x' * 60!r}… (61 characters)")

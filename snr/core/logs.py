@@ -50,7 +50,10 @@ class RepeatFilter:
     identical lines a second and bury everything else in the log. Messages
     are grouped by a key (e.g. the handler and the error's type): the first
     ``first`` of each group are logged in full, then at most one summary line
-    every ``every_s`` seconds says how many more there were.
+    every ``every_s`` seconds says how many more there were. With
+    ``fresh_after_s``, a group that has been quiet that long starts afresh
+    (its next ones are in full again): for news that is welcome now and then
+    but not a thousand times a second, such as a client connecting.
 
     Example::
 
@@ -67,12 +70,15 @@ class RepeatFilter:
         first: int = 3,
         every_s: float = 5.0,
         clock: Callable[[], float] = time.monotonic,
+        fresh_after_s: Optional[float] = None,
     ) -> None:
         self.log = log
         self.first = first
         self.every_s = every_s
+        self.fresh_after_s = fresh_after_s
         self._clock = clock
-        # key -> [times seen, not yet summarised, start of this summary period, level]
+        # key -> [times seen in all, not yet summarised, start of this summary
+        #         period, level, said in full since the group was fresh, last seen]
         self._seen: Dict[Hashable, List[Any]] = {}
         self._what: Dict[Hashable, str] = {}
 
@@ -81,11 +87,17 @@ class RepeatFilter:
         now = self._clock()
         seen = self._seen.get(key)
         if seen is None:
-            seen = self._seen[key] = [0, 0, now, level]
+            seen = self._seen[key] = [0, 0, now, level, 0, now]
             self._what[key] = what
+        elif self.fresh_after_s is not None and now - seen[5] >= self.fresh_after_s:
+            if seen[1]:  # what the last burst left uncounted aloud comes first
+                self._summarise(key, seen, now)
+            seen[4] = 0
+        seen[5] = now
         seen[0] += 1
-        if seen[0] <= self.first:
-            if seen[0] == self.first:
+        if seen[4] < self.first:
+            seen[4] += 1
+            if seen[4] == self.first:
                 msg += (
                     f"\n(More of these are counted from now on: one line every {self.every_s:g} s.)"
                 )

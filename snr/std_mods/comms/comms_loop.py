@@ -25,11 +25,13 @@ Example (what `SocketsPair` and `PipeLoopFactory` build for you)::
 
 from __future__ import annotations
 
+import logging
 import threading
 import time
 from typing import Any, Callable, Dict, List, Optional, Sequence, Set, Tuple, Union
 
 from snr.core import ThreadLoop, tasks
+from snr.core.logs import RepeatFilter
 from snr.prelude import (
     AbstractFactory,
     AbstractNode,
@@ -159,6 +161,7 @@ class CommsLoop(ThreadLoop):
         self.dead_after_s = dead_after_s
         self.beat_s = min(1.0, dead_after_s / 4)
         self.links: Tuple[Link, ...] = ()
+        self.news = RepeatFilter(self.log, first=5, every_s=5.0, fresh_after_s=30.0)
         self.closed_totals: Dict[str, int] = dict.fromkeys(
             ("links", "pages_sent", "pages_received", "dropped", "bad_frames"), 0
         )
@@ -337,9 +340,30 @@ class CommsLoop(ThreadLoop):
             self.on_link_lost(link, reason)
             self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
 
+    def say(self, what: str, level: int, msg: str, *args: Any) -> None:
+        """Log news of links (connects, hellos, losses) in full, unless it comes in a flood.
+
+        ``what`` names the kind of news, e.g. ``"Clients connected"``: of each
+        kind the first five in a row are logged in full, then one line every
+        5 s counts the rest, and after 30 s without any the next is in full
+        again. A robot that reconnects now and then is logged every time; a
+        program that connects a thousand times a second costs a line every 5 s.
+
+        Example::
+
+            self.say("Links lost", logging.WARNING, "Lost the link to %s", link.label)
+        """
+        self.news.report((what, level), what, level, msg, *args)
+
     def on_hello(self, link: Link) -> None:
         """The peer said which node it is (called on the node's I/O thread)."""
-        self.info("Linked to node %s at %s", link.peer_name, link.transport.peer)
+        self.say(
+            "Links made",
+            logging.INFO,
+            "Linked to node %s at %s",
+            link.peer_name,
+            link.transport.peer,
+        )
 
     def on_link_lost(self, link: Link, reason: str) -> None:
         """Log that the peer went away (subclasses say what happens next).
@@ -348,9 +372,9 @@ class CommsLoop(ThreadLoop):
         node that stops in order is news, not a fault.
         """
         if link.peer_said_bye:
-            self.info("The link to %s ended: %s.", link.label, reason)
+            self.say("Links ended", logging.INFO, "The link to %s ended: %s.", link.label, reason)
         else:
-            self.warn("Lost the link to %s: %s.", link.label, reason)
+            self.say("Links lost", logging.WARNING, "Lost the link to %s: %s.", link.label, reason)
 
     #: The message in one frame's body: `decode_body` itself (no call in
     #: between, on every frame's path); a subclass that accepts more defines
@@ -413,3 +437,4 @@ class CommsLoop(ThreadLoop):
         for link in opened:  # aborted ones end on the I/O thread's next pass
             link.join(max(0.1, deadline - time.monotonic()))
         self._release_io_loop()
+        self.news.flush()  # what a flood of connections left uncounted aloud

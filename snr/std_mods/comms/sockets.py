@@ -18,6 +18,7 @@ every client over the same connections.
 
 from __future__ import annotations
 
+import logging
 import os
 import socket
 import time
@@ -229,11 +230,23 @@ class SocketsServerLoop(CommsLoop):
         self.dbg("Accepted a connection from %s", link.transport.peer)
 
     def on_hello(self, link: Link) -> None:
-        self.info("Client node %s connected from %s", link.peer_name, link.transport.peer)
+        self.say(
+            "Clients connected",
+            logging.INFO,
+            "Client node %s connected from %s",
+            link.peer_name,
+            link.transport.peer,
+        )
 
     def on_link_lost(self, link: Link, reason: str) -> None:
-        say = self.warn if link.went_silent else self.info  # a silent death is news
-        say("Client %s disconnected: %s. Still listening.", link.label, reason)
+        level = logging.WARNING if link.went_silent else logging.INFO  # a silent death is news
+        self.say(
+            "Clients disconnected",
+            level,
+            "Client %s disconnected: %s. Still listening.",
+            link.label,
+            reason,
+        )
 
     def halt(self) -> None:
         """Stop accepting, then flush and close every client link."""
@@ -331,8 +344,13 @@ class SocketsClientLoop(CommsLoop):
         verb = "Reconnected" if self._ever_connected else "Connected"
         self._ever_connected = True
         self._loss_reported = False
-        self.info(
-            "%s to the sockets server, node %s at %s", verb, link.peer_name, link.transport.peer
+        self.say(
+            "Connections to the sockets server",
+            logging.INFO,
+            "%s to the sockets server, node %s at %s",
+            verb,
+            link.peer_name,
+            link.transport.peer,
         )
 
     def _report_waiting(self, reason: str) -> None:
@@ -352,10 +370,12 @@ class SocketsClientLoop(CommsLoop):
             return
         self._loss_reported = True
         if link.peer_said_bye:  # its node stopped in order: news, not a fault
-            say, what = self.info, "The sockets server %s closed the link"
+            level, what = logging.INFO, "The sockets server %s closed the link"
         else:
-            say, what = self.warn, "Lost the link to the sockets server %s"
-        say(
+            level, what = logging.WARNING, "Lost the link to the sockets server %s"
+        self.say(
+            "Links to the sockets server ended",
+            level,
             what + ": %s. Reconnecting in the background; pages stored meanwhile are not sent.",
             link.label,
             reason,
