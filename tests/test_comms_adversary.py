@@ -160,6 +160,23 @@ class TestOddHellos(CommsFaultTest):
         self.assertIn("(40 in all)", count)
         self.assertLessEqual(len(self.log.matching("disconnected")), 6)
 
+    def test_bad_frames_from_many_connections_are_logged_in_brief(self) -> None:
+        counter = CounterFactory("tick")
+        first = self.serve(counter)
+        clients = [first] + [connect_when_listening(self.port) for _ in range(29)]
+        for client in clients[1:]:
+            self.addCleanup(client.close)
+        junk = b"".join(len(b).to_bytes(4, "big") + b for b in (b"{", b"[1]", b'{"v":9}'))
+        for client in clients:
+            client.sendall(junk)
+        comms = comms_of(self.nodes.nodes[0])
+        self.assertTrue(wait_until(lambda: sum(link.bad_frames for link in comms.links) == 90, 5.0))
+        self.nodes.stop()
+        in_full = self.log.matching("Bad frame from")
+        self.assertEqual(len(in_full), 5, "five in full for the whole component, not per link")
+        [count] = self.log.matching("Bad frames:")
+        self.assertIn("(90 in all)", count)
+
     def test_shown_role_quotes_short_roles_as_they_are(self) -> None:
         self.assertEqual(shown_role("urov"), "'urov'")
         self.assertEqual(shown_role("x" * 61), f"{'x' * 60!r}… (61 characters)")

@@ -35,7 +35,7 @@ from typing import (
     Set,
 )
 
-from snr.core.logs import LossReport, RepeatFilter
+from snr.core.logs import LossReport
 from snr.prelude import CommsError, DataKey, Page, WireFormatError
 from snr.std_mods.comms.io_loop import IOLoop, IOTimer
 from snr.std_mods.comms.link_hints import watch_link
@@ -68,7 +68,6 @@ _BURST_S = 0.0002  # a frame this soon after the last send joins a batch for the
 _TICK_S = 0.25  # how often a link checks its peer's silence and whether it owes a beat
 _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
-_SHOWN_BAD_FRAMES = 5  # per link, log the first few bad frames in full, then a count every 5 s
 _MAX_KEYS_NOTED = 1000  # DEBUG: how many received keys a link remembers for the hints
 _PROGRESS_BYTES = 16 * 1024  # a read this big, even mid-frame, is a sign of life (a big frame)
 _SHOWN_ROLE_CHARS = 60  # a peer's role in log lines is cut to this many characters
@@ -941,20 +940,18 @@ class Link:
             self.peer_said_bye = True
 
     def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
+        # Through the component's news filter, not one per link: sixty hostile
+        # connections must not write five lines each (CommsLoop.say).
         self.bad_frames += 1
-        repeats: Optional[RepeatFilter] = getattr(self, "_bad_frame_repeats", None)
-        if repeats is None:  # made on the first bad frame: most links never see one
-            repeats = self._bad_frame_repeats = RepeatFilter(
-                self.owner.log, first=_SHOWN_BAD_FRAMES
-            )
         what = "reset the connection" if resetting else "dropped the frame"
         count = self.bad_frames
         more = f"; {count} bad frames from this peer so far" if count > 1 else ""
-        message = "Bad frame from %s: %s (%s; the node keeps running%s; see docs/wire-format.md)"
-        args = (self.label, error, what, more)
-        if resetting:  # the last word on this connection: always said, with the count
-            self.owner.log.warning(message, *args)
-            repeats.flush()
-            return
-        what = f"Bad frames from {self.label}"
-        repeats.report("bad frame", what, logging.WARNING, message, *args)
+        self.owner.say(
+            "Connections reset after a bad frame" if resetting else "Bad frames",
+            logging.WARNING,
+            "Bad frame from %s: %s (%s; the node keeps running%s; see docs/wire-format.md)",
+            self.label,
+            error,
+            what,
+            more,
+        )
