@@ -31,6 +31,7 @@ from snr import (
     EndpointFactory,
     LoopFactory,
     Mode,
+    Node,
     Page,
     SocketsPair,
     SomeTasks,
@@ -732,6 +733,132 @@ class TestZenohInOneProcess(unittest.TestCase):
             self.assertEqual((body["v"], body["kind"], body["key"]), (1, "page", "depth_m"))
             self.assertEqual(body["origin"], "robot")
         self.assertEqual(samples[1]["payload"]["data"], samples[0]["payload"]["data"] + 1)
+
+
+class Flood(ThreadLoop):
+    """Stores 0, 1, 2, ... under ``key`` as fast as its node takes them (50 a tick)."""
+
+    def __init__(self, factory: FloodFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "flood", max_tick_rate_hz=1000)
+        self.key = factory.key
+        self.sent = 0
+
+    def loop(self) -> None:
+        for _ in range(50):
+            self.store_data(self.key, self.sent)
+            self.sent += 1
+
+
+class FloodFactory(LoopFactory):
+    def __init__(self, key: str) -> None:
+        super().__init__()
+        self.key = key
+
+    def get(self, parent: AbstractNode) -> Flood:
+        return Flood(self, parent)
+
+
+class SlowHandler(Endpoint):
+    """Takes half a millisecond for each page under ``key``: a receiver slower than its sender."""
+
+    def __init__(self, factory: SlowHandlerFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "slow_handler")
+        self.task_handlers = {(TaskType.store_page, factory.key): self.on_page}
+
+    def on_page(self, task: Task, key: TaskId) -> SomeTasks:
+        time.sleep(0.0005)  # on purpose: a handler slower than the pages come
+        return None
+
+
+class SlowHandlerFactory(EndpointFactory):
+    def __init__(self, key: str) -> None:
+        super().__init__()
+        self.key = key
+
+    def get(self, parent: AbstractNode) -> SlowHandler:
+        return SlowHandler(self, parent)
+
+
+class DaemonNodes:
+    """Nodes on daemon threads: a node that hangs fails its test instead of the test run.
+
+    ``stop`` asks from a daemon thread too (asking may be what hangs) and
+    says which nodes did not stop within the time given.
+    """
+
+    def __init__(self, config: Config, roles: Sequence[str]) -> None:
+        self.nodes = {role: Node(role, config) for role in roles}
+        self.threads = {
+            role: threading.Thread(target=node.loop, name=f"test-{role}", daemon=True)
+            for role, node in self.nodes.items()
+        }
+        for thread in self.threads.values():
+            thread.start()
+
+    def comms_of(self, role: str) -> Any:
+        return self.nodes[role].components["zenoh_comms"]
+
+    def stop(self, roles: Sequence[str] = (), timeout_s: float = 5.0) -> List[str]:
+        """Stop ``roles`` (default: all); the roles still running after ``timeout_s``."""
+        roles = list(roles or self.nodes)
+        for role in roles:
+            asker = threading.Thread(
+                target=self.nodes[role].set_terminate_flag, args=("test over",), daemon=True
+            )
+            asker.start()
+        deadline = time.monotonic() + timeout_s
+        for role in roles:
+            self.threads[role].join(max(0.0, deadline - time.monotonic()))
+        return [role for role in roles if self.threads[role].is_alive()]
+
+
+@unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)
+class TestZenohUnderFlood(unittest.TestCase):
+    """A receiver slower than its sender: it stops, reloads and stays bounded."""
+
+    def flood(self) -> DaemonNodes:
+        """A sender flooding a slow receiver, until the receiver is well behind."""
+        capture_test_logs(self)
+        ep = endpoint(free_port())
+        safety = TimeoutLoopFactory(seconds=20)
+        config = Config(
+            {
+                "receiver": [
+                    comms("lab", subscribe="n", listen=[ep]),
+                    SlowHandlerFactory("n"),
+                    safety,
+                ],
+                "sender": [comms("lab", publish="n", connect=[ep]), FloodFactory("n"), safety],
+            },
+            mode=Mode.TEST,
+        )
+        nodes = DaemonNodes(config, ["receiver", "sender"])
+        self.addCleanup(nodes.stop)
+
+        def behind() -> bool:  # more pages sent than the receiver's FIFO holds
+            sent = int(nodes.comms_of("sender").published)
+            return sent - int(nodes.comms_of("receiver").received) > 12_000
+
+        self.assertTrue(wait_until(behind, 10.0), "the receiver fell behind")
+        return nodes
+
+    def test_a_receiver_behind_on_pages_stops_at_once(self) -> None:
+        nodes = self.flood()
+        self.assertEqual(nodes.stop(["receiver"]), [], "the receiver stopped")
+        self.assertEqual(nodes.stop(), [])
+
+    def test_a_receiver_behind_on_pages_reloads_its_comms_and_goes_on(self) -> None:
+        nodes = self.flood()
+        receiver = nodes.nodes["receiver"]
+        old = nodes.comms_of("receiver")
+        receiver.schedule(tasks.reload_component("zenoh_comms"))
+
+        def reloaded_and_receiving() -> bool:
+            new = nodes.comms_of("receiver")
+            return new is not old and bool(new.received > 0)
+
+        self.assertTrue(wait_until(reloaded_and_receiving, 5.0), "reloaded, pages come again")
+        self.assertEqual(nodes.stop(), [], "both nodes stopped")
 
 
 @unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)

@@ -153,6 +153,16 @@ def _check_chunk_text(text: str, what: str, wildcards: bool) -> None:
             )
 
 
+def _empty_fifo(handler: Any) -> None:
+    """Take and forget what waits in an undeclared subscription's FIFO (the node is stopping)."""
+    for _ in range(_FIFO_SAMPLES + 100):  # bounded: nothing new comes once undeclared
+        try:
+            if handler.try_recv() is None:
+                return
+        except Exception:  # closed and empty
+            return
+
+
 def key_expr_of(system: str, key: str) -> str:
     """The Zenoh key expression SNR uses for ``key`` in ``system``.
 
@@ -537,8 +547,8 @@ class ZenohComms(Endpoint):
     def _put_wake(self, key: str) -> None:
         """Put a wake-up sample for the idle reader (see `IdleReader`)."""
         session = self.session
-        if session is None:
-            return
+        if session is None or self._closed.is_set():
+            return  # closing: nobody reads, and a full FIFO would hold the put for ever
         try:
             session.put(
                 key, b"", attachment=WAKE, allowed_destination=self.zenoh.Locality.SESSION_LOCAL
@@ -566,6 +576,10 @@ class ZenohComms(Endpoint):
                 pass
         self._declared.clear()
         self._publishers.clear()
+        # A put that found a FIFO full waits in it (a wake-up put just before
+        # closing began): emptying the FIFOs lets it go. Nothing new comes in.
+        for channel in self._channels:
+            _empty_fifo(channel.handler)
         session.close()
         for watcher in self._watchers:
             watcher.join(1.0)

@@ -173,11 +173,17 @@ class IdleReader:
         channel.take_lock.acquire()
         self.deadline = None if timeout_s is None else time.monotonic() + timeout_s
         self.reading = True
-        try:
-            sample = channel.handler.recv()  # waits without the GIL
-        except Exception:  # undeclared: the component is closing
+        # `wake` sets the nudge, then puts a wake-up only if it sees `reading`:
+        # checked after `reading` is set, one of the two always sees the other.
+        if self._nudge.is_set():
             sample = None
+        else:
+            try:
+                sample = channel.handler.recv()  # waits without the GIL
+            except Exception:  # undeclared: the component is closing
+                sample = None
         self.reading = False
+        self._nudge.clear()
         self.busy_since = time.monotonic()
         if sample is None or is_wake(sample):
             channel.take_lock.release()
@@ -198,9 +204,17 @@ class IdleReader:
             self._take_from(self.channel, None)
 
     def wake(self) -> None:
-        """End the node thread's wait, in the FIFO or not (any thread)."""
+        """End the node thread's wait, in the FIFO or not (any thread).
+
+        A wake-up sample is put only while the node's thread waits in the
+        FIFO, which is then empty. Put while the node works, it could find
+        the FIFO full, and a full FIFO holds the put until the node's thread
+        takes from it: for ever, if that thread is stopping (or is the one
+        putting). A wait that starts later sees the nudge and does not wait.
+        """
         self._nudge.set()
-        self._put_wake(self.wake_key)
+        if self.reading:
+            self._put_wake(self.wake_key)
 
 
 _Stream = Tuple[bytes, str]  # (the sender's id, the key)
