@@ -281,8 +281,9 @@ class TestZenohCounting(unittest.TestCase):
         rest = comms.take_batch(first[-1], first[-1].id())
         assert isinstance(rest, list)
         self.assertEqual(data_of(rest[0]), list(range(zc._BATCH, count)), "the rest behind")
-        self.assertEqual(len(rest), 1, "nothing more to ask for")
+        self.assertEqual([t.name for t in rest], [tasks.STORE_PAGES, "zenoh_comms_arrived"])
         self.assertTrue(channel.emptied.is_set(), "emptied: the watcher waits for the next")
+        self.assertEqual(comms.take_batch(rest[-1], rest[-1].id()), [], "nothing more to take")
         self.assertEqual(comms.stats()["received"], count)
 
         # The node's thread is stuck: the watcher drops what waits, counted and said.
@@ -295,6 +296,25 @@ class TestZenohCounting(unittest.TestCase):
         back = comms.take_batch(node.scheduled[-1], node.scheduled[-1].id())
         assert isinstance(back, list)
         self.assertEqual(data_of(back[0]), [0], "the one handed over stays")
+
+    def test_nothing_is_taken_while_the_nodes_queue_is_full(self) -> None:
+        from snr.std_mods.comms import zenoh_comms as zc
+
+        node = MockNode()
+        comms = ZenohCommsFactory("lab", subscribe="**").get(node)
+        fifo: Deque[Any] = collections.deque(sample_of(i) for i in range(3))
+        channel = zc.SampleChannel(mock.Mock(try_recv=lambda: fifo.popleft() if fifo else None))
+        comms._channels.append(channel)
+        comms._hand_over(channel, fifo.popleft())
+        asked = node.scheduled[0]
+        with mock.patch.object(node, "wait_for_room", return_value=False):
+            later = comms.take_batch(asked, asked.id())
+        assert isinstance(later, list)
+        self.assertEqual([t.name for t in later], ["zenoh_comms_arrived"], "asked again later")
+        self.assertEqual(len(fifo), 2, "the samples wait in the FIFO")
+        batch = comms.take_batch(later[0], later[0].id())
+        assert isinstance(batch, list)
+        self.assertEqual(data_of(batch[0]), [0, 1, 2], "room again: all of them, in order")
 
     def test_a_watcher_wakes_the_node_once_a_burst_and_ends_with_the_subscriber(self) -> None:
         from snr.std_mods.comms import zenoh_comms as zc
@@ -354,8 +374,10 @@ class TestZenohCounting(unittest.TestCase):
         fifo.put(sample(1))
         reader.wait(5.0)
         reader.woken()
-        self.assertEqual(len(node.scheduled), 1)
-        self.assertEqual(data_of(node.scheduled[0]), [0, 1], "one burst, in order")
+        stored, next_batch = node.scheduled
+        self.assertEqual(data_of(stored), [0, 1], "one burst, in order")
+        self.assertEqual(next_batch.name, "zenoh_comms_arrived", "the next batch asked behind")
+        self.assertEqual(comms.take_batch(next_batch, next_batch.id()), [], "nothing more")
         self.assertTrue(channel.emptied.is_set(), "the FIFO is empty: nothing owed")
 
         # The wait ends by the time the node asked for: the watcher wakes it.
@@ -365,7 +387,7 @@ class TestZenohCounting(unittest.TestCase):
         self.assertGreaterEqual(time.monotonic() - started, 0.1)
         self.assertLess(time.monotonic() - started, 2.0)
         self.assertEqual(woken_by, ["snr/lab/n"])
-        self.assertEqual(len(node.scheduled), 1, "a wake-up is no page")
+        self.assertEqual(len(node.scheduled), 2, "a wake-up is no page")
 
         # wake() from another thread ends a wait at once.
         threading.Timer(0.05, reader.wake).start()
@@ -377,18 +399,19 @@ class TestZenohCounting(unittest.TestCase):
         # The node's thread has worked a while: the watcher hands a burst over.
         reader.busy_since = time.monotonic() - 1.0
         fifo.put(sample(2))
-        self.assertTrue(wait_until(lambda: len(node.scheduled) == 2), "the node was asked")
-        batch = comms.take_batch(node.scheduled[1], node.scheduled[1].id())
+        self.assertTrue(wait_until(lambda: len(node.scheduled) == 3), "the node was asked")
+        batch = comms.take_batch(node.scheduled[2], node.scheduled[2].id())
         assert isinstance(batch, list)
         self.assertEqual(batch[0].val_list[0].data, 2)
         self.assertTrue(channel.emptied.is_set())
+        self.assertEqual(comms.take_batch(batch[-1], batch[-1].id()), [], "nothing more")
 
         # While the node's thread holds the channel, the watcher takes nothing.
         with channel.take_lock:
             fifo.put(sample(3))
             time.sleep(0.2)
-            self.assertEqual(len(node.scheduled), 2)
-        self.assertTrue(wait_until(lambda: len(node.scheduled) == 3), "then it does")
+            self.assertEqual(len(node.scheduled), 3)
+        self.assertTrue(wait_until(lambda: len(node.scheduled) == 4), "then it does")
 
         comms._closed.set()
         comms._watchers[0].join(5)
@@ -736,23 +759,23 @@ class TestZenohInOneProcess(unittest.TestCase):
 
 
 class Flood(ThreadLoop):
-    """Stores 0, 1, 2, ... under ``key`` as fast as its node takes them (50 a tick)."""
+    """Stores 0, 1, 2, ... under ``key``, ``per_tick`` pages a tick, up to 1000 ticks a second."""
 
     def __init__(self, factory: FloodFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, "flood", max_tick_rate_hz=1000)
-        self.key = factory.key
+        self.key, self.per_tick = factory.key, factory.per_tick
         self.sent = 0
 
     def loop(self) -> None:
-        for _ in range(50):
+        for _ in range(self.per_tick):
             self.store_data(self.key, self.sent)
             self.sent += 1
 
 
 class FloodFactory(LoopFactory):
-    def __init__(self, key: str) -> None:
+    def __init__(self, key: str, per_tick: int = 50) -> None:
         super().__init__()
-        self.key = key
+        self.key, self.per_tick = key, per_tick
 
     def get(self, parent: AbstractNode) -> Flood:
         return Flood(self, parent)
@@ -816,24 +839,33 @@ class DaemonNodes:
 class TestZenohUnderFlood(unittest.TestCase):
     """A receiver slower than its sender: it stops, reloads and stays bounded."""
 
-    def flood(self) -> DaemonNodes:
-        """A sender flooding a slow receiver, until the receiver is well behind."""
+    def start(self, subscribe: Sequence[str] = ("n",), per_tick: int = 50) -> DaemonNodes:
+        """A sender flooding a slow receiver subscribed to ``subscribe`` with pages under "n"."""
         capture_test_logs(self)
         ep = endpoint(free_port())
         safety = TimeoutLoopFactory(seconds=20)
         config = Config(
             {
                 "receiver": [
-                    comms("lab", subscribe="n", listen=[ep]),
+                    comms("lab", subscribe=list(subscribe), listen=[ep]),
                     SlowHandlerFactory("n"),
                     safety,
                 ],
-                "sender": [comms("lab", publish="n", connect=[ep]), FloodFactory("n"), safety],
+                "sender": [
+                    comms("lab", publish="n", connect=[ep]),
+                    FloodFactory("n", per_tick),
+                    safety,
+                ],
             },
             mode=Mode.TEST,
         )
         nodes = DaemonNodes(config, ["receiver", "sender"])
         self.addCleanup(nodes.stop)
+        return nodes
+
+    def flood(self) -> DaemonNodes:
+        """A sender flooding a slow receiver, until the receiver is well behind."""
+        nodes = self.start()
 
         def behind() -> bool:  # more pages sent than the receiver's FIFO holds
             sent = int(nodes.comms_of("sender").published)
@@ -859,6 +891,25 @@ class TestZenohUnderFlood(unittest.TestCase):
 
         self.assertTrue(wait_until(reloaded_and_receiving, 5.0), "reloaded, pages come again")
         self.assertEqual(nodes.stop(), [], "both nodes stopped")
+
+    def test_a_slow_receivers_queue_holds_at_most_a_batch_from_zenoh(self) -> None:
+        from snr.std_mods.comms.zenoh_comms import _BATCH
+
+        # Under "n" the pages come through a watcher thread (the node's thread
+        # waits in the FIFO of "x" when idle); some ticks the FIFO is empty a moment.
+        nodes = self.start(subscribe=["x", "n"], per_tick=10)
+        queue = nodes.nodes["receiver"].queue
+        most = 0
+
+        def well_ahead() -> bool:  # the receiver handles fewer than 2,000 pages a second
+            nonlocal most
+            most = max(most, len(queue))
+            return int(nodes.comms_of("sender").published) >= 12_000
+
+        self.assertTrue(wait_until(well_ahead, 10.0), "the sender went well ahead")
+        self.assertGreater(nodes.comms_of("receiver").received, 0, "pages came")
+        self.assertLessEqual(most, _BATCH + 10, "a batch of pages, and a task to take the next")
+        self.assertEqual(nodes.stop(), [])
 
 
 @unittest.skipUnless(HAVE_ZENOH, NEEDS_ZENOH)

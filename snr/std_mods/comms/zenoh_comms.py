@@ -420,7 +420,8 @@ class ZenohComms(Endpoint):
         self.queue_report = LossReport(
             self.log,
             "pages from Zenoh",
-            f"the node's thread took none for {factory.max_wait_s:g} s (a handler is stuck)",
+            f"the node's thread took none for {factory.max_wait_s:g} s (a handler is stuck, "
+            "or the node's queue stayed full)",
         )
         self.task_handlers = {
             (TaskType.store_page, key): self.publish_page for key in factory.publish
@@ -760,10 +761,15 @@ class ZenohComms(Endpoint):
     def take_batch(self, task: Task, key: TaskId) -> SomeTasks:
         """Decode up to a batch of received samples; return one task that stores them.
 
-        What is left waits for the next batch, queued behind these pages, so
-        the node's queue holds at most a batch of pages from Zenoh at a time.
+        The next batch is asked for behind these pages, so the node's queue
+        holds at most a batch of pages from Zenoh at a time. While the queue
+        is above its high-water mark (other work fills it) nothing is taken:
+        the samples wait in Zenoh's FIFO, and a full FIFO slows the senders.
         Peers coming and going are announced once no page waits before them.
         """
+        if not self._node_has_room():
+            self._batch_queued = True
+            return [self._next_batch]  # asked again once the node worked its queue down
         return self._take_waiting()
 
     def _take_now(self, channel: SampleChannel, sample: Any) -> None:
@@ -826,7 +832,11 @@ class ZenohComms(Endpoint):
         if budget > 0:  # every channel emptied: peers' news, after their pages
             while changes:
                 out.extend(self._peer_changed(*changes.popleft()))
-        elif not self._batch_queued:
+        if out and not self._batch_queued:
+            # The next batch queues behind these pages, even if every FIFO is
+            # empty now: a burst handed over meanwhile waits for it, so the
+            # urgent `_first_batch` never takes more before these are handled
+            # (it did, and a slow node's queue grew without end).
             self._batch_queued = True
             out.append(self._next_batch)
         return out
