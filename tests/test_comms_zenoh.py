@@ -153,7 +153,44 @@ class TestZenohSettings(unittest.TestCase):
             with self.subTest(words=words), self.assertRaises(ConfigError) as caught:
                 make()
             self.assertIn(words, str(caught.exception))
-        ZenohCommsFactory("team", publish=["a/b"], subscribe=["*", "sensors/**"])  # fine
+        ZenohCommsFactory("team", publish=["a/b"], subscribe=["*", "sensors/*/**"])  # fine
+
+    def test_overlapping_subscriptions_are_refused_with_what_to_leave_out(self) -> None:
+        cases = [
+            (["sensors/n", "sensors/*"], "'sensors/*' already matches every key 'sensors/n'"),
+            (["x", "**"], "'**' already matches every key 'x' does: leave 'x' out"),
+            (["sensors/**", "sensors"], "'sensors/**' already matches every key 'sensors'"),
+            (["*/depth", "sensors/*"], "share no key"),
+        ]
+        for patterns, words in cases:
+            with self.subTest(patterns=patterns), self.assertRaises(ConfigError) as caught:
+                ZenohCommsFactory("team", subscribe=patterns)
+            message = str(caught.exception)
+            self.assertIn(f"{patterns[0]!r} and {patterns[1]!r}, which overlap", message)
+            self.assertIn(words, message)
+
+    def test_patterns_overlap_as_zenoh_says_they_intersect(self) -> None:
+        from snr.std_mods.comms.zenoh_comms import _chunks_cover, patterns_overlap
+
+        zenoh = _zenoh_module()
+        canon = zenoh.KeyExpr.autocanonize  # "**/*" is "*/**" to Zenoh
+
+        def matches(pattern: str, key: str) -> bool:
+            return bool(canon(f"snr/t/{pattern}").intersects(zenoh.KeyExpr(f"snr/t/{key}")))
+
+        parts = ["a", "b", "*", "**"]
+        patterns = [f"{x}/{y}" for x in parts for y in parts] + parts + ["a/*/**", "**/b/*"]
+        words = ["a", "b", "c"]
+        keys = [*words, *(f"{x}/{y}" for x in words for y in words)]
+        keys += [f"{k}/{w}" for k in keys if "/" in k for w in words]  # up to 3 parts
+        for first in patterns:
+            for second in patterns:
+                expected = canon(f"snr/t/{first}").intersects(canon(f"snr/t/{second}"))
+                with self.subTest(first=first, second=second):
+                    self.assertEqual(patterns_overlap(first, second), expected)
+                    if _chunks_cover(first.split("/"), second.split("/")):  # (it may miss some)
+                        missed = [k for k in keys if matches(second, k) and not matches(first, k)]
+                        self.assertEqual(missed, [], "said to cover, so every key matched")
 
     def test_a_missing_library_names_the_extra_to_install(self) -> None:
         with mock.patch.dict(sys.modules, {"zenoh": None}), self.assertRaises(ConfigError) as e:

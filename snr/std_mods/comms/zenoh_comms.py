@@ -93,6 +93,7 @@ __all__ = [
     "ZenohCommsFactory",
     "key_expr_of",
     "page_from_sample",
+    "patterns_overlap",
     "wake_key",
     "zenoh_config",
 ]
@@ -150,6 +151,70 @@ def _check_chunk_text(text: str, what: str, wildcards: bool) -> None:
             raise ConfigError(
                 f"{what} {text!r} has one of * $ ? # inside a part{allowed}; Zenoh key "
                 "expressions cannot. Use letters, digits, '_', '-' and '/'."
+            )
+
+
+def _chunks_overlap(a: Sequence[str], b: Sequence[str]) -> bool:
+    """Whether some key matches both patterns (split in parts: words, ``*`` or ``**``)."""
+    if a and a[0] == "**":  # ** matches no part, or one part and then still **
+        return _chunks_overlap(a[1:], b) or (bool(b) and _chunks_overlap(a, b[1:]))
+    if b and b[0] == "**":
+        return _chunks_overlap(b, a)
+    if not a or not b:
+        return not a and not b
+    return (a[0] == b[0] or "*" in (a[0], b[0])) and _chunks_overlap(a[1:], b[1:])
+
+
+def _chunks_cover(a: Sequence[str], b: Sequence[str]) -> bool:
+    """Whether every key that pattern ``b`` matches is matched by pattern ``a`` too.
+
+    Part by part, so only where that shows (``**`` in ``b`` is covered by
+    ``**`` in ``a`` alone): False may still cover, True always does. It only
+    chooses the advice of an error message.
+    """
+    if a and a[0] == "**":
+        return _chunks_cover(a[1:], b) or (bool(b) and _chunks_cover(a, b[1:]))
+    if not a or not b:
+        return not a and not b
+    if b[0] == "**":
+        return False  # one part (a word or *) never covers any number of parts
+    return (a[0] == "*" or a[0] == b[0]) and _chunks_cover(a[1:], b[1:])
+
+
+def patterns_overlap(first: str, second: str) -> bool:
+    """Whether some data key matches both subscription patterns.
+
+    ``*`` matches one part of a key, ``**`` any number of parts (none too).
+
+    Example::
+
+        patterns_overlap("sensors/*", "sensors/depth")   # True
+        patterns_overlap("sensors/**", "sensors")        # True: ** may match no part
+        patterns_overlap("sensors/*", "motors/*")        # False
+    """
+    return _chunks_overlap(first.split("/"), second.split("/"))
+
+
+def _check_no_overlap(patterns: Sequence[str]) -> None:
+    """Refuse two subscriptions that match a key in common: its pages would come twice.
+
+    Each pattern is its own Zenoh subscriber, with its own FIFO; a page both
+    match would be received by each, and the two copies taken in no set order.
+    """
+    for index, first in enumerate(patterns):
+        for second in patterns[index + 1 :]:
+            if not patterns_overlap(first, second):
+                continue
+            a, b = first.split("/"), second.split("/")
+            if _chunks_cover(a, b) or _chunks_cover(b, a):
+                wide, narrow = (first, second) if _chunks_cover(a, b) else (second, first)
+                advice = f"{wide!r} already matches every key {narrow!r} does: leave {narrow!r} out"
+            else:
+                advice = "write patterns that share no key (exact keys, or one wider pattern)"
+            raise ConfigError(
+                f"ZenohCommsFactory got subscribe patterns {first!r} and {second!r}, which "
+                "overlap: a page under a key both match would arrive twice, out of order "
+                f"(each pattern is its own Zenoh subscriber). {advice[0].upper()}{advice[1:]}."
             )
 
 
@@ -265,7 +330,8 @@ class ZenohCommsFactory(EndpointFactory):
             same network (one part: letters, digits, ``_``, ``-``).
         publish: the data key (or keys) whose pages this node publishes.
         subscribe: keys whose pages this node stores: exact keys, or patterns with
-            ``*`` (one part of a key) and ``**`` (any number of parts).
+            ``*`` (one part of a key) and ``**`` (any number of parts). No two may
+            match a key in common (`patterns_overlap`): its pages would come twice.
         mode: ``"peer"`` (default: talk to other nodes directly) or ``"client"``
             (talk through a Zenoh router, ``zenohd``).
         connect: endpoints to connect to, e.g. ``["tcp/192.168.1.10:7447"]``.
@@ -318,10 +384,11 @@ class ZenohCommsFactory(EndpointFactory):
             _check_chunk_text(key, "The published key", wildcards=False)
         for key in self.subscribe:
             _check_chunk_text(key, "The subscribed key", wildcards=True)
+        _check_no_overlap(self.subscribe)
         if not self.publish and not self.subscribe:
             raise ConfigError(
                 "ZenohCommsFactory got no keys to publish and none to subscribe to: give "
-                'publish=["key", ...] and/or subscribe=["key", "sensors/*", "**"].'
+                'publish=["key", ...] and/or subscribe=["key", "sensors/*"] ("**": every key).'
             )
         if mode not in _MODES:
             raise ConfigError(f"ZenohCommsFactory got mode={mode!r}; use one of {_MODES}.")
