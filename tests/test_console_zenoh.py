@@ -10,7 +10,7 @@ import io
 import unittest
 
 from snr import Config, Mode, TimeoutLoopFactory
-from tests.helpers import free_port
+from tests.helpers import free_port, wait_until
 from tests.optional import needs
 from tests.quiet import capture_test_logs
 from tests.test_comms_local import LocalNodes
@@ -81,6 +81,59 @@ class TestZenohConsole(unittest.TestCase):
         self.assertIn("dump", out.getvalue())
         node = self.nodes.wait_first(8.0)
         self.assertTrue(node.is_terminated(), "`exit` over Zenoh stops the node")
+
+
+@needs("zenoh")
+class TestZenohConsoleEveryNode(unittest.TestCase):
+    """Two nodes; a console whose role is "*" reaches both, but only to read."""
+
+    def setUp(self) -> None:
+        from snr.std_mods.io.zenoh_console import ZenohConsoleFactory
+
+        capture_test_logs(self, "snr")
+        self.endpoints = [f"tcp/127.0.0.1:{free_port()}" for _ in range(2)]
+        urov, camera = (
+            [
+                ZenohConsoleFactory(SYSTEM, listen=[ep], scouting=False),
+                TimeoutLoopFactory(seconds=15),
+            ]
+            for ep in self.endpoints
+        )
+        config = Config({"urov": urov, "camera": camera}, mode=Mode.TEST)
+        self.nodes = LocalNodes(config, ["urov", "camera"])
+        self.addCleanup(self.nodes.stop)
+
+    def test_read_only_commands_show_every_reply_and_exit_is_refused(self) -> None:
+        from snr.std_mods.io.console_protocol import Status
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        console = ZenohConsole(SYSTEM, connect=self.endpoints, scouting=False, timeout_s=5.0)
+        self.addCleanup(console.close)
+        self.assertTrue(wait_until(lambda: console.roles() == ["camera", "urov"]), "both answer")
+        greeting = console.connect()
+        self.assertIs(greeting.status, Status.HELLO)
+        self.assertIn("only help, list, stats", greeting.text)
+        listing = console.send("list endpoints")
+        self.assertIs(listing.status, Status.OK)
+        self.assertIn("[camera]", listing.text)
+        self.assertIn("[urov]", listing.text)
+        refused = console.send("exit")
+        self.assertIs(refused.status, Status.ERROR)
+        self.assertIn("Not sent: `exit` changes a node", refused.text)
+        self.assertIn("--zenoh lab ROLE", refused.text)
+        self.assertFalse(any(node.is_terminated() for node in self.nodes.nodes), "none stopped")
+
+    def test_the_command_line_without_a_role_never_stops_every_node(self) -> None:
+        import snr.console
+
+        where = [arg for ep in self.endpoints for arg in ("--connect", ep)] + ["--no-scouting"]
+        out, err = io.StringIO(), io.StringIO()
+        code = snr.console.main(
+            ["--zenoh", SYSTEM, *where, "-c", "stats", "-c", "exit"], stdout=out, stderr=err
+        )
+        self.assertNotEqual(code, 0, "a refused command fails")
+        self.assertIn("Not sent: `exit`", out.getvalue())
+        self.assertFalse(any(node.is_terminated() for node in self.nodes.nodes), "none stopped")
 
 
 if __name__ == "__main__":

@@ -28,7 +28,7 @@ import os
 import sys
 import threading
 import time
-from typing import IO, Any, List, Optional, Sequence
+from typing import IO, Any, Dict, List, Optional, Sequence
 
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, CommsError
@@ -58,9 +58,24 @@ from snr.std_mods.io.remote_console import (
     run_console,
 )
 
-__all__ = ["ZenohConsole", "ZenohConsoleFactory", "ZenohConsoleLoop", "console_key", "main"]
+__all__ = [
+    "EVERY_NODE_COMMANDS",
+    "ZenohConsole",
+    "ZenohConsoleFactory",
+    "ZenohConsoleLoop",
+    "console_key",
+    "main",
+]
 
 MAX_WAITING_QUERIES = 16  # commands queued on one node and not answered yet; more are refused
+
+EVERY_NODE_COMMANDS = ("help", "list", "stats", "dump", "graph")
+"""The commands a console sends to every node its role pattern matches (``"*"``).
+
+They only read. The others (``exit``, ``task``, ``reload``, ``pause``...)
+change a node, so they need one node's role: typed at ``"*"`` they would
+stop or change every robot of the system at once.
+"""
 
 
 def console_key(system: str, role: str) -> str:
@@ -239,11 +254,19 @@ class ZenohConsole(RemoteConsole):
     It talks like `RemoteConsole` (``send``, ``stream``, ``interact``): each
     command is one Zenoh query, its reply one reply frame.
 
+    The role may be a pattern: ``"*"`` (the default) reaches every node of
+    the system. Then only the read-only `EVERY_NODE_COMMANDS` are sent, and
+    the reply holds every node's, each labelled with its role; a command
+    that changes a node (``exit``, ``reload``...) is refused without being
+    sent: name the node.
+
     Example::
 
         with ZenohConsole("team7", "urov", connect=["tcp/127.0.0.1:7447"], scouting=False) as c:
             print(c.send("stats").text)
         ZenohConsole("team7").roles()   # ['camera', 'urov']
+        with ZenohConsole("team7") as every:
+            print(every.send("stats").text)   # "[camera] ...", then "[urov] ..."
     """
 
     def __init__(
@@ -269,6 +292,17 @@ class ZenohConsole(RemoteConsole):
         """``"system/role"``, for messages and the prompt."""
         return f"{self.system}/{self.role}"
 
+    @property
+    def every_node(self) -> bool:
+        """True if the role is a pattern (``"*"``): commands reach every node it matches.
+
+        Example::
+
+            ZenohConsole("team7").every_node           # True: only read-only commands
+            ZenohConsole("team7", "urov").every_node   # False
+        """
+        return "*" in self.role
+
     def connect(self) -> Reply:
         """Open the Zenoh session and greet the node; returns its greeting.
 
@@ -281,6 +315,13 @@ class ZenohConsole(RemoteConsole):
             self.close()
             raise ConsoleConnectionError(
                 f"The node {self.where} turned the console away: {greeting.text}"
+            )
+        if self.every_node:
+            greeting = Reply(
+                greeting.status,
+                f"{greeting.text}\nRole {self.role!r} reaches every node above: only "
+                f"{', '.join(EVERY_NODE_COMMANDS)} are sent, and each node's reply is shown. "
+                "Name a node for the other commands (exit, task, reload...).",
             )
         self.greeting = greeting
         return greeting
@@ -315,10 +356,25 @@ class ZenohConsole(RemoteConsole):
             raise ConsoleConnectionError(
                 f"The console is not connected to {self.where}: call connect() first."
             )
+        if self.every_node:
+            return self._ask_every_node(line)
         reply = self._ask(line, self._reply_timeout_s(line))
         if reply.status is Status.BYE:
             self.close()
         return reply
+
+    def _ask_every_node(self, line: str) -> Reply:
+        """Send a read-only command to every node the role matches; their replies, labelled."""
+        command = line.split()[0].lower() if line.split() else ""
+        if command not in EVERY_NODE_COMMANDS:
+            return Reply(
+                Status.ERROR,
+                f"Not sent: `{command}` changes a node, and role {self.role!r} reaches every "
+                f"node of system {self.system!r}. Name the node: `python -m snr console "
+                f"--zenoh {self.system} ROLE` (or ZenohConsole({self.system!r}, ROLE)). To "
+                f"every node this console sends only {', '.join(EVERY_NODE_COMMANDS)}.",
+            )
+        return self._ask(line, self._reply_timeout_s(line))
 
     def _ask(self, line: str, timeout_s: float, until_answered: bool = False) -> Reply:
         """The node's reply to ``line``; asked again until it answers if ``until_answered``.
@@ -330,10 +386,13 @@ class ZenohConsole(RemoteConsole):
         key = console_key(self.system, self.role)
         while True:
             left = max(0.1, deadline - time.monotonic())
+            by_role = {}
             for answer in self._replies(key, line, left):
                 replies = ReplyDecoder().feed(answer.payload.to_bytes())
                 if replies:
-                    return replies[0]
+                    by_role[str(answer.key_expr).rsplit("/", 1)[-1]] = replies[0]
+            if by_role:
+                return _labelled(by_role) if self.every_node else next(iter(by_role.values()))
             if not until_answered or time.monotonic() >= deadline:
                 break
             time.sleep(0.05)
@@ -362,13 +421,33 @@ class ZenohConsole(RemoteConsole):
         return self.session is not None
 
 
+def _labelled(by_role: Dict[str, Reply]) -> Reply:
+    """One reply from several nodes' replies: each under its role; an error if any was one.
+
+    Example::
+
+        _labelled({"urov": Reply(Status.OK, "pong")}).text   # '[urov] pong'
+    """
+    parts = []
+    for role, reply in sorted(by_role.items()):
+        parts.append(f"[{role}]" + ("\n" if "\n" in reply.text else " ") + reply.text)
+    statuses = {reply.status for reply in by_role.values()}
+    status = next(iter(statuses)) if len(statuses) == 1 else Status.ERROR
+    return Reply(status, "\n".join(parts))
+
+
 def _parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="snr console --zenoh",
         description="Type commands into a node of a system, found by its role over Zenoh.",
     )
     parser.add_argument("--zenoh", metavar="SYSTEM", required=True, help="the system's name")
-    parser.add_argument("role", nargs="?", help="the node's role (leave out to list the roles)")
+    parser.add_argument(
+        "role",
+        nargs="?",
+        help="the node's role (leave out to list the roles; with -c, read-only commands "
+        "then go to every node)",
+    )
     parser.add_argument(
         "--connect",
         action="append",
@@ -427,7 +506,7 @@ def main(
     except Exception as error:  # a ConfigError: no zenoh, a bad endpoint
         _say(err, f"snr console: {error}")
         return EXIT_CONNECTION
-    if args.role is None:
+    if args.role is None and not args.command:
         try:
             roles = console.roles(min(args.timeout, 2.0))
         finally:
