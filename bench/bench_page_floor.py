@@ -313,8 +313,8 @@ class ZenohPair:
         """CPU µs per page of the floor over Zenoh (see the module docstring)."""
         put = self.publisher.put
         encode = PageEncoder({"v": 1, "kind": "page"}, to="over Zenoh")
-        count_of = struct.Struct(">8sQ")  # what ZenohComms attaches: sender id, count
-        sender = b"floor-01"
+        count_of = struct.Struct(">4s8sQ")  # what ZenohComms attaches: mark, sender id, count
+        mark, sender = b"snr#", b"floor-01"
         datastore: Dict[str, Page] = {}
         store_page = TaskType.store_page
         started = time.thread_time()
@@ -322,7 +322,7 @@ class ZenohPair:
             page = Page(KEY, small_data(i), "sender", time.time(), True)
             task = Task(store_page, KEY, [page])
             datastore[page.key] = task.val_list[0]
-            put(encode(page), attachment=count_of.pack(sender, i))
+            put(encode(page), attachment=count_of.pack(mark, sender, i))
         return (time.thread_time() - started) / count * 1e6
 
     def close(self) -> None:

@@ -73,11 +73,12 @@ from snr.std_mods.comms.comms_loop import (
 )
 from snr.std_mods.comms.wire import WIRE_VERSION
 from snr.std_mods.comms.zenoh_inbox import (
-    SEQUENCE,
     WAKE,
     IdleReader,
     SampleChannel,
     SequenceFollower,
+    count_attachment,
+    read_count,
     wake_key,
 )
 
@@ -677,7 +678,7 @@ class ZenohComms(Endpoint):
         count = self._counts.get(page.key, 0) + 1
         self._counts[page.key] = count
         self.published += 1
-        publisher.put(body, attachment=SEQUENCE.pack(self._sender_id, count))
+        publisher.put(body, attachment=count_attachment(self._sender_id, count))
         return None
 
     def publish_burst(self, run: List[Task]) -> SomeTasks:
@@ -806,8 +807,9 @@ class ZenohComms(Endpoint):
                 if counted == WAKE:
                     continue  # only woke the node's thread: not a page
                 dropped += 1
-                if counted is not None and len(counted) == SEQUENCE.size:
-                    sender, count = SEQUENCE.unpack(counted)
+                numbered = read_count(counted)
+                if numbered is not None:
+                    sender, count = numbered
                     sequences.dropped(sender, str(sample.key_expr)[len(self.prefix) :], count)
         if dropped:
             self.queue_report.dropped(dropped)
@@ -931,9 +933,10 @@ class ZenohComms(Endpoint):
         return page
 
     def _follow_sequence(self, key: str, attachment: bytes) -> None:
-        if len(attachment) != SEQUENCE.size:
-            return  # not an SNR sender's count
-        sender, count = SEQUENCE.unpack(attachment)
+        numbered = read_count(attachment)
+        if numbered is None:
+            return  # not an SNR sender's count: a plain program may attach anything
+        sender, count = numbered
         lost = self._sequences.taken(sender, key, count)
         if lost:
             self.lost_report.dropped(lost)

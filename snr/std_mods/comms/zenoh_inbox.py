@@ -16,26 +16,39 @@ Example::
 
 from __future__ import annotations
 
+import os
 import struct
 import threading
 import time
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 __all__ = [
+    "COUNT_MARK",
     "SEQUENCE",
     "WAKE",
     "IdleReader",
     "SampleChannel",
     "SequenceFollower",
+    "count_attachment",
     "is_wake",
+    "read_count",
     "wake_key",
 ]
 
-SEQUENCE = struct.Struct(">8sQ")
-"""An SNR sender's attachment on a page: its random id, then its count of pages under the key."""
+COUNT_MARK = b"snr#"
+"""The first bytes of an SNR sender's count attachment (`SEQUENCE`): other attachments are not."""
 
-WAKE = b"snr-wake"
-"""The attachment of a sample that only wakes a node's thread (`IdleReader`)."""
+SEQUENCE = struct.Struct(">4s8sQ")
+"""An SNR sender's attachment on a page: `COUNT_MARK`, its random id, then its count of pages
+under the key (20 bytes). Made by `count_attachment`, read by `read_count`."""
+
+WAKE = b"snr-wake-" + os.urandom(8)
+"""The attachment of a sample that only wakes a node's thread (`IdleReader`).
+
+Random for each process: such a sample never leaves its session, so a
+sample from elsewhere that carries it (or anything like it) is no wake-up
+and is taken as a page.
+"""
 
 _WAKE_CHUNK = "_snr_wake"  # what stands for a wildcard in the key of such a sample
 
@@ -94,6 +107,35 @@ def wake_key(pattern: str) -> Optional[str]:
         chunk = chunk.replace("$*", "")
         chunks.append(chunk or _WAKE_CHUNK)
     return "/".join(chunks)
+
+
+def count_attachment(sender: bytes, count: int) -> bytes:
+    """The attachment of page number ``count`` that ``sender`` (8 bytes) publishes under a key.
+
+    Example::
+
+        count_attachment(b"sender01", 7)   # b'snr#sender01' + (7).to_bytes(8, "big")
+    """
+    return SEQUENCE.pack(COUNT_MARK, sender, count)
+
+
+def read_count(attachment: Optional[bytes]) -> Optional[Tuple[bytes, int]]:
+    """The sender and count of an SNR sender's attachment; None for any other attachment.
+
+    A program that is not SNR may attach anything (16 bytes of its own, say):
+    only an attachment of `SEQUENCE`'s size that starts with `COUNT_MARK` is a count.
+
+    Example::
+
+        read_count(count_attachment(b"sender01", 7))   # (b'sender01', 7)
+        read_count(b"0123456789abcdef")                # None
+    """
+    if attachment is None or len(attachment) != SEQUENCE.size:
+        return None
+    if not attachment.startswith(COUNT_MARK):
+        return None
+    _, sender, count = SEQUENCE.unpack(attachment)
+    return sender, count
 
 
 def is_wake(sample: Any) -> bool:
