@@ -494,7 +494,12 @@ class Link:
 
     @property
     def peer_name(self) -> str:
-        """The peer's role for log lines (quoted, cut short), or ``"unknown"`` before its hello."""
+        """The peer's role for log lines (quoted, cut short), or ``"unknown"`` before its hello.
+
+        Example::
+
+            link.peer_name   # "'urov'"
+        """
         return shown_role(self.peer_role) if self.peer_role else "unknown"
 
     def fileno(self) -> int:
