@@ -6,7 +6,7 @@ import logging
 import unittest
 from typing import List
 
-from snr.core.logs import LossReport, RepeatFilter
+from snr.core.logs import LossReport, RateLimitedLog
 
 
 class Lines(logging.Handler):
@@ -37,30 +37,34 @@ class LogTest(unittest.TestCase):
         self.clock = Clock()
 
 
-class TestRepeatFilter(LogTest):
-    def test_a_flood_is_summarised_and_a_quiet_group_starts_afresh(self) -> None:
-        news = RepeatFilter(self.log, first=2, every_s=5.0, clock=self.clock, fresh_after_s=30.0)
-        for n in range(10):  # a flood: two in full, the rest counted
-            news.report("connect", "Clients connected", logging.INFO, "client %d", n)
+class TestRateLimitedLog(LogTest):
+    def test_news_is_logged_one_by_one_until_it_floods(self) -> None:
+        news = RateLimitedLog(self.log, burst=3, window_s=10.0, clock=self.clock)
+        for n in range(10):  # a flood: three in full, the rest counted
+            news.report("Clients connected", logging.INFO, "client %d", n)
             self.clock.now += 0.1
-        self.assertEqual(self.lines.lines[0], "client 0")
-        self.assertTrue(self.lines.lines[1].startswith("client 1\n(More of these"))
-        self.assertEqual(len(self.lines.lines), 2)
-        self.clock.now += 60  # quiet: the next one is news again, after the count
-        news.report("connect", "Clients connected", logging.INFO, "client %d", 10)
-        self.assertRegex(self.lines.lines[2], r"^Clients connected: 8 more times .* \(10 in all\)")
-        self.assertEqual(self.lines.lines[3], "client 10")
-        self.assertEqual(news.count("connect"), 11)
-
-    def test_without_fresh_after_s_the_count_goes_on_for_ever(self) -> None:
-        repeats = RepeatFilter(self.log, first=1, every_s=5.0, clock=self.clock)
-        for _ in range(3):
-            repeats.report("bad", "Bad readings", logging.WARNING, "bad reading")
-            self.clock.now += 60
-        self.assertTrue(self.lines.lines[0].startswith("bad reading\n"))  # in full once
+        self.assertEqual(self.lines.lines, ["client 0", "client 1", "client 2"])
+        news.tick()  # the window has not passed: nothing yet
         self.assertEqual(len(self.lines.lines), 3)
-        for line in self.lines.lines[1:]:
-            self.assertRegex(line, r"^Bad readings: 1 more times")
+        self.clock.now += 10
+        news.tick()
+        self.assertRegex(
+            self.lines.lines[3],
+            r"^Clients connected: 7 more in the last 10\.\d s, not logged one by one "
+            r"\(over 3 in 10 s\)\.$",
+        )
+        news.report("Clients connected", logging.INFO, "client %d", 10)  # calm again
+        self.assertEqual(self.lines.lines[4], "client 10")
+
+    def test_every_kind_has_its_own_budget_and_flush_says_the_rest(self) -> None:
+        news = RateLimitedLog(self.log, burst=1, window_s=10.0, clock=self.clock)
+        for kind in ("Clients connected", "Clients disconnected"):
+            for _ in range(3):
+                news.report(kind, logging.INFO, "%s", kind.lower())
+        self.assertEqual(self.lines.lines, ["clients connected", "clients disconnected"])
+        news.flush()
+        self.assertEqual(len(self.lines.lines), 4)
+        self.assertTrue(all("2 more in the last" in line for line in self.lines.lines[2:]))
 
 
 class TestLossReport(LogTest):
@@ -74,10 +78,17 @@ class TestLossReport(LogTest):
         self.assertTrue(loss.ended("the link ended"))
         self.assertEqual(
             self.lines.lines[-1],
-            "Dropped 5 pages for 'urov' over 0.4 s before the link ended (5 in all).",
+            "Dropped 4 more pages for 'urov' before the link ended (5 over 0.4 s, 5 in all).",
         )
         self.assertFalse(loss.dropping)
         self.assertFalse(loss.ended("the link ended"), "nothing more to say")
+
+    def test_an_episode_all_said_ends_in_silence(self) -> None:
+        loss = LossReport(self.log, "pages for 'urov'", "it is slow", clock=self.clock)
+        loss.dropped()
+        self.assertFalse(loss.ended("the link ended"), "the one drop is in the log already")
+        self.assertEqual(len(self.lines.lines), 1)
+        self.assertFalse(loss.dropping)
 
 
 if __name__ == "__main__":

@@ -8,15 +8,23 @@ Every node logs to ``snr.<role>`` and every component to
 
 from __future__ import annotations
 
+import collections
 import logging
 import sys
 import threading
 import time
-from typing import Any, Callable, Dict, Hashable, List, Optional
+from typing import Any, Callable, Deque, Dict, Hashable, List, Optional, Tuple
 
 from snr.prelude import Mode
 
-__all__ = ["LOG_FORMAT", "LossReport", "RepeatFilter", "ensure_log_handler", "level_for_mode"]
+__all__ = [
+    "LOG_FORMAT",
+    "LossReport",
+    "RateLimitedLog",
+    "RepeatFilter",
+    "ensure_log_handler",
+    "level_for_mode",
+]
 
 LOG_FORMAT = "%(asctime)s %(name)s %(levelname)s: %(message)s"
 """How SNR's own handler formats a line."""
@@ -50,10 +58,7 @@ class RepeatFilter:
     identical lines a second and bury everything else in the log. Messages
     are grouped by a key (e.g. the handler and the error's type): the first
     ``first`` of each group are logged in full, then at most one summary line
-    every ``every_s`` seconds says how many more there were. With
-    ``fresh_after_s``, a group that has been quiet that long starts afresh
-    (its next ones are in full again): for news that is welcome now and then
-    but not a thousand times a second, such as a client connecting.
+    every ``every_s`` seconds says how many more there were.
 
     Example::
 
@@ -70,15 +75,12 @@ class RepeatFilter:
         first: int = 3,
         every_s: float = 5.0,
         clock: Callable[[], float] = time.monotonic,
-        fresh_after_s: Optional[float] = None,
     ) -> None:
         self.log = log
         self.first = first
         self.every_s = every_s
-        self.fresh_after_s = fresh_after_s
         self._clock = clock
-        # key -> [times seen in all, not yet summarised, start of this summary
-        #         period, level, said in full since the group was fresh, last seen]
+        # key -> [times seen, not yet summarised, start of this summary period, level]
         self._seen: Dict[Hashable, List[Any]] = {}
         self._what: Dict[Hashable, str] = {}
 
@@ -87,17 +89,11 @@ class RepeatFilter:
         now = self._clock()
         seen = self._seen.get(key)
         if seen is None:
-            seen = self._seen[key] = [0, 0, now, level, 0, now]
+            seen = self._seen[key] = [0, 0, now, level]
             self._what[key] = what
-        elif self.fresh_after_s is not None and now - seen[5] >= self.fresh_after_s:
-            if seen[1]:  # what the last burst left uncounted aloud comes first
-                self._summarise(key, seen, now)
-            seen[4] = 0
-        seen[5] = now
         seen[0] += 1
-        if seen[4] < self.first:
-            seen[4] += 1
-            if seen[4] == self.first:
+        if seen[0] <= self.first:
+            if seen[0] == self.first:
                 msg += (
                     f"\n(More of these are counted from now on: one line every {self.every_s:g} s.)"
                 )
@@ -131,6 +127,89 @@ class RepeatFilter:
         for key, seen in self._seen.items():
             if seen[1]:
                 self._summarise(key, seen, now)
+
+
+class RateLimitedLog:
+    """Logs news in full unless it comes in a flood; then counts it, one line a window.
+
+    For news that is welcome one by one but not a thousand times a second,
+    such as a client connecting: lines of one kind (``what``) are logged in
+    full while no more than ``burst`` came in the last ``window_s`` seconds;
+    past that they are counted, and ``tick()`` (call it every second or so)
+    logs how many, once a window. Safe to call from any thread.
+
+    Example::
+
+        news = RateLimitedLog(log, burst=20, window_s=10.0)
+        news.report("Clients connected", logging.INFO, "Client %s connected", "urov")
+        news.tick()    # in a loop: "Clients connected: 480 more in the last 10.0 s, ..."
+        news.flush()   # at the end: every count not yet said
+    """
+
+    def __init__(
+        self,
+        log: logging.Logger,
+        burst: int = 20,
+        window_s: float = 10.0,
+        clock: Callable[[], float] = time.monotonic,
+    ) -> None:
+        self.log = log
+        self.burst = burst
+        self.window_s = window_s
+        self._clock = clock
+        self._lock = threading.Lock()
+        self._shown: Dict[str, Deque[float]] = {}  # what -> when its recent full lines went out
+        self._unsaid: Dict[str, List[Any]] = {}  # what -> [count, since, level]
+
+    def report(self, what: str, level: int, msg: str, *args: Any) -> None:
+        """Log ``msg % args`` in full, or count it under ``what`` if they come too fast."""
+        with self._lock:
+            now = self._clock()
+            shown = self._shown.setdefault(what, collections.deque())
+            while shown and now - shown[0] >= self.window_s:
+                shown.popleft()
+            full = len(shown) < self.burst
+            if full:
+                shown.append(now)
+            else:
+                unsaid = self._unsaid.setdefault(what, [0, now, level])
+                unsaid[0] += 1
+            due = self._take_due(now, self.window_s)
+        self._say(due, now)
+        if full:
+            self.log.log(level, msg, *args)
+
+    def tick(self) -> None:
+        """Log the counts whose window has passed (any thread)."""
+        with self._lock:
+            now = self._clock()
+            due = self._take_due(now, self.window_s)
+        self._say(due, now)
+
+    def flush(self) -> None:
+        """Log every count not yet said (e.g. when the component stops)."""
+        with self._lock:
+            now = self._clock()
+            due = self._take_due(now, 0.0)
+        self._say(due, now)
+
+    def _take_due(self, now: float, age_s: float) -> List[Tuple[str, List[Any]]]:
+        due = [(what, unsaid) for what, unsaid in self._unsaid.items() if now - unsaid[1] >= age_s]
+        for what, _ in due:
+            del self._unsaid[what]
+        return due
+
+    def _say(self, due: List[Tuple[str, List[Any]]], now: float) -> None:
+        for what, (count, since, level) in due:
+            self.log.log(
+                level,
+                "%s: %d more in the last %.1f s, not logged one by one (over %d in %g s).",
+                what,
+                count,
+                now - since,
+                self.burst,
+                self.window_s,
+            )
 
 
 class LossReport:
@@ -221,28 +300,33 @@ class LossReport:
         return True
 
     def ended(self, how: str) -> bool:
-        """The source of the drops is gone (e.g. a link closed): say an open episode's total.
+        """The source of the drops is gone (e.g. a link closed): say the drops not yet logged.
 
         Drops counted in the last second are not yet in the log; without this
-        they would vanish with the link. Returns True if there was anything to say.
+        they would vanish with the link. Ends the episode (no "Recovered" line
+        follows). Returns True if there was anything to say.
 
         Example::
 
-            loss.ended("the link to 'urov' ended")
-            # "Dropped 12 pages for 'urov' over 0.4 s before the link to 'urov' ended (12 in all)."
+            loss.ended("the link ended")
+            # "Dropped 3 more pages for 'urov' before the link ended (8 over 0.4 s, 8 in all)."
         """
         with self._lock:
             if self._episode_start is None:
                 return False
-            episode, since = self._episode, self._clock() - self._episode_start
+            unsaid, episode = self._unsaid, self._episode
+            since = self._clock() - self._episode_start
             self._episode, self._unsaid, self._episode_start = 0, 0, None
+        if not unsaid:  # every drop is in the log already
+            return False
         self.log.warning(
-            "%s %d %s over %.1f s before %s (%d in all).",
+            "%s %d more %s before %s (%d over %.1f s, %d in all).",
             self.verb,
-            episode,
+            unsaid,
             self.what,
-            since,
             how,
+            episode,
+            since,
             self.total,
         )
         return True

@@ -31,7 +31,7 @@ import time
 from typing import Any, Callable, Dict, List, Optional, Sequence, Set, Tuple, Union
 
 from snr.core import ThreadLoop, tasks
-from snr.core.logs import RepeatFilter
+from snr.core.logs import RateLimitedLog
 from snr.prelude import (
     AbstractFactory,
     AbstractNode,
@@ -161,7 +161,8 @@ class CommsLoop(ThreadLoop):
         self.dead_after_s = dead_after_s
         self.beat_s = min(1.0, dead_after_s / 4)
         self.links: Tuple[Link, ...] = ()
-        self.news = RepeatFilter(self.log, first=5, every_s=5.0, fresh_after_s=30.0)
+        self.news = RateLimitedLog(self.log, burst=20, window_s=10.0)
+        self.bad_frame_news = RateLimitedLog(self.log, burst=5, window_s=5.0)
         self.closed_totals: Dict[str, int] = dict.fromkeys(
             ("links", "pages_sent", "pages_received", "dropped", "bad_frames"), 0
         )
@@ -343,17 +344,31 @@ class CommsLoop(ThreadLoop):
     def say(self, what: str, level: int, msg: str, *args: Any) -> None:
         """Log news of links (connects, hellos, losses) in full, unless it comes in a flood.
 
-        ``what`` names the kind of news, e.g. ``"Clients connected"``: of each
-        kind the first five in a row are logged in full, then one line every
-        5 s counts the rest, and after 30 s without any the next is in full
-        again. A robot that reconnects now and then is logged every time; a
-        program that connects a thousand times a second costs a line every 5 s.
+        ``what`` names the kind of news, e.g. ``"Clients connected"``: each
+        line is logged in full while no more than 20 of its kind came in the
+        last 10 s; past that they are counted, and the count is logged once
+        every 10 s (from the component's loop, see `RateLimitedLog`). A class
+        of robots connecting is logged robot by robot; a program that connects
+        a thousand times a second costs a line every 10 s.
 
         Example::
 
             self.say("Links lost", logging.WARNING, "Lost the link to %s", link.label)
         """
-        self.news.report((what, level), what, level, msg, *args)
+        self.news.report(what, level, msg, *args)
+
+    def tick_news(self) -> None:
+        """Log the counts of news that came in a flood, once their window has passed.
+
+        Called by the component's loop every half second or so.
+
+        Example::
+
+            def loop(self) -> None:
+                self.tick_news()
+        """
+        self.news.tick()
+        self.bad_frame_news.tick()
 
     def on_hello(self, link: Link) -> None:
         """The peer said which node it is (called on the node's I/O thread)."""
@@ -437,4 +452,5 @@ class CommsLoop(ThreadLoop):
         for link in opened:  # aborted ones end on the I/O thread's next pass
             link.join(max(0.1, deadline - time.monotonic()))
         self._release_io_loop()
-        self.news.flush()  # what a flood of connections left uncounted aloud
+        self.news.flush()  # what a flood of connections or bad frames left uncounted aloud
+        self.bad_frame_news.flush()

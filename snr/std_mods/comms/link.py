@@ -69,7 +69,7 @@ _TICK_S = 0.25  # how often a link checks its peer's silence and whether it owes
 _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
 _MAX_KEYS_NOTED = 1000  # DEBUG: how many received keys a link remembers for the hints
-_PROGRESS_BYTES = 16 * 1024  # a read this big, even mid-frame, is a sign of life (a big frame)
+_PROGRESS_BYTES = 16 * 1024  # this much of a frame still arriving is a sign of life (a big frame)
 _SHOWN_ROLE_CHARS = 60  # a peer's role in log lines is cut to this many characters
 
 
@@ -398,9 +398,10 @@ class Link:
 
     Liveness: both sides promise a sign of life in their hello (``beat_s``)
     and a link that has sent nothing for that long sends a beat frame. A sign
-    of life is a whole frame, or a big read of one still arriving: a byte now
-    and then does not keep a link open, and a connection with no well-formed
-    frame (not even a hello) within ``hello_timeout_s`` is closed.
+    of life is a whole frame, or 16 KiB more of one still arriving (a big
+    page on slow Wi-Fi): a byte now and then does not keep a link open, and
+    a connection with no well-formed frame (not even a hello) within
+    ``hello_timeout_s`` is closed, unless its first frame is still arriving.
     A peer that promised beats and is then not heard from for
     ``max(dead_after_s, 3 * its beat_s)`` is declared lost — also while pages
     flow the other way, which is when a Wi-Fi link usually dies — and the
@@ -449,6 +450,7 @@ class Link:
         self.io: IOLoop = io
         self.transport = transport
         self.peer_role: Optional[str] = None
+        self.hello_at: Optional[float] = None  # when the peer's hello arrived
         self.peer_beat_s: Optional[float] = None
         self.state = LinkState.OPEN
         self.bad_frames = 0
@@ -461,6 +463,8 @@ class Link:
         self.opened_at = time.monotonic()
         self.last_heard = self.opened_at
         self._heard_frame = False  # a well-formed frame has arrived (for the hello timeout)
+        self._progress = 0  # bytes of a frame still arriving, since the peer was last heard
+        self._progress_at = self.opened_at  # when they last added up to _PROGRESS_BYTES
         self._sent_when_heard = 0
         self.loss = LossReport(
             owner.log,
@@ -810,15 +814,24 @@ class Link:
             self._deliver(pages)
             self._end(f"reset after a bad frame ({error})")
             return
-        if bodies or count >= _PROGRESS_BYTES:
-            # A sign of life is a whole frame (wire format 3.3), or a big read of
-            # one still arriving; a byte now and then keeps no link alive.
-            self.last_heard = time.monotonic()
-            self._sent_when_heard = self.pages_sent
+        if bodies:  # a sign of life is a whole frame (wire format 3.3)...
+            self._heard(time.monotonic())
+        else:  # ...or 16 KiB more of one still arriving (a big page on slow Wi-Fi)
+            self._progress += count
+            if self._progress >= _PROGRESS_BYTES:
+                self._progress_at = now = time.monotonic()
+                self._heard(now)
         self._decode_bodies(bodies, pages)
         if pages:
             self._heard_frame = True
             self._deliver(pages)
+
+    def _heard(self, now: float) -> None:
+        # A byte now and then (a peer that trickles) adds up to 16 KiB too
+        # slowly to keep a link open: the silence limit passes first.
+        self.last_heard = now
+        self._sent_when_heard = self.pages_sent
+        self._progress = 0
 
     def _decode_bodies(self, bodies: List[bytes], pages: List[Page]) -> None:
         """Decode each frame body: pages go to ``pages``, hellos and byes are acted on."""
@@ -905,7 +918,11 @@ class Link:
     def _silence(self) -> Optional[str]:
         """Why the link is lost if the peer has been quiet too long, else None."""
         quiet_s = time.monotonic() - self.last_heard
-        if not self._heard_frame and time.monotonic() - self.opened_at > self.owner.hello_timeout_s:
+        limit_s = self.owner.hello_timeout_s
+        if (
+            not self._heard_frame
+            and time.monotonic() - max(self.opened_at, self._progress_at) > limit_s
+        ):  # nothing well-formed yet, and no big first frame still coming in steadily
             return (
                 f"it sent no well-formed frame, not even a hello, within "
                 f"{self.owner.hello_timeout_s:g} s of connecting"
@@ -937,6 +954,7 @@ class Link:
                     )
                 return
             self.peer_role = message.role
+            self.hello_at = time.monotonic()
             self.peer_beat_s = message.beat_s
             self._peer_takes_bye = message.bye
             self.owner.on_hello(self)
@@ -945,13 +963,13 @@ class Link:
             self.peer_said_bye = True
 
     def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
-        # Through the component's news filter, not one per link: sixty hostile
-        # connections must not write five lines each (CommsLoop.say).
+        # Counted by the component, not per link: sixty hostile connections
+        # must not write five lines each (at most five a 5 s, then a count).
         self.bad_frames += 1
         what = "reset the connection" if resetting else "dropped the frame"
         count = self.bad_frames
         more = f"; {count} bad frames from this peer so far" if count > 1 else ""
-        self.owner.say(
+        self.owner.bad_frame_news.report(
             "Connections reset after a bad frame" if resetting else "Bad frames",
             logging.WARNING,
             "Bad frame from %s: %s (%s; the node keeps running%s; see docs/wire-format.md)",

@@ -177,6 +177,7 @@ class PipeLoop(CommsLoop):
 
     def loop(self) -> None:
         """Wait; stop once the pipe has closed (a pipe cannot reconnect)."""
+        self.tick_news()
         if self.link is None or self.link.wait_closed(0.5):
             self.set_terminate_flag("the pipe closed")
 

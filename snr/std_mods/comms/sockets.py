@@ -205,6 +205,7 @@ class SocketsServerLoop(CommsLoop):
 
     def loop(self) -> None:
         """Accept one client, or return after a short wait to check for stop."""
+        self.tick_news()
         listener = self._listener
         if listener is None:
             return
@@ -298,13 +299,15 @@ class SocketsClientLoop(CommsLoop):
 
     def loop(self) -> None:
         """Watch the current link, or try to connect once (then back off)."""
+        self.tick_news()
         link = self.link
         if link is not None:
             if not link.is_closed():
                 link.wait_closed(_ACCEPT_WAKE_S)
                 return
             self.link = None
-            if link.peer_role is not None and time.monotonic() - link.opened_at >= _STABLE_S:
+            hello_at = link.hello_at
+            if hello_at is not None and time.monotonic() - hello_at >= _STABLE_S:
                 self._retry_s = _FIRST_RETRY_S  # it worked for a while: try again at once
             else:  # a server that accepts and then hangs up (e.g. full) is not hammered
                 self._back_off()
