@@ -7,10 +7,11 @@ at run time. Skipped when the Zenoh extra is not installed.
 from __future__ import annotations
 
 import io
+import threading
 import unittest
 
-from snr import Config, Mode, TimeoutLoopFactory
-from tests.helpers import free_port, wait_until
+from snr import Config, Mode, SomeTasks, Task, TaskId, TaskType, TimeoutLoopFactory
+from tests.helpers import RecorderFactory, free_port, wait_until
 from tests.optional import needs
 from tests.quiet import capture_test_logs
 from tests.test_comms_local import LocalNodes
@@ -85,7 +86,11 @@ class TestZenohConsole(unittest.TestCase):
 
 @needs("zenoh")
 class TestZenohConsoleEveryNode(unittest.TestCase):
-    """Two nodes; a console whose role is "*" reaches both, but only to read."""
+    """Two nodes; a console whose role is "*" reaches both, but only to read.
+
+    The event ``block`` keeps urov's thread in a handler until the test ends
+    (at most 10 s), as a slow handler would.
+    """
 
     def setUp(self) -> None:
         from snr.std_mods.io.zenoh_console import ZenohConsoleFactory
@@ -99,9 +104,25 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
             ]
             for ep in self.endpoints
         )
-        config = Config({"urov": urov, "camera": camera}, mode=Mode.TEST)
+        self.release = threading.Event()
+        blocker = RecorderFactory("blocker", [(TaskType.event, "block")], [], self.block)
+        config = Config({"urov": [*urov, blocker], "camera": camera}, mode=Mode.TEST)
         self.nodes = LocalNodes(config, ["urov", "camera"])
         self.addCleanup(self.nodes.stop)
+        self.addCleanup(self.release.set)  # (cleanups run last first: before the stop)
+
+    def block(self, task: Task, key: TaskId) -> SomeTasks:
+        self.release.wait(10.0)
+        return None
+
+    def every_node(self) -> object:
+        """A console to "*" that has met both nodes."""
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        console = ZenohConsole(SYSTEM, connect=self.endpoints, scouting=False, timeout_s=5.0)
+        self.addCleanup(console.close)
+        self.assertTrue(wait_until(lambda: console.roles() == ["camera", "urov"]), "both answer")
+        return console
 
     def test_read_only_commands_show_every_reply_and_exit_is_refused(self) -> None:
         from snr.std_mods.io.console_protocol import Status
@@ -122,6 +143,30 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         self.assertIn("Not sent: `exit` changes a node", refused.text)
         self.assertIn("--zenoh lab ROLE", refused.text)
         self.assertFalse(any(node.is_terminated() for node in self.nodes.nodes), "none stopped")
+
+    def test_a_node_that_does_not_reply_in_time_is_named_and_the_command_fails(self) -> None:
+        import snr.console
+        from snr.std_mods.io.console_protocol import Status
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        every = self.every_node()
+        assert isinstance(every, ZenohConsole)
+        every.connect()
+        with ZenohConsole(SYSTEM, "urov", connect=self.endpoints, scouting=False) as urov:
+            self.assertIs(urov.send("task event block").status, Status.OK)
+        every.timeout_s = 0.5
+        stats = every.send("stats")
+        self.assertIs(stats.status, Status.ERROR, stats.text)
+        self.assertIn("[camera]\nQueue of node 'camera'", stats.text)
+        self.assertIn("[urov] no reply within 0.5 s", stats.text)
+
+        where = [arg for ep in self.endpoints for arg in ("--connect", ep)] + ["--no-scouting"]
+        out, err = io.StringIO(), io.StringIO()
+        code = snr.console.main(
+            ["--zenoh", SYSTEM, *where, "--timeout", "1", "-c", "stats"], stdout=out, stderr=err
+        )
+        self.assertNotEqual(code, 0, "a node that did not answer fails the command")
+        self.assertIn("[urov] no reply within 1 s", out.getvalue())
 
     def test_the_command_line_without_a_role_never_stops_every_node(self) -> None:
         import snr.console

@@ -286,6 +286,9 @@ class ZenohConsole(RemoteConsole):
         self.zenoh = _zenoh_module()
         self._config = zenoh_config(mode, connect, listen, scouting)
         self.session: Any = None
+        # With a pattern: the roles that greeted this console, so a command's
+        # reply can say which of them did not answer it in time.
+        self._greeted: List[str] = []
 
     @property
     def where(self) -> str:
@@ -310,12 +313,14 @@ class ZenohConsole(RemoteConsole):
             ConsoleConnectionError: no node of that role answered in time.
         """
         self._open()
-        greeting = self._ask("", self.timeout_s, until_answered=True)
+        by_role = self._ask_roles("", self.timeout_s, until_answered=True)
+        greeting = _labelled(by_role) if self.every_node else next(iter(by_role.values()))
         if greeting.status is not Status.HELLO:
             self.close()
             raise ConsoleConnectionError(
                 f"The node {self.where} turned the console away: {greeting.text}"
             )
+        self._greeted = sorted(by_role)
         if self.every_node:
             greeting = Reply(
                 greeting.status,
@@ -374,29 +379,52 @@ class ZenohConsole(RemoteConsole):
                 f"--zenoh {self.system} ROLE` (or ZenohConsole({self.system!r}, ROLE)). To "
                 f"every node this console sends only {', '.join(EVERY_NODE_COMMANDS)}.",
             )
-        return self._ask(line, self._reply_timeout_s(line))
+        timeout_s = self._reply_timeout_s(line)
+        by_role = self._answers(line, timeout_s)
+        for role in self._greeted:  # a node busy in a slow handler must not just vanish
+            if role not in by_role:
+                by_role[role] = Reply(
+                    Status.ERROR,
+                    f"no reply within {timeout_s:g} s: the node may be busy in a slow "
+                    f"handler. Ask it alone (`python -m snr console --zenoh {self.system} "
+                    f"{role}`) or give a longer --timeout.",
+                )
+        if not by_role:
+            raise self._nobody_answered(timeout_s)
+        return _labelled(by_role)
 
-    def _ask(self, line: str, timeout_s: float, until_answered: bool = False) -> Reply:
-        """The node's reply to ``line``; asked again until it answers if ``until_answered``.
+    def _ask(self, line: str, timeout_s: float) -> Reply:
+        """The one node's reply to ``line``."""
+        return next(iter(self._ask_roles(line, timeout_s).values()))
+
+    def _ask_roles(
+        self, line: str, timeout_s: float, until_answered: bool = False
+    ) -> Dict[str, Reply]:
+        """Each answering node's reply to ``line``, by role; asked again if ``until_answered``.
 
         A query sent before the session has met the node's ends at once with
         no reply: a greeting (which changes nothing) may be asked again.
         """
         deadline = time.monotonic() + timeout_s
-        key = console_key(self.system, self.role)
         while True:
-            left = max(0.1, deadline - time.monotonic())
-            by_role = {}
-            for answer in self._replies(key, line, left):
-                replies = ReplyDecoder().feed(answer.payload.to_bytes())
-                if replies:
-                    by_role[str(answer.key_expr).rsplit("/", 1)[-1]] = replies[0]
+            by_role = self._answers(line, max(0.1, deadline - time.monotonic()))
             if by_role:
-                return _labelled(by_role) if self.every_node else next(iter(by_role.values()))
+                return by_role
             if not until_answered or time.monotonic() >= deadline:
-                break
+                raise self._nobody_answered(timeout_s)
             time.sleep(0.05)
-        raise ConsoleConnectionError(
+
+    def _answers(self, line: str, timeout_s: float) -> Dict[str, Reply]:
+        """One query for ``line``: the replies that came within ``timeout_s``, by role."""
+        by_role = {}
+        for answer in self._replies(console_key(self.system, self.role), line, timeout_s):
+            replies = ReplyDecoder().feed(answer.payload.to_bytes())
+            if replies:
+                by_role[str(answer.key_expr).rsplit("/", 1)[-1]] = replies[0]
+        return by_role
+
+    def _nobody_answered(self, timeout_s: float) -> ConsoleConnectionError:
+        return ConsoleConnectionError(
             f"No node {self.role!r} of system {self.system!r} answered within {timeout_s:g} s. "
             "Is it running with a ZenohConsoleFactory, on the same network (or the same "
             "connect endpoints)? `python -m snr console --zenoh SYSTEM` lists the roles "
