@@ -67,6 +67,18 @@ class TestZenohConsole(unittest.TestCase):
         with self.assertRaisesRegex(ConsoleConnectionError, "No node 'camera'"):
             nobody.connect()
 
+    def test_every_node_refusing_turns_a_console_to_every_node_away(self) -> None:
+        from snr.std_mods.io.console_protocol import ConsoleConnectionError
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        every = self.console(role="*", token="guess")
+        assert isinstance(every, ZenohConsole)
+        with self.assertRaisesRegex(
+            ConsoleConnectionError, r"Every node lab/\* .*\[urov\] refused"
+        ):
+            every.connect()
+        self.assertFalse(every.is_connected())
+
     def test_the_command_line_lists_roles_runs_commands_and_exit_stops_the_node(self) -> None:
         import snr.console
 
@@ -167,6 +179,41 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         )
         self.assertNotEqual(code, 0, "a node that did not answer fails the command")
         self.assertIn("[urov] no reply within 1 s", out.getvalue())
+
+    def test_a_node_that_needs_a_token_is_named_and_the_others_still_answer(self) -> None:
+        import snr.console
+        from snr.std_mods.io.console_protocol import Status
+        from snr.std_mods.io.zenoh_console import ZenohConsole, ZenohConsoleFactory
+
+        arm_endpoint = f"tcp/127.0.0.1:{free_port()}"
+        arm = [
+            ZenohConsoleFactory(SYSTEM, listen=[arm_endpoint], scouting=False, token="sesame"),
+            TimeoutLoopFactory(seconds=15),
+        ]
+        arm_node = LocalNodes(Config({"arm": arm}, mode=Mode.TEST), ["arm"])
+        self.addCleanup(arm_node.stop)
+        endpoints = [*self.endpoints, arm_endpoint]
+        console = ZenohConsole(SYSTEM, connect=endpoints, scouting=False, timeout_s=5.0)
+        self.addCleanup(console.close)
+        roles = ["arm", "camera", "urov"]
+        self.assertTrue(wait_until(lambda: console.roles() == roles), "all three answer")
+
+        greeting = console.connect()
+        self.assertIs(greeting.status, Status.HELLO)
+        refused = "[arm] refused: this node needs its console token (give it: --token"
+        self.assertIn(refused, greeting.text)
+        self.assertIn("[urov] Connected to node 'urov'", greeting.text)
+        stats = console.send("stats")
+        self.assertIs(stats.status, Status.OK, stats.text)
+        self.assertIn(refused, stats.text)
+        self.assertIn("[camera]\nQueue of node 'camera'", stats.text)
+
+        where = [arg for ep in endpoints for arg in ("--connect", ep)] + ["--no-scouting"]
+        out, err = io.StringIO(), io.StringIO()
+        code = snr.console.main(["--zenoh", SYSTEM, *where, "-c", "stats"], stdout=out, stderr=err)
+        self.assertEqual(code, 0, err.getvalue())
+        self.assertIn(refused, out.getvalue())
+        self.assertIn("[urov]\nQueue of node 'urov'", out.getvalue())
 
     def test_the_command_line_without_a_role_never_stops_every_node(self) -> None:
         import snr.console

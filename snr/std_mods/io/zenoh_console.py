@@ -258,7 +258,8 @@ class ZenohConsole(RemoteConsole):
     the system. Then only the read-only `EVERY_NODE_COMMANDS` are sent, and
     the reply holds every node's, each labelled with its role; a command
     that changes a node (``exit``, ``reload``...) is refused without being
-    sent: name the node.
+    sent: name the node. A node that refuses the console (it needs its
+    token) is named in each reply; the others are still reached.
 
     Example::
 
@@ -287,8 +288,10 @@ class ZenohConsole(RemoteConsole):
         self._config = zenoh_config(mode, connect, listen, scouting)
         self.session: Any = None
         # With a pattern: the roles that greeted this console, so a command's
-        # reply can say which of them did not answer it in time.
+        # reply can say which of them did not answer it in time; and the roles
+        # that refused it (a token), named in every reply rather than dropped.
         self._greeted: List[str] = []
+        self._refused: Dict[str, str] = {}
 
     @property
     def where(self) -> str:
@@ -309,27 +312,50 @@ class ZenohConsole(RemoteConsole):
     def connect(self) -> Reply:
         """Open the Zenoh session and greet the node; returns its greeting.
 
+        With a pattern (``"*"``), the nodes that accept the console are used,
+        and those that refuse it (say, for want of their token) are named.
+
         Raises:
-            ConsoleConnectionError: no node of that role answered in time.
+            ConsoleConnectionError: no node of that role answered in time, or
+                every one that answered refused the console.
         """
         self._open()
         by_role = self._ask_roles("", self.timeout_s, until_answered=True)
-        greeting = _labelled(by_role) if self.every_node else next(iter(by_role.values()))
-        if greeting.status is not Status.HELLO:
-            self.close()
-            raise ConsoleConnectionError(
-                f"The node {self.where} turned the console away: {greeting.text}"
-            )
-        self._greeted = sorted(by_role)
         if self.every_node:
-            greeting = Reply(
-                greeting.status,
-                f"{greeting.text}\nRole {self.role!r} reaches every node above: only "
-                f"{', '.join(EVERY_NODE_COMMANDS)} are sent, and each node's reply is shown. "
-                "Name a node for the other commands (exit, task, reload...).",
-            )
+            greeting = self._greet_every_node(by_role)
+        else:
+            greeting = next(iter(by_role.values()))
+            if greeting.status is not Status.HELLO:
+                self.close()
+                raise ConsoleConnectionError(
+                    f"The node {self.where} turned the console away: {greeting.text}"
+                )
         self.greeting = greeting
         return greeting
+
+    def _greet_every_node(self, by_role: Dict[str, Reply]) -> Reply:
+        """Keep the nodes that accepted the console, note those that refused; the greeting."""
+        self._greeted = sorted(
+            role for role, reply in by_role.items() if reply.status is Status.HELLO
+        )
+        self._refused = {
+            role: _refusal(reply.text)
+            for role, reply in by_role.items()
+            if reply.status is not Status.HELLO
+        }
+        if not self._greeted:
+            self.close()
+            raise ConsoleConnectionError(
+                f"Every node {self.where} turned the console away: "
+                + _labelled({}, self._refused).text
+            )
+        hello = _labelled({role: by_role[role] for role in self._greeted}, self._refused)
+        return Reply(
+            Status.HELLO,
+            f"{hello.text}\nRole {self.role!r} reaches the nodes that accepted it above: only "
+            f"{', '.join(EVERY_NODE_COMMANDS)} are sent, and each node's reply is shown. "
+            "Name a node for the other commands (exit, task, reload...).",
+        )
 
     def roles(self, timeout_s: float = 2.0) -> List[str]:
         """The roles of the system's nodes that answer consoles now, sorted.
@@ -380,7 +406,11 @@ class ZenohConsole(RemoteConsole):
                 f"every node this console sends only {', '.join(EVERY_NODE_COMMANDS)}.",
             )
         timeout_s = self._reply_timeout_s(line)
-        by_role = self._answers(line, timeout_s)
+        by_role = {  # a node that refused the console refuses each command the same way
+            role: reply
+            for role, reply in self._answers(line, timeout_s).items()
+            if role not in self._refused
+        }
         for role in self._greeted:  # a node busy in a slow handler must not just vanish
             if role not in by_role:
                 by_role[role] = Reply(
@@ -391,7 +421,7 @@ class ZenohConsole(RemoteConsole):
                 )
         if not by_role:
             raise self._nobody_answered(timeout_s)
-        return _labelled(by_role)
+        return _labelled(by_role, self._refused)
 
     def _ask(self, line: str, timeout_s: float) -> Reply:
         """The one node's reply to ``line``."""
@@ -449,19 +479,38 @@ class ZenohConsole(RemoteConsole):
         return self.session is not None
 
 
-def _labelled(by_role: Dict[str, Reply]) -> Reply:
+def _labelled(by_role: Dict[str, Reply], notes: Optional[Dict[str, str]] = None) -> Reply:
     """One reply from several nodes' replies: each under its role; an error if any was one.
+
+    ``notes`` are lines about nodes with no reply of their own (they refused
+    the console when it connected): shown under their roles, but they do not
+    make the reply an error, as the console was told so at once.
 
     Example::
 
         _labelled({"urov": Reply(Status.OK, "pong")}).text   # '[urov] pong'
     """
+    texts = {role: reply.text for role, reply in by_role.items()}
+    texts.update(notes or {})
     parts = []
-    for role, reply in sorted(by_role.items()):
-        parts.append(f"[{role}]" + ("\n" if "\n" in reply.text else " ") + reply.text)
+    for role, text in sorted(texts.items()):
+        parts.append(f"[{role}]" + ("\n" if "\n" in text else " ") + text)
     statuses = {reply.status for reply in by_role.values()}
     status = next(iter(statuses)) if len(statuses) == 1 else Status.ERROR
     return Reply(status, "\n".join(parts))
+
+
+def _refusal(text: str) -> str:
+    """How a node's refusal of the console reads under its role, with what to do about it.
+
+    Example::
+
+        _refusal("This node needs its console token.")
+        # 'refused: this node needs its console token (give it: --token or SNR_CONSOLE_TOKEN)'
+    """
+    why = text.rstrip(".")
+    hint = f" (give it: --token or {TOKEN_ENV_VAR})" if "token" in why else ""
+    return f"refused: {why[:1].lower()}{why[1:]}{hint}"
 
 
 def _parser() -> argparse.ArgumentParser:
