@@ -154,6 +154,14 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         self.assertIs(refused.status, Status.ERROR)
         self.assertIn("Not sent: `exit` changes a node", refused.text)
         self.assertIn("--zenoh lab ROLE", refused.text)
+        for streaming in ("echo", "hz"):
+            not_sent = console.send(f"{streaming} depth 1")
+            self.assertIs(not_sent.status, Status.ERROR)
+            self.assertIn(f"Not sent: `{streaming}` streams from one node", not_sent.text)
+            self.assertIn("Name the node to stream from", not_sent.text)
+            self.assertNotIn("changes a node", not_sent.text)
+        typo = console.send("relaod all")
+        self.assertIn("Not sent: `relaod` is not a console command", typo.text)
         self.assertFalse(any(node.is_terminated() for node in self.nodes.nodes), "none stopped")
 
     def test_a_node_that_does_not_reply_in_time_is_named_and_the_command_fails(self) -> None:

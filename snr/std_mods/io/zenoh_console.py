@@ -38,6 +38,7 @@ from snr.std_mods.comms.zenoh_comms import (
     _zenoh_module,
     zenoh_config,
 )
+from snr.std_mods.io.command_table import COMMANDS
 from snr.std_mods.io.console_loop import ConsoleLoop
 from snr.std_mods.io.console_protocol import (
     MAX_LINE_BYTES,
@@ -72,10 +73,13 @@ MAX_WAITING_QUERIES = 16  # commands queued on one node and not answered yet; mo
 EVERY_NODE_COMMANDS = ("help", "list", "stats", "dump", "graph")
 """The commands a console sends to every node its role pattern matches (``"*"``).
 
-They only read. The others (``exit``, ``task``, ``reload``, ``pause``...)
-change a node, so they need one node's role: typed at ``"*"`` they would
-stop or change every robot of the system at once.
+They only read. ``echo`` and ``hz`` read too, but watch one key on one
+node over time, so they need one node's role; the others (``exit``,
+``task``, ``reload``, ``pause``...) change a node: typed at ``"*"`` they
+would stop or change every robot of the system at once.
 """
+
+_ONE_NODE_STREAMS = ("echo", "hz")  # read-only, but a stream of replies from one node
 
 
 def console_key(system: str, role: str) -> str:
@@ -398,13 +402,7 @@ class ZenohConsole(RemoteConsole):
         """Send a read-only command to every node the role matches; their replies, labelled."""
         command = line.split()[0].lower() if line.split() else ""
         if command not in EVERY_NODE_COMMANDS:
-            return Reply(
-                Status.ERROR,
-                f"Not sent: `{command}` changes a node, and role {self.role!r} reaches every "
-                f"node of system {self.system!r}. Name the node: `python -m snr console "
-                f"--zenoh {self.system} ROLE` (or ZenohConsole({self.system!r}, ROLE)). To "
-                f"every node this console sends only {', '.join(EVERY_NODE_COMMANDS)}.",
-            )
+            return Reply(Status.ERROR, self._not_sent(command))
         timeout_s = self._reply_timeout_s(line)
         by_role = {  # a node that refused the console refuses each command the same way
             role: reply
@@ -422,6 +420,21 @@ class ZenohConsole(RemoteConsole):
         if not by_role:
             raise self._nobody_answered(timeout_s)
         return _labelled(by_role, self._refused)
+
+    def _not_sent(self, command: str) -> str:
+        """Why ``command`` is not sent to every node, and what to type instead."""
+        if command in _ONE_NODE_STREAMS:
+            what, name = "streams from one node", "Name the node to stream from"
+        elif command in COMMANDS:
+            what, name = "changes a node", "Name the node"
+        else:
+            return f"Not sent: `{command}` is not a console command; `help` lists them."
+        return (
+            f"Not sent: `{command}` {what}, and role {self.role!r} reaches every node of "
+            f"system {self.system!r}. {name}: `python -m snr console --zenoh {self.system} "
+            f"ROLE` (or ZenohConsole({self.system!r}, ROLE)). To every node this console "
+            f"sends only {', '.join(EVERY_NODE_COMMANDS)}."
+        )
 
     def _ask(self, line: str, timeout_s: float) -> Reply:
         """The one node's reply to ``line``."""
