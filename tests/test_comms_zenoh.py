@@ -192,6 +192,20 @@ class TestZenohSettings(unittest.TestCase):
                         missed = [k for k in keys if matches(second, k) and not matches(first, k)]
                         self.assertEqual(missed, [], "said to cover, so every key matched")
 
+    def test_deep_and_long_patterns_are_checked_quickly_and_fail_as_config_errors(self) -> None:
+        from snr.std_mods.comms.zenoh_comms import patterns_overlap
+
+        # Trying every way each of 30 `**` may match would outlast the test's time limit.
+        deep = "/".join(["**", "a"] * 30) + "/c"
+        a_parts = "/".join(["a"] * 62)
+        self.assertFalse(patterns_overlap(deep, a_parts))
+        self.assertTrue(patterns_overlap(deep, f"{a_parts}/c"))
+        # More parts than Python's default recursion limit (1,000) may nest calls.
+        long = "/".join(["a"] * 1_100)
+        with self.assertRaises(ConfigError) as caught:
+            ZenohCommsFactory("team", subscribe=[long, "*" + long[1:]])
+        self.assertIn("already matches every key", str(caught.exception))
+
     def test_a_missing_library_names_the_extra_to_install(self) -> None:
         with mock.patch.dict(sys.modules, {"zenoh": None}), self.assertRaises(ConfigError) as e:
             _zenoh_module()

@@ -36,6 +36,7 @@ import time
 from typing import (
     TYPE_CHECKING,
     Any,
+    Callable,
     Deque,
     Dict,
     List,
@@ -155,15 +156,53 @@ def _check_chunk_text(text: str, what: str, wildcards: bool) -> None:
             )
 
 
+_Step = Callable[[Sequence[str], Sequence[str], int, int, List[List[bool]]], bool]
+
+
+def _match_table(a: Sequence[str], b: Sequence[str], step: _Step) -> bool:
+    """``step``'s answer for the whole patterns, worked out from their ends back.
+
+    ``done[i][j]`` holds the answer for ``a[i:]`` and ``b[j:]``; ``step``
+    gives it from ``done[i + 1][j]``, ``done[i][j + 1]`` and
+    ``done[i + 1][j + 1]``, found before. So each pair of positions is
+    looked at once (len(a) * len(b) steps), whereas trying in turn each way
+    every ``**`` may match takes time exponential in their number; and no
+    recursion limits a pattern's length.
+    """
+    done = [[False] * (len(b) + 2) for _ in range(len(a) + 2)]
+    for i in range(len(a), -1, -1):
+        for j in range(len(b), -1, -1):
+            done[i][j] = step(a, b, i, j, done)
+    return done[0][0]
+
+
+def _overlap_step(
+    a: Sequence[str], b: Sequence[str], i: int, j: int, done: List[List[bool]]
+) -> bool:
+    """Whether ``a[i:]`` and ``b[j:]`` overlap, from the answers further on."""
+    if i < len(a) and a[i] == "**":  # ** matches no part, or one part and then still **
+        return done[i + 1][j] or (j < len(b) and done[i][j + 1])
+    if j < len(b) and b[j] == "**":
+        return done[i][j + 1] or (i < len(a) and done[i + 1][j])
+    if i == len(a) or j == len(b):
+        return i == len(a) and j == len(b)
+    return (a[i] == b[j] or "*" in (a[i], b[j])) and done[i + 1][j + 1]
+
+
+def _cover_step(a: Sequence[str], b: Sequence[str], i: int, j: int, done: List[List[bool]]) -> bool:
+    """Whether ``a[i:]`` covers ``b[j:]`` part by part, from the answers further on."""
+    if i < len(a) and a[i] == "**":
+        return done[i + 1][j] or (j < len(b) and done[i][j + 1])
+    if i == len(a) or j == len(b):
+        return i == len(a) and j == len(b)
+    if b[j] == "**":
+        return False  # one part (a word or *) never covers any number of parts
+    return (a[i] == "*" or a[i] == b[j]) and done[i + 1][j + 1]
+
+
 def _chunks_overlap(a: Sequence[str], b: Sequence[str]) -> bool:
     """Whether some key matches both patterns (split in parts: words, ``*`` or ``**``)."""
-    if a and a[0] == "**":  # ** matches no part, or one part and then still **
-        return _chunks_overlap(a[1:], b) or (bool(b) and _chunks_overlap(a, b[1:]))
-    if b and b[0] == "**":
-        return _chunks_overlap(b, a)
-    if not a or not b:
-        return not a and not b
-    return (a[0] == b[0] or "*" in (a[0], b[0])) and _chunks_overlap(a[1:], b[1:])
+    return _match_table(a, b, _overlap_step)
 
 
 def _chunks_cover(a: Sequence[str], b: Sequence[str]) -> bool:
@@ -173,13 +212,7 @@ def _chunks_cover(a: Sequence[str], b: Sequence[str]) -> bool:
     ``**`` in ``a`` alone): False may still cover, True always does. It only
     chooses the advice of an error message.
     """
-    if a and a[0] == "**":
-        return _chunks_cover(a[1:], b) or (bool(b) and _chunks_cover(a, b[1:]))
-    if not a or not b:
-        return not a and not b
-    if b[0] == "**":
-        return False  # one part (a word or *) never covers any number of parts
-    return (a[0] == "*" or a[0] == b[0]) and _chunks_cover(a[1:], b[1:])
+    return _match_table(a, b, _cover_step)
 
 
 def patterns_overlap(first: str, second: str) -> bool:
