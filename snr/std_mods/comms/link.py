@@ -464,7 +464,7 @@ class Link:
         self.last_heard = self.opened_at
         self._heard_frame = False  # a well-formed frame has arrived (for the hello timeout)
         self._progress = 0  # bytes of a frame still arriving, since the peer was last heard
-        self._progress_at = self.opened_at  # when they last added up to _PROGRESS_BYTES
+        self._progress_at = self.opened_at  # when they last added up to _PROGRESS_BYTES (or opened)
         self._sent_when_heard = 0
         self.loss = LossReport(
             owner.log,
@@ -896,9 +896,9 @@ class Link:
     def _note_unread(self) -> Optional[int]:
         """Bytes waiting unread in the OS (None if it cannot say); more than last time is life."""
         unread = unread_bytes(self.transport.fileno())
-        if unread is not None and unread > self._unread_seen:
-            self.last_heard = time.monotonic()  # the peer sent something while we did not read
         if unread is not None:
+            if unread > self._unread_seen:  # the peer sent something while we did not read
+                self.last_heard = time.monotonic()
             self._unread_seen = unread
         return unread
 
@@ -919,13 +919,11 @@ class Link:
         """Why the link is lost if the peer has been quiet too long, else None."""
         quiet_s = time.monotonic() - self.last_heard
         limit_s = self.owner.hello_timeout_s
-        if (
-            not self._heard_frame
-            and time.monotonic() - max(self.opened_at, self._progress_at) > limit_s
-        ):  # nothing well-formed yet, and no big first frame still coming in steadily
+        # Nothing well-formed yet, and no big first frame still coming in steadily:
+        if not self._heard_frame and time.monotonic() - self._progress_at > limit_s:
             return (
-                f"it sent no well-formed frame, not even a hello, within "
-                f"{self.owner.hello_timeout_s:g} s of connecting"
+                f"it sent no well-formed frame, not even a hello, within {limit_s:g} s "
+                "of connecting"
             )
         if self.peer_beat_s is None:
             return None  # a peer that promised no beats may be quiet for ever

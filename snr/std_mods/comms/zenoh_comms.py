@@ -240,8 +240,9 @@ def _check_no_overlap(patterns: Sequence[str]) -> None:
             if not patterns_overlap(first, second):
                 continue
             a, b = first.split("/"), second.split("/")
-            if _chunks_cover(a, b) or _chunks_cover(b, a):
-                wide, narrow = (first, second) if _chunks_cover(a, b) else (second, first)
+            wide_first = _chunks_cover(a, b)
+            if wide_first or _chunks_cover(b, a):
+                wide, narrow = (first, second) if wide_first else (second, first)
                 advice = f"{wide!r} already matches every key {narrow!r} does: leave {narrow!r} out"
             else:
                 advice = "write patterns that share no key (exact keys, or one wider pattern)"

@@ -126,11 +126,13 @@ class RemoteConsole:
         greeting = self._receive()
         if greeting.status is Status.AUTH:
             greeting = self._authenticate()
+        return self._accept(greeting, f"The node at {self.where}")
+
+    def _accept(self, greeting: Reply, node: str) -> Reply:
+        """Keep ``greeting`` if it says hello; else close and say why the node refused."""
         if greeting.status is not Status.HELLO:
             self.close()
-            raise ConsoleConnectionError(
-                f"The node at {self.where} turned the console away: {greeting.text}"
-            )
+            raise ConsoleConnectionError(f"{node} turned the console away: {greeting.text}")
         self.greeting = greeting
         return greeting
 

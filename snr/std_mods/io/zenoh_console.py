@@ -329,13 +329,7 @@ class ZenohConsole(RemoteConsole):
             greeting = self._greet_every_node(by_role)
         else:
             greeting = next(iter(by_role.values()))
-            if greeting.status is not Status.HELLO:
-                self.close()
-                raise ConsoleConnectionError(
-                    f"The node {self.where} turned the console away: {greeting.text}"
-                )
-        self.greeting = greeting
-        return greeting
+        return self._accept(greeting, f"The node {self.where}")
 
     def _greet_every_node(self, by_role: Dict[str, Reply]) -> Reply:
         """Keep the nodes that accepted the console, note those that refused; the greeting."""
