@@ -129,6 +129,26 @@ class TestStrictReading(BackendCase):
                     assert line_page is not None
                     self.assertEqual(line_page.data, expected)
 
+    def test_whitespace_around_a_frame_is_fine_and_trailing_text_is_named(self) -> None:
+        body = GOOD_PAGE % b"[1, 2]"
+        for _ in self.backends():
+            for framed in (b" " + body, body + b" \n", b"\t" + body + b"\r\n"):
+                with self.subTest(framed=framed[:3] + framed[-3:]):
+                    page = decode_body(framed)
+                    assert isinstance(page, Page)
+                    self.assertEqual(page.data, [1, 2])
+            for bad, words in (
+                (body + b"x", "Extra data"),
+                (body + body, "Extra data"),
+                (body[:-1], "Expecting"),
+                (b"", "Expecting value"),
+                (b"   ", "Expecting value"),
+            ):
+                with self.subTest(bad=bad[-8:]), self.assertRaises(WireFormatError) as ctx:
+                    decode_body(bad)
+                self.assertIn("not JSON", str(ctx.exception))
+                self.assertIn(words, str(ctx.exception))  # the stdlib's words, either backend
+
     def test_the_version_must_be_the_integer_1(self) -> None:
         for _ in self.backends():
             for version in (b"1.0", b'"1"', b"true", b"null", b"[1]", b"2"):
