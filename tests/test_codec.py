@@ -405,6 +405,10 @@ class TestPageEncoder(BackendCase):
         Page("bench", {"big": 2**70}, "sender", 2.0),
         Page("bench", 0.5, "sender", -2e-5),  # a tiny negative time
         Page("bench", True, "sender", 0.0),
+        Page("bench", "\U0001f600", "sender", 1.0),  # a surrogate pair once escaped
+        Page("bench", {2.5: 1, True: 2, None: 3}, "sender", 1.0),  # keys json turns to text
+        Page("bench", json.loads(nested(codec.MAX_DEPTH - 1)), "sender", 1.0),  # as deep as may be
+        Page("bench", "x", "sender", 1700000000),  # an int time
     ]
 
     def test_the_same_bytes_as_page_json(self) -> None:
@@ -417,7 +421,10 @@ class TestPageEncoder(BackendCase):
     def test_the_same_refusal(self) -> None:
         for _ in self.backends():
             encode = codec.PageEncoder(self.HEAD)
-            for data in ({1, 2}, math.nan, [math.inf], "\ud800"):
+            itself: List[Any] = [1]
+            itself.append(itself)
+            too_deep = [json.loads(nested(codec.MAX_DEPTH - 1))]
+            for data in ({1, 2}, math.nan, [math.inf], "\ud800", {"a": "\udfff"}, itself, too_deep):
                 page = Page("bench", data, "sender", 1.0)
                 with self.subTest(data=data):
                     with self.assertRaises(NotSerializableError) as expected:
@@ -432,6 +439,21 @@ class TestPageEncoder(BackendCase):
             page = Page(f"key{number}", number, "sender", 1.0)
             self.assertEqual(encode(page), codec.page_json(page, self.HEAD))
         self.assertLessEqual(len(encode._parts), 1024)
+        self.assertLessEqual(len(encode._std_parts), 1024)
+
+    def test_the_same_bytes_for_every_key_and_origin_with_each_backend(self) -> None:
+        for _ in self.backends():
+            encode = codec.PageEncoder(self.HEAD)
+            for key, origin in (("k", "o"), ("k\u00e9", "o"), ("k", "\U0001f600"), ("k", "\ud800")):
+                page = Page(key, [1, {"a": 0.25}], origin, 1.5)
+                with self.subTest(key=key, origin=origin):
+                    try:
+                        expected = codec.page_json(page, self.HEAD)
+                    except NotSerializableError:
+                        self.assertRaises(NotSerializableError, encode, page)
+                        continue
+                    self.assertEqual(encode(page), expected)
+                    self.assertEqual(encode(page), expected)  # from what it learned
 
 
 class TestChoosingTheBackend(BackendCase):

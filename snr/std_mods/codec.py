@@ -50,6 +50,7 @@ from typing import (
     Mapping,
     NoReturn,
     Optional,
+    Sequence,
     Tuple,
     Union,
 )
@@ -124,6 +125,26 @@ def _reject_constant(name: str) -> NoReturn:
 
 
 _STD_ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
+# `_STD_ENCODER`'s own C encoder, made once: `encode` makes a new one for every
+# call. Without the circular check (a list that holds itself raises
+# RecursionError, and `page_json` then gives the verdict); None where json has
+# no C speed-ups. Returns the JSON text in pieces.
+_std_c_encoder: Any = getattr(json.encoder, "c_make_encoder", None)
+_STD_PIECES: Optional[Callable[[Any, int], Sequence[str]]] = (
+    None
+    if _std_c_encoder is None
+    else _std_c_encoder(
+        None,
+        _STD_ENCODER.default,
+        json.encoder.encode_basestring_ascii,
+        None,
+        ":",
+        ",",
+        False,
+        False,
+        False,
+    )
+)
 _STD_DECODER = json.JSONDecoder(parse_constant=_reject_constant)
 # Reads one value at an index: (value, where it ended). Set by JSONDecoder's
 # __init__ (the C scanner where there is one), though typeshed does not list it.
@@ -587,12 +608,15 @@ class PageEncoder:
 
     A node sends pages under a few keys, each from one origin, over and over:
     everything in the JSON of such a page except the data and the time is the
-    same every time. With orjson, the text before the data and between the
-    data and the time is made once per key and origin and kept (up to 1,024
-    pairs; then it starts again), so a page costs two orjson calls and a
-    join. The bytes are exactly `page_json`'s: the short path is taken only
-    where `page_json` would take orjson's output as it is (the same checks),
-    and everything else goes through `page_json` itself.
+    same every time. The text before the data and between the data and the
+    time is made once per key and origin and kept (up to 1,024 pairs; then it
+    starts again), so a page costs the JSON of its data and time and a join:
+    two orjson calls, or one call of json's C encoder (made once, where
+    `json.dumps` makes one a call) and the time's ``repr``. The bytes are
+    exactly `page_json`'s: the short path is taken only where `page_json`
+    would take the same output as it is (the same checks), and everything
+    else (deep data, a surrogate, anything json refuses) goes through
+    `page_json` itself.
 
     Example::
 
@@ -605,6 +629,7 @@ class PageEncoder:
         self.head = dict(head)
         self.to = to
         self._parts: Dict[Tuple[str, str], Optional[Tuple[bytes, bytes]]] = {}
+        self._std_parts: Dict[Tuple[str, str], Optional[Tuple[str, str]]] = {}
 
     def __call__(self, page: Page) -> bytes:
         """The page's JSON; raises `NotSerializableError` as `page_json` does."""
@@ -640,7 +665,51 @@ class PageEncoder:
                     return page_json(page, self.head, self.to)
                 tail = b',"process":true}' if page.process else b',"process":false}'
                 return b"".join((parts[0], data_json, parts[1], created_json, tail))
+        elif (
+            _dump_plain is _dump_std
+            and _STD_PIECES is not None
+            and type(key) is str
+            and type(origin) is str
+            and type(page.process) is bool
+            and (
+                created.__class__ is int
+                or (created.__class__ is float and created - created == 0.0)
+            )
+        ):
+            try:
+                text_parts = self._std_parts[(key, origin)]
+            except KeyError:
+                text_parts = self._learn_std(key, origin)
+            if text_parts is not None:
+                try:
+                    data_text = "".join(_STD_PIECES(data, 0))
+                except (TypeError, ValueError, RecursionError):  # page_json says why
+                    return page_json(page, self.head, self.to)
+                # What _dump_std would look into (deep data, a surrogate): page_json decides.
+                if (
+                    "\\ud" not in data_text
+                    and data_text.count("[") + data_text.count("{") < MAX_DEPTH
+                ):
+                    tail_text = ',"process":true}' if page.process else ',"process":false}'
+                    return "".join(
+                        (text_parts[0], data_text, text_parts[1], repr(created), tail_text)
+                    ).encode("ascii")
         return page_json(page, self.head, self.to)
+
+    def _learn_std(self, key: str, origin: str) -> Optional[Tuple[str, str]]:
+        """`_learn` for the standard library's json: the same two pieces, as text."""
+        if len(self._std_parts) >= _MAX_KNOWN_PAGE_KINDS:
+            self._std_parts.clear()
+        parts: Optional[Tuple[str, str]] = None
+        try:
+            before = _dump_std({**self.head, "key": key}).decode("ascii")[:-1] + ',"data":'
+            between = ',"origin":' + _dump_std(origin).decode("ascii") + ',"created_at_s":'
+            if "\\ud" not in before + between:  # a surrogate: page_json decides
+                parts = (before, between)
+        except _Refused:  # a head value json refuses: page_json says why
+            parts = None
+        self._std_parts[(key, origin)] = parts
+        return parts
 
     def _learn(self, key: str, origin: str) -> Optional[Tuple[bytes, bytes]]:
         """The JSON before the data and between the data and the time (None: not exact)."""
