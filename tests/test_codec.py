@@ -418,6 +418,13 @@ class TestPageEncoder(BackendCase):
                 with self.subTest(page=page):
                     self.assertEqual(encode(page), codec.page_json(page, self.HEAD))
 
+    def test_lines_are_page_json_without_a_head(self) -> None:
+        for _ in self.backends():
+            for page in self.PAGES * 2:
+                with self.subTest(page=page):
+                    expected = codec.page_json(page, to="to a recording or serial link")
+                    self.assertEqual(codec.page_to_line(page), expected.decode("ascii"))
+
     def test_the_same_refusal(self) -> None:
         for _ in self.backends():
             encode = codec.PageEncoder(self.HEAD)

@@ -815,6 +815,12 @@ def header_line() -> str:
     return dump_json({"format": FORMAT_NAME, "version": FORMAT_VERSION}).decode("ascii")
 
 
+# Lines carry no head: `page_json`'s bytes, with the JSON around the data kept
+# per key and origin. Shared by every thread that writes lines: a race between
+# two of them only makes a kept piece again.
+_LINE_ENCODER = PageEncoder({}, to="to a recording or serial link")
+
+
 def page_to_line(page: Page) -> str:
     """One page as one line of JSON (without the newline).
 
@@ -827,7 +833,7 @@ def page_to_line(page: Page) -> str:
         page_to_line(Page("x", [1, 2], "robot", 0.5))
         # '{"key":"x","data":[1,2],"origin":"robot","created_at_s":0.5,"process":true}'
     """
-    return page_json(page, to="to a recording or serial link").decode("ascii")
+    return _LINE_ENCODER(page).decode("ascii")
 
 
 def decode_line(line: Text) -> Dict[str, Any]:
