@@ -113,6 +113,16 @@ else:
     loads = json.loads
 
 
+def install_note() -> str:
+    """Which installs the backend of this run stands for, and how to run the other."""
+    if BACKEND == "orjson":
+        return (
+            "orjson is what the [fast] and [dev] extras give. A student's plain install "
+            "uses the standard library's json: SNR_JSON=json runs that."
+        )
+    return "the standard library's json is what a student's plain install uses."
+
+
 def small_data(i: int) -> Dict[str, Any]:
     return {"seq": i, "value": 0.5}
 
@@ -825,7 +835,7 @@ def print_report(
         f"{args.idle_s:g} s; {rounds} interleaved rounds, fresh processes each time; "
         f"median of the rounds, spread = min-max over rounds, ratios taken within each round."
     )
-    print(f"JSON backend: {BACKEND} (SNR's page codec and every baseline).")
+    print(f"JSON backend: {BACKEND} (SNR's page codec and every baseline); {install_note()}")
     if zmq is None:
         print("pyzmq is not installed (pip install pyzmq): the pyzmq rows and targets are skipped.")
     else:

@@ -401,7 +401,8 @@ def print_report(
         "interleaved rounds, fresh processes each time; median of the rounds, ratios "
         "taken within each round."
     )
-    print(f"JSON backend: {bc.BACKEND}; eclipse-zenoh {version('eclipse-zenoh')}.")
+    print(f"eclipse-zenoh {version('eclipse-zenoh')}. JSON backend: {bc.BACKEND}; ", end="")
+    print(bc.install_note())
     print()
     print(f"{'one-way throughput':32} {'pages/s':>10} {'spread':>17} {'x raw':>6}  lost dup reord")
     for name, runs in rates.items():
