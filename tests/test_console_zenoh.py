@@ -9,6 +9,7 @@ from __future__ import annotations
 import io
 import threading
 import unittest
+from typing import List, Optional
 
 from snr import Config, Mode, SomeTasks, Task, TaskId, TaskType, TimeoutLoopFactory
 from tests.helpers import RecorderFactory, free_port, wait_until
@@ -222,6 +223,106 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         self.assertEqual(code, 0, err.getvalue())
         self.assertIn(refused, out.getvalue())
         self.assertIn("[urov]\nQueue of node 'urov'", out.getvalue())
+
+    def start_arm(self, endpoint: str, token: Optional[str] = None) -> LocalNodes:
+        """A third node, 'arm', with a Zenoh console listening on ``endpoint``."""
+        from snr.std_mods.io.zenoh_console import ZenohConsoleFactory
+
+        factories = [
+            ZenohConsoleFactory(SYSTEM, listen=[endpoint], scouting=False, token=token),
+            TimeoutLoopFactory(seconds=15),
+        ]
+        arm = LocalNodes(Config({"arm": factories}, mode=Mode.TEST), ["arm"])
+        self.addCleanup(arm.stop)
+        return arm
+
+    def every_node_with_arm(self, arm_endpoint: str, roles: List[str]) -> object:
+        """A console to "*" that also connects to arm's endpoint, once ``roles`` answer."""
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        endpoints = [*self.endpoints, arm_endpoint]
+        console = ZenohConsole(SYSTEM, connect=endpoints, scouting=False, timeout_s=5.0)
+        self.addCleanup(console.close)
+        self.assertTrue(wait_until(lambda: console.roles() == roles), f"{roles} answer")
+        console.connect()
+        return console
+
+    def test_a_node_that_left_is_named_as_gone_and_does_not_fail_the_command(self) -> None:
+        from snr.std_mods.io.console_protocol import Status
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        arm = self.start_arm(endpoint)
+        every = self.every_node_with_arm(endpoint, ["arm", "camera", "urov"])
+        assert isinstance(every, ZenohConsole)
+        arm.stop()
+        self.assertTrue(wait_until(lambda: every.roles() == ["camera", "urov"]), "arm is gone")
+        for command in ("stats", "list endpoints"):
+            reply = every.send(command)
+            self.assertIs(reply.status, Status.OK, reply.text)
+            self.assertIn("[arm] left the system (its console is gone)", reply.text)
+            self.assertEqual(reply.text.count("[arm]"), 1, reply.text)
+            self.assertIn("[camera]\n", reply.text)
+            self.assertIn("[urov]\n", reply.text)
+
+    def test_a_node_without_a_liveliness_token_is_not_said_to_have_left(self) -> None:
+        from unittest import mock
+
+        from snr.std_mods.io.console_protocol import Status
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        arm = self.start_arm(endpoint)
+        # As with nodes of an older SNR: no console says it is alive.
+        with mock.patch.object(ZenohConsole, "_alive_roles", staticmethod(lambda _: set())):
+            every = self.every_node_with_arm(endpoint, ["arm", "camera", "urov"])
+            assert isinstance(every, ZenohConsole)
+            arm.stop()
+            self.assertTrue(wait_until(lambda: every.roles() == ["camera", "urov"]), "arm gone")
+            every.timeout_s = 0.5
+            stats = every.send("stats")
+        self.assertIs(stats.status, Status.ERROR, stats.text)
+        self.assertIn("[arm] no reply within 0.5 s: the node does not say whether", stats.text)
+        self.assertNotIn("busy in a slow handler", stats.text)
+        self.assertIn("[camera]\nQueue of node 'camera'", stats.text)
+        self.assertIn("[urov]\nQueue of node 'urov'", stats.text)
+
+    def test_a_node_that_joins_later_and_needs_a_token_is_named_as_refusing(self) -> None:
+        from snr.std_mods.io.console_protocol import Status
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        every = self.every_node_with_arm(endpoint, ["camera", "urov"])  # arm is not up yet
+        assert isinstance(every, ZenohConsole)
+        self.start_arm(endpoint, token="sesame")
+        self.assertTrue(wait_until(lambda: "arm" in every.roles()), "arm joined")
+        refused = "[arm] refused: this node needs its console token (give it: --token"
+        for command in ("stats", "help"):
+            reply = every.send(command)
+            self.assertIs(reply.status, Status.OK, reply.text)
+            self.assertIn(refused, reply.text)
+            self.assertEqual(reply.text.count("[arm]"), 1, reply.text)
+            self.assertIn("[urov]\n", reply.text)
+
+    def test_a_node_that_joins_later_is_reached_then_named_when_it_leaves(self) -> None:
+        from snr.std_mods.io.console_protocol import Status
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        every = self.every_node_with_arm(endpoint, ["camera", "urov"])  # arm is not up yet
+        assert isinstance(every, ZenohConsole)
+        arm = self.start_arm(endpoint)
+        self.assertTrue(wait_until(lambda: "arm" in every.roles()), "arm joined")
+        stats = every.send("stats")
+        self.assertIs(stats.status, Status.OK, stats.text)
+        self.assertIn("[arm]\nQueue of node 'arm'", stats.text)
+        self.assertIn("[camera]\nQueue of node 'camera'", stats.text)
+
+        arm.stop()
+        self.assertTrue(wait_until(lambda: every.roles() == ["camera", "urov"]), "arm is gone")
+        stats = every.send("stats")
+        self.assertIs(stats.status, Status.OK, stats.text)
+        self.assertIn("[arm] left the system (its console is gone)", stats.text)
 
     def test_the_command_line_without_a_role_never_stops_every_node(self) -> None:
         import snr.console

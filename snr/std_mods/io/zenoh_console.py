@@ -28,7 +28,7 @@ import os
 import sys
 import threading
 import time
-from typing import IO, Any, Dict, List, Optional, Sequence
+from typing import IO, Any, Dict, List, Optional, Sequence, Set
 
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, CommsError
@@ -127,11 +127,12 @@ class ZenohConsoleLoop(ConsoleLoop):
         self.key = console_key(factory.system, parent.role)
         self.session: Any = None
         self._queryable: Any = None
+        self._alive: Any = None  # liveliness token: consoles tell "left" from "busy" by it
         self._waiting = 0
         self._lock = threading.Lock()
 
     def begin(self) -> None:
-        """Add the command processor; open a Zenoh session and answer on `key`."""
+        """Add the command processor; open a Zenoh session, say it is alive and answer on `key`."""
         super().begin()
         spec = self.spec
         config = zenoh_config(spec.mode, spec.connect, spec.listen, spec.scouting)
@@ -142,6 +143,8 @@ class ZenohConsoleLoop(ConsoleLoop):
                 f"Node {self.parent.role!r} could not open the Zenoh session of its console "
                 f"(listen={spec.listen}, connect={spec.connect}): {str(error).split(' at /')[0]}"
             ) from None
+        # The token first: a console that got this node's greeting also sees it alive.
+        self._alive = self.session.liveliness().declare_token(self.key)
         self._queryable = self.session.declare_queryable(self.key, self._on_query)
         self.info("Console answers over Zenoh on %s", self.key)
 
@@ -150,7 +153,10 @@ class ZenohConsoleLoop(ConsoleLoop):
         self.wait_s(1.0)
 
     def halt(self) -> None:
-        """Stop answering and close the session."""
+        """Stop answering, say this console is gone and close the session."""
+        alive, self._alive = self._alive, None
+        if alive is not None:
+            alive.undeclare()
         queryable, self._queryable = self._queryable, None
         if queryable is not None:
             queryable.undeclare()
@@ -263,7 +269,11 @@ class ZenohConsole(RemoteConsole):
     the reply holds every node's, each labelled with its role; a command
     that changes a node (``exit``, ``reload``...) is refused without being
     sent: name the node. A node that refuses the console (it needs its
-    token) is named in each reply; the others are still reached.
+    token) is named in each reply; the others are still reached. Which
+    nodes are reached is asked again with each command: a node that joined
+    since is reached too (or named as refusing), and one whose console has
+    gone is named as having left, which does not fail the command; one
+    still there that does not reply in time does.
 
     Example::
 
@@ -292,10 +302,13 @@ class ZenohConsole(RemoteConsole):
         self._config = zenoh_config(mode, connect, listen, scouting)
         self.session: Any = None
         # With a pattern: the roles that greeted this console, so a command's
-        # reply can say which of them did not answer it in time; and the roles
-        # that refused it (a token), named in every reply rather than dropped.
+        # reply can say which of them did not answer it in time; the roles
+        # that refused it (a token), named in every reply rather than dropped;
+        # and the roles seen with a liveliness token: once it is gone, such a
+        # node left (a node of an older SNR has none, so it may be just busy).
         self._greeted: List[str] = []
         self._refused: Dict[str, str] = {}
+        self._tokened: Set[str] = set()
 
     @property
     def where(self) -> str:
@@ -332,7 +345,7 @@ class ZenohConsole(RemoteConsole):
         return self._accept(greeting, f"The node {self.where}")
 
     def _greet_every_node(self, by_role: Dict[str, Reply]) -> Reply:
-        """Keep the nodes that accepted the console, note those that refused; the greeting."""
+        """Note the nodes that accept the console, refuse it, say they are alive; the greeting."""
         self._greeted = sorted(
             role for role, reply in by_role.items() if reply.status is Status.HELLO
         )
@@ -347,6 +360,7 @@ class ZenohConsole(RemoteConsole):
                 f"Every node {self.where} turned the console away: "
                 + _labelled({}, self._refused).text
             )
+        self._tokened = self._alive_roles(self._ask_alive(self.timeout_s))
         hello = _labelled({role: by_role[role] for role in self._greeted}, self._refused)
         return Reply(
             Status.HELLO,
@@ -398,22 +412,68 @@ class ZenohConsole(RemoteConsole):
         if command not in EVERY_NODE_COMMANDS:
             return Reply(Status.ERROR, self._not_sent(command))
         timeout_s = self._reply_timeout_s(line)
+        pending = self._ask_alive(timeout_s)  # read after the replies: no extra wait
+        answers = self._answers(line, timeout_s)
+        self._meet(answers, timeout_s)
+        alive = self._alive_roles(pending)
+        self._tokened |= alive
         by_role = {  # a node that refused the console refuses each command the same way
-            role: reply
-            for role, reply in self._answers(line, timeout_s).items()
-            if role not in self._refused
+            role: reply for role, reply in answers.items() if role not in self._refused
         }
-        for role in self._greeted:  # a node busy in a slow handler must not just vanish
-            if role not in by_role:
-                by_role[role] = Reply(
-                    Status.ERROR,
-                    f"no reply within {timeout_s:g} s: the node may be busy in a slow "
-                    f"handler. Ask it alone (`python -m snr console --zenoh {self.system} "
-                    f"{role}`) or give a longer --timeout.",
-                )
-        if not by_role:
+        notes = dict(self._refused)
+        for role in [*self._greeted, *self._refused]:
+            if role in answers:
+                continue
+            if role in self._tokened and role not in alive:  # stopped, or lost: not an error
+                notes[role] = "left the system (its console is gone)"
+            elif role in self._greeted:  # a node busy in a slow handler must not just vanish
+                by_role[role] = Reply(Status.ERROR, self._no_reply(role, timeout_s, alive))
+        if not by_role and not notes:
             raise self._nobody_answered(timeout_s)
-        return _labelled(by_role, self._refused)
+        return _labelled(by_role, notes)
+
+    def _meet(self, answers: Dict[str, Reply], timeout_s: float) -> None:
+        """Roles that answered for the first time (they joined late): greeted, or refused.
+
+        An error may be a refusal (the node needs its token): only a greeting
+        tells, as it does at `connect`.
+        """
+        for role, reply in answers.items():
+            if role in self._greeted or role in self._refused:
+                continue
+            if reply.status is Status.ERROR:
+                greeting = self._answers("", timeout_s, role).get(role)
+                if greeting is None:  # gone again: learn about it next time
+                    continue
+                if greeting.status is not Status.HELLO:
+                    self._refused[role] = _refusal(greeting.text)
+                    continue
+            self._greeted = sorted([*self._greeted, role])
+
+    def _no_reply(self, role: str, timeout_s: float, alive: Set[str]) -> str:
+        """Why a node that greeted this console has no reply, and what to do about it."""
+        if role in alive:
+            why = "the node may be busy in a slow handler"
+        else:  # no liveliness token, ever: a node of an older SNR
+            why = (
+                "the node does not say whether it still runs (an older SNR), so it may "
+                "have left the system or be busy"
+            )
+        return (
+            f"no reply within {timeout_s:g} s: {why}. Ask it alone (`python -m snr console "
+            f"--zenoh {self.system} {role}`) or give a longer --timeout."
+        )
+
+    def _ask_alive(self, timeout_s: float) -> Any:
+        """Ask which consoles the role matches are alive now; read with `_alive_roles`."""
+        key = console_key(self.system, self.role)
+        return self.session.liveliness().get(key, timeout=timeout_s)
+
+    @staticmethod
+    def _alive_roles(pending: Any) -> Set[str]:
+        """The roles whose console's liveliness token answered ``pending`` (a Zenoh get)."""
+        samples = [answer.ok for answer in pending if answer.ok is not None]
+        return {str(sample.key_expr).rsplit("/", 1)[-1] for sample in samples}
 
     def _not_sent(self, command: str) -> str:
         """Why ``command`` is not sent to every node, and what to type instead."""
@@ -451,10 +511,11 @@ class ZenohConsole(RemoteConsole):
                 raise self._nobody_answered(timeout_s)
             time.sleep(0.05)
 
-    def _answers(self, line: str, timeout_s: float) -> Dict[str, Reply]:
-        """One query for ``line``: the replies that came within ``timeout_s``, by role."""
+    def _answers(self, line: str, timeout_s: float, role: str = "") -> Dict[str, Reply]:
+        """One query for ``line`` (to ``role``, else the console's role): the replies, by role."""
         by_role = {}
-        for answer in self._replies(console_key(self.system, self.role), line, timeout_s):
+        key = console_key(self.system, role or self.role)
+        for answer in self._replies(key, line, timeout_s):
             replies = ReplyDecoder().feed(answer.payload.to_bytes())
             if replies:
                 by_role[str(answer.key_expr).rsplit("/", 1)[-1]] = replies[0]
@@ -490,8 +551,9 @@ def _labelled(by_role: Dict[str, Reply], notes: Optional[Dict[str, str]] = None)
     """One reply from several nodes' replies: each under its role; an error if any was one.
 
     ``notes`` are lines about nodes with no reply of their own (they refused
-    the console when it connected): shown under their roles, but they do not
-    make the reply an error, as the console was told so at once.
+    the console, or left the system): shown under their roles, but they do
+    not make the reply an error, as no command failed on them. With no reply
+    at all, only notes, the reply is an error: the command reached no node.
 
     Example::
 
