@@ -231,19 +231,17 @@ def _load_std(raw: Text) -> Any:
         # scanner reads it without `decode`'s two calls and two regex matches
         # (0.5 us of a page's 2.7). Anything else (whitespace around it, an
         # error) goes through `decode`, which gives the verdict and the message.
-        obj, end = _STD_SCAN(text, 0)
-        whole = end == len(text)
-    except (StopIteration, ValueError):
-        whole = False
+        try:
+            obj, end = _STD_SCAN(text, 0)
+            whole = end == len(text)
+        except (StopIteration, ValueError):
+            whole = False
+        if not whole:
+            obj = _STD_DECODER.decode(text)
+    except ValueError as error:  # json.JSONDecodeError, NaN/Infinity, huge integers
+        raise WireFormatError(f"it is not JSON ({error}): {text[:60]!r}") from None
     except RecursionError:
         raise WireFormatError(_TOO_DEEP) from None
-    if not whole:
-        try:
-            obj = _STD_DECODER.decode(text)
-        except ValueError as error:  # json.JSONDecodeError, NaN/Infinity, huge integers
-            raise WireFormatError(f"it is not JSON ({error}): {text[:60]!r}") from None
-        except RecursionError:
-            raise WireFormatError(_TOO_DEEP) from None
     zeroed = data.translate(_ZEROED, b"+")
     if (
         strings
