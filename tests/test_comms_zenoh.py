@@ -65,7 +65,12 @@ PLAIN_CLIENT = os.path.join(os.path.dirname(__file__), "zenoh_plain_client.py")
 if HAVE_ZENOH:
     from snr import ZenohCommsFactory
     from snr.std_mods.comms import ZenohComms
-    from snr.std_mods.comms.zenoh_comms import _zenoh_module, page_from_sample
+    from snr.std_mods.comms.zenoh_comms import (
+        BATCH_TIME_LIMIT_MS,
+        _zenoh_module,
+        page_from_sample,
+        zenoh_config,
+    )
 
 
 def zenoh_safe_context() -> Any:
@@ -205,6 +210,15 @@ class TestZenohSettings(unittest.TestCase):
         with self.assertRaises(ConfigError) as caught:
             ZenohCommsFactory("team", subscribe=[long, "*" + long[1:]])
         self.assertIn("already matches every key", str(caught.exception))
+
+    def test_batches_fill_longer_while_the_link_is_busy_unless_told_otherwise(self) -> None:
+        path = "transport/link/tx/queue/batching"
+        zenoh_default = json.loads(_zenoh_module().Config().get_json(path))["time_limit"]
+        ours = json.loads(zenoh_config(scouting=False).get_json(path))
+        self.assertEqual((ours["enabled"], ours["time_limit"]), (True, BATCH_TIME_LIMIT_MS))
+        self.assertNotEqual(BATCH_TIME_LIMIT_MS, zenoh_default)
+        told = zenoh_config(scouting=False, extra={f"{path}/time_limit": 1}).get_json(path)
+        self.assertEqual(json.loads(told)["time_limit"], 1)
 
     def test_a_missing_library_names_the_extra_to_install(self) -> None:
         with mock.patch.dict(sys.modules, {"zenoh": None}), self.assertRaises(ConfigError) as e:
