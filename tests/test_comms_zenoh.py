@@ -12,6 +12,7 @@ import json
 import multiprocessing
 import os
 import queue
+import random
 import signal
 import struct
 import subprocess
@@ -43,7 +44,7 @@ from snr import (
     tasks,
 )
 from snr.prelude import ConfigError, WireFormatError
-from snr.std_mods.comms.zenoh_inbox import WAKE, SequenceFollower
+from snr.std_mods.comms.zenoh_inbox import WAKE, SequenceFollower, count_attachment, read_count
 from snr.utils import MockNode
 from tests.comms_helpers import (
     EchoFactory,
@@ -260,6 +261,34 @@ class TestSequenceFollower(unittest.TestCase):
         self.assertEqual(follow.taken(b, "x", 40), 0, "a newcomer starts where it is")
         self.assertEqual(follow.taken(a, "y", 3), 0, "each key is counted alone")
         self.assertEqual(follow.taken(a, "x", 14), 0, "a repeat is no gap")
+
+    def test_a_batch_counts_what_its_pages_one_by_one_would(self) -> None:
+        rng = random.Random(14)
+        senders, keys = [b"A" * 8, b"B" * 8], ["x", "y"]
+        for trial in range(200):
+            one_by_one, batched = SequenceFollower(max_streams=3), SequenceFollower(max_streams=3)
+            counts = {(s, k): 0 for s in senders for k in keys}
+            batch: List[Tuple[str, bytes]] = []
+            for _ in range(rng.randrange(1, 40)):
+                stream = rng.choice(list(counts))
+                counts[stream] += rng.choice([1, 1, 1, 1, 2, 5, 0, -1])  # runs, gaps, repeats
+                attachment = count_attachment(stream[0], max(counts[stream], 0))
+                if rng.random() < 0.05:
+                    attachment = b"plain program's"  # no count: skipped
+                batch.append((stream[1], attachment))
+            if rng.random() < 0.3:
+                with one_by_one.lock, batched.lock:
+                    one_by_one.dropped(senders[0], "x", 3)
+                    batched.dropped(senders[0], "x", 3)
+            expected = 0
+            for key, attachment in batch:
+                numbered = read_count(attachment)
+                if numbered is not None:
+                    expected += one_by_one.taken(numbered[0], key, numbered[1])
+            with self.subTest(trial=trial):
+                self.assertEqual(batched.taken_all(batch), expected)
+                self.assertEqual(batched._last, one_by_one._last)
+                self.assertEqual(batched._dropped, one_by_one._dropped)
 
     def test_dropped_runs_are_bounded_and_streams_too(self) -> None:
         follow = SequenceFollower(max_streams=3)

@@ -943,7 +943,7 @@ class ZenohComms(Endpoint):
                 channel.emptied.clear()  # more than a batch waits: the node's thread takes it on
             channel.taken += len(samples)
             budget -= len(samples)
-            pages = [page for page in map(self._page_of, samples) if page is not None]
+            pages = self._pages_of(samples)
             if len(pages) == 1:  # the usual page of a quiet link: no burst to split
                 out.append(tasks.store_page(pages[0]))
             elif pages:  # stored by the node core in one call, as a link's burst is
@@ -963,38 +963,55 @@ class ZenohComms(Endpoint):
             out.append(self._next_batch)
         return out
 
-    def _page_of(self, sample: zenoh.Sample) -> Optional[Page]:
-        attachment = sample.attachment
-        counted = None if attachment is None else attachment.to_bytes()
-        if counted == WAKE:  # only woke the node's thread (IdleReader)
-            return None
-        key_expr = str(sample.key_expr)
-        key = key_expr[len(self.prefix) :]
-        try:
-            page = page_from_sample(key, sample.payload.to_bytes())
-        except WireFormatError as error:
-            self._bad_sample(key_expr, error)
-            return None
-        if counted is not None:
-            self._follow_sequence(key, counted)
-        self.received += 1
-        if key in self._published_keys:
-            arrived = self._arrived
-            if len(arrived) >= _MAX_ECHO_GUARD:  # their tasks were dropped: forget them
-                arrived.clear()
-            arrived[id(page)] = page
-        return page
+    def _pages_of(self, samples: Sequence[zenoh.Sample]) -> List[Page]:
+        """The pages of one subscription's ``samples``, in order; wake-ups and bad samples left out.
 
-    def _follow_sequence(self, key: str, attachment: bytes) -> None:
-        numbered = read_count(attachment)
-        if numbered is None:
-            return  # not an SNR sender's count: a plain program may attach anything
-        sender, count = numbered
-        lost = self._sequences.taken(sender, key, count)
+        The senders' counts are followed for the whole batch at once
+        (`SequenceFollower.taken_all`): a burst from one sender costs one
+        comparison a page.
+        """
+        pages: List[Page] = []
+        counted: List[Tuple[str, bytes]] = []
+        cut = len(self.prefix)
+        published, arrived = self._published_keys, self._arrived
+        for sample in samples:
+            attachment = sample.attachment
+            count = None if attachment is None else attachment.to_bytes()
+            if count == WAKE:  # only woke the node's thread (IdleReader)
+                continue
+            key = str(sample.key_expr)[cut:]
+            try:
+                page = page_from_sample(key, sample.payload.to_bytes())
+            except WireFormatError as error:
+                self._bad_sample(self.prefix + key, error)
+                continue
+            if count is not None:
+                counted.append((key, count))
+            if key in published:  # never sent back out (the echo guard)
+                if len(arrived) >= _MAX_ECHO_GUARD:  # their tasks were dropped: forget them
+                    arrived.clear()
+                arrived[id(page)] = page
+            pages.append(page)
+        if counted:
+            self._follow_sequences(counted)
+        self.received += len(pages)
+        return pages
+
+    def _page_of(self, sample: zenoh.Sample) -> Optional[Page]:
+        """`_pages_of` for one sample: its page, or None."""
+        pages = self._pages_of([sample])
+        return pages[0] if pages else None
+
+    def _follow_sequences(self, counted: Sequence[Tuple[str, bytes]]) -> None:
+        lost = self._sequences.taken_all(counted)
         if lost:
             self.lost_report.dropped(lost)
         elif self.lost_report.dropping and time.monotonic() - self.lost_report.last_drop > 1.0:
             self.lost_report.recovered()
+
+    def _follow_sequence(self, key: str, attachment: bytes) -> None:
+        """`_follow_sequences` for one sample's count."""
+        self._follow_sequences([(key, attachment)])
 
     def _bad_sample(self, key_expr: str, error: WireFormatError) -> None:
         self.bad_samples += 1

@@ -20,7 +20,7 @@ import os
 import struct
 import threading
 import time
-from typing import Any, Callable, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 __all__ = [
     "COUNT_MARK",
@@ -41,6 +41,8 @@ COUNT_MARK = b"snr#"
 SEQUENCE = struct.Struct(">4s8sQ")
 """An SNR sender's attachment on a page: `COUNT_MARK`, its random id, then its count of pages
 under the key (20 bytes). Made by `count_attachment`, read by `read_count`."""
+
+_SENDER_END = 12  # SEQUENCE's mark and sender id end here; the count follows
 
 WAKE = b"snr-wake-" + os.urandom(8)
 """The attachment of a sample that only wakes a node's thread (`IdleReader`).
@@ -312,6 +314,42 @@ class SequenceFollower:
             if later:
                 self._dropped[stream] = later
         return max(0, count - last - 1 - dropped_here)
+
+    def taken_all(self, counted: Sequence[Tuple[str, bytes]]) -> int:
+        """Node's thread: `taken` for each (key, attachment) of a batch, in order; pages lost.
+
+        Attachments that are not an SNR sender's count are skipped. A run of
+        consecutive counts of one sender under one key costs one `taken` (its
+        first) and one comparison of bytes per page after it: a burst of
+        pages is checked for gaps at a fraction of a `taken` call each.
+
+        Example::
+
+            follower = SequenceFollower()
+            follower.taken_all([("depth", count_attachment(b"sender01", n)) for n in (1, 2, 5)])
+            # 2: counts 3 and 4 never arrived
+        """
+        lost = 0
+        run_key: Optional[str] = None  # the key of the run of counts being followed
+        sender, count, expected = b"", 0, b""  # ... its sender, last count, and next attachment
+        for key, attachment in counted:
+            if attachment == expected and key == run_key:
+                count += 1
+                expected = attachment[:_SENDER_END] + (count + 1).to_bytes(8, "big")
+                continue
+            if run_key is not None:
+                self._last[(sender, run_key)] = count  # the run ended: no gap inside it
+            numbered = read_count(attachment)
+            if numbered is None:
+                run_key, expected = None, b""
+                continue
+            sender, count = numbered
+            lost += self.taken(sender, key, count)
+            run_key = key
+            expected = attachment[:_SENDER_END] + (count + 1).to_bytes(8, "big")
+        if run_key is not None:
+            self._last[(sender, run_key)] = count
+        return lost
 
     def dropped(self, sender: bytes, key: str, count: int) -> None:
         """Any thread, holding `lock`: the node dropped the page numbered ``count``."""
