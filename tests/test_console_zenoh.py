@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import io
 import threading
+import time
 import unittest
 from typing import List, Optional
 
@@ -165,6 +166,22 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         self.assertIn("Not sent: `relaod` is not a console command", typo.text)
         self.assertFalse(any(node.is_terminated() for node in self.nodes.nodes), "none stopped")
 
+    def test_a_new_console_meets_its_endpoints_before_it_asks(self) -> None:
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        # Zenoh connects in the background: a query sent at once could miss a node.
+        console = ZenohConsole(SYSTEM, connect=self.endpoints, scouting=False, timeout_s=5.0)
+        self.addCleanup(console.close)
+        console._open()  # what connect() and roles() do first
+        self.assertEqual(len(list(console.session.info.peers_zid())), 2, "met both at once")
+        # An endpoint nobody listens on holds a console up for its timeout at most.
+        nobody = f"tcp/127.0.0.1:{free_port()}"
+        lonely = ZenohConsole(SYSTEM, connect=[nobody], scouting=False, timeout_s=0.3)
+        self.addCleanup(lonely.close)
+        started = time.monotonic()
+        self.assertEqual(lonely.roles(timeout_s=0.1), [])
+        self.assertLess(time.monotonic() - started, 5.0, "bounded by the console's timeout")
+
     def test_a_node_that_does_not_reply_in_time_is_named_and_the_command_fails(self) -> None:
         import snr.console
         from snr.std_mods.io.console_protocol import Status
@@ -225,12 +242,13 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         self.assertIn("[urov]\nQueue of node 'urov'", out.getvalue())
 
     def start_arm(self, endpoint: str, token: Optional[str] = None) -> LocalNodes:
-        """A third node, 'arm', with a Zenoh console listening on ``endpoint``."""
+        """A third node, 'arm', with a Zenoh console listening on ``endpoint`` (and ``block``)."""
         from snr.std_mods.io.zenoh_console import ZenohConsoleFactory
 
         factories = [
             ZenohConsoleFactory(SYSTEM, listen=[endpoint], scouting=False, token=token),
             TimeoutLoopFactory(seconds=15),
+            RecorderFactory("blocker", [(TaskType.event, "block")], [], self.block),
         ]
         arm = LocalNodes(Config({"arm": factories}, mode=Mode.TEST), ["arm"])
         self.addCleanup(arm.stop)
@@ -323,6 +341,24 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         stats = every.send("stats")
         self.assertIs(stats.status, Status.OK, stats.text)
         self.assertIn("[arm] left the system (its console is gone)", stats.text)
+
+    def test_a_node_that_joins_later_busy_is_named_and_the_command_fails(self) -> None:
+        from snr.std_mods.io.console_protocol import Status
+        from snr.std_mods.io.zenoh_console import ZenohConsole
+
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        every = self.every_node_with_arm(endpoint, ["camera", "urov"])  # arm is not up yet
+        assert isinstance(every, ZenohConsole)
+        self.start_arm(endpoint)
+        self.addCleanup(self.release.set)  # before arm stops (cleanups run last first)
+        self.assertTrue(wait_until(lambda: "arm" in every.roles()), "arm joined")
+        with ZenohConsole(SYSTEM, "arm", connect=[endpoint], scouting=False) as arm:
+            self.assertIs(arm.send("task event block").status, Status.OK)
+        every.timeout_s = 0.5
+        stats = every.send("stats")  # arm never answered a command of this console
+        self.assertIs(stats.status, Status.ERROR, stats.text)
+        self.assertIn("[arm] no reply within 0.5 s: the node may be busy", stats.text)
+        self.assertIn("[camera]\nQueue of node 'camera'", stats.text)
 
     def test_the_command_line_without_a_role_never_stops_every_node(self) -> None:
         import snr.console

@@ -79,6 +79,8 @@ node over time, so they need one node's role; the others (``exit``,
 would stop or change every robot of the system at once.
 """
 
+_MEET_ENDPOINTS_S = 2.0  # at most this long, a new console waits to meet its connect endpoints
+_MEET_QUIET_S = 0.25  # ... or this long after the last one it met, if it met any
 _ONE_NODE_STREAMS = ("echo", "hz")  # read-only, but a stream of replies from one node
 
 
@@ -300,6 +302,7 @@ class ZenohConsole(RemoteConsole):
         self.system, self.role = system, role
         self.zenoh = _zenoh_module()
         self._config = zenoh_config(mode, connect, listen, scouting)
+        self._mode, self._connect = mode, list(connect)
         self.session: Any = None
         # With a pattern: the roles that greeted this console, so a command's
         # reply can say which of them did not answer it in time; the roles
@@ -388,6 +391,37 @@ class ZenohConsole(RemoteConsole):
     def _open(self) -> None:
         if self.session is None:
             self.session = self.zenoh.open(self._config)
+            self._meet_endpoints()
+
+    def _meet_endpoints(self) -> None:
+        """Wait until the session has met a node at each ``connect`` endpoint.
+
+        Zenoh opens a session at once and connects in the background: a first
+        query reached only the nodes met by then, and a console to ``"*"``
+        greeted one node of two now and then (a busy machine, 1 time in 40).
+        The wait ends 0.25 s after the last node met if some endpoint has
+        nobody listening, and after 2 s (or the console's timeout) at most.
+        """
+        if not self._connect:
+            return  # scouting: there is no knowing how many nodes will answer
+        info = self.session.info
+        # A client connects to one router; a peer to every endpoint.
+        if self._mode == "client":
+            wanted, met = 1, info.routers_zid
+        else:
+            wanted, met = len(self._connect), info.peers_zid
+        started = time.monotonic()
+        deadline = started + min(self.timeout_s, _MEET_ENDPOINTS_S)
+        count, counted_at = 0, started
+        while True:
+            now, latest = time.monotonic(), len(list(met()))
+            if latest != count:
+                count, counted_at = latest, now
+            # Done once all are met; or when some are and no other came for a while
+            # (an endpoint nobody listens on would hold every console up otherwise).
+            if count >= wanted or now >= deadline or (count and now - counted_at >= _MEET_QUIET_S):
+                return
+            time.sleep(0.005)
 
     def send(self, line: str) -> Reply:
         """Send one command line and wait for its reply (see `RemoteConsole.send`)."""
@@ -417,6 +451,10 @@ class ZenohConsole(RemoteConsole):
         self._meet(answers, timeout_s)
         alive = self._alive_roles(pending)
         self._tokened |= alive
+        # Alive, yet neither known nor answering: it joined and is busy. Greet it
+        # (Zenoh's thread answers greetings), so it is named below, not left out.
+        unknown = alive - answers.keys() - set(self._greeted) - self._refused.keys()
+        self._meet({role: Reply(Status.ERROR, "") for role in sorted(unknown)}, timeout_s)
         by_role = {  # a node that refused the console refuses each command the same way
             role: reply for role, reply in answers.items() if role not in self._refused
         }
