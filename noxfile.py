@@ -33,6 +33,7 @@ def lint(session: nox.Session) -> None:
     """Lint with ruff."""
     session.install("ruff")
     session.run("ruff", "check", "snr", "tests", "examples", "bench")
+    session.run("ruff", "format", "--check", "snr", "tests", "examples", "bench")
 
 
 @nox.session

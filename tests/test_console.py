@@ -212,7 +212,6 @@ class TestStats(unittest.TestCase):
     def test_stats_shows_the_queue_and_every_link(self) -> None:
         from snr import SocketsPair
 
-
         pair = SocketsPair(("127.0.0.1", free_port()))
         with NodeInThread([pair.server()]) as run, run.console() as console:
             self.assertIn("0 links", console.send("stats").text)

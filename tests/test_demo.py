@@ -44,9 +44,7 @@ def _installed_copy() -> Path:
     folder = Path(tempfile.mkdtemp(prefix="snr-installed-"))
     lib = folder / "site-packages"
     shutil.copytree(Path(ROOT, "snr"), lib / "snr", ignore=shutil.ignore_patterns("__pycache__"))
-    shutil.copytree(
-        Path(ROOT, "docs"), lib / "snr" / "guide", ignore=shutil.ignore_patterns("api")
-    )
+    shutil.copytree(Path(ROOT, "docs"), lib / "snr" / "guide", ignore=shutil.ignore_patterns("api"))
     return folder
 
 

@@ -12,8 +12,7 @@ from snr.tools.docsite import build, literal_blocks_to_fences
 class TestLiteralBlocks(unittest.TestCase):
     def test_example_block_becomes_fenced_python(self) -> None:
         text = (
-            "Starts the node.\n\nExample::\n\n"
-            "    node = Node('robot', config)\n    node.loop()\n"
+            "Starts the node.\n\nExample::\n\n    node = Node('robot', config)\n    node.loop()\n"
         )
         self.assertEqual(
             literal_blocks_to_fences(text),
@@ -44,7 +43,6 @@ class TestRenderedPage(unittest.TestCase):
             shutil.rmtree(output, ignore_errors=True)
         self.assertNotIn("Example::", page)
         self.assertIn('class="pdoc-code codehilite"', page)
-
 
 
 class TestExtrasWarnings(unittest.TestCase):

@@ -430,9 +430,7 @@ class TestMechanisms(unittest.TestCase):
         debug = Node("checked", Config({"checked": [TimeoutLoopFactory(seconds=1)]}))
         with self.assertRaises(ComponentError):
             debug.page(3, "depth")  # type: ignore[arg-type]
-        deployed = Node(
-            "fast", Config({"fast": [TimeoutLoopFactory(seconds=1)]}, Mode.DEPLOYED)
-        )
+        deployed = Node("fast", Config({"fast": [TimeoutLoopFactory(seconds=1)]}, Mode.DEPLOYED))
         self.assertEqual(deployed.page("depth", 3).data, 3)
         self.assertEqual(deployed.page(3, "depth").key, 3)  # type: ignore[arg-type]
 

@@ -31,15 +31,12 @@ def _init_takes_only_star_args(cls: type) -> bool:
 
 class TestRealSignatures(unittest.TestCase):
     def test_node_shows_role_and_config(self) -> None:
-        self.assertEqual(
-            list(inspect.signature(snr.Node).parameters), ["role", "config"]
-        )
+        self.assertEqual(list(inspect.signature(snr.Node).parameters), ["role", "config"])
 
     def test_timeout_factory_shows_its_arguments(self) -> None:
         self.assertEqual(
             str(inspect.signature(snr.TimeoutLoopFactory)),
-            "(seconds: 'float' = 0.0, ms: 'float' = 0.0, name: 'Optional[str]' = None)"
-            " -> None",
+            "(seconds: 'float' = 0.0, ms: 'float' = 0.0, name: 'Optional[str]' = None) -> None",
         )
 
     def test_help_shows_the_signature(self) -> None:

@@ -366,4 +366,3 @@ class SequenceFollower:
         if len(runs) > _MAX_DROPPED_RUNS:  # join the two oldest (what lay between them counts too)
             runs[0][1] = runs[1][1]
             del runs[1]
-
