@@ -88,6 +88,19 @@ def endpoint(port: int) -> str:
     return f"tcp/127.0.0.1:{port}"
 
 
+def start_router(test: unittest.TestCase) -> str:
+    """A Zenoh router in this process, standing in for zenohd; its endpoint (closed at cleanup)."""
+    zenoh = _zenoh_module()
+    ep = endpoint(free_port())
+    config = zenoh.Config()
+    config.insert_json5("mode", '"router"')
+    config.insert_json5("scouting/multicast/enabled", "false")
+    config.insert_json5("listen/endpoints", json.dumps([ep]))
+    router = zenoh.open(config)
+    test.addCleanup(router.close)
+    return ep
+
+
 def comms(system: str, **kwargs: Any) -> Any:
     """A ZenohCommsFactory as the tests use it: no multicast, explicit endpoints."""
     return ZenohCommsFactory(system, scouting=False, **kwargs)
@@ -799,15 +812,7 @@ class TestZenohInOneProcess(unittest.TestCase):
         self.assertEqual((stranger["received"], stranger["peers"]), (0, []))
 
     def test_nodes_in_client_mode_talk_through_a_router(self) -> None:
-        # A Zenoh router in this process stands in for zenohd (where multicast is blocked).
-        zenoh = _zenoh_module()
-        ep = endpoint(free_port())
-        config = zenoh.Config()
-        config.insert_json5("mode", '"router"')
-        config.insert_json5("scouting/multicast/enabled", "false")
-        config.insert_json5("listen/endpoints", json.dumps([ep]))
-        router = zenoh.open(config)
-        self.addCleanup(router.close)
+        ep = start_router(self)  # zenohd, where multicast is blocked
         nodes = self.run_nodes(
             {
                 "topside": [

@@ -182,6 +182,28 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         self.assertEqual(lonely.roles(timeout_s=0.1), [])
         self.assertLess(time.monotonic() - started, 5.0, "bounded by the console's timeout")
 
+    def test_a_console_through_a_router_meets_it_at_once_in_either_mode(self) -> None:
+        from snr.std_mods.io.zenoh_console import ZenohConsole, ZenohConsoleFactory
+        from tests.test_comms_zenoh import start_router
+
+        router_ep = start_router(self)
+        arm = [
+            ZenohConsoleFactory(SYSTEM, mode="client", connect=[router_ep], scouting=False),
+            TimeoutLoopFactory(seconds=15),
+        ]
+        arm_node = LocalNodes(Config({"arm": arm}, mode=Mode.TEST), ["arm"])
+        self.addCleanup(arm_node.stop)
+        for mode in ("client", "peer"):  # a peer meets the router as a router, not a peer
+            console = ZenohConsole(
+                SYSTEM, "arm", mode=mode, connect=[router_ep], scouting=False, timeout_s=5.0
+            )
+            self.addCleanup(console.close)
+            started = time.monotonic()
+            console._open()
+            self.assertLess(time.monotonic() - started, 1.0, f"{mode}: met, not timed out")
+            self.assertEqual(len(list(console.session.info.routers_zid())), 1, mode)
+            self.assertTrue(wait_until(lambda: console.roles() == ["arm"]), mode)  # noqa: B023
+
     def test_a_node_that_does_not_reply_in_time_is_named_and_the_command_fails(self) -> None:
         import snr.console
         from snr.std_mods.io.console_protocol import Status

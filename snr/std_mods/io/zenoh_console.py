@@ -405,16 +405,14 @@ class ZenohConsole(RemoteConsole):
         if not self._connect:
             return  # scouting: there is no knowing how many nodes will answer
         info = self.session.info
-        # A client connects to one router; a peer to every endpoint.
-        if self._mode == "client":
-            wanted, met = 1, info.routers_zid
-        else:
-            wanted, met = len(self._connect), info.peers_zid
+        # A client connects to one router; a peer to every endpoint (peers or routers).
+        wanted = 1 if self._mode == "client" else len(self._connect)
         started = time.monotonic()
         deadline = started + min(self.timeout_s, _MEET_ENDPOINTS_S)
         count, counted_at = 0, started
         while True:
-            now, latest = time.monotonic(), len(list(met()))
+            now = time.monotonic()
+            latest = len(list(info.peers_zid())) + len(list(info.routers_zid()))
             if latest != count:
                 count, counted_at = latest, now
             # Done once all are met; or when some are and no other came for a while
