@@ -333,9 +333,9 @@ class TestZenohCounting(unittest.TestCase):
         sender, other = b"A" * 8, b"B" * 8
         with self.assertLogs("snr", "WARNING") as logs:
             for count in (1, 2, 5, 6):  # 3 and 4 never came
-                self.comms._follow_sequence("depth", count_attachment(sender, count))
-            self.comms._follow_sequence("depth", count_attachment(other, 7))  # a newcomer
-            self.comms._follow_sequence("depth", b"not a count")  # ignored
+                self.comms._follow_sequences([("depth", count_attachment(sender, count))])
+            self.comms._follow_sequences([("depth", count_attachment(other, 7))])  # a newcomer
+            self.comms._follow_sequences([("depth", b"not a count")])  # ignored
         self.assertEqual(self.comms.stats()["lost"], 2)
         self.assertIn("Lost 2 pages from Zenoh", logs.output[0])
 
@@ -345,15 +345,19 @@ class TestZenohCounting(unittest.TestCase):
         def attached(data: int, attachment: bytes) -> Any:
             return sample_of(data, mock.Mock(to_bytes=lambda: attachment))
 
+        def page_of(sample: Any) -> Any:
+            pages = comms._pages_of([sample])
+            return pages[0] if pages else None
+
         # A plain Zenoh program's own 16 bytes (the old shape of SNR's count).
         for i, data in enumerate((1, 2)):
-            page = comms._page_of(attached(data, struct.pack(">8sQ", b"plainapp", i * 10**9)))
+            page = page_of(attached(data, struct.pack(">8sQ", b"plainapp", i * 10**9)))
             self.assertEqual(page.data if page else None, data)
         self.assertEqual(comms.stats()["lost"], 0, "not an SNR count: no gap")
         # "snr-wake" from elsewhere is a page (only this process's own wake-ups are not).
-        page = comms._page_of(attached(3, b"snr-wake"))
+        page = page_of(attached(3, b"snr-wake"))
         self.assertEqual(page.data if page else None, 3)
-        self.assertIsNone(comms._page_of(attached(4, WAKE)), "our own wake-up is no page")
+        self.assertIsNone(page_of(attached(4, WAKE)), "our own wake-up is no page")
         self.assertEqual(comms.stats()["received"], 3)
 
     def test_pages_dropped_here_are_not_counted_again_as_lost(self) -> None:

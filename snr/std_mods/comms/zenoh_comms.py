@@ -997,21 +997,12 @@ class ZenohComms(Endpoint):
         self.received += len(pages)
         return pages
 
-    def _page_of(self, sample: zenoh.Sample) -> Optional[Page]:
-        """`_pages_of` for one sample: its page, or None."""
-        pages = self._pages_of([sample])
-        return pages[0] if pages else None
-
     def _follow_sequences(self, counted: Sequence[Tuple[str, bytes]]) -> None:
         lost = self._sequences.taken_all(counted)
         if lost:
             self.lost_report.dropped(lost)
         elif self.lost_report.dropping and time.monotonic() - self.lost_report.last_drop > 1.0:
             self.lost_report.recovered()
-
-    def _follow_sequence(self, key: str, attachment: bytes) -> None:
-        """`_follow_sequences` for one sample's count."""
-        self._follow_sequences([(key, attachment)])
 
     def _bad_sample(self, key_expr: str, error: WireFormatError) -> None:
         self.bad_samples += 1

@@ -42,8 +42,6 @@ SEQUENCE = struct.Struct(">4s8sQ")
 """An SNR sender's attachment on a page: `COUNT_MARK`, its random id, then its count of pages
 under the key (20 bytes). Made by `count_attachment`, read by `read_count`."""
 
-_SENDER_END = 12  # SEQUENCE's mark and sender id end here; the count follows
-
 WAKE = b"snr-wake-" + os.urandom(8)
 """The attachment of a sample that only wakes a node's thread (`IdleReader`).
 
@@ -335,7 +333,7 @@ class SequenceFollower:
         for key, attachment in counted:
             if attachment == expected and key == run_key:
                 count += 1
-                expected = attachment[:_SENDER_END] + (count + 1).to_bytes(8, "big")
+                expected = count_attachment(sender, count + 1)
                 continue
             if run_key is not None:
                 self._last[(sender, run_key)] = count  # the run ended: no gap inside it
@@ -346,7 +344,7 @@ class SequenceFollower:
             sender, count = numbered
             lost += self.taken(sender, key, count)
             run_key = key
-            expected = attachment[:_SENDER_END] + (count + 1).to_bytes(8, "big")
+            expected = count_attachment(sender, count + 1)
         if run_key is not None:
             self._last[(sender, run_key)] = count
         return lost

@@ -451,8 +451,8 @@ class ZenohConsole(RemoteConsole):
         self._tokened |= alive
         # Alive, yet neither known nor answering: it joined and is busy. Greet it
         # (Zenoh's thread answers greetings), so it is named below, not left out.
-        unknown = alive - answers.keys() - set(self._greeted) - self._refused.keys()
-        self._meet({role: Reply(Status.ERROR, "") for role in sorted(unknown)}, timeout_s)
+        for role in sorted(alive - answers.keys() - set(self._greeted) - self._refused.keys()):
+            self._greet(role, timeout_s)
         by_role = {  # a node that refused the console refuses each command the same way
             role: reply for role, reply in answers.items() if role not in self._refused
         }
@@ -478,13 +478,19 @@ class ZenohConsole(RemoteConsole):
             if role in self._greeted or role in self._refused:
                 continue
             if reply.status is Status.ERROR:
-                greeting = self._answers("", timeout_s, role).get(role)
-                if greeting is None:  # gone again: learn about it next time
-                    continue
-                if greeting.status is not Status.HELLO:
-                    self._refused[role] = _refusal(greeting.text)
-                    continue
+                self._greet(role, timeout_s)
+            else:
+                self._greeted = sorted([*self._greeted, role])
+
+    def _greet(self, role: str, timeout_s: float) -> None:
+        """Greet ``role`` alone: it is greeted, or refused (a token); if silent, asked next time."""
+        greeting = self._answers("", timeout_s, role).get(role)
+        if greeting is None:  # gone again: learn about it next time
+            return
+        if greeting.status is Status.HELLO:
             self._greeted = sorted([*self._greeted, role])
+        else:
+            self._refused[role] = _refusal(greeting.text)
 
     def _no_reply(self, role: str, timeout_s: float, alive: Set[str]) -> str:
         """Why a node that greeted this console has no reply, and what to do about it."""
