@@ -29,11 +29,16 @@ __all__ = ["main"]
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Entry point of ``python -m snr`` and the ``snr`` command."""
-    parser = argparse.ArgumentParser(prog="snr", description="SNR is Not ROS")
-    sub = parser.add_subparsers(dest="command", metavar="COMMAND")
+    parser = argparse.ArgumentParser(
+        prog="snr",
+        description="SNR is Not ROS: a pure-Python robotics framework for teaching.",
+        epilog="Run 'snr COMMAND --help' for a command's options.",
+    )
+    sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
     demo_parser = sub.add_parser(
         "demo",
-        help="run the demo system of nodes",
+        help="run a demo, no hardware needed: the UROV of the thesis (two nodes over "
+        "TCP), or with --sim a simulated rover that follows walls",
         description="By default: the UROV of the thesis, two nodes in two processes "
         "talking over TCP, which is what SNR is for. --sim: one node, a simulated rover "
         "driven by the wall follower of the first lesson (docs/lessons.md).",
@@ -63,8 +68,19 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         default=None,
         help="with --sim: write PNG frames to DIR instead of opening a window",
     )
-    sub.add_parser("console", help="type commands into a running node (same as snr-console)")
-    docs_parser = sub.add_parser("docs", help="build (if needed) and open the docs offline")
+    # Never parsed here: `snr console ...` goes to snr.console.main, whose help is its own.
+    sub.add_parser(
+        "console",
+        help="type commands into a running node, by HOST:PORT or, with --zenoh, by its "
+        "role (the same as snr-console)",
+    )
+    docs_parser = sub.add_parser(
+        "docs",
+        help="build (if needed) and open SNR's docs, the guide and the API reference, offline",
+        description="Build SNR's documentation, the guide and the API reference, as HTML "
+        "(only if a page or the code changed since the last build), then open it in a "
+        "browser, to read offline; --serve serves it on http://127.0.0.1 instead.",
+    )
     graph_parser = sub.add_parser(
         "graph",
         usage="snr graph FILE [--role ROLE] [--format {mermaid,dot,text}] [-- ARGS...]",
@@ -82,12 +98,20 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "--format", choices=["mermaid", "dot", "text"], default="mermaid", help="default mermaid"
     )
     convert_parser = sub.add_parser(
-        "convert", help="convert a recording between JSON lines and MCAP (*.mcap)"
+        "convert",
+        help="convert a recording between JSON lines and MCAP (*.mcap)",
+        description="Convert a recording of pages: JSON lines to MCAP, or MCAP to JSON "
+        "lines. The source's format is read from its first bytes, the target's from its "
+        "name (*.mcap: MCAP, anything else: JSON lines).",
     )
-    sub.add_parser("version", help="print the SNR version")
+    sub.add_parser(
+        "version",
+        help="print the installed SNR version",
+        description="Print the version of the SNR that 'import snr' finds.",
+    )
     words = list(sys.argv[1:] if argv is None else argv)
     if words[:1] == ["console"]:  # its own options, e.g. --token, go to snr-console
-        return snr.console.main(words[1:])
+        return snr.console.main(words[1:], prog="snr console")
     file_args: List[str] = []
     if words[:1] == ["graph"] and "--" in words:  # what follows `--` is FILE's own
         file_args = words[words.index("--") + 1 :]

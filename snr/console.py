@@ -24,8 +24,12 @@ def main(
     stdin: Optional[IO[str]] = None,
     stdout: Optional[IO[str]] = None,
     stderr: Optional[IO[str]] = None,
+    prog: str = "snr-console",
 ) -> int:
     """Entry point of ``snr-console``: over TCP, or over Zenoh with ``--zenoh``.
+
+    ``prog`` is the command's name in its usage and messages: ``python -m snr
+    console`` passes ``"snr console"``, so its help shows what was typed.
 
     Example::
 
@@ -35,8 +39,8 @@ def main(
     if any(word == "--zenoh" or word.startswith("--zenoh=") for word in words):
         from snr.std_mods.io import zenoh_console  # needs the zenoh extra
 
-        return zenoh_console.main(words, stdin, stdout, stderr)
-    return remote_console.main(words, stdin, stdout, stderr)
+        return zenoh_console.main(words, stdin, stdout, stderr, prog)
+    return remote_console.main(words, stdin, stdout, stderr, prog)
 
 
 if __name__ == "__main__":

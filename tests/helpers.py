@@ -2,10 +2,12 @@
 
 from __future__ import annotations
 
+import contextlib
 import os
 import socket
+import sys
 import time
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple, TypeVar
+from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple, TypeVar
 
 from snr import (
     AbstractNode,
@@ -22,6 +24,20 @@ from snr import (
 
 Log = List[Tuple[str, Any]]
 T = TypeVar("T")
+
+
+@contextlib.contextmanager
+def no_pygame() -> Iterator[None]:
+    """Within the block, ``import pygame`` fails as if it were not installed."""
+    saved = sys.modules.get("pygame")
+    sys.modules["pygame"] = None  # type: ignore[assignment]
+    try:
+        yield
+    finally:
+        if saved is None:
+            del sys.modules["pygame"]
+        else:
+            sys.modules["pygame"] = saved
 
 
 def wait_until(condition: Callable[[], T], timeout_s: float = 5.0) -> T:

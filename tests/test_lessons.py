@@ -41,6 +41,7 @@ from snr.std_mods.sim import (
     WHEEL_ENCODERS,
     DiffDriveRobot,
 )
+from snr.std_mods.sim.draw import NO_PICTURES
 from snr.utils import SNRTestCase
 from tests.examples_support import (
     StartedScript,
@@ -50,6 +51,7 @@ from tests.examples_support import (
     script_env,
     start_script,
 )
+from tests.helpers import no_pygame
 from tests.page_collector import PageCollectorFactory
 from tests.quiet import captured_logs
 
@@ -192,22 +194,31 @@ class TestRunAsAStudentDoes(SNRTestCase):
         argv = ["lesson.py", "--seconds", str(seconds), "--frames", str(frames), *options]
         with captured_logs("snr.sim") as lines, contextlib.redirect_stdout(out):
             lesson.main(argv)
+        # No warning, with pygame or without: without, the lesson says so on stdout.
         problems = [line for line in lines if not line.startswith("INFO")]
-        if HAS_PYGAME:
-            self.assertEqual(problems, [], lines)
-        else:  # the simulator drives unseen, and says how to see it
-            self.assertEqual(len(problems), 1, lines)
-            self.assertIn("pip install 'snr[controller]'", problems[0])
+        self.assertEqual(problems, [], lines)
         return out.getvalue(), frames
 
     def test_the_wall_follower_sets_off_in_real_time(self) -> None:
         text, frames = self.run_main(wall_follower, 0.4)  # the default: --speed 1
-        self.assertIn(f"Pictures: PNG frames in {frames.resolve()}", text)
         simulated_s, x = summary(r"After ([\d.]+) s the robot is at \(([\d.]+), ", text)
         self.assertEqual(simulated_s, 0.4, text)  # simulated time: however busy the machine
         self.assertGreater(x, 0.5, text)  # it set off east from x = 0.5
-        if HAS_PYGAME:  # a frame at 0.0, 0.1, ... 0.4 simulated s
+        if HAS_PYGAME:  # a frame at 0.0, 0.1, ... 0.4 simulated s, where it said
+            self.assertIn(f"Pictures: PNG frames in {frames.resolve()}", text)
             self.assertEqual(len(list(frames.glob("frame_*.png"))), 5, "frames written")
+        else:
+            self.assertIn(NO_PICTURES, text)
+
+    def test_without_pygame_a_lesson_says_so_once_and_promises_no_frames(self) -> None:
+        for lesson in (wall_follower, go_to_goal):
+            with self.subTest(lesson=lesson.__name__):
+                with no_pygame():
+                    text, frames = self.run_main(lesson, 0.2, "--speed", "0")
+                self.assertEqual(text.count(NO_PICTURES), 1, text)
+                self.assertNotIn("Pictures:", text)
+                self.assertNotIn("frames", text)
+                self.assertFalse(frames.exists(), f"{frames} was made, but nothing is drawn")
 
     def test_go_to_goal_sets_off_as_fast_as_it_can(self) -> None:
         text, _ = self.run_main(go_to_goal, 0.4, "--speed", "0")
@@ -239,12 +250,30 @@ def _start_sim_demo() -> Tuple[Path, Optional[StartedScript]]:
     return folder, start_script(command, cwd=str(folder), env=env)
 
 
-# Started when this module is imported (`early`); it runs while other tests do.
+# `python -m snr demo --sim` where ``import pygame`` fails, as in a plain install.
+RUN_SIM_DEMO_WITHOUT_PYGAME = (
+    "import runpy, sys\n"
+    "sys.modules['pygame'] = None  # import pygame: ImportError\n"
+    "sys.argv = ['snr', 'demo', '--sim', *sys.argv[1:]]\n"
+    "runpy.run_module('snr', run_name='__main__', alter_sys=True)\n"
+)
+
+
+def _start_sim_demo_without_pygame() -> Tuple[Path, StartedScript]:
+    """``python -m snr demo --sim`` for 0.5 s in a temp folder, as if pygame were missing."""
+    folder = Path(tempfile.mkdtemp(prefix="snr-sim-demo-no-pygame-"))
+    command = ["-c", RUN_SIM_DEMO_WITHOUT_PYGAME, "--seconds", "0.5"]
+    return folder, start_script(command, cwd=str(folder))
+
+
+# Started when this module is imported (`early`); they run while other tests do.
 SIM_DEMO = early(_start_sim_demo)
+SIM_DEMO_WITHOUT_PYGAME = early(_start_sim_demo_without_pygame)
 
 
 def setUpModule() -> None:
     SIM_DEMO()  # (started already, unless in a pytest-xdist worker)
+    SIM_DEMO_WITHOUT_PYGAME()
 
 
 @unittest.skipUnless(HAS_PYGAME, "pygame is not installed: the demo would draw nothing")
@@ -264,6 +293,27 @@ class TestSimDemo(SNRTestCase):
         self.assertGreater(x, 0.5, result.stdout)  # it set off from x = 0.5
         self.assertTrue(list(frames.glob("frame_*.png")), result.stdout)
         self.assertEqual(result.stderr, "", "quiet unless --verbose")
+        self.assertNotIn("draws nothing", result.stdout)
+
+
+class TestSimDemoWithoutPygame(unittest.TestCase):
+    def test_it_drives_unseen_says_so_once_and_makes_no_frames_folder(self) -> None:
+        folder, demo = SIM_DEMO_WITHOUT_PYGAME()
+        result = demo.result()
+        self.addCleanup(shutil.rmtree, folder, True)
+        self.assertEqual(result.returncode, 0, result.stderr)
+        lines = result.stdout.splitlines()
+        self.assertTrue(lines[0].startswith("SNR demo --sim: "), result.stdout)
+        # One true thing: it runs without drawing, and how to get pictures.
+        self.assertEqual(lines[1], NO_PICTURES, result.stdout)
+        self.assertIn("Install pygame to see it", NO_PICTURES)
+        self.assertEqual(result.stdout.count("draws nothing"), 1, result.stdout)
+        self.assertNotIn("frames", result.stdout)
+        self.assertEqual(result.stderr, "", "said once, on stdout; the log adds nothing")
+        self.assertEqual(list(folder.iterdir()), [], "no sim_frames folder: nothing is drawn")
+        simulated_s, x = summary(r"After ([\d.]+) s the robot is at \(([\d.]+), ", lines[-1])
+        self.assertEqual(simulated_s, 0.5, result.stdout)
+        self.assertGreater(x, 0.5, result.stdout)  # it drove all the same
 
 
 if __name__ == "__main__":

@@ -6,13 +6,11 @@ dummy video driver is set in case anything asks for a window.
 
 from __future__ import annotations
 
-import contextlib
 import importlib
 import os
-import sys
 import unittest
 from pathlib import Path
-from typing import Any, Callable, Iterator
+from typing import Any, Callable
 
 os.environ["SDL_VIDEODRIVER"] = "dummy"  # before pygame is imported
 os.environ["PYGAME_HIDE_SUPPORT_PROMPT"] = "1"
@@ -22,7 +20,7 @@ from snr.prelude import ComponentError
 from snr.std_mods.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
 from snr.std_mods.sim.draw import WALL, WorldView, import_pygame, render_scene, save_png
 from tests.examples_support import example_path, load_module
-from tests.helpers import StopWhenFactory
+from tests.helpers import StopWhenFactory, no_pygame
 from tests.optional import needs
 
 try:
@@ -31,20 +29,6 @@ except ImportError:
     pygame = None
 
 rover: Any = load_module(example_path("rover", "main.py"), "rover_example_under_test")
-
-
-@contextlib.contextmanager
-def no_pygame() -> Iterator[None]:
-    """Within the block, ``import pygame`` fails as if it were not installed."""
-    saved = sys.modules.get("pygame")
-    sys.modules["pygame"] = None  # type: ignore[assignment]
-    try:
-        yield
-    finally:
-        if saved is None:
-            del sys.modules["pygame"]
-        else:
-            sys.modules["pygame"] = saved
 
 
 def pixels_of(surface: Any, color: Any) -> int:

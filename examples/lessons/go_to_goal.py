@@ -5,7 +5,8 @@ brain, `GoToGoalEndpoint`, knows where it is only from its ``odometry`` page
 (dead reckoning from the wheel encoders) and sees the crate only with its
 range sensors, as a real rover would.
 
-Run it (a window if you have a screen, else PNG frames in ``sim_frames/``)::
+Run it (a window if you have a screen, else PNG frames in ``sim_frames/``;
+without pygame it runs undrawn, and says so)::
 
     python examples/lessons/go_to_goal.py --seconds 30
     python examples/lessons/go_to_goal.py --seconds 5 --frames my_frames
@@ -22,6 +23,7 @@ from typing import Any, Dict, List, Optional, Tuple
 
 import snr
 from snr import AbstractNode, Endpoint, EndpointFactory, SomeTasks, Task, TaskId, TaskType
+from snr.std_mods.sim.draw import NO_PICTURES, pygame_installed
 
 __all__ = ["GoToGoalEndpoint", "GoToGoalFactory", "main", "make_world", "run", "wrap"]
 
@@ -197,9 +199,13 @@ def run(
         view = snr.SimViewFactory(world)
     else:
         view = snr.SimViewFactory(world, frames_dir=frames_dir, window=False)
-    if not view.window:
-        print(f"Pictures: PNG frames in {Path(view.frames_dir).resolve()}", flush=True)
-    components = [sim, view, GoToGoalFactory(world.goal), snr.TimeoutLoopFactory(seconds=seconds)]
+    components = [sim, GoToGoalFactory(world.goal), snr.TimeoutLoopFactory(seconds=seconds)]
+    if not pygame_installed():  # said once, here; no view, so no folder and no warning
+        print(NO_PICTURES, flush=True)
+    else:
+        components.append(view)
+        if not view.window:
+            print(f"Pictures: PNG frames in {Path(view.frames_dir).resolve()}", flush=True)
     clock = snr.SimClock(speed=speed)
     snr.SynchronousRunner("sim", snr.Config({"sim": components}, clock=clock)).run()
     pose = sim.robot.pose

@@ -5,7 +5,8 @@ it all the way round the room. Its brain, `WallFollowerEndpoint`, is a
 proportional controller: it steers by an amount proportional to how far it
 is from where it wants to be.
 
-Run it (a window if you have a screen, else PNG frames in ``sim_frames/``)::
+Run it (a window if you have a screen, else PNG frames in ``sim_frames/``;
+without pygame it runs undrawn, and says so)::
 
     python examples/lessons/wall_follower.py --seconds 30
     python examples/lessons/wall_follower.py --seconds 5 --frames my_frames
@@ -29,6 +30,7 @@ from typing import Any, Dict, List, Optional
 import snr
 from snr import AbstractNode, Endpoint, EndpointFactory, SomeTasks, Task, TaskId, TaskType
 from snr.std_mods.sim import run_in_window
+from snr.std_mods.sim.draw import NO_PICTURES, pygame_installed
 
 __all__ = ["WallFollowerEndpoint", "WallFollowerFactory", "main", "make_world", "run"]
 
@@ -139,7 +141,8 @@ def run(
     With ``frames_dir`` the view writes PNG frames there; without it, a
     window if there is a screen (drawn on this thread, which must be the
     main one on macOS, while the node runs on another), else frames in
-    ``sim_frames/``.
+    ``sim_frames/``. Without pygame nothing is drawn: it says so, and how to
+    get pictures, and makes no folder.
 
     The node runs on a `SimClock`, ``speed`` simulated seconds per real
     second (1.0: real time; None: as fast as the computer can), so ``seconds``
@@ -158,7 +161,10 @@ def run(
         view = snr.SimViewFactory(world, frames_dir=frames_dir, window=False)
     brain = [WallFollowerFactory(), snr.TimeoutLoopFactory(seconds=seconds)]
     clock = snr.SimClock(speed=speed)
-    if view.window:
+    if not pygame_installed():  # said once, here; no view, so no folder and no warning
+        print(NO_PICTURES, flush=True)
+        snr.SynchronousRunner("sim", snr.Config({"sim": [sim, *brain]}, clock=clock)).run()
+    elif view.window:
         # The window on this (the main) thread, as macOS requires; the node beside it.
         run_in_window("sim", snr.Config({"sim": [sim, *brain]}, clock=clock), view)
     else:

@@ -382,13 +382,15 @@ def add_session_options(parser: argparse.ArgumentParser) -> None:
     )
 
 
-def _parser() -> argparse.ArgumentParser:
+def _parser(prog: str) -> argparse.ArgumentParser:
     import argparse  # here, not at the top: only the snr-console command parses arguments
 
     parser = argparse.ArgumentParser(
-        prog="snr-console",
+        prog=prog,
         description="Send commands to a running SNR node (one with a CommandReceiverFactory).",
-        epilog="Inside the console, type 'help' for the node's commands.",
+        epilog="Inside the console, type 'help' for the node's commands. To reach a node "
+        f"by its role over Zenoh instead: {prog} --zenoh SYSTEM [ROLE] "
+        f"(its options: {prog} --zenoh SYSTEM --help).",
     )
     parser.add_argument(
         "address",
@@ -406,8 +408,12 @@ def main(
     stdin: Optional[IO[str]] = None,
     stdout: Optional[IO[str]] = None,
     stderr: Optional[IO[str]] = None,
+    prog: str = "snr-console",
 ) -> int:
     """Entry point of ``snr-console``; returns the exit code.
+
+    ``prog``: the command's name in its usage and messages (``"snr console"``
+    when reached through ``python -m snr``).
 
     Example::
 
@@ -415,16 +421,16 @@ def main(
     """
     err = stderr if stderr is not None else sys.stderr
     out = stdout if stdout is not None else sys.stdout
-    parser = _parser()
+    parser = _parser(prog)
     args = parser.parse_args(argv)
     try:
         host, port = parse_address(args.address)
     except ValueError as error:
         parser.print_usage(err)
-        _say(err, f"snr-console: error: {error}")
+        _say(err, f"{prog}: error: {error}")
         return EXIT_USAGE
     console = RemoteConsole(host, port, args.token, args.timeout)
-    return run_console(console, args.command, stdin, out, err)
+    return run_console(console, args.command, stdin, out, err, prog)
 
 
 def run_console(
@@ -433,8 +439,11 @@ def run_console(
     stdin: Optional[IO[str]],
     out: IO[str],
     err: IO[str],
+    prog: str = "snr-console",
 ) -> int:
     """Connect, then run ``commands``, or what stdin gives (typed, or piped); the exit code.
+
+    ``prog`` begins each error message: the name of the command that was typed.
 
     Example::
 
@@ -450,10 +459,10 @@ def run_console(
             return console.interact(output=out)
         return _run_commands(console, (line.strip() for line in source), out)
     except ConsoleConnectionError as error:
-        _say(err, f"snr-console: {error}")
+        _say(err, f"{prog}: {error}")
         return EXIT_CONNECTION
     except KeyboardInterrupt:  # while waiting for a reply: leave (the node keeps running)
-        _say(err, "\nsnr-console: interrupted.")
+        _say(err, f"\n{prog}: interrupted.")
         return EXIT_INTERRUPTED
     finally:
         console.close()

@@ -624,9 +624,10 @@ def _refusal(text: str) -> str:
     return f"refused: {why[:1].lower()}{why[1:]}{hint}"
 
 
-def _parser() -> argparse.ArgumentParser:
+def _parser(prog: str) -> argparse.ArgumentParser:
+    # The usage line shows --zenoh SYSTEM itself, so prog is the command alone.
     parser = argparse.ArgumentParser(
-        prog="snr console --zenoh",
+        prog=prog,
         description="Type commands into a node of a system, found by its role over Zenoh.",
     )
     parser.add_argument("--zenoh", metavar="SYSTEM", required=True, help="the system's name")
@@ -670,8 +671,12 @@ def main(
     stdin: Optional[IO[str]] = None,
     stdout: Optional[IO[str]] = None,
     stderr: Optional[IO[str]] = None,
+    prog: str = "snr-console",
 ) -> int:
     """``python -m snr console --zenoh SYSTEM [ROLE]``; returns the exit code.
+
+    ``prog``: the command's name in its usage and messages (``"snr console"``
+    when reached through ``python -m snr``, as `snr.console.main` passes it).
 
     Example::
 
@@ -679,7 +684,7 @@ def main(
     """
     out = stdout if stdout is not None else sys.stdout
     err = stderr if stderr is not None else sys.stderr
-    args = _parser().parse_args(argv)
+    args = _parser(prog).parse_args(argv)
     try:
         console = ZenohConsole(
             args.zenoh,
@@ -692,7 +697,7 @@ def main(
             timeout_s=args.timeout,
         )
     except Exception as error:  # a ConfigError: no zenoh, a bad endpoint
-        _say(err, f"snr console: {error}")
+        _say(err, f"{prog}: {error}")
         return EXIT_CONNECTION
     if args.role is None and not args.command:
         try:
@@ -702,4 +707,4 @@ def main(
         found = ", ".join(roles) or "none"
         _say(out, f"Nodes of system {args.zenoh!r} with a Zenoh console: {found}")
         return EXIT_OK if roles else EXIT_CONNECTION
-    return run_console(console, args.command, stdin, out, err)
+    return run_console(console, args.command, stdin, out, err, prog)

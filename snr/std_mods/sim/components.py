@@ -33,7 +33,7 @@ from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.prelude import AbstractNode, ComponentError
 from snr.std_mods.io.keyboard import KeyboardJoystick
 from snr.std_mods.sim.draw import (
-    INSTALL_HINT,
+    NO_PICTURES,
     Scene,
     import_pygame,
     open_window,
@@ -193,10 +193,7 @@ class SimViewLoop(ThreadLoop):
         try:
             pygame = import_pygame()
         except ComponentError:
-            self.warn(
-                "The simulator runs, but draws nothing: pygame is not installed. %s.",
-                INSTALL_HINT,
-            )
+            self.warn("%s", NO_PICTURES)
             self.set_terminate_flag("no pygame")
             return
         self.scene = self.settings.scene(pygame)

@@ -35,10 +35,12 @@ from snr.std_mods.sim.world import World
 
 __all__ = [
     "INSTALL_HINT",
+    "NO_PICTURES",
     "Scene",
     "WorldView",
     "import_pygame",
     "open_window",
+    "pygame_installed",
     "render_scene",
     "save_png",
     "window_closed",
@@ -48,6 +50,9 @@ INSTALL_HINT = (
     "Install pygame to see it: `pip install 'snr[controller]'` (or `pip install pygame`; "
     "on Raspberry Pi OS `sudo apt install python3-pygame`)"
 )
+
+NO_PICTURES = f"The simulator runs, but draws nothing: pygame is not installed. {INSTALL_HINT}."
+"""What a simulator says, once, when it runs without pygame: no window, no PNG frames."""
 
 Color = Tuple[int, int, int]
 BACKGROUND: Color = (250, 250, 245)
@@ -76,6 +81,24 @@ def import_pygame() -> ModuleType:
             f"Drawing the simulator needs pygame, which is not installed. {INSTALL_HINT}. "
             "The simulation itself runs without it."
         ) from error
+
+
+def pygame_installed() -> bool:
+    """True if pygame imports, so the simulator can draw: a window or PNG frames.
+
+    A program asks before it promises pictures: without pygame it says
+    `NO_PICTURES` instead of naming a folder that will never be made.
+
+    Example::
+
+        if not pygame_installed():
+            print(NO_PICTURES)
+    """
+    try:
+        import_pygame()
+    except ComponentError:
+        return False
+    return True
 
 
 class WorldView:

@@ -24,7 +24,7 @@ from typing import List
 from snr.core import Node, tasks
 from snr.prelude import AbstractConfig, ComponentError, Role
 from snr.std_mods.sim.components import SimViewFactory
-from snr.std_mods.sim.draw import INSTALL_HINT, import_pygame, open_window, window_closed
+from snr.std_mods.sim.draw import NO_PICTURES, import_pygame, open_window, window_closed
 
 __all__ = ["run_in_window"]
 
@@ -49,7 +49,7 @@ def run_in_window(role: Role, config: AbstractConfig, view: SimViewFactory) -> N
     try:
         pygame = import_pygame()
     except ComponentError:
-        node.log.warning("The simulator runs, but draws nothing: %s.", INSTALL_HINT)
+        node.log.warning("%s", NO_PICTURES)
         node.loop()
         return node
     failures: List[BaseException] = []
