@@ -33,7 +33,8 @@ from snr.core.checks.explain import (
     wrong_get_result_error,
     wrong_get_signature,
 )
-from snr.core.dispatch import HandlerTable, check_burst_handlers
+from snr.core.checks.handler_checks import check_burst_handlers
+from snr.core.dispatch import HandlerTable
 from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
     AbstractComponent,
