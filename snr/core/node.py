@@ -294,7 +294,7 @@ class Node(AbstractNode):
         run_queued = self._runner.run_queued
         step_mode = self.step_mode
         while self._running:
-            if step_mode.paused:  # a console paused the node: see step_mode.py
+            if step_mode.paused:  # a console paused the node: see checks/step_mode.py
                 step_mode.run_paused(self.idle_wake_s)
                 continue
             run_queued()
