@@ -51,6 +51,7 @@ from snr import (
     tasks,
 )
 from snr.core import MissingKeyHints
+from snr.core.checks.os_errors import OsAction, explain_os_error
 from snr.prelude import (
     CommsError,
     ComponentError,
@@ -61,7 +62,6 @@ from snr.prelude import (
     ThreadSafetyError,
 )
 from snr.prelude.not_serializable import not_serializable_error
-from snr.prelude.os_errors import OsAction, explain_os_error
 from snr.std_mods.codec import page_json, page_to_line
 from snr.std_mods.comms import serial_port
 from snr.std_mods.comms.board_protocol import compact_line

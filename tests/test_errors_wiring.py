@@ -33,7 +33,7 @@ from snr import (
     tasks,
 )
 from snr.core import MissingKeyHints
-from snr.core.explain import returning_lines
+from snr.core.checks.explain import returning_lines
 from snr.prelude import ComponentError, HandlerError, MissingSuperInitError
 from snr.std_mods.comms.link_hints import watch_link
 from tests.helpers import FactoryOf, free_port

@@ -15,7 +15,7 @@ from snr import (
     ThreadLoop,
     TimeoutLoopFactory,
 )
-from snr.core.profiler import Profiler
+from snr.core.checks.profiler import Profiler
 from tests.helpers import LoopFactoryOf, StopWhenFactory
 
 SHARE = re.compile(r" -> +([\d.]+)%: ")

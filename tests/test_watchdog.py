@@ -47,7 +47,7 @@ FAST_WATCHDOG = textwrap.dedent(
     """
     import runpy, sys
     from snr.core.node import Node
-    from snr.core.watchdog import Watchdog
+    from snr.core.checks.watchdog import Watchdog
     Watchdog.every_s, Watchdog.stuck_s, Watchdog.idle_s = 0.01, 0.1, 0.15
     Node.max_queued_tasks = 1000
     sys.argv = sys.argv[1:]

@@ -19,31 +19,30 @@ from snr.core import (
     dispatch,
     endpoint,
     factory,
-    key_hints,
     logs,
     loop,
     moving_avg_filter,
     node,
     node_core,
-    profiler,
     runners,
     sim_clock,
     task_queue,
     tasks,
     timer,
 )
+from snr.core.checks import key_hints, profiler
+from snr.core.checks.key_hints import *
+from snr.core.checks.profiler import *
 from snr.core.component import *
 from snr.core.config import *
 from snr.core.dispatch import *
 from snr.core.endpoint import *
 from snr.core.factory import *
-from snr.core.key_hints import *
 from snr.core.logs import *
 from snr.core.loop import *
 from snr.core.moving_avg_filter import *
 from snr.core.node import *
 from snr.core.node_core import *
-from snr.core.profiler import *
 from snr.core.runners import *
 from snr.core.sim_clock import *
 from snr.core.task_queue import *

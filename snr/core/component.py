@@ -10,6 +10,7 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING, Any, Optional, Sequence
 
+from snr.core.checks.explain import check_component_args
 from snr.core.dispatch import HandlerMap
 from snr.prelude import (
     AbstractComponent,
@@ -24,7 +25,6 @@ from snr.prelude import (
     Task,
     TaskHandlerMap,
 )
-from snr.prelude.error_text import short_repr
 from snr.prelude.student_code import caller_block, describe_class
 
 __all__ = ["Component"]
@@ -67,49 +67,12 @@ class Component(AbstractComponent):
     """
 
     def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:
-        self._check_constructor_args(factory, parent, name)
+        check_component_args(type(self), factory, parent, name)  # which one is wrong, if any
         self.factory = factory
         self.parent = parent
         self.name = name
         self._log: Optional[logging.Logger] = None
         self._task_handlers = HandlerMap(owner_class=type(self), on_change=self._handlers_changed)
-
-    def _check_constructor_args(self, factory: Any, parent: Any, name: Any) -> None:
-        expected = "super().__init__(factory, parent, name)"
-        valid_name = isinstance(name, str) and bool(name)
-        if isinstance(factory, AbstractFactory) and isinstance(parent, AbstractNode) and valid_name:
-            return  # the common case: no need to look up the source file
-        me = describe_class(type(self))
-        if isinstance(factory, AbstractNode) and isinstance(parent, AbstractFactory):
-            raise ComponentError(
-                f"{me} passed the node as its factory and the factory as its parent: the "
-                f"arguments are swapped. Write {expected}, in that order (check the "
-                "order in your __init__ and in the factory's get() call too)."
-            )
-        if isinstance(factory, str) or isinstance(parent, str):
-            raise ComponentError(
-                f"{me} passed its arguments in the wrong order: {short_repr(factory, 40)}, "
-                f"{short_repr(parent, 40)}, {short_repr(name, 40)}. Write {expected}: "
-                "the factory first, then the parent node, then the name."
-            )
-        if not isinstance(factory, AbstractFactory):
-            raise ComponentError(
-                f"{me} passed {factory!r} as its factory. The first argument of {expected} "
-                "must be the factory that builds it (inside a factory's get(), pass "
-                "`self`). Check the order of the arguments."
-            )
-        if not isinstance(parent, AbstractNode):
-            raise ComponentError(
-                f"{me} passed {parent!r} as its parent node. The second argument of "
-                f"{expected} must be the node (the `parent` given to the factory's "
-                "get()). Check the order of the arguments."
-            )
-        if not isinstance(name, str) or not name:
-            raise ComponentError(
-                f"{me} passed {name!r} as its name. The third argument of {expected} "
-                "must be a non-empty string that is unique in the node, such as "
-                "'depth_filter'."
-            )
 
     @property
     def log(self) -> logging.Logger:

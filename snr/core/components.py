@@ -26,14 +26,15 @@ from __future__ import annotations
 import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
-from snr.core.dispatch import HandlerTable, check_burst_handlers
-from snr.core.explain import (
+from snr.core.checks.explain import (
     failed_get_error,
     only_returns_none,
     reload_failure,
     wrong_get_result_error,
     wrong_get_signature,
 )
+from snr.core.checks.handler_checks import check_burst_handlers
+from snr.core.dispatch import HandlerTable
 from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
     AbstractComponent,

@@ -4,7 +4,7 @@ from __future__ import annotations
 
 from typing import Dict, List, Mapping, Optional, Sequence
 
-from snr.core.profiler import Profiler
+from snr.core.checks.profiler import Profiler
 from snr.core.sim_clock import SimClock
 from snr.prelude import (
     AbstractConfig,

@@ -35,14 +35,14 @@ import logging
 import time
 from typing import Any, Callable, Hashable, List, Optional, Set, cast
 
-from snr.core.components import ComponentSet
-from snr.core.dispatch import BurstEntry
-from snr.core.explain import (
+from snr.core.checks.explain import (
     bad_result_error,
     handler_failure,
     loop_failure,
     slow_handler_text,
 )
+from snr.core.components import ComponentSet
+from snr.core.dispatch import BurstEntry
 from snr.core.logs import RepeatFilter
 from snr.core.task_queue import TaskQueue
 from snr.prelude import (

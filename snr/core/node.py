@@ -24,22 +24,18 @@ import logging
 import threading
 import time
 from threading import get_ident
-from typing import Any, Callable, List, Optional
+from typing import TYPE_CHECKING, Any, Callable, List, Optional
 
+from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
+from snr.core.checks.step_mode import StepMode
 from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerTable
-from snr.core.explain import check_node_args, check_page_args, wrong_thread_error
 from snr.core.handler_runner import HandlerRunner
-from snr.core.key_hints import MissingKeyHints
 from snr.core.logs import ensure_log_handler, level_for_mode
-from snr.core.node_checks import NodeChecks
 from snr.core.node_core import NodeCoreFactory
 from snr.core.sim_clock import NodeTurn, clock_of
-from snr.core.step_mode import StepMode
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Timer
-from snr.core.watchdog import Watchdog
-from snr.core.wiring_checks import WiringChecks
 from snr.prelude import (
     AbstractComponent,
     AbstractConfig,
@@ -60,6 +56,12 @@ from snr.prelude import (
     TaskId,
     TaskType,
 )
+
+if TYPE_CHECKING:  # DEBUG helpers, imported when a node turns them on (see __init__)
+    from snr.core.checks.key_hints import MissingKeyHints
+    from snr.core.checks.node_checks import NodeChecks
+    from snr.core.checks.watchdog import Watchdog
+    from snr.core.checks.wiring_checks import WiringChecks
 
 __all__ = ["Node", "NodeState"]
 
@@ -101,13 +103,14 @@ class Node(AbstractNode):
         terminate_reason: why the node stopped, once it has.
         key_hints: in DEBUG mode, the `MissingKeyHints` that log a hint for a
             data key read but never stored (None in other modes).
-        wiring_checks: in DEBUG mode, the `WiringChecks` that warn about an
+        wiring_checks: in DEBUG mode, the
+            `snr.core.checks.wiring_checks.WiringChecks` that warn about an
             event nothing handles and a handler nothing can reach (None in
             other modes).
         step_mode: the `StepMode` a console uses to pause the node, run its
             tasks one at a time and resume it.
-        watchdog: in DEBUG mode, the `Watchdog` that says when the node is
-            stuck without a word: a handler that does not return, a ``loop()``
+        watchdog: in DEBUG mode, the `snr.core.checks.watchdog.Watchdog` that
+            says when the node is stuck without a word: a handler that does not return, a ``loop()``
             that never returns, a loop flooding the queue, a node nothing will
             ever stop (None in other modes; set it to None before ``loop()``
             to switch it off).
@@ -155,8 +158,15 @@ class Node(AbstractNode):
             timed=self.profiler is not None or self.mode is not Mode.DEPLOYED,
         )
         self.step_mode = StepMode(self.queue, self._runner, self._lookup, self.is_terminated)
-        # Sets key_hints, wiring_checks and watchdog (None outside DEBUG mode).
-        self._checks = NodeChecks(self, self._components, self._runner)
+        # The checks for silent mistakes (snr/core/checks/, read second): NodeChecks
+        # sets key_hints, wiring_checks and watchdog in DEBUG mode, and reads each
+        # component's class in DEBUG and TEST. A DEPLOYED node does not load them.
+        self.key_hints = self.wiring_checks = self.watchdog = None
+        self._checks: Optional[NodeChecks] = None
+        if self.mode is not Mode.DEPLOYED:
+            from snr.core.checks.node_checks import NodeChecks
+
+            self._checks = NodeChecks(self, self._components, self._runner)
         # A deployed robot's code was checked while it was developed: its pages
         # are made without the checks of `page` (on every store, they add ~25 ns).
         self._check_pages = self.mode is not Mode.DEPLOYED
@@ -208,7 +218,8 @@ class Node(AbstractNode):
         self.state = NodeState.RUNNING
         self._thread_id = self.queue.owner_thread = threading.get_ident()
         self._running = not self._stop_requested
-        self._checks.start(self._thread_id)
+        if self._checks is not None:
+            self._checks.start(self._thread_id)
         try:
             if self._clock_turn is not None:
                 self._clock_turn.begin()
@@ -234,9 +245,11 @@ class Node(AbstractNode):
 
         Runs once by itself a few seconds after the node starts (see
         `MissingKeyHints.check_handlers`), and about handlers registered so
-        that they can never run (see `WiringChecks.check_never_ran`).
+        that they can never run (see
+        `snr.core.checks.wiring_checks.WiringChecks.check_never_ran`).
         """
-        self._checks.check_wiring()
+        if self._checks is not None:
+            self._checks.check_wiring()
 
     def set_terminate_flag(self, reason: str) -> None:
         """Ask the node to stop after the current task; safe from any thread."""
@@ -263,7 +276,8 @@ class Node(AbstractNode):
             self.set_terminate_flag("terminate() called")
         self._running = False
         self.state = NodeState.TERMINATING
-        self._checks.stop()  # stopping loops and waiting for them is no mistake
+        if self._checks is not None:  # stopping loops and waiting for them is no mistake
+            self._checks.stop()
         self._components.shutdown()
         self._runner.repeats.flush()
         dropped = self.queue.clear()
@@ -280,7 +294,7 @@ class Node(AbstractNode):
         run_queued = self._runner.run_queued
         step_mode = self.step_mode
         while self._running:
-            if step_mode.paused:  # a console paused the node: see step_mode.py
+            if step_mode.paused:  # a console paused the node: see checks/step_mode.py
                 step_mode.run_paused(self.idle_wake_s)
                 continue
             run_queued()

@@ -13,7 +13,7 @@ from __future__ import annotations
 import time
 from typing import Any, List, Optional
 
-from snr.core.explain import check_page_args
+from snr.core.checks.explain import check_page_args
 from snr.prelude import (
     AbstractFactory,
     ComponentError,

@@ -14,8 +14,8 @@ from __future__ import annotations
 
 from typing import Any, List, Optional
 
+from snr.core.checks.os_errors import explain_os_error
 from snr.prelude import CommsError
-from snr.prelude.os_errors import explain_os_error
 
 __all__ = [
     "available_ports",

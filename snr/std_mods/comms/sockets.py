@@ -25,9 +25,9 @@ import time
 from typing import Optional, Tuple
 
 from snr.core import LoopFactory
+from snr.core.checks.os_errors import explain_os_error
 from snr.core.logs import LossReport
 from snr.prelude import AbstractNode, CommsError, ConfigError
-from snr.prelude.os_errors import explain_os_error
 from snr.std_mods.comms.comms_loop import (
     DEFAULT_DEAD_AFTER_S,
     DEFAULT_MAX_BACKLOG_BYTES,

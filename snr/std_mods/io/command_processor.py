@@ -36,9 +36,9 @@ from dataclasses import dataclass
 from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 
 from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, tasks
+from snr.core.checks.step_mode import MAX_STEPS, Step
 from snr.core.logs import RepeatFilter
 from snr.core.node_core import NODE_CORE_NAME
-from snr.core.step_mode import MAX_STEPS, Step
 from snr.prelude import (
     AbstractComponent,
     AbstractNode,

@@ -24,9 +24,9 @@ import time
 from typing import Any, Dict, Optional, Tuple
 
 from snr.core import LoopFactory
+from snr.core.checks.os_errors import explain_os_error
 from snr.core.logs import RepeatFilter
 from snr.prelude import AbstractNode, CommsError, ComponentName, ConfigError, Mode
-from snr.prelude.os_errors import explain_os_error
 from snr.std_mods.io.console_loop import ConsoleLoop
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,

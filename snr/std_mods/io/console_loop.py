@@ -17,7 +17,7 @@ from __future__ import annotations
 from typing import Sequence
 
 from snr.core import ThreadLoop, tasks
-from snr.core.step_mode import console_priority
+from snr.core.checks.step_mode import console_priority
 from snr.prelude import AbstractFactory, AbstractNode, ComponentName, DataKey, Task, TaskType
 from snr.std_mods.io.command_processor import CommandProcessorFactory
 from snr.std_mods.io.console_session import ConsoleSession

@@ -30,6 +30,7 @@ from typing import TYPE_CHECKING, Any, List, Optional, Sequence, Union
 from urllib.parse import quote
 
 from snr.core import Endpoint, EndpointFactory
+from snr.core.checks.os_errors import explain_os_error
 from snr.prelude import (
     AbstractNode,
     CommsError,
@@ -40,7 +41,6 @@ from snr.prelude import (
     TaskId,
     TaskType,
 )
-from snr.prelude.os_errors import explain_os_error
 
 if TYPE_CHECKING:
     from snr.std_mods.io.live_view_server import LiveViewServer, LiveViewStats

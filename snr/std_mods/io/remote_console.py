@@ -19,8 +19,8 @@ import socket
 import sys
 from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequence
 
+from snr.core.checks.os_errors import explain_os_error
 from snr.prelude import WireFormatError
-from snr.prelude.os_errors import explain_os_error
 from snr.std_mods.io.command_table import COMMANDS
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,

@@ -30,29 +30,50 @@ Example (what `Node` does)::
 from __future__ import annotations
 
 import threading
-from typing import TYPE_CHECKING, List, Optional, Set, Tuple
+from typing import List, Optional, Protocol, Set, Tuple
 
 from snr.core import tasks
-from snr.core.class_checks import check_component
+from snr.core.checks.class_checks import check_component
+from snr.core.checks.key_hints import MissingKeyHints
+from snr.core.checks.watchdog import Watchdog, WatchedNode, queued_page_keys
+from snr.core.checks.wiring_checks import WiringChecks
 from snr.core.components import ComponentSet
 from snr.core.handler_runner import HandlerRunner
-from snr.core.key_hints import MissingKeyHints
-from snr.core.watchdog import Watchdog, queued_page_keys
-from snr.core.wiring_checks import WiringChecks
+from snr.core.timer import Timer
 from snr.prelude import (
     AbstractComponent,
+    DataDict,
     DataKey,
     Mode,
+    SomeTasks,
     TaskHandler,
     TaskType,
 )
 
-if TYPE_CHECKING:
-    from snr.core.node import Node
-
-__all__ = ["NodeChecks"]
+__all__ = ["CheckedNode", "NodeChecks"]
 
 _PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
+
+
+class CheckedNode(WatchedNode, Protocol):
+    """What `NodeChecks` reads and sets of its node: a `Node` has all of it.
+
+    (A Protocol rather than `Node` itself, so that this module need not import
+    ``node.py``, which imports it.)
+
+    Example::
+
+        checked: CheckedNode = Node("robot", config)
+    """
+
+    mode: Mode
+    datastore: DataDict
+    timer: Timer
+    wiring_checks: Optional[WiringChecks]
+    watchdog: Optional[Watchdog]
+
+    def schedule(self, t: SomeTasks) -> None:
+        """Queue a task or a list of tasks; safe from any thread."""
 
 
 class NodeChecks:
@@ -71,7 +92,7 @@ class NodeChecks:
         node.key_hints is not None   # True in DEBUG mode
     """
 
-    def __init__(self, node: Node, components: ComponentSet, runner: HandlerRunner) -> None:
+    def __init__(self, node: CheckedNode, components: ComponentSet, runner: HandlerRunner) -> None:
         self.node = node
         self.components = components
         self._wiring_timer: Optional[threading.Timer] = None

@@ -57,13 +57,22 @@ import sys
 import threading
 import time
 from types import CodeType, FrameType
-from typing import TYPE_CHECKING, Dict, FrozenSet, Iterable, List, Optional, Set, Tuple
+from typing import TYPE_CHECKING, Dict, FrozenSet, Iterable, List, Optional, Protocol, Set, Tuple
 
 from snr.core import tasks
 from snr.core.handler_runner import HandlerRunner
 from snr.core.loop import ThreadLoop
 from snr.core.task_queue import TaskQueue
-from snr.prelude import AbstractComponent, AbstractLoop, DataKey, Page, Task, TaskType
+from snr.prelude import (
+    AbstractComponent,
+    AbstractLoop,
+    ComponentName,
+    DataKey,
+    Page,
+    Role,
+    Task,
+    TaskType,
+)
 from snr.prelude.student_code import (
     code_name,
     describe_callable,
@@ -76,9 +85,12 @@ from snr.prelude.student_code import (
 from snr.prelude.task import format_task
 
 if TYPE_CHECKING:
-    from snr.core.node import Node
+    import logging
 
-__all__ = ["Watchdog"]
+    from snr.core.checks.key_hints import MissingKeyHints
+    from snr.core.checks.step_mode import StepMode
+
+__all__ = ["Watchdog", "WatchedNode"]
 
 _HANDLER_CALLERS: FrozenSet[CodeType] = frozenset(
     {HandlerRunner.run_queued.__code__, HandlerRunner.run.__code__}
@@ -87,6 +99,25 @@ _LOOP_CALLER: FrozenSet[CodeType] = frozenset({ThreadLoop._run.__code__})
 _MAX_DEPTH = 200  # frames looked at per stack: enough for any student's call chain
 _PARENT_WATCH = "snr-parent-watch"  # MultiProcRunner's: it stops the node only on Ctrl+C
 _FOOTER = "(This shows once, in DEBUG mode only; node.watchdog = None turns the watchdog off.)"
+
+
+class WatchedNode(Protocol):
+    """What the watchdog reads of the node it watches: a `Node` has all of it.
+
+    (A Protocol rather than `Node` itself, so that this module need not import
+    ``node.py``, which imports it.)
+
+    Example::
+
+        watched: WatchedNode = Node("robot", config)
+    """
+
+    role: Role
+    log: logging.Logger
+    queue: TaskQueue
+    components: Dict[ComponentName, AbstractComponent]
+    key_hints: Optional[MissingKeyHints]
+    step_mode: StepMode
 
 
 class Watchdog:
@@ -116,7 +147,7 @@ class Watchdog:
     """A node that was behind less than this long ago still counts as behind
     (its queue swings from full to empty and back while a loop floods it)."""
 
-    def __init__(self, node: Node) -> None:
+    def __init__(self, node: WatchedNode) -> None:
         self.node = node
         self.every_s = type(self).every_s
         self.stuck_s = type(self).stuck_s

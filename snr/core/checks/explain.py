@@ -26,6 +26,7 @@ from snr.prelude import (
     AbstractConfig,
     AbstractFactory,
     AbstractLoop,
+    AbstractNode,
     ComponentError,
     ConfigError,
     HandlerError,
@@ -61,6 +62,7 @@ __all__ = [
     "THREAD_SAFE_INSTEAD",
     "bad_result_error",
     "bad_result_hint",
+    "check_component_args",
     "check_node_args",
     "check_page_args",
     "describe_bad_result",
@@ -475,6 +477,53 @@ def check_page_args(key: Any, data: Any) -> None:
         raise ComponentError(bad_data_key(key, data))
     if data.__class__ is Page:
         raise ComponentError(page_as_data(key))
+
+
+def check_component_args(component_class: type, factory: Any, parent: Any, name: Any) -> None:
+    """Raise a `ComponentError` that says what is wrong with ``super().__init__``'s arguments.
+
+    `Component.__init__` calls it with the arguments it was given.
+
+    Example::
+
+        check_component_args(Beeper, factory, node, "beeper")   # fine: no error
+        check_component_args(Beeper, node, factory, "beeper")   # ComponentError: ... swapped.
+    """
+    expected = "super().__init__(factory, parent, name)"
+    valid_name = isinstance(name, str) and bool(name)
+    if isinstance(factory, AbstractFactory) and isinstance(parent, AbstractNode) and valid_name:
+        return  # the common case: no need to look up the source file
+    me = describe_class(component_class)
+    if isinstance(factory, AbstractNode) and isinstance(parent, AbstractFactory):
+        raise ComponentError(
+            f"{me} passed the node as its factory and the factory as its parent: the "
+            f"arguments are swapped. Write {expected}, in that order (check the "
+            "order in your __init__ and in the factory's get() call too)."
+        )
+    if isinstance(factory, str) or isinstance(parent, str):
+        raise ComponentError(
+            f"{me} passed its arguments in the wrong order: {short_repr(factory, 40)}, "
+            f"{short_repr(parent, 40)}, {short_repr(name, 40)}. Write {expected}: "
+            "the factory first, then the parent node, then the name."
+        )
+    if not isinstance(factory, AbstractFactory):
+        raise ComponentError(
+            f"{me} passed {factory!r} as its factory. The first argument of {expected} "
+            "must be the factory that builds it (inside a factory's get(), pass "
+            "`self`). Check the order of the arguments."
+        )
+    if not isinstance(parent, AbstractNode):
+        raise ComponentError(
+            f"{me} passed {parent!r} as its parent node. The second argument of "
+            f"{expected} must be the node (the `parent` given to the factory's "
+            "get()). Check the order of the arguments."
+        )
+    if not isinstance(name, str) or not name:
+        raise ComponentError(
+            f"{me} passed {name!r} as its name. The third argument of {expected} "
+            "must be a non-empty string that is unique in the node, such as "
+            "'depth_filter'."
+        )
 
 
 def check_node_args(node_class: Any, role: Any, config: Any) -> None:

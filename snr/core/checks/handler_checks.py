@@ -1,0 +1,155 @@
+"""Checks of what a component registers as task handlers, with the fix in words.
+
+`HandlerMap` (``snr/core/dispatch.py``) calls `check_task_id` and
+`check_handler` on every entry of a ``task_handlers`` mapping as it is set, and
+the node calls `check_burst_handlers` when a component is added or changes its
+handlers. So a handler registered under a wrong id, or written with the wrong
+parameters, is refused at start-up, before the robot moves, in every mode.
+
+Example::
+
+    check_task_id((TaskType.event, "go"))   # fine
+    check_task_id("go")                     # ComponentError: "... Did you mean ..."
+"""
+
+from __future__ import annotations
+
+import inspect
+from types import CodeType
+from typing import Any, Set
+
+from snr.prelude import AbstractComponent, ComponentError, TaskId, TaskType
+from snr.prelude.error_text import closest_match
+from snr.prelude.student_code import def_block, describe_callable, describe_class
+
+__all__ = ["check_burst_handlers", "check_handler", "check_task_id"]
+
+_STORE_PAGE = TaskType.store_page
+
+_TASK_TYPE_NAMES = [t.name for t in TaskType]
+
+
+def check_task_id(key: Any, owner_class: type = object) -> None:
+    """Raise a ComponentError unless ``key`` is a TaskType or (TaskType, str).
+
+    Example::
+
+        check_task_id((TaskType.event, "go"))   # fine
+        check_task_id("go")                     # ComponentError explaining why
+    """
+    if isinstance(key, TaskType):
+        return
+    if (
+        isinstance(key, tuple)
+        and len(key) == 2
+        and isinstance(key[0], TaskType)
+        and isinstance(key[1], str)
+    ):
+        return
+    owner = describe_class(owner_class)
+    hint = ""
+    if isinstance(key, tuple) and len(key) == 2 and isinstance(key[1], TaskType):
+        hint = f" Put the TaskType first: ({key[1]!r}, {key[0]!r})."
+    elif isinstance(key, str):
+        guess = closest_match(key, _TASK_TYPE_NAMES)
+        if guess is not None:
+            hint = f" Did you mean TaskType.{guess}?"
+        else:
+            hint = (
+                f" To run on pages stored under {key!r}, use "
+                f"(TaskType.store_page, {key!r}); for an event called {key!r}, "
+                f"use (TaskType.event, {key!r})."
+            )
+    raise ComponentError(
+        f"{owner} registers a task handler under {key!r} ({type(key).__name__}), "
+        "but task_handlers keys must be a TaskType, such as TaskType.terminate, or "
+        f"a (TaskType, str) pair, such as (TaskType.store_page, 'depth').{hint}"
+    )
+
+
+_checked_code: Set[CodeType] = set()
+
+
+def _param_text(param: inspect.Parameter) -> str:
+    if param.kind is inspect.Parameter.VAR_POSITIONAL:
+        return "*" + param.name
+    if param.kind is inspect.Parameter.VAR_KEYWORD:
+        return "**" + param.name
+    return param.name
+
+
+def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None:
+    """Raise a ComponentError unless ``handler`` can be called as ``f(task, key)``.
+
+    Checked once per function, when it is registered (at start-up), so a wrong
+    signature is found before the robot moves rather than mid-run.
+
+    Example::
+
+        def on_go(self, task: Task, key: TaskId) -> SomeTasks: ...   # fine
+        def on_go(self, task: Task) -> SomeTasks: ...                # error
+    """
+    if not callable(handler):
+        raise ComponentError(
+            f"{describe_class(owner_class)} registers {handler!r} "
+            f"({type(handler).__name__}) for {key!r}, "
+            "but a task handler must be a method, such as self.on_data. Did you "
+            "call it (self.on_data()) instead of naming it (self.on_data)?"
+        )
+    code = getattr(getattr(handler, "__func__", handler), "__code__", None)
+    if code is not None and code in _checked_code:
+        return
+    try:
+        signature = inspect.signature(handler)
+    except (TypeError, ValueError):  # builtins without signatures: trust them
+        return
+    try:
+        signature.bind(object(), object())
+    except TypeError:
+        where = describe_callable(handler)
+        name = getattr(handler, "__name__", "handler")
+        params = [_param_text(p) for p in signature.parameters.values()]
+        self_ = "self, " if hasattr(handler, "__self__") else ""
+        if hasattr(handler, "__self__"):
+            params.insert(0, "self")
+        code_line = "\n" + def_block(handler) if code is not None else ""
+        raise ComponentError(
+            f"Task handler {where} for {key!r} is written as "
+            f"`def {name}({', '.join(params)})`, but SNR calls a handler with two "
+            "arguments: the task and the task id it matched. Write it as "
+            f"`def {name}({self_}task: Task, key: TaskId) -> SomeTasks:`.{code_line}"
+        ) from None
+    if code is not None:
+        _checked_code.add(code)
+
+
+def check_burst_handlers(component: AbstractComponent) -> None:
+    """Refuse burst handlers the handler table could not use, saying what to write.
+
+    Each id in ``component.burst_handlers`` must be ``(TaskType.store_page,
+    key)`` and must be in its ``task_handlers`` too (that handler runs for a
+    page that comes alone). The node checks when a component is added and
+    when a running component changes its ``task_handlers``; a burst handler
+    left without its task handler would otherwise be unused without a word.
+
+    Raises:
+        ComponentError: naming the component, the id and the fix.
+
+    Example::
+
+        check_burst_handlers(comms)   # fine: returns None
+    """
+    handlers = component.task_handlers
+    for key in component.burst_handlers:
+        if not isinstance(key, tuple) or key[0] is not _STORE_PAGE:
+            raise ComponentError(
+                f"{describe_class(type(component))} has a burst handler for {key!r}; "
+                "burst handlers are for pages under one key only: "
+                "(TaskType.store_page, 'the_key')."
+            )
+        if key not in handlers:
+            raise ComponentError(
+                f"{describe_class(type(component))} has a burst handler for {key!r} "
+                "but no handler for it in task_handlers. Add one there too: it runs "
+                "when a page under that key comes alone."
+            )
