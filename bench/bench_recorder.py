@@ -42,7 +42,7 @@ from snr import (
     TaskType,
     tasks,
 )
-from snr.std_mods.io.mcap_files import McapPageWriter
+from snr.extras.viz.mcap_files import McapPageWriter
 from snr.std_mods.io.page_lines import page_from_line, page_to_line
 
 SAMPLE = Page("imu", {"ax": 0.01, "ay": -9.81, "az": 0.2, "ok": True}, "urov", 1.7e9)

@@ -51,9 +51,9 @@ from snr import (
     TimeoutLoopFactory,
     World,
 )
-from snr.demo import wall_follower
-from snr.std_mods.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
-from snr.std_mods.sim.draw import WorldView, import_pygame, render_scene
+from snr.extras.demo import wall_follower
+from snr.extras.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
+from snr.extras.sim.draw import WorldView, import_pygame, render_scene
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WORLD = World.load(os.path.join(ROOT, "examples", "rover", "room.json"))
@@ -136,7 +136,7 @@ def simulator(steps: int, draw_every: int = 0) -> float:
 
 def picture(path: str, seconds: float = 40.0) -> None:
     """Drive for ``seconds`` and save a picture of the world with the robot's path."""
-    from snr.std_mods.sim.draw import save_png
+    from snr.extras.sim.draw import save_png
 
     robot = DiffDriveRobot(RobotSpec(), Pose(*WORLD.start), seed=SEED)
     odometry, sensor = Odometry(robot.spec, robot.pose), RangeSensor()

@@ -58,7 +58,7 @@ from snr import (
     ZenohCommsFactory,
     tasks,
 )
-from snr.std_mods.comms.zenoh_comms import BATCH_TIME_LIMIT_MS
+from snr.extras.zenoh.comms import BATCH_TIME_LIMIT_MS
 
 try:
     import zenoh

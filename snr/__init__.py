@@ -6,7 +6,7 @@ Everything a student needs is here::
 
 That gives the names of ``__all__`` below: what the thesis's listings, the
 tutorial and the examples use, and the names kept for code written against
-the 2021 release (``snr.compat2021``). The rest of SNR, the machinery and the
+the 2021 release (``snr.extras.compat2021``). The rest of SNR, the machinery and the
 less common components, is imported from its own module, e.g.
 ``from snr.std_mods.comms import SocketsServerFactory`` or
 ``from snr.core.task_queue import TaskQueue``.
@@ -14,11 +14,12 @@ less common components, is imported from its own module, e.g.
 ``python -m snr docs`` builds this documentation, offline, and opens it in a
 browser: the guide (concepts, a tutorial, each ready-made component) and
 the API reference. ``python -m snr demo`` runs a whole system of nodes, the
-thesis's underwater vehicle; its code is the ``snr.demo`` package. In a copy
+thesis's underwater vehicle; its code is the ``snr.extras.demo`` package. In a copy
 of SNR's source, the guide's pages are ``docs/*.md`` and the thesis's
 listings are in ``examples/``.
 
 ``import snr`` is kept light: the ready-made components (``snr.std_mods``),
+the extras (``snr.extras``: Zenoh, serial, controller, simulator...),
 ``SNRTestCase`` (with ``unittest``) and the 2021 names are imported the
 first time one is used; ``from snr import *`` imports everything it names.
 """
@@ -69,7 +70,7 @@ from snr.utils import (
 )
 
 if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers see them
-    from snr.compat2021 import (
+    from snr.extras.compat2021 import (
         AbstractContext,
         Consumer,
         Context,
@@ -84,28 +85,30 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         TaskExpectations,
         TaskExpector,
     )
+    from snr.extras.controller import (
+        ControllerLoopFactory,
+        ControlProcessorFactory,
+        InputMappingFactory,
+        Joystick,
+        SimulatedJoystick,
+    )
+    from snr.extras.serial import SerialLinkFactory
+    from snr.extras.sim import SimRobotFactory, SimViewFactory, World
+    from snr.extras.viz import FoxgloveBridgeFactory
+    from snr.extras.zenoh import ZenohCommsFactory
     from snr.std_mods.comms import (
         COMMS_CONNECTED,
         COMMS_DISCONNECTED,
         PipeLoopFactory,
-        SerialLinkFactory,
         SocketsPair,
-        ZenohCommsFactory,
     )
     from snr.std_mods.filters import KalmanFilterFactory, MovingAvgFilterFactory
     from snr.std_mods.io import (
         CommandReceiverFactory,
-        ControllerLoopFactory,
-        ControlProcessorFactory,
-        FoxgloveBridgeFactory,
-        InputMappingFactory,
-        Joystick,
         LocalConsoleFactory,
         RecorderEndpointFactory,
         ReplayerLoopFactory,
-        SimulatedJoystick,
     )
-    from snr.std_mods.sim import SimRobotFactory, SimViewFactory, World
     from snr.std_mods.utils import (
         PrinterEndpointFactory,
         StopwatchEndpointFactory,
@@ -114,7 +117,7 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
     from snr.utils.test_case import SNRTestCase
 
 _LAZY: Dict[str, Tuple[str, ...]] = {
-    "snr.compat2021": (
+    "snr.extras.compat2021": (
         "AbstractContext",
         "Consumer",
         "Context",
@@ -129,28 +132,30 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
         "TaskExpectations",
         "TaskExpector",
     ),
+    "snr.extras.controller": (
+        "ControllerLoopFactory",
+        "ControlProcessorFactory",
+        "InputMappingFactory",
+        "Joystick",
+        "SimulatedJoystick",
+    ),
+    "snr.extras.serial": ("SerialLinkFactory",),
+    "snr.extras.sim": ("SimRobotFactory", "SimViewFactory", "World"),
+    "snr.extras.viz": ("FoxgloveBridgeFactory",),
+    "snr.extras.zenoh": ("ZenohCommsFactory",),
     "snr.std_mods.comms": (
         "COMMS_CONNECTED",
         "COMMS_DISCONNECTED",
         "PipeLoopFactory",
-        "SerialLinkFactory",
         "SocketsPair",
-        "ZenohCommsFactory",
     ),
     "snr.std_mods.filters": ("KalmanFilterFactory", "MovingAvgFilterFactory"),
     "snr.std_mods.io": (
         "CommandReceiverFactory",
-        "ControllerLoopFactory",
-        "ControlProcessorFactory",
-        "FoxgloveBridgeFactory",
-        "InputMappingFactory",
-        "Joystick",
         "LocalConsoleFactory",
         "RecorderEndpointFactory",
         "ReplayerLoopFactory",
-        "SimulatedJoystick",
     ),
-    "snr.std_mods.sim": ("SimRobotFactory", "SimViewFactory", "World"),
     "snr.std_mods.utils": (
         "PrinterEndpointFactory",
         "StopwatchEndpointFactory",
@@ -163,7 +168,7 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
 The ready-made components (``snr.std_mods``) and ``SNRTestCase``
 (``unittest``) cost more to import than the rest of SNR together; a program
 pays for them only when it uses them. The names kept for code written
-against the 2021 release (``snr.compat2021``) come with the components they
+against the 2021 release (``snr.extras.compat2021``) come with the components they
 alias."""
 
 __version__ = "0.1.0"

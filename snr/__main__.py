@@ -19,10 +19,11 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import List, Optional, Sequence
+from typing import Any, List, Optional, Sequence
 
 import snr
 import snr.console
+from snr.core import plugins
 
 __all__ = ["main"]
 
@@ -116,52 +117,32 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if words[:1] == ["graph"] and "--" in words:  # what follows `--` is FILE's own
         file_args = words[words.index("--") + 1 :]
         words = words[: words.index("--")]
-    if words[:1] == ["convert"]:  # its options, built only when asked for
-        from snr.std_mods.io import convert
-
-        convert.add_arguments(convert_parser)
-    if words[:1] == ["docs"]:  # the docs builder is loaded only to build docs
-        from snr.tools import docsite
-
-        docsite.add_arguments(docs_parser)
+    command: Any = None
+    if words[:1] in (["demo"], ["graph"], ["docs"], ["convert"]):
+        # These commands live in extras, found by their entry points (docs/design.md,
+        # "Extras and extension points"), loaded only when asked for.
+        try:
+            command = plugins.load("snr.commands", words[0], f"python -m snr {words[0]}")
+        except snr.SNRError as error:
+            print(f"snr {words[0]}: {error}", file=sys.stderr)
+            return 1
+        if hasattr(command, "add_arguments"):  # its own options, e.g. convert's
+            command.add_arguments({"docs": docs_parser, "convert": convert_parser}[words[0]])
     args = parser.parse_args(words)
     if args.command == "demo":
-        from snr.demo import run_demo, run_sim_demo  # only the demo needs it
-
-        if args.sim:
-            if args.view:
-                demo_parser.error("--view watches the UROV demo; it does not go with --sim")
-            return run_sim_demo(args.seconds, verbose=args.verbose, frames_dir=args.frames)
-        if args.frames is not None:
+        if args.sim and args.view:
+            demo_parser.error("--view watches the UROV demo; it does not go with --sim")
+        if not args.sim and args.frames is not None:
             demo_parser.error("--frames goes with --sim")
-        view_port = args.view_port if args.view else None
-        return run_demo(args.seconds, verbose=args.verbose, view_port=view_port)
     if args.command == "graph":
-        return _graph(args.file, file_args, args.role, args.format)
-    if args.command == "docs":
-        return docsite.run(args)
-    if args.command == "convert":
-        return convert.run(args)
+        args.file_args = file_args
+    if command is not None:
+        return int(command.run(args))
     if args.command == "version":
         print(snr.__version__)
         return 0
     parser.print_help()
     return 2
-
-
-def _graph(file: str, file_args: Sequence[str], roles: Optional[Sequence[str]], form: str) -> int:
-    """``python -m snr graph``: print the graph of the system ``file`` runs."""
-    from snr.std_mods.graph import config_from_script, graph_of_config, render
-
-    try:
-        config = config_from_script(file, file_args)
-        for role in roles or ():
-            config.get(role)  # an unknown role: the error lists the known ones
-        print(render(graph_of_config(config, roles), form))
-    except snr.SNRError as error:
-        print(f"snr graph: {error}", file=sys.stderr)
-        return 1
-    return 0
 
 
 if __name__ == "__main__":

@@ -1,7 +1,7 @@
 """``python -m snr.console HOST:PORT``: the remote console (also ``snr-console``).
 
 With ``--zenoh SYSTEM [ROLE]`` it reaches a node by its role over Zenoh
-instead (``snr/std_mods/io/zenoh_console.py``).
+instead (``snr/extras/zenoh/console.py``).
 
 Example::
 
@@ -14,6 +14,8 @@ from __future__ import annotations
 import sys
 from typing import IO, Optional, Sequence
 
+from snr.core import plugins
+from snr.prelude import SNRError
 from snr.std_mods.io import remote_console
 
 __all__ = ["main"]
@@ -37,9 +39,12 @@ def main(
     """
     words = list(sys.argv[1:] if argv is None else argv)
     if any(word == "--zenoh" or word.startswith("--zenoh=") for word in words):
-        from snr.std_mods.io import zenoh_console  # needs the zenoh extra
-
-        return zenoh_console.main(words, stdin, stdout, stderr, prog)
+        try:  # the Zenoh transport is an extra, found by its entry point
+            zenoh_main = plugins.load("snr.console_transports", "zenoh", f"{prog} --zenoh")
+        except SNRError as error:
+            print(f"{prog}: {error}", file=sys.stderr if stderr is None else stderr)
+            return 2
+        return int(zenoh_main(words, stdin, stdout, stderr, prog))
     return remote_console.main(words, stdin, stdout, stderr, prog)
 
 

@@ -43,8 +43,8 @@ from snr import (
     TimeoutLoopFactory,
     tasks,
 )
+from snr.extras.zenoh.inbox import WAKE, SequenceFollower, count_attachment, read_count
 from snr.prelude import ConfigError, WireFormatError
-from snr.std_mods.comms.zenoh_inbox import WAKE, SequenceFollower, count_attachment, read_count
 from snr.utils import MockNode
 from tests.comms_helpers import (
     EchoFactory,
@@ -65,8 +65,8 @@ PLAIN_CLIENT = os.path.join(os.path.dirname(__file__), "zenoh_plain_client.py")
 
 if HAVE_ZENOH:
     from snr import ZenohCommsFactory
-    from snr.std_mods.comms import ZenohComms
-    from snr.std_mods.comms.zenoh_comms import (
+    from snr.extras.zenoh import ZenohComms
+    from snr.extras.zenoh.comms import (
         BATCH_TIME_LIMIT_MS,
         _zenoh_module,
         page_from_sample,
@@ -189,7 +189,7 @@ class TestZenohSettings(unittest.TestCase):
             self.assertIn(words, message)
 
     def test_patterns_overlap_as_zenoh_says_they_intersect(self) -> None:
-        from snr.std_mods.comms.zenoh_comms import _chunks_cover, patterns_overlap
+        from snr.extras.zenoh.comms import _chunks_cover, patterns_overlap
 
         zenoh = _zenoh_module()
         canon = zenoh.KeyExpr.autocanonize  # "**/*" is "*/**" to Zenoh
@@ -212,7 +212,7 @@ class TestZenohSettings(unittest.TestCase):
                         self.assertEqual(missed, [], "said to cover, so every key matched")
 
     def test_deep_and_long_patterns_are_checked_quickly_and_fail_as_config_errors(self) -> None:
-        from snr.std_mods.comms.zenoh_comms import patterns_overlap
+        from snr.extras.zenoh.comms import patterns_overlap
 
         # Trying every way each of 30 `**` may match would outlast the test's time limit.
         deep = "/".join(["**", "a"] * 30) + "/c"
@@ -328,7 +328,7 @@ class TestZenohCounting(unittest.TestCase):
         self.comms = ZenohCommsFactory("lab", subscribe="**").get(MockNode())
 
     def test_a_gap_in_a_senders_count_is_counted_as_lost(self) -> None:
-        from snr.std_mods.comms.zenoh_inbox import count_attachment
+        from snr.extras.zenoh.inbox import count_attachment
 
         sender, other = b"A" * 8, b"B" * 8
         with self.assertLogs("snr", "WARNING") as logs:
@@ -361,8 +361,8 @@ class TestZenohCounting(unittest.TestCase):
         self.assertEqual(comms.stats()["received"], 3)
 
     def test_pages_dropped_here_are_not_counted_again_as_lost(self) -> None:
-        from snr.std_mods.comms import zenoh_comms as zc
-        from snr.std_mods.comms.zenoh_inbox import count_attachment
+        from snr.extras.zenoh import comms as zc
+        from snr.extras.zenoh.inbox import count_attachment
 
         sender = b"A" * 8
 
@@ -391,7 +391,7 @@ class TestZenohCounting(unittest.TestCase):
     def test_samples_reach_the_node_in_bounded_batches_in_order_and_a_stuck_node_drops(
         self,
     ) -> None:
-        from snr.std_mods.comms import zenoh_comms as zc
+        from snr.extras.zenoh import comms as zc
 
         node = MockNode()
         comms = ZenohCommsFactory("lab", subscribe="**").get(node)
@@ -429,7 +429,7 @@ class TestZenohCounting(unittest.TestCase):
         self.assertEqual(data_of(back[0]), [0], "the one handed over stays")
 
     def test_nothing_is_taken_while_the_nodes_queue_is_full(self) -> None:
-        from snr.std_mods.comms import zenoh_comms as zc
+        from snr.extras.zenoh import comms as zc
 
         node = MockNode()
         comms = ZenohCommsFactory("lab", subscribe="**").get(node)
@@ -448,7 +448,7 @@ class TestZenohCounting(unittest.TestCase):
         self.assertEqual(data_of(batch[0]), [0, 1, 2], "room again: all of them, in order")
 
     def test_a_watcher_wakes_the_node_once_a_burst_and_ends_with_the_subscriber(self) -> None:
-        from snr.std_mods.comms import zenoh_comms as zc
+        from snr.extras.zenoh import comms as zc
 
         node = MockNode()
         comms = ZenohCommsFactory("lab", subscribe="**").get(node)
@@ -478,7 +478,7 @@ class TestZenohCounting(unittest.TestCase):
         self.assertFalse(comms._watchers[-1].is_alive())
 
     def test_the_idle_node_waits_in_the_fifo_and_its_watcher_covers_while_it_works(self) -> None:
-        from snr.std_mods.comms import zenoh_comms as zc
+        from snr.extras.zenoh import comms as zc
 
         node = MockNode()
         comms = ZenohCommsFactory("lab", subscribe="n").get(node)
@@ -549,7 +549,7 @@ class TestZenohCounting(unittest.TestCase):
         self.assertFalse(comms._watchers[0].is_alive(), "the watcher ends with the component")
 
     def test_a_wake_key_is_one_the_subscription_matches(self) -> None:
-        from snr.std_mods.comms.zenoh_comms import wake_key
+        from snr.extras.zenoh.comms import wake_key
 
         zenoh = _zenoh_module()
         for pattern, key in [
@@ -1016,7 +1016,7 @@ class TestZenohUnderFlood(unittest.TestCase):
         self.assertEqual(nodes.stop(), [], "both nodes stopped")
 
     def test_a_slow_receivers_queue_holds_at_most_a_batch_from_zenoh(self) -> None:
-        from snr.std_mods.comms.zenoh_comms import _BATCH
+        from snr.extras.zenoh.comms import _BATCH
 
         # Under "n" the pages come through a watcher thread (the node's thread
         # waits in the FIFO of "x" when idle); some ticks the FIFO is empty a moment.

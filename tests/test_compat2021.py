@@ -154,12 +154,12 @@ class TestRefusedNames(unittest.TestCase):
 
 class TestExported(unittest.TestCase):
     def test_names_are_exported_from_snr_lazily(self) -> None:
-        import snr.compat2021
+        import snr.extras.compat2021
 
-        for name in snr.compat2021.__all__:
+        for name in snr.extras.compat2021.__all__:
             self.assertIn(name, snr.__all__)
-            self.assertEqual(snr._HOME[name], "snr.compat2021")
-        self.assertIn("2021 release", snr.compat2021.__doc__ or "")
+            self.assertEqual(snr._HOME[name], "snr.extras.compat2021")
+        self.assertIn("2021 release", snr.extras.compat2021.__doc__ or "")
 
 
 if __name__ == "__main__":

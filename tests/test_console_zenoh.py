@@ -26,7 +26,7 @@ class TestZenohConsole(unittest.TestCase):
     """One node with a Zenoh console on a thread; consoles reach it by its role."""
 
     def setUp(self) -> None:
-        from snr.std_mods.io.zenoh_console import ZenohConsoleFactory
+        from snr.extras.zenoh.console import ZenohConsoleFactory
 
         capture_test_logs(self, "snr")
         self.endpoint = f"tcp/127.0.0.1:{free_port()}"
@@ -38,7 +38,7 @@ class TestZenohConsole(unittest.TestCase):
         self.addCleanup(self.nodes.stop)
 
     def console(self, role: str = "urov", token: str = "sesame", system: str = SYSTEM) -> object:
-        from snr.std_mods.io.zenoh_console import ZenohConsole
+        from snr.extras.zenoh.console import ZenohConsole
 
         console = ZenohConsole(
             system, role, connect=[self.endpoint], scouting=False, token=token, timeout_s=5.0
@@ -47,8 +47,8 @@ class TestZenohConsole(unittest.TestCase):
         return console
 
     def test_commands_by_role_with_the_token_and_refusals_without(self) -> None:
+        from snr.extras.zenoh.console import ZenohConsole
         from snr.std_mods.io.console_protocol import ConsoleConnectionError, Status
-        from snr.std_mods.io.zenoh_console import ZenohConsole
 
         console = self.console()
         assert isinstance(console, ZenohConsole)
@@ -70,8 +70,8 @@ class TestZenohConsole(unittest.TestCase):
             nobody.connect()
 
     def test_every_node_refusing_turns_a_console_to_every_node_away(self) -> None:
+        from snr.extras.zenoh.console import ZenohConsole
         from snr.std_mods.io.console_protocol import ConsoleConnectionError
-        from snr.std_mods.io.zenoh_console import ZenohConsole
 
         every = self.console(role="*", token="guess")
         assert isinstance(every, ZenohConsole)
@@ -107,7 +107,7 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
     """
 
     def setUp(self) -> None:
-        from snr.std_mods.io.zenoh_console import ZenohConsoleFactory
+        from snr.extras.zenoh.console import ZenohConsoleFactory
 
         capture_test_logs(self, "snr")
         self.endpoints = [f"tcp/127.0.0.1:{free_port()}" for _ in range(2)]
@@ -131,7 +131,7 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
 
     def every_node(self) -> object:
         """A console to "*" that has met both nodes."""
-        from snr.std_mods.io.zenoh_console import ZenohConsole
+        from snr.extras.zenoh.console import ZenohConsole
 
         console = ZenohConsole(SYSTEM, connect=self.endpoints, scouting=False, timeout_s=5.0)
         self.addCleanup(console.close)
@@ -139,8 +139,8 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         return console
 
     def test_read_only_commands_show_every_reply_and_exit_is_refused(self) -> None:
+        from snr.extras.zenoh.console import ZenohConsole
         from snr.std_mods.io.console_protocol import Status
-        from snr.std_mods.io.zenoh_console import ZenohConsole
 
         console = ZenohConsole(SYSTEM, connect=self.endpoints, scouting=False, timeout_s=5.0)
         self.addCleanup(console.close)
@@ -167,7 +167,7 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         self.assertFalse(any(node.is_terminated() for node in self.nodes.nodes), "none stopped")
 
     def test_a_new_console_meets_its_endpoints_before_it_asks(self) -> None:
-        from snr.std_mods.io.zenoh_console import ZenohConsole
+        from snr.extras.zenoh.console import ZenohConsole
 
         # Zenoh connects in the background: a query sent at once could miss a node.
         console = ZenohConsole(SYSTEM, connect=self.endpoints, scouting=False, timeout_s=5.0)
@@ -183,7 +183,7 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         self.assertLess(time.monotonic() - started, 5.0, "bounded by the console's timeout")
 
     def test_a_console_through_a_router_meets_it_at_once_in_either_mode(self) -> None:
-        from snr.std_mods.io.zenoh_console import ZenohConsole, ZenohConsoleFactory
+        from snr.extras.zenoh.console import ZenohConsole, ZenohConsoleFactory
         from tests.test_comms_zenoh import start_router
 
         router_ep = start_router(self)
@@ -206,8 +206,8 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
 
     def test_a_node_that_does_not_reply_in_time_is_named_and_the_command_fails(self) -> None:
         import snr.console
+        from snr.extras.zenoh.console import ZenohConsole
         from snr.std_mods.io.console_protocol import Status
-        from snr.std_mods.io.zenoh_console import ZenohConsole
 
         every = self.every_node()
         assert isinstance(every, ZenohConsole)
@@ -230,8 +230,8 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
 
     def test_a_node_that_needs_a_token_is_named_and_the_others_still_answer(self) -> None:
         import snr.console
+        from snr.extras.zenoh.console import ZenohConsole, ZenohConsoleFactory
         from snr.std_mods.io.console_protocol import Status
-        from snr.std_mods.io.zenoh_console import ZenohConsole, ZenohConsoleFactory
 
         arm_endpoint = f"tcp/127.0.0.1:{free_port()}"
         arm = [
@@ -265,7 +265,7 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
 
     def start_arm(self, endpoint: str, token: Optional[str] = None) -> LocalNodes:
         """A third node, 'arm', with a Zenoh console listening on ``endpoint`` (and ``block``)."""
-        from snr.std_mods.io.zenoh_console import ZenohConsoleFactory
+        from snr.extras.zenoh.console import ZenohConsoleFactory
 
         factories = [
             ZenohConsoleFactory(SYSTEM, listen=[endpoint], scouting=False, token=token),
@@ -278,7 +278,7 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
 
     def every_node_with_arm(self, arm_endpoint: str, roles: List[str]) -> object:
         """A console to "*" that also connects to arm's endpoint, once ``roles`` answer."""
-        from snr.std_mods.io.zenoh_console import ZenohConsole
+        from snr.extras.zenoh.console import ZenohConsole
 
         endpoints = [*self.endpoints, arm_endpoint]
         console = ZenohConsole(SYSTEM, connect=endpoints, scouting=False, timeout_s=5.0)
@@ -288,8 +288,8 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         return console
 
     def test_a_node_that_left_is_named_as_gone_and_does_not_fail_the_command(self) -> None:
+        from snr.extras.zenoh.console import ZenohConsole
         from snr.std_mods.io.console_protocol import Status
-        from snr.std_mods.io.zenoh_console import ZenohConsole
 
         endpoint = f"tcp/127.0.0.1:{free_port()}"
         arm = self.start_arm(endpoint)
@@ -308,8 +308,8 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
     def test_a_node_without_a_liveliness_token_is_not_said_to_have_left(self) -> None:
         from unittest import mock
 
+        from snr.extras.zenoh.console import ZenohConsole
         from snr.std_mods.io.console_protocol import Status
-        from snr.std_mods.io.zenoh_console import ZenohConsole
 
         endpoint = f"tcp/127.0.0.1:{free_port()}"
         arm = self.start_arm(endpoint)
@@ -328,8 +328,8 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         self.assertIn("[urov]\nQueue of node 'urov'", stats.text)
 
     def test_a_node_that_joins_later_and_needs_a_token_is_named_as_refusing(self) -> None:
+        from snr.extras.zenoh.console import ZenohConsole
         from snr.std_mods.io.console_protocol import Status
-        from snr.std_mods.io.zenoh_console import ZenohConsole
 
         endpoint = f"tcp/127.0.0.1:{free_port()}"
         every = self.every_node_with_arm(endpoint, ["camera", "urov"])  # arm is not up yet
@@ -345,8 +345,8 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
             self.assertIn("[urov]\n", reply.text)
 
     def test_a_node_that_joins_later_is_reached_then_named_when_it_leaves(self) -> None:
+        from snr.extras.zenoh.console import ZenohConsole
         from snr.std_mods.io.console_protocol import Status
-        from snr.std_mods.io.zenoh_console import ZenohConsole
 
         endpoint = f"tcp/127.0.0.1:{free_port()}"
         every = self.every_node_with_arm(endpoint, ["camera", "urov"])  # arm is not up yet
@@ -365,8 +365,8 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         self.assertIn("[arm] left the system (its console is gone)", stats.text)
 
     def test_a_node_that_joins_later_busy_is_named_and_the_command_fails(self) -> None:
+        from snr.extras.zenoh.console import ZenohConsole
         from snr.std_mods.io.console_protocol import Status
-        from snr.std_mods.io.zenoh_console import ZenohConsole
 
         endpoint = f"tcp/127.0.0.1:{free_port()}"
         every = self.every_node_with_arm(endpoint, ["camera", "urov"])  # arm is not up yet

@@ -25,13 +25,13 @@ from snr import (
     TimeoutLoopFactory,
     tasks,
 )
-from snr.prelude import ComponentError
-from snr.std_mods.io import (
+from snr.extras.controller import (
     STEAM_CONTROLLER_BUTTONS,
     STEAM_CONTROLLER_MAPPING,
     ControlProcessorEndpoint,
 )
-from snr.std_mods.io.joystick import read_joystick
+from snr.extras.controller.joystick import read_joystick
+from snr.prelude import ComponentError
 from tests.helpers import StopWhenTrueFactory
 
 PRESSED = (TaskType.event, "button_pressed")

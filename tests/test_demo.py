@@ -99,15 +99,17 @@ class TestDemoShipsInThePackage(unittest.TestCase):
         )
         files = {p.relative_to(self.lib).as_posix() for p in self.lib.rglob("*") if p.is_file()}
         for name in ["__init__.py", "run.py", "system.py", "urov.py"]:
-            self.assertIn(f"snr/demo/{name}", files)
+            self.assertIn(f"snr/extras/demo/{name}", files)
         self.assertIn("snr/py.typed", files)
         self.assertIn("snr/guide/tutorial.md", files)
         self.assertEqual(sorted(os.listdir(self.lib)), ["snr"], "no examples/ beside it")
 
     def test_the_installed_copy_finds_its_guide(self) -> None:
-        import snr.tools.docsite
+        import snr.extras.docs.docsite
 
-        self.assertEqual(snr.tools.docsite.find_guide(self.lib / "snr"), self.lib / "snr" / "guide")
+        self.assertEqual(
+            snr.extras.docs.docsite.find_guide(self.lib / "snr"), self.lib / "snr" / "guide"
+        )
 
     def test_the_demo_runs_from_the_package_alone(self) -> None:
         """CI's smoke run, on the installed copy: a banner and the telemetry, no log chatter."""

@@ -16,7 +16,7 @@ from typing import List
 from unittest import mock
 
 from snr.__main__ import main
-from snr.tools import docsite
+from snr.extras.docs import docsite
 from tests.examples_support import ROOT
 from tests.optional import needs
 

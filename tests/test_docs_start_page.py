@@ -5,8 +5,8 @@ import tempfile
 import unittest
 from pathlib import Path
 
-from snr.api_topics import TOPICS, Topic, check_topics, full_entry, summary
-from snr.tools import docsite
+from snr.extras.docs import docsite
+from snr.extras.docs.api_topics import TOPICS, Topic, check_topics, full_entry, summary
 from tests.examples_support import ROOT
 from tests.optional import needs
 
@@ -37,9 +37,9 @@ class TestTopics(unittest.TestCase):
         # A component: the page of its sub-package, which exports it.
         self.assertEqual(full_entry("SocketsPair"), "snr/std_mods/comms.html#SocketsPair")
         self.assertEqual(full_entry("COMMS_CONNECTED"), "snr/std_mods/comms.html#COMMS_CONNECTED")
-        self.assertEqual(full_entry("MPExpector"), "snr/compat2021.html#MPExpector")
+        self.assertEqual(full_entry("MPExpector"), "snr/extras/compat2021.html#MPExpector")
         self.assertEqual(full_entry("tasks"), "snr/core/tasks.html")
-        self.assertEqual(full_entry("Settings"), "snr/compat2021.html#Settings")
+        self.assertEqual(full_entry("Settings"), "snr/extras/compat2021.html#Settings")
 
     @needs("websockets")  # summary() imports every module of snr, the live view's server too
     def test_an_alias_is_summed_up_by_the_docstring_under_it(self) -> None:

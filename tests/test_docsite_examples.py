@@ -6,7 +6,7 @@ import tempfile
 import unittest
 from pathlib import Path
 
-from snr.tools.docsite import build, literal_blocks_to_fences
+from snr.extras.docs.docsite import build, literal_blocks_to_fences
 
 
 class TestLiteralBlocks(unittest.TestCase):
@@ -47,7 +47,7 @@ class TestRenderedPage(unittest.TestCase):
 
 class TestExtrasWarnings(unittest.TestCase):
     def test_a_missing_extra_behind_type_checking_is_not_a_problem(self) -> None:
-        from snr.tools.docsite import _extra_not_installed
+        from snr.extras.docs.docsite import _extra_not_installed
 
         prefix = "Failed to run TYPE_CHECKING code while parsing X for snr.m.f: "
         self.assertTrue(_extra_not_installed(prefix + "No module named 'zenoh'"))

@@ -52,6 +52,9 @@ from snr import (
 )
 from snr.core import MissingKeyHints
 from snr.core.checks.os_errors import OsAction, explain_os_error
+from snr.extras.serial import port as serial_port
+from snr.extras.serial.board import compact_line
+from snr.extras.viz.live_view import _listen as live_view_listen
 from snr.prelude import (
     CommsError,
     ComponentError,
@@ -63,11 +66,8 @@ from snr.prelude import (
 )
 from snr.prelude.not_serializable import not_serializable_error
 from snr.std_mods.codec import page_json, page_to_line
-from snr.std_mods.comms import serial_port
-from snr.std_mods.comms.board_protocol import compact_line
 from snr.std_mods.comms.sockets import _listen as sockets_listen
 from snr.std_mods.io.console_protocol import ConsoleConnectionError
-from snr.std_mods.io.live_view import _listen as live_view_listen
 from snr.std_mods.io.remote_console import RemoteConsole
 from tests.helpers import StopWhenDrainedFactory, StopWhenFactory, StopWhenTrueFactory, free_port
 from tests.quiet import capture_test_logs, captured_logs

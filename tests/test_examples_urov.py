@@ -1,4 +1,4 @@
-"""The UROV example (thesis 5.1): its parts in snr.demo and examples/urov/main.py.
+"""The UROV example (thesis 5.1): its parts in snr.extras.demo and examples/urov/main.py.
 
 tests/test_demo.py runs it as `python -m snr demo`.
 """
@@ -6,7 +6,7 @@ tests/test_demo.py runs it as `python -m snr demo`.
 import unittest
 from typing import Any
 
-import snr.demo.urov
+import snr.extras.demo.urov
 from snr import Mode, SNRTestCase, TaskType, tasks
 from snr.utils import ListReplayerFactory
 from tests.examples_support import early, example_path, load_module, start_script
@@ -25,7 +25,7 @@ def setUpModule() -> None:
 
 
 class TestUrovParts(SNRTestCase):
-    urov: Any = snr.demo.urov
+    urov: Any = snr.extras.demo.urov
 
     def test_mixing_of_surge_yaw_heave(self) -> None:
         node = self.mock_node()

@@ -27,8 +27,7 @@ from snr import (
     ThreadLoop,
 )
 from snr.__main__ import main as snr_main
-from snr.prelude import ConfigError
-from snr.std_mods.graph import (
+from snr.extras.graph import (
     UNKNOWN_PEER,
     SystemGraph,
     config_from_script,
@@ -38,6 +37,7 @@ from snr.std_mods.graph import (
     to_mermaid,
     to_text,
 )
+from snr.prelude import ConfigError
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 UROV_MAIN = os.path.join(ROOT, "examples", "urov", "main.py")

@@ -30,8 +30,8 @@ from snr import (
     TimeoutLoopFactory,
     World,
 )
-from snr.std_mods.io import KeyboardJoystick
-from snr.std_mods.sim import SimViewLoop, StickDriveFactory, run_in_window
+from snr.extras.controller import KeyboardJoystick
+from snr.extras.sim import SimViewLoop, StickDriveFactory, run_in_window
 from snr.utils.mock_node import MockNode
 
 try:

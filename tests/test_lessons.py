@@ -32,7 +32,7 @@ from snr import (
     World,
 )
 from snr.core import TestRunner
-from snr.std_mods.sim import (
+from snr.extras.sim import (
     BUMP,
     ODOMETRY,
     RANGE,
@@ -41,7 +41,7 @@ from snr.std_mods.sim import (
     WHEEL_ENCODERS,
     DiffDriveRobot,
 )
-from snr.std_mods.sim.draw import NO_PICTURES
+from snr.extras.sim.draw import NO_PICTURES
 from snr.utils import SNRTestCase
 from tests.examples_support import (
     StartedScript,
@@ -125,7 +125,7 @@ class TestWallFollower(unittest.TestCase):
 
     def test_the_demo_runs_this_file(self) -> None:
         """``python -m snr demo --sim`` and the lesson run the one controller."""
-        import snr.demo.wall_follower as shipped
+        import snr.extras.demo.wall_follower as shipped
 
         self.assertIs(wall_follower.WallFollowerEndpoint, shipped.WallFollowerEndpoint)
         self.assertIs(wall_follower.main, shipped.main)

@@ -18,13 +18,15 @@ from snr.prelude import TaskPriority
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 # Loaded only by the code that needs them: Page/Task (de)serialization,
-# SNRTestCase, and the ready-made components.
+# SNRTestCase, the ready-made components and the extras (any module of
+# snr.extras loads the package snr.extras first).
 HEAVY = [
     "dataclasses_json",
     "marshmallow",
     "unittest",
     "snr.std_mods",
-    "snr.compat2021",
+    "snr.extras",
+    "snr.extras.compat2021",
     "multiprocessing",
     "argparse",
 ]
@@ -78,8 +80,8 @@ class TestLightImport(unittest.TestCase):
             "assert snr.MPExpector is snr.MultiProcExpector\n"
         )
         self.assertEqual(
-            loaded_after(code, ["unittest", "snr.std_mods", "snr.compat2021"]),
-            {"unittest": True, "snr.std_mods": True, "snr.compat2021": True},
+            loaded_after(code, ["unittest", "snr.std_mods", "snr.extras.compat2021"]),
+            {"unittest": True, "snr.std_mods": True, "snr.extras.compat2021": True},
         )
 
     def test_unknown_names_still_raise_attribute_error(self) -> None:

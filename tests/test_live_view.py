@@ -17,10 +17,10 @@ from typing import Any, Dict, List, Tuple
 from unittest import mock
 
 from snr import Config, Mode, Node, Page, SNRTestCase, tasks
+from snr.extras.viz.live_view import FoxgloveBridgeFactory, foxglove_app_url
+from snr.extras.viz.page_schema import data_schema, page_schema
 from snr.prelude import ConfigError
 from snr.std_mods.codec import page_json
-from snr.std_mods.io.live_view import FoxgloveBridgeFactory, foxglove_app_url
-from snr.std_mods.io.page_schema import data_schema, page_schema
 from tests.quiet import capture_test_logs
 
 try:
@@ -182,7 +182,7 @@ async def subscribe_all(viewer: ClientConnection) -> Dict[str, int]:
 @NEEDS_WEBSOCKETS
 class TestHandOver(SNRTestCase):
     def test_the_newest_page_of_each_key_is_kept_and_every_replaced_one_counted(self) -> None:
-        from snr.std_mods.io.live_view_server import LiveViewServer
+        from snr.extras.viz.live_view_server import LiveViewServer
 
         with socket.socket() as unused:
             server = LiveViewServer("robot", unused, logging.getLogger("snr.test.live_view"))
@@ -329,14 +329,14 @@ class TestDemoOption(SNRTestCase):
     def test_view_passes_the_port_to_the_demo(self) -> None:
         from snr.__main__ import main
 
-        with mock.patch("snr.demo.run_demo", return_value=0) as run_demo:
+        with mock.patch("snr.extras.demo.command.run_demo", return_value=0) as run_demo:
             self.assertEqual(main(["demo", "--seconds", "1", "--view", "--view-port", "9999"]), 0)
             self.assertEqual(run_demo.call_args.kwargs["view_port"], 9999)
             main(["demo", "--seconds", "1"])
             self.assertIsNone(run_demo.call_args.kwargs["view_port"])
 
     def test_without_websockets_the_demo_says_what_to_install_and_starts_nothing(self) -> None:
-        from snr.demo import run_demo
+        from snr.extras.demo import run_demo
 
         hidden = {"websockets": None, "websockets.asyncio": None, "websockets.asyncio.server": None}
         err = io.StringIO()

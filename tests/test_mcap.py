@@ -16,18 +16,18 @@ from unittest import mock
 
 from snr import ListReplayerFactory, Page, RecorderEndpointFactory, ReplayerLoopFactory, SNRTestCase
 from snr.__main__ import main
-from snr.prelude import ConfigError
-from snr.std_mods.codec import MAX_DEPTH, header_line, page_to_line
-from snr.std_mods.io import PageReader
-from snr.std_mods.io.convert import convert_recording
-from snr.std_mods.io.mcap_files import (
+from snr.extras.viz.convert import convert_recording
+from snr.extras.viz.mcap_files import (
     INSTALL_HINT,
     MCAP_MAGIC,
     McapPageWriter,
     log_time_ns,
     page_schema,
 )
-from snr.std_mods.io.page_schema import data_schema as infer_schema
+from snr.extras.viz.page_schema import data_schema as infer_schema
+from snr.prelude import ConfigError
+from snr.std_mods.codec import MAX_DEPTH, header_line, page_to_line
+from snr.std_mods.io import PageReader
 from tests.optional import HealthCheck, given, settings, st
 from tests.page_collector import PageCollectorFactory
 from tests.test_recorder_replayer import ReloadAtFactory, bad_lines_of_every_kind, run_role

@@ -38,10 +38,10 @@ SNR_PACKAGES = [
     "snr.std_mods.comms",
     "snr.std_mods.filters",
     "snr.std_mods.io",
-    "snr.std_mods.sim",
+    "snr.extras.sim",
     "snr.std_mods.utils",
     "snr.utils",
-    "snr.compat2021",
+    "snr.extras.compat2021",
 ]
 
 
@@ -179,9 +179,9 @@ class TestWhatStudentCodeUses(unittest.TestCase):
         self.assertEqual(names_taken_from("snr", unimported, False, snr_names()), set())
 
     def test_the_2021_names_are_exported(self) -> None:
-        import snr.compat2021
+        import snr.extras.compat2021
 
-        self.assertLessEqual(set(snr.compat2021.__all__), set(snr.__all__))
+        self.assertLessEqual(set(snr.extras.compat2021.__all__), set(snr.__all__))
 
     def test_the_listings_star_imports_of_snr_core_and_snr_prelude_give_what_they_use(
         self,

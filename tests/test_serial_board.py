@@ -22,9 +22,9 @@ from types import ModuleType
 from typing import Any, Callable, List, Tuple
 
 from snr import Page, SerialLinkFactory, SNRTestCase, tasks
+from snr.extras.serial import board as board_protocol
+from snr.extras.serial.board import READY_LINE, BoardWatch, compact_line
 from snr.prelude import ConfigError
-from snr.std_mods.comms import board_protocol
-from snr.std_mods.comms.board_protocol import READY_LINE, BoardWatch, compact_line
 from tests.examples_support import ROOT
 from tests.page_collector import PageCollectorFactory
 from tests.test_serial_link import QUICK, NodeThread, PtyPair, needs_pty, needs_pyserial

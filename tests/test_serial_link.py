@@ -459,7 +459,7 @@ class TestErrors(SNRTestCase):
 
     def test_permission_denied_explains_the_dialout_group(self) -> None:
         # The tests may run as root, who is never denied, so make the error by hand.
-        from snr.std_mods.comms.serial_port import describe_open_error
+        from snr.extras.serial.port import describe_open_error
 
         denied = serial.SerialException(errno.EACCES, "could not open port /dev/ttyUSB0")
         message = str(describe_open_error("/dev/ttyUSB0", denied))
@@ -516,7 +516,7 @@ class TestErrors(SNRTestCase):
         self.assertEqual(link.bad_lines, 4)
 
     def test_the_outbox_keeps_the_newest_line_per_key_when_full(self) -> None:
-        from snr.std_mods.comms.serial_link_loop import LineOutbox
+        from snr.extras.serial.link import LineOutbox
 
         outbox = LineOutbox(max_bytes=40)
         self.assertEqual(outbox.put("speed", b"speed 1\n"), 0)  # 8 bytes each

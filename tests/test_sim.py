@@ -9,8 +9,7 @@ import unittest
 from typing import Any, Dict, List
 
 from snr import SimRobotFactory, SNRTestCase, World
-from snr.prelude import ComponentError
-from snr.std_mods.sim import (
+from snr.extras.sim import (
     DiffDriveRobot,
     Odometry,
     Pose,
@@ -19,7 +18,8 @@ from snr.std_mods.sim import (
     sensor_pages,
     wheel_command,
 )
-from snr.std_mods.sim.world import Segment, distance_to_segment_m, ray_segment_hit_m
+from snr.extras.sim.world import Segment, distance_to_segment_m, ray_segment_hit_m
+from snr.prelude import ComponentError
 
 DT_S = 0.02
 PERFECT = RobotSpec(slip=0.0)

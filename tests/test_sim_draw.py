@@ -16,9 +16,9 @@ os.environ["SDL_VIDEODRIVER"] = "dummy"  # before pygame is imported
 os.environ["PYGAME_HIDE_SUPPORT_PROMPT"] = "1"
 
 from snr import SimRobotFactory, SimViewFactory, SNRTestCase, TaskType, World
+from snr.extras.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
+from snr.extras.sim.draw import WALL, WorldView, import_pygame, render_scene, save_png
 from snr.prelude import ComponentError
-from snr.std_mods.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
-from snr.std_mods.sim.draw import WALL, WorldView, import_pygame, render_scene, save_png
 from tests.examples_support import example_path, load_module
 from tests.helpers import StopWhenFactory, no_pygame
 from tests.optional import needs

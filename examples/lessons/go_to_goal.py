@@ -23,7 +23,7 @@ from typing import Any, Dict, List, Optional, Tuple
 
 import snr
 from snr import AbstractNode, Endpoint, EndpointFactory, SomeTasks, Task, TaskId, TaskType
-from snr.std_mods.sim.draw import NO_PICTURES, pygame_installed
+from snr.extras.sim.draw import NO_PICTURES, pygame_installed
 
 __all__ = ["GoToGoalEndpoint", "GoToGoalFactory", "main", "make_world", "run", "wrap"]
 

@@ -30,7 +30,7 @@ from typing import List, Optional
 
 import snr
 from snr import AbstractNode, Endpoint, EndpointFactory, SomeTasks, Task, TaskId, TaskType
-from snr.std_mods.sim import StickDriveFactory
+from snr.extras.sim import StickDriveFactory
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 

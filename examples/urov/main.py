@@ -12,8 +12,8 @@ or both at once (each in its own process)::
 ``--real-controller`` reads a real game pad instead of the scripted pilot;
 ``--host``/``--port`` choose where the two links listen (ports P and P+1).
 
-The system and its components live in the ``snr.demo`` package
-(``snr/demo/system.py`` is listing 5.1, ``snr/demo/urov.py`` the components
+The system and its components live in the ``snr.extras.demo`` package
+(``snr/extras/demo/system.py`` is listing 5.1, ``snr/extras/demo/urov.py`` the components
 and the simulated hardware), so ``python -m snr demo`` runs them from an
 installed SNR too. This file is the command line around them.
 """
@@ -23,7 +23,7 @@ import sys
 from typing import List
 
 import snr
-from snr.demo import make_components
+from snr.extras.demo import make_components
 
 
 def main(argv: List[str]) -> None:

@@ -1,8 +1,9 @@
 """Layer 2 of SNR: ready-made components (thesis 6.4).
 
-Sub-packages: ``comms`` (talk between nodes), ``filters``, ``io`` (console,
-recorder, replayer, serial, controller, live view), ``sim`` (a simulated
-robot) and ``utils`` (timeout, stopwatch, printer). Each sub-package gives
+Sub-packages: ``comms`` (talk between nodes: pipes, TCP), ``filters``, ``io``
+(console, recorder, replayer) and ``utils`` (timeout, stopwatch, printer).
+Serial links, Zenoh, the controller, the live view, MCAP and the simulator
+are extras (``snr.extras``). Each sub-package gives
 its components; the common ones are also in ``snr`` (``from snr import *``).
 Importing this package imports none of them: a program pays only for the
 components it uses.
@@ -13,4 +14,4 @@ Example::
     from snr.std_mods.io import TextReplayerFactory
 """
 
-__all__ = ["comms", "filters", "io", "sim", "utils"]
+__all__ = ["comms", "filters", "io", "utils"]

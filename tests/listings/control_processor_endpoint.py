@@ -2,7 +2,7 @@
 
 Printed in Appendix A (line 1280 of the thesis text). Listing A.6 imports this
 module as ``control_processor_endpoint``. SNR's own version is
-``snr.ControlProcessorEndpoint`` (``snr/std_mods/io/control_processor.py``).
+``snr.ControlProcessorEndpoint`` (``snr/extras/controller/control_processor.py``).
 
 Repaired PDF artefacts: indentation; line 30, broken before its ``)``; the
 page break after line 44, where lines 44-45 were numbered twice.

@@ -3,7 +3,7 @@
 Printed in Appendix A (line 1248 of the thesis text). Listing 5.3 imports this
 module as ``control_processor_factory``; it imports listing A.7 as
 ``control_processor_endpoint``. SNR's own version is
-``snr.ControlProcessorFactory`` (``snr/std_mods/io/control_processor.py``).
+``snr.ControlProcessorFactory`` (``snr/extras/controller/control_processor.py``).
 
 Repaired PDF artefacts: indentation.
 Deviations: none.

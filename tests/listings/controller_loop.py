@@ -2,7 +2,7 @@
 
 Printed in Appendix A (line 1364 of the thesis text). Listing A.9 imports this
 module as ``controller_loop``. It needs pygame and a game controller. SNR's own
-version, ``snr.ControllerLoop`` (``snr/std_mods/io/controller.py``), also runs
+version, ``snr.ControllerLoop`` (``snr/extras/controller/controller.py``), also runs
 without one (``snr.SimulatedJoystick``); this one reads pygame directly, so
 the test suite plugs in a virtual pad through SDL (see
 tests/test_controller_pygame.py) and skips where it cannot.

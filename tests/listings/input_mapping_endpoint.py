@@ -2,7 +2,7 @@
 
 Printed in Appendix A (line 1532 of the thesis text). Listing A.10 imports
 this module as ``input_mapping_endpoint``. SNR's own version is
-``snr.InputMappingEndpoint`` (``snr/std_mods/io/input_mapping.py``).
+``snr.InputMappingEndpoint`` (``snr/extras/controller/input_mapping.py``).
 
 Repaired PDF artefacts: indentation, and line 35, broken inside the string
 ``"controller_input_map_endpoint"``.

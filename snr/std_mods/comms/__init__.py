@@ -1,8 +1,10 @@
-"""Communication between nodes: pipes, TCP sockets, serial links, Zenoh.
+"""Communication between nodes: pipes and TCP sockets.
+
+Serial links and Zenoh are extras: ``snr.extras.serial`` and ``snr.extras.zenoh``.
 
 Example::
 
-    from snr.std_mods.comms import SerialLinkFactory
+    from snr.std_mods.comms import SocketsServerFactory
 """
 
 from snr.std_mods.comms.comms_loop import (
@@ -14,20 +16,12 @@ from snr.std_mods.comms.pipe import (
     PipeLoop,
     PipeLoopFactory,
 )
-from snr.std_mods.comms.serial_link_loop import (
-    SerialLinkFactory,
-    SerialLinkLoop,
-)
 from snr.std_mods.comms.sockets import (
     SocketsClientFactory,
     SocketsClientLoop,
     SocketsPair,
     SocketsServerFactory,
     SocketsServerLoop,
-)
-from snr.std_mods.comms.zenoh_comms import (
-    ZenohComms,
-    ZenohCommsFactory,
 )
 
 __all__ = [
@@ -36,13 +30,9 @@ __all__ = [
     "CommsLoop",
     "PipeLoop",
     "PipeLoopFactory",
-    "SerialLinkFactory",
-    "SerialLinkLoop",
     "SocketsClientFactory",
     "SocketsClientLoop",
     "SocketsPair",
     "SocketsServerFactory",
     "SocketsServerLoop",
-    "ZenohComms",
-    "ZenohCommsFactory",
 ]

@@ -35,7 +35,7 @@ import time
 from dataclasses import dataclass
 from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
 
-from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, tasks
+from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, plugins, tasks
 from snr.core.checks.step_mode import MAX_STEPS, Step
 from snr.core.logs import RepeatFilter
 from snr.core.node_core import NODE_CORE_NAME
@@ -454,10 +454,10 @@ class CommandProcessorEndpoint(Endpoint):
 
     def cmd_graph(self, args: str) -> _Outcome:
         """``graph [text|mermaid|dot]``: this node's data-flow graph, as it runs now."""
-        from snr.std_mods.graph import graph_of_node, render  # loads ast: only when asked
-
         choice = _one_choice("graph", args or "text", ["text", "mermaid", "dot"])
-        return _ok(render(graph_of_node(self._full_node("graph")), choice))
+        # The graph is an extra (it loads ast): found by its entry point, only when asked.
+        draw = plugins.load("snr.console_commands", "graph", "The console's `graph` command")
+        return _ok(draw(self._full_node("graph"), choice))
 
     def cmd_echo(self, args: str) -> _Outcome:
         """``echo KEY [N]``: the next pages of KEY (the reply waits for them)."""

@@ -2,7 +2,8 @@
 
 The file is in the JSON-lines page format (``snr.std_mods.codec``): a header line,
 then one page per line; or, for a file named ``*.mcap``, in MCAP
-(``snr.std_mods.io.mcap_files``), one JSON message per page. Each page is
+(``snr.extras.viz.mcap_files``, found through `recording_formats`), one JSON
+message per page. Each page is
 flushed as soon as it is written, so a process that is killed loses at most
 the page it was writing; replay the file with `ReplayerLoopFactory` or read
 it with `PageReader`.
@@ -35,14 +36,8 @@ from snr.prelude import (
     TaskType,
 )
 from snr.std_mods.codec import PathLike, decode_line, header_line, is_header, page_to_line
-from snr.std_mods.io.mcap_files import (
-    COMPRESSION_PACKAGES,
-    COMPRESSIONS,
-    MCAP_MAGIC,
-    McapPageWriter,
-    format_of_name,
-    require_mcap,
-)
+from snr.std_mods.io import recording_formats
+from snr.std_mods.io.recording_formats import PageWriter, format_of_bytes, format_of_name
 
 __all__ = ["FILE_FORMATS", "RecorderEndpoint", "RecorderEndpointFactory", "kept_name"]
 
@@ -70,7 +65,7 @@ class _LinesFile:
         self.file.close()
 
 
-RecordingFile = Union[_LinesFile, McapPageWriter]
+RecordingFile = Union[_LinesFile, PageWriter]
 """A recording open for writing: ``write(page, line)`` and ``close()``."""
 
 
@@ -360,8 +355,10 @@ class RecorderEndpointFactory(EndpointFactory):
         if self.started and self.file_format == "jsonl":
             return _LinesFile(self._open(self.path, "a"), self.sync)
         if self.file_format == "mcap":  # before any file is made or renamed
-            require_mcap(f"{type(self).__name__}({self.filename!r})")
-            package = COMPRESSION_PACKAGES.get(self.compression)
+            what = f"{type(self).__name__}({self.filename!r})"
+            recording_format = recording_formats.get(self.file_format, what)
+            recording_format.require(what)
+            package = recording_format.compression_packages.get(self.compression)
             if package is not None and not _installed(package):
                 raise ConfigError(
                     f"{type(self).__name__}({self.filename!r}, compression="
@@ -376,13 +373,15 @@ class RecorderEndpointFactory(EndpointFactory):
         self.started = True
         return recording
 
-    def _open_mcap(self) -> McapPageWriter:
+    def _open_mcap(self) -> PageWriter:
         try:
             file = open(self.path, "wb")  # noqa: SIM115 - closed by close_file
         except OSError as error:
             raise self._cannot_write(error) from error
         try:
-            return McapPageWriter(file, self.compression, sync=self.sync)
+            what = f"{type(self).__name__}({self.filename!r})"
+            recording_format = recording_formats.get(self.file_format, what)
+            return recording_format.writer(file, self.compression, sync=self.sync)
         except ConfigError:
             file.close()
             raise
@@ -467,10 +466,12 @@ def _choose_format(filename: str, file_format: Optional[str]) -> str:
 def _choose_compression(filename: str, file_format: str, compression: Optional[str]) -> str:
     if compression is None:
         return "none"
-    if file_format != "mcap" or compression not in COMPRESSIONS:
+    what = f"RecorderEndpointFactory({filename!r}, compression={compression!r})"
+    compressions = recording_formats.get("mcap", what).compressions
+    if file_format != "mcap" or compression not in compressions:
         raise ConfigError(
             f"RecorderEndpointFactory({filename!r}, compression={compression!r}): "
-            f"compression is for MCAP recordings, one of {COMPRESSIONS}."
+            f"compression is for MCAP recordings, one of {compressions}."
         )
     return compression
 
@@ -482,7 +483,7 @@ def _what_it_holds(path: str) -> str:
             start = file.read(_PEEK_BYTES)
     except OSError:
         return "recording"  # unreadable: do not write over it; renaming keeps it safe
-    if start.startswith(MCAP_MAGIC):
+    if format_of_bytes(start) != "jsonl":
         return "recording"
     lines = [line for line in start.split(b"\n") if line.strip()]
     if not lines:

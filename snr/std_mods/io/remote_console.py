@@ -46,6 +46,7 @@ __all__ = [
     "add_session_options",
     "main",
     "run_console",
+    "say",
 ]
 
 EXIT_OK = 0
@@ -194,16 +195,16 @@ class RemoteConsole:
             while replies is None or sent < replies:
                 reply = self.send(line)
                 sent += 1
-                _say(output, reply.text)
+                say(output, reply.text)
                 if reply.status is Status.ERROR:
                     return EXIT_CONNECTION
                 if reply.status is Status.BYE:
                     return EXIT_CONNECTION
         except ValueError as error:
-            _say(output, f"error: {error}")
+            say(output, f"error: {error}")
             return EXIT_CONNECTION
         except KeyboardInterrupt:
-            _say(output, f"\n(Ctrl-C) Stopped `{line}`.")
+            say(output, f"\n(Ctrl-C) Stopped `{line}`.")
         return EXIT_OK
 
     def _send_line(self, line: str) -> None:
@@ -290,7 +291,7 @@ class RemoteConsole:
         if read_line is None:
             _enable_line_editing()
             read_line = input
-        _say(out, "Type 'quit' or Ctrl-D to leave (the node keeps running).")
+        say(out, "Type 'quit' or Ctrl-D to leave (the node keeps running).")
         while self.is_connected():
             try:
                 line = read_line(f"{self.where}> ").strip()
@@ -298,7 +299,7 @@ class RemoteConsole:
                 out.write("\n")  # so the shell's prompt starts on a new line
                 return EXIT_OK
             except KeyboardInterrupt:
-                _say(out, "\n(Ctrl-C) Type 'quit' to leave.")
+                say(out, "\n(Ctrl-C) Type 'quit' to leave.")
                 continue
             if line.lower() in _LEAVE_WORDS:
                 return EXIT_OK
@@ -324,9 +325,9 @@ class RemoteConsole:
         try:
             reply = self.send(line)
         except ValueError as error:
-            _say(output, f"error: {error}")
+            say(output, f"error: {error}")
             return EXIT_CONNECTION
-        _say(output, reply.text)
+        say(output, reply.text)
         if reply.status is Status.ERROR:
             return EXIT_CONNECTION
         if reply.status is Status.BYE and line.split()[0].lower() != "exit":
@@ -334,7 +335,13 @@ class RemoteConsole:
         return EXIT_OK
 
 
-def _say(output: IO[str], text: str) -> None:
+def say(output: IO[str], text: str) -> None:
+    """Write ``text`` and a newline to ``output`` and flush it; nothing for empty text.
+
+    Example::
+
+        say(sys.stdout, "Connected to node 'urov'.")
+    """
     if text:
         output.write(text + "\n")
         output.flush()
@@ -427,7 +434,7 @@ def main(
         host, port = parse_address(args.address)
     except ValueError as error:
         parser.print_usage(err)
-        _say(err, f"{prog}: error: {error}")
+        say(err, f"{prog}: error: {error}")
         return EXIT_USAGE
     console = RemoteConsole(host, port, args.token, args.timeout)
     return run_console(console, args.command, stdin, out, err, prog)
@@ -453,16 +460,16 @@ def run_console(
         greeting = console.connect()
         if commands:
             return _run_commands(console, commands, out)
-        _say(out, greeting.text)
+        say(out, greeting.text)
         source = stdin if stdin is not None else sys.stdin
         if source.isatty() and stdin is None:
             return console.interact(output=out)
         return _run_commands(console, (line.strip() for line in source), out)
     except ConsoleConnectionError as error:
-        _say(err, f"{prog}: {error}")
+        say(err, f"{prog}: {error}")
         return EXIT_CONNECTION
     except KeyboardInterrupt:  # while waiting for a reply: leave (the node keeps running)
-        _say(err, f"\n{prog}: interrupted.")
+        say(err, f"\n{prog}: interrupted.")
         return EXIT_INTERRUPTED
     finally:
         console.close()

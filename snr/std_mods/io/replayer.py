@@ -53,7 +53,7 @@ from snr.std_mods.codec import (
     is_header,
     page_from_fields,
 )
-from snr.std_mods.io.mcap_files import is_mcap_file, read_mcap_pages, require_mcap
+from snr.std_mods.io import recording_formats
 
 __all__ = [
     "MAX_GAP_S",
@@ -118,6 +118,15 @@ def _check_readable(filename: str, what: str) -> None:
         )
 
 
+def _format_of_file(filename: str) -> str:
+    """The format of a recording, from its first bytes: ``"jsonl"`` unless an extra's."""
+    try:
+        with open(filename, "rb") as file:
+            return recording_formats.format_of_bytes(file.read(16))
+    except OSError:
+        return "jsonl"
+
+
 class PageReader:
     """Reads the pages of a recording, JSON lines or MCAP, in order; iterate over it.
 
@@ -163,9 +172,10 @@ class PageReader:
         self._bad_line_numbers: List[int] = []
         # A corrupt file can hold thousands of bad lines: log the first few in full.
         self._repeats = RepeatFilter(_log, first=5)
-        self.is_mcap = is_mcap_file(self.filename)
+        self.is_mcap = _format_of_file(self.filename) == "mcap"
         if self.is_mcap:  # fail now if the mcap package is missing
-            require_mcap(f"Reading the MCAP file {self.filename!r}", "stream_reader")
+            what = f"Reading the MCAP file {self.filename!r}"
+            recording_formats.get("mcap", what).require(what, "stream_reader")
             return
         with open(self.filename, "rb") as file:
             self._check_if_header(file.readline())  # fail now, not halfway through a replay
@@ -193,7 +203,8 @@ class PageReader:
         self._repeats = RepeatFilter(_log, first=5)
         try:
             if self.is_mcap:
-                for number, page, timed in read_mcap_pages(self.filename, self._report_message):
+                mcap = recording_formats.get("mcap", f"Reading {self.filename!r}")
+                for number, page, timed in mcap.read_pages(self.filename, self._report_message):
                     yield RecordedPage(number, page, timed)
                 return
             with open(self.filename, "rb") as file:

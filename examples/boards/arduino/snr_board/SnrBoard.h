@@ -21,7 +21,7 @@
 #include <stdlib.h>
 #include <string.h>
 
-// The protocol: these must match snr/std_mods/comms/board_protocol.py.
+// The protocol: these must match snr/extras/serial/board.py.
 #define SNR_READY_LINE "{\"format\":\"snr-pages\",\"version\":1}"
 #define SNR_HEARTBEAT_KEY "hb"
 #define SNR_HEARTBEAT_MS 200

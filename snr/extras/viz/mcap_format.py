@@ -1,0 +1,64 @@
+"""MCAP as a recording format of the recorder, replayer and converter (``snr.recording_formats``).
+
+The kernel's recorder and replayer find it by the entry point ``mcap`` in
+SNR's ``pyproject.toml``; the work is done by `snr.extras.viz.mcap_files`.
+
+Example::
+
+    from snr.extras.viz.mcap_format import MCAP
+
+    with open("dive.mcap", "wb") as file:
+        writer = MCAP.writer(file)
+        writer.write(Page("depth_m", 3.2, "urov", 1700000000.25))
+        writer.close()
+"""
+
+from __future__ import annotations
+
+from typing import IO, Any, Callable, Dict, Iterator, Tuple
+
+from snr.extras.viz.mcap_files import (
+    COMPRESSION_PACKAGES,
+    COMPRESSIONS,
+    MCAP_MAGIC,
+    McapPageWriter,
+    read_mcap_pages,
+    require_mcap,
+)
+from snr.prelude import Page
+from snr.std_mods.codec import PathLike
+
+__all__ = ["MCAP", "McapFormat"]
+
+
+class McapFormat:
+    """MCAP files, written and read with the ``mcap`` package (``pip install 'snr[viz]'``).
+
+    Example::
+
+        MCAP.require("Writing dive.mcap")   # a ConfigError if mcap is not installed
+    """
+
+    magic: bytes = MCAP_MAGIC
+    compressions: Tuple[str, ...] = COMPRESSIONS
+    compression_packages: Dict[str, str] = COMPRESSION_PACKAGES
+
+    def require(self, what: str, part: str = "writer") -> Any:
+        """The ``mcap.<part>`` module, or a `ConfigError` naming the install command."""
+        return require_mcap(what, part)
+
+    def writer(
+        self, file: IO[bytes], compression: str = "none", flush: bool = True, sync: bool = False
+    ) -> McapPageWriter:
+        """A `McapPageWriter` on ``file``."""
+        return McapPageWriter(file, compression, flush=flush, sync=sync)
+
+    def read_pages(
+        self, filename: PathLike, report: Callable[[int, str], None]
+    ) -> Iterator[Tuple[int, Page, bool]]:
+        """The pages of an MCAP file (`read_mcap_pages`)."""
+        return read_mcap_pages(filename, report)
+
+
+MCAP = McapFormat()
+"""The MCAP recording format, the entry point ``mcap`` of ``snr.recording_formats``."""
