@@ -38,6 +38,8 @@ from snr.std_mods.codec import PathLike, decode_line, header_line, is_header, pa
 from snr.std_mods.io.mcap_files import (
     COMPRESSION_PACKAGES,
     COMPRESSIONS,
+    DEBIAN_HINT,
+    INSTALL_HINT,
     MCAP_MAGIC,
     McapPageWriter,
     format_of_name,
@@ -250,7 +252,7 @@ class RecorderEndpointFactory(EndpointFactory):
             header line, so the file stays one valid recording). JSON lines only.
         file_format: ``"jsonl"`` or ``"mcap"``; by default ``"mcap"`` when
             ``filename`` ends in ``.mcap``, else ``"jsonl"`` (the thesis's format).
-            MCAP needs ``pip install 'snr[viz]'``; see ``docs/recording.md``.
+            MCAP needs ``pip install 'snr[mcap]'``; see ``docs/recording.md``.
         compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress the file in
             chunks of about 1 MiB (a killed process loses the unfinished
             chunk); ``None`` (default) writes and flushes each page on its own.
@@ -365,8 +367,8 @@ class RecorderEndpointFactory(EndpointFactory):
             if package is not None and not _installed(package):
                 raise ConfigError(
                     f"{type(self).__name__}({self.filename!r}, compression="
-                    f"{self.compression!r}) needs the {package} package: pip install "
-                    f"{package}, or leave compression out"
+                    f"{self.compression!r}) needs the {package} package: {INSTALL_HINT} "
+                    f"({DEBIAN_HINT}), or leave compression out"
                 )
         self.path, self.kept = self._choose_path()
         if self.file_format == "mcap":
