@@ -1,7 +1,7 @@
 """The Raspberry Pi install: the README's commands are the ones the project supports.
 
 Running them takes a network and a Debian system; .ci/run runs the venv line
-as the README writes it.
+as the README writes it, and docs/raspberry-pi.md's live view line after it.
 These checks are the fast part: the apt line names the Debian packages of
 exactly SNR's dependencies and the extras the pip line asks for, the venv sees
 them, no Pi line has pip compile anything on 32-bit Raspberry Pi OS, and nothing
@@ -43,7 +43,7 @@ PI_WHEELS: Dict[str, List[str]] = {
 
 Each has a wheel that 32-bit Raspberry Pi OS (armv7l, Python 3.11) installs without
 compiling: mcap is pure Python, websockets has armv7l wheels and a pure-Python one
-(checked on PyPI for armv7l and Python 3.11). What they require must come from
+(.ci/run checks the live view line's on PyPI). What they require must come from
 here too, or from Debian: `test_what_the_pi_wheels_require_is_what_they_say`.
 """
 
@@ -235,6 +235,19 @@ class TestRaspberryPiInstall(unittest.TestCase):
                 assert extra is not None, str(caught.exception)
                 names = [requirement_name(r) for r in extras[extra.group(1)]]
                 self.assertEqual(names, [package], f"the extra {extra.group(1)!r}")
+
+    def test_ci_runs_the_pi_page_s_live_view_line(self) -> None:
+        ci = read(".ci", "run")
+        self.assertIn(
+            """view_line=$(grep -m1 -F "pip install -e '.[view]'" docs/raspberry-pi.md)""", ci
+        )
+        self.assertIn('bash -c "$view_line --seconds 2 --view-port 0"', ci)
+        self.assertIn("Root-Is-Purelib", ci)
+        pi_page = read("docs", "raspberry-pi.md")
+        lines = [line for line in pi_page.splitlines() if "pip install -e '.[view]'" in line]
+        self.assertEqual(len(lines), 1)  # so the grep finds the line of the bash block
+        self.assertTrue(lines[0].endswith("python -m snr demo --view"), lines[0])
+        self.assertIn(f"```bash\n{lines[0]}\n```", pi_page)
 
     def test_nothing_tells_anyone_to_force_pip(self) -> None:
         texts = ["README.md", ".ci/run", *glob.glob("docs/*.md", root_dir=ROOT)]
