@@ -203,7 +203,7 @@ class TestRaspberryPiInstall(unittest.TestCase):
         pi_page = read("docs", "raspberry-pi.md")
         for page in "viewing.md", "recording.md":
             text = read("docs", page)
-            extras = re.findall(r"pip install 'snr\[(\w+)\]'", text)
+            extras = re.findall(r"pip install '[\w.-]+\[(\w+)\]'", text)  # snr or a new name
             self.assertNotEqual(extras, [], page)
             for extra in extras:
                 with self.subTest(page=page, extra=extra):
