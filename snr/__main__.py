@@ -52,7 +52,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "--view",
         action="store_true",
         help="serve a live view for Foxglove or Lichtblick and print the URL to open "
-        "(needs pip install 'snr[viz]')",
+        "(needs pip install 'snr[view]')",
     )
     demo_parser.add_argument(
         "--view-port", type=int, default=8765, help="the live view's port (default 8765)"

@@ -141,7 +141,7 @@ if __name__ == "__main__":
     unittest.main()
 
 
-# Packages only an extra brings (serial, controller, viz, zenoh, docs, fast).
+# Packages only an extra brings (serial, controller, view, mcap, zenoh, docs, fast).
 OPTIONAL_PACKAGES = ["serial", "pygame", "mcap", "websockets", "zenoh", "pdoc", "orjson"]
 
 IMPORT_EVERY_MODULE_WITHOUT_EXTRAS = f"""

@@ -31,11 +31,11 @@ try:
     SDK = Subprotocol("foxglove.sdk.v1")  # what current viewers offer
     OLDER = Subprotocol("foxglove.websocket.v1")  # viewers before it
     HAVE_WEBSOCKETS = True
-except ImportError:  # the viz extra is optional
+except ImportError:  # the view extra is optional
     HAVE_WEBSOCKETS = False
 
 NEEDS_WEBSOCKETS = unittest.skipUnless(
-    HAVE_WEBSOCKETS, "the live view needs websockets: pip install 'snr[viz]'"
+    HAVE_WEBSOCKETS, "the live view needs websockets: pip install 'snr[view]'"
 )
 DEADLINE_S = 5.0
 Frame = Tuple[int, int, Dict[str, Any]]  # subscription id, log time (ns), page fields
@@ -88,7 +88,7 @@ class TestConfiguration(SNRTestCase):
             with self.assertRaises(ConfigError) as caught:
                 FoxgloveBridgeFactory(["depth_m"])
         message = str(caught.exception)
-        self.assertIn("pip install 'snr[viz]'", message)
+        self.assertIn("pip install 'snr[view]'", message)
         self.assertNotIn("\n", message)
 
     @NEEDS_WEBSOCKETS
@@ -345,4 +345,4 @@ class TestDemoOption(SNRTestCase):
                 self.assertEqual(run_demo(1.0, view_port=8765), 2)
         runner.assert_not_called()
         self.assertEqual(err.getvalue().count("\n"), 1)
-        self.assertIn("pip install 'snr[viz]'", err.getvalue())
+        self.assertIn("pip install 'snr[view]'", err.getvalue())

@@ -33,7 +33,7 @@ from tests.page_collector import PageCollectorFactory
 from tests.test_recorder_replayer import ReloadAtFactory, bad_lines_of_every_kind, run_role
 
 HAS_MCAP = importlib.util.find_spec("mcap") is not None
-NEEDS_MCAP = "needs the mcap package (pip install -e '.[viz]' or '.[dev]')"
+NEEDS_MCAP = "needs the mcap package (pip install -e '.[mcap]' or '.[dev]')"
 
 
 def mcap_contents(path: str) -> Tuple[Any, List[Tuple[Any, Any, Any]]]:
@@ -178,7 +178,9 @@ class TestRecordMcap(SNRTestCase):
         with mock.patch.dict(sys.modules, {"zstandard": None}):
             with self.assertRaises(ConfigError) as caught:
                 run_role("robot", [RecorderEndpointFactory(path, ["n"], compression="zstd")])
-        self.assertIn("pip install zstandard", str(caught.exception))
+        message = str(caught.exception)
+        self.assertIn("needs the zstandard package: " + INSTALL_HINT, message)
+        self.assertIn("sudo apt install python3-lz4 python3-zstandard", message)
         self.assertEqual(os.listdir(os.path.dirname(path)), [os.path.basename(path)])
 
 
@@ -309,7 +311,7 @@ class TestConvert(unittest.TestCase):
 
 
 class TestWithoutMcap(SNRTestCase):
-    """What someone who did not install the viz extra sees: one line naming the command."""
+    """What someone who did not install the mcap extra sees: one line naming the command."""
 
     def setUp(self) -> None:
         hidden: Dict[str, Any] = {name: None for name in sys.modules if name.startswith("mcap")}

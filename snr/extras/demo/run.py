@@ -94,7 +94,7 @@ def run_demo(seconds: float = 15.0, verbose: bool = False, view_port: Optional[i
     of `VIEWED_KEYS` for Foxglove or Lichtblick on that port of 127.0.0.1,
     and the address to open is printed. Returns 0 when both nodes ended
     well, 1 if one did not, 2 if the live view cannot be offered (the
-    ``viz`` extra is not installed).
+    ``view`` extra is not installed).
 
     Example::
 

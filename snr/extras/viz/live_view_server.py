@@ -51,7 +51,7 @@ from snr.prelude import Page, WireFormatError
 from snr.std_mods.codec import load_object, page_json
 
 if TYPE_CHECKING:
-    # websockets (the viz extra) is imported when the server starts, not with
+    # websockets (the view extra) is imported when the server starts, not with
     # this module: the docs and `import snr.std_mods.io` must work without it.
     from websockets.asyncio.server import ServerConnection
 

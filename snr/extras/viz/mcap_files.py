@@ -1,9 +1,12 @@
 """MCAP recordings: pages as JSON messages that Foxglove, Lichtblick and ROS 2 tools open.
 
 MCAP (https://mcap.dev) is the default file format of ``ros2 bag``. SNR writes
-it with the ``mcap`` package, an optional extra (``pip install 'snr[viz]'``):
+it with the ``mcap`` package, an optional extra (``pip install 'snr[mcap]'``):
 nothing here imports it until an MCAP file is written or read, and a missing
-package is a one-line `ConfigError` naming that install command.
+package is a one-line `ConfigError` naming that install command. The package is
+pure Python, but its metadata requires lz4 and zstandard, which PyPI has no
+wheels of for 32-bit Raspberry Pi OS: there, install Debian's ``python3-lz4``
+and ``python3-zstandard`` first (``docs/raspberry-pi.md``).
 
 How pages map onto MCAP (see ``docs/recording.md``):
 
@@ -60,6 +63,7 @@ from snr.std_mods.codec import (
 __all__ = [
     "COMPRESSIONS",
     "COMPRESSION_PACKAGES",
+    "DEBIAN_HINT",
     "INSTALL_HINT",
     "MCAP_MAGIC",
     "MAX_RECORD_BYTES",
@@ -75,14 +79,17 @@ __all__ = [
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 """The 8 bytes every MCAP file starts (and ends) with."""
 
-INSTALL_HINT = "pip install 'snr[viz]'"
+INSTALL_HINT = "pip install 'snr[mcap]'"
 """The command that installs what MCAP files need."""
 
 COMPRESSIONS = ("none", "zstd", "lz4")
 """The ``compression`` choices; ``"none"`` needs only the pure-Python ``mcap`` package."""
 
 COMPRESSION_PACKAGES = {"zstd": "zstandard", "lz4": "lz4"}
-"""The package each compression needs besides ``mcap`` (they have no wheels everywhere)."""
+"""The package each compression needs besides ``mcap`` (the ``mcap`` extra brings both)."""
+
+DEBIAN_HINT = "on 32-bit Raspberry Pi OS: sudo apt install python3-lz4 python3-zstandard"
+"""Where a 32-bit Pi gets the compression packages: PyPI has no armv7l wheels of them."""
 
 MAX_RECORD_BYTES = 256 * 2**20
 """Largest MCAP record read (256 MiB): a damaged length field is reported, not allocated."""
@@ -215,7 +222,7 @@ class McapPageWriter:
             package = COMPRESSION_PACKAGES.get(compression, compression)
             raise ConfigError(
                 f"{what} with compression={compression!r} needs the {package} package "
-                f"({error}): pip install {package}, or write it uncompressed"
+                f"({error}): {INSTALL_HINT} ({DEBIAN_HINT}), or write it uncompressed"
             ) from None
         self.file = file
         self.compression = compression

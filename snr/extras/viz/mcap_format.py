@@ -20,6 +20,8 @@ from typing import IO, Any, Callable, Dict, Iterator, Tuple
 from snr.extras.viz.mcap_files import (
     COMPRESSION_PACKAGES,
     COMPRESSIONS,
+    DEBIAN_HINT,
+    INSTALL_HINT,
     MCAP_MAGIC,
     McapPageWriter,
     read_mcap_pages,
@@ -32,7 +34,7 @@ __all__ = ["MCAP", "McapFormat"]
 
 
 class McapFormat:
-    """MCAP files, written and read with the ``mcap`` package (``pip install 'snr[viz]'``).
+    """MCAP files, written and read with the ``mcap`` package (``pip install 'snr[mcap]'``).
 
     Example::
 
@@ -42,6 +44,7 @@ class McapFormat:
     magic: bytes = MCAP_MAGIC
     compressions: Tuple[str, ...] = COMPRESSIONS
     compression_packages: Dict[str, str] = COMPRESSION_PACKAGES
+    install_hint: str = f"{INSTALL_HINT} ({DEBIAN_HINT})"
 
     def require(self, what: str, part: str = "writer") -> Any:
         """The ``mcap.<part>`` module, or a `ConfigError` naming the install command."""

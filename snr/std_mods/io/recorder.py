@@ -245,7 +245,7 @@ class RecorderEndpointFactory(EndpointFactory):
             header line, so the file stays one valid recording). JSON lines only.
         file_format: ``"jsonl"`` or ``"mcap"``; by default ``"mcap"`` when
             ``filename`` ends in ``.mcap``, else ``"jsonl"`` (the thesis's format).
-            MCAP needs ``pip install 'snr[viz]'``; see ``docs/recording.md``.
+            MCAP needs ``pip install 'snr[mcap]'``; see ``docs/recording.md``.
         compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress the file in
             chunks of about 1 MiB (a killed process loses the unfinished
             chunk); ``None`` (default) writes and flushes each page on its own.
@@ -362,8 +362,8 @@ class RecorderEndpointFactory(EndpointFactory):
             if package is not None and not _installed(package):
                 raise ConfigError(
                     f"{type(self).__name__}({self.filename!r}, compression="
-                    f"{self.compression!r}) needs the {package} package: pip install "
-                    f"{package}, or leave compression out"
+                    f"{self.compression!r}) needs the {package} package: "
+                    f"{recording_format.install_hint}, or leave compression out"
                 )
         self.path, self.kept = self._choose_path()
         if self.file_format == "mcap":

@@ -43,11 +43,13 @@ class RecordingFormat(Protocol):
         magic: the bytes every file of this format starts with.
         compressions: the ``compression`` choices, ``"none"`` first.
         compression_packages: the package each compression needs.
+        install_hint: how to install those packages, e.g. "pip install 'snr[mcap]'".
     """
 
     magic: bytes
     compressions: Tuple[str, ...]
     compression_packages: Mapping[str, str]
+    install_hint: str
 
     def require(self, what: str, part: str = "writer") -> Any:
         """Fail with a `ConfigError` naming the install command if a package is missing."""
