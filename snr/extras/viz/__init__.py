@@ -1,7 +1,8 @@
 """See your robot: MCAP recordings and the live view for Foxglove or Lichtblick.
 
 Needs ``pip install 'snr[viz]'`` (mcap and websockets; ``[view]`` or
-``[mcap]`` installs one of them). ``mcap_files`` writes and reads MCAP (the recorder and replayer find it through the entry point
+``[mcap]`` installs one of them). ``mcap_files`` writes and reads MCAP
+(the recorder and replayer find it through the entry point
 ``snr.recording_formats``, ``mcap_format``), ``convert`` is
 ``python -m snr convert``, ``live_view`` serves a node's pages over the
 Foxglove WebSocket protocol (`FoxgloveBridgeFactory`).
