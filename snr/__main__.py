@@ -23,6 +23,7 @@ from typing import List, Optional, Sequence
 
 import snr
 import snr.console
+from snr.prelude.install import install_hint
 
 __all__ = ["main"]
 
@@ -46,7 +47,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "--view",
         action="store_true",
         help="serve a live view for Foxglove or Lichtblick and print the URL to open "
-        "(needs pip install 'snr[viz]')",
+        f"(needs {install_hint('viz')})",
     )
     demo_parser.add_argument(
         "--view-port", type=int, default=8765, help="the live view's port (default 8765)"
@@ -55,7 +56,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "--sim",
         action="store_true",
         help="a simulated rover follows walls, in a window or as PNG frames "
-        "(needs pip install 'snr[controller]' to draw)",
+        f"(needs {install_hint('controller')} to draw)",
     )
     demo_parser.add_argument(
         "--frames",

@@ -26,6 +26,7 @@ from snr import (
     tasks,
 )
 from snr.prelude import ComponentError
+from snr.prelude.install import install_hint
 from snr.std_mods.io import (
     STEAM_CONTROLLER_BUTTONS,
     STEAM_CONTROLLER_MAPPING,
@@ -301,7 +302,7 @@ class TestControllerLoop(SNRTestCase):
             ControllerLoopFactory("raw").get(node)
         message = str(caught.exception)
         self.assertIn("pygame is not installed", message)
-        self.assertIn("pip install 'snr[controller]'", message)
+        self.assertIn(install_hint("controller"), message)
         self.assertIn("SimulatedJoystick()", message)
         node.terminate()
 

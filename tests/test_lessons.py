@@ -32,6 +32,7 @@ from snr import (
     World,
 )
 from snr.core import TestRunner
+from snr.prelude.install import install_hint
 from snr.std_mods.sim import (
     BUMP,
     ODOMETRY,
@@ -50,6 +51,7 @@ from tests.examples_support import (
     script_env,
     start_script,
 )
+from tests.optional import reason
 from tests.page_collector import PageCollectorFactory
 from tests.quiet import captured_logs
 
@@ -197,7 +199,7 @@ class TestRunAsAStudentDoes(SNRTestCase):
             self.assertEqual(problems, [], lines)
         else:  # the simulator drives unseen, and says how to see it
             self.assertEqual(len(problems), 1, lines)
-            self.assertIn("pip install 'snr[controller]'", problems[0])
+            self.assertIn(install_hint("controller"), problems[0])
         return out.getvalue(), frames
 
     def test_the_wall_follower_sets_off_in_real_time(self) -> None:
@@ -247,7 +249,7 @@ def setUpModule() -> None:
     SIM_DEMO()  # (started already, unless in a pytest-xdist worker)
 
 
-@unittest.skipUnless(HAS_PYGAME, "pygame is not installed: the demo would draw nothing")
+@unittest.skipUnless(HAS_PYGAME, reason("pygame"))
 class TestSimDemo(SNRTestCase):
     def test_python_m_snr_demo_sim_drives_the_rover_and_says_where_the_frames_are(self) -> None:
         folder, demo = SIM_DEMO()

@@ -28,12 +28,12 @@ from snr.std_mods.io.mcap_files import (
     page_schema,
 )
 from snr.std_mods.io.page_schema import data_schema as infer_schema
-from tests.optional import HealthCheck, given, settings, st
+from tests.optional import HealthCheck, given, reason, settings, st
 from tests.page_collector import PageCollectorFactory
 from tests.test_recorder_replayer import ReloadAtFactory, bad_lines_of_every_kind, run_role
 
 HAS_MCAP = importlib.util.find_spec("mcap") is not None
-NEEDS_MCAP = "needs the mcap package (pip install -e '.[viz]' or '.[dev]')"
+NEEDS_MCAP = reason("mcap")
 
 
 def mcap_contents(path: str) -> Tuple[Any, List[Tuple[Any, Any, Any]]]:

@@ -5,7 +5,7 @@ The loop publishes the controller's raw state, a dict such as
 something changes. `InputMappingFactory` turns the numbered controls into
 names, `ControlProcessorFactory` turns button changes into events.
 
-pygame is optional (``pip install 'snr[controller]'``) and only imported when
+pygame is optional (``pip install 'snr-robotics[controller]'``) and only imported when
 a loop opens a real controller; a `SimulatedJoystick` needs no pygame.
 
 Example::
@@ -28,12 +28,13 @@ from typing import Any, Dict, List, Optional, Tuple
 
 from snr.core import LoopFactory, ThreadLoop
 from snr.prelude import AbstractNode, ComponentError, DataKey
+from snr.prelude.install import install_hint
 from snr.std_mods.io.joystick import Joystick, read_joystick
 
 __all__ = ["ControllerLoop", "ControllerLoopFactory"]
 
 _INSTALL_HINT = (
-    "Install it with `pip install 'snr[controller]'` (or `pip install pygame`; on "
+    f"Install it with `{install_hint('controller')}` (or `pip install pygame`; on "
     "Raspberry Pi OS `sudo apt install python3-pygame`)"
 )
 _SIMULATE_HINT = (

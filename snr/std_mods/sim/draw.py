@@ -1,6 +1,6 @@
 """Drawing the simulated world with pygame: in a window, or into PNG files.
 
-pygame is optional (the ``controller`` extra: ``pip install 'snr[controller]'``)
+pygame is optional (the ``controller`` extra: ``pip install 'snr-robotics[controller]'``)
 and imported only when something is drawn. Nothing here needs a screen:
 `render_scene` draws on an off-screen surface, which `save_png` writes out,
 so pictures can be made on a robot reached over ssh or in CI (set
@@ -29,6 +29,7 @@ from types import ModuleType
 from typing import Any, Callable, Deque, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 from snr.prelude import ComponentError, DataKey
+from snr.prelude.install import install_hint
 from snr.std_mods.io.keyboard import KeyboardJoystick
 from snr.std_mods.sim.sensors import BUMP, ODOMETRY, RANGE, TRUE_POSE
 from snr.std_mods.sim.world import World
@@ -45,9 +46,10 @@ __all__ = [
 ]
 
 INSTALL_HINT = (
-    "Install pygame to see it: `pip install 'snr[controller]'` (or `pip install pygame`; "
+    f"Install pygame to see it: `{install_hint('controller')}` (or `pip install pygame`; "
     "on Raspberry Pi OS `sudo apt install python3-pygame`)"
 )
+"""How to get pygame, said when the simulator cannot draw."""
 
 Color = Tuple[int, int, int]
 BACKGROUND: Color = (250, 250, 245)

@@ -1,0 +1,104 @@
+"""SNR as a package: its name, the install lines it prints, its version and its licence.
+
+SNR's distribution is ``snr-robotics`` (``snr`` on the package index is another
+project) and is imported as ``snr``. Every line that tells a user what to
+install comes from ``snr.prelude.install``; these tests pin what it builds, that
+no user-facing text still gives the old name, that ``snr --version`` answers
+with the installed version, and that the metadata carries the licence.
+"""
+
+from __future__ import annotations
+
+import re
+import sys
+import unittest
+from pathlib import Path
+from typing import Any, Dict, List
+
+from snr.prelude.install import DISTRIBUTION, install_hint, upgrade_hint
+from tests.examples_support import ROOT
+from tests.optional import EXTRA_FOR, reason
+
+OLD_NAME = re.compile(r"""pip install (?:-U |--upgrade )?snr(?![-\w])|['"]snr\[""")
+"""An install line with the old distribution name: ``pip install snr``, ``'snr[zenoh]'``."""
+
+TEXT_SUFFIXES = {".py", ".md", ".toml", ".txt", ".json", ".sh", ".ino", ".cfg"}
+
+
+def old_name_lines(text: str) -> List[str]:
+    """The lines of ``text`` that tell a user to install SNR by its old name."""
+    return [line.strip() for line in text.splitlines() if OLD_NAME.search(line)]
+
+
+def pyproject() -> Dict[str, Any]:
+    """pyproject.toml, read with tomllib (Python 3.11 and newer)."""
+    import tomllib
+
+    with open(Path(ROOT, "pyproject.toml"), "rb") as f:
+        return tomllib.load(f)
+
+
+def hinted_extras(source: str) -> List[str]:
+    """The extras the ``install_hint("...")`` calls in ``source`` name."""
+    return re.findall(r"""install_hint\(\s*['"]([\w-]+)['"]\s*\)""", source)
+
+
+class TestInstallHint(unittest.TestCase):
+    def test_the_hint_names_the_distribution_and_quotes_the_extra(self) -> None:
+        self.assertEqual(DISTRIBUTION, "snr-robotics")
+        self.assertEqual(install_hint("zenoh"), "pip install 'snr-robotics[zenoh]'")
+        self.assertEqual(install_hint("controller"), "pip install 'snr-robotics[controller]'")
+        self.assertEqual(install_hint(), "pip install snr-robotics")
+        self.assertEqual(upgrade_hint(), "pip install -U snr-robotics")
+
+    def test_the_tests_skip_reasons_give_the_same_hint_as_snr(self) -> None:
+        self.assertEqual(reason("zenoh"), "needs zenoh: pip install 'snr-robotics[zenoh]'")
+        self.assertEqual(reason("mcap"), f"needs mcap: {install_hint('viz')}")
+        self.assertEqual(reason("hypothesis"), f"needs hypothesis: {install_hint('dev')}")
+
+    @unittest.skipIf(sys.version_info < (3, 11), "reads pyproject.toml with tomllib")
+    def test_every_hinted_extra_exists_and_the_name_is_the_project_s(self) -> None:
+        project = pyproject()["project"]
+        self.assertEqual(project["name"], DISTRIBUTION)
+        extras = set(project["optional-dependencies"])
+        hinted = set(EXTRA_FOR.values())
+        for folder in ["snr", "bench", "tests"]:
+            for path in sorted(Path(ROOT, folder).rglob("*.py")):
+                hinted.update(hinted_extras(path.read_text(encoding="utf-8")))
+        self.assertGreaterEqual(hinted, {"controller", "docs", "fast", "serial", "viz", "zenoh"})
+        self.assertEqual(sorted(hinted - extras), [], "hints name extras pyproject.toml lacks")
+
+
+class TestNoOldName(unittest.TestCase):
+    def test_the_check_finds_the_old_name_and_passes_the_new(self) -> None:
+        old = [
+            "pip install snr",
+            "run: pip install -U snr now.",
+            "needs `pip install 'snr[viz]'`",
+            'extras = ["snr[zenoh]"]',
+        ]
+        self.assertEqual(old_name_lines("\n".join(old)), old)
+        new = f"{install_hint()}\n{upgrade_hint()}\n{install_hint('viz')}\npip install snr-robotics"
+        self.assertEqual(old_name_lines(new + "\npip install -e '.[dev]'\nimport snr"), [])
+
+    def test_no_user_facing_line_gives_the_old_name(self) -> None:
+        root = Path(ROOT)
+        files = [root / "README.md", root / "pyproject.toml"]
+        for folder in ["snr", "docs", "examples", "bench", "tests"]:
+            files += [
+                p
+                for p in (root / folder).rglob("*")
+                if p.suffix in TEXT_SUFFIXES and "api" not in p.relative_to(root).parts[:2]
+            ]
+        self.assertGreater(len(files), 100)
+        found = []
+        for path in files:
+            if path.name == Path(__file__).name:
+                continue  # its own examples of the old name
+            for line in old_name_lines(path.read_text(encoding="utf-8", errors="replace")):
+                found.append(f"{path.relative_to(root)}: {line}")
+        self.assertEqual(found, [], f"say {DISTRIBUTION}, as snr.prelude.install does")
+
+
+if __name__ == "__main__":
+    unittest.main()
