@@ -100,5 +100,26 @@ class TestNoOldName(unittest.TestCase):
         self.assertEqual(found, [], f"say {DISTRIBUTION}, as snr.prelude.install does")
 
 
+class TestPygameOrPygameCe(unittest.TestCase):
+    @unittest.skipIf(sys.version_info < (3, 11), "reads pyproject.toml with tomllib")
+    def test_the_controller_extra_takes_pygame_ce_where_pygame_has_no_wheels(self) -> None:
+        extras = pyproject()["project"]["optional-dependencies"]
+        either = [
+            "pygame>=2.1; python_version < '3.14'",
+            "pygame-ce>=2.5; python_version >= '3.14'",
+        ]
+        self.assertEqual(extras["controller"], either)
+        self.assertEqual([r for r in extras["dev"] if r.startswith("pygame")], either)
+
+    def test_the_missing_pygame_messages_say_either_works(self) -> None:
+        from snr.std_mods.io import controller
+        from snr.std_mods.sim import draw
+
+        for hint in [controller._INSTALL_HINT, draw.INSTALL_HINT]:
+            self.assertIn(install_hint("controller"), hint)
+            self.assertIn("pip install pygame-ce", hint)
+            self.assertIn("either works", hint)
+
+
 if __name__ == "__main__":
     unittest.main()

@@ -6,7 +6,8 @@ something changes. `InputMappingFactory` turns the numbered controls into
 names, `ControlProcessorFactory` turns button changes into events.
 
 pygame is optional (``pip install 'snr-robotics[controller]'``) and only imported when
-a loop opens a real controller; a `SimulatedJoystick` needs no pygame.
+a loop opens a real controller; a `SimulatedJoystick` needs no pygame. pygame-ce,
+which is imported as ``pygame`` too, works the same.
 
 Example::
 
@@ -34,8 +35,9 @@ from snr.std_mods.io.joystick import Joystick, read_joystick
 __all__ = ["ControllerLoop", "ControllerLoopFactory"]
 
 _INSTALL_HINT = (
-    f"Install it with `{install_hint('controller')}` (or `pip install pygame`; on "
-    "Raspberry Pi OS `sudo apt install python3-pygame`)"
+    f"Install it with `{install_hint('controller')}`, or with `pip install pygame` or "
+    "`pip install pygame-ce`: either works, both are imported as pygame, and pygame-ce "
+    "has wheels for Python 3.14 (on Raspberry Pi OS: `sudo apt install python3-pygame`)"
 )
 _SIMULATE_HINT = (
     "To run without a controller, give the loop a pretend one: "
