@@ -9,6 +9,7 @@ with the installed version, and that the metadata carries the licence.
 
 from __future__ import annotations
 
+import importlib.metadata
 import re
 import sys
 import unittest
@@ -98,6 +99,25 @@ class TestNoOldName(unittest.TestCase):
             for line in old_name_lines(path.read_text(encoding="utf-8", errors="replace")):
                 found.append(f"{path.relative_to(root)}: {line}")
         self.assertEqual(found, [], f"say {DISTRIBUTION}, as snr.prelude.install does")
+
+
+class TestLicence(unittest.TestCase):
+    def test_the_licence_file_is_mit(self) -> None:
+        text = Path(ROOT, "LICENSE").read_text(encoding="utf-8")
+        self.assertTrue(text.startswith("MIT License\n"), text[:40])
+        self.assertIn("Copyright (c) 2021-2026 SNR developers", text)
+
+    def test_the_installed_metadata_says_mit_and_names_the_file(self) -> None:
+        metadata = importlib.metadata.metadata(DISTRIBUTION)
+        self.assertEqual(metadata["License-Expression"], "MIT")
+        self.assertEqual(metadata.get_all("License-File"), ["LICENSE"])
+
+    @unittest.skipIf(sys.version_info < (3, 11), "reads pyproject.toml with tomllib")
+    def test_pyproject_uses_the_licence_expression(self) -> None:
+        project = pyproject()["project"]
+        self.assertEqual((project["license"], project["license-files"]), ("MIT", ["LICENSE"]))
+        ci = Path(ROOT, ".ci", "run").read_text(encoding="utf-8")
+        self.assertTrue("python -m pip wheel" in ci, ".ci/run builds the wheel to check it")
 
 
 class TestPygameOrPygameCe(unittest.TestCase):
