@@ -12,7 +12,7 @@ Commands::
                                        draw the system FILE runs, without running it
     python -m snr docs [--serve]       build (if needed) and open the docs, offline
     python -m snr convert IN OUT       convert a recording: JSON lines <-> MCAP (by OUT's name)
-    python -m snr version              print the installed version
+    python -m snr version              print the installed version (also: --version)
 """
 
 from __future__ import annotations
@@ -23,7 +23,7 @@ from typing import List, Optional, Sequence
 
 import snr
 import snr.console
-from snr.prelude.install import install_hint
+from snr.prelude.install import DISTRIBUTION, install_hint
 
 __all__ = ["main"]
 
@@ -31,6 +31,9 @@ __all__ = ["main"]
 def main(argv: Optional[Sequence[str]] = None) -> int:
     """Entry point of ``python -m snr`` and the ``snr`` command."""
     parser = argparse.ArgumentParser(prog="snr", description="SNR is Not ROS")
+    parser.add_argument(
+        "--version", action=_PrintVersion, help="print the installed version and exit"
+    )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND")
     demo_parser = sub.add_parser(
         "demo",
@@ -124,6 +127,32 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 0
     parser.print_help()
     return 2
+
+
+class _PrintVersion(argparse.Action):
+    """``snr --version``: prints e.g. ``snr-robotics 0.1.0`` and exits with 0."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, help: str) -> None:
+        super().__init__(option_strings, dest, nargs=0, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: object) -> None:
+        print(f"{DISTRIBUTION} {_installed_version()}")
+        parser.exit()
+
+
+def _installed_version() -> str:
+    """The version pip installed (the distribution's metadata), e.g. ``"0.1.0"``.
+
+    It is ``snr.__version__``, which the build reads; a checkout put on
+    ``sys.path`` without installing it has no metadata, and gives its own.
+    """
+    # Loaded only when asked: importlib.metadata costs more than all of `import snr`.
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version(DISTRIBUTION)
+    except PackageNotFoundError:
+        return snr.__version__
 
 
 def _graph(file: str, file_args: Sequence[str], roles: Optional[Sequence[str]], form: str) -> int:

@@ -9,15 +9,20 @@ with the installed version, and that the metadata carries the licence.
 
 from __future__ import annotations
 
+import contextlib
 import importlib.metadata
+import io
 import re
+import subprocess
 import sys
 import unittest
 from pathlib import Path
 from typing import Any, Dict, List
 
+import snr
+from snr.__main__ import main
 from snr.prelude.install import DISTRIBUTION, install_hint, upgrade_hint
-from tests.examples_support import ROOT
+from tests.examples_support import ROOT, script_env
 from tests.optional import EXTRA_FOR, reason
 
 OLD_NAME = re.compile(r"""pip install (?:-U |--upgrade )?snr(?![-\w])|['"]snr\[""")
@@ -99,6 +104,51 @@ class TestNoOldName(unittest.TestCase):
             for line in old_name_lines(path.read_text(encoding="utf-8", errors="replace")):
                 found.append(f"{path.relative_to(root)}: {line}")
         self.assertEqual(found, [], f"say {DISTRIBUTION}, as snr.prelude.install does")
+
+
+class TestVersion(unittest.TestCase):
+    def test_snr_version_is_the_installed_distribution_s(self) -> None:
+        try:
+            installed = importlib.metadata.version(DISTRIBUTION)
+        except importlib.metadata.PackageNotFoundError:
+            self.fail(f"{DISTRIBUTION} is not installed: run `pip install -e .` in the checkout")
+        self.assertEqual(snr.__version__, installed, "reinstall: pip install -e .")
+
+    def test_python_m_snr_version_prints_the_name_and_version_and_exits_0(self) -> None:
+        result = subprocess.run(
+            [sys.executable, "-m", "snr", "--version"],
+            capture_output=True,
+            text=True,
+            env=script_env(),
+            timeout=60,
+        )
+        self.assertEqual((result.returncode, result.stderr), (0, ""))
+        self.assertEqual(result.stdout, f"snr-robotics {snr.__version__}\n")
+
+    def test_the_snr_command_answers_version_too(self) -> None:
+        command = Path(sys.executable).with_name("snr.exe" if sys.platform == "win32" else "snr")
+        if not command.exists():
+            self.skipTest(f"no snr command beside {sys.executable}")
+        result = subprocess.run(
+            [str(command), "--version"], capture_output=True, text=True, timeout=60
+        )
+        self.assertEqual(result.returncode, 0, result.stderr)
+        self.assertEqual(result.stdout, f"snr-robotics {snr.__version__}\n")
+
+    def test_the_version_subcommand_prints_the_number(self) -> None:
+        out = io.StringIO()
+        with contextlib.redirect_stdout(out):
+            self.assertEqual(main(["version"]), 0)
+        self.assertEqual(out.getvalue(), f"{snr.__version__}\n")
+
+    @unittest.skipIf(sys.version_info < (3, 11), "reads pyproject.toml with tomllib")
+    def test_the_version_is_written_in_one_place(self) -> None:
+        config = pyproject()
+        self.assertNotIn("version", config["project"])
+        self.assertIn("version", config["project"]["dynamic"])
+        self.assertEqual(config["tool"]["hatch"]["version"], {"path": "snr/__init__.py"})
+        init = Path(ROOT, "snr", "__init__.py").read_text(encoding="utf-8")
+        self.assertEqual(re.findall(r"^__version__ = \"(.*)\"$", init, re.M), [snr.__version__])
 
 
 class TestLicence(unittest.TestCase):
