@@ -6,7 +6,7 @@ shape, recording lines) with:
 * ``before``: the previous codec (stdlib ``json``, no checks for infinity,
   lone surrogates or depth), copied here as it was;
 * ``json``: ``snr.std_mods.codec`` with the standard library;
-* ``orjson``: the same codec with orjson (``pip install 'snr[fast]'``).
+* ``orjson``: the same codec with orjson (``pip install 'snr-robotics[fast]'``).
 
 The ``json`` and ``orjson`` rows write the same bytes and reject the same
 input (``tests/test_codec.py`` checks it); only the speed differs.

@@ -13,7 +13,7 @@ its rate without it (the issue's bound: a slow viewer never slows the node).
 The pages a stalled viewer misses are dropped, newest kept, and counted.
 
 Run: ``python bench/bench_live_view.py [--pages N]`` (or ``nox -s bench``).
-Needs ``pip install 'snr[view]'``.
+Needs ``pip install 'snr-robotics[view]'``.
 """
 
 from __future__ import annotations

@@ -32,7 +32,7 @@ this was written): the difference between that and the floor is the node's
 own work (dispatch, the outbox, the profiler's clock in DEBUG mode), which
 is what a faster node can still save. See docs/performance.md.
 
-With Zenoh installed (``pip install 'snr[zenoh]'``), two sending rows more,
+With Zenoh installed (``pip install 'snr-robotics[zenoh]'``), two sending rows more,
 between two sessions of this process: **raw Zenoh put** (the raw row of
 `bench_zenoh.py`: ``publisher.put(orjson.dumps(body))``) and **SNR floor
 over Zenoh** (the page, its task, the datastore write, `PageEncoder` and a

@@ -6,7 +6,7 @@
 2. A node storing N pages: without a recorder (the baseline), with a
    recorder (one write + flush per page), and with ``sync=True`` (an fsync
    per page; on a laptop SSD this is the slow one).
-3. MCAP (when the mcap package is installed: ``pip install 'snr[mcap]'``):
+3. MCAP (when the mcap package is installed: ``pip install 'snr-robotics[mcap]'``):
    raw ``mcap`` writes (``json.dumps`` + ``add_message`` + flush per page)
    against SNR's `McapPageWriter`, and a node recording to MCAP against
    the same node recording JSON lines, all in this one run.
@@ -43,6 +43,7 @@ from snr import (
     tasks,
 )
 from snr.extras.viz.mcap_files import McapPageWriter
+from snr.prelude.install import install_hint
 from snr.std_mods.io.page_lines import page_from_line, page_to_line
 
 SAMPLE = Page("imu", {"ax": 0.01, "ay": -9.81, "az": 0.2, "ok": True}, "urov", 1.7e9)
@@ -146,7 +147,7 @@ def lines_per_second(path: str, count: int) -> float:
 def mcap_table(folder: str, n: int, rounds: int) -> None:
     """MCAP beside JSON lines and beside raw mcap writes: interleaved, best of ``rounds``."""
     if importlib.util.find_spec("mcap") is None:
-        print("\nMCAP: skipped, the mcap package is not installed (pip install 'snr[mcap]')")
+        print(f"\nMCAP: skipped, the mcap package is not installed ({install_hint('mcap')})")
         return
     mcap_path, jsonl_path = os.path.join(folder, "m.mcap"), os.path.join(folder, "j.jsonl")
     raw = writer = lines = jsonl = recorded = 0.0

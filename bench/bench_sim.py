@@ -54,6 +54,7 @@ from snr import (
 from snr.extras.demo import wall_follower
 from snr.extras.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
 from snr.extras.sim.draw import WorldView, import_pygame, render_scene
+from snr.prelude.install import install_hint
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 WORLD = World.load(os.path.join(ROOT, "examples", "rover", "room.json"))
@@ -198,7 +199,7 @@ def main(argv: List[str]) -> int:
         cases.append(("simulator + draw every 5th", lambda n: simulator(n, draw_every=5)))
         cases.append(("simulator + draw every step", lambda n: simulator(n, draw_every=1)))
     else:
-        print("pygame is not installed: no drawing rows (pip install 'snr[controller]')")
+        print(f"pygame is not installed: no drawing rows ({install_hint('controller')})")
     print(
         f"Simulator speed: {options.steps} steps of {DT_S * 1000:.0f} ms, "
         f"{len(WORLD.walls)} walls, 5 range rays, best of {options.rounds}"

@@ -1,6 +1,6 @@
 """SNR over Zenoh against raw Zenoh and SNR's own sockets, and fan-out / fan-in with CPU.
 
-Needs the Zenoh extra (``pip install 'snr[zenoh]'``). Every process talks
+Needs the Zenoh extra (``pip install 'snr-robotics[zenoh]'``). Every process talks
 over 127.0.0.1 with multicast scouting off and explicit endpoints (ports
 chosen at run time). Side by side, in one run, interleaved round by round:
 
@@ -59,6 +59,7 @@ from snr import (
     tasks,
 )
 from snr.extras.zenoh.comms import BATCH_TIME_LIMIT_MS
+from snr.prelude.install import install_hint
 
 try:
     import zenoh
@@ -467,7 +468,7 @@ def main(argv: Optional[List[str]] = None) -> None:
     parser.add_argument("--rounds", type=int, help="interleaved rounds (3; --quick 1)")
     args = parser.parse_args(argv)
     if zenoh is None:
-        print("Zenoh is not installed: pip install 'snr[zenoh]'")
+        print(f"Zenoh is not installed: {install_hint('zenoh')}")
         sys.exit(0)
     defaults = (5000, 300, 1) if args.quick else (50_000, 2000, 3)
     for field, default in zip(("pages", "round_trips", "rounds"), defaults):

@@ -12,7 +12,7 @@ Commands::
                                        draw the system FILE runs, without running it
     python -m snr docs [--serve]       build (if needed) and open the docs, offline
     python -m snr convert IN OUT       convert a recording: JSON lines <-> MCAP (by OUT's name)
-    python -m snr version              print the installed version
+    python -m snr version              print the installed version (also: --version)
 """
 
 from __future__ import annotations
@@ -24,6 +24,7 @@ from typing import Any, List, Optional, Sequence
 import snr
 import snr.console
 from snr.core import plugins
+from snr.prelude.install import DISTRIBUTION, install_hint
 
 __all__ = ["main"]
 
@@ -34,6 +35,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         prog="snr",
         description="SNR is Not ROS: a pure-Python robotics framework for teaching.",
         epilog="Run 'snr COMMAND --help' for a command's options.",
+    )
+    parser.add_argument(
+        "--version", action=_PrintVersion, help="print the installed version and exit"
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
     demo_parser = sub.add_parser(
@@ -52,7 +56,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "--view",
         action="store_true",
         help="serve a live view for Foxglove or Lichtblick and print the URL to open "
-        "(needs pip install 'snr[view]')",
+        f"(needs {install_hint('view')})",
     )
     demo_parser.add_argument(
         "--view-port", type=int, default=8765, help="the live view's port (default 8765)"
@@ -61,7 +65,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "--sim",
         action="store_true",
         help="a simulated rover follows walls, in a window or as PNG frames "
-        "(needs pip install 'snr[controller]' to draw)",
+        f"(needs {install_hint('controller')} to draw)",
     )
     demo_parser.add_argument(
         "--frames",
@@ -143,6 +147,32 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         return 0
     parser.print_help()
     return 2
+
+
+class _PrintVersion(argparse.Action):
+    """``snr --version``: prints e.g. ``snr-robotics 0.1.0`` and exits with 0."""
+
+    def __init__(self, option_strings: Sequence[str], dest: str, help: str) -> None:
+        super().__init__(option_strings, dest, nargs=0, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: object) -> None:
+        print(f"{DISTRIBUTION} {_installed_version()}")
+        parser.exit()
+
+
+def _installed_version() -> str:
+    """The version pip installed (the distribution's metadata), e.g. ``"0.1.0"``.
+
+    It is ``snr.__version__``, which the build reads; a checkout put on
+    ``sys.path`` without installing it has no metadata, and gives its own.
+    """
+    # Loaded only when asked: importlib.metadata costs more than all of `import snr`.
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version(DISTRIBUTION)
+    except PackageNotFoundError:
+        return snr.__version__
 
 
 if __name__ == "__main__":

@@ -21,9 +21,12 @@ from __future__ import annotations
 
 import importlib.util
 import unittest
-from typing import Any, Callable, Iterator, TypeVar
+from typing import Any, Callable, Dict, Iterator, TypeVar
+
+from snr.prelude.install import install_hint
 
 __all__ = [
+    "EXTRA_FOR",
     "HAVE_HYPOTHESIS",
     "HealthCheck",
     "example",
@@ -39,9 +42,27 @@ T = TypeVar("T")
 Decorated = TypeVar("Decorated", bound=Callable[..., Any])  # a test function or class
 
 
+EXTRA_FOR: Dict[str, str] = {
+    "mcap": "mcap",
+    "orjson": "fast",
+    "pdoc": "docs",
+    "pygame": "controller",
+    "serial": "serial",
+    "websockets": "view",
+    "zenoh": "zenoh",
+}
+"""The extra that installs each optional module the tests import; any other is in ``dev``."""
+
+
 def reason(module: str) -> str:
-    """Why a test skips: ``reason("pdoc")`` is "needs pdoc (pip install -e '.[dev]')"."""
-    return f"needs {module} (pip install -e '.[dev]')"
+    """Why a test skips, with the line that installs ``module`` (SNR's messages use it too).
+
+    Example::
+
+        reason("zenoh")       # "needs zenoh: pip install 'snr-robotics[zenoh]'"
+        reason("hypothesis")  # "needs hypothesis: pip install 'snr-robotics[dev]'"
+    """
+    return f"needs {module}: {install_hint(EXTRA_FOR.get(module, 'dev'))}"
 
 
 def needs(module: str) -> Callable[[Decorated], Decorated]:

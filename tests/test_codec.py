@@ -22,7 +22,7 @@ from snr.prelude import NotSerializableError, WireFormatError
 from snr.std_mods import codec
 from snr.std_mods.comms.wire import HEADER_BYTES, decode_body, encode_hello, encode_page
 from snr.std_mods.io import PageReader
-from tests.optional import example, given, settings, st
+from tests.optional import example, given, reason, settings, st
 
 BACKENDS = codec.available_backends()
 GOOD_PAGE = b'{"v":1,"kind":"page","key":"k","data":%s,"origin":"o","created_at_s":1.5}'
@@ -311,7 +311,7 @@ def read(backend: str, raw: bytes) -> Any:
     return ("read", json.dumps(value), repr(value))  # types too: 1 is not 1.0
 
 
-@unittest.skipUnless("orjson" in BACKENDS, "orjson is not installed")
+@unittest.skipUnless("orjson" in BACKENDS, reason("orjson"))
 class TestBackendsAgree(BackendCase):
     @settings(max_examples=150, deadline=None, database=None)
     @given(data=json_data, created=awkward_floats)

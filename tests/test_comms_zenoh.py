@@ -45,6 +45,7 @@ from snr import (
 )
 from snr.extras.zenoh.inbox import WAKE, SequenceFollower, count_attachment, read_count
 from snr.prelude import ConfigError, WireFormatError
+from snr.prelude.install import install_hint
 from snr.utils import MockNode
 from tests.comms_helpers import (
     EchoFactory,
@@ -56,11 +57,12 @@ from tests.comms_helpers import (
     TickerFactory,
 )
 from tests.helpers import free_port, wait_until
+from tests.optional import reason
 from tests.quiet import capture_test_logs
 from tests.test_comms_local import LocalNodes
 
 HAVE_ZENOH = importlib.util.find_spec("zenoh") is not None
-NEEDS_ZENOH = "needs the Zenoh extra: pip install 'snr[zenoh]'"
+NEEDS_ZENOH = reason("zenoh")
 PLAIN_CLIENT = os.path.join(os.path.dirname(__file__), "zenoh_plain_client.py")
 
 if HAVE_ZENOH:
@@ -237,7 +239,7 @@ class TestZenohSettings(unittest.TestCase):
     def test_a_missing_library_names_the_extra_to_install(self) -> None:
         with mock.patch.dict(sys.modules, {"zenoh": None}), self.assertRaises(ConfigError) as e:
             _zenoh_module()
-        self.assertIn("pip install 'snr[zenoh]'", str(e.exception))
+        self.assertIn(install_hint("zenoh"), str(e.exception))
 
     def test_samples_decode_as_frames_do_and_plain_programs_may_say_less(self) -> None:
         full = b'{"v":1,"kind":"page","key":"d","data":[1,2],"origin":"r","created_at_s":5.0}'

@@ -32,6 +32,7 @@ from snr.extras.controller import (
 )
 from snr.extras.controller.joystick import read_joystick
 from snr.prelude import ComponentError
+from snr.prelude.install import install_hint
 from tests.helpers import StopWhenTrueFactory
 
 PRESSED = (TaskType.event, "button_pressed")
@@ -301,7 +302,7 @@ class TestControllerLoop(SNRTestCase):
             ControllerLoopFactory("raw").get(node)
         message = str(caught.exception)
         self.assertIn("pygame is not installed", message)
-        self.assertIn("pip install 'snr[controller]'", message)
+        self.assertIn(install_hint("controller"), message)
         self.assertIn("SimulatedJoystick()", message)
         node.terminate()
 

@@ -32,6 +32,7 @@ from snr import (
     ThreadLoop,
 )
 from snr.prelude import ComponentError
+from tests.optional import reason
 
 try:
     pygame: Any = importlib.import_module("pygame")
@@ -117,7 +118,7 @@ class PadPresserFactory(LoopFactory):
         return PadPresserLoop(self, parent)
 
 
-@unittest.skipUnless(pygame is not None, "pygame is not installed")
+@unittest.skipUnless(pygame is not None, reason("pygame"))
 class TestControllerLoopOnPygame(SNRTestCase):
     def setUp(self) -> None:
         # Leave pygame as each test found it: stopped.

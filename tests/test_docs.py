@@ -17,6 +17,7 @@ from unittest import mock
 
 from snr.__main__ import main
 from snr.extras.docs import docsite
+from snr.prelude.install import install_hint
 from tests.examples_support import ROOT
 from tests.optional import needs
 
@@ -95,7 +96,7 @@ class TestDocsChecks(unittest.TestCase):
         with mock.patch.dict(sys.modules, {"pdoc": None, "pdoc.render": None}):
             with self.assertRaises(docsite.DocsBuildError) as caught:
                 docsite.build(Path(tempfile.mkdtemp(prefix="snr-docs-")), None)
-        self.assertIn("pip install 'snr[docs]'", str(caught.exception))
+        self.assertIn(install_hint("docs"), str(caught.exception))
 
     def test_a_misspelt_name_in_a_docstring_is_reported(self) -> None:
         module = types.ModuleType("student_module")

@@ -1,12 +1,12 @@
 """Docstring examples ("Example::" + an indented block) render as Python code."""
 
-import importlib.util
 import shutil
 import tempfile
 import unittest
 from pathlib import Path
 
 from snr.extras.docs.docsite import build, literal_blocks_to_fences
+from tests.optional import needs
 
 
 class TestLiteralBlocks(unittest.TestCase):
@@ -32,7 +32,7 @@ class TestLiteralBlocks(unittest.TestCase):
         self.assertEqual(literal_blocks_to_fences(text), text)
 
 
-@unittest.skipUnless(importlib.util.find_spec("pdoc"), "needs pdoc (pip install -e '.[dev]')")
+@needs("pdoc")
 class TestRenderedPage(unittest.TestCase):
     def test_no_literal_example_marker_on_the_page(self) -> None:
         output = Path(tempfile.mkdtemp(prefix="snr-docs-examples-"))

@@ -70,6 +70,7 @@ from snr.std_mods.comms.sockets import _listen as sockets_listen
 from snr.std_mods.io.console_protocol import ConsoleConnectionError
 from snr.std_mods.io.remote_console import RemoteConsole
 from tests.helpers import StopWhenDrainedFactory, StopWhenFactory, StopWhenTrueFactory, free_port
+from tests.optional import reason
 from tests.quiet import capture_test_logs, captured_logs
 
 HERE = "test_errors.py"
@@ -838,7 +839,7 @@ class TestOsErrors(unittest.TestCase):
         try:
             import serial  # noqa: F401 - only to know pyserial is there
         except ImportError:  # pragma: no cover - pyserial is an extra
-            self.skipTest("pyserial is not installed")
+            self.skipTest(reason("serial"))
         missing = "/dev/snr-no-such-port"
         with mock.patch.object(serial_port, "available_ports", lambda: ["/dev/ttyACM0"]):
             with self.assertRaises(CommsError) as ctx:

@@ -33,6 +33,7 @@ from snr import (
 from snr.extras.controller import KeyboardJoystick
 from snr.extras.sim import SimViewLoop, StickDriveFactory, run_in_window
 from snr.utils.mock_node import MockNode
+from tests.optional import reason
 
 try:
     pygame: Any = importlib.import_module("pygame")
@@ -76,7 +77,7 @@ class TestStickDrive(unittest.TestCase):
         self.assertEqual(self.wheels({"left_stick_Y": "up", "A": 1}), rest)  # not a number
 
 
-@unittest.skipIf(pygame is None, "pygame is not installed")
+@unittest.skipIf(pygame is None, reason("pygame"))
 class TestKeyboardJoystick(unittest.TestCase):
     def test_keys_move_the_left_stick_and_focus_loss_lets_go(self) -> None:
         keys = KeyboardJoystick()
@@ -92,7 +93,7 @@ class TestKeyboardJoystick(unittest.TestCase):
         self.assertEqual((keys.get_axis(1), keys.get_button(2)), (0.0, 0))
 
 
-@unittest.skipIf(pygame is None, "pygame is not installed")
+@unittest.skipIf(pygame is None, reason("pygame"))
 class TestTeleopInTheSimulatorWindow(unittest.TestCase):
     def test_arrow_keys_drive_the_rover_and_letting_go_stops_it(self) -> None:
         sim, view, teleop = teleop_rover()
@@ -115,7 +116,7 @@ class TestTeleopInTheSimulatorWindow(unittest.TestCase):
         self.assertFalse(thread.is_alive())
 
 
-@unittest.skipIf(pygame is None, "pygame is not installed")
+@unittest.skipIf(pygame is None, reason("pygame"))
 class TestWindowOnTheMainThread(unittest.TestCase):
     """What ``python -m snr demo --sim`` does on every platform (macOS requires it)."""
 

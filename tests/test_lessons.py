@@ -52,6 +52,7 @@ from tests.examples_support import (
     start_script,
 )
 from tests.helpers import no_pygame
+from tests.optional import reason
 from tests.page_collector import PageCollectorFactory
 from tests.quiet import captured_logs
 
@@ -276,7 +277,7 @@ def setUpModule() -> None:
     SIM_DEMO_WITHOUT_PYGAME()
 
 
-@unittest.skipUnless(HAS_PYGAME, "pygame is not installed: the demo would draw nothing")
+@unittest.skipUnless(HAS_PYGAME, reason("pygame"))
 class TestSimDemo(SNRTestCase):
     def test_python_m_snr_demo_sim_drives_the_rover_and_says_where_the_frames_are(self) -> None:
         folder, demo = SIM_DEMO()

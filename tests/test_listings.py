@@ -32,6 +32,7 @@ import snr
 from snr import AbstractNode, Node, SNRTestCase, Task, TaskType, tasks
 from snr.utils import ExpectorEndpointFactory, ListReplayerFactory
 from tests.helpers import free_port
+from tests.optional import reason
 from tests.quiet import capture_test_logs
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -381,7 +382,7 @@ class TestControllerListings(SNRTestCase):
         try:
             pygame: Any = importlib.import_module("pygame")
         except ImportError:
-            self.skipTest("listing A.8 needs pygame")
+            self.skipTest(reason("pygame"))
         # As a module, not its names: its test classes must not be collected twice.
         from tests import test_controller_pygame as virtual_pads
 

@@ -20,7 +20,9 @@ from snr import Config, Mode, Node, Page, SNRTestCase, tasks
 from snr.extras.viz.live_view import FoxgloveBridgeFactory, foxglove_app_url
 from snr.extras.viz.page_schema import data_schema, page_schema
 from snr.prelude import ConfigError
+from snr.prelude.install import install_hint
 from snr.std_mods.codec import page_json
+from tests.optional import reason
 from tests.quiet import capture_test_logs
 
 try:
@@ -34,9 +36,7 @@ try:
 except ImportError:  # the view extra is optional
     HAVE_WEBSOCKETS = False
 
-NEEDS_WEBSOCKETS = unittest.skipUnless(
-    HAVE_WEBSOCKETS, "the live view needs websockets: pip install 'snr[view]'"
-)
+NEEDS_WEBSOCKETS = unittest.skipUnless(HAVE_WEBSOCKETS, reason("websockets"))
 DEADLINE_S = 5.0
 Frame = Tuple[int, int, Dict[str, Any]]  # subscription id, log time (ns), page fields
 
@@ -88,7 +88,7 @@ class TestConfiguration(SNRTestCase):
             with self.assertRaises(ConfigError) as caught:
                 FoxgloveBridgeFactory(["depth_m"])
         message = str(caught.exception)
-        self.assertIn("pip install 'snr[view]'", message)
+        self.assertIn(install_hint("view"), message)
         self.assertNotIn("\n", message)
 
     @NEEDS_WEBSOCKETS
@@ -345,4 +345,4 @@ class TestDemoOption(SNRTestCase):
                 self.assertEqual(run_demo(1.0, view_port=8765), 2)
         runner.assert_not_called()
         self.assertEqual(err.getvalue().count("\n"), 1)
-        self.assertIn("pip install 'snr[view]'", err.getvalue())
+        self.assertIn(install_hint("view"), err.getvalue())

@@ -28,12 +28,12 @@ from snr.extras.viz.page_schema import data_schema as infer_schema
 from snr.prelude import ConfigError
 from snr.std_mods.codec import MAX_DEPTH, header_line, page_to_line
 from snr.std_mods.io import PageReader
-from tests.optional import HealthCheck, given, settings, st
+from tests.optional import HealthCheck, given, reason, settings, st
 from tests.page_collector import PageCollectorFactory
 from tests.test_recorder_replayer import ReloadAtFactory, bad_lines_of_every_kind, run_role
 
 HAS_MCAP = importlib.util.find_spec("mcap") is not None
-NEEDS_MCAP = "needs the mcap package (pip install -e '.[mcap]' or '.[dev]')"
+NEEDS_MCAP = reason("mcap")
 
 
 def mcap_contents(path: str) -> Tuple[Any, List[Tuple[Any, Any, Any]]]:

@@ -33,7 +33,9 @@ from snr import (
 )
 from snr.core import TestRunner
 from snr.prelude import CommsError, ConfigError
+from snr.prelude.install import install_hint
 from tests.helpers import StopWhenTrueFactory
+from tests.optional import reason
 from tests.page_collector import PageCollectorFactory
 from tests.quiet import capture_test_logs, captured_logs
 
@@ -46,7 +48,7 @@ QUICK = 0.02
 """``read_timeout_s`` for links whose stopping time is not what a test checks:
 a link stops within one read (0.1 s by default)."""
 
-needs_pyserial = unittest.skipIf(serial is None, "pyserial is not installed")
+needs_pyserial = unittest.skipIf(serial is None, reason("serial"))
 needs_pty = unittest.skipUnless(sys.platform.startswith(("linux", "darwin")), "needs a pty")
 
 
@@ -549,4 +551,4 @@ class TestErrors(SNRTestCase):
         with mock.patch.dict(sys.modules, hidden):
             with self.assertRaises(CommsError) as caught:
                 SerialLinkFactory("/dev/ttyACM0")
-        self.assertIn("pip install 'snr[serial]'", str(caught.exception))
+        self.assertIn(install_hint("serial"), str(caught.exception))

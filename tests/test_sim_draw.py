@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import importlib
 import os
+import re
 import unittest
 from pathlib import Path
 from typing import Any, Callable
@@ -19,9 +20,10 @@ from snr import SimRobotFactory, SimViewFactory, SNRTestCase, TaskType, World
 from snr.extras.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
 from snr.extras.sim.draw import WALL, WorldView, import_pygame, render_scene, save_png
 from snr.prelude import ComponentError
+from snr.prelude.install import install_hint
 from tests.examples_support import example_path, load_module
 from tests.helpers import StopWhenFactory, no_pygame
-from tests.optional import needs
+from tests.optional import needs, reason
 
 try:
     pygame: Any = importlib.import_module("pygame")
@@ -36,7 +38,7 @@ def pixels_of(surface: Any, color: Any) -> int:
     return int(pygame.mask.from_threshold(surface, color, (10, 10, 10, 255)).count())
 
 
-@unittest.skipIf(pygame is None, "pygame is not installed")
+@unittest.skipIf(pygame is None, reason("pygame"))
 class TestPicture(SNRTestCase):
     def test_a_png_of_the_world_is_written_and_is_not_blank(self) -> None:
         world = World.load(example_path("rover", "room.json"))
@@ -80,7 +82,7 @@ class TestInANode(SNRTestCase):
         )
         return sim
 
-    @unittest.skipIf(pygame is None, "pygame is not installed")
+    @unittest.skipIf(pygame is None, reason("pygame"))
     def test_the_wanderer_drives_and_frames_are_written(self) -> None:
         frames = Path(self.temp_file("frames"))
         view = SimViewFactory(World.box(4, 3), frames_dir=frames, window=False, rate_hz=100)
@@ -89,7 +91,7 @@ class TestInANode(SNRTestCase):
         self.assertFalse(sim.robot.bumped)
         self.assertGreaterEqual(len(list(frames.glob("frame_*.png"))), 2)
 
-    @unittest.skipIf(pygame is None, "pygame is not installed")
+    @unittest.skipIf(pygame is None, reason("pygame"))
     def test_a_window_is_drawn_and_closed_with_the_node(self) -> None:
         # SDL's dummy driver (set above) stands in for a screen.
         view = SimViewFactory(World.box(4, 3), window=True, rate_hz=100)
@@ -111,7 +113,7 @@ class TestInANode(SNRTestCase):
 
     def test_without_pygame_it_runs_and_says_how_to_see_it(self) -> None:
         with no_pygame():
-            with self.assertRaisesRegex(ComponentError, r"pip install 'snr\[controller\]'"):
+            with self.assertRaisesRegex(ComponentError, re.escape(install_hint("controller"))):
                 import_pygame()
             view = SimViewFactory(World.box(4, 3), window=False, rate_hz=100)
             with self.assertLogs("snr", "WARNING") as logs:

@@ -17,7 +17,7 @@ message for data JSON cannot hold, and one strict reader:
   `MAX_DEPTH`, and pages with missing or wrongly typed fields.
 
 Two JSON backends do the work: the standard library's ``json`` and, when it
-is installed (``pip install 'snr[fast]'``), ``orjson``, several times faster.
+is installed (``pip install 'snr-robotics[fast]'``), ``orjson``, several times faster.
 The backends differ (orjson writes NaN as ``null``, writes non-ASCII text as
 raw UTF-8, formats small floats differently, rejects some inputs that ``json``
 accepts), so the orjson path is taken only where its result is known to be the
@@ -56,6 +56,7 @@ from typing import (
 )
 
 from snr.prelude import NotSerializableError, Page, WireFormatError
+from snr.prelude.install import install_hint, upgrade_hint
 from snr.prelude.not_serializable import not_serializable_error
 
 _orjson: Any
@@ -425,7 +426,7 @@ def available_backends() -> Tuple[str, ...]:
 
     Example::
 
-        "orjson" in available_backends()   # True after pip install 'snr[fast]'
+        "orjson" in available_backends()   # True after pip install 'snr-robotics[fast]'
     """
     return ("json", "orjson") if _orjson is not None else ("json",)
 
@@ -468,7 +469,7 @@ def use_backend(name: Optional[str] = None) -> str:
         if _orjson is None:
             raise ValueError(
                 f"the orjson JSON backend is not installed ({BACKEND_ENV_VAR}=orjson?): "
-                "pip install 'snr[fast]', or use 'json'"
+                f"{install_hint('fast')}, or use 'json'"
             )
         _load, _dump_plain = _load_orjson, _dump_orjson
     else:
@@ -880,7 +881,7 @@ def check_header(fields: Mapping[str, Any]) -> None:
     if version > FORMAT_VERSION:
         raise WireFormatError(
             f"it was written in format version {version}, but this SNR reads up to version "
-            f"{FORMAT_VERSION}: upgrade SNR (pip install -U snr) to read it"
+            f"{FORMAT_VERSION}: upgrade SNR ({upgrade_hint()}) to read it"
         )
 
 

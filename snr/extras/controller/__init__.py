@@ -1,6 +1,6 @@
 """Game controllers and the keyboard as input (thesis listings A.6 to A.11).
 
-pygame reads a real controller: ``pip install 'snr[controller]'``. A
+pygame reads a real controller: ``pip install 'snr-robotics[controller]'``. A
 `SimulatedJoystick` needs nothing. ``controller`` reads it
 (`ControllerLoopFactory`), ``joystick`` is what a controller looks like,
 ``keyboard`` the arrow keys of a pygame window, ``input_mapping`` names its

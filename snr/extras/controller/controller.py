@@ -5,8 +5,9 @@ The loop publishes the controller's raw state, a dict such as
 something changes. `InputMappingFactory` turns the numbered controls into
 names, `ControlProcessorFactory` turns button changes into events.
 
-pygame is optional (``pip install 'snr[controller]'``) and only imported when
-a loop opens a real controller; a `SimulatedJoystick` needs no pygame.
+pygame is optional (``pip install 'snr-robotics[controller]'``) and only imported when
+a loop opens a real controller; a `SimulatedJoystick` needs no pygame. pygame-ce,
+which is imported as ``pygame`` too, works the same.
 
 Example::
 
@@ -29,12 +30,14 @@ from typing import Any, Dict, List, Optional, Tuple
 from snr.core import LoopFactory, ThreadLoop
 from snr.extras.controller.joystick import Joystick, read_joystick
 from snr.prelude import AbstractNode, ComponentError, DataKey
+from snr.prelude.install import install_hint
 
 __all__ = ["ControllerLoop", "ControllerLoopFactory"]
 
 _INSTALL_HINT = (
-    "Install it with `pip install 'snr[controller]'` (or `pip install pygame`; on "
-    "Raspberry Pi OS `sudo apt install python3-pygame`)"
+    f"Install it with `{install_hint('controller')}`, or with `pip install pygame` or "
+    "`pip install pygame-ce`: either works, both are imported as pygame, and pygame-ce "
+    "has wheels for Python 3.14 (on Raspberry Pi OS: `sudo apt install python3-pygame`)"
 )
 _SIMULATE_HINT = (
     "To run without a controller, give the loop a pretend one: "

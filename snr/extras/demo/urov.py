@@ -44,6 +44,7 @@ from snr import (
     ThreadLoop,
 )
 from snr.extras.controller import JoystickStep
+from snr.prelude.install import install_hint
 
 __all__ = [
     "PILOT_SCRIPT",
@@ -372,7 +373,7 @@ class ControlsProcessorFactory(EndpointFactory):
 class SerialConnection(Endpoint):
     """Writes thruster speeds to the motor board as ``M,left,right,vertical`` lines.
 
-    Uses pyserial when it is installed (``pip install 'snr[serial]'``); without
+    Uses pyserial when it is installed (``pip install 'snr-robotics[serial]'``); without
     it, the port is opened as a plain file, which works for the simulated board's
     pseudo-terminal, and for a real USB device at the baud rate it already has.
     """
@@ -404,8 +405,9 @@ class SerialConnection(Endpoint):
         except ImportError:
             if not simulated:  # a pseudo-terminal needs no settings; a USB device might
                 self.info(
-                    "pyserial is not installed (pip install 'snr[serial]'), so %s is opened "
+                    "pyserial is not installed (%s), so %s is opened "
                     "as a plain file, at the baud rate it already has",
+                    install_hint("serial"),
                     self.port_name,
                 )
             self.port = open(self.port_name, "wb", buffering=0)  # noqa: SIM115

@@ -1,6 +1,6 @@
 """The documentation builder: ``python -m snr docs`` (the guide and the API reference).
 
-Needs ``pip install 'snr[docs]'`` (pdoc). ``docsite`` builds and serves the
+Needs ``pip install 'snr-robotics[docs]'`` (pdoc). ``docsite`` builds and serves the
 docs; ``api_topics`` sorts what ``from snr import *`` gives into the topics
 of the reference's start page. The kernel finds ``docsite`` through the
 entry point ``snr.commands``; ``import snr`` does not load it. It ships

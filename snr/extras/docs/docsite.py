@@ -49,6 +49,7 @@ import snr
 from snr import prelude
 from snr.extras.docs.api_topics import PAGE_MODULES, TOPICS, check_topics, full_entry, summary
 from snr.prelude import SNRError
+from snr.prelude.install import install_hint
 
 __all__ = [
     "API_MODULES",
@@ -554,7 +555,7 @@ def build(
     except ImportError as error:
         raise DocsBuildError(
             "Building the docs needs pdoc, which is not installed. Install it with "
-            "`pip install 'snr[docs]'` (or `pip install -e '.[dev]'` in a checkout)."
+            f"`{install_hint('docs')}` (or `pip install -e '.[dev]'` in a checkout)."
         ) from error
     output_dir.mkdir(parents=True, exist_ok=True)
     (output_dir / STAMP_FILE).unlink(missing_ok=True)

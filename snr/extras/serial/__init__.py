@@ -1,6 +1,6 @@
 """Serial links to microcontrollers, and the board protocol (heartbeats, failsafe).
 
-Needs ``pip install 'snr[serial]'`` (pyserial). ``link`` exchanges pages or
+Needs ``pip install 'snr-robotics[serial]'`` (pyserial). ``link`` exchanges pages or
 text lines over a serial port (`SerialLinkFactory`), ``port`` opens ports
 with errors that explain, ``board`` is the protocol of SNR's board sketches.
 

@@ -19,7 +19,7 @@ waits for the board's ready line after each opening, sends heartbeats, and
 reports a board that stopped answering (whose own failsafe then stops its
 motors).
 
-pyserial is an optional dependency: ``pip install 'snr[serial]'``.
+pyserial is an optional dependency: ``pip install 'snr-robotics[serial]'``.
 """
 
 from __future__ import annotations

@@ -2,7 +2,7 @@
 
 What `SerialLinkLoop` (``serial_link_loop.py``) uses to open its port, kept
 apart so that a program can list ports or open one the same way.
-pyserial is an optional dependency: ``pip install 'snr[serial]'``.
+pyserial is an optional dependency: ``pip install 'snr-robotics[serial]'``.
 
 Example::
 
@@ -16,6 +16,7 @@ from typing import Any, List, Optional
 
 from snr.core.checks.os_errors import explain_os_error
 from snr.prelude import CommsError
+from snr.prelude.install import install_hint
 
 __all__ = [
     "available_ports",
@@ -39,7 +40,7 @@ def import_pyserial() -> Any:
     except ImportError as error:
         raise CommsError(
             "The serial link needs the pyserial package, which is not installed. Install "
-            "it with:  pip install 'snr[serial]'   (or: pip install pyserial)"
+            f"it with:  {install_hint('serial')}   (or: pip install pyserial)"
         ) from error
     return serial
 

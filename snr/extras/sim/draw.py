@@ -1,7 +1,8 @@
 """Drawing the simulated world with pygame: in a window, or into PNG files.
 
-pygame is optional (the ``controller`` extra: ``pip install 'snr[controller]'``)
-and imported only when something is drawn. Nothing here needs a screen:
+pygame (or pygame-ce, imported as ``pygame`` too) is optional (the ``controller``
+extra: ``pip install 'snr-robotics[controller]'``) and imported only when
+something is drawn. Nothing here needs a screen:
 `render_scene` draws on an off-screen surface, which `save_png` writes out,
 so pictures can be made on a robot reached over ssh or in CI (set
 ``SDL_VIDEODRIVER=dummy`` there if a window is asked for anyway).
@@ -32,6 +33,7 @@ from snr.extras.controller.keyboard import KeyboardJoystick
 from snr.extras.sim.sensors import BUMP, ODOMETRY, RANGE, TRUE_POSE
 from snr.extras.sim.world import World
 from snr.prelude import ComponentError, DataKey
+from snr.prelude.install import install_hint
 
 __all__ = [
     "INSTALL_HINT",
@@ -47,9 +49,11 @@ __all__ = [
 ]
 
 INSTALL_HINT = (
-    "Install pygame to see it: `pip install 'snr[controller]'` (or `pip install pygame`; "
-    "on Raspberry Pi OS `sudo apt install python3-pygame`)"
+    f"Install pygame to see it: `{install_hint('controller')}`, or `pip install pygame` or "
+    "`pip install pygame-ce`: either works, both are imported as pygame, and pygame-ce "
+    "has wheels for Python 3.14 (on Raspberry Pi OS: `sudo apt install python3-pygame`)"
 )
+"""How to get pygame, said when the simulator cannot draw."""
 
 NO_PICTURES = f"The simulator runs, but draws nothing: pygame is not installed. {INSTALL_HINT}."
 """What a simulator says, once, when it runs without pygame: no window, no PNG frames."""

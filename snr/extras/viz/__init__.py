@@ -1,6 +1,6 @@
 """See your robot: MCAP recordings and the live view for Foxglove or Lichtblick.
 
-Needs ``pip install 'snr[viz]'`` (mcap and websockets; ``[view]`` or
+Needs ``pip install 'snr-robotics[viz]'`` (mcap and websockets; ``[view]`` or
 ``[mcap]`` installs one of them). ``mcap_files`` writes and reads MCAP
 (the recorder and replayer find it through the entry point
 ``snr.recording_formats``, ``mcap_format``), ``convert`` is

@@ -10,7 +10,7 @@ page of each key, and the pages it missed are counted and logged (see
 ``live_view_server.py``). The server listens on 127.0.0.1 only, unless told
 otherwise: anyone who can connect sees every page.
 
-It needs the ``websockets`` package: ``pip install 'snr[view]'``, which installs
+It needs the ``websockets`` package: ``pip install 'snr-robotics[view]'``, which installs
 without compiling on a Raspberry Pi too. Without it, creating the factory
 raises a `ConfigError` that says so in one line.
 
@@ -42,6 +42,7 @@ from snr.prelude import (
     TaskId,
     TaskType,
 )
+from snr.prelude.install import install_hint
 
 if TYPE_CHECKING:
     from snr.extras.viz.live_view_server import LiveViewServer, LiveViewStats
@@ -51,7 +52,7 @@ __all__ = ["DEFAULT_LIVE_VIEW_PORT", "FoxgloveBridge", "FoxgloveBridgeFactory", 
 DEFAULT_LIVE_VIEW_PORT = 8765
 """The port Foxglove and Lichtblick suggest for a WebSocket connection."""
 
-_INSTALL = "pip install 'snr[view]'"
+_INSTALL = install_hint("view")
 _STOP_S = 1.0  # how long stopping waits for the server's thread
 _SEND_BUFFER = 1 << 18  # bytes the OS may hold for one viewer (Linux doubles it)
 
@@ -179,7 +180,7 @@ class FoxgloveBridgeFactory(EndpointFactory):
 
     Raises:
         ConfigError: no keys, a port out of range, or the ``websockets``
-            package is missing (``pip install 'snr[view]'``).
+            package is missing (``pip install 'snr-robotics[view]'``).
 
     Example::
 

@@ -1,7 +1,7 @@
 """MCAP recordings: pages as JSON messages that Foxglove, Lichtblick and ROS 2 tools open.
 
 MCAP (https://mcap.dev) is the default file format of ``ros2 bag``. SNR writes
-it with the ``mcap`` package, an optional extra (``pip install 'snr[mcap]'``):
+it with the ``mcap`` package, an optional extra (``pip install 'snr-robotics[mcap]'``):
 nothing here imports it until an MCAP file is written or read, and a missing
 package is a one-line `ConfigError` naming that install command. The package is
 pure Python, but its metadata requires lz4 and zstandard, which PyPI has no
@@ -49,6 +49,7 @@ from typing import IO, Any, Callable, Dict, Iterator, Optional, Tuple
 
 from snr.extras.viz.page_schema import page_schema as any_page_schema
 from snr.prelude import ConfigError, Page, WireFormatError
+from snr.prelude.install import install_hint
 from snr.std_mods.codec import (
     FORMAT_NAME,
     FORMAT_VERSION,
@@ -79,7 +80,7 @@ __all__ = [
 MCAP_MAGIC = b"\x89MCAP0\r\n"
 """The 8 bytes every MCAP file starts (and ends) with."""
 
-INSTALL_HINT = "pip install 'snr[mcap]'"
+INSTALL_HINT = install_hint("mcap")
 """The command that installs what MCAP files need."""
 
 COMPRESSIONS = ("none", "zstd", "lz4")

@@ -34,7 +34,7 @@ __all__ = ["MCAP", "McapFormat"]
 
 
 class McapFormat:
-    """MCAP files, written and read with the ``mcap`` package (``pip install 'snr[mcap]'``).
+    """MCAP files, written and read with the ``mcap`` package (``[mcap]`` extra).
 
     Example::
 

@@ -1,6 +1,6 @@
 """Zenoh: comms between many nodes on one network, and the console over Zenoh.
 
-Needs ``pip install 'snr[zenoh]'`` (eclipse-zenoh). ``comms`` publishes
+Needs ``pip install 'snr-robotics[zenoh]'`` (eclipse-zenoh). ``comms`` publishes
 pages by key (`ZenohCommsFactory`), ``inbox`` hands samples to the node's
 thread, ``console`` reaches any node by its role (``snr-console --zenoh``,
 found by the kernel through the entry point ``snr.console_transports``).

@@ -1,4 +1,6 @@
-"""Zenoh comms: many nodes, one network, pages published by key (``pip install 'snr[zenoh]'``).
+"""Zenoh comms: many nodes, one network, pages published by key (the ``zenoh`` extra).
+
+Install it with ``pip install 'snr-robotics[zenoh]'``.
 
 Each node adds one `ZenohCommsFactory`. It publishes the pages stored under
 the keys it names, each under the Zenoh key expression ``snr/<system>/<key>``,
@@ -73,6 +75,7 @@ from snr.prelude import (
     TaskType,
     WireFormatError,
 )
+from snr.prelude.install import install_hint
 from snr.std_mods.codec import PageEncoder, load_object, page_from_fields
 from snr.std_mods.comms.comms_loop import (
     COMMS_CONNECTED,
@@ -134,7 +137,7 @@ _BUSY_READS_S = 0.05  # then, once the node's thread has worked this long, it re
 _BAD_CHARS = set("*$?#")
 _MODES = ("peer", "client", "router")
 _STORE_PAGE = TaskType.store_page
-_INSTALL = "pip install 'snr[zenoh]'"
+_INSTALL = install_hint("zenoh")
 
 
 def _zenoh_module() -> Any:

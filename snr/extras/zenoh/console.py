@@ -1,4 +1,6 @@
-"""The console over Zenoh: reach any node of a system by its role (``pip install 'snr[zenoh]'``).
+"""The console over Zenoh: reach any node of a system by its role (the ``zenoh`` extra).
+
+Install it with ``pip install 'snr-robotics[zenoh]'``.
 
 A node that adds `ZenohConsoleFactory` answers console commands asked as
 Zenoh queries on ``snr/<system>/@console/<role>``; `ZenohConsole` asks them.

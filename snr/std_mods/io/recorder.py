@@ -245,7 +245,7 @@ class RecorderEndpointFactory(EndpointFactory):
             header line, so the file stays one valid recording). JSON lines only.
         file_format: ``"jsonl"`` or ``"mcap"``; by default ``"mcap"`` when
             ``filename`` ends in ``.mcap``, else ``"jsonl"`` (the thesis's format).
-            MCAP needs ``pip install 'snr[mcap]'``; see ``docs/recording.md``.
+            MCAP needs ``pip install 'snr-robotics[mcap]'``; see ``docs/recording.md``.
         compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress the file in
             chunks of about 1 MiB (a killed process loses the unfinished
             chunk); ``None`` (default) writes and flushes each page on its own.

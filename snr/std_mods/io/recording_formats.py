@@ -43,7 +43,7 @@ class RecordingFormat(Protocol):
         magic: the bytes every file of this format starts with.
         compressions: the ``compression`` choices, ``"none"`` first.
         compression_packages: the package each compression needs.
-        install_hint: how to install those packages, e.g. "pip install 'snr[mcap]'".
+        install_hint: how to install those packages, e.g. "pip install 'snr-robotics[mcap]'".
     """
 
     magic: bytes

@@ -131,7 +131,7 @@ class PageReader:
     """Reads the pages of a recording, JSON lines or MCAP, in order; iterate over it.
 
     An MCAP file (known by its first bytes, whatever its name) is read with
-    the ``mcap`` package (``pip install 'snr[mcap]'``); its messages are taken
+    the ``mcap`` package (``pip install 'snr-robotics[mcap]'``); its messages are taken
     as lines are, so what follows holds for both, with "message N" for "line N"
     (see `read_mcap_pages`).
 
