@@ -9,6 +9,7 @@ from typing import Any, List, Optional, Sequence
 from snr import AbstractFactory, CommandReceiverFactory, Config, Mode, Node
 from snr.std_mods.io import RemoteConsole
 from snr.std_mods.io.console_protocol import Reply, ReplyDecoder
+from tests.quiet import SLOW_HANDLER_S
 
 STOP_TIMEOUT_S = 5.0
 
@@ -31,6 +32,7 @@ class NodeInThread:
         self.receiver = CommandReceiverFactory(port=0, token=token, **receiver_options)
         config = Config({"robot": [*factories, self.receiver]}, mode=mode, profile=profile)
         self.node = Node("robot", config)
+        self.node.slow_handler_s = SLOW_HANDLER_S  # quick handlers on a busy machine
         self.errors: List[BaseException] = []
         self.thread = threading.Thread(target=self._run, name="test-node", daemon=True)
         self.host = ""

@@ -12,6 +12,13 @@ them without demanding any::
 
 or, for a whole test (e.g. one that runs a DEBUG node to check something else),
 ``capture_test_logs(self)`` as its first line.
+
+A node's handlers slower than 0.1 s are reported (`Node.slow_handler_s`). The
+suite's handlers are quick, but on a busy machine a handler may wait that long for
+the CPU, and a reload waits for the old loop's thread: the nodes of such tests
+set `SLOW_HANDLER_S` (``node.slow_handler_s = SLOW_HANDLER_S``, or the component
+`SlowHandlerLimitFactory` where a runner builds the node), so a line comes only
+when a handler really held its node up.
 """
 
 from __future__ import annotations
@@ -21,7 +28,12 @@ import logging
 import unittest
 from typing import Dict, Iterator, List, Optional
 
-__all__ = ["capture_test_logs", "captured_logs"]
+from snr import AbstractNode, Endpoint, EndpointFactory, Node
+
+__all__ = ["SLOW_HANDLER_S", "SlowHandlerLimitFactory", "capture_test_logs", "captured_logs"]
+
+SLOW_HANDLER_S = 1.0
+"""The slow-handler threshold of the suite's nodes that run quick handlers on a busy machine."""
 
 
 class _Keep(logging.Handler):
@@ -84,3 +96,22 @@ def capture_test_logs(test: unittest.TestCase, name: str = "snr") -> List[str]:
     lines = capture.__enter__()
     test.addCleanup(capture.__exit__, None, None, None)
     return lines
+
+
+class SlowHandlerLimitFactory(EndpointFactory):
+    """A component that sets its node's `Node.slow_handler_s` (for a node a runner builds).
+
+    Example::
+
+        components = [robot, brain, TimeoutLoopFactory(seconds=5), SlowHandlerLimitFactory()]
+        TestRunner("sim", Config({"sim": components}, mode=Mode.TEST), 30.0).run()
+    """
+
+    def __init__(self, seconds: float = SLOW_HANDLER_S) -> None:
+        super().__init__()
+        self.seconds = seconds
+
+    def get(self, parent: AbstractNode) -> Endpoint:
+        assert isinstance(parent, Node), parent
+        parent.slow_handler_s = self.seconds
+        return Endpoint(self, parent, "slow_handler_limit")

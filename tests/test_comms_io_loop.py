@@ -152,6 +152,8 @@ class TestOneIOThreadPerNode(unittest.TestCase):
         port = free_port()
         pair = SocketsPair(("127.0.0.1", port))
         config = Config({"both": [pair.server("a"), pair.client("b")]}, mode=Mode.TEST)
+        # A reload of a link's component waits on the node's thread while the old
+        # link says goodbye (0.25 s): LocalNodes' threshold (tests/quiet.py) allows it.
         nodes = LocalNodes(config, ["both"])
         self.addCleanup(nodes.stop)
         [node] = nodes.nodes

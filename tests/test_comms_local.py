@@ -29,7 +29,7 @@ from snr import (
 from snr.prelude import CommsError, ConfigError
 from tests.comms_helpers import StopAfterFactory
 from tests.helpers import free_port
-from tests.quiet import capture_test_logs
+from tests.quiet import SLOW_HANDLER_S, capture_test_logs
 
 PAGE = Page("pose", {"x": 1.5, "tags": ["a", "b"]}, "robot", 1234.5, process=False)
 
@@ -74,6 +74,8 @@ class LocalNodes:
 
     def __init__(self, config: Config, roles: Sequence[str]) -> None:
         self.nodes = [Node(role, config) for role in roles]
+        for node in self.nodes:  # quick handlers, but on a busy machine (tests/quiet.py)
+            node.slow_handler_s = SLOW_HANDLER_S
         self.errors: List[BaseException] = []
         self.threads = [
             threading.Thread(target=self._run, args=(node,), name=f"test-{node.role}")

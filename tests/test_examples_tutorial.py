@@ -50,7 +50,7 @@ def terminal() -> Iterator[io.StringIO]:
     # Only to the screen: not also to the stderr handler an earlier node may have
     # given "snr"; and the levels these DEBUG nodes set are put back afterwards.
     with captured_logs("snr"):
-        logging.getLogger("snr").addHandler(handler)  # so SNR adds no stderr handler
+        logging.getLogger("snr").addHandler(handler)  # so SNR's stderr handler steps aside
         with contextlib.redirect_stdout(screen), contextlib.redirect_stderr(screen):
             yield screen
 

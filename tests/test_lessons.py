@@ -54,7 +54,7 @@ from tests.examples_support import (
 from tests.helpers import no_pygame
 from tests.optional import reason
 from tests.page_collector import PageCollectorFactory
-from tests.quiet import captured_logs
+from tests.quiet import SlowHandlerLimitFactory, captured_logs
 
 wall_follower: Any = load_module(
     example_path("lessons", "wall_follower.py"), "lesson_wall_follower"
@@ -91,7 +91,14 @@ def drive(brain: AbstractFactory, world: World, seconds: float, seed: int = 1) -
     clock = SimClock()
     robot = SimRobotFactory(world, seed=seed)
     pages = PageCollectorFactory([TRUE_POSE, BUMP, WHEEL_CMD])
-    components = [robot, brain, TimeoutLoopFactory(seconds=seconds), pages]
+    # The brains' handlers are quick, but may wait for a busy machine's CPU.
+    components = [
+        robot,
+        brain,
+        TimeoutLoopFactory(seconds=seconds),
+        pages,
+        SlowHandlerLimitFactory(),
+    ]
     runner = TestRunner("sim", Config({"sim": components}, mode=Mode.TEST, clock=clock), 30.0)
     runner.run()
     if runner.timed_out:

@@ -1,12 +1,18 @@
-"""`RepeatFilter` and `LossReport`: repeated lines in brief, and drops always said."""
+"""SNR's logging: each line once, however the program set logging up; repeats in brief.
+
+`RateLimitedLog` and `LossReport` keep repeated lines short and always say drops.
+"""
 
 from __future__ import annotations
 
 import logging
+import subprocess
+import sys
 import unittest
 from typing import List
 
 from snr.core.logs import LossReport, RateLimitedLog
+from tests.examples_support import ROOT, script_env
 
 
 class Lines(logging.Handler):
@@ -89,6 +95,74 @@ class TestLossReport(LogTest):
         self.assertFalse(loss.ended("the link ended"), "the one drop is in the log already")
         self.assertEqual(len(self.lines.lines), 1)
         self.assertFalse(loss.dropping)
+
+
+# A program as a student writes it; argv[1] says when, if ever, it configures logging.
+PROGRAM = """
+import logging, sys
+from snr import Config, Mode, Node, TimeoutLoopFactory
+app_format = "app %(name)s %(levelname)s: %(message)s"
+if sys.argv[1] == "before":
+    logging.basicConfig(format=app_format)
+node = Node("robot", Config({"robot": [TimeoutLoopFactory(seconds=1)]}, mode=Mode.DEBUG))
+if sys.argv[1] == "after":
+    logging.basicConfig(format=app_format)
+node.log.info("Depth %d m", 3)
+node.log.warning("Sonar silent")
+
+class Listener(logging.Handler):  # as the console's, quoting a failed reload to its user
+    snr_only_listens = True
+    def emit(self, record):
+        pass
+
+node.log.addHandler(Listener(logging.ERROR))
+node.log.error("Reload failed")
+"""
+
+
+class TestEachLineOnce(unittest.TestCase):
+    """Whoever prints SNR's lines, each is printed once (issue: twice after basicConfig)."""
+
+    def stderr_lines(self, when: str) -> List[str]:
+        done = subprocess.run(
+            [sys.executable, "-c", PROGRAM, when],
+            cwd=ROOT,
+            env=script_env(),
+            capture_output=True,
+            text=True,
+            timeout=60,
+        )
+        self.assertEqual(done.returncode, 0, done.stderr)
+        self.assertEqual(done.stdout, "")
+        return done.stderr.splitlines()
+
+    def test_basic_config_before_the_first_node(self) -> None:
+        self.assertEqual(
+            self.stderr_lines("before"),
+            [
+                "app snr.robot INFO: Depth 3 m",
+                "app snr.robot WARNING: Sonar silent",
+                "app snr.robot ERROR: Reload failed",
+            ],
+        )
+
+    def test_basic_config_after_the_first_node(self) -> None:
+        self.assertEqual(
+            self.stderr_lines("after"),
+            [
+                "app snr.robot INFO: Depth 3 m",
+                "app snr.robot WARNING: Sonar silent",
+                "app snr.robot ERROR: Reload failed",
+            ],
+        )
+
+    def test_never_configured_snr_prints_its_own_lines(self) -> None:
+        lines = self.stderr_lines("never")
+        self.assertEqual(len(lines), 3, lines)
+        self.assertRegex(lines[0], r"^\d\d:\d\d:\d\d snr\.robot INFO: Depth 3 m$")
+        self.assertRegex(lines[1], r"^\d\d:\d\d:\d\d snr\.robot WARNING: Sonar silent$")
+        # A handler that only listens (the console's) leaves the line to SNR's.
+        self.assertRegex(lines[2], r"^\d\d:\d\d:\d\d snr\.robot ERROR: Reload failed$")
 
 
 if __name__ == "__main__":

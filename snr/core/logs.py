@@ -38,17 +38,61 @@ def level_for_mode(mode: Mode) -> int:
 
 
 def ensure_log_handler() -> None:
-    """Add a stderr handler to the ``snr`` logger if nobody configured logging.
+    """Give the ``snr`` logger SNR's own stderr handler, once per process.
 
-    A program that calls ``logging.basicConfig`` (or a test runner that
-    captures logs) keeps full control: SNR adds nothing then.
+    The handler writes a line only while nobody else would: while the
+    program has set no handler of its own on the root logger, nor on the
+    ``snr`` loggers the line passes on its way up. A program that calls
+    ``logging.basicConfig``, before or after building its nodes, gets each
+    line once, formatted its way; one that never configures logging sees
+    SNR's lines on stderr.
+
+    Example::
+
+        ensure_log_handler()          # what every Node does
+        logging.basicConfig(level=logging.INFO)
+        logging.getLogger("snr.urov").warning("Depth sensor silent")   # printed once
     """
     snr_log = logging.getLogger(_ROOT)
-    if snr_log.handlers or logging.getLogger().handlers:
+    if any(isinstance(handler, _DefaultHandler) for handler in snr_log.handlers):
         return
-    handler = logging.StreamHandler(sys.stderr)
+    handler = _DefaultHandler(sys.stderr)
     handler.setFormatter(logging.Formatter(LOG_FORMAT, datefmt="%H:%M:%S"))
     snr_log.addHandler(handler)
+
+
+class _DefaultHandler(logging.StreamHandler):  # type: ignore[type-arg]
+    """SNR's stderr handler: it steps aside for any handler the program set.
+
+    It decides line by line, not once when the first node is built: logging
+    may be configured later, and a line that reached the program's handler
+    too would be printed twice.
+    """
+
+    def handle(self, record: logging.LogRecord) -> bool:
+        if _another_handler_takes(record, self):
+            return False
+        return super().handle(record)
+
+
+def _another_handler_takes(record: logging.LogRecord, own: logging.Handler) -> bool:
+    """Whether ``record`` reaches a handler that prints or keeps it, besides ``own``.
+
+    A handler SNR adds only to listen (the console quoting a failed reload's
+    error back to its user) marks itself ``snr_only_listens``: the line must
+    still be printed.
+    """
+    logger: Optional[logging.Logger] = logging.getLogger(record.name)
+    while logger is not None:
+        for handler in logger.handlers:
+            if (
+                handler is not own
+                and record.levelno >= handler.level
+                and not getattr(handler, "snr_only_listens", False)
+            ):
+                return True
+        logger = logger.parent if logger.propagate else None
+    return False
 
 
 class RepeatFilter:

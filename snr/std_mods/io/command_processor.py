@@ -748,6 +748,8 @@ def _bounded(text: str) -> str:
 
 
 class _ErrorCollector(logging.Handler):
+    snr_only_listens = True  # SNR's stderr handler still prints what this collects
+
     def __init__(self, into: List[str]) -> None:
         super().__init__(logging.ERROR)
         self.into = into
