@@ -789,6 +789,27 @@ class TestBlockingHandler(SNRTestCase):
                 for part in (HERE, "took 0.0", "(event, 'nap')", "ThreadLoop", "time.sleep"):
                     self.assertIn(part, slow[0])
 
+    def test_a_slow_handler_of_snr_s_own_is_not_blamed_on_the_student(self) -> None:
+        capture_test_logs(self)
+        naps = [tasks.event("nap")]
+        node = Node(
+            "test",
+            self.get_config(
+                [FactoryOf(Sleepy), StopWhenDrainedFactory(naps), TimeoutLoopFactory(seconds=5)],
+                Mode.DEBUG,
+            ),
+        )
+        node.slow_handler_s = 0.01
+        # The same slow function, as if SNR's own module had defined it.
+        Sleepy.nap.__module__ = "snr.core.node_core"
+        try:
+            with self.assertLogs("snr.test", "DEBUG") as logs:
+                node.loop()
+        finally:
+            Sleepy.nap.__module__ = __name__
+        slow = [r for r in logs.records if "Sleepy.nap" in r.getMessage()]
+        self.assertEqual([r.levelname for r in slow], ["DEBUG"], logs.output)
+
 
 # -- 12. ports and serial devices: the real components ---------------------------------
 def catalogue_section(number: int) -> str:

@@ -356,13 +356,22 @@ class HandlerRunner:
         self.stop(f"stopped by a {type(error).__name__}")
 
     def report_slow(self, handler: TaskHandler, task: Task, took_s: float) -> None:
-        """Warn once per handler that it held the node's thread for ``took_s``."""
+        """Warn once per handler that it held the node's thread for ``took_s``.
+
+        Only a student's handler is warned about; SNR's own (in ``snr.*``
+        modules) is noted at DEBUG level, since the advice is not theirs to follow.
+        """
         if self.mode is Mode.DEPLOYED:
             return
         func = _func_of(handler)
         if func in self._slow_reported:
             return
         self._slow_reported.add(func)
+        if getattr(func, "__module__", "").startswith("snr."):
+            # SNR's own handler (a reload waiting for a link's goodbye, say): the
+            # advice to move work into a ThreadLoop is not the student's to follow.
+            self.log.debug("%s", slow_handler_text(handler, task, took_s))
+            return
         self.log.warning("%s", slow_handler_text(handler, task, took_s))
 
 
