@@ -115,8 +115,10 @@ class Driver(Endpoint):
         return self.drive(0.0, None, "the laptop left")
 
     def drive(self, speed: float, command: Optional[int], why: str) -> Task:
+        """The robot's new status: drive at ``speed`` for ``command`` (None: a stop of its own)."""
         before = self.get_data(STATUS)
-        if before is None or before["speed_m_s"] != speed:
+        # Say each change of speed, and every stop the laptop did not command.
+        if before is None or before["speed_m_s"] != speed or command is None:
             print(f"robot: driving at {speed:+.2f} m/s ({why})", flush=True)
         return self.store_data_task(STATUS, {"speed_m_s": speed, "command": command, "why": why})
 
