@@ -44,12 +44,12 @@ from snr.std_mods.io.console_protocol import (
     MAX_LINE_BYTES,
     TOKEN_ENV_VAR,
     ConsoleConnectionError,
+    ConsoleSession,
     Reply,
     ReplyDecoder,
     Status,
     tokens_match,
 )
-from snr.std_mods.io.console_session import ConsoleSession
 from snr.std_mods.io.remote_console import EXIT_CONNECTION, EXIT_OK, ConsoleClient, say
 
 __all__ = [
@@ -95,14 +95,9 @@ class _QueryReply(ConsoleSession):
 
     def send(self, reply: Reply) -> None:
         query, self.query = self.query, None
-        if query is None:
-            return
-        try:
-            query.reply(self.owner.key, reply.encode())
-            query.drop()  # finished: the console stops waiting for more replies
-        except Exception:  # the console gave up waiting, or the session closed
-            pass
-        self.owner.answered()
+        if query is not None:
+            self.owner.answer(query, reply)
+            self.owner.answered()
 
 
 class ZenohConsoleLoop(ConsoleLoop):
@@ -175,38 +170,33 @@ class ZenohConsoleLoop(ConsoleLoop):
             if given is None or not tokens_match(
                 given.to_bytes().decode("utf-8", "replace"), token
             ):
-                self._answer_now(query, Status.ERROR, "This node needs its console token.")
+                self.answer(query, Reply(Status.ERROR, "This node needs its console token."))
                 return
         payload = query.payload
         line = payload.to_bytes().decode("utf-8", "replace") if payload is not None else ""
         if not line.strip():
-            text = (
-                f"Connected to node {self.parent.role!r} over Zenoh ({self.key}). "
-                "Type 'help' for the commands, 'exit' to stop the node."
-            )
-            self._answer_now(query, Status.HELLO, text)
+            self.answer(query, Reply(Status.HELLO, self.greeting(f" over Zenoh ({self.key})")))
             return
         if len(line.encode("utf-8")) > MAX_LINE_BYTES or "\n" in line:
-            self._answer_now(
-                query, Status.ERROR, f"A command is one line of at most {MAX_LINE_BYTES} bytes."
-            )
+            text = f"A command is one line of at most {MAX_LINE_BYTES} bytes."
+            self.answer(query, Reply(Status.ERROR, text))
             return
         with self._lock:
             busy = self._waiting >= MAX_WAITING_QUERIES
             if not busy:
                 self._waiting += 1
         if busy:
-            self._answer_now(
-                query, Status.ERROR, "The node is busy with other consoles' commands; try again."
-            )
+            text = "The node is busy with other consoles' commands; try again."
+            self.answer(query, Reply(Status.ERROR, text))
             return
         self.submit(line, _QueryReply(self, query))
 
-    def _answer_now(self, query: Any, status: Status, text: str) -> None:
+    def answer(self, query: Any, reply: Reply) -> None:
+        """Reply to ``query`` and finish it (any thread); a console that gave up is let be."""
         try:
-            query.reply(self.key, Reply(status, text).encode())
-            query.drop()
-        except Exception:  # the console gave up waiting
+            query.reply(self.key, reply.encode())
+            query.drop()  # finished: the console stops waiting for more replies
+        except Exception:  # the console gave up waiting, or the session closed
             pass
 
 
