@@ -341,9 +341,7 @@ class RemoteConsole(ConsoleClient):
     Args:
         host: the node's address.
         port: the receiver's port.
-        token: the shared token, if the node needs one (default: the
-            ``SNR_CONSOLE_TOKEN`` environment variable).
-        timeout_s: how long to wait to connect, and for each reply.
+        token, timeout_s: as for `ConsoleClient`.
     """
 
     def __init__(
@@ -581,7 +579,3 @@ def main(
         say(err, f"{prog}: {error}")
         return EXIT_CONNECTION
     return console.run(args.command, stdin, out, err, prog)
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
