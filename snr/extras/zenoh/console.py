@@ -324,7 +324,9 @@ class ZenohConsole(ConsoleClient):
                 every one that answered refused the console.
         """
         self._open()
-        by_role = self._ask_roles("", self.timeout_s, until_answered=True)
+        by_role = self._greetings(self.timeout_s)
+        if not by_role:
+            raise self._nobody_answered(self.timeout_s)
         if self.every_node:
             greeting = self._greet_every_node(by_role)
         else:
@@ -364,13 +366,7 @@ class ZenohConsole(ConsoleClient):
             ZenohConsole("team7", scouting=False, connect=[...]).roles()   # ['urov']
         """
         self._open()
-        deadline = time.monotonic() + timeout_s
-        key = console_key(self.system, "*")
-        while True:  # until some node answers: the session may still be meeting its peers
-            answers = self._replies(key, "", max(0.1, deadline - time.monotonic()))
-            if answers or time.monotonic() >= deadline:
-                return sorted({str(answer.key_expr).rsplit("/", 1)[-1] for answer in answers})
-            time.sleep(0.05)
+        return sorted(self._greetings(timeout_s, "*"))
 
     def _open(self) -> None:
         if self.session is None:
@@ -409,7 +405,10 @@ class ZenohConsole(ConsoleClient):
         """One query for ``line``: the node's reply, or every node's, labelled (``"*"``)."""
         if self.every_node:
             return self._ask_every_node(line, timeout_s)
-        return next(iter(self._ask_roles(line, timeout_s).values()))
+        by_role = self._answers(line, timeout_s)
+        if not by_role:
+            raise self._nobody_answered(timeout_s)
+        return next(iter(by_role.values()))
 
     def _ask_every_node(self, line: str, timeout_s: float) -> Reply:
         """Send a read-only command to every node the role matches; their replies, labelled."""
@@ -504,21 +503,17 @@ class ZenohConsole(ConsoleClient):
             f"sends only {', '.join(EVERY_NODE_COMMANDS)}."
         )
 
-    def _ask_roles(
-        self, line: str, timeout_s: float, until_answered: bool = False
-    ) -> Dict[str, Reply]:
-        """Each answering node's reply to ``line``, by role; asked again if ``until_answered``.
+    def _greetings(self, timeout_s: float, role: str = "") -> Dict[str, Reply]:
+        """Each node's greeting, by role; asked again until one answers or ``timeout_s`` ends.
 
         A query sent before the session has met the node's ends at once with
         no reply: a greeting (which changes nothing) may be asked again.
         """
         deadline = time.monotonic() + timeout_s
         while True:
-            by_role = self._answers(line, max(0.1, deadline - time.monotonic()))
-            if by_role:
+            by_role = self._answers("", max(0.1, deadline - time.monotonic()), role)
+            if by_role or time.monotonic() >= deadline:
                 return by_role
-            if not until_answered or time.monotonic() >= deadline:
-                raise self._nobody_answered(timeout_s)
             time.sleep(0.05)
 
     def _answers(self, line: str, timeout_s: float, role: str = "") -> Dict[str, Reply]:
