@@ -165,14 +165,17 @@ class ConsoleClient(ABC):
         if len(line.encode("utf-8")) > MAX_LINE_BYTES:
             raise ValueError(f"A console command may be at most {MAX_LINE_BYTES} bytes long.")
         if not self.is_connected():
-            raise ConsoleConnectionError(
-                f"The console is not connected to {self.where}: call connect() first "
-                "(a node that said bye has closed the connection)."
-            )
+            raise self._not_connected()
         reply = self.ask(line, self._reply_timeout_s(line))
         if reply.status is Status.BYE:
             self.close()
         return reply
+
+    def _not_connected(self) -> ConsoleConnectionError:
+        return ConsoleConnectionError(
+            f"The console is not connected to {self.where}: call connect() first "
+            "(a node that said bye has closed the connection)."
+        )
 
     def _reply_timeout_s(self, line: str) -> float:
         """How long to wait for the reply to ``line``: ``hz KEY W`` replies after W s."""
@@ -441,10 +444,7 @@ class RemoteConsole(ConsoleClient):
 
     def _connected(self) -> socket.socket:
         if self._sock is None:
-            raise ConsoleConnectionError(
-                f"The console is not connected to {self.where}: call connect() first "
-                "(a node that said bye has closed the connection)."
-            )
+            raise self._not_connected()
         return self._sock
 
     def _lost(self, error: Optional[OSError]) -> ConsoleConnectionError:
