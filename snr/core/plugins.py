@@ -18,7 +18,7 @@ The groups (``docs/design.md``, "Extras and extension points"):
   ``graph``, ``docs``, ``convert``): a module with ``add_arguments(parser)``
   and ``run(args) -> int``;
 * ``snr.console_transports``: other ways for ``snr-console`` to reach a node
-  (``zenoh``): a ``main(argv, stdin, stdout, stderr) -> int``;
+  (``zenoh``): a `snr.std_mods.io.remote_console.ConsoleClient` subclass;
 * ``snr.console_commands``: console commands kept in extras (``graph``): a
   ``command(node, args) -> str``;
 * ``snr.recording_formats``: recording formats besides JSON lines
@@ -93,7 +93,7 @@ def load(group: str, name: str, what: str) -> Any:
 
     Example::
 
-        run = load("snr.console_transports", "zenoh", "snr-console --zenoh")
+        client = load("snr.console_transports", "zenoh", "snr-console --zenoh")
     """
     for point in _entry_points(group):
         if point.name == name:

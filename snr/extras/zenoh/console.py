@@ -46,20 +46,13 @@ from snr.std_mods.io.console_protocol import (
     MAX_LINE_BYTES,
     TOKEN_ENV_VAR,
     ConsoleConnectionError,
+    ConsoleSession,
     Reply,
     ReplyDecoder,
     Status,
     tokens_match,
 )
-from snr.std_mods.io.console_session import ConsoleSession
-from snr.std_mods.io.remote_console import (
-    EXIT_CONNECTION,
-    EXIT_OK,
-    RemoteConsole,
-    add_session_options,
-    run_console,
-    say,
-)
+from snr.std_mods.io.remote_console import EXIT_CONNECTION, EXIT_OK, ConsoleClient, say
 
 __all__ = [
     "EVERY_NODE_COMMANDS",
@@ -67,7 +60,6 @@ __all__ = [
     "ZenohConsoleFactory",
     "ZenohConsoleLoop",
     "console_key",
-    "main",
 ]
 
 MAX_WAITING_QUERIES = 16  # commands queued on one node and not answered yet; more are refused
@@ -105,14 +97,9 @@ class _QueryReply(ConsoleSession):
 
     def send(self, reply: Reply) -> None:
         query, self.query = self.query, None
-        if query is None:
-            return
-        try:
-            query.reply(self.owner.key, reply.encode())
-            query.drop()  # finished: the console stops waiting for more replies
-        except Exception:  # the console gave up waiting, or the session closed
-            pass
-        self.owner.answered()
+        if query is not None:
+            self.owner.answer(query, reply)
+            self.owner.answered()
 
 
 class ZenohConsoleLoop(ConsoleLoop):
@@ -185,38 +172,33 @@ class ZenohConsoleLoop(ConsoleLoop):
             if given is None or not tokens_match(
                 given.to_bytes().decode("utf-8", "replace"), token
             ):
-                self._answer_now(query, Status.ERROR, "This node needs its console token.")
+                self.answer(query, Reply(Status.ERROR, "This node needs its console token."))
                 return
         payload = query.payload
         line = payload.to_bytes().decode("utf-8", "replace") if payload is not None else ""
         if not line.strip():
-            text = (
-                f"Connected to node {self.parent.role!r} over Zenoh ({self.key}). "
-                "Type 'help' for the commands, 'exit' to stop the node."
-            )
-            self._answer_now(query, Status.HELLO, text)
+            self.answer(query, Reply(Status.HELLO, self.greeting(f" over Zenoh ({self.key})")))
             return
         if len(line.encode("utf-8")) > MAX_LINE_BYTES or "\n" in line:
-            self._answer_now(
-                query, Status.ERROR, f"A command is one line of at most {MAX_LINE_BYTES} bytes."
-            )
+            text = f"A command is one line of at most {MAX_LINE_BYTES} bytes."
+            self.answer(query, Reply(Status.ERROR, text))
             return
         with self._lock:
             busy = self._waiting >= MAX_WAITING_QUERIES
             if not busy:
                 self._waiting += 1
         if busy:
-            self._answer_now(
-                query, Status.ERROR, "The node is busy with other consoles' commands; try again."
-            )
+            text = "The node is busy with other consoles' commands; try again."
+            self.answer(query, Reply(Status.ERROR, text))
             return
         self.submit(line, _QueryReply(self, query))
 
-    def _answer_now(self, query: Any, status: Status, text: str) -> None:
+    def answer(self, query: Any, reply: Reply) -> None:
+        """Reply to ``query`` and finish it (any thread); a console that gave up is let be."""
         try:
-            query.reply(self.key, Reply(status, text).encode())
-            query.drop()
-        except Exception:  # the console gave up waiting
+            query.reply(self.key, reply.encode())
+            query.drop()  # finished: the console stops waiting for more replies
+        except Exception:  # the console gave up waiting, or the session closed
             pass
 
 
@@ -262,11 +244,12 @@ class ZenohConsoleFactory(LoopFactory):
         return ZenohConsoleLoop(self, parent)
 
 
-class ZenohConsole(RemoteConsole):
-    """A console that reaches a node by system and role over Zenoh.
+class ZenohConsole(ConsoleClient):
+    """The console over Zenoh: reaches a node by system and role (``--zenoh``).
 
-    It talks like `RemoteConsole` (``send``, ``stream``, ``interact``): each
-    command is one Zenoh query, its reply one reply frame.
+    A transport of the console's core, `ConsoleClient`: it talks like
+    ``RemoteConsole`` (``send``, ``stream``, ``interact``); each command is one
+    Zenoh query, its reply one reply frame.
 
     The role may be a pattern: ``"*"`` (the default) reaches every node of
     the system. Then only the read-only `EVERY_NODE_COMMANDS` are sent, and
@@ -300,7 +283,7 @@ class ZenohConsole(RemoteConsole):
         token: Optional[str] = None,
         timeout_s: float = 10.0,
     ) -> None:
-        super().__init__(token=token, timeout_s=timeout_s)
+        super().__init__(token, timeout_s)
         self.system, self.role = system, role
         self.zenoh = _zenoh_module()
         self._config = zenoh_config(mode, connect, listen, scouting)
@@ -314,6 +297,7 @@ class ZenohConsole(RemoteConsole):
         self._greeted: List[str] = []
         self._refused: Dict[str, str] = {}
         self._tokened: Set[str] = set()
+        self._lists_roles = False  # snr-console --zenoh SYSTEM, with no role and no -c
 
     @property
     def where(self) -> str:
@@ -342,7 +326,9 @@ class ZenohConsole(RemoteConsole):
                 every one that answered refused the console.
         """
         self._open()
-        by_role = self._ask_roles("", self.timeout_s, until_answered=True)
+        by_role = self._greetings(self.timeout_s)
+        if not by_role:
+            raise self._nobody_answered(self.timeout_s)
         if self.every_node:
             greeting = self._greet_every_node(by_role)
         else:
@@ -382,13 +368,7 @@ class ZenohConsole(RemoteConsole):
             ZenohConsole("team7", scouting=False, connect=[...]).roles()   # ['urov']
         """
         self._open()
-        deadline = time.monotonic() + timeout_s
-        key = console_key(self.system, "*")
-        while True:  # until some node answers: the session may still be meeting its peers
-            answers = self._replies(key, "", max(0.1, deadline - time.monotonic()))
-            if answers or time.monotonic() >= deadline:
-                return sorted({str(answer.key_expr).rsplit("/", 1)[-1] for answer in answers})
-            time.sleep(0.05)
+        return sorted(self._greetings(timeout_s, "*"))
 
     def _open(self) -> None:
         if self.session is None:
@@ -423,29 +403,20 @@ class ZenohConsole(RemoteConsole):
                 return
             time.sleep(0.005)
 
-    def send(self, line: str) -> Reply:
-        """Send one command line and wait for its reply (see `RemoteConsole.send`)."""
-        if "\n" in line or "\r" in line:
-            raise ValueError("A console command is one line: remove the line breaks.")
-        if len(line.encode("utf-8")) > MAX_LINE_BYTES:
-            raise ValueError(f"A console command may be at most {MAX_LINE_BYTES} bytes long.")
-        if self.session is None:
-            raise ConsoleConnectionError(
-                f"The console is not connected to {self.where}: call connect() first."
-            )
+    def ask(self, line: str, timeout_s: float) -> Reply:
+        """One query for ``line``: the node's reply, or every node's, labelled (``"*"``)."""
         if self.every_node:
-            return self._ask_every_node(line)
-        reply = self._ask(line, self._reply_timeout_s(line))
-        if reply.status is Status.BYE:
-            self.close()
-        return reply
+            return self._ask_every_node(line, timeout_s)
+        by_role = self._answers(line, timeout_s)
+        if not by_role:
+            raise self._nobody_answered(timeout_s)
+        return next(iter(by_role.values()))
 
-    def _ask_every_node(self, line: str) -> Reply:
+    def _ask_every_node(self, line: str, timeout_s: float) -> Reply:
         """Send a read-only command to every node the role matches; their replies, labelled."""
         command = line.split()[0].lower() if line.split() else ""
         if command not in EVERY_NODE_COMMANDS:
             return Reply(Status.ERROR, self._not_sent(command))
-        timeout_s = self._reply_timeout_s(line)
         pending = self._ask_alive(timeout_s)  # read after the replies: no extra wait
         answers = self._answers(line, timeout_s)
         self._meet(answers, timeout_s)
@@ -534,25 +505,17 @@ class ZenohConsole(RemoteConsole):
             f"sends only {', '.join(EVERY_NODE_COMMANDS)}."
         )
 
-    def _ask(self, line: str, timeout_s: float) -> Reply:
-        """The one node's reply to ``line``."""
-        return next(iter(self._ask_roles(line, timeout_s).values()))
-
-    def _ask_roles(
-        self, line: str, timeout_s: float, until_answered: bool = False
-    ) -> Dict[str, Reply]:
-        """Each answering node's reply to ``line``, by role; asked again if ``until_answered``.
+    def _greetings(self, timeout_s: float, role: str = "") -> Dict[str, Reply]:
+        """Each node's greeting, by role; asked again until one answers or ``timeout_s`` ends.
 
         A query sent before the session has met the node's ends at once with
         no reply: a greeting (which changes nothing) may be asked again.
         """
         deadline = time.monotonic() + timeout_s
         while True:
-            by_role = self._answers(line, max(0.1, deadline - time.monotonic()))
-            if by_role:
+            by_role = self._answers("", max(0.1, deadline - time.monotonic()), role)
+            if by_role or time.monotonic() >= deadline:
                 return by_role
-            if not until_answered or time.monotonic() >= deadline:
-                raise self._nobody_answered(timeout_s)
             time.sleep(0.05)
 
     def _answers(self, line: str, timeout_s: float, role: str = "") -> Dict[str, Reply]:
@@ -590,6 +553,82 @@ class ZenohConsole(RemoteConsole):
         """True until closed, or the node said bye."""
         return self.session is not None
 
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser, prog: str) -> None:
+        """``--zenoh SYSTEM [ROLE]`` and the Zenoh session's options (for ``snr-console``)."""
+        parser.description = "Type commands into a node of a system, found by its role over Zenoh."
+        parser.add_argument("--zenoh", metavar="SYSTEM", required=True, help="the system's name")
+        parser.add_argument(
+            "role",
+            nargs="?",
+            help="the node's role (leave out to list the roles; with -c, read-only commands "
+            "then go to every node)",
+        )
+        parser.add_argument(
+            "--connect",
+            action="append",
+            default=[],
+            metavar="ENDPOINT",
+            help="a Zenoh endpoint to connect to, e.g. tcp/192.168.1.10:7447",
+        )
+        parser.add_argument(
+            "--listen",
+            action="append",
+            default=[],
+            metavar="ENDPOINT",
+            help="a Zenoh endpoint to listen on, e.g. tcp/0.0.0.0:7447",
+        )
+        parser.add_argument(
+            "--no-scouting",
+            action="store_true",
+            help="do not look for peers by multicast (give --connect instead)",
+        )
+        parser.add_argument(
+            "--mode",
+            default="peer",
+            choices=["peer", "client"],
+            help="peer (the default) or client, through a zenohd router given with --connect",
+        )
+
+    @classmethod
+    def from_arguments(cls, args: argparse.Namespace) -> ZenohConsole:
+        """The console ``--zenoh SYSTEM [ROLE]`` describes; with no role, every node.
+
+        Raises:
+            ConfigError: no zenoh library, or an endpoint Zenoh refuses.
+        """
+        console = cls(
+            args.zenoh,
+            args.role or "*",
+            mode=args.mode,
+            connect=args.connect,
+            listen=args.listen,
+            scouting=not args.no_scouting,
+            token=args.token,
+            timeout_s=args.timeout,
+        )
+        console._lists_roles = args.role is None
+        return console
+
+    def run(
+        self,
+        commands: Sequence[str] = (),
+        stdin: Optional[IO[str]] = None,
+        out: Optional[IO[str]] = None,
+        err: Optional[IO[str]] = None,
+        prog: str = "snr-console",
+    ) -> int:
+        """As `ConsoleClient.run`; from ``--zenoh SYSTEM`` alone, list the roles that answer."""
+        if not self._lists_roles or commands:
+            return super().run(commands, stdin, out, err, prog)
+        try:
+            roles = self.roles(min(self.timeout_s, 2.0))
+        finally:
+            self.close()
+        found = ", ".join(roles) or "none"
+        say(out or sys.stdout, f"Nodes of system {self.system!r} with a Zenoh console: {found}")
+        return EXIT_OK if roles else EXIT_CONNECTION
+
 
 def _labelled(by_role: Dict[str, Reply], notes: Optional[Dict[str, str]] = None) -> Reply:
     """One reply from several nodes' replies: each under its role; an error if any was one.
@@ -624,89 +663,3 @@ def _refusal(text: str) -> str:
     why = text.rstrip(".")
     hint = f" (give it: --token or {TOKEN_ENV_VAR})" if "token" in why else ""
     return f"refused: {why[:1].lower()}{why[1:]}{hint}"
-
-
-def _parser(prog: str) -> argparse.ArgumentParser:
-    # The usage line shows --zenoh SYSTEM itself, so prog is the command alone.
-    parser = argparse.ArgumentParser(
-        prog=prog,
-        description="Type commands into a node of a system, found by its role over Zenoh.",
-    )
-    parser.add_argument("--zenoh", metavar="SYSTEM", required=True, help="the system's name")
-    parser.add_argument(
-        "role",
-        nargs="?",
-        help="the node's role (leave out to list the roles; with -c, read-only commands "
-        "then go to every node)",
-    )
-    parser.add_argument(
-        "--connect",
-        action="append",
-        default=[],
-        metavar="ENDPOINT",
-        help="a Zenoh endpoint to connect to, e.g. tcp/192.168.1.10:7447",
-    )
-    parser.add_argument(
-        "--listen",
-        action="append",
-        default=[],
-        metavar="ENDPOINT",
-        help="a Zenoh endpoint to listen on, e.g. tcp/0.0.0.0:7447",
-    )
-    parser.add_argument(
-        "--no-scouting",
-        action="store_true",
-        help="do not look for peers by multicast (give --connect instead)",
-    )
-    parser.add_argument(
-        "--mode",
-        default="peer",
-        choices=["peer", "client"],
-        help="peer (the default) or client, through a zenohd router given with --connect",
-    )
-    add_session_options(parser)
-    return parser
-
-
-def main(
-    argv: Optional[Sequence[str]] = None,
-    stdin: Optional[IO[str]] = None,
-    stdout: Optional[IO[str]] = None,
-    stderr: Optional[IO[str]] = None,
-    prog: str = "snr-console",
-) -> int:
-    """``python -m snr console --zenoh SYSTEM [ROLE]``; returns the exit code.
-
-    ``prog``: the command's name in its usage and messages (``"snr console"``
-    when reached through ``python -m snr``, as `snr.console.main` passes it).
-
-    Example::
-
-        main(["--zenoh", "team7", "urov", "-c", "stats"])
-    """
-    out = stdout if stdout is not None else sys.stdout
-    err = stderr if stderr is not None else sys.stderr
-    args = _parser(prog).parse_args(argv)
-    try:
-        console = ZenohConsole(
-            args.zenoh,
-            args.role or "*",
-            mode=args.mode,
-            connect=args.connect,
-            listen=args.listen,
-            scouting=not args.no_scouting,
-            token=args.token,
-            timeout_s=args.timeout,
-        )
-    except Exception as error:  # a ConfigError: no zenoh, a bad endpoint
-        say(err, f"{prog}: {error}")
-        return EXIT_CONNECTION
-    if args.role is None and not args.command:
-        try:
-            roles = console.roles(min(args.timeout, 2.0))
-        finally:
-            console.close()
-        found = ", ".join(roles) or "none"
-        say(out, f"Nodes of system {args.zenoh!r} with a Zenoh console: {found}")
-        return EXIT_OK if roles else EXIT_CONNECTION
-    return run_console(console, args.command, stdin, out, err, prog)

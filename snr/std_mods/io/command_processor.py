@@ -55,8 +55,13 @@ from snr.prelude.error_text import closest_match, did_you_mean
 from snr.prelude.task import format_task
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.io.command_table import COMMANDS, commands_table
-from snr.std_mods.io.console_protocol import Reply, Status, parse_values, split_command
-from snr.std_mods.io.console_session import ConsoleSession
+from snr.std_mods.io.console_protocol import (
+    ConsoleSession,
+    Reply,
+    Status,
+    parse_values,
+    split_command,
+)
 from snr.std_mods.io.key_watch import (
     ECHO_DEFAULT_PAGES,
     ECHO_MAX_PAGES,

@@ -32,12 +32,12 @@ from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
     MAX_LINE_BYTES,
     TOKEN_ENV_VAR,
+    ConsoleSession,
     Reply,
     Status,
     check_listen_policy,
     tokens_match,
 )
-from snr.std_mods.io.console_session import ConsoleSession
 
 __all__ = [
     "DEFAULT_AUTH_TIMEOUT_S",
@@ -498,7 +498,7 @@ class CommandReceiverLoop(ConsoleLoop):
     def _admit(self, session: _RemoteSession) -> None:
         session.authenticated = True
         session.last_request = time.monotonic()
-        session.answer(Reply(Status.HELLO, self._greeting()))
+        session.answer(Reply(Status.HELLO, self.greeting()))
         self.info("Console %s connected", session.peer)
 
     def _turn_away(self, session: _RemoteSession) -> None:
@@ -512,12 +512,6 @@ class CommandReceiverLoop(ConsoleLoop):
         )
         self._close_with(
             session, Reply(Status.BYE, f"Too many consoles ({MAX_CONSOLES}) are open.")
-        )
-
-    def _greeting(self) -> str:
-        return (
-            f"Connected to node {self.parent.role!r}. "
-            "Type 'help' for the commands, 'exit' to stop the node."
         )
 
     def _drain_wakeups(self) -> None:

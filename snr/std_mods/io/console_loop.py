@@ -1,9 +1,9 @@
-"""`ConsoleLoop`: the base of every console (remote over TCP, or local on stdin).
+"""`ConsoleLoop`: the base of every console transport of a node (TCP, stdin, Zenoh).
 
 A console only turns the lines a user types into tasks; the command
-processor it adds to the node runs them on the node's thread. Each console
-adds its own processor when it begins, so several consoles never run one
-command twice.
+processor it adds to the node runs them on the node's thread and sends each
+reply to the line's `ConsoleSession`. Each console adds its own processor
+when it begins, so several consoles never run one command twice.
 
 Example::
 
@@ -20,7 +20,7 @@ from snr.core import ThreadLoop, tasks
 from snr.core.checks.step_mode import console_priority
 from snr.prelude import AbstractFactory, AbstractNode, ComponentName, DataKey, Task, TaskType
 from snr.std_mods.io.command_processor import CommandProcessorFactory
-from snr.std_mods.io.console_session import ConsoleSession
+from snr.std_mods.io.console_protocol import ConsoleSession
 
 __all__ = ["ConsoleLoop"]
 
@@ -66,3 +66,15 @@ class ConsoleLoop(ThreadLoop):
         """
         priority = console_priority(self.parent)
         self.schedule(Task(TaskType.event, self.command_task_name, [line, session], priority))
+
+    def greeting(self, how: str = "") -> str:
+        """The text of the ``hello`` a console gets; ``how`` says how it reached the node.
+
+        Example::
+
+            loop.greeting(" over Zenoh")   # "Connected to node 'urov' over Zenoh. Type 'help'..."
+        """
+        return (
+            f"Connected to node {self.parent.role!r}{how}. "
+            "Type 'help' for the commands, 'exit' to stop the node."
+        )

@@ -1,7 +1,8 @@
 """The console protocol: how a console and a node talk, and who may talk.
 
-Shared by the node side (`CommandReceiverFactory`) and the client
-(`RemoteConsole`); the full description is in ``docs/console.md``.
+Shared by the node side (`CommandReceiverFactory`, and `ConsoleSession`,
+where a node sends a reply) and the client (`RemoteConsole`); the full
+description is in ``docs/console.md``.
 
 * Console → node: one request per line of UTF-8 text ending in ``\\n``, at
   most `MAX_LINE_BYTES` bytes.
@@ -21,6 +22,7 @@ from __future__ import annotations
 
 import enum
 import json
+from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any, List, Optional, Tuple
 
@@ -34,6 +36,7 @@ __all__ = [
     "PROTOCOL",
     "TOKEN_ENV_VAR",
     "ConsoleConnectionError",
+    "ConsoleSession",
     "Reply",
     "ReplyDecoder",
     "Status",
@@ -106,6 +109,26 @@ class Reply:
             cut = len(body) - len(kept.encode("utf-8"))
             body = f"{kept}\n... (reply cut: {cut} more bytes)".encode()
         return f"{PROTOCOL} {self.status.value} {len(body)}\n".encode("ascii") + body
+
+
+class ConsoleSession(ABC):
+    """One console the node is talking to: where a command's reply goes.
+
+    A console loop (`CommandReceiverLoop`, `LocalConsole`) hands each command
+    line to the node with its session; the `CommandProcessorEndpoint` runs the
+    command on the node's thread and calls ``session.send(reply)``, so ``send``
+    must be quick and must never block or raise, even when the console has gone.
+
+    Example::
+
+        class PrintSession(ConsoleSession):
+            def send(self, reply: Reply) -> None:
+                print(reply.text)
+    """
+
+    @abstractmethod
+    def send(self, reply: Reply) -> None:
+        """Deliver ``reply`` to the console (a ``BYE`` reply also closes it)."""
 
 
 class ReplyDecoder:

@@ -39,7 +39,7 @@ from snr.core.checks.step_mode import console_priority
 from snr.core.component import Component
 from snr.prelude import DataKey, Page, SomeTasks, Task, TaskId, TaskType
 from snr.prelude.error_text import did_you_mean
-from snr.std_mods.io.console_protocol import Reply, Status
+from snr.std_mods.io.console_protocol import ConsoleSession, Reply, Status
 
 __all__ = [
     "ECHO_BATCH_S",
@@ -101,7 +101,7 @@ class _Echo:
     console: str
     pages: Deque[Tuple[Page, float]] = field(default_factory=lambda: deque(maxlen=ECHO_MAX_PAGES))
     skipped: int = 0
-    session: Any = None  # the ConsoleSession of the request waiting for pages
+    session: Optional[ConsoleSession] = None  # of the request waiting for pages
     wanted: int = ECHO_DEFAULT_PAGES
     asked_at: float = 0.0
     first_at: Optional[float] = None
@@ -111,7 +111,7 @@ class _Echo:
 @dataclass
 class _Rate:
     key: DataKey
-    session: Any
+    session: ConsoleSession
     window_s: float
     ends_at: float
     count: int = 0
@@ -165,7 +165,7 @@ class KeyWatches:
         self._closed = False
 
     # -- commands ----------------------------------------------------------------
-    def echo(self, key: DataKey, wanted: int, session: Any) -> Optional[Reply]:
+    def echo(self, key: DataKey, wanted: int, session: ConsoleSession) -> Optional[Reply]:
         """Start (or continue) this console's echo of ``key``; a reply now, or None (later)."""
         console = str(session)
         echo = self._echoes.get((console, key))
@@ -183,7 +183,7 @@ class KeyWatches:
         self._arm()
         return None
 
-    def hz(self, key: DataKey, window_s: float, session: Any) -> None:
+    def hz(self, key: DataKey, window_s: float, session: ConsoleSession) -> None:
         """Count the pages of ``key`` for ``window_s``; the reply goes to ``session`` then."""
         self._check_room()
         self._rates.append(_Rate(key, session, window_s, time.perf_counter() + window_s))
@@ -275,7 +275,8 @@ class KeyWatches:
 
     def _answer_echo(self, echo: _Echo) -> None:
         session = echo.session
-        session.send(self._echo_reply(echo))
+        if session is not None:  # always, as the callers check first
+            session.send(self._echo_reply(echo))
 
     def _echo_reply(self, echo: _Echo) -> Reply:
         echo.session, echo.first_at = None, None

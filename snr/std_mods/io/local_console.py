@@ -21,8 +21,7 @@ from typing import IO, Any, Dict, Optional, Tuple
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, ComponentName
 from snr.std_mods.io.console_loop import ConsoleLoop
-from snr.std_mods.io.console_protocol import MAX_LINE_BYTES, Reply, Status
-from snr.std_mods.io.console_session import ConsoleSession
+from snr.std_mods.io.console_protocol import MAX_LINE_BYTES, ConsoleSession, Reply, Status
 
 __all__ = ["LocalConsole", "LocalConsoleFactory"]
 

@@ -1,8 +1,12 @@
-"""`RemoteConsole`: type commands into a running node from another terminal.
+"""The console's end: one client core, `ConsoleClient`, and its TCP transport, `RemoteConsole`.
 
 Run it as ``snr-console HOST:PORT`` (or ``python -m snr.console HOST:PORT``)
 against a node whose config has a `CommandReceiverFactory`. With readline
 (Linux, macOS) you get line editing, history and Tab completion of commands.
+``snr-console --zenoh SYSTEM [ROLE]`` reaches a node over Zenoh instead:
+that transport is an extra (``snr/extras/zenoh/console.py``), found through
+the entry point ``snr.console_transports``. How the parts fit:
+``docs/console.md``, "How the console is built".
 
 Example::
 
@@ -17,10 +21,12 @@ from __future__ import annotations
 import os
 import socket
 import sys
-from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequence
+from abc import ABC, abstractmethod
+from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequence, Type, TypeVar
 
+from snr.core import plugins
 from snr.core.checks.os_errors import explain_os_error
-from snr.prelude import WireFormatError
+from snr.prelude import SNRError, WireFormatError
 from snr.std_mods.io.command_table import COMMANDS
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
@@ -42,10 +48,9 @@ __all__ = [
     "EXIT_INTERRUPTED",
     "EXIT_OK",
     "EXIT_USAGE",
+    "ConsoleClient",
     "RemoteConsole",
-    "add_session_options",
     "main",
-    "run_console",
     "say",
 ]
 
@@ -62,73 +67,84 @@ EXIT_INTERRUPTED = 130
 """Exit code: Ctrl-C while waiting for the node (the shell's convention)."""
 
 _LEAVE_WORDS = ("quit", "q")
+_Client = TypeVar("_Client", bound="ConsoleClient")
 
 
-class RemoteConsole:
-    """A client of a node's `CommandReceiverFactory`.
+class ConsoleClient(ABC):
+    """The console's core: sends command lines, prints replies, runs the program.
 
-    Use it as a program (``snr-console``), or from Python, e.g. in a test.
+    It reaches nodes through a transport's five methods (`where`, `connect`,
+    `ask`, `close`, `is_connected`) and, for ``snr-console``'s command line,
+    its two class methods (`add_arguments`, `from_arguments`). `RemoteConsole`
+    is the TCP transport; ``ZenohConsole`` (``snr.extras.zenoh.console``)
+    reaches nodes over Zenoh.
 
     Example::
 
-        with RemoteConsole("127.0.0.1", 9123) as console:
+        with RemoteConsole("127.0.0.1", 9123) as console:   # a ConsoleClient over TCP
             print(console.send("list endpoints").text)
 
     Args:
-        host: the node's address.
-        port: the receiver's port.
         token: the shared token, if the node needs one (default: the
             ``SNR_CONSOLE_TOKEN`` environment variable).
         timeout_s: how long to wait to connect, and for each reply.
     """
 
-    def __init__(
-        self,
-        host: str = "127.0.0.1",
-        port: int = DEFAULT_CONSOLE_PORT,
-        token: Optional[str] = None,
-        timeout_s: float = 10.0,
-    ) -> None:
-        self.host = host
-        self.port = port
+    def __init__(self, token: Optional[str] = None, timeout_s: float = 10.0) -> None:
         self.token = token if token is not None else os.environ.get(TOKEN_ENV_VAR) or None
         self.timeout_s = timeout_s
         self.greeting: Optional[Reply] = None
-        self._sock: Optional[socket.socket] = None
-        self._decoder = ReplyDecoder()
-        self._ready: List[Reply] = []
-        self._unanswered = 0  # requests sent whose replies were not read (Ctrl-C in a wait)
 
+    # -- what a transport provides ------------------------------------------------
     @property
+    @abstractmethod
     def where(self) -> str:
-        """``"host:port"``, for messages and the prompt."""
-        return f"{self.host}:{self.port}"
+        """What the prompt and the messages call the node(s), e.g. ``"127.0.0.1:9123"``."""
 
-    # -- connecting --------------------------------------------------------------
+    @abstractmethod
     def connect(self) -> Reply:
-        """Connect (and present the token if asked); returns the node's greeting.
+        """Reach the node(s); returns the greeting.
 
         Raises:
-            ConsoleConnectionError: refused, unreachable, wrong token, or not
-                an SNR console at that address. The message says what to try.
+            ConsoleConnectionError: no node answered, or it turned the console
+                away. The message says what to try.
         """
-        try:
-            self._sock = socket.create_connection((self.host, self.port), self.timeout_s)
-        except OSError as error:
-            raise ConsoleConnectionError(
-                explain_os_error(
-                    error,
-                    action="connect",
-                    target=self.where,
-                    who="The console",
-                    setting=f"the node's CommandReceiverFactory(port={self.port})",
-                )
-            ) from None
-        greeting = self._receive()
-        if greeting.status is Status.AUTH:
-            greeting = self._authenticate()
-        return self._accept(greeting, f"The node at {self.where}")
 
+    @abstractmethod
+    def ask(self, line: str, timeout_s: float) -> Reply:
+        """Send one checked request line, wait at most ``timeout_s``; its reply.
+
+        A transport that reaches several nodes returns one reply holding
+        each node's, under its role.
+
+        Raises:
+            ConsoleConnectionError: the node went away, or no reply came in time.
+        """
+
+    @abstractmethod
+    def close(self) -> None:
+        """Hang up (the node keeps running). Safe to call twice."""
+
+    @abstractmethod
+    def is_connected(self) -> bool:
+        """True until the console or the node closed the connection."""
+
+    @classmethod
+    @abstractmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser, prog: str) -> None:
+        """Add the command-line options that say which node(s) to reach (for `main`)."""
+
+    @classmethod
+    @abstractmethod
+    def from_arguments(cls, args: argparse.Namespace) -> ConsoleClient:
+        """The client the parsed command line describes (not connected yet).
+
+        Raises:
+            ValueError: an option is malformed (a usage error).
+            SNRError: the transport cannot be set up (e.g. its library is missing).
+        """
+
+    # -- the core -------------------------------------------------------------------
     def _accept(self, greeting: Reply, node: str) -> Reply:
         """Keep ``greeting`` if it says hello; else close and say why the node refused."""
         if greeting.status is not Status.HELLO:
@@ -137,17 +153,6 @@ class RemoteConsole:
         self.greeting = greeting
         return greeting
 
-    def _authenticate(self) -> Reply:
-        if self.token is None:
-            self.close()
-            raise ConsoleConnectionError(
-                f"The node at {self.where} needs a console token. Give it with "
-                f"`--token TOKEN` or the {TOKEN_ENV_VAR} environment variable."
-            )
-        self._send_line(f"auth {self.token}")
-        return self._receive()
-
-    # -- talking -------------------------------------------------------------------
     def send(self, line: str) -> Reply:
         """Send one command line and wait for its reply.
 
@@ -159,14 +164,18 @@ class RemoteConsole:
             raise ValueError("A console command is one line: remove the line breaks.")
         if len(line.encode("utf-8")) > MAX_LINE_BYTES:
             raise ValueError(f"A console command may be at most {MAX_LINE_BYTES} bytes long.")
-        while self._unanswered:  # a reply left unread by Ctrl-C: it is not this one's
-            self._receive(self._reply_timeout_s(""))
-            self._unanswered -= 1
-        self._send_line(line)
-        self._unanswered += 1
-        reply = self._receive(self._reply_timeout_s(line))
-        self._unanswered -= 1
+        if not self.is_connected():
+            raise self._not_connected()
+        reply = self.ask(line, self._reply_timeout_s(line))
+        if reply.status is Status.BYE:
+            self.close()
         return reply
+
+    def _not_connected(self) -> ConsoleConnectionError:
+        return ConsoleConnectionError(
+            f"The console is not connected to {self.where}: call connect() first "
+            "(a node that said bye has closed the connection)."
+        )
 
     def _reply_timeout_s(self, line: str) -> float:
         """How long to wait for the reply to ``line``: ``hz KEY W`` replies after W s."""
@@ -196,9 +205,7 @@ class RemoteConsole:
                 reply = self.send(line)
                 sent += 1
                 say(output, reply.text)
-                if reply.status is Status.ERROR:
-                    return EXIT_CONNECTION
-                if reply.status is Status.BYE:
+                if reply.status in (Status.ERROR, Status.BYE):
                     return EXIT_CONNECTION
         except ValueError as error:
             say(output, f"error: {error}")
@@ -207,67 +214,7 @@ class RemoteConsole:
             say(output, f"\n(Ctrl-C) Stopped `{line}`.")
         return EXIT_OK
 
-    def _send_line(self, line: str) -> None:
-        sock = self._connected()
-        try:
-            sock.sendall(line.encode("utf-8") + b"\n")
-        except OSError as error:
-            raise self._lost(error) from None
-
-    def _receive(self, timeout_s: Optional[float] = None) -> Reply:
-        sock = self._connected()
-        wait_s = self.timeout_s if timeout_s is None else timeout_s
-        sock.settimeout(wait_s)
-        while not self._ready:
-            try:
-                data = sock.recv(65536)
-            except socket.timeout:
-                raise ConsoleConnectionError(
-                    f"No reply from the node at {self.where} within {wait_s:g} s. "
-                    "It may be busy in a slow handler; try again, or use a longer "
-                    "--timeout."
-                ) from None
-            except OSError as error:
-                raise self._lost(error) from None
-            if not data:
-                raise self._lost(None)
-            try:
-                self._ready.extend(self._decoder.feed(data))
-            except WireFormatError as error:
-                self.close()
-                raise ConsoleConnectionError(f"{self.where}: {error}") from None
-        reply = self._ready.pop(0)
-        if reply.status is Status.BYE:
-            self.close()
-        return reply
-
-    def _connected(self) -> socket.socket:
-        if self._sock is None:
-            raise ConsoleConnectionError(
-                f"The console is not connected to {self.where}: call connect() first "
-                "(a node that said bye has closed the connection)."
-            )
-        return self._sock
-
-    def _lost(self, error: Optional[OSError]) -> ConsoleConnectionError:
-        self.close()
-        why = f" ({error.strerror or error})" if error is not None else ""
-        return ConsoleConnectionError(
-            f"Lost the connection to the node at {self.where}{why}. The node may have "
-            "stopped; its terminal says why."
-        )
-
-    def close(self) -> None:
-        """Hang up (the node keeps running). Safe to call twice."""
-        if self._sock is not None:
-            self._sock.close()
-            self._sock = None
-
-    def is_connected(self) -> bool:
-        """True until the console or the node closed the connection."""
-        return self._sock is not None
-
-    def __enter__(self) -> RemoteConsole:
+    def __enter__(self: _Client) -> _Client:
         if not self.is_connected():
             self.connect()
         return self
@@ -330,9 +277,222 @@ class RemoteConsole:
         say(output, reply.text)
         if reply.status is Status.ERROR:
             return EXIT_CONNECTION
-        if reply.status is Status.BYE and line.split()[0].lower() != "exit":
+        if reply.status is Status.BYE and words[0].lower() != "exit":
             return EXIT_CONNECTION  # the node left without being asked
         return EXIT_OK
+
+    def run(
+        self,
+        commands: Sequence[str] = (),
+        stdin: Optional[IO[str]] = None,
+        out: Optional[IO[str]] = None,
+        err: Optional[IO[str]] = None,
+        prog: str = "snr-console",
+    ) -> int:
+        """Connect, then run ``commands``, or what stdin gives (typed, or piped); the exit code.
+
+        ``prog`` begins each error message: the name of the command that was typed.
+
+        Example::
+
+            RemoteConsole("127.0.0.1", 9123).run(["stats"])   # prints the stats, returns 0
+        """
+        out = out if out is not None else sys.stdout
+        err = err if err is not None else sys.stderr
+        try:
+            greeting = self.connect()
+            if commands:
+                return self._run_lines(commands, out)
+            say(out, greeting.text)
+            source = stdin if stdin is not None else sys.stdin
+            if source.isatty() and stdin is None:
+                return self.interact(output=out)
+            return self._run_lines((line.strip() for line in source), out)
+        except ConsoleConnectionError as error:
+            say(err, f"{prog}: {error}")
+            return EXIT_CONNECTION
+        except KeyboardInterrupt:  # while waiting for a reply: leave (the node keeps running)
+            say(err, f"\n{prog}: interrupted.")
+            return EXIT_INTERRUPTED
+        finally:
+            self.close()
+
+    def _run_lines(self, lines: Iterable[str], out: IO[str]) -> int:
+        """Run commands from ``-c`` or a pipe; the exit code of the worst one."""
+        worst = EXIT_OK
+        for line in lines:
+            if not line:
+                continue
+            if line.lower() in _LEAVE_WORDS:
+                break
+            worst = max(worst, self.run_command(line, out))
+            if not self.is_connected():
+                break
+        return worst
+
+
+class RemoteConsole(ConsoleClient):
+    """The console over TCP: a client of a node's `CommandReceiverFactory`.
+
+    Use it as a program (``snr-console``), or from Python, e.g. in a test.
+
+    Example::
+
+        with RemoteConsole("127.0.0.1", 9123) as console:
+            print(console.send("list endpoints").text)
+
+    Args:
+        host: the node's address.
+        port: the receiver's port.
+        token, timeout_s: as for `ConsoleClient`.
+    """
+
+    def __init__(
+        self,
+        host: str = "127.0.0.1",
+        port: int = DEFAULT_CONSOLE_PORT,
+        token: Optional[str] = None,
+        timeout_s: float = 10.0,
+    ) -> None:
+        super().__init__(token, timeout_s)
+        self.host = host
+        self.port = port
+        self._sock: Optional[socket.socket] = None
+        self._decoder = ReplyDecoder()
+        self._ready: List[Reply] = []
+        self._unanswered = 0  # requests sent whose replies were not read (Ctrl-C in a wait)
+
+    @property
+    def where(self) -> str:
+        """``"host:port"``, for messages and the prompt."""
+        return f"{self.host}:{self.port}"
+
+    def connect(self) -> Reply:
+        """Connect (and present the token if asked); returns the node's greeting.
+
+        Raises:
+            ConsoleConnectionError: refused, unreachable, wrong token, or not
+                an SNR console at that address. The message says what to try.
+        """
+        try:
+            self._sock = socket.create_connection((self.host, self.port), self.timeout_s)
+        except OSError as error:
+            raise ConsoleConnectionError(
+                explain_os_error(
+                    error,
+                    action="connect",
+                    target=self.where,
+                    who="The console",
+                    setting=f"the node's CommandReceiverFactory(port={self.port})",
+                )
+            ) from None
+        greeting = self._receive(self.timeout_s)
+        if greeting.status is Status.AUTH:
+            if self.token is None:
+                self.close()
+                raise ConsoleConnectionError(
+                    f"The node at {self.where} needs a console token. Give it with "
+                    f"`--token TOKEN` or the {TOKEN_ENV_VAR} environment variable."
+                )
+            self._send_line(f"auth {self.token}")
+            greeting = self._receive(self.timeout_s)
+        return self._accept(greeting, f"The node at {self.where}")
+
+    def ask(self, line: str, timeout_s: float) -> Reply:
+        """Send ``line`` and read its reply (replies are in request order)."""
+        while self._unanswered:  # a reply left unread by Ctrl-C: it is not this one's
+            self._receive(timeout_s)
+            self._unanswered -= 1
+        self._send_line(line)
+        self._unanswered += 1
+        reply = self._receive(timeout_s)
+        self._unanswered -= 1
+        return reply
+
+    def _send_line(self, line: str) -> None:
+        sock = self._connected()
+        try:
+            sock.sendall(line.encode("utf-8") + b"\n")
+        except OSError as error:
+            raise self._lost(error) from None
+
+    def _receive(self, wait_s: float) -> Reply:
+        sock = self._connected()
+        sock.settimeout(wait_s)
+        while not self._ready:
+            try:
+                data = sock.recv(65536)
+            except socket.timeout:
+                raise ConsoleConnectionError(
+                    f"No reply from the node at {self.where} within {wait_s:g} s. "
+                    "It may be busy in a slow handler; try again, or use a longer "
+                    "--timeout."
+                ) from None
+            except OSError as error:
+                raise self._lost(error) from None
+            if not data:
+                raise self._lost(None)
+            try:
+                self._ready.extend(self._decoder.feed(data))
+            except WireFormatError as error:
+                self.close()
+                raise ConsoleConnectionError(f"{self.where}: {error}") from None
+        reply = self._ready.pop(0)
+        if reply.status is Status.BYE:
+            self.close()
+        return reply
+
+    def _connected(self) -> socket.socket:
+        if self._sock is None:
+            raise self._not_connected()
+        return self._sock
+
+    def _lost(self, error: Optional[OSError]) -> ConsoleConnectionError:
+        self.close()
+        why = f" ({error.strerror or error})" if error is not None else ""
+        return ConsoleConnectionError(
+            f"Lost the connection to the node at {self.where}{why}. The node may have "
+            "stopped; its terminal says why."
+        )
+
+    def close(self) -> None:
+        """Hang up (the node keeps running). Safe to call twice."""
+        if self._sock is not None:
+            self._sock.close()
+            self._sock = None
+
+    def is_connected(self) -> bool:
+        """True until the console or the node closed the connection."""
+        return self._sock is not None
+
+    @classmethod
+    def add_arguments(cls, parser: argparse.ArgumentParser, prog: str) -> None:
+        """``[HOST:PORT]``, and the help's words on reaching a node over Zenoh instead."""
+        parser.description = (
+            "Send commands to a running SNR node (one with a CommandReceiverFactory)."
+        )
+        parser.epilog = (
+            "Inside the console, type 'help' for the node's commands. To reach a node "
+            f"by its role over Zenoh instead: {prog} --zenoh SYSTEM [ROLE] "
+            f"(its options: {prog} --zenoh SYSTEM --help)."
+        )
+        parser.add_argument(
+            "address",
+            metavar="HOST:PORT",
+            nargs="?",
+            default=f"127.0.0.1:{DEFAULT_CONSOLE_PORT}",
+            help=f"the node's console address (default 127.0.0.1:{DEFAULT_CONSOLE_PORT})",
+        )
+
+    @classmethod
+    def from_arguments(cls, args: argparse.Namespace) -> RemoteConsole:
+        """The console to ``args.address``.
+
+        Raises:
+            ValueError: the address is not ``HOST:PORT``.
+        """
+        host, port = parse_address(args.address)
+        return cls(host, port, args.token, args.timeout)
 
 
 def say(output: IO[str], text: str) -> None:
@@ -363,16 +523,37 @@ def _enable_line_editing() -> None:
     readline.parse_and_bind("tab: complete")
 
 
-def add_session_options(parser: argparse.ArgumentParser) -> None:
-    """The options every console command line has: ``--token``, ``-c`` and ``--timeout``.
+def main(
+    argv: Optional[Sequence[str]] = None,
+    stdin: Optional[IO[str]] = None,
+    stdout: Optional[IO[str]] = None,
+    stderr: Optional[IO[str]] = None,
+    prog: str = "snr-console",
+) -> int:
+    """``snr-console``: over TCP, or over Zenoh with ``--zenoh``; returns the exit code.
 
-    Shared by ``snr-console`` and its ``--zenoh`` form, so both read alike.
+    ``prog`` is the command's name in its usage and messages: ``python -m snr
+    console`` passes ``"snr console"``, so its help shows what was typed.
 
     Example::
 
-        parser = argparse.ArgumentParser(prog="my-console")
-        add_session_options(parser)   # then parser.parse_args(["-c", "stats"])
+        main(["127.0.0.1:9123", "-c", "list endpoints"])   # prints the list, returns 0
+        main(["--zenoh", "team7", "urov", "-c", "stats"])
     """
+    import argparse  # here, not at the top: only the snr-console command parses arguments
+
+    words = list(sys.argv[1:] if argv is None else argv)
+    out = stdout if stdout is not None else sys.stdout
+    err = stderr if stderr is not None else sys.stderr
+    client: Type[ConsoleClient] = RemoteConsole
+    if any(word == "--zenoh" or word.startswith("--zenoh=") for word in words):
+        try:  # the Zenoh transport is an extra, found by its entry point
+            client = plugins.load("snr.console_transports", "zenoh", f"{prog} --zenoh")
+        except SNRError as error:
+            say(err, f"{prog}: {error}")
+            return EXIT_USAGE
+    parser = argparse.ArgumentParser(prog=prog)
+    client.add_arguments(parser, prog)
     parser.add_argument(
         "--token", default=None, help=f"the node's console token (default: ${TOKEN_ENV_VAR})"
     )
@@ -387,107 +568,14 @@ def add_session_options(parser: argparse.ArgumentParser) -> None:
     parser.add_argument(
         "--timeout", type=float, default=10.0, help="seconds to wait for the node (default 10)"
     )
-
-
-def _parser(prog: str) -> argparse.ArgumentParser:
-    import argparse  # here, not at the top: only the snr-console command parses arguments
-
-    parser = argparse.ArgumentParser(
-        prog=prog,
-        description="Send commands to a running SNR node (one with a CommandReceiverFactory).",
-        epilog="Inside the console, type 'help' for the node's commands. To reach a node "
-        f"by its role over Zenoh instead: {prog} --zenoh SYSTEM [ROLE] "
-        f"(its options: {prog} --zenoh SYSTEM --help).",
-    )
-    parser.add_argument(
-        "address",
-        metavar="HOST:PORT",
-        nargs="?",
-        default=f"127.0.0.1:{DEFAULT_CONSOLE_PORT}",
-        help=f"the node's console address (default 127.0.0.1:{DEFAULT_CONSOLE_PORT})",
-    )
-    add_session_options(parser)
-    return parser
-
-
-def main(
-    argv: Optional[Sequence[str]] = None,
-    stdin: Optional[IO[str]] = None,
-    stdout: Optional[IO[str]] = None,
-    stderr: Optional[IO[str]] = None,
-    prog: str = "snr-console",
-) -> int:
-    """Entry point of ``snr-console``; returns the exit code.
-
-    ``prog``: the command's name in its usage and messages (``"snr console"``
-    when reached through ``python -m snr``).
-
-    Example::
-
-        main(["127.0.0.1:9123", "-c", "list endpoints"])   # prints the list, returns 0
-    """
-    err = stderr if stderr is not None else sys.stderr
-    out = stdout if stdout is not None else sys.stdout
-    parser = _parser(prog)
-    args = parser.parse_args(argv)
+    args = parser.parse_args(words)
     try:
-        host, port = parse_address(args.address)
-    except ValueError as error:
+        console = client.from_arguments(args)
+    except ValueError as error:  # e.g. an address that is not HOST:PORT
         parser.print_usage(err)
         say(err, f"{prog}: error: {error}")
         return EXIT_USAGE
-    console = RemoteConsole(host, port, args.token, args.timeout)
-    return run_console(console, args.command, stdin, out, err, prog)
-
-
-def run_console(
-    console: RemoteConsole,
-    commands: Sequence[str],
-    stdin: Optional[IO[str]],
-    out: IO[str],
-    err: IO[str],
-    prog: str = "snr-console",
-) -> int:
-    """Connect, then run ``commands``, or what stdin gives (typed, or piped); the exit code.
-
-    ``prog`` begins each error message: the name of the command that was typed.
-
-    Example::
-
-        run_console(RemoteConsole("127.0.0.1", 9123), ["stats"], None, sys.stdout, sys.stderr)
-    """
-    try:
-        greeting = console.connect()
-        if commands:
-            return _run_commands(console, commands, out)
-        say(out, greeting.text)
-        source = stdin if stdin is not None else sys.stdin
-        if source.isatty() and stdin is None:
-            return console.interact(output=out)
-        return _run_commands(console, (line.strip() for line in source), out)
-    except ConsoleConnectionError as error:
+    except SNRError as error:  # e.g. the transport's library is not installed
         say(err, f"{prog}: {error}")
         return EXIT_CONNECTION
-    except KeyboardInterrupt:  # while waiting for a reply: leave (the node keeps running)
-        say(err, f"\n{prog}: interrupted.")
-        return EXIT_INTERRUPTED
-    finally:
-        console.close()
-
-
-def _run_commands(console: RemoteConsole, lines: Iterable[str], out: IO[str]) -> int:
-    """Run commands from ``-c`` or a pipe; the exit code of the worst one."""
-    worst = EXIT_OK
-    for line in lines:
-        if not line:
-            continue
-        if line.lower() in _LEAVE_WORDS:
-            break
-        worst = max(worst, console.run_command(line, out))
-        if not console.is_connected():
-            break
-    return worst
-
-
-if __name__ == "__main__":  # pragma: no cover
-    sys.exit(main())
+    return console.run(args.command, stdin, out, err, prog)
