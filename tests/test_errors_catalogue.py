@@ -14,7 +14,8 @@ What is normalised before comparing, as the page's introduction says:
   their defaults: a key nobody stores is reported after 0.3 s instead of
   ``node.key_hints.missing_s`` (5 s), and a link's keys are checked 0.2 s after
   it comes up instead of ``link_s`` (3 s); a handler's measured time
-  (``took 0.503 s``) is compared to the tenth;
+  (``took 0.503 s``) is shown as the page's 0.500 s when it is at least that
+  (a busy machine wakes a 0.5 s sleep late);
 * ports: the page's 9001 is a free port, and a client's own port is any.
 
 As in `tests.test_errors_silence`, the program's `TimeoutLoopFactory` ends the
@@ -46,7 +47,7 @@ LINK_S = 0.2  # node.key_hints.link_s while testing (3 s by default)
 AS_ON_THE_PAGE: List[Tuple[str, str]] = [
     (r"has been read for \d+\.\d s", "has been read for 5.0 s"),
     (rf"in the {LINK_S:.1f} s since", "in the 3.0 s since"),
-    (r"took 0\.5\d\d s", "took 0.500 s"),
+    (r"took (0\.[5-9]|[1-9]\.)\d\d s", "took 0.500 s"),
     (r"127\.0\.0\.1:\d+", "127.0.0.1:PORT"),
 ]
 
