@@ -1,7 +1,7 @@
-"""`Link`: one live connection to one peer node, and the `Outbox` of frames waiting for it.
+"""`Link`: one live connection to one peer node, over a `Transport`.
 
 A `Link` owns a *transport* (a TCP socket or a pipe end, see `Transport`) and
-an `Outbox` of frames waiting to be written, and has no thread of its own:
+an `Outbox` (``outbox.py``) of frames waiting to be written, and has no thread of its own:
 the node's one `IOLoop` thread reads the transport when bytes arrive
 (cutting them into frames and handing pages to its `CommsLoop`, in
 ``comms_loop.py``) and writes queued frames when the transport has room, for
@@ -16,7 +16,6 @@ Example (a `CommsLoop` opens its links with ``open_link``)::
 
 from __future__ import annotations
 
-import collections
 import enum
 import logging
 import selectors
@@ -26,8 +25,6 @@ import time
 from typing import (
     TYPE_CHECKING,
     Any,
-    Callable,
-    Deque,
     Dict,
     List,
     Optional,
@@ -39,6 +36,7 @@ from snr.core.logs import LossReport
 from snr.prelude import CommsError, DataKey, Page, WireFormatError
 from snr.std_mods.comms.io_loop import IOLoop, IOTimer
 from snr.std_mods.comms.link_hints import watch_link
+from snr.std_mods.comms.outbox import CLOSED, FIRST, Outbox
 from snr.std_mods.comms.wire import (
     Bye,
     FrameDecoder,
@@ -60,9 +58,8 @@ try:  # Linux and macOS say how many bytes wait unread; Windows has no fcntl
 except ImportError:
     _FIONREAD = None
 
-__all__ = ["Link", "LinkState", "Outbox", "Transport", "shown_role", "unread_bytes"]
+__all__ = ["Link", "LinkState", "Transport", "shown_role", "unread_bytes"]
 
-_MAX_CHUNK_BYTES = 1024 * 1024  # queued frames are joined into chunks up to this size
 _WRITE_NOW_BYTES = 64 * 1024  # the node's thread writes a backlog this big before it goes idle
 _BURST_S = 0.0002  # a frame this soon after the last send joins a batch for the I/O thread
 _TICK_S = 0.25  # how often a link checks its peer's silence and whether it owes a beat
@@ -142,235 +139,6 @@ class Transport(Protocol):
 
     def close(self) -> None:
         """Release the socket or pipe."""
-
-
-_Entry = List[Any]  # [data key or None, frame or None once superseded]
-
-
-class Outbox:
-    """Frames waiting to be written to one peer, in the order they were queued; bounded.
-
-    ``put`` runs on the node's thread. With ``now=True`` and nothing waiting,
-    it writes the frame straight away without blocking (no thread switch: the
-    lowest latency). Otherwise, or when the OS buffer is full, the frame is
-    queued, ``on_queued`` asks the node's I/O loop to watch for room, and
-    ``write_some`` then sends everything queued, joined into as few ``send``
-    calls as the socket takes (the highest throughput when many pages come at
-    once). Every write happens under the outbox's lock, so frames leave in the
-    order they were put and each is written whole, however the two threads meet.
-
-    At most ``max_bytes`` wait. When a new page would go over, the newest
-    page still waiting under the same key is dropped in its favour (newest
-    wins per key: a robot wants the latest reading, not an old one); if none
-    waits under that key, the new page is dropped. Every drop is counted in
-    ``dropped`` and ``dropped_by_key``.
-
-    Example::
-
-        outbox.put(frame, now=True, key="depth_m")   # "sent", "queued", "replaced" or "dropped"
-        outbox.write_some()                          # I/O loop: True once all is written
-
-    Attributes:
-        last_sent_at: when bytes last went to the transport (``time.monotonic()``).
-        answer_due: the peer has been heard since the last send (set by the
-            link as frames arrive): the next frame answers it and goes at once.
-    """
-
-    def __init__(
-        self,
-        transport: Transport,
-        max_bytes: int,
-        on_queued: Optional[Callable[[], None]] = None,
-    ) -> None:
-        self.transport = transport
-        self.max_bytes = max_bytes
-        self.on_queued = on_queued
-        self.dropped = 0
-        self.dropped_by_key: Dict[DataKey, int] = {}
-        self.last_sent_at = time.monotonic()
-        self.answer_due = False
-        self._entries: Deque[_Entry] = collections.deque()
-        self._newest: Dict[DataKey, _Entry] = {}
-        self._queued_bytes = 0
-        self._live = 0  # entries not superseded
-        self._closed = False
-        self._lock = threading.Lock()
-
-    def put(self, frame: bytes, now: bool = False, key: Optional[DataKey] = None) -> str:
-        """Send (if ``now``) or queue ``frame``; says what happened.
-
-        Returns ``"sent"``, ``"queued"``, ``"replaced"`` (an older page under
-        ``key`` was dropped for it), ``"dropped"`` (the backlog is full) or
-        ``"closed"``.
-        """
-        outcome = "queued"
-        with self._lock:
-            if self._closed:
-                return "closed"
-            # A frame right behind another (a burst) waits for the I/O thread,
-            # which sends everything waiting in one call: a burst of pages costs
-            # a few system calls instead of one each. A frame after a pause
-            # goes at once, and so does one sent after the peer was heard (a
-            # reply: a fast ping-pong would otherwise look like a burst and
-            # pay a trip through the I/O thread every time).
-            if (
-                now
-                and not self._live
-                and (self.answer_due or time.monotonic() - self.last_sent_at >= _BURST_S)
-            ):
-                self.answer_due = False
-                try:
-                    sent = self.transport.send(frame)
-                except OSError:  # full (BlockingIOError) or broken: the I/O loop finds out
-                    sent = 0
-                if sent:
-                    self.last_sent_at = time.monotonic()
-                if sent == len(frame):
-                    return "sent"
-                if sent:  # the rest must go next, before anything else, whatever the cap
-                    self._append(None, frame[sent:])
-                    frame = b""
-            if frame:
-                if self._queued_bytes + len(frame) > self.max_bytes:
-                    older = self._newest.get(key) if key is not None else None
-                    if older is None:
-                        self._count_drop(key)
-                        return "dropped"
-                    self._queued_bytes -= len(older[1])
-                    older[1] = None
-                    self._live -= 1
-                    self._count_drop(key)
-                    outcome = "replaced"
-                self._append(key, frame)
-            first = self._live == 1
-        if first and self.on_queued is not None:  # was empty: ask for a writer
-            self.on_queued()
-        return outcome
-
-    def put_burst(self, frames: List[bytes], key: DataKey) -> bool:
-        """Queue ``frames`` (pages under ``key``, in order) with one lock; False if it did not.
-
-        Only when they all fit under ``max_bytes`` and the outbox is open:
-        otherwise nothing is queued, and the caller puts them one by one
-        (each drop decided and counted by `put`). Unlike ``put(now=True)``,
-        nothing is written straight away: a burst is worth one ``send``.
-
-        Example::
-
-            if not outbox.put_burst(frames, "depth"):
-                for frame in frames:
-                    outbox.put(frame, key="depth")   # over the cap: drops decided one by one
-        """
-        size = 0
-        for frame in frames:
-            size += len(frame)
-        with self._lock:
-            if self._closed or self._queued_bytes + size > self.max_bytes:
-                return False
-            burst: List[_Entry] = [[key, frame] for frame in frames]
-            self._entries.extend(burst)
-            self._newest[key] = burst[-1]
-            self._queued_bytes += size
-            first = self._live == 0
-            self._live += len(burst)
-        if first and self.on_queued is not None:  # was empty: ask for a writer
-            self.on_queued()
-        return True
-
-    def _append(self, key: Optional[DataKey], frame: bytes) -> None:
-        entry: _Entry = [key, frame]
-        self._entries.append(entry)
-        if key is not None:
-            self._newest[key] = entry
-        self._queued_bytes += len(frame)
-        self._live += 1
-
-    def _count_drop(self, key: Optional[DataKey]) -> None:
-        self.dropped += 1
-        if key is not None:
-            self.dropped_by_key[key] = self.dropped_by_key.get(key, 0) + 1
-
-    def write_some(self) -> bool:
-        """For the I/O loop: write what the transport takes now; True once nothing waits.
-
-        Queued frames are joined into chunks of up to 1 MiB, so many small
-        frames cost one system call. What does not fit stays first in line.
-
-        Raises:
-            OSError: the peer is gone (not BlockingIOError: a full buffer just
-                means "later").
-        """
-        with self._lock:
-            entries = self._entries
-            while self._live:
-                parts: List[bytes] = []
-                taken: List[_Entry] = []
-                size = 0
-                for entry in entries:
-                    if size >= _MAX_CHUNK_BYTES:
-                        break
-                    taken.append(entry)
-                    if entry[1] is not None:
-                        parts.append(entry[1])
-                        size += len(entry[1])
-                chunk = parts[0] if len(parts) == 1 else b"".join(parts)
-                try:
-                    sent = self.transport.send(chunk)
-                except BlockingIOError:
-                    return False
-                if sent:
-                    self.last_sent_at = time.monotonic()
-                self._consume(taken, sent)
-                if sent < size:
-                    return False
-            return True
-
-    def _consume(self, taken: List[_Entry], sent: int) -> None:
-        """Forget the first ``sent`` bytes of the ``taken`` entries (a partial frame stays)."""
-        entries = self._entries
-        for entry in taken:
-            frame = entry[1]
-            if frame is not None:
-                if sent < len(frame):
-                    if sent:  # the rest goes first next time; the key no longer replaces it
-                        entry[1] = frame[sent:]
-                        self._queued_bytes -= sent
-                        self._forget_newest(entry)
-                    return
-                sent -= len(frame)
-                self._queued_bytes -= len(frame)
-                self._live -= 1
-                self._forget_newest(entry)
-            entries.popleft()
-
-    def _forget_newest(self, entry: _Entry) -> None:
-        key = entry[0]
-        if key is not None and self._newest.get(key) is entry:
-            del self._newest[key]
-
-    def close(self, discard: bool) -> None:
-        """Accept no more frames; with ``discard``, forget those still waiting."""
-        with self._lock:
-            self._closed = True
-            if discard:
-                self._entries.clear()
-                self._newest.clear()
-                self._queued_bytes = 0
-                self._live = 0
-
-    @property
-    def closed(self) -> bool:
-        """True once ``close`` was called."""
-        return self._closed
-
-    @property
-    def queued_bytes(self) -> int:
-        """Bytes of frames waiting to be sent."""
-        return self._queued_bytes
-
-    def __len__(self) -> int:
-        """How many frames wait to be sent."""
-        return self._live
 
 
 class LinkState(enum.Enum):
@@ -486,8 +254,9 @@ class Link:
         self._finished = False
         self._ending_soon = False  # ended while the node's thread read it; the loop's finishes
         self._ending = False  # half-closed after a graceful flush
-        self.outbox = Outbox(transport, owner.max_backlog_bytes, self._wake_writer)
-        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s, bye=True), now=False)
+        self._answer_due = False  # the peer was heard since the last send: answer at once
+        self.outbox = Outbox(owner.max_backlog_bytes, self.loss)
+        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s, bye=True))
 
     @property
     def label(self) -> str:
@@ -515,38 +284,38 @@ class Link:
         self.io.call_soon(self._attach)
 
     def send(self, frame: bytes, now: bool = True, key: Optional[DataKey] = None) -> bool:
-        """Send or queue a page's ``frame`` (node thread); False if it was dropped.
+        """Send or queue a page's ``frame`` (node thread); False if the link is not open.
 
-        A page that the full backlog cannot take, or a queued one it
-        replaces, is counted and reported (at most once a second).
+        If the backlog is full, older frames make room (see `Outbox`): they
+        are counted and reported (at most once a second).
         """
         if self.state is not LinkState.OPEN:
             return False
         outbox = self.outbox
-        outcome = outbox.put(frame, now, key)
-        if outcome == "queued":
-            self.pages_sent += 1
-            if outbox.queued_bytes >= _WRITE_NOW_BYTES and not self._io_writes:
-                self.write_waiting()  # a long burst: do not wait for the node to go idle
-            return True
-        if outcome == "sent":
-            self.pages_sent += 1
-            return True
-        if outcome == "replaced":
-            self.pages_sent += 1
-            self.loss.dropped()
-            return True
-        if outcome == "dropped":
-            self.loss.dropped()
-        return False
+        # A frame right behind another (a burst) waits for one joined send
+        # (a burst of pages then costs a few system calls instead of one
+        # each). A frame after a pause goes at once, and so does one sent
+        # after the peer was heard (a reply: a fast ping-pong would otherwise
+        # look like a burst and pay a trip through the I/O thread every time).
+        write = None
+        if now and (self._answer_due or time.monotonic() - outbox.last_sent_at >= _BURST_S):
+            self._answer_due = False
+            write = self.transport.send
+        outcome = outbox.put(frame, key, write)
+        if outcome == CLOSED:
+            return False
+        self.pages_sent += 1
+        if outcome == FIRST:
+            self._wake_writer()
+        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self._io_writes:
+            self.write_waiting()  # a long burst: do not wait for the node to go idle
+        return True
 
     def send_burst(self, frames: List[bytes], key: DataKey) -> None:
-        """`send` for the frames of a run of pages under ``key`` (node thread).
+        """`send` for the frames of a run of pages under ``key`` (node thread), with one lock.
 
-        Queued with one call when they all fit in the backlog; else one by
-        one, so that each drop is decided, counted and reported as `send`
-        does. They leave when the node's thread next goes idle, or at once
-        once 64 KiB wait.
+        They leave when the node's thread next goes idle, or at once once
+        64 KiB wait.
 
         Example::
 
@@ -555,21 +324,24 @@ class Link:
         if self.state is not LinkState.OPEN:
             return
         outbox = self.outbox
-        if outbox.put_burst(frames, key):
-            self.pages_sent += len(frames)
-            if outbox.queued_bytes >= _WRITE_NOW_BYTES and not self._io_writes:
-                self.write_waiting()
+        outcome = outbox.put_all(frames, key)
+        if outcome == CLOSED:
             return
-        for frame in frames:
-            self.send(frame, True, key)
+        self.pages_sent += len(frames)
+        if outcome == FIRST:
+            self._wake_writer()
+        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self._io_writes:
+            self.write_waiting()
 
     def close(self) -> None:
         """Send what is queued and a goodbye, then end the connection (graceful)."""
         if self.state is LinkState.OPEN:
             self.state = LinkState.CLOSING
             if self._peer_takes_bye:  # older peers never get a frame they do not know
-                self.outbox.put(encode_bye(), now=True)
-            self.outbox.close(discard=False)
+                outcome = self.outbox.put(encode_bye(), None, self.transport.send)
+                if outcome == FIRST:
+                    self._wake_writer()
+            self.outbox.close()
             self.io.call_soon(self._flush_then_end)
 
     def abort(self) -> None:
@@ -643,7 +415,7 @@ class Link:
         if not len(self.outbox):
             return
         try:
-            done = self.outbox.write_some()
+            done = self.outbox.write_to(self.transport.send)
         except OSError:  # broken: the loop's thread finds out and ends the link
             done = False
         if not done:
@@ -683,7 +455,9 @@ class Link:
                 and not len(self.outbox)
                 and time.monotonic() - self.outbox.last_sent_at >= self.owner.beat_s
             ):
-                self.outbox.put(encode_beat(), now=True)  # quiet for beat_s: a sign of life
+                outcome = self.outbox.put(encode_beat(), None, self.transport.send)
+                if outcome == FIRST:  # quiet for beat_s: a sign of life, written later
+                    self._want_write()
             self._check_recovered()
             self._timer = self.io.call_later(self._tick_s, self._tick)
 
@@ -761,7 +535,7 @@ class Link:
         if self._finished:
             return
         try:
-            done = self.outbox.write_some()
+            done = self.outbox.write_to(self.transport.send)
         except OSError as error:
             self._finish(f"{type(error).__name__}: {error}")
             return
@@ -803,7 +577,7 @@ class Link:
                 )
             self._end("the peer closed the connection")
             return
-        self.outbox.answer_due = True
+        self._answer_due = True
         bodies: List[bytes] = []
         pages: List[Page] = []
         try:
