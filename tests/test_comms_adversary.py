@@ -222,7 +222,7 @@ class TestAReceiverThatIsBehind(CommsFaultTest):
         [link] = comms_of(nodes.nodes[0]).links
         self.assertTrue(wait_until(lambda: link.pages_received == 6, 5.0))
         sock.sendall(page("tick", 6))  # read, held: the link pauses
-        self.assertTrue(wait_until(lambda: link._paused, 5.0))
+        self.assertTrue(wait_until(lambda: bool(link._held), 5.0))
         silent_since = time.monotonic()  # and the peer says nothing more, beats included
         heard = "nothing heard from it for"
         self.assertTrue(wait_until(lambda: self.log.matching(heard), 1.2), self.log.lines)

@@ -142,7 +142,21 @@ class Transport(Protocol):
 
 
 class LinkState(enum.Enum):
-    """OPEN → CLOSING (flushing, after ``close()``) → CLOSED.
+    """Where a link is in its life: one value, moved by the methods named below.
+
+    ======== ================================================ ==========================
+    state    the link                                         moves on to
+    ======== ================================================ ==========================
+    OPEN     sends pages, reads, beats, judges silence        CLOSING, ENDING, CLOSED
+    CLOSING  ``close()``: writes what waits, then a bye       DRAINING, ENDING, CLOSED
+    DRAINING all written, half-closed: reads what still comes CLOSED (after ``drain_s``)
+    ENDING   ``abort()``, or the node's thread found the end: CLOSED (on the I/O thread)
+             no more reads; the I/O thread finishes it
+    CLOSED   transport closed, the `CommsLoop` told           (the end)
+    ======== ================================================ ==========================
+
+    Whether the link reads is the one other thing that changes: it stops
+    while pages it read wait for room in the node's queue (``Link._held``).
 
     Example::
 
@@ -151,7 +165,13 @@ class LinkState(enum.Enum):
 
     OPEN = "open"
     CLOSING = "closing"
+    DRAINING = "draining"
+    ENDING = "ending"
     CLOSED = "closed"
+
+
+_OPEN, _CLOSING, _DRAINING = LinkState.OPEN, LinkState.CLOSING, LinkState.DRAINING
+_ENDED = (LinkState.ENDING, LinkState.CLOSED)  # no more reading or writing
 
 
 class Link:
@@ -216,6 +236,11 @@ class Link:
             )
         self.owner = owner
         self.io: IOLoop = io
+        self.log = owner.log
+        self.beat_s = owner.beat_s  # how often a quiet link sends a beat (its hello says so)
+        self.hello_timeout_s = owner.hello_timeout_s
+        self.dead_after_s = owner.dead_after_s
+        self.recovered_after_s = owner.recovered_after_s
         self.transport = transport
         self.peer_role: Optional[str] = None
         self.hello_at: Optional[float] = None  # when the peer's hello arrived
@@ -244,19 +269,15 @@ class Link:
         self._closed = threading.Event()
         # These belong to the I/O loop's thread (set before the hello, which may wake it).
         self._decoder = FrameDecoder()
-        self._attached = False
-        self._io_writes = False  # the loop's thread watches for room: leave the writing to it
-        self._paused = False
         self._unread_seen = 0  # while paused: bytes the OS held for us at the last look
-        self._held: List[Page] = []  # decoded while the node was behind: delivered first
+        # Decoded while the node was behind, delivered first; while any wait,
+        # the link reads no more.
+        self._held: List[Page] = []
         self._timer: Optional[IOTimer] = None
         self._tick_s = min(_TICK_S, owner.beat_s / 4)
-        self._finished = False
-        self._ending_soon = False  # ended while the node's thread read it; the loop's finishes
-        self._ending = False  # half-closed after a graceful flush
         self._answer_due = False  # the peer was heard since the last send: answer at once
         self.outbox = Outbox(owner.max_backlog_bytes, self.loss)
-        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s, bye=True))
+        self.outbox.put(encode_hello(owner.parent.role, self.beat_s, bye=True))
 
     @property
     def label(self) -> str:
@@ -289,7 +310,7 @@ class Link:
         If the backlog is full, older frames make room (see `Outbox`): they
         are counted and reported (at most once a second).
         """
-        if self.state is not LinkState.OPEN:
+        if self.state is not _OPEN:
             return False
         outbox = self.outbox
         # A frame right behind another (a burst) waits for one joined send
@@ -307,7 +328,7 @@ class Link:
         self.pages_sent += 1
         if outcome == FIRST:
             self._wake_writer()
-        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self._io_writes:
+        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self.io.events(self) & _WRITE:
             self.write_waiting()  # a long burst: do not wait for the node to go idle
         return True
 
@@ -321,7 +342,7 @@ class Link:
 
             link.send_burst([encode_page(page) for page in pages], "depth")
         """
-        if self.state is not LinkState.OPEN:
+        if self.state is not _OPEN:
             return
         outbox = self.outbox
         outcome = outbox.put_all(frames, key)
@@ -330,13 +351,13 @@ class Link:
         self.pages_sent += len(frames)
         if outcome == FIRST:
             self._wake_writer()
-        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self._io_writes:
+        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self.io.events(self) & _WRITE:
             self.write_waiting()
 
     def close(self) -> None:
         """Send what is queued and a goodbye, then end the connection (graceful)."""
-        if self.state is LinkState.OPEN:
-            self.state = LinkState.CLOSING
+        if self.state is _OPEN:
+            self.state = _CLOSING
             if self._peer_takes_bye:  # older peers never get a frame they do not know
                 outcome = self.outbox.put(encode_bye(), None, self.transport.send)
                 if outcome == FIRST:
@@ -344,11 +365,12 @@ class Link:
             self.outbox.close()
             self.io.call_soon(self._flush_then_end)
 
-    def abort(self) -> None:
-        """End the connection now, dropping what is queued."""
-        self.state = LinkState.CLOSED
-        self.outbox.close(discard=True)
-        self.io.call_soon(lambda: self._finish("the link was closed"))
+    def abort(self, reason: str = "the link was closed") -> None:
+        """End the connection now, dropping what is queued; ``reason`` goes in the log line."""
+        if self.state not in _ENDED:
+            self.state = LinkState.ENDING
+            self.outbox.close(discard=True)
+            self.io.call_soon(lambda: self._finish(reason))
 
     def is_closed(self) -> bool:
         """True once the link has ended and the transport is closed."""
@@ -357,14 +379,6 @@ class Link:
     def wait_closed(self, timeout_s: Optional[float]) -> bool:
         """Wait up to ``timeout_s`` for the link to close; True if it has."""
         return self._closed.wait(timeout_s)
-
-    def is_alive(self) -> bool:
-        """True until the link has ended (it has no thread of its own)."""
-        return not self._closed.is_set()
-
-    def join(self, timeout_s: Optional[float]) -> None:
-        """Wait up to ``timeout_s`` for the link to end."""
-        self._closed.wait(timeout_s)
 
     def stats(self) -> Dict[str, Any]:
         """The link's counters, e.g. for the console's ``stats`` command.
@@ -388,9 +402,8 @@ class Link:
 
     # -- I/O loop thread: life ------------------------------------------------
     def _attach(self) -> None:
-        if self._finished:  # aborted before the loop got to it
+        if self.state in _ENDED:  # aborted before the loop got to it
             return
-        self._attached = True
         self.io.watch(self, _READ)
         self._timer = self.io.call_later(self._tick_s, self._tick)
         self.on_writable()  # the hello goes at once
@@ -419,22 +432,21 @@ class Link:
         except OSError:  # broken: the loop's thread finds out and ends the link
             done = False
         if not done:
-            self._io_writes = True
             self.io.call_soon(self._want_write)
 
     def _want_write(self) -> None:
-        if self._attached and not self._finished and len(self.outbox):
+        if self.state not in _ENDED and len(self.outbox):
             self.io.watch(self, self.io.events(self) | _WRITE)
 
     def _flush_then_end(self) -> None:
-        if self._attached and not self._finished and not len(self.outbox):
+        if self.state is _CLOSING and not len(self.outbox):
             self._end_writing()
 
     def _end_writing(self) -> None:
-        """Everything is sent: half-close, then read what still comes for a moment."""
-        if self._ending:
+        """CLOSING, everything sent: half-close, then read what still comes for a moment."""
+        if self.state is not _CLOSING:
             return
-        self._ending = True
+        self.state = _DRAINING
         self.transport.end_writing()
         if self._timer is not None:
             self._timer.cancel()
@@ -443,17 +455,17 @@ class Link:
     def _tick(self) -> None:
         """Every quarter beat or so: is the peer still there, and do we owe it a beat?"""
         self._timer = None
-        if self._finished:
+        if self.state in _ENDED:
             return
-        silence = self._silence_while_paused() if self._paused else self._silence()
+        silence = self._silence_while_paused() if self._held else self._silence()
         if silence is not None:
             self._finish(silence)
             return
-        if self.state is LinkState.OPEN:
+        if self.state is _OPEN:
             if (
                 self.peer_beat_s is not None
                 and not len(self.outbox)
-                and time.monotonic() - self.outbox.last_sent_at >= self.owner.beat_s
+                and time.monotonic() - self.outbox.last_sent_at >= self.beat_s
             ):
                 outcome = self.outbox.put(encode_beat(), None, self.transport.send)
                 if outcome == FIRST:  # quiet for beat_s: a sign of life, written later
@@ -465,7 +477,7 @@ class Link:
         # The peer has caught up once everything queued went out and nothing
         # was dropped for a while (a second by default).
         if self.loss.dropping and not len(self.outbox):
-            self.loss.recovered(quiet_s=self.owner.recovered_after_s)
+            self.loss.recovered(quiet_s=self.recovered_after_s)
 
     def on_io_stop(self) -> None:
         """The I/O loop is stopping: end the link now."""
@@ -476,17 +488,17 @@ class Link:
         if self.io.in_loop_thread():
             self._finish(reason)
         else:  # the node's thread, reading while idle, leaves it to the loop's
-            self._ending_soon = True  # and reads it no more meanwhile
+            self.state = LinkState.ENDING  # and reads it no more meanwhile
             self.io.call_soon(lambda: self._finish(reason))
 
     def _finish(self, reason: str) -> None:
-        if self._finished:
+        """Any state → CLOSED, on the I/O thread: close the transport, tell the `CommsLoop`."""
+        if self.state is LinkState.CLOSED:
             return
         with self.io.read_role():  # nobody reads the socket while it closes
-            self._finished = True
             if self.peer_said_bye:
                 reason = "it said goodbye (its node is stopping)"
-            elif self.state is not LinkState.OPEN and not self.went_silent:
+            elif self.state in (_CLOSING, _DRAINING) and not self.went_silent:
                 reason = reason if reason.startswith("the peer") else "the link was closed"
             self.state = LinkState.CLOSED
             self.outbox.close(discard=True)
@@ -528,11 +540,11 @@ class Link:
             self._failed(error)
 
     def _failed(self, error: Exception) -> None:
-        self.owner.log.exception("Link to %s failed", self.label)
+        self.log.exception("Link to %s failed", self.label)
         self._end(f"unexpected {type(error).__name__}: {error}")
 
     def _write(self) -> None:
-        if self._finished:
+        if self.state in _ENDED:
             return
         try:
             done = self.outbox.write_to(self.transport.send)
@@ -540,15 +552,13 @@ class Link:
             self._finish(f"{type(error).__name__}: {error}")
             return
         if done:
-            self._io_writes = False
             events = self.io.events(self)
             if events & _WRITE:
                 self.io.watch(self, events & ~_WRITE)
             self._check_recovered()
-            if self.state is LinkState.CLOSING and self.outbox.closed:
+            if self.state is _CLOSING:
                 self._end_writing()
         else:
-            self._io_writes = True
             if not self.io.events(self) & _WRITE:
                 self.io.watch(self, self.io.events(self) | _WRITE)
 
@@ -557,7 +567,7 @@ class Link:
         # On the thread that holds the read role: the I/O loop's, or the
         # node's while it is idle. Everything else (ending the link, pausing)
         # is left to the loop's thread.
-        if self._finished or self._paused or self._ending_soon:
+        if self.state in _ENDED or self._held:
             return
         try:
             count = self.transport.recv_into(self.io.buffer)
@@ -617,7 +627,7 @@ class Link:
                 self._bad_frame(error)
                 continue
             except Exception as error:  # a bug in decoding: say so, and lose no other frame
-                self.owner.log.exception("Decoding a frame from %s failed", self.label)
+                self.log.exception("Decoding a frame from %s failed", self.label)
                 self._bad_frame(WireFormatError(f"it could not be decoded ({error!r:.80})"))
                 continue
             if message.__class__ is Page:
@@ -636,30 +646,26 @@ class Link:
             else:
                 noted.update([page.key for page in pages])
         if self._held or not self.owner.parent.wait_for_room(0):
-            # The node is behind: keep these, read no more until it has room.
+            # The node is behind: keep these, read no more until it has room
+            # (from now on, on either thread: _read sees them held).
+            first = not self._held
             self._held.extend(pages)
-            self._pause()
+            if first and self.io.in_loop_thread():
+                self._stop_reading()
+            elif first:
+                self.io.call_soon(self._stop_reading)
             return
         self.owner.deliver(self, pages)
 
-    def _pause(self) -> None:
-        if not self._paused:
-            self._paused = True  # read no more, from now on (either thread)
-            if self.io.in_loop_thread():
-                self._stop_reading()
-            else:
-                self.io.call_soon(self._stop_reading)
-
     def _stop_reading(self) -> None:
-        if not self._finished:
+        if self.state not in _ENDED:
             self.io.watch(self, self.io.events(self) & ~_READ)
             self._unread_seen = 0
             self.io.when_room(self._resume)
 
     def _resume(self) -> None:
-        if self._finished:
+        if self.state in _ENDED:
             return
-        self._paused = False
         if self._note_unread() != 0:  # what waits is read next: news of the peer
             self.last_heard = time.monotonic()
         held, self._held = self._held, []
@@ -692,7 +698,7 @@ class Link:
     def _silence(self) -> Optional[str]:
         """Why the link is lost if the peer has been quiet too long, else None."""
         quiet_s = time.monotonic() - self.last_heard
-        limit_s = self.owner.hello_timeout_s
+        limit_s = self.hello_timeout_s
         # Nothing well-formed yet, and no big first frame still coming in steadily:
         if not self._heard_frame and time.monotonic() - self._progress_at > limit_s:
             return (
@@ -701,7 +707,7 @@ class Link:
             )
         if self.peer_beat_s is None:
             return None  # a peer that promised no beats may be quiet for ever
-        limit = max(self.owner.dead_after_s, 3 * self.peer_beat_s)
+        limit = max(self.dead_after_s, 3 * self.peer_beat_s)
         if quiet_s <= limit:
             return None
         at_risk = self.pages_sent - self._sent_when_heard

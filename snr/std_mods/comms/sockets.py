@@ -240,7 +240,8 @@ class SocketsServerLoop(CommsLoop):
         if self.is_terminated():
             sock.close()
             return
-        taken = sum(1 for link in self.links if link.state is not LinkState.CLOSED)
+        ended = (LinkState.ENDING, LinkState.CLOSED)  # aborted links go in a moment
+        taken = sum(1 for link in self.links if link.state not in ended)
         if taken >= self.max_connections and not self._make_room():
             sock.close()  # the client sees the connection end and retries later
             self.refused.dropped()
@@ -259,7 +260,10 @@ class SocketsServerLoop(CommsLoop):
         """
         for link in self.links:
             if link.peer_role is None and link.state is LinkState.OPEN:
-                link.abort()
+                link.abort(
+                    f"it had not said hello in {time.monotonic() - link.opened_at:.1f} s and "
+                    f"the server, full ({self.max_connections} clients), made room for a new one"
+                )
                 self.closed_silent.dropped()
                 return True
         return False
