@@ -1,28 +1,14 @@
 """`Outbox`: the frames waiting for one peer, for every link (TCP, pipe, serial).
 
-One design for every link that writes to a peer slower than pages are
-stored (docs/design.md, "One outbox for every link"):
-
-* **Bounded.** At most ``max_bytes`` of frames wait (one frame bigger than
-  that is still taken when nothing else waits, so it can go at all).
-* **When full, the newest per key wins.** A new frame that does not fit
-  pushes out the oldest frame waiting under its own key; if its key has none
-  waiting, the oldest frame of the key with the most frames waiting. A robot
-  wants the latest reading, and a flood under one key never pushes out the
-  last value of another. Frames with no key (a hello, a beat, the rest of a
-  frame already part-written) are never pushed out.
-* **Never silent.** Every frame pushed out is counted (``dropped``,
-  ``dropped_by_key``) and told to the link's `LossReport`, which logs the
-  numbers at most once a second.
-* **Never blocks the node.** ``put`` returns at once; a writer takes frames
-  with ``write_to`` (a non-blocking transport: TCP, pipe) or ``take`` (a
-  writer thread: serial).
+Bounded in bytes; when full, the newest per key wins; every drop is counted
+and reported; ``put`` never blocks. The policy, and why, is in
+docs/design.md, "One outbox for every link".
 
 Example::
 
     outbox = Outbox(max_bytes=64, loss=LossReport(log, "lines", "the board is not reading"))
-    outbox.put(b"speed 1\\n", key="speed")     # "first": queued, and the outbox was empty
-    outbox.put(b"speed 2\\n", key="speed")     # "queued"
+    outbox.put(b"speed 1\n", key="speed")     # "first": queued, and the outbox was empty
+    outbox.put(b"speed 2\n", key="speed")     # "queued"
     outbox.write_to(sock.send)                # True once everything is written
 """
 
@@ -69,6 +55,11 @@ class _Entry:
 
 class Outbox:
     """Frames waiting to be written to one peer, oldest first; bounded, newest per key wins.
+
+    When a new frame does not fit, it pushes out the oldest frame waiting
+    under its own key, or, if its key has none waiting, the oldest of the key
+    with the most waiting: a flood under one key never pushes out the last
+    value of another. Frames with no key are never pushed out.
 
     Safe from any thread: every change happens under one lock, and so does
     every write (``put`` with ``write``, ``write_to``), so frames leave in
