@@ -8,7 +8,6 @@ close what only holds a connection, and log it all briefly.
 
 from __future__ import annotations
 
-import json
 import re
 import socket
 import threading
@@ -20,38 +19,19 @@ from snr import Config, Mode, Node, SocketsPair
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.comms.link import shown_role, unread_bytes
 from tests.helpers import wait_until
-from tests.test_comms_liveness import CommsFaultTest, CounterFactory, FloodFactory
+from tests.test_comms_liveness import (
+    CommsFaultTest,
+    CounterFactory,
+    FloodFactory,
+    comms_of,
+    frame,
+    read_until_closed,
+)
 from tests.test_comms_local import connect_when_listening
-
-
-def frame(**fields: Any) -> bytes:
-    """One frame as a plain program writes it: 4-byte big-endian length, then JSON."""
-    body = json.dumps(fields).encode("utf-8")
-    return len(body).to_bytes(4, "big") + body
 
 
 def page(key: str, data: Any) -> bytes:
     return frame(v=1, kind="page", key=key, data=data, origin="tool", created_at_s=1.0)
-
-
-def read_until_closed(sock: socket.socket, limit_s: float) -> bool:
-    """Read (and drop) what comes until the peer closes; False if still open after ``limit_s``."""
-    deadline = time.monotonic() + limit_s
-    sock.settimeout(0.05)
-    while time.monotonic() < deadline:
-        try:
-            if not sock.recv(65536):
-                return True
-        except socket.timeout:
-            continue
-        except OSError:  # reset: closed too
-            return True
-    return False
-
-
-def comms_of(node: Node) -> CommsLoop:
-    [comms] = [part for part in node.components.values() if isinstance(part, CommsLoop)]
-    return comms
 
 
 def connect_with_small_buffer(port: int) -> socket.socket:
@@ -242,7 +222,7 @@ class TestAReceiverThatIsBehind(CommsFaultTest):
         [link] = comms_of(nodes.nodes[0]).links
         self.assertTrue(wait_until(lambda: link.pages_received == 6, 5.0))
         sock.sendall(page("tick", 6))  # read, held: the link pauses
-        self.assertTrue(wait_until(lambda: link._paused, 5.0))
+        self.assertTrue(wait_until(lambda: bool(link._held), 5.0))
         silent_since = time.monotonic()  # and the peer says nothing more, beats included
         heard = "nothing heard from it for"
         self.assertTrue(wait_until(lambda: self.log.matching(heard), 1.2), self.log.lines)

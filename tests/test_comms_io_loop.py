@@ -33,7 +33,6 @@ from snr import (
 from snr.prelude import ConfigError
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.comms.io_loop import IOLoop
-from snr.std_mods.comms.link import Outbox
 from snr.std_mods.comms.pipe import PipeTransport
 from snr.std_mods.comms.wire import encode_hello
 from tests.helpers import free_port, wait_until
@@ -318,68 +317,3 @@ class TestPipeTransport(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
-
-
-class CountingTransport:
-    """Takes every byte at once and remembers each ``send`` call."""
-
-    peer = "test"
-
-    def __init__(self) -> None:
-        self.sends: List[bytes] = []
-
-    def fileno(self) -> int:
-        return -1
-
-    def send(self, data: bytes) -> int:
-        self.sends.append(bytes(data))
-        return len(data)
-
-    def recv_into(self, buffer: bytearray) -> int:
-        raise BlockingIOError
-
-    def end_writing(self) -> None:
-        pass
-
-    def close(self) -> None:
-        pass
-
-
-class TestWhenAFrameGoesAtOnce(unittest.TestCase):
-    def test_a_burst_waits_for_one_joined_send_but_an_answer_goes_at_once(self) -> None:
-        transport = CountingTransport()
-        woken: List[int] = []
-        outbox = Outbox(transport, 1 << 20, on_queued=lambda: woken.append(1))
-        outbox.last_sent_at -= 1.0  # the last send was a while ago: a lone frame
-        self.assertEqual(outbox.put(b"a", now=True), "sent")
-        # Right behind it: a burst, left for the I/O thread. (The clock is set
-        # so that this holds however slowly the test runs.)
-        outbox.last_sent_at += 3600.0
-        self.assertEqual(outbox.put(b"b", now=True), "queued")
-        self.assertEqual(outbox.put(b"c", now=True), "queued")
-        self.assertEqual(woken, [1], "the I/O thread was asked once")
-        self.assertTrue(outbox.write_some())
-        self.assertEqual(transport.sends, [b"a", b"bc"], "the burst went in one call")
-        # The peer spoke since (a ping): the reply is never held back, even
-        # though the last send was a moment ago.
-        outbox.answer_due = True
-        self.assertEqual(outbox.put(b"pong", now=True), "sent")
-        self.assertEqual(transport.sends[-1], b"pong")
-        self.assertEqual(outbox.put(b"next", now=True), "queued", "one answer per ping")
-
-    def test_a_burst_is_queued_in_one_call_in_order_or_not_at_all(self) -> None:
-        transport = CountingTransport()
-        woken: List[int] = []
-        outbox = Outbox(transport, 9, on_queued=lambda: woken.append(1))
-        self.assertTrue(outbox.put_burst([b"ab", b"cd", b"ef"], "k"))
-        self.assertEqual(woken, [1], "the I/O thread was asked once")
-        self.assertEqual(outbox.queued_bytes, 6)
-        self.assertFalse(outbox.put_burst([b"gh", b"ij", b"kl"], "k"), "over the cap: not one")
-        self.assertEqual(outbox.queued_bytes, 6, "nothing of it was queued")
-        self.assertEqual(outbox.dropped, 0, "dropping is put's to decide, frame by frame")
-        self.assertEqual(outbox.put(b"mn", key="k"), "queued")
-        self.assertEqual(outbox.put(b"op", key="k"), "replaced", "newest wins, burst or not")
-        self.assertTrue(outbox.write_some())
-        self.assertEqual(transport.sends, [b"abcdefop"], "in order, in one call")
-        outbox.close(discard=True)
-        self.assertFalse(outbox.put_burst([b"qr"], "k"), "closed")

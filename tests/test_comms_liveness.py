@@ -8,6 +8,7 @@ as Wi-Fi out of range does (no FIN, no RST).
 
 from __future__ import annotations
 
+import json
 import logging
 import selectors
 import socket
@@ -33,6 +34,7 @@ from snr import (
     tasks,
 )
 from snr.std_mods.comms.comms_loop import CommsLoop
+from snr.std_mods.comms.sockets import SocketsServerLoop
 from snr.utils import MemoryLinkPair
 from tests.helpers import free_port, wait_until
 from tests.quiet import capture_test_logs
@@ -337,6 +339,60 @@ class BurstFloodFactory(FloodFactory):
         return BurstFlood(self, parent)
 
 
+class Sender(ThreadLoop):
+    """Stores 0, 1, 2, ... under ``tick``, ``count`` of them, once ``started`` is set."""
+
+    def __init__(self, factory: SenderFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "sender")
+        self.sender_factory = factory
+
+    def loop(self) -> None:
+        factory = self.sender_factory
+        if not factory.started.is_set() or factory.sent == factory.count:
+            self.wait_s(0.01)
+            return
+        self.store_data("tick", factory.sent)
+        factory.sent += 1
+
+
+class SenderFactory(LoopFactory):
+    def __init__(self, count: int) -> None:
+        super().__init__()
+        self.count = count
+        self.sent = 0
+        self.started = threading.Event()
+
+    def get(self, parent: AbstractNode) -> Sender:
+        return Sender(self, parent)
+
+
+def frame(**fields: Any) -> bytes:
+    """One frame as a plain program writes it: 4-byte big-endian length, then JSON."""
+    body = json.dumps(fields).encode("utf-8")
+    return len(body).to_bytes(4, "big") + body
+
+
+def comms_of(node: Node) -> CommsLoop:
+    """The node's one comms component."""
+    [comms] = [part for part in node.components.values() if isinstance(part, CommsLoop)]
+    return comms
+
+
+def read_until_closed(sock: socket.socket, limit_s: float) -> bool:
+    """Read (and drop) what comes until the peer closes; False if still open after ``limit_s``."""
+    deadline = time.monotonic() + limit_s
+    sock.settimeout(0.05)
+    while time.monotonic() < deadline:
+        try:
+            if not sock.recv(65536):
+                return True
+        except socket.timeout:
+            continue
+        except OSError:  # reset: closed too
+            return True
+    return False
+
+
 class TestSlowReader(CommsFaultTest):
     def test_a_paused_reader_costs_bounded_memory_and_every_drop_is_counted(self) -> None:
         self.check_a_paused_reader(FloodFactory(count=3000))
@@ -383,26 +439,60 @@ class TestSlowReader(CommsFaultTest):
 
 
 class TestConnectionLimits(CommsFaultTest):
-    def test_connections_over_the_cap_are_refused_and_counted(self) -> None:
+    def test_connections_over_the_cap_are_refused_once_every_one_said_hello(self) -> None:
         pair = SocketsPair(("127.0.0.1", self.port), max_connections=3)
-        self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
-        socks = [connect_when_listening(self.port) for _ in range(5)]
-        for sock in socks:
+        nodes = self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
+        comms = comms_of(nodes.nodes[0])
+        socks = [connect_when_listening(self.port) for _ in range(3)]
+        for n, sock in enumerate(socks):
             self.addCleanup(sock.close)
             sock.settimeout(3.0)
-        got = []
-        for sock in socks:
-            data = b""
-            try:
-                data = sock.recv(4)
-            except OSError:
-                pass
-            got.append(data)
-        self.assertEqual(sum(1 for data in got if data), 3, got)  # three got a hello
-        self.assertEqual(got[3:], [b"", b""])  # the others saw the connection end
+            sock.sendall(frame(v=1, kind="hello", role=f"robot{n}"))
+        said_hello = lambda: sum(1 for link in comms.links if link.peer_role) == 3  # noqa: E731
+        self.assertTrue(wait_until(said_hello, 5.0), self.log.lines)
+        late = [connect_when_listening(self.port) for _ in range(2)]
+        for sock in late:
+            self.addCleanup(sock.close)
+            sock.settimeout(3.0)
+        self.assertEqual([sock.recv(4) for sock in late], [b"", b""], "refused at once")
+        self.assertTrue(all(sock.recv(4) for sock in socks), "the three nodes kept their links")
         refused = self.log.matching("Refused")
         self.assertTrue(refused, self.log.lines)
         self.assertIn("already has 3 clients", refused[0])
+        self.assertEqual(self.log.matching("had not said hello"), [], "no node was closed")
+
+    def test_a_node_gets_in_past_connections_that_never_said_hello(self) -> None:
+        # A server held connections that never said hello and refused a real
+        # node while they lasted, and the pages that node stored meanwhile
+        # were lost. Now the oldest silent connection makes room for it.
+        original = CommsLoop.hello_timeout_s
+        CommsLoop.hello_timeout_s = 60.0  # none times out during the test: room must be made
+        self.addCleanup(setattr, CommsLoop, "hello_timeout_s", original)
+        cap, idle, count = 4, 12, 500
+        pair = SocketsPair(("127.0.0.1", self.port), max_connections=cap)
+        counter, sender = CounterFactory("tick"), SenderFactory(count)
+        config = Config(
+            {"server": [pair.server(), counter], "robot": [pair.client("tick"), sender]},
+            mode=Mode.TEST,
+        )
+        server = comms_of(self.run_nodes(config, ["server"]).nodes[0])
+        assert isinstance(server, SocketsServerLoop)
+        holders = [connect_when_listening(self.port) for _ in range(idle)]
+        for sock in holders:
+            self.addCleanup(sock.close)
+        self.assertTrue(wait_until(lambda: server.closed_silent.total == idle - cap, 5.0))
+        robot = comms_of(self.run_nodes(config, ["robot"]).nodes[0])
+        linked = lambda: any(link.peer_role == "server" for link in robot.links)  # noqa: E731
+        self.assertTrue(wait_until(linked, 3.0), self.log.lines)
+        sender.started.set()
+        self.assertTrue(wait_until(lambda: len(counter.seen) == count, 10.0), len(counter.seen))
+        self.assertEqual(counter.seen, list(range(count)), "every page, in order")
+        self.assertEqual(server.closed_silent.total, idle - cap + 1, "one more made room")
+        self.assertEqual(server.refused.total, 0)
+        self.assertTrue(self.log.matching("connections that had not said hello"), self.log.lines)
+        # Oldest first: the first holders were closed, the last ones still hold a slot.
+        self.assertTrue(read_until_closed(holders[0], 2.0))
+        self.assertFalse(read_until_closed(holders[-1], 0.2))
 
     def test_a_connection_that_never_speaks_is_closed(self) -> None:
         original = CommsLoop.hello_timeout_s

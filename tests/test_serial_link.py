@@ -517,30 +517,6 @@ class TestErrors(SNRTestCase):
         self.assertEqual([p.key for p in stored], ["serial_in"] * 4 + ["ok"])
         self.assertEqual(link.bad_lines, 4)
 
-    def test_the_outbox_keeps_the_newest_line_per_key_when_full(self) -> None:
-        from snr.extras.serial.link import LineOutbox
-
-        outbox = LineOutbox(max_bytes=40)
-        self.assertEqual(outbox.put("speed", b"speed 1\n"), 0)  # 8 bytes each
-        self.assertEqual(outbox.put("light", b"light 1\n"), 0)
-        for value in range(2, 5):
-            self.assertEqual(outbox.put("speed", f"speed {value}\n".encode()), 0)
-        # full (40 bytes): each new speed line pushes out the oldest speed line
-        self.assertEqual(outbox.put("speed", b"speed 5\n"), 1)
-        self.assertEqual(outbox.put("speed", b"speed 6\n"), 1)
-        # a key with nothing to replace pushes out the oldest line of the key
-        # with the most waiting, so the only light line stays
-        self.assertEqual(outbox.put("beep", b"beep 1\n"), 1)
-        taken = []
-        while len(outbox):
-            taken.append(outbox.take(0))
-        expected = [b"light 1\n", b"speed 4\n", b"speed 5\n", b"speed 6\n", b"beep 1\n"]
-        self.assertEqual(taken, expected)
-        self.assertEqual(outbox.take(0), None)
-        outbox.close()
-        self.assertEqual(outbox.put("speed", b"speed 7\n"), 0)
-        self.assertIsNone(outbox.take())  # closed and empty: does not wait
-
     def test_a_bad_outbox_size_is_a_config_error(self) -> None:
         with self.assertRaises(ConfigError) as caught:
             SerialLinkFactory("loop://", outbox_bytes=0)

@@ -29,7 +29,7 @@ import logging
 import sys
 import threading
 import time
-from typing import Any, Deque, Dict, List, Optional, Sequence
+from typing import Any, List, Optional, Sequence
 
 from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.core.logs import LossReport, RepeatFilter
@@ -56,11 +56,11 @@ from snr.prelude import (
 )
 from snr.prelude.error_text import did_you_mean
 from snr.std_mods.codec import data_json, header_line, page_from_line, page_to_line
+from snr.std_mods.comms import Outbox
 
 __all__ = [
     "DEFAULT_OUTBOX_BYTES",
     "SERIAL_MODES",
-    "LineOutbox",
     "SerialLinkFactory",
     "SerialLinkLoop",
 ]
@@ -80,137 +80,14 @@ _FLUSH_S = 0.25  # after halt, how long lines already queued may still go out
 _WRITER_WAKE_S = 0.1  # how often a writer holding lines for a starting board looks up
 
 
-class _Entry:
-    """One queued line: its key (``""`` for the header), its bytes, and whether it still counts."""
-
-    __slots__ = ("data", "key", "live")
-
-    def __init__(self, key: str, data: bytes) -> None:
-        self.key = key
-        self.data = data
-        self.live = True
-
-
-class LineOutbox:
-    """Lines waiting for a serial link's writer thread, bounded in bytes.
-
-    ``put`` runs on the node's thread and never blocks on the device. When a
-    new line does not fit, older lines make room, oldest first: those of the
-    same data key (the newest value of a key wins: a motor command from a
-    second ago is worse than none), or, if that key has none waiting, those of
-    the key with the most lines waiting. So a flood under one key never pushes
-    out the last value of another. A line longer than the whole outbox is
-    still taken when the outbox is empty.
-
-    Example::
-
-        outbox = LineOutbox(max_bytes=64)
-        outbox.put("speed", b'{"key":"speed","data":1}\\n')   # 0: nothing dropped
-        outbox.put("speed", b'{"key":"speed","data":2}\\n')   # 0: both fit
-        outbox.put("speed", b'{"key":"speed","data":3}\\n')   # 1: data 1 made room
-        outbox.put("light", b'{"key":"light","data":1}\\n')   # 1: speed 2 made room
-        outbox.take()                                         # b'{"key":"speed","data":3}\\n'
-    """
-
-    def __init__(self, max_bytes: int = DEFAULT_OUTBOX_BYTES) -> None:
-        self.max_bytes = max_bytes
-        self._fifo: Deque[_Entry] = collections.deque()  # dropped entries stay, not live
-        self._by_key: Dict[str, Deque[_Entry]] = {}  # live entries only, oldest first
-        self._lines = 0
-        self._bytes = 0
-        self._closed = False
-        self._changed = threading.Condition(threading.Lock())
-
-    def put(self, key: str, data: bytes, first: bool = False) -> int:
-        """Queue ``data`` (at the front if ``first``); how many older lines were dropped.
-
-        Once closed, the line is not queued and 0 is returned.
-        """
-        with self._changed:
-            if self._closed:
-                return 0
-            dropped = 0
-            while self._lines and self._bytes + len(data) > self.max_bytes:
-                same = self._by_key.get(key) or max(self._by_key.values(), key=len)
-                victim = same.popleft()  # its entry in the FIFO is skipped by take()
-                victim.live = False
-                self._count_out(victim)
-                dropped += 1
-            entry = _Entry(key, data)
-            if first:
-                self._fifo.appendleft(entry)
-                self._by_key.setdefault(key, collections.deque()).appendleft(entry)
-            else:
-                self._fifo.append(entry)
-                self._by_key.setdefault(key, collections.deque()).append(entry)
-            self._lines += 1
-            self._bytes += len(data)
-            self._changed.notify()
-            return dropped
-
-    def take(self, timeout_s: Optional[float] = None) -> Optional[bytes]:
-        """For the writer: the oldest line, waiting for one up to ``timeout_s``.
-
-        Returns None when closed and empty, or when ``timeout_s`` passed.
-        """
-        with self._changed:
-            if not self._lines and not self._closed:
-                self._changed.wait(timeout_s)
-            if not self._lines:
-                return None
-            entry = self._pop_oldest()
-            self._count_out(entry)
-            return entry.data
-
-    def _pop_oldest(self) -> _Entry:
-        while True:
-            entry = self._fifo.popleft()
-            if entry.live:
-                self._by_key[entry.key].popleft()  # it is also the oldest of its key
-                return entry
-
-    def _count_out(self, entry: _Entry) -> None:
-        self._lines -= 1
-        self._bytes -= len(entry.data)
-        if not self._by_key[entry.key]:
-            del self._by_key[entry.key]
-
-    def discard(self) -> int:
-        """Forget every pending line; how many there were."""
-        with self._changed:
-            count = self._lines
-            self._fifo.clear()
-            self._by_key.clear()
-            self._lines = self._bytes = 0
-            return count
-
-    def close(self) -> None:
-        """Take no more lines; ``take`` returns what is left, then None."""
-        with self._changed:
-            self._closed = True
-            self._changed.notify_all()
-
-    @property
-    def closed(self) -> bool:
-        """True once ``close()`` was called."""
-        return self._closed
-
-    @property
-    def pending_bytes(self) -> int:
-        """The bytes of the lines waiting."""
-        return self._bytes
-
-    def __len__(self) -> int:
-        return self._lines
-
-
 class SerialLinkLoop(ThreadLoop):
     """Reads lines from the port on its thread; a writer thread writes queued lines.
 
     The ``store_page`` handler only encodes the page and puts the line in a
-    bounded `LineOutbox`, so a device that stops reading never slows the
-    node. When the outbox is full the newest line per key is kept and the
-    drops are counted in ``dropped`` and logged at most once a second.
+    bounded `Outbox` (the one every link uses), so a device that stops
+    reading never slows the node. When the outbox is full the newest line per
+    key is kept and the drops are counted in ``dropped`` and logged at most
+    once a second.
 
     If the device disappears (unplugged), the reading thread logs it and
     reopens the port with a growing pause (up to 5 s) until the node stops:
@@ -249,7 +126,6 @@ class SerialLinkLoop(ThreadLoop):
         self._buffer = bytearray()
         self._send_keys = set(factory.send_keys)
         self._received: collections.OrderedDict[int, Page] = collections.OrderedDict()
-        self._outbox = LineOutbox(factory.outbox_bytes)
         self._writer: Optional[threading.Thread] = None
         self._flush_until = 0.0
         self._cut = False  # a write timed out, maybe part-way through a line
@@ -260,6 +136,7 @@ class SerialLinkLoop(ThreadLoop):
             "the device is not reading them (or the port is being reopened); the newest "
             f"line per key is kept, up to {factory.outbox_bytes:,} bytes",
         )
+        self._outbox = Outbox(factory.outbox_bytes, self._loss)
         self._repeats = RepeatFilter(self.log)
         self.task_handlers = {
             (TaskType.store_page, key): self.send_page for key in factory.send_keys
@@ -283,7 +160,7 @@ class SerialLinkLoop(ThreadLoop):
     # -- starting and stopping ------------------------------------------------
     def begin(self) -> None:
         """Open the port now (a wrong port name stops the node at start-up); start the writer."""
-        self._outbox = LineOutbox(self.link.outbox_bytes)
+        self._outbox = Outbox(self.link.outbox_bytes, self._loss)
         if self.port is None:  # still open after a refused reload: reopening resets boards
             self._open()
         self._writer = threading.Thread(
@@ -307,7 +184,7 @@ class SerialLinkLoop(ThreadLoop):
             self._ready.clear()  # the board resets on opening: hold the lines for it
         self.port = port
         if link.mode == "pages":  # lets the other end check the format version
-            self._outbox.put("", (header_line() + "\n").encode("utf-8"), first=True)
+            self._outbox.put_first((header_line() + "\n").encode("utf-8"))
 
     def halt(self) -> None:
         """Take no more lines; those queued may go out for a moment (see ``join``)."""
@@ -338,8 +215,7 @@ class SerialLinkLoop(ThreadLoop):
         writer.join(max(0.0, flush_end - time.monotonic()))
         if not writer.is_alive():
             return
-        self._outbox.close()
-        left = self._outbox.discard()
+        left = self._outbox.close(discard=True)
         if left:
             self._loss.dropped(left)
         cancel = getattr(self.port, "cancel_write", None)
@@ -567,18 +443,14 @@ class SerialLinkLoop(ThreadLoop):
         except NotSerializableError as error:
             self.err("Did not send a page over serial: %s", error)
             return None
-        dropped = self._outbox.put(page.key, (line + "\n").encode("utf-8"))
-        if dropped:
-            self._loss.dropped(dropped)
+        self._outbox.put((line + "\n").encode("utf-8"), page.key)  # drops are counted there
         return None
 
     def send_heartbeat(self, task: Task, key: TaskId) -> SomeTasks:
         """Queue the next heartbeat line (on the node's thread: proof it still runs)."""
         line = heartbeat_line(self.heartbeats_sent)
         self.heartbeats_sent += 1
-        dropped = self._outbox.put(HEARTBEAT_KEY, (line + "\n").encode("ascii"))
-        if dropped:
-            self._loss.dropped(dropped)
+        self._outbox.put((line + "\n").encode("ascii"), HEARTBEAT_KEY)
         return None
 
     def _encode(self, page: Page) -> str:
@@ -600,7 +472,7 @@ class SerialLinkLoop(ThreadLoop):
         while True:
             if not self._ready.wait(_WRITER_WAKE_S):  # the board is starting up
                 if outbox.closed:
-                    left = outbox.discard()
+                    left = outbox.close(discard=True)
                     if left:
                         self._loss.dropped(left)
                     return
@@ -611,7 +483,7 @@ class SerialLinkLoop(ThreadLoop):
                     return
                 continue
             if outbox.closed and time.monotonic() > self._flush_until:
-                self._loss.dropped(1 + outbox.discard())
+                self._loss.dropped(1 + outbox.close(discard=True))
                 return
             try:
                 self._write(data)

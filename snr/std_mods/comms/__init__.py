@@ -1,6 +1,7 @@
 """Communication between nodes: pipes and TCP sockets.
 
 Serial links and Zenoh are extras: ``snr.extras.serial`` and ``snr.extras.zenoh``.
+Every link that writes to a peer queues in the one `Outbox` (``outbox.py``).
 
 Example::
 
@@ -12,6 +13,7 @@ from snr.std_mods.comms.comms_loop import (
     COMMS_DISCONNECTED,
     CommsLoop,
 )
+from snr.std_mods.comms.outbox import Outbox
 from snr.std_mods.comms.pipe import (
     PipeLoop,
     PipeLoopFactory,
@@ -28,6 +30,7 @@ __all__ = [
     "COMMS_CONNECTED",
     "COMMS_DISCONNECTED",
     "CommsLoop",
+    "Outbox",
     "PipeLoop",
     "PipeLoopFactory",
     "SocketsClientFactory",

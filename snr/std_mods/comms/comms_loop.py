@@ -28,7 +28,7 @@ from __future__ import annotations
 import logging
 import threading
 import time
-from typing import Any, Callable, Dict, List, Optional, Sequence, Set, Tuple, Union
+from typing import Any, Dict, List, Optional, Sequence, Set, Tuple, Union
 
 from snr.core import ThreadLoop, tasks
 from snr.core.logs import RateLimitedLog
@@ -321,7 +321,7 @@ class CommsLoop(ThreadLoop):
                 transport.close()
                 raise
             self.links = (*self.links, link)
-            self._opened = [old for old in self._opened if old.is_alive()] + [link]
+            self._opened = [old for old in self._opened if not old.is_closed()] + [link]
         self._unsent_reported = False
         link.start()
         self.schedule(tasks.event(COMMS_CONNECTED, [self.name, transport.peer]))
@@ -391,10 +391,14 @@ class CommsLoop(ThreadLoop):
         else:
             self.say("Links lost", logging.WARNING, "Lost the link to %s: %s.", link.label, reason)
 
-    #: The message in one frame's body: `decode_body` itself (no call in
-    #: between, on every frame's path); a subclass that accepts more defines
-    #: ``def decode_message(self, body: bytes) -> Message``, as the pipe does.
-    decode_message: Callable[[bytes], Message] = staticmethod(decode_body)
+    def decode_message(self, body: bytes) -> Message:
+        """The message in one frame's body (`decode_body`); the pipe accepts 2021 pages too.
+
+        Example::
+
+            comms.decode_message(b'{"v":1,"kind":"beat"}')   # Beat()
+        """
+        return decode_body(body)
 
     def stats(self) -> List[Dict[str, Any]]:
         """The counters of every open link (see `Link.stats`).
@@ -450,7 +454,7 @@ class CommsLoop(ThreadLoop):
         with self._links_lock:
             opened = list(self._opened)
         for link in opened:  # aborted ones end on the I/O thread's next pass
-            link.join(max(0.1, deadline - time.monotonic()))
+            link.wait_closed(max(0.1, deadline - time.monotonic()))
         self._release_io_loop()
         self.news.flush()  # what a flood of connections or bad frames left uncounted aloud
         self.bad_frame_news.flush()

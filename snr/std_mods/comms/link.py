@@ -1,7 +1,7 @@
-"""`Link`: one live connection to one peer node, and the `Outbox` of frames waiting for it.
+"""`Link`: one live connection to one peer node, over a `Transport`.
 
 A `Link` owns a *transport* (a TCP socket or a pipe end, see `Transport`) and
-an `Outbox` of frames waiting to be written, and has no thread of its own:
+an `Outbox` (``outbox.py``) of frames waiting to be written, and has no thread of its own:
 the node's one `IOLoop` thread reads the transport when bytes arrive
 (cutting them into frames and handing pages to its `CommsLoop`, in
 ``comms_loop.py``) and writes queued frames when the transport has room, for
@@ -16,7 +16,6 @@ Example (a `CommsLoop` opens its links with ``open_link``)::
 
 from __future__ import annotations
 
-import collections
 import enum
 import logging
 import selectors
@@ -26,8 +25,6 @@ import time
 from typing import (
     TYPE_CHECKING,
     Any,
-    Callable,
-    Deque,
     Dict,
     List,
     Optional,
@@ -39,6 +36,7 @@ from snr.core.logs import LossReport
 from snr.prelude import CommsError, DataKey, Page, WireFormatError
 from snr.std_mods.comms.io_loop import IOLoop, IOTimer
 from snr.std_mods.comms.link_hints import watch_link
+from snr.std_mods.comms.outbox import CLOSED, FIRST, Outbox
 from snr.std_mods.comms.wire import (
     Bye,
     FrameDecoder,
@@ -60,9 +58,8 @@ try:  # Linux and macOS say how many bytes wait unread; Windows has no fcntl
 except ImportError:
     _FIONREAD = None
 
-__all__ = ["Link", "LinkState", "Outbox", "Transport", "shown_role", "unread_bytes"]
+__all__ = ["Link", "LinkState", "Transport", "shown_role", "unread_bytes"]
 
-_MAX_CHUNK_BYTES = 1024 * 1024  # queued frames are joined into chunks up to this size
 _WRITE_NOW_BYTES = 64 * 1024  # the node's thread writes a backlog this big before it goes idle
 _BURST_S = 0.0002  # a frame this soon after the last send joins a batch for the I/O thread
 _TICK_S = 0.25  # how often a link checks its peer's silence and whether it owes a beat
@@ -144,237 +141,22 @@ class Transport(Protocol):
         """Release the socket or pipe."""
 
 
-_Entry = List[Any]  # [data key or None, frame or None once superseded]
-
-
-class Outbox:
-    """Frames waiting to be written to one peer, in the order they were queued; bounded.
-
-    ``put`` runs on the node's thread. With ``now=True`` and nothing waiting,
-    it writes the frame straight away without blocking (no thread switch: the
-    lowest latency). Otherwise, or when the OS buffer is full, the frame is
-    queued, ``on_queued`` asks the node's I/O loop to watch for room, and
-    ``write_some`` then sends everything queued, joined into as few ``send``
-    calls as the socket takes (the highest throughput when many pages come at
-    once). Every write happens under the outbox's lock, so frames leave in the
-    order they were put and each is written whole, however the two threads meet.
-
-    At most ``max_bytes`` wait. When a new page would go over, the newest
-    page still waiting under the same key is dropped in its favour (newest
-    wins per key: a robot wants the latest reading, not an old one); if none
-    waits under that key, the new page is dropped. Every drop is counted in
-    ``dropped`` and ``dropped_by_key``.
-
-    Example::
-
-        outbox.put(frame, now=True, key="depth_m")   # "sent", "queued", "replaced" or "dropped"
-        outbox.write_some()                          # I/O loop: True once all is written
-
-    Attributes:
-        last_sent_at: when bytes last went to the transport (``time.monotonic()``).
-        answer_due: the peer has been heard since the last send (set by the
-            link as frames arrive): the next frame answers it and goes at once.
-    """
-
-    def __init__(
-        self,
-        transport: Transport,
-        max_bytes: int,
-        on_queued: Optional[Callable[[], None]] = None,
-    ) -> None:
-        self.transport = transport
-        self.max_bytes = max_bytes
-        self.on_queued = on_queued
-        self.dropped = 0
-        self.dropped_by_key: Dict[DataKey, int] = {}
-        self.last_sent_at = time.monotonic()
-        self.answer_due = False
-        self._entries: Deque[_Entry] = collections.deque()
-        self._newest: Dict[DataKey, _Entry] = {}
-        self._queued_bytes = 0
-        self._live = 0  # entries not superseded
-        self._closed = False
-        self._lock = threading.Lock()
-
-    def put(self, frame: bytes, now: bool = False, key: Optional[DataKey] = None) -> str:
-        """Send (if ``now``) or queue ``frame``; says what happened.
-
-        Returns ``"sent"``, ``"queued"``, ``"replaced"`` (an older page under
-        ``key`` was dropped for it), ``"dropped"`` (the backlog is full) or
-        ``"closed"``.
-        """
-        outcome = "queued"
-        with self._lock:
-            if self._closed:
-                return "closed"
-            # A frame right behind another (a burst) waits for the I/O thread,
-            # which sends everything waiting in one call: a burst of pages costs
-            # a few system calls instead of one each. A frame after a pause
-            # goes at once, and so does one sent after the peer was heard (a
-            # reply: a fast ping-pong would otherwise look like a burst and
-            # pay a trip through the I/O thread every time).
-            if (
-                now
-                and not self._live
-                and (self.answer_due or time.monotonic() - self.last_sent_at >= _BURST_S)
-            ):
-                self.answer_due = False
-                try:
-                    sent = self.transport.send(frame)
-                except OSError:  # full (BlockingIOError) or broken: the I/O loop finds out
-                    sent = 0
-                if sent:
-                    self.last_sent_at = time.monotonic()
-                if sent == len(frame):
-                    return "sent"
-                if sent:  # the rest must go next, before anything else, whatever the cap
-                    self._append(None, frame[sent:])
-                    frame = b""
-            if frame:
-                if self._queued_bytes + len(frame) > self.max_bytes:
-                    older = self._newest.get(key) if key is not None else None
-                    if older is None:
-                        self._count_drop(key)
-                        return "dropped"
-                    self._queued_bytes -= len(older[1])
-                    older[1] = None
-                    self._live -= 1
-                    self._count_drop(key)
-                    outcome = "replaced"
-                self._append(key, frame)
-            first = self._live == 1
-        if first and self.on_queued is not None:  # was empty: ask for a writer
-            self.on_queued()
-        return outcome
-
-    def put_burst(self, frames: List[bytes], key: DataKey) -> bool:
-        """Queue ``frames`` (pages under ``key``, in order) with one lock; False if it did not.
-
-        Only when they all fit under ``max_bytes`` and the outbox is open:
-        otherwise nothing is queued, and the caller puts them one by one
-        (each drop decided and counted by `put`). Unlike ``put(now=True)``,
-        nothing is written straight away: a burst is worth one ``send``.
-
-        Example::
-
-            if not outbox.put_burst(frames, "depth"):
-                for frame in frames:
-                    outbox.put(frame, key="depth")   # over the cap: drops decided one by one
-        """
-        size = 0
-        for frame in frames:
-            size += len(frame)
-        with self._lock:
-            if self._closed or self._queued_bytes + size > self.max_bytes:
-                return False
-            burst: List[_Entry] = [[key, frame] for frame in frames]
-            self._entries.extend(burst)
-            self._newest[key] = burst[-1]
-            self._queued_bytes += size
-            first = self._live == 0
-            self._live += len(burst)
-        if first and self.on_queued is not None:  # was empty: ask for a writer
-            self.on_queued()
-        return True
-
-    def _append(self, key: Optional[DataKey], frame: bytes) -> None:
-        entry: _Entry = [key, frame]
-        self._entries.append(entry)
-        if key is not None:
-            self._newest[key] = entry
-        self._queued_bytes += len(frame)
-        self._live += 1
-
-    def _count_drop(self, key: Optional[DataKey]) -> None:
-        self.dropped += 1
-        if key is not None:
-            self.dropped_by_key[key] = self.dropped_by_key.get(key, 0) + 1
-
-    def write_some(self) -> bool:
-        """For the I/O loop: write what the transport takes now; True once nothing waits.
-
-        Queued frames are joined into chunks of up to 1 MiB, so many small
-        frames cost one system call. What does not fit stays first in line.
-
-        Raises:
-            OSError: the peer is gone (not BlockingIOError: a full buffer just
-                means "later").
-        """
-        with self._lock:
-            entries = self._entries
-            while self._live:
-                parts: List[bytes] = []
-                taken: List[_Entry] = []
-                size = 0
-                for entry in entries:
-                    if size >= _MAX_CHUNK_BYTES:
-                        break
-                    taken.append(entry)
-                    if entry[1] is not None:
-                        parts.append(entry[1])
-                        size += len(entry[1])
-                chunk = parts[0] if len(parts) == 1 else b"".join(parts)
-                try:
-                    sent = self.transport.send(chunk)
-                except BlockingIOError:
-                    return False
-                if sent:
-                    self.last_sent_at = time.monotonic()
-                self._consume(taken, sent)
-                if sent < size:
-                    return False
-            return True
-
-    def _consume(self, taken: List[_Entry], sent: int) -> None:
-        """Forget the first ``sent`` bytes of the ``taken`` entries (a partial frame stays)."""
-        entries = self._entries
-        for entry in taken:
-            frame = entry[1]
-            if frame is not None:
-                if sent < len(frame):
-                    if sent:  # the rest goes first next time; the key no longer replaces it
-                        entry[1] = frame[sent:]
-                        self._queued_bytes -= sent
-                        self._forget_newest(entry)
-                    return
-                sent -= len(frame)
-                self._queued_bytes -= len(frame)
-                self._live -= 1
-                self._forget_newest(entry)
-            entries.popleft()
-
-    def _forget_newest(self, entry: _Entry) -> None:
-        key = entry[0]
-        if key is not None and self._newest.get(key) is entry:
-            del self._newest[key]
-
-    def close(self, discard: bool) -> None:
-        """Accept no more frames; with ``discard``, forget those still waiting."""
-        with self._lock:
-            self._closed = True
-            if discard:
-                self._entries.clear()
-                self._newest.clear()
-                self._queued_bytes = 0
-                self._live = 0
-
-    @property
-    def closed(self) -> bool:
-        """True once ``close`` was called."""
-        return self._closed
-
-    @property
-    def queued_bytes(self) -> int:
-        """Bytes of frames waiting to be sent."""
-        return self._queued_bytes
-
-    def __len__(self) -> int:
-        """How many frames wait to be sent."""
-        return self._live
-
-
 class LinkState(enum.Enum):
-    """OPEN → CLOSING (flushing, after ``close()``) → CLOSED.
+    """Where a link is in its life: one value, moved by the methods named below.
+
+    ======== ================================================ ==========================
+    state    the link                                         moves on to
+    ======== ================================================ ==========================
+    OPEN     sends pages, reads, beats, judges silence        CLOSING, ENDING, CLOSED
+    CLOSING  ``close()``: writes what waits, then a bye       DRAINING, ENDING, CLOSED
+    DRAINING all written, half-closed: reads what still comes CLOSED (after ``drain_s``)
+    ENDING   ``abort()``, or the node's thread found the end: CLOSED (on the I/O thread)
+             no more reads; the I/O thread finishes it
+    CLOSED   transport closed, the `CommsLoop` told           (the end)
+    ======== ================================================ ==========================
+
+    Whether the link reads is the one other thing that changes: it stops
+    while pages it read wait for room in the node's queue (``Link._held``).
 
     Example::
 
@@ -383,7 +165,13 @@ class LinkState(enum.Enum):
 
     OPEN = "open"
     CLOSING = "closing"
+    DRAINING = "draining"
+    ENDING = "ending"
     CLOSED = "closed"
+
+
+_OPEN, _CLOSING, _DRAINING = LinkState.OPEN, LinkState.CLOSING, LinkState.DRAINING
+_ENDED = (LinkState.ENDING, LinkState.CLOSED)  # no more reading or writing
 
 
 class Link:
@@ -448,6 +236,11 @@ class Link:
             )
         self.owner = owner
         self.io: IOLoop = io
+        self.log = owner.log
+        self.beat_s = owner.beat_s  # how often a quiet link sends a beat (its hello says so)
+        self.hello_timeout_s = owner.hello_timeout_s
+        self.dead_after_s = owner.dead_after_s
+        self.recovered_after_s = owner.recovered_after_s
         self.transport = transport
         self.peer_role: Optional[str] = None
         self.hello_at: Optional[float] = None  # when the peer's hello arrived
@@ -476,18 +269,15 @@ class Link:
         self._closed = threading.Event()
         # These belong to the I/O loop's thread (set before the hello, which may wake it).
         self._decoder = FrameDecoder()
-        self._attached = False
-        self._io_writes = False  # the loop's thread watches for room: leave the writing to it
-        self._paused = False
         self._unread_seen = 0  # while paused: bytes the OS held for us at the last look
-        self._held: List[Page] = []  # decoded while the node was behind: delivered first
+        # Decoded while the node was behind, delivered first; while any wait,
+        # the link reads no more.
+        self._held: List[Page] = []
         self._timer: Optional[IOTimer] = None
         self._tick_s = min(_TICK_S, owner.beat_s / 4)
-        self._finished = False
-        self._ending_soon = False  # ended while the node's thread read it; the loop's finishes
-        self._ending = False  # half-closed after a graceful flush
-        self.outbox = Outbox(transport, owner.max_backlog_bytes, self._wake_writer)
-        self.outbox.put(encode_hello(owner.parent.role, owner.beat_s, bye=True), now=False)
+        self._answer_due = False  # the peer was heard since the last send: answer at once
+        self.outbox = Outbox(owner.max_backlog_bytes, self.loss)
+        self.outbox.put(encode_hello(owner.parent.role, self.beat_s, bye=True))
 
     @property
     def label(self) -> str:
@@ -515,68 +305,72 @@ class Link:
         self.io.call_soon(self._attach)
 
     def send(self, frame: bytes, now: bool = True, key: Optional[DataKey] = None) -> bool:
-        """Send or queue a page's ``frame`` (node thread); False if it was dropped.
+        """Send or queue a page's ``frame`` (node thread); False if the link is not open.
 
-        A page that the full backlog cannot take, or a queued one it
-        replaces, is counted and reported (at most once a second).
+        If the backlog is full, older frames make room (see `Outbox`): they
+        are counted and reported (at most once a second).
         """
-        if self.state is not LinkState.OPEN:
+        if self.state is not _OPEN:
             return False
         outbox = self.outbox
-        outcome = outbox.put(frame, now, key)
-        if outcome == "queued":
-            self.pages_sent += 1
-            if outbox.queued_bytes >= _WRITE_NOW_BYTES and not self._io_writes:
-                self.write_waiting()  # a long burst: do not wait for the node to go idle
-            return True
-        if outcome == "sent":
-            self.pages_sent += 1
-            return True
-        if outcome == "replaced":
-            self.pages_sent += 1
-            self.loss.dropped()
-            return True
-        if outcome == "dropped":
-            self.loss.dropped()
-        return False
+        # A frame right behind another (a burst) waits for one joined send
+        # (a burst of pages then costs a few system calls instead of one
+        # each). A frame after a pause goes at once, and so does one sent
+        # after the peer was heard (a reply: a fast ping-pong would otherwise
+        # look like a burst and pay a trip through the I/O thread every time).
+        write = None
+        if now and (self._answer_due or time.monotonic() - outbox.last_sent_at >= _BURST_S):
+            self._answer_due = False
+            write = self.transport.send
+        outcome = outbox.put(frame, key, write)
+        if outcome == CLOSED:
+            return False
+        self.pages_sent += 1
+        if outcome == FIRST:
+            self._wake_writer()
+        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self.io.events(self) & _WRITE:
+            self.write_waiting()  # a long burst: do not wait for the node to go idle
+        return True
 
     def send_burst(self, frames: List[bytes], key: DataKey) -> None:
-        """`send` for the frames of a run of pages under ``key`` (node thread).
+        """`send` for the frames of a run of pages under ``key`` (node thread), with one lock.
 
-        Queued with one call when they all fit in the backlog; else one by
-        one, so that each drop is decided, counted and reported as `send`
-        does. They leave when the node's thread next goes idle, or at once
-        once 64 KiB wait.
+        They leave when the node's thread next goes idle, or at once once
+        64 KiB wait.
 
         Example::
 
             link.send_burst([encode_page(page) for page in pages], "depth")
         """
-        if self.state is not LinkState.OPEN:
+        if self.state is not _OPEN:
             return
         outbox = self.outbox
-        if outbox.put_burst(frames, key):
-            self.pages_sent += len(frames)
-            if outbox.queued_bytes >= _WRITE_NOW_BYTES and not self._io_writes:
-                self.write_waiting()
+        outcome = outbox.put_all(frames, key)
+        if outcome == CLOSED:
             return
-        for frame in frames:
-            self.send(frame, True, key)
+        self.pages_sent += len(frames)
+        if outcome == FIRST:
+            self._wake_writer()
+        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self.io.events(self) & _WRITE:
+            self.write_waiting()
 
     def close(self) -> None:
         """Send what is queued and a goodbye, then end the connection (graceful)."""
-        if self.state is LinkState.OPEN:
-            self.state = LinkState.CLOSING
+        if self.state is _OPEN:
+            self.state = _CLOSING
             if self._peer_takes_bye:  # older peers never get a frame they do not know
-                self.outbox.put(encode_bye(), now=True)
-            self.outbox.close(discard=False)
+                outcome = self.outbox.put(encode_bye(), None, self.transport.send)
+                if outcome == FIRST:
+                    self._wake_writer()
+            self.outbox.close()
             self.io.call_soon(self._flush_then_end)
 
-    def abort(self) -> None:
-        """End the connection now, dropping what is queued."""
-        self.state = LinkState.CLOSED
-        self.outbox.close(discard=True)
-        self.io.call_soon(lambda: self._finish("the link was closed"))
+    def abort(self, reason: str = "the link was closed") -> None:
+        """End the connection now, dropping what is queued; ``reason`` goes in the log line."""
+        if self.state not in _ENDED:
+            self.state = LinkState.ENDING
+            self.outbox.close(discard=True)
+            self.io.call_soon(lambda: self._finish(reason))
 
     def is_closed(self) -> bool:
         """True once the link has ended and the transport is closed."""
@@ -585,14 +379,6 @@ class Link:
     def wait_closed(self, timeout_s: Optional[float]) -> bool:
         """Wait up to ``timeout_s`` for the link to close; True if it has."""
         return self._closed.wait(timeout_s)
-
-    def is_alive(self) -> bool:
-        """True until the link has ended (it has no thread of its own)."""
-        return not self._closed.is_set()
-
-    def join(self, timeout_s: Optional[float]) -> None:
-        """Wait up to ``timeout_s`` for the link to end."""
-        self._closed.wait(timeout_s)
 
     def stats(self) -> Dict[str, Any]:
         """The link's counters, e.g. for the console's ``stats`` command.
@@ -616,9 +402,8 @@ class Link:
 
     # -- I/O loop thread: life ------------------------------------------------
     def _attach(self) -> None:
-        if self._finished:  # aborted before the loop got to it
+        if self.state in _ENDED:  # aborted before the loop got to it
             return
-        self._attached = True
         self.io.watch(self, _READ)
         self._timer = self.io.call_later(self._tick_s, self._tick)
         self.on_writable()  # the hello goes at once
@@ -643,26 +428,25 @@ class Link:
         if not len(self.outbox):
             return
         try:
-            done = self.outbox.write_some()
+            done = self.outbox.write_to(self.transport.send)
         except OSError:  # broken: the loop's thread finds out and ends the link
             done = False
         if not done:
-            self._io_writes = True
             self.io.call_soon(self._want_write)
 
     def _want_write(self) -> None:
-        if self._attached and not self._finished and len(self.outbox):
+        if self.state not in _ENDED and len(self.outbox):
             self.io.watch(self, self.io.events(self) | _WRITE)
 
     def _flush_then_end(self) -> None:
-        if self._attached and not self._finished and not len(self.outbox):
+        if self.state is _CLOSING and not len(self.outbox):
             self._end_writing()
 
     def _end_writing(self) -> None:
-        """Everything is sent: half-close, then read what still comes for a moment."""
-        if self._ending:
+        """CLOSING, everything sent: half-close, then read what still comes for a moment."""
+        if self.state is not _CLOSING:
             return
-        self._ending = True
+        self.state = _DRAINING
         self.transport.end_writing()
         if self._timer is not None:
             self._timer.cancel()
@@ -671,19 +455,21 @@ class Link:
     def _tick(self) -> None:
         """Every quarter beat or so: is the peer still there, and do we owe it a beat?"""
         self._timer = None
-        if self._finished:
+        if self.state in _ENDED:
             return
-        silence = self._silence_while_paused() if self._paused else self._silence()
+        silence = self._silence_while_paused() if self._held else self._silence()
         if silence is not None:
             self._finish(silence)
             return
-        if self.state is LinkState.OPEN:
+        if self.state is _OPEN:
             if (
                 self.peer_beat_s is not None
                 and not len(self.outbox)
-                and time.monotonic() - self.outbox.last_sent_at >= self.owner.beat_s
+                and time.monotonic() - self.outbox.last_sent_at >= self.beat_s
             ):
-                self.outbox.put(encode_beat(), now=True)  # quiet for beat_s: a sign of life
+                outcome = self.outbox.put(encode_beat(), None, self.transport.send)
+                if outcome == FIRST:  # quiet for beat_s: a sign of life, written later
+                    self._want_write()
             self._check_recovered()
             self._timer = self.io.call_later(self._tick_s, self._tick)
 
@@ -691,7 +477,7 @@ class Link:
         # The peer has caught up once everything queued went out and nothing
         # was dropped for a while (a second by default).
         if self.loss.dropping and not len(self.outbox):
-            self.loss.recovered(quiet_s=self.owner.recovered_after_s)
+            self.loss.recovered(quiet_s=self.recovered_after_s)
 
     def on_io_stop(self) -> None:
         """The I/O loop is stopping: end the link now."""
@@ -702,17 +488,17 @@ class Link:
         if self.io.in_loop_thread():
             self._finish(reason)
         else:  # the node's thread, reading while idle, leaves it to the loop's
-            self._ending_soon = True  # and reads it no more meanwhile
+            self.state = LinkState.ENDING  # and reads it no more meanwhile
             self.io.call_soon(lambda: self._finish(reason))
 
     def _finish(self, reason: str) -> None:
-        if self._finished:
+        """Any state → CLOSED, on the I/O thread: close the transport, tell the `CommsLoop`."""
+        if self.state is LinkState.CLOSED:
             return
         with self.io.read_role():  # nobody reads the socket while it closes
-            self._finished = True
             if self.peer_said_bye:
                 reason = "it said goodbye (its node is stopping)"
-            elif self.state is not LinkState.OPEN and not self.went_silent:
+            elif self.state in (_CLOSING, _DRAINING) and not self.went_silent:
                 reason = reason if reason.startswith("the peer") else "the link was closed"
             self.state = LinkState.CLOSED
             self.outbox.close(discard=True)
@@ -754,27 +540,25 @@ class Link:
             self._failed(error)
 
     def _failed(self, error: Exception) -> None:
-        self.owner.log.exception("Link to %s failed", self.label)
+        self.log.exception("Link to %s failed", self.label)
         self._end(f"unexpected {type(error).__name__}: {error}")
 
     def _write(self) -> None:
-        if self._finished:
+        if self.state in _ENDED:
             return
         try:
-            done = self.outbox.write_some()
+            done = self.outbox.write_to(self.transport.send)
         except OSError as error:
             self._finish(f"{type(error).__name__}: {error}")
             return
         if done:
-            self._io_writes = False
             events = self.io.events(self)
             if events & _WRITE:
                 self.io.watch(self, events & ~_WRITE)
             self._check_recovered()
-            if self.state is LinkState.CLOSING and self.outbox.closed:
+            if self.state is _CLOSING:
                 self._end_writing()
         else:
-            self._io_writes = True
             if not self.io.events(self) & _WRITE:
                 self.io.watch(self, self.io.events(self) | _WRITE)
 
@@ -783,7 +567,7 @@ class Link:
         # On the thread that holds the read role: the I/O loop's, or the
         # node's while it is idle. Everything else (ending the link, pausing)
         # is left to the loop's thread.
-        if self._finished or self._paused or self._ending_soon:
+        if self.state in _ENDED or self._held:
             return
         try:
             count = self.transport.recv_into(self.io.buffer)
@@ -803,7 +587,7 @@ class Link:
                 )
             self._end("the peer closed the connection")
             return
-        self.outbox.answer_due = True
+        self._answer_due = True
         bodies: List[bytes] = []
         pages: List[Page] = []
         try:
@@ -843,7 +627,7 @@ class Link:
                 self._bad_frame(error)
                 continue
             except Exception as error:  # a bug in decoding: say so, and lose no other frame
-                self.owner.log.exception("Decoding a frame from %s failed", self.label)
+                self.log.exception("Decoding a frame from %s failed", self.label)
                 self._bad_frame(WireFormatError(f"it could not be decoded ({error!r:.80})"))
                 continue
             if message.__class__ is Page:
@@ -862,30 +646,26 @@ class Link:
             else:
                 noted.update([page.key for page in pages])
         if self._held or not self.owner.parent.wait_for_room(0):
-            # The node is behind: keep these, read no more until it has room.
+            # The node is behind: keep these, read no more until it has room
+            # (from now on, on either thread: _read sees them held).
+            first = not self._held
             self._held.extend(pages)
-            self._pause()
+            if first and self.io.in_loop_thread():
+                self._stop_reading()
+            elif first:
+                self.io.call_soon(self._stop_reading)
             return
         self.owner.deliver(self, pages)
 
-    def _pause(self) -> None:
-        if not self._paused:
-            self._paused = True  # read no more, from now on (either thread)
-            if self.io.in_loop_thread():
-                self._stop_reading()
-            else:
-                self.io.call_soon(self._stop_reading)
-
     def _stop_reading(self) -> None:
-        if not self._finished:
+        if self.state not in _ENDED:
             self.io.watch(self, self.io.events(self) & ~_READ)
             self._unread_seen = 0
             self.io.when_room(self._resume)
 
     def _resume(self) -> None:
-        if self._finished:
+        if self.state in _ENDED:
             return
-        self._paused = False
         if self._note_unread() != 0:  # what waits is read next: news of the peer
             self.last_heard = time.monotonic()
         held, self._held = self._held, []
@@ -918,7 +698,7 @@ class Link:
     def _silence(self) -> Optional[str]:
         """Why the link is lost if the peer has been quiet too long, else None."""
         quiet_s = time.monotonic() - self.last_heard
-        limit_s = self.owner.hello_timeout_s
+        limit_s = self.hello_timeout_s
         # Nothing well-formed yet, and no big first frame still coming in steadily:
         if not self._heard_frame and time.monotonic() - self._progress_at > limit_s:
             return (
@@ -927,7 +707,7 @@ class Link:
             )
         if self.peer_beat_s is None:
             return None  # a peer that promised no beats may be quiet for ever
-        limit = max(self.owner.dead_after_s, 3 * self.peer_beat_s)
+        limit = max(self.dead_after_s, 3 * self.peer_beat_s)
         if quiet_s <= limit:
             return None
         at_risk = self.pages_sent - self._sent_when_heard

@@ -53,7 +53,7 @@ def watch_link(comms: CommsLoop, link: Link) -> None:
         link.keys_received = set()  # from now on the link notes what arrives
 
     def ask() -> None:  # on the I/O thread: hand the check to the node's thread
-        if link.is_alive() and not comms.is_terminated():
+        if not link.is_closed() and not comms.is_terminated():
             check = functools.partial(check_link, comms, link)
             comms.schedule(tasks.event(tasks.CHECK_WIRING, [check]))
 
@@ -75,7 +75,7 @@ def check_link(comms: CommsLoop, link: Link) -> None:
 
     node = comms.parent
     hints = _hints_of(comms)
-    if hints is None or not isinstance(node, Node) or not link.is_alive():
+    if hints is None or not isinstance(node, Node) or link.is_closed():
         return
     if node.components.get(comms.name) is not comms:
         return  # removed or reloaded since
@@ -91,7 +91,7 @@ def check_link(comms: CommsLoop, link: Link) -> None:
     now = time.monotonic()
     received: Set[DataKey] = set()
     for other in peer_links:
-        if other.is_alive() and now - other.opened_at < hints.link_s:
+        if not other.is_closed() and now - other.opened_at < hints.link_s:
             handled = []  # a newer link to the same node: its own check comes later
         received.update(other.keys_received or ())
     places = sorted({other.transport.peer for other in peer_links} | {link.transport.peer})

@@ -35,7 +35,7 @@ from snr.std_mods.comms.comms_loop import (
     Keys,
     normalize_keys,
 )
-from snr.std_mods.comms.link import Link
+from snr.std_mods.comms.link import Link, LinkState
 
 __all__ = [
     "DEFAULT_MAX_CONNECTIONS",
@@ -50,7 +50,12 @@ __all__ = [
 Address = Tuple[str, int]
 
 DEFAULT_MAX_CONNECTIONS = 64
-"""How many clients a sockets server takes at once; more are refused (and counted)."""
+"""How many clients a sockets server takes at once.
+
+When a new client comes to a full server, the oldest connection that has not
+said hello is closed to make room (counted and logged); if every one has,
+the new client is refused (counted and logged) and retries later.
+"""
 
 _ACCEPT_WAKE_S = 0.5  # how often a waiting server checks whether it should stop
 _CONNECT_TIMEOUT_S = 0.5
@@ -172,6 +177,12 @@ class SocketsServerLoop(CommsLoop):
     every accepted connection is served by the node's one I/O thread
     (``IOLoop``), so hundreds of idle clients add no threads.
 
+    At ``max_connections`` a real node must still get in: a connection that
+    has not said hello (a port scanner, a program that only holds a slot)
+    gives way, oldest first, and is counted in ``closed_silent``; only when
+    every connection is a node that said hello is the newcomer refused
+    (counted in ``refused``).
+
     Example::
 
         sockets = SocketsPair(server_tuple=("localhost", 9000))
@@ -192,9 +203,17 @@ class SocketsServerLoop(CommsLoop):
         self.refused = LossReport(
             self.log,
             "connections",
-            f"this server already has {factory.max_connections} clients, the most it takes "
-            "(SocketsPair(..., max_connections=N) changes that)",
+            f"this server already has {factory.max_connections} clients, the most it takes, "
+            "and every one has said hello (SocketsPair(..., max_connections=N) changes that)",
             verb="Refused",
+        )
+        self.closed_silent = LossReport(
+            self.log,
+            "connections that had not said hello",
+            f"this server has {factory.max_connections} clients, the most it takes, and new "
+            "ones came: the oldest that had not said hello made room for each, so a real node "
+            "always gets in (SocketsPair(..., max_connections=N) changes the cap)",
+            verb="Closed",
         )
         self._listener: Optional[socket.socket] = None
 
@@ -221,7 +240,9 @@ class SocketsServerLoop(CommsLoop):
         if self.is_terminated():
             sock.close()
             return
-        if len(self.links) >= self.max_connections:
+        ended = (LinkState.ENDING, LinkState.CLOSED)  # aborted links go in a moment
+        taken = sum(1 for link in self.links if link.state not in ended)
+        if taken >= self.max_connections and not self._make_room():
             sock.close()  # the client sees the connection end and retries later
             self.refused.dropped()
             return
@@ -229,6 +250,23 @@ class SocketsServerLoop(CommsLoop):
             self.refused.recovered()
         link = self.open_link(SocketTransport(sock, _describe(peer[:2]), self.dead_after_s))
         self.dbg("Accepted a connection from %s", link.transport.peer)
+
+    def _make_room(self) -> bool:
+        """Close the oldest connection that has not said hello; False if every one has.
+
+        Links are kept in the order they opened, so the first one found is
+        the oldest. A link being aborted no longer counts (it ends on the I/O
+        thread a moment later).
+        """
+        for link in self.links:
+            if link.peer_role is None and link.state is LinkState.OPEN:
+                link.abort(
+                    f"it had not said hello in {time.monotonic() - link.opened_at:.1f} s and "
+                    f"the server, full ({self.max_connections} clients), made room for a new one"
+                )
+                self.closed_silent.dropped()
+                return True
+        return False
 
     def on_hello(self, link: Link) -> None:
         self.say(
