@@ -211,9 +211,6 @@ class QuietNode:
     def wait_for_room(self, timeout_s: float) -> bool:
         return True
 
-    def _snr_never_wait(self) -> None:
-        pass
-
 
 class RingsWhileDrained:
     """The loop's wake-up socket; runs ``during`` once, in the middle of a drain."""

@@ -333,14 +333,15 @@ class TestLifeCycle(SNRTestCase):
 
         node = Node("test", self.get_config([TimeoutLoopFactory(seconds=1)]))
         first, second = Waiter(), Waiter()
-        self.assertTrue(node._snr_use_idle_waiter(first))
-        self.assertFalse(node._snr_use_idle_waiter(second), "one at a time")
+        self.assertTrue(node.queue.use_waiter(first))
+        self.assertFalse(node.queue.use_waiter(second), "one at a time")
+        self.assertTrue(node.queue.use_waiter(first), "asking again is no harm")
         self.assertIs(node.queue.waiter, first)
-        node._snr_stop_idle_waiter(second)  # not the one: nothing changes
+        node.queue.stop_waiter(second)  # not the one: nothing changes
         self.assertIs(node.queue.waiter, first)
-        node._snr_stop_idle_waiter(first)
+        node.queue.stop_waiter(first)
         self.assertIsNone(node.queue.waiter, "the bell again")
-        self.assertTrue(node._snr_use_idle_waiter(second))
+        self.assertTrue(node.queue.use_waiter(second))
 
 
 class TestHandlerFailures(SNRTestCase):

@@ -121,7 +121,7 @@ class Component(AbstractComponent):
         self._handlers_changed()
 
     def _handlers_changed(self) -> None:
-        self.parent._snr_handlers_changed(self)
+        self.parent.handlers_changed(self)
 
     # -- life cycle hooks (documented no-ops: override what you need) -------
     def begin(self) -> None:

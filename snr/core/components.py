@@ -23,6 +23,7 @@ Example::
 
 from __future__ import annotations
 
+import functools
 import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
@@ -318,7 +319,7 @@ class ComponentSet:
             _BLOCKED_ADVICE,
         )
         if isinstance(old, AbstractLoop):
-            old._snr_cancel_stop()
+            old.cancel_stop()
         return False
 
     def _build_replacement(self, old: AbstractComponent) -> Optional[AbstractComponent]:
@@ -355,7 +356,7 @@ class ComponentSet:
         if not self.running:
             return
         try:
-            old._snr_start()
+            _start(old)
         except Exception as error:
             self.node.log.error(
                 "%r could not be restarted after the failed reload: %s: %s",
@@ -380,7 +381,7 @@ class ComponentSet:
             ComponentError: its ``begin()`` raised; the message shows where.
         """
         try:
-            component._snr_start()
+            _start(component)
         except SNRError:
             raise
         except Exception as error:
@@ -395,7 +396,7 @@ class ComponentSet:
 
     def stop(self, component: AbstractComponent) -> None:
         """Halt ``component`` and wait (up to ``join_timeout_s``) for its thread."""
-        self.call_safely(component._snr_stop, component, "halt")
+        self.call_safely(functools.partial(_halt, component), component, "halt")
         component.join(self.join_timeout_s)
 
     def shutdown(self) -> None:
@@ -403,7 +404,7 @@ class ComponentSet:
         self.running = False
         components = list(self.by_name.values())[::-1]
         for component in components:
-            self.call_safely(component._snr_stop, component, "halt")
+            self.call_safely(functools.partial(_halt, component), component, "halt")
         deadline = time.monotonic() + self.join_timeout_s
         for component in components:
             component.join(max(0.0, deadline - time.monotonic()))
@@ -466,6 +467,21 @@ class ComponentSet:
         self._pending_adds = []
         self._rebuild_needed = False
         self.table_stale = False
+
+
+def _start(component: AbstractComponent) -> None:
+    """Start ``component``: ``begin()``; a loop's ``start_thread()`` also starts its thread."""
+    if isinstance(component, AbstractLoop):
+        component.start_thread()
+    else:
+        component.begin()
+
+
+def _halt(component: AbstractComponent) -> None:
+    """Ask ``component`` to stop: a loop's stop flag first (its thread ends), then ``halt()``."""
+    if isinstance(component, AbstractLoop):
+        component.set_terminate_flag("node stopping")
+    component.halt()
 
 
 def _init_block(cls: type) -> str:

@@ -160,7 +160,12 @@ class ThreadLoop(Component, AbstractLoop):
         return False
 
     # -- driven by the node -------------------------------------------------
-    def _snr_start(self) -> None:
+    def start_thread(self) -> None:
+        """Called by the node: ``begin()``, then ``setup()`` and ``loop()`` on a new thread.
+
+        Raises:
+            NodeStateError: the loop is running already.
+        """
         if self.state is LoopState.RUNNING:
             raise NodeStateError(
                 f"Cannot start loop {self.name!r} twice: it is {self.state.value}. "
@@ -180,11 +185,13 @@ class ThreadLoop(Component, AbstractLoop):
         )
         self._thread.start()
 
-    def _snr_stop(self) -> None:
-        self.set_terminate_flag(self.terminate_reason or "node stopping")
-        self.halt()
+    def cancel_stop(self) -> None:
+        """Take back a request to stop, if the thread still runs: the loop carries on.
 
-    def _snr_cancel_stop(self) -> None:
+        Example (what the node does when a loop would not stop to be reloaded)::
+
+            loop.cancel_stop()
+        """
         if self.is_alive():
             self._resume_running()
 
@@ -291,7 +298,7 @@ class ThreadLoop(Component, AbstractLoop):
         except BaseException as error:  # every way out is reported, in words
             # sys.exit() and KeyboardInterrupt included: either would end this
             # thread with no word (or a raw traceback), never the program.
-            self.parent._snr_loop_failed(self, error)
+            self.parent.loop_failed(self, error)
         finally:
             self.state = LoopState.STOPPED
             if turn is not None:

@@ -45,7 +45,6 @@ from snr.prelude import (
     ComponentName,
     DataDict,
     DataKey,
-    IdleWaiter,
     Mode,
     NodeStateError,
     Page,
@@ -168,7 +167,7 @@ class Node(AbstractNode):
 
             self._checks = NodeChecks(self, self._components, self._runner)
         # A deployed robot's code was checked while it was developed: its pages
-        # are made without the checks of `page` (on every store, they add ~25 ns).
+        # are made without the checks of `page` (see performance.md for their cost).
         self._check_pages = self.mode is not Mode.DEPLOYED
         core = NodeCoreFactory().get(self)
         self.add_component(core, start=False)
@@ -352,7 +351,13 @@ class Node(AbstractNode):
         self.queue.urgent.appendleft(t)  # first in line: the next task to run
         self._runner.run_queued(max_tasks=1)
 
-    def _snr_loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
+    def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
+        """``loop``'s thread ended with ``error``: a failure, reported as a handler's is.
+
+        In DEBUG and TEST mode the node stops and ``loop()`` raises a
+        `LoopError`; DEPLOYED logs it. ``sys.exit()`` or Ctrl-C in a loop stop
+        the node in every mode. Called by the loop's thread as it ends.
+        """
         self._runner.loop_failed(loop, error)
 
     # ------------------------------------------------------------------
@@ -364,27 +369,17 @@ class Node(AbstractNode):
         From a loop's thread this waits while the node's queue is full (see
         `TaskQueue`), so a loop cannot run ahead of its node.
         """
-        if t.__class__ is Task:  # one task, the usual case: one call less
-            self.queue.put(t)
-        else:
-            self.queue.schedule(t)
+        self.queue.schedule(t)
 
-    def _snr_schedule_first(self, tasks: List[Task]) -> None:
+    def schedule_first(self, tasks: List[Task]) -> None:
+        """Queue ``tasks`` first in line, in their order; the node's own thread only.
+
+        Example (the node core putting back the pages of a burst it splits)::
+
+            node.schedule_first([node.store_page_task(page) for page in rest])
+        """
+        self._check_owner_thread("schedule_first")
         self.queue.normal.extendleft(reversed(tasks))
-
-    def _snr_never_wait(self) -> None:
-        self.queue.never_wait(threading.get_ident())
-
-    def _snr_use_idle_waiter(self, waiter: IdleWaiter) -> bool:
-        # On a SimClock the node's idle waits are its turns; and one waiter at a time.
-        if self._clock_turn is not None or self.queue.waiter not in (None, waiter):
-            return False
-        self.queue.use_waiter(waiter)
-        return True
-
-    def _snr_stop_idle_waiter(self, waiter: IdleWaiter) -> None:
-        if self._clock_turn is None and self.queue.waiter is waiter:
-            self.queue.use_waiter(None)
 
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the queue is below its high-water mark.
@@ -421,14 +416,13 @@ class Node(AbstractNode):
         return Page(key, data, self.role, self._page_time(), process)
 
     def store_data(self, key: DataKey, data: Any, process: bool = True) -> None:
-        """Queue storing ``data`` under ``key``; safe from any thread."""
-        # `page`, written out: from a loop, the node's thread waits for the GIL
-        # until the loop blocks again, and a thread that has just woken runs
-        # each call many times slower than a warm one.
-        if self._check_pages:
-            check_page_args(key, data)
-        page = Page(key, data, self.role, self._page_time(), process)
-        self.queue.put(Task(_STORE_PAGE, key, [page]))
+        """Queue storing ``data`` under ``key``; safe from any thread.
+
+        Example (in a loop)::
+
+            self.parent.store_data("depth_m", 3.2)
+        """
+        self.queue.put(self.store_data_task(key, data, process))
 
     def get_page(self, key: DataKey) -> Optional[Page]:
         """The newest page under ``key``, or None; safe from any thread.
@@ -498,7 +492,12 @@ class Node(AbstractNode):
         self._check_owner_thread("reload_component")
         return self._components.reload(name)
 
-    def _snr_handlers_changed(self, component: AbstractComponent) -> None:
+    def handlers_changed(self, component: AbstractComponent) -> None:
+        """``component`` changed its ``task_handlers``: the table is rebuilt before the next task.
+
+        Raises:
+            ComponentError: a burst handler of the component lost its task handler.
+        """
         self._components.handlers_changed(component)
 
     def _check_owner_thread(self, method: str) -> None:

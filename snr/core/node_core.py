@@ -61,8 +61,7 @@ class NodeCoreEndpoint(Endpoint):
 
         Not in the handler table: the node's run loop calls it for every
         ``store_page`` task before the task's handlers (``HandlerRunner``), so
-        they all find the page stored, and a loop's page reaches them with one
-        handler call less.
+        they all find the page stored.
         """
         page = task.page()
         if page is None:
@@ -77,8 +76,8 @@ class NodeCoreEndpoint(Endpoint):
             page = dataclasses.replace(page, origin=self.node.role)
             task.val_list[0] = page
         self.node.datastore[page.key] = page  # node.write_page, on the node's own thread
-        # tasks.process_data(page), inline: the handlers of a loop's page wait
-        # for this one. None when nothing handles it (a sender's page, say).
+        # The page's process_data task, only if some handler waits for it: a
+        # page nobody processes (a sender's page, say) costs no task.
         if page.process and self.node.is_handled(_PROCESS_DATA, page.key):
             return Task(_PROCESS_DATA, page.key, [page])
         return None
@@ -122,7 +121,7 @@ class NodeCoreEndpoint(Endpoint):
     def _store_one_by_one(self, pages: List[Any]) -> None:
         """Queue one store_page task per page, first in line, in order."""
         one_each = [Task(TaskType.store_page, str(getattr(p, "key", "")), [p]) for p in pages]
-        self.node._snr_schedule_first(one_each)
+        self.node.schedule_first(one_each)
 
     def add_component_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Build a component with the factory in the task and add it."""

@@ -2,12 +2,17 @@
 
 Two deques: ``urgent`` for high-priority tasks (terminate) and ``normal`` for
 the rest, each FIFO. ``deque.append``/``popleft`` are atomic in CPython, so
-producers never take a lock. When the node sleeps on an empty queue it blocks
-on a "bell" (a C-implemented ``queue.SimpleQueue``), and producers ring it
-only while the node sleeps: an idle node uses no CPU, and a busy one pays
-nothing for waking. (A ``threading.Event`` does the same job with Python-level
-locking that cost ~15 µs per wake-up, which showed in round trips between
-nodes.)
+producers never take a lock.
+
+**How an idle node waits.** When its queue is empty, the node's thread sleeps
+in `TaskQueue.wait`, with a timeout, and producers wake it only while it
+sleeps: an idle node uses no CPU, and a busy one pays nothing for waking.
+What it sleeps on is the queue's *bell*, a ``queue.SimpleQueue`` (a blocking
+get with a timeout), unless something else was installed with `use_waiter`:
+an `IdleWaiter`, the one way to change how an idle node waits. SNR has three:
+a `SimClock`'s turn (an idle node gives the clock back), the socket comms'
+I/O loop and Zenoh's idle reader (an idle node reads its links itself, so a
+page that arrives needs no hand-off from another thread).
 
 The queue is bounded by a *high-water mark* (``high_water``, 10,000 tasks by
 default). A task offered by another thread (a loop's ``store_data``) while the
@@ -19,10 +24,6 @@ and logged (at most once a second, with numbers), so a stuck node can never
 fill the memory. Tasks the node's own handlers return never wait (the node
 would wait on itself) and urgent tasks (terminate) never wait or drop.
 Readers of sockets ask `wait_for_room(0)` and stop reading instead of waiting.
-
-A node with comms links waits on its sockets instead of the bell (see
-`use_waiter`): a page that arrives while the node is idle is then read on the
-node's own thread, with no hand-off between threads.
 """
 
 from __future__ import annotations
@@ -34,13 +35,50 @@ import sys
 import threading
 import time
 from types import FrameType
-from typing import Deque, Dict, Optional, Set, Tuple
+from typing import Deque, Dict, Optional, Protocol, Set, Tuple
 
 from snr.core.logs import LossReport
-from snr.prelude import AbstractTaskQueue, HandlerError, IdleWaiter, SomeTasks, Task
+from snr.prelude import AbstractTaskQueue, HandlerError, SomeTasks, Task
 from snr.prelude.student_code import outside_runtime
 
-__all__ = ["TaskQueue"]
+__all__ = ["IdleWaiter", "TaskQueue"]
+
+
+class IdleWaiter(Protocol):
+    """What a node's thread sleeps on while its queue is empty, instead of the bell.
+
+    The one extension point for how an idle node waits (see `TaskQueue.use_waiter`).
+    The queue calls ``wait`` while it counts the node as sleeping, then
+    ``woken`` once it no longer does, on the node's thread; producers call
+    ``wake`` (any thread), only while the node sleeps.
+
+    Example (a waiter that sleeps on an Event, as the bell does)::
+
+        class EventWaiter:
+            def __init__(self) -> None:
+                self.event = threading.Event()
+
+            def wait(self, timeout_s: Optional[float]) -> None:
+                self.event.wait(timeout_s)
+                self.event.clear()
+
+            def woken(self) -> None:
+                pass
+
+            def wake(self) -> None:
+                self.event.set()
+
+        node.queue.use_waiter(EventWaiter())
+    """
+
+    def wait(self, timeout_s: Optional[float]) -> None:
+        """Block until ``wake()``, work of the waiter's own, or ``timeout_s`` (None: no limit)."""
+
+    def woken(self) -> None:
+        """After ``wait`` (or instead of it): do the work it found, e.g. queue what it read."""
+
+    def wake(self) -> None:
+        """End a ``wait`` in progress, or the next one (any thread)."""
 
 
 class TaskQueue(AbstractTaskQueue):
@@ -104,14 +142,10 @@ class TaskQueue(AbstractTaskQueue):
         self._closed = threading.Event()
 
     def put(self, task: Task) -> None:
-        """Queue one task. Any thread; the path a loop's ``store_data`` takes.
+        """Queue one task. Any thread; what `schedule` does with a single `Task`.
 
-        `schedule` for a single `Task`, without looking at what it was given:
-        a loop thread holds the GIL, which the node's thread waits for, from
-        the moment it queues a page until it blocks again, so every step here
-        shows in the loop → handler latency. From a thread other than the
-        node's, this may wait while the queue is above its high-water mark,
-        and drop the task if it stays there.
+        From a thread other than the node's, this may wait while the queue is
+        above its high-water mark, and drop the task if it stays there.
 
         Example::
 
@@ -162,7 +196,7 @@ class TaskQueue(AbstractTaskQueue):
             self._ring()
 
     def _ring(self) -> None:
-        """Wake the sleeping node, once per sleep (it sleeps on the bell or on its waiter)."""
+        """Wake the sleeping node, once per sleep (on the bell, or on its waiter)."""
         self._rung = True
         waiter = self._waiter
         if waiter is None:
@@ -272,20 +306,40 @@ class TaskQueue(AbstractTaskQueue):
         """What the node's thread sleeps on when idle instead of the bell (None: the bell)."""
         return self._waiter
 
-    def use_waiter(self, waiter: Optional[IdleWaiter]) -> None:
-        """Sleep on ``waiter`` from now on instead of the bell (None: the bell again).
+    def use_waiter(self, waiter: IdleWaiter) -> bool:
+        """Sleep on ``waiter`` from now on instead of the bell; True if it now does.
 
-        Called by the node's thread (so it is not sleeping); a sleep on the
-        old one, if any, is ended anyway, so no wake-up is lost.
+        One waiter at a time, the first to ask: False if another is installed
+        (a node on a `SimClock` sleeps on its turn; a node with sockets and
+        Zenoh sleeps on whichever comms started first). A comms refused here
+        reads its links on a thread of its own and queues what it reads,
+        which is always correct, only a hand-off slower. Call it from the
+        node's thread, or before the node runs; a sleep on the bell in
+        progress is ended, so no wake-up is lost.
 
-        Example (what the comms I/O loop does through its node)::
+        Example (what the socket comms' I/O loop does as it starts)::
 
-            queue.use_waiter(io_loop)   # idle waits now watch the links' sockets
+            if node.queue.use_waiter(io_loop):
+                ...   # idle waits now watch the links' sockets too
         """
-        old, self._waiter = self._waiter, waiter
+        if self._waiter is not None:
+            return self._waiter is waiter
+        self._waiter = waiter
         self._bell.put(None)
-        if old is not None:
-            old.wake()
+        return True
+
+    def stop_waiter(self, waiter: IdleWaiter) -> None:
+        """Sleep on the bell again if ``waiter`` is the one installed (else nothing changes).
+
+        A sleep on ``waiter`` in progress is ended, so no wake-up is lost.
+
+        Example::
+
+            node.queue.stop_waiter(io_loop)   # the comms are closing
+        """
+        if self._waiter is waiter:
+            self._waiter = None
+            waiter.wake()
 
     def wait(self, timeout_s: Optional[float], urgent_only: bool = False) -> None:
         """Sleep until a task arrives, ``wake()`` is called, or the timeout.

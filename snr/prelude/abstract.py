@@ -20,7 +20,7 @@ import logging
 import re
 from abc import ABCMeta, abstractmethod
 from types import MappingProxyType, ModuleType
-from typing import Any, Callable, Dict, List, Mapping, Optional, Protocol
+from typing import Any, Callable, Dict, List, Mapping, Optional
 
 from snr.prelude.errors import ComponentError
 from snr.prelude.names import (
@@ -52,7 +52,6 @@ __all__ = [
     "AbstractProfiler",
     "AbstractRunner",
     "AbstractTaskQueue",
-    "IdleWaiter",
     "explain_abstract_error",
     "missing_methods_error",
 ]
@@ -100,7 +99,7 @@ class _FriendlyABC(metaclass=_FriendlyABCMeta):
     __slots__ = ()
 
 
-def _snr_interface(cls: type) -> Optional[type]:
+def _interface_of(cls: type) -> Optional[type]:
     for base in (AbstractLoop, AbstractEndpoint, AbstractComponent, AbstractFactory):
         if issubclass(cls, base):
             return base
@@ -142,7 +141,7 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
     for name in sorted(getattr(cls, "__abstractmethods__", ())):
         requirer = _requirer_of(cls, name)
         if requirer.__module__ == __name__:  # one of SNR's: name the one cls subclasses
-            requirer = _snr_interface(cls) or requirer
+            requirer = _interface_of(cls) or requirer
         by_requirer.setdefault(requirer, []).append(name)
     lacks = "; and ".join(
         f"that {requirer.__name__} requires: {', '.join(names)}"
@@ -150,7 +149,7 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
     )
     fixes = []
     for requirer, names in by_requirer.items():
-        interface = _snr_interface(requirer)
+        interface = _interface_of(requirer)
         if interface is not None and requirer.__module__ == __name__:
             fixes.append("Easiest fix: " + _EASY_FIX[interface.__name__] + " Or add them.")
         else:
@@ -270,31 +269,6 @@ class AbstractTaskQueue(_FriendlyABC):
         """How many tasks are waiting."""
 
 
-class IdleWaiter(Protocol):
-    """How a node's thread waits for work when its queue is empty, if not on its bell.
-
-    A node whose comms links can be read without blocking (Linux: epoll)
-    waits on its links' sockets and a wake-up socket at once, so a page
-    that arrives while the node is idle is read, decoded and queued on the
-    node's own thread, with no hand-off between threads. The task queue
-    calls ``wait`` while it marks the node sleeping, then ``woken`` once it
-    no longer does; producers call ``wake``, only while the node sleeps.
-
-    Example: the comms ``IOLoop`` in ``snr/std_mods/comms/io_loop.py``::
-
-        node._snr_use_idle_waiter(io_loop)    # the node now waits on its sockets too
-    """
-
-    def wait(self, timeout_s: Optional[float]) -> None:
-        """Block until ``wake()``, bytes on a link, or ``timeout_s`` (None: no limit)."""
-
-    def woken(self) -> None:
-        """After ``wait`` (or instead of it): do the reading it found to do."""
-
-    def wake(self) -> None:
-        """End a ``wait`` in progress, or the next one (any thread)."""
-
-
 class AbstractNode(_FriendlyABC):
     """The interface components see of their node (thesis 6.2.6).
 
@@ -386,23 +360,6 @@ class AbstractNode(_FriendlyABC):
     def check_wiring(self) -> None:
         """Look for handlers of data keys that nothing stores but that look misspelled."""
 
-    def _snr_never_wait(self) -> None:
-        """The calling thread holds back by itself: its tasks never wait for room."""
-
-    def _snr_use_idle_waiter(self, waiter: IdleWaiter) -> bool:
-        """Wait on ``waiter`` when idle instead of the queue's bell; True if it now does.
-
-        One waiter at a time: False if the node already waits on another (a
-        node with sockets and Zenoh waits on whichever comms started first).
-        A node that cannot (a mock, a node on a `SimClock`) says False too.
-        Either way the caller's comms must then be read by a thread of their
-        own, which is always correct, only a little slower.
-        """
-        return False
-
-    def _snr_stop_idle_waiter(self, waiter: IdleWaiter) -> None:
-        """Stop waiting on ``waiter`` (if the node does): the queue's bell again."""
-
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the node's queue has room; True if it has.
 
@@ -413,21 +370,39 @@ class AbstractNode(_FriendlyABC):
         return True
 
     # -- what components tell their node (called by SNR, not by students) --
-    def _snr_handlers_changed(self, component: AbstractComponent) -> None:
-        """``component`` changed its ``task_handlers``: the node re-reads them.
+    def handlers_changed(self, component: AbstractComponent) -> None:
+        """``component`` changed its ``task_handlers``: look them up again before the next task.
 
-        A node that dispatches by looking handlers up every time (a mock)
-        needs to do nothing.
+        A component calls it whenever its mapping is assigned or changed, so a
+        node that keeps a handler table (`Node`) rebuilds it; a node that looks
+        handlers up every time (a mock) has nothing to do.
+
+        Example (what ``Component`` does when a handler is added)::
+
+            self.task_handlers[(TaskType.event, "dive")] = self.dive
+            # -> self.parent.handlers_changed(self)
         """
 
-    def _snr_loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
-        """``loop``'s thread ended with ``error``: report it (the loop has stopped)."""
+    def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
+        """``loop``'s thread ended with ``error``; the loop has stopped. Report it.
+
+        Example (the last words of ``ThreadLoop``'s thread)::
+
+            except BaseException as error:
+                self.parent.loop_failed(self, error)
+        """
         self.log.error("Loop %r stopped: it raised %s: %s", loop.name, type(error).__name__, error)
 
-    def _snr_schedule_first(self, tasks: List[Task]) -> None:
-        """Node thread: queue ``tasks`` first in line, in order (the node core splitting a burst).
+    def schedule_first(self, tasks: List[Task]) -> None:
+        """Queue ``tasks`` first in line, in their order (the node's own thread only).
 
-        A node without a queue of its own (a mock) queues them as `schedule` does.
+        The node core uses it to put back the pages of a burst it splits, so
+        they are stored before anything queued after the burst. A node without
+        a queue of its own (a mock) queues them as `schedule` does.
+
+        Example::
+
+            node.schedule_first([node.store_page_task(page) for page in rest])
         """
         self.schedule(tasks)
 
@@ -531,15 +506,6 @@ class AbstractComponent(_FriendlyABC):
     def store_page(self, page: Page) -> None:
         """Queue storing a page on the parent node."""
 
-    # -- driven by the node (SNR calls these; students override begin/halt) --
-    def _snr_start(self) -> None:
-        """Start the component: an endpoint's ``begin()``; a loop also starts its thread."""
-        self.begin()
-
-    def _snr_stop(self) -> None:
-        """Ask the component to stop: an endpoint's ``halt()``; a loop also ends its thread."""
-        self.halt()
-
     def is_alive(self) -> bool:
         """True while a thread of the component runs (endpoints have none)."""
         return False
@@ -581,8 +547,30 @@ class AbstractLoop(AbstractComponent):
         """
         return ""
 
-    def _snr_cancel_stop(self) -> None:
-        """Take back a request to stop (a refused reload): the loop carries on."""
+    def start_thread(self) -> None:
+        """Called by the node to start the loop: ``begin()``, then its thread.
+
+        The thread runs ``setup()`` once, then ``loop()`` over and over. The
+        node calls this instead of ``begin()`` for a loop, so a student who
+        overrides ``begin`` cannot forget to start the thread.
+        This default only calls ``begin()``: `ThreadLoop` starts the thread.
+
+        Example (what the node does for each loop as it starts)::
+
+            loop.start_thread()
+        """
+        self.begin()
+
+    def cancel_stop(self) -> None:
+        """Take back a request to stop: the loop carries on (a reload was refused).
+
+        Example (a loop that did not stop in time to be reloaded)::
+
+            loop.set_terminate_flag("reloading")
+            loop.join(1.0)
+            if loop.is_alive():
+                loop.cancel_stop()   # the old version keeps running
+        """
 
 
 class AbstractFactory(_FriendlyABC):

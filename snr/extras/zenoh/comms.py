@@ -52,6 +52,8 @@ from typing import (
 from snr.core import EndpointFactory, tasks
 from snr.core.endpoint import Endpoint
 from snr.core.logs import LossReport
+from snr.core.node import Node
+from snr.core.task_queue import TaskQueue
 from snr.extras.zenoh.inbox import (
     WAKE,
     IdleReader,
@@ -614,7 +616,8 @@ class ZenohComms(Endpoint):
                     put_wake=self._put_wake,
                     has_room=self._node_has_room,
                 )
-                if self.parent._snr_use_idle_waiter(reader):
+                queue = self._node_queue()
+                if queue is not None and queue.use_waiter(reader):
                     self._reader = reader
             self._watch_channel(channel)
         me = str(session.zid())
@@ -665,6 +668,11 @@ class ZenohComms(Endpoint):
                 return index, self.prefix + key
         return None
 
+    def _node_queue(self) -> Optional[TaskQueue]:
+        """The node's task queue, where the idle reader is installed; None for a mock node."""
+        parent = self.parent
+        return parent.queue if isinstance(parent, Node) else None
+
     def _node_has_room(self) -> bool:
         """The node's queue is below its high-water mark (for the idle reader)."""
         return self.parent.wait_for_room(0)
@@ -684,8 +692,9 @@ class ZenohComms(Endpoint):
     def _close(self) -> None:
         self._closed.set()  # the watchers stop waiting for the node
         reader, self._reader = self._reader, None
-        if reader is not None:  # the node waits on its bell again
-            self.parent._snr_stop_idle_waiter(reader)
+        queue = self._node_queue()
+        if reader is not None and queue is not None:  # the node waits on its bell again
+            queue.stop_waiter(reader)
         for channel in self._channels:
             channel.emptied.set()
         session, self.session = self.session, None

@@ -146,10 +146,10 @@ def is_wake(sample: Any) -> bool:
 class IdleReader:
     """The node's thread, while idle, waits in one subscription's FIFO itself.
 
-    A node's `IdleWaiter` (as the socket links' I/O loop is): a sample that
+    A node's `snr.core.task_queue.IdleWaiter` (as the socket links' I/O loop is): a sample that
     arrives while the node is idle is taken by the node's own thread as
-    Zenoh hands it over, with no hand-off between Python threads. That takes
-    a thread switch (20-30 µs) off each side of a round trip. Zenoh's FIFO
+    Zenoh hands it over, with no hand-off between Python threads (what that
+    saves on a round trip: docs/performance.md). Zenoh's FIFO
     has no timeout and nothing but a sample wakes it, so `wake` puts an
     empty sample marked ``snr-wake`` under a key the subscription matches,
     for this session only (``Locality.SESSION_LOCAL``: no other program sees
@@ -169,7 +169,7 @@ class IdleReader:
 
         reader = IdleReader(channel, "snr/team7/cmd", comms._take_now, comms._put_wake,
                             lambda: node.wait_for_room(0))
-        node._snr_use_idle_waiter(reader)   # True: idle waits are now in its FIFO
+        node.queue.use_waiter(reader)   # True: idle waits are now in its FIFO
 
     Attributes:
         reading: the node's thread is waiting in the FIFO now.

@@ -291,13 +291,14 @@ class CommsLoop(ThreadLoop):
             self.schedule([Task(_STORE_PAGE, page.key, [page]) for page in pages])
 
     # -- opening and closing links --------------------------------------------
-    def _snr_start(self) -> None:
+    def start_thread(self) -> None:
+        """Acquire the node's I/O loop, then start as every loop does (``begin()``, its thread)."""
         # Links need the node's I/O loop from begin() on; a restart after a
         # failed reload keeps the one it has.
         if self.io_loop is None:
             self.io_loop = IOLoop.acquire(self.parent)
         try:
-            super()._snr_start()
+            super().start_thread()
         except BaseException:
             self._release_io_loop()
             raise

@@ -11,15 +11,16 @@ links' timers (beats, silence checks, paused readers). The node's thread
 count stays the same whatever the number of peers.
 
 While the node's own thread has nothing to do, *it* reads the links (Linux,
-where sockets can be watched with ``epoll``): its idle wait watches the
-links' sockets and a wake-up socket together, so a page that arrives is
-read, decoded and queued on the node's thread, with no hand-off between
-threads (two of them per round trip cost ~20 us each). While the node's
-thread runs handlers, the I/O thread reads, as before: a slow handler never
-stops a link from being read, beating or noticing a dead peer. One lock, the
-*read role*, decides which of the two reads; the links' sockets sit in one
-epoll set of their own, which the I/O thread watches only while the node's
-thread does not (see `IOLoop.wait`).
+where sockets can be watched with ``epoll``): the loop is the node's
+`snr.core.task_queue.IdleWaiter` (installed with ``node.queue.use_waiter``), so the idle wait
+watches the links' sockets and a wake-up socket together, and a page that
+arrives is read, decoded and queued on the node's thread, with no hand-off
+between threads (what that saves on a round trip: docs/performance.md).
+While the node's thread runs handlers, the I/O thread reads, as before: a
+slow handler never stops a link from being read, beating or noticing a dead
+peer. One lock, the *read role*, decides which of the two reads; the links'
+sockets sit in one epoll set of their own, which the I/O thread watches only
+while the node's thread does not (see `IOLoop.wait`).
 
 The loop is shared: every comms component of a node gets the same one with
 `IOLoop.acquire` (the first starts its thread) and gives it back with
@@ -48,6 +49,8 @@ import threading
 import time
 from typing import Any, Callable, Deque, Dict, Iterator, List, Optional, Protocol, Tuple
 
+from snr.core.node import Node
+from snr.core.task_queue import TaskQueue
 from snr.prelude import AbstractNode
 
 __all__ = ["IOHandler", "IOLoop", "IOTimer"]
@@ -134,7 +137,7 @@ class IOLoop:
     things with `call_soon` (thread-safe: it appends to a queue and wakes the
     selector through a socket pair). The handlers' sockets are read by the
     thread that holds the *read role*: the node's thread while it is idle
-    (`wait`, `woken`: it is the node's ``IdleWaiter``), else the loop's thread.
+    (`wait`, `woken`: it is the node's `snr.core.task_queue.IdleWaiter`), else the loop's thread.
 
     Get it with `acquire` and give it back with `release`, never by
     constructing it yourself in a component.
@@ -234,8 +237,9 @@ class IOLoop:
                 loop = cls(node)
                 _registry[id(node)] = (node, loop)
                 loop._thread.start()
-                if loop._reads is not None:
-                    loop._waiter_installed = node._snr_use_idle_waiter(loop)
+                queue = _queue_of(node)
+                if loop._reads is not None and queue is not None:
+                    loop._waiter_installed = queue.use_waiter(loop)
             loop._users += 1
             return loop
 
@@ -257,9 +261,10 @@ class IOLoop:
 
     def stop(self, timeout_s: float = JOIN_TIMEOUT_S) -> None:
         """End the thread (it closes what is still watched) and wait up to ``timeout_s``."""
-        if self._waiter_installed:
+        queue = _queue_of(self.node)
+        if self._waiter_installed and queue is not None:
             self._waiter_installed = False
-            self.node._snr_stop_idle_waiter(self)  # the node waits on its bell again
+            queue.stop_waiter(self)  # the node waits on its bell again
         self._stopping = True
         self._wake()
         if self._thread.is_alive() and self._thread is not threading.current_thread():
@@ -402,7 +407,7 @@ class IOLoop:
             self._role_wanted = False
             self._role.release()
 
-    # -- the node's thread, while idle (the node's IdleWaiter) ----------------
+    # -- the node's thread, while idle (the node's IdleWaiter) ---------------
     def wait(self, timeout_s: Optional[float]) -> None:
         """Node thread, its queue empty: wait for a task or for bytes on a link.
 
@@ -551,7 +556,9 @@ class IOLoop:
     def _run(self) -> None:
         # This thread serves every link and stops reading a link by itself
         # while the node is behind: the tasks it schedules must never wait.
-        self.node._snr_never_wait()
+        queue = _queue_of(self.node)
+        if queue is not None:
+            queue.never_wait(threading.get_ident())
         if self._reads is not None:
             self._busy_timer = self.call_later(BUSY_READS_S, self._check_busy)
         select, monotonic = self._selector.select, time.monotonic
@@ -611,6 +618,11 @@ class IOLoop:
         # for ever on a loop with no timers, such as a client between links.)
         _drain(self._wake_r)
         self._woken = False
+
+
+def _queue_of(node: AbstractNode) -> Optional[TaskQueue]:
+    """A `Node`'s task queue; None for another `AbstractNode` (a mock), which has none."""
+    return node.queue if isinstance(node, Node) else None
 
 
 def _poll(epoll: Any, timeout_s: float) -> List[Tuple[int, int]]:
