@@ -1,6 +1,7 @@
 """The names kept for code written against the 2021 release, and the ones refused."""
 
 import multiprocessing
+import sys
 import unittest
 from typing import Any, Mapping
 
@@ -156,9 +157,16 @@ class TestExported(unittest.TestCase):
     def test_names_are_exported_from_snr_lazily(self) -> None:
         import snr.extras.compat2021
 
+        kernel = {"snr.prelude", "snr.core", "snr.utils"}
         for name in snr.extras.compat2021.__all__:
             self.assertIn(name, snr.__all__)
-            self.assertEqual(snr._HOME[name], "snr.extras.compat2021")
+            # Today's own classes under their 2021 names are the kernel's, imported at
+            # once; what the layer adds is loaded on first use.
+            home = snr._HOME.get(name, "")
+            self.assertIn(home, {"snr.extras.compat2021", ""}, name)
+            self.assertIs(getattr(snr, name), getattr(snr.extras.compat2021, name), name)
+            if not home:
+                self.assertTrue(any(name in sys.modules[m].__all__ for m in kernel), name)
         self.assertIn("2021 release", snr.extras.compat2021.__doc__ or "")
 
 

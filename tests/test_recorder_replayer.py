@@ -9,6 +9,7 @@ import subprocess
 import sys
 import textwrap
 import time
+import unittest
 from typing import Dict, List, Sequence, Tuple
 from unittest import mock
 
@@ -728,3 +729,25 @@ class TestTheRecorderKeepsTheNodeRunning(SNRTestCase):
         self.assertEqual(recorder.pages_skipped, 1)
         self.assertIn("under 'n'", logs.output[0])
         self.assertIn("RecursionError", logs.output[0])
+
+
+class TestCreatedOrder(unittest.TestCase):
+    def order(self, pages: List[Tuple[str, float, bool]], window: int = 1000) -> List[int]:
+        recorded = [
+            replayer.RecordedPage(line, Page("n", line, origin, at), timed)
+            for line, (origin, at, timed) in enumerate(pages, start=2)
+        ]
+        return [r.line for r in replayer.in_created_order(recorded, 10.0, window)]
+
+    def test_each_origin_in_created_order_in_its_own_places(self) -> None:
+        pages = [("a", 2.0, True), ("b", 50.0, True), ("a", 1.0, True), ("b", 49.0, True)]
+        self.assertEqual(self.order(pages), [4, 5, 2, 3])
+
+    def test_untimed_pages_and_clock_jumps_keep_their_places(self) -> None:
+        pages = [("a", 5.0, True), ("a", 0.0, False), ("a", 1e9, True), ("a", 4.0, True)]
+        self.assertEqual(self.order(pages), [2, 3, 4, 5])
+
+    def test_only_pages_within_the_window_swap(self) -> None:
+        pages = [("a", 3.0, True), ("a", 2.0, True), ("a", 1.0, True)]
+        self.assertEqual(self.order(pages, window=1), [3, 4, 2])  # one page of look-ahead
+        self.assertEqual(self.order(pages), [4, 3, 2])

@@ -238,6 +238,10 @@ class Expector(Generic[K]):
             self.assert_satisfied()
 
 
+def _keys(keys: Sequence[Hashable]) -> str:
+    return ", ".join(map(format_key, keys))
+
+
 def _times(n: int) -> str:
     return "once" if n == 1 else f"{n} times"
 
@@ -281,7 +285,10 @@ class OrderedExpector(Expector[K]):
                 return []
             for i, (want, got) in enumerate(zip(self.order, self.seen)):
                 if want != got:
-                    return [f"at position {i}: expected {format_key(want)}, saw {format_key(got)}"]
+                    return [
+                        f"at position {i}: expected {format_key(want)}, saw {format_key(got)} "
+                        f"(expected order: {_keys(self.order)}; seen order: {_keys(self.seen)})"
+                    ]
             if len(self.seen) < len(self.order):
                 missing = ", ".join(format_key(k) for k in self.order[len(self.seen) :])
                 closest = self._closest_seen(self.order[len(self.seen)])

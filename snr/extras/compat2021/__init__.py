@@ -16,6 +16,19 @@ Kept, on top of today's classes:
   its mapping from task id to count.
 * ``MovingAvgEndpointFactory(input_key, output_key, window)``:
   ``MovingAvgFilterFactory(input, output, length)``.
+* ``TestRunner(config)``: a `SynchronousRunner` of the role ``"test"`` that
+  stops its node after a time limit (today's ``snr.core.TestRunner``).
+* ``TextReader`` and ``PageReader`` (``TextReader(parent, name, filename)``
+  with ``open()``, ``read()``, ``close()``) and
+  ``TextReplayerFactory(input_filename, output_data_name, exit)``, on top of
+  today's readers (`snr.extras.compat2021.readers`).
+* ``RemoteConsole(server_tuple, commands)`` and ``LocalConsole(port, commands)``,
+  console programs with ``run()`` (`snr.extras.compat2021.consoles`).
+
+Today's own classes, under the names the 2021 release exported them by:
+``AbstractComponent``, ``AbstractLoop``, ``AbstractMultiRunner`` and
+``AbstractProfiler`` (the real base classes of today's components, runners
+and profiler), ``TaskHandlerMap``, ``MovingAvgFilter`` and ``OrderedExpector``.
 
 Elsewhere, in the classes themselves: ``Expector[str](...)`` (expectors are
 generic), ``SNRTestCase.temp_file(filename, overwrite, cleanup)`` (it returns a
@@ -50,24 +63,48 @@ from typing import (
     Optional,
     Protocol,
     Type,
+    Union,
     runtime_checkable,
 )
 
-from snr.prelude import DataKey, TaskId
+from snr.core import Config, MovingAvgFilter, SynchronousRunner
+from snr.core import TestRunner as _TimedTestRunner
+from snr.extras.compat2021.consoles import LocalConsole, RemoteConsole
+from snr.extras.compat2021.readers import PageReader, TextReader, TextReplayerFactory
+from snr.prelude import (
+    AbstractComponent,
+    AbstractConfig,
+    AbstractLoop,
+    AbstractMultiRunner,
+    AbstractProfiler,
+    ComponentsByRole,
+    DataKey,
+    TaskHandlerMap,
+    TaskId,
+)
 from snr.prelude.errors import RemovedApiError
 from snr.std_mods.filters.moving_average import DEFAULT_FILTER_LENGTH, MovingAvgFilterFactory
-from snr.utils.expector import Expector, MultiProcExpector
+from snr.utils.expector import Expector, MultiProcExpector, OrderedExpector
 
 if TYPE_CHECKING:
     import unittest
 
 __all__ = [
+    "AbstractComponent",
     "AbstractContext",
+    "AbstractLoop",
+    "AbstractMultiRunner",
+    "AbstractProfiler",
     "Consumer",
     "Context",
     "ExpectorProtocol",
-    "MPExpector",
+    "LocalConsole",
     "MovingAvgEndpointFactory",
+    "MovingAvgFilter",
+    "MPExpector",
+    "OrderedExpector",
+    "PageReader",
+    "RemoteConsole",
     "RemovedApiError",
     "Settings",
     "SocketsListenerFactory",
@@ -75,6 +112,10 @@ __all__ = [
     "SocketsWrapper",
     "TaskExpectations",
     "TaskExpector",
+    "TaskHandlerMap",
+    "TestRunner",
+    "TextReader",
+    "TextReplayerFactory",
 ]
 
 
@@ -166,6 +207,49 @@ class MovingAvgEndpointFactory(MovingAvgFilterFactory):
         name: Optional[str] = None,
     ) -> None:
         super().__init__(input_key, output_key, window, name)
+
+
+class TestRunner(_TimedTestRunner, SynchronousRunner):
+    """The 2021 release's runner for tests: a `SynchronousRunner` of the role ``"test"``.
+
+    ``TestRunner(config).run()`` builds the node of the role ``"test"`` and
+    runs it in the calling thread until it stops, as the 2021
+    ``SNRTestCase.run_test_node`` did; an error in the node reaches the
+    caller. It is today's ``snr.core.TestRunner`` too, so the node is
+    stopped after ``timeout_s`` (``timed_out`` then says so) instead of
+    hanging a test run. Pytest does not collect it (``__test__ = False``).
+
+    Args:
+        config: a `Config` with the role ``"test"`` (or its dict of factories).
+        timeout_s: the time limit in seconds.
+
+    Example::
+
+        config = Config({"test": [ListReplayerFactory([1], "n"), TimeoutLoopFactory(ms=50)]})
+        runner = TestRunner(config)
+        runner.run()
+        runner.node.get_data("n")   # 1
+    """
+
+    __test__ = False
+
+    def __init__(
+        self, config: Union[AbstractConfig, ComponentsByRole], timeout_s: float = 10.0
+    ) -> None:
+        given: object = config  # typed, but old code may pass anything
+        if isinstance(given, dict):
+            given = Config(given)
+        if not isinstance(given, AbstractConfig):
+            today = " (today's snr.core.TestRunner takes the role first)"
+            raise TypeError(
+                f"TestRunner({config!r}): give the Config of the role 'test', e.g. "
+                f'TestRunner(Config({{"test": [...]}})){today if isinstance(given, str) else ""}.'
+            )
+        super().__init__("test", given, timeout_s)
+        # what SynchronousRunner's own __init__ would set; its run() is not used
+        self.exit_on_error = False
+        self.announce_interrupt = True
+        self.on_node = None
 
 
 # -- refused ------------------------------------------------------------------

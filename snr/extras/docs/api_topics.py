@@ -156,9 +156,13 @@ TOPICS: Tuple[Topic, ...] = (
     ),
     Topic(
         "Code written for the 2021 release",
-        "Names the 2021 release used that the thesis does not print; the removed "
-        "ones raise an error that says what replaced them.",
+        "The names the 2021 release exported that today's API does not list (today's "
+        "classes, or 2021 calls on top of them); the removed ones raise an error that "
+        "says what replaced them.",
         _names(
+            "AbstractComponent AbstractLoop AbstractMultiRunner AbstractProfiler "
+            "TaskHandlerMap MovingAvgFilter OrderedExpector TestRunner "
+            "TextReader PageReader TextReplayerFactory RemoteConsole LocalConsole "
             "ExpectorProtocol MPExpector TaskExpector TaskExpectations "
             "MovingAvgEndpointFactory RemovedApiError AbstractContext Context "
             "Consumer Settings SocketsListenerFactory SocketsLoopFactory "

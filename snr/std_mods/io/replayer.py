@@ -14,16 +14,20 @@ are replaced by a bounded gap, with a warning naming the line.
 
 from __future__ import annotations
 
+import heapq
 import logging
 import math
 import os
 import sys
 import threading
 import time
+from collections import deque
 from typing import (
+    Deque,
     Dict,
     Generator,
     Generic,
+    Iterable,
     Iterator,
     List,
     NamedTuple,
@@ -59,6 +63,7 @@ __all__ = [
     "MAX_GAP_S",
     "MAX_PROBLEMS",
     "PageReader",
+    "REORDER_WINDOW",
     "RecordedPage",
     "ReplayLoop",
     "ReplayerLoop",
@@ -66,6 +71,7 @@ __all__ = [
     "TextReader",
     "TextReplayerFactory",
     "TextReplayerLoop",
+    "in_created_order",
 ]
 
 _log = logging.getLogger("snr.replay")
@@ -82,6 +88,9 @@ corrupt timestamp than a real pause, so the replayer waits this long instead
 and logs a warning naming the line. ``ReplayerLoopFactory(max_gap_s=...)``
 changes it.
 """
+
+REORDER_WINDOW = 1000
+"""How many pages ahead the replayer looks for an earlier-made page of the same origin."""
 
 MAX_PROBLEMS = 100
 """How many problems `PageReader.problems` keeps in full; `PageReader.bad_lines` counts all."""
@@ -441,6 +450,9 @@ class _ReplayFactory(LoopFactory):
 class ReplayerLoop(ReplayLoop[RecordedPage]):
     """Stores the pages of a recording, each with its key, data, origin and time.
 
+    Each origin's pages are stored in the order they were made, even where
+    the file's lines are out of order (see `in_created_order`).
+
     With original timing, each page is stored as long after the previous one
     as it was created after it (``created_at_s``), but never more than
     ``max_gap_s`` later. Each origin's clock is followed on its own, so pages
@@ -466,10 +478,9 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
     def items(self) -> Iterator[RecordedPage]:
         recorded_pages = self.reader.recorded_pages()
         keys = None if self.options.keys is None else set(self.options.keys)
+        wanted = (r for r in recorded_pages if keys is None or r.page.key in keys)
         try:
-            for recorded in recorded_pages:
-                if keys is None or recorded.page.key in keys:
-                    yield recorded
+            yield from in_created_order(wanted, max(self.options.max_gap_s, MAX_GAP_S))
         finally:
             recorded_pages.close()
 
@@ -553,6 +564,43 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
         if self.options.retimed:
             parts.append(f"{self.options.retimed} pages not stored at their recorded time")
         return f" ({'; '.join(parts)}; see the warnings above)" if parts else ""
+
+
+def in_created_order(
+    recorded: Iterable[RecordedPage], max_jump_s: float, window: int = REORDER_WINDOW
+) -> Iterator[RecordedPage]:
+    """``recorded`` with each origin's pages in the order they were made (``created_at_s``).
+
+    A recording's lines can be out of order (the 2021 node handled the newest
+    task first). Each page takes the place in the file of one of its origin's
+    pages, so the origins stay interleaved as recorded and their clocks are
+    never compared. Pages further apart than ``window`` lines are not swapped,
+    and neither are pages on either side of a clock jump (more than
+    ``max_jump_s`` either way): those are timing problems, left to `ReplayerLoop`.
+    Pages without a time keep their places.
+
+    Example::
+
+        for recorded in in_created_order(PageReader("old.jsonl").recorded_pages(), 10.0):
+            print(recorded.page.created_at_s)
+    """
+    ahead: Deque[Optional[str]] = deque()  # the origin of each page read ahead, in file order
+    heaps: Dict[Optional[str], List[Tuple[int, float, int, RecordedPage]]] = {}
+    last: Dict[str, Tuple[int, float]] = {}  # origin -> (clock segment, time) of its last page
+    for item in recorded:
+        origin: Optional[str] = None  # no time: a stream of its own, in file order
+        segment, created = 0, 0.0
+        if item.timed:
+            origin, created = item.page.origin, item.page.created_at_s
+            segment, previous = last.get(origin, (0, created))
+            segment += abs(created - previous) > max_jump_s
+            last[origin] = (segment, created)
+        heapq.heappush(heaps.setdefault(origin, []), (segment, created, item.line, item))
+        ahead.append(origin)
+        if len(ahead) > window:
+            yield heapq.heappop(heaps[ahead.popleft()])[-1]
+    while ahead:
+        yield heapq.heappop(heaps[ahead.popleft()])[-1]
 
 
 def _seconds(value: float) -> str:
