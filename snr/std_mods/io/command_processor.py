@@ -47,7 +47,6 @@ from snr.std_mods.io.console_protocol import (
     Reply,
     Status,
     parse_values,
-    split_command,
 )
 from snr.std_mods.io.key_watch import (
     ECHO_DEFAULT_PAGES,
@@ -184,9 +183,10 @@ class CommandProcessorEndpoint(Endpoint):
         return Reply(outcome.status, _bounded(outcome.text))
 
     def _run(self, line: str) -> _Outcome:
-        word, args = split_command(line)
-        if not word:
+        words = line.split(None, 1)
+        if not words:
             return _ok("")
+        word, args = words[0].lower(), words[1] if len(words) > 1 else ""
         if word not in COMMANDS:
             hint = did_you_mean(word, COMMANDS)
             return _Outcome(

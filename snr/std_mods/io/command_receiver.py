@@ -21,7 +21,7 @@ import socket
 import threading
 import time
 from collections import deque
-from typing import Any, Callable, Deque, Dict, List, Optional, Tuple, Union
+from typing import Any, Callable, Deque, Dict, List, Optional, Tuple
 
 from snr.core import LoopFactory
 from snr.core.checks.os_errors import explain_os_error
@@ -30,9 +30,9 @@ from snr.prelude import AbstractNode, CommsError, ComponentName, ConfigError, Mo
 from snr.std_mods.io.console_loop import ConsoleLoop
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
-    MAX_LINE_BYTES,
     TOKEN_ENV_VAR,
     ConsoleSession,
+    LineReader,
     Reply,
     Status,
     check_listen_policy,
@@ -105,8 +105,6 @@ _PAUSE_OUT_BYTES = 64 * 1024  # stop taking a console's lines while this much wa
 _GOODBYE_TIMEOUT_S = 0.5  # for all consoles together, when the node stops
 _POLL_S = 0.5  # the selector wakes at least this often (halt() wakes it at once)
 _READ_CHUNK = 4096
-_LINE_TOO_LONG = Reply(Status.ERROR, f"Ignored a line longer than {MAX_LINE_BYTES} bytes.")
-_NOT_UTF8 = Reply(Status.ERROR, "Ignored a line that is not UTF-8 text.")
 
 
 class _TokenThrottle:
@@ -184,8 +182,7 @@ class _RemoteSession:
         self.waiting: Deque[_ReplySlot] = deque()  # requests not yet in `out`, in order
         self.out = bytearray()  # encoded replies not yet taken by the socket
         self.bye_queued = False  # the BYE is in `out`: close once it is sent
-        self.inbox = bytearray()  # bytes read, not yet taken as lines
-        self._skipping = False  # dropping the rest of a line that was too long
+        self.lines = LineReader()
 
     def slot(self) -> _ReplySlot:
         """A place for the reply to the next request, in order."""
@@ -203,29 +200,7 @@ class _RemoteSession:
 
     def wants_to_read(self) -> bool:
         """True when the socket should be read: lines are taken, none is waiting."""
-        return self.takes_lines() and b"\n" not in self.inbox
-
-    def next_request(self) -> Union[str, Reply, None]:
-        """The next line read (stripped), the error that refuses it, or None: no line yet."""
-        while True:
-            newline = self.inbox.find(b"\n")
-            if newline < 0:
-                if len(self.inbox) <= MAX_LINE_BYTES:
-                    return None
-                self.inbox.clear()
-                skipping, self._skipping = self._skipping, True
-                return None if skipping else _LINE_TOO_LONG
-            raw = bytes(self.inbox[:newline])
-            del self.inbox[: newline + 1]
-            if self._skipping:  # the tail of a line already refused
-                self._skipping = False
-            elif len(raw) > MAX_LINE_BYTES:
-                return _LINE_TOO_LONG
-            else:
-                try:
-                    return raw.decode("utf-8").strip()
-                except UnicodeDecodeError:
-                    return _NOT_UTF8
+        return self.takes_lines() and not self.lines.has_line()
 
     def collect(self) -> None:
         """Move the replies that are ready, in order, to the output buffer."""
@@ -475,7 +450,7 @@ class CommandReceiverLoop(ConsoleLoop):
             data = b""
         if not data:
             self._drop(session, "disconnected")
-        session.inbox += data
+        session.lines.feed(data)
 
     def _write(self, session: _RemoteSession) -> bool:
         """Send what the socket takes now; False if the console has gone."""
@@ -490,7 +465,7 @@ class CommandReceiverLoop(ConsoleLoop):
         """Run the lines the console may have run, send its replies, watch its socket."""
         session.collect()
         while session.takes_lines():
-            request = session.next_request()
+            request = session.lines.next_request()
             if request is None:
                 break
             if isinstance(request, Reply):
