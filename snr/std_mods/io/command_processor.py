@@ -3,23 +3,11 @@
 A console (remote over TCP, or local on stdin) never touches the node itself:
 it turns each line the user typed into a command task, and this endpoint runs
 the command in a task handler, on the node's thread, then hands the reply to
-the console's `ConsoleSession`. Thesis 6.4.3 lists the commands::
-
-    exit                            stop the node (and the console)
-    task <type> <name> [values...]  schedule a task
-    reload all|<component>          reload source code from disk, keep factory state
-    list commands|endpoints         what you can type / what the node runs
-    dump profiler|datastore [KEY]   handler timings / the newest page of every key
-    stats                           the queue and every comms link: sent, dropped...
-    graph [text|mermaid|dot]        the node's components, data keys and links
-    echo KEY [N]                    the next pages of a key (snr-console repeats it)
-    hz KEY [WINDOW_S]               how often a key is stored, and the jitter
-    pause / step [N] / resume       run a paused node's tasks one at a time
-    help [command]                  the commands, or one command in detail
-
-The commands and their help are listed in ``command_table.py``; consoles
-are ``ConsoleLoop`` subclasses (``console_loop.py``), each of which adds its own
-processor when it begins, so several consoles never run one command twice.
+the console's `ConsoleSession`. The commands (thesis 6.4.3) and their help
+are listed in `COMMANDS` (``command_table.py``); each is run by the method
+``cmd_<word>`` here. Consoles are ``ConsoleLoop`` subclasses
+(``console_loop.py``), each of which adds its own processor when it begins,
+so several consoles never run one command twice.
 
 Example::
 
@@ -28,12 +16,11 @@ Example::
 
 from __future__ import annotations
 
-import contextlib
 import logging
 import reprlib
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple
+from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, plugins, tasks
 from snr.core.checks.step_mode import MAX_STEPS, Step
@@ -60,7 +47,6 @@ from snr.std_mods.io.console_protocol import (
     Reply,
     Status,
     parse_values,
-    split_command,
 )
 from snr.std_mods.io.key_watch import (
     ECHO_DEFAULT_PAGES,
@@ -77,11 +63,6 @@ __all__ = [
     "CommandProcessorEndpoint",
     "CommandProcessorFactory",
 ]
-
-
-_LIST_CHOICES = ["commands", "endpoints"]
-_DUMP_CHOICES = ["profiler", "datastore"]
-_VALUE_PREVIEW_CHARS = 120
 
 REPLY_BUDGET_CHARS = 64 * 1024
 """Longest reply a console command builds; a longer one is cut with a note.
@@ -107,15 +88,16 @@ Example::
 """
 
 _MIN_LINES = 50  # a listing shows this many keys however slow the node is (each is cheap)
-_previews = reprlib.Repr()
-_previews.maxstring = _previews.maxother = _VALUE_PREVIEW_CHARS
+_PREVIEW_CHARS = 120
+_previews = reprlib.Repr()  # a short preview of any value, cheap even for a huge one
+_previews.maxstring = _previews.maxother = _PREVIEW_CHARS
 _previews.maxlevel = 3
 _previews.maxlist = _previews.maxtuple = _previews.maxdict = _previews.maxset = 12
-_whole_values = reprlib.Repr()
+_whole_values = reprlib.Repr()  # one value in full, up to a reply's length
 _whole_values.maxstring = _whole_values.maxother = REPLY_BUDGET_CHARS
 _whole_values.maxlevel = 8
-_whole_values.maxlist = _whole_values.maxtuple = 2000
-_whole_values.maxdict = _whole_values.maxset = 2000
+_whole_values.maxlist = _whole_values.maxtuple = _whole_values.maxdict = 2000
+_whole_values.maxset = 2000
 
 
 @dataclass
@@ -123,7 +105,7 @@ class _Outcome:
     status: Status
     text: str
     tasks: SomeTasks = None
-    later: bool = False  # the reply is sent later (echo, hz), not now
+    later: bool = False  # the reply is sent later (echo, hz, step), not now
 
 
 class _CommandFailed(Exception):
@@ -132,6 +114,9 @@ class _CommandFailed(Exception):
 
 def _ok(text: str, follow_up: SomeTasks = None) -> _Outcome:
     return _Outcome(Status.OK, text, follow_up)
+
+
+_LATER = _Outcome(Status.OK, "", later=True)
 
 
 class CommandProcessorEndpoint(Endpoint):
@@ -161,22 +146,6 @@ class CommandProcessorEndpoint(Endpoint):
             (TaskType.event, task_name): self.on_command,
             (TaskType.event, self.watches.tick_name): self.watches.on_tick,
         }
-        self._commands: Dict[str, Callable[[str], _Outcome]] = {
-            "exit": self.cmd_exit,
-            "task": self.cmd_task,
-            "reload": self.cmd_reload,
-            "list": self.cmd_list,
-            "dump": self.cmd_dump,
-            "stats": self.cmd_stats,
-            "graph": self.cmd_graph,
-            "echo": self.cmd_echo,
-            "hz": self.cmd_hz,
-            "pause": self.cmd_pause,
-            "step": self.cmd_step,
-            "resume": self.cmd_resume,
-            "help": self.cmd_help,
-        }
-        self._current_session = "console"
         self._session: Optional[ConsoleSession] = None  # of the command being run
         self._refusals = RepeatFilter(self.log)
 
@@ -191,15 +160,13 @@ class CommandProcessorEndpoint(Endpoint):
                 task.val_list,
             )
             return None
-        line, session = task.val_list
-        self._current_session = str(session)
-        self._session = session
+        line, self._session = task.val_list
         try:
             outcome = self._run(str(line))
+            if not outcome.later:
+                self._session.send(Reply(outcome.status, _bounded(outcome.text)))
         finally:
             self._session = None
-        if not outcome.later:
-            session.send(Reply(outcome.status, _bounded(outcome.text)))
         return outcome.tasks
 
     def terminate(self) -> None:
@@ -216,19 +183,19 @@ class CommandProcessorEndpoint(Endpoint):
         return Reply(outcome.status, _bounded(outcome.text))
 
     def _run(self, line: str) -> _Outcome:
-        word, args = split_command(line)
-        if not word:
+        words = line.split(None, 1)
+        if not words:
             return _ok("")
-        command = self._commands.get(word)
-        if command is None:
-            hint = did_you_mean(word, self._commands)
+        word, args = words[0].lower(), words[1] if len(words) > 1 else ""
+        if word not in COMMANDS:
+            hint = did_you_mean(word, COMMANDS)
             return _Outcome(
-                Status.ERROR,
-                f"Unknown command {word!r}.{hint} Type 'help' to see the commands.",
+                Status.ERROR, f"Unknown command {word!r}.{hint} Type 'help' to see the commands."
             )
+        command: Callable[[str], _Outcome] = getattr(self, f"cmd_{word}")
         try:
             return command(args)
-        except _CommandFailed as refused:
+        except (_CommandFailed, WatchRefused) as refused:
             return _Outcome(Status.ERROR, str(refused))
         except Exception as error:  # a broken command must not stop the robot
             self.log.exception("Console command %r failed", line)
@@ -242,52 +209,49 @@ class CommandProcessorEndpoint(Endpoint):
     def cmd_exit(self, args: str) -> _Outcome:
         """``exit``: stop the node; the console is closed after the reply."""
         _no_arguments("exit", args)
-        reason = f"exit command from {self._current_session}"
         return _Outcome(
             Status.BYE,
             f"Stopping node {self.parent.role!r}. Bye.",
-            tasks.terminate(reason),
+            tasks.terminate(f"exit command from {self._session or 'console'}"),
         )
 
     def cmd_task(self, args: str) -> _Outcome:
         """``task <type> <name> [values...]``: schedule a task."""
         words = args.split(None, 2)
+        types = ", ".join(TaskType.__members__)
         if len(words) < 2:
             raise _CommandFailed(
                 f"Usage: {COMMANDS['task'].usage}, e.g. `task event button_pressed A`. "
-                f"Types: {', '.join(TaskType.__members__)}."
+                f"Types: {types}."
             )
-        task = self._build_task(words[0], words[1], words[2] if len(words) == 3 else "")
-        return _ok(f"Scheduled {format_task(task, values='data')}", task)
-
-    def _build_task(self, type_word: str, name: str, rest: str) -> Task:
+        type_word, name, rest = words[0], words[1], words[2] if len(words) == 3 else ""
         task_type = TaskType.__members__.get(type_word.lower())
         if task_type is None:
             hint = did_you_mean(type_word.lower(), TaskType.__members__)
-            raise _CommandFailed(
-                f"Unknown task type {type_word!r}.{hint} Types: {', '.join(TaskType.__members__)}."
-            )
-        if task_type is TaskType.terminate:
-            return tasks.terminate(f"{name} {rest}".strip())
-        if task_type is TaskType.reload:
-            if name != "all":
-                self._check_reloadable(self._full_node("task reload"), name)
-            return tasks.reload_component(name)
+            raise _CommandFailed(f"Unknown task type {type_word!r}.{hint} Types: {types}.")
         values = parse_values(rest)
-        if task_type is TaskType.event:
+        if task_type is TaskType.terminate:
+            task = tasks.terminate(f"{name} {rest}".strip())
+        elif task_type is TaskType.reload:
+            if name != "all":
+                self._check_protected(self._full_node("task reload"), name, "reload")
+            task = tasks.reload_component(name)
+        elif task_type is TaskType.event:
             if name == tasks.REMOVE_COMPONENT:
                 for target in values:
-                    self._check_removable(str(target))
-            return tasks.event(name, values)
-        if len(values) != 1:
+                    self._check_protected(self.parent, str(target), "remove")
+            task = tasks.event(name, values)
+        elif len(values) != 1:
             raise _CommandFailed(
                 f"`task {type_word} {name}` needs exactly one value (the data), got "
                 f"{len(values)}. Write e.g. `task {type_word} {name} 3.2`, or "
                 f"`task {type_word} {name} [1, 2]` for a list."
             )
-        if task_type is TaskType.store_page:
-            return tasks.store_data(name, values[0])
-        return tasks.process_data(self.parent.page(name, values[0]))
+        elif task_type is TaskType.store_page:
+            task = tasks.store_data(name, values[0])
+        else:
+            task = tasks.process_data(self.parent.page(name, values[0]))
+        return _ok(f"Scheduled {format_task(task, values='data')}", task)
 
     def cmd_reload(self, args: str) -> _Outcome:
         """``reload all|<component>``: hot-reload source code, keep factory state."""
@@ -297,6 +261,7 @@ class CommandProcessorEndpoint(Endpoint):
                 f"Usage: {COMMANDS['reload'].usage}. Components: {self._component_names()}."
             )
         node = self._full_node("reload")
+        names = [target]
         if target == "all":
             names = [
                 name
@@ -309,71 +274,72 @@ class CommandProcessorEndpoint(Endpoint):
                     "Pass the module to the factory, e.g. `super().__init__(my_module)`."
                 )
         else:
-            self._check_reloadable(node, target)
-            names = [target]
+            self._check_protected(node, target, "reload")
         results = [self._reload_one(node, name) for name in names]
         failed = [message for ok, message in results if not ok]
-        if len(results) == 1:
-            text = results[0][1]
-        else:
+        text = results[0][1]
+        if len(results) > 1:
             text = f"Reloaded {len(results) - len(failed)} of {len(results)} components:\n"
             text += "\n".join("  " + message for _, message in results)
         return _Outcome(Status.ERROR if failed else Status.OK, text)
 
-    def _check_removable(self, name: ComponentName) -> None:
-        """Refuse to remove the node's core or a console (the reply says why)."""
-        if name == NODE_CORE_NAME:
-            self._refuse(
+    def _check_protected(self, node: AbstractNode, name: ComponentName, action: str) -> None:
+        """Refuse to ``action`` ("remove" or "reload") the node's core or a console part.
+
+        The refusal is the reply, and it is logged (repeats are counted, not repeated).
+        """
+        component = node.components.get(name)
+        if name == NODE_CORE_NAME and action == "remove":
+            reason = (
                 f"Refused: {name!r} is the node's own core. It stores every page, adds, "
                 "removes and reloads components, and stops the node on `exit`; without "
                 "it the node would run on deaf. To stop the node, type `exit`."
             )
-        component = self.parent.components.get(name)
-        if component is not None and _is_console_part(component, self.parent):
-            self._refuse(
-                f"Refused: {name!r} is part of a console; removing it would cut off the "
-                "consoles that use it, maybe this one. Type `quit` to leave this console, "
-                "or `exit` to stop the node."
-            )
-
-    def _refuse(self, reason: str) -> None:
-        """Log the refusal (repeats are counted, not repeated) and reply with it."""
-        self._refusals.report(
-            ("refused", reason[:60]),
-            "Refused console commands",
-            logging.WARNING,
-            "Console %s: %s",
-            self._current_session,
-            reason,
-        )
-        raise _CommandFailed(reason)
-
-    def _check_reloadable(self, node: Node, name: ComponentName) -> None:
-        if name == NODE_CORE_NAME:
-            self._refuse(
+        elif name == NODE_CORE_NAME:
+            reason = (
                 f"Refused: {name!r} is the node's own core and runs every reload itself; "
                 "SNR's own code is not reloaded while the node runs. Restart the node to "
                 "load a new SNR."
             )
-        component = node.components.get(name)
-        if component is None:
+        elif component is None and action == "reload":
             hint = did_you_mean(name, node.components)
             raise _CommandFailed(
                 f"No component named {name!r} in node {node.role!r}.{hint} "
                 f"Components: {self._component_names()}."
             )
-        if _is_console_part(component, self.parent):
-            self._refuse(
+        elif component is None or not _is_console_part(component, self.parent):
+            return
+        elif action == "remove":
+            reason = (
+                f"Refused: {name!r} is part of a console; removing it would cut off the "
+                "consoles that use it, maybe this one. Type `quit` to leave this console, "
+                "or `exit` to stop the node."
+            )
+        else:
+            reason = (
                 f"{name!r} is part of the console, which cannot reload itself while it "
                 "carries this command. Restart the node to load new console code."
             )
+        self._refusals.report(
+            ("refused", reason[:60]),
+            "Refused console commands",
+            logging.WARNING,
+            "Console %s: %s",
+            self._session or "console",
+            reason,
+        )
+        raise _CommandFailed(reason)
 
     def _reload_one(self, node: Node, name: ComponentName) -> Tuple[bool, str]:
         has_modules = bool(node.components[name].factory.reload_targets)
-        with _logged_errors(node.log) as errors:
+        errors = _ErrorCollector()  # the node logs why a reload failed: quote it back
+        node.log.addHandler(errors)
+        try:
             rebuilt = node.reload_component(name)
+        finally:
+            node.log.removeHandler(errors)
         if not rebuilt:
-            return False, "\n".join(errors) or (
+            return False, "\n".join(errors.messages) or (
                 f"Reloading {name!r} failed, so the old version keeps running. "
                 "The node's log says why."
             )
@@ -387,36 +353,40 @@ class CommandProcessorEndpoint(Endpoint):
 
     def cmd_list(self, args: str) -> _Outcome:
         """``list commands|endpoints``."""
-        choice = _one_choice("list", args, _LIST_CHOICES)
-        if choice == "commands":
+        if _one_choice("list", args, ["commands", "endpoints"]) == "commands":
             return _ok(commands_table())
-        lines = [f"Components of node {self.parent.role!r} ({len(self.parent.components)}):"]
-        width = max((len(name) for name in self.parent.components), default=0)
-        for name, component in self.parent.components.items():
-            lines.append(f"  {name:<{width}}  {_describe_component(component)}")
+        components = self.parent.components
+        lines = [f"Components of node {self.parent.role!r} ({len(components)}):"]
+        width = max((len(name) for name in components), default=0)
+        for name, component in components.items():
+            kind = "loop" if isinstance(component, ThreadLoop) else "endpoint"
+            line = f"  {name:<{width}}  {kind:<8}  {type(component).__name__}"
+            if isinstance(component, ThreadLoop):
+                line += f" ({component.state.value})"
+            modules = [m.__name__ for m in component.factory.reload_targets]
+            if modules:
+                line += f"  reloads: {', '.join(modules)}"
+            lines.append(line)
         return _ok("\n".join(lines))
 
     def cmd_dump(self, args: str) -> _Outcome:
         """``dump profiler|datastore [KEY|PREFIX*]``."""
         words = args.split()
-        choice = _one_choice("dump", words[0] if words else "", _DUMP_CHOICES)
+        choice = _one_choice("dump", words[0] if words else "", ["profiler", "datastore"])
         if len(words) > (1 if choice == "profiler" else 2):
             raise _CommandFailed(f"Usage: {COMMANDS['dump'].usage}.")
         if choice == "profiler":
-            profiler = self.parent.profiler
-            if profiler is None:
+            if self.parent.profiler is None:
                 return _ok(
                     f"Profiling is off for node {self.parent.role!r}. Turn it on with "
                     "Config(..., profile=True); it is on by default in Mode.DEBUG."
                 )
-            return _ok(profiler.dump())
+            return _ok(self.parent.profiler.dump())
         datastore = self._full_node("dump datastore").datastore
-        if len(words) == 2 and not words[1].endswith("*"):
-            return self._dump_one_key(datastore, words[1])
-        prefix = words[1][:-1] if len(words) == 2 else ""
-        return _ok(_list_datastore(self.parent.role, datastore, prefix))
-
-    def _dump_one_key(self, datastore: Dict[str, Page], key: str) -> _Outcome:
+        if len(words) < 2 or words[1].endswith("*"):
+            prefix = words[1][:-1] if len(words) == 2 else ""
+            return _ok(_list_datastore(self.parent.role, datastore, prefix))
+        key = words[1]
         page = datastore.get(key)
         if page is None:
             hint = did_you_mean(key, datastore)
@@ -451,10 +421,7 @@ class CommandProcessorEndpoint(Endpoint):
         if node.step_mode.paused:
             lines.append(f"The node is paused. {_loss_while_paused(node)}")
         comms = [c for c in node.components.values() if isinstance(c, CommsLoop)]
-        if not comms:
-            lines.append("No comms links.")
-        for loop in comms:
-            lines.append(f"{loop.name}: {loop.stats_text()}")
+        lines += [f"{loop.name}: {loop.stats_text()}" for loop in comms] or ["No comms links."]
         return _ok("\n".join(lines))
 
     def cmd_graph(self, args: str) -> _Outcome:
@@ -472,34 +439,28 @@ class CommandProcessorEndpoint(Endpoint):
         wanted = ECHO_DEFAULT_PAGES
         if len(words) == 2:
             wanted = int(_number(words[1], "echo", "N", 1, ECHO_MAX_PAGES, int))
-        reply = self._watch(lambda session: self.watches.echo(words[0], wanted, session))
-        if reply is None:
-            return _Outcome(Status.OK, "", later=True)
-        return _Outcome(reply.status, reply.text)
+        reply = self.watches.echo(words[0], wanted, self._console())
+        return _LATER if reply is None else _Outcome(reply.status, reply.text)
 
     def cmd_hz(self, args: str) -> _Outcome:
         """``hz KEY [WINDOW_S]``: the rate and jitter of KEY (the reply comes after the window)."""
         words = args.split()
         if not 1 <= len(words) <= 2:
             raise _CommandFailed(f"Usage: {COMMANDS['hz'].usage}, e.g. `hz depth 2`.")
-        window_s = (
-            _number(words[1], "hz", "WINDOW_S", 0.1, HZ_MAX_WINDOW_S, float)
-            if len(words) == 2
-            else HZ_DEFAULT_WINDOW_S
-        )
-        self._watch(lambda session: self.watches.hz(words[0], window_s, session))
-        return _Outcome(Status.OK, "", later=True)
+        window_s = HZ_DEFAULT_WINDOW_S
+        if len(words) == 2:
+            window_s = _number(words[1], "hz", "WINDOW_S", 0.1, HZ_MAX_WINDOW_S, float)
+        self.watches.hz(words[0], window_s, self._console())
+        return _LATER
 
-    def _watch(self, start: Callable[[ConsoleSession], Optional[Reply]]) -> Optional[Reply]:
+    def _console(self) -> ConsoleSession:
+        """The session of the command being run, for a reply that comes later."""
         if self._session is None:
             raise _CommandFailed(
-                "`echo` and `hz` reply once pages have come, so they need a console to "
-                "reply to: type them in snr-console or a LocalConsoleFactory console."
+                "`echo` and `hz` reply once pages have come, so they need a console to reply to: "
+                "type them in snr-console or a LocalConsoleFactory console."
             )
-        try:
-            return start(self._session)
-        except WatchRefused as refused:
-            raise _CommandFailed(str(refused)) from None
+        return self._session
 
     def cmd_pause(self, args: str) -> _Outcome:
         """``pause``: hold the node's tasks (the console's own still run)."""
@@ -534,7 +495,7 @@ class CommandProcessorEndpoint(Endpoint):
             step_mode.step(count, lambda steps: session.send(Reply(Status.OK, _steps_text(steps))))
         except ValueError as refused:
             raise _CommandFailed(str(refused)) from None
-        return _Outcome(Status.OK, "", later=True)
+        return _LATER
 
     def cmd_resume(self, args: str) -> _Outcome:
         """``resume``: let a paused node run freely again."""
@@ -559,10 +520,8 @@ class CommandProcessorEndpoint(Endpoint):
             raise _CommandFailed(
                 f"There is no command {topic!r}.{hint} Commands: {', '.join(COMMANDS)}."
             )
-        text = f"{entry.usage}\n  {entry.summary}"
-        if entry.details:
-            text += "\n" + "\n".join("  " + line for line in entry.details.splitlines())
-        return _ok(text)
+        lines = [entry.usage, entry.summary, *entry.details.splitlines()]
+        return _ok("\n  ".join(lines))
 
     # -- helpers ----------------------------------------------------------------
     def _full_node(self, command: str) -> Node:
@@ -606,9 +565,7 @@ class CommandProcessorFactory(EndpointFactory):
 # -- module helpers ---------------------------------------------------------------
 def _is_console_part(component: AbstractComponent, node: AbstractNode) -> bool:
     """A command processor, or a console loop one of them serves."""
-    if isinstance(component, CommandProcessorEndpoint):
-        return True
-    return any(
+    return isinstance(component, CommandProcessorEndpoint) or any(
         isinstance(other, CommandProcessorEndpoint) and other.console_name == component.name
         for other in list(node.components.values())
     )
@@ -634,26 +591,15 @@ def _one_choice(command: str, args: str, choices: List[str]) -> str:
 def _number(word: str, command: str, name: str, low: float, high: float, kind: type) -> float:
     """``word`` as a number of ``kind`` from ``low`` to ``high``, or a reply saying why not."""
     try:
-        value = kind(word)
+        value = float(kind(word))
     except ValueError:
-        value = None
-    if value is None or not low <= value <= high:
+        value = float("nan")  # fails the range check below
+    if not low <= value <= high:
         raise _CommandFailed(
             f"`{command}` takes {name} from {low:g} to {high:g}; got {word!r}. "
             f"Usage: {COMMANDS[command].usage}."
         )
-    return float(value)
-
-
-def _describe_component(component: AbstractComponent) -> str:
-    kind = "loop" if isinstance(component, ThreadLoop) else "endpoint"
-    text = f"{kind:<8}  {type(component).__name__}"
-    if isinstance(component, ThreadLoop):
-        text += f" ({component.state.value})"
-    modules = [m.__name__ for m in component.factory.reload_targets]
-    if modules:
-        text += f"  reloads: {', '.join(modules)}"
-    return text
+    return value
 
 
 def _steps_text(steps: List[Step]) -> str:
@@ -670,12 +616,10 @@ def _steps_text(steps: List[Step]) -> str:
         went_to = ", ".join(step.handlers) or "no handler (nothing handles this task)"
         lines.append(f"  went to: {went_to}")
         if step.returned:
-            lines.append(
-                f"  returned: {', '.join(format_task(t, values='data') for t in step.returned)}"
-            )
+            returned = ", ".join(format_task(t, values="data") for t in step.returned)
+            lines.append(f"  returned: {returned}")
     if steps and steps[-1].task is not None:
-        last = steps[-1]
-        lines.append(_next_line(last.next_tasks, last.waiting))
+        lines.append(_next_line(steps[-1].next_tasks, steps[-1].waiting))
     return "\n".join(lines)
 
 
@@ -699,9 +643,7 @@ def _next_line(next_tasks: List[Task], waiting: int) -> str:
 def _preview(data: Any) -> str:
     """A short repr: cheap even for a huge value (reprlib stops early)."""
     text = _previews.repr(data)
-    if len(text) > _VALUE_PREVIEW_CHARS:
-        text = text[: _VALUE_PREVIEW_CHARS - 3] + "..."
-    return text
+    return text if len(text) <= _PREVIEW_CHARS else text[: _PREVIEW_CHARS - 3] + "..."
 
 
 def _list_datastore(role: str, datastore: Dict[str, Page], prefix: str) -> str:
@@ -753,27 +695,13 @@ def _bounded(text: str) -> str:
 
 
 class _ErrorCollector(logging.Handler):
+    """Keeps the error messages of a logger (and its children) while it is added to it."""
+
     snr_only_listens = True  # SNR's stderr handler still prints what this collects
 
-    def __init__(self, into: List[str]) -> None:
+    def __init__(self) -> None:
         super().__init__(logging.ERROR)
-        self.into = into
+        self.messages: List[str] = []
 
     def emit(self, record: logging.LogRecord) -> None:
-        self.into.append(record.getMessage())
-
-
-@contextlib.contextmanager
-def _logged_errors(log: logging.Logger) -> Iterator[List[str]]:
-    """The error messages ``log`` (and its children) emit inside the block.
-
-    The node reports a failed reload in its log; this lets the console quote
-    the reason back to the user without changing the node.
-    """
-    messages: List[str] = []
-    collector = _ErrorCollector(messages)
-    log.addHandler(collector)
-    try:
-        yield messages
-    finally:
-        log.removeHandler(collector)
+        self.messages.append(record.getMessage())

@@ -16,12 +16,12 @@ from __future__ import annotations
 
 import logging
 import os
-import select
 import selectors
 import socket
 import threading
 import time
-from typing import Any, Dict, Optional, Tuple
+from collections import deque
+from typing import Any, Callable, Deque, Dict, List, Optional, Tuple
 
 from snr.core import LoopFactory
 from snr.core.checks.os_errors import explain_os_error
@@ -30,9 +30,9 @@ from snr.prelude import AbstractNode, CommsError, ComponentName, ConfigError, Mo
 from snr.std_mods.io.console_loop import ConsoleLoop
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
-    MAX_LINE_BYTES,
     TOKEN_ENV_VAR,
     ConsoleSession,
+    LineReader,
     Reply,
     Status,
     check_listen_policy,
@@ -127,18 +127,17 @@ class _TokenThrottle:
         self.max_delay_s = max_delay_s
         self.forget_after_s = forget_after_s
         self.max_addresses = max_addresses
-        self._failures: Dict[str, Tuple[int, float]] = {}  # host -> (in a row, last failure)
+        # host -> (wrong tokens in a row, the last one's time), the longest-quiet host first
+        self._failures: Dict[str, Tuple[int, float]] = {}
+
+    def _in_a_row(self, host: str, now: float) -> Tuple[int, float]:
+        failures, last = self._failures.get(host, (0, 0.0))
+        return (failures, last) if now - last <= self.forget_after_s else (0, 0.0)
 
     def wait_s(self, host: str, now: float) -> float:
         """How long ``host`` must still wait before its next token is checked."""
-        entry = self._failures.get(host)
-        if entry is None:
-            return 0.0
-        failures, last = entry
-        if now - last > self.forget_after_s:
-            del self._failures[host]
-            return 0.0
-        return max(0.0, last + self.delay_s(failures) - now)
+        failures, last = self._in_a_row(host, now)
+        return max(0.0, last + self.delay_s(failures) - now) if failures else 0.0
 
     def delay_s(self, failures: int) -> float:
         """The wait after ``failures`` wrong tokens in a row."""
@@ -146,10 +145,10 @@ class _TokenThrottle:
 
     def failed(self, host: str, now: float) -> Tuple[int, float]:
         """Count a wrong token; the failures in a row and the wait before the next try."""
-        entry = self._failures.pop(host, None)
-        failures = 1 if entry is None or now - entry[1] > self.forget_after_s else entry[0] + 1
+        failures = self._in_a_row(host, now)[0] + 1
+        self._failures.pop(host, None)
         if len(self._failures) >= self.max_addresses:  # forget the longest-quiet address
-            del self._failures[min(self._failures, key=lambda h: self._failures[h][1])]
+            del self._failures[next(iter(self._failures))]
         self._failures[host] = (failures, now)
         return failures, self.delay_s(failures)
 
@@ -161,108 +160,59 @@ class _TokenThrottle:
 class _RemoteSession:
     """One TCP console, served by the receiver loop's thread.
 
-    Every request line gets a numbered `_ReplySlot`; whoever answers it (the
-    node's thread for commands, the loop's thread for a refused line) fills
-    the slot, and replies go out in request order, so a console always knows
-    which reply answers which line. At most `MAX_UNANSWERED` requests wait for
-    their replies; until some are sent, the console's lines wait in the
-    socket (so a flood of commands costs the node nothing). Replies are sent
-    without blocking from an output buffer that the loop thread drains.
+    Every request line gets a `_ReplySlot` in `waiting`; whoever answers it
+    (the node's thread for commands, the loop's thread for a refused line)
+    fills the slot, and replies go out in request order, so a console always
+    knows which reply answers which line. At most `MAX_UNANSWERED` requests
+    wait for their replies; until some are sent, the console's lines wait in
+    the socket (so a flood of commands costs the node nothing). Replies are
+    sent without blocking from an output buffer that the loop thread drains.
     """
 
     def __init__(self, sock: socket.socket, address: Tuple[Any, ...], wake: socket.socket) -> None:
         self.sock = sock
         self.host = str(address[0])
         self.peer = f"{address[0]}:{address[1]}"
+        self.wake = wake  # written to when a reply is filled in
         self.authenticated = False
         self.closed = False
         self.leaving = False  # a BYE is due: run no more of this console's lines
         self.connected_at = self.last_request = self.last_sent = time.monotonic()
         self.events = 0  # what the selector watches for (0: not registered)
+        self.waiting: Deque[_ReplySlot] = deque()  # requests not yet in `out`, in order
         self.out = bytearray()  # encoded replies not yet taken by the socket
         self.bye_queued = False  # the BYE is in `out`: close once it is sent
-        self._inbox = bytearray()
-        self._skipping_long_line = False
-        self._next_slot = 0  # numbers handed to requests (loop thread)
-        self._next_to_send = 0  # the reply the console waits for next (loop thread)
-        self._ready: Dict[int, Reply] = {}  # filled from any thread
-        self._wake = wake
+        self.lines = LineReader()
 
     def slot(self) -> _ReplySlot:
         """A place for the reply to the next request, in order."""
-        slot = _ReplySlot(self, self._next_slot)
-        self._next_slot += 1
+        slot = _ReplySlot(self)
+        self.waiting.append(slot)
         return slot
-
-    def answer(self, reply: Reply) -> None:
-        """Answer the next request here, on the loop's thread."""
-        self.slot().send(reply)
-
-    def fill(self, number: int, reply: Reply) -> None:
-        """Store the reply for request ``number`` (any thread; never blocks)."""
-        if self.closed:
-            return  # the console has gone; nobody waits for this reply
-        if reply.status is Status.BYE:
-            self.leaving = True
-        self._ready[number] = reply
-        try:
-            self._wake.send(b"\0")
-        except OSError:
-            pass  # the receiver is shutting down, or already has wake-ups to read
-
-    @property
-    def unanswered(self) -> int:
-        """Requests whose replies have not gone to the output buffer yet."""
-        return self._next_slot - self._next_to_send
 
     def takes_lines(self) -> bool:
         """True while this console may have another line run."""
         return (
             not self.leaving
-            and self.unanswered < MAX_UNANSWERED
+            and len(self.waiting) < MAX_UNANSWERED
             and len(self.out) < _PAUSE_OUT_BYTES
         )
 
-    def has_line_waiting(self) -> bool:
-        """True when a line read from the socket waits to be run."""
-        return b"\n" in self._inbox
-
     def wants_to_read(self) -> bool:
         """True when the socket should be read: lines are taken, none is waiting."""
-        return self.takes_lines() and not self.has_line_waiting()
-
-    def receive(self, data: bytes) -> None:
-        """Keep bytes read from the socket until their lines are taken."""
-        self._inbox += data
-
-    def next_line(self) -> Tuple[bool, Optional[bytes]]:
-        """``(True, line)`` for the next complete line (None: too long), else ``(False, None)``."""
-        while True:
-            newline = self._inbox.find(b"\n")
-            if newline < 0:
-                if len(self._inbox) > MAX_LINE_BYTES:
-                    self._inbox.clear()
-                    if not self._skipping_long_line:
-                        self._skipping_long_line = True
-                        return True, None
-                return False, None
-            line = bytes(self._inbox[:newline])
-            del self._inbox[: newline + 1]
-            if self._skipping_long_line:  # the tail of a line already refused
-                self._skipping_long_line = False
-                continue
-            return True, line if len(line) <= MAX_LINE_BYTES else None
+        return self.takes_lines() and not self.lines.has_line()
 
     def collect(self) -> None:
         """Move the replies that are ready, in order, to the output buffer."""
-        while not self.bye_queued and self._next_to_send in self._ready:
-            reply = self._ready.pop(self._next_to_send)
-            self._next_to_send += 1
+        while self.waiting and not self.bye_queued:
+            reply = self.waiting[0].reply
+            if reply is None:
+                return
+            self.waiting.popleft()
             if not self.out:
                 self.last_sent = time.monotonic()  # the send clock starts now
             self.out += reply.encode()
-            if reply.status is Status.BYE:
-                self.bye_queued = True
+            self.bye_queued = reply.status is Status.BYE
 
     def write(self) -> None:
         """Send what the socket takes now, never waiting.
@@ -278,10 +228,6 @@ class _RemoteSession:
             del self.out[:sent]
             self.last_sent = time.monotonic()
 
-    def close(self) -> None:
-        self.closed = True
-        self.sock.close()
-
     def __repr__(self) -> str:
         return f"console {self.peer}"
 
@@ -289,12 +235,21 @@ class _RemoteSession:
 class _ReplySlot(ConsoleSession):
     """Where the reply to one request of a remote console goes."""
 
-    def __init__(self, session: _RemoteSession, number: int) -> None:
+    def __init__(self, session: _RemoteSession) -> None:
         self.session = session
-        self.number = number
+        self.reply: Optional[Reply] = None
 
     def send(self, reply: Reply) -> None:
-        self.session.fill(self.number, reply)
+        """Fill the slot (any thread; never blocks) and wake the receiver to send it."""
+        if self.session.closed:
+            return  # the console has gone; nobody waits for this reply
+        if reply.status is Status.BYE:
+            self.session.leaving = True
+        self.reply = reply
+        try:
+            self.session.wake.send(b"\0")
+        except OSError:
+            pass  # the receiver is shutting down, or already has wake-ups to read
 
     def __repr__(self) -> str:
         return repr(self.session)
@@ -322,16 +277,13 @@ class CommandReceiverLoop(ConsoleLoop):
 
     def __init__(self, factory: CommandReceiverFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
-        self.host = factory.host
-        self.port = factory.port
         self.auth_timeout_s = factory.auth_timeout_s
         self.idle_timeout_s = factory.idle_timeout_s
-        self._token = factory.token
         self._selector: Optional[selectors.BaseSelector] = None
         self._listener: Optional[socket.socket] = None
         self._wake_in: Optional[socket.socket] = None
         self._wake_out: Optional[socket.socket] = None
-        self._sessions: Dict[socket.socket, _RemoteSession] = {}
+        self._sessions: Dict[Any, _RemoteSession] = {}  # by socket, the oldest first
         self._throttle = _TokenThrottle()
         self._repeats = RepeatFilter(self.log)
         self._last_summary = time.monotonic()
@@ -339,40 +291,40 @@ class CommandReceiverLoop(ConsoleLoop):
     # -- life cycle (node thread) -------------------------------------------
     def begin(self) -> None:
         """Listen on ``host:port`` and add the command processor."""
+        factory = self.factory
         try:
-            listener = socket.create_server((self.host, self.port))
+            self._listener = socket.create_server((factory.host, factory.port))
         except OSError as error:
-            self._cannot_listen(error)
-            return
-        listener.setblocking(False)
-        self._listener = listener
-        self._wake_in, self._wake_out = socket.socketpair()
-        self._wake_out.setblocking(False)  # a wake-up must never block the node's thread
-        self._selector = selectors.DefaultSelector()
-        self._selector.register(listener, selectors.EVENT_READ, None)
-        self._selector.register(self._wake_in, selectors.EVENT_READ, None)
-        host, port = listener.getsockname()[:2]
-        self.factory._now_listening(host, port)
-        self.info("Console receiver listening on %s:%d", host, port)
-        super().begin()
-
-    def _cannot_listen(self, error: OSError) -> None:
-        message = explain_os_error(
-            error,
-            action="listen",
-            target=f"{self.host}:{self.port}",
-            who=f"Console receiver {self.name!r}",
-            setting="CommandReceiverFactory(port=...)",
-        )
-        if self.parent.mode is Mode.DEPLOYED:
+            message = explain_os_error(
+                error,
+                action="listen",
+                target=f"{factory.host}:{factory.port}",
+                who=f"Console receiver {self.name!r}",
+                setting="CommandReceiverFactory(port=...)",
+            )
+            if self.parent.mode is not Mode.DEPLOYED:
+                raise CommsError(message) from error
             self.err("%s The node runs on without a console.", message)
             self.set_terminate_flag("cannot listen")
             return
-        raise CommsError(message) from error
+        self._listener.setblocking(False)
+        self._wake_in, self._wake_out = socket.socketpair()
+        self._wake_out.setblocking(False)  # a wake-up must never block the node's thread
+        self._selector = selectors.DefaultSelector()
+        self._selector.register(self._listener, selectors.EVENT_READ)
+        self._selector.register(self._wake_in, selectors.EVENT_READ)
+        host, port = self._listener.getsockname()[:2]
+        factory._now_listening(host, port)
+        self.info("Console receiver listening on %s:%d", host, port)
+        super().begin()
 
     def halt(self) -> None:
         """Wake the loop's thread so it sees it must stop."""
-        self._poke()
+        if self._wake_out is not None:
+            try:
+                self._wake_out.send(b"\0")
+            except OSError:
+                pass
 
     def terminate(self) -> None:
         """Send what is queued and a goodbye to every console, then close all sockets.
@@ -381,56 +333,40 @@ class CommandReceiverLoop(ConsoleLoop):
         cannot hold up the node's shutdown.
         """
         goodbye = Reply(Status.BYE, f"Node {self.parent.role!r} is stopping.").encode()
-        sessions = list(self._sessions.values())
-        for session in sessions:
+        deadline = time.monotonic() + _GOODBYE_TIMEOUT_S
+        for session in self._sessions.values():
             session.collect()
             if not session.bye_queued:
                 session.out += goodbye
-        deadline = time.monotonic() + _GOODBYE_TIMEOUT_S
-        waiting = [s for s in sessions if s.out]
-        while waiting and time.monotonic() < deadline:
-            for session in list(waiting):
-                try:
-                    session.write()
-                except OSError:
-                    session.out.clear()  # it had gone already
-                if not session.out:
-                    waiting.remove(session)
-            if waiting:
-                select.select(
-                    [], [s.sock for s in waiting], [], max(0.0, deadline - time.monotonic())
-                )
-        for session in sessions:
-            session.close()
+            try:
+                session.sock.settimeout(max(0.001, deadline - time.monotonic()))
+                session.sock.sendall(session.out)
+            except OSError:
+                pass  # gone already, or too slow to take its goodbye
+            session.closed = True
+            session.sock.close()
         self._sessions.clear()
         self._repeats.flush()
         for closable in (self._selector, self._listener, self._wake_in, self._wake_out):
             if closable is not None:
                 closable.close()
-        self._listener = None
-
-    def _poke(self) -> None:
-        if self._wake_out is not None:
-            try:
-                self._wake_out.send(b"\0")
-            except OSError:
-                pass
 
     # -- the loop (its own thread) -------------------------------------------
     def loop(self) -> None:
         """Wait for connections, lines and replies; handle what arrived; enforce the limits."""
-        selector = self._selector
-        if selector is None:  # begin() could not listen
+        if self._selector is None or self._wake_in is None:  # begin() could not listen
             self.set_terminate_flag("not listening")
             return
-        for key, mask in selector.select(timeout=self._next_wake_s(time.monotonic())):
-            sock: Any = key.fileobj
-            if sock is self._listener:
+        now = time.monotonic()
+        deadlines = [when for s in self._sessions.values() for when, _ in self._limits(s)]
+        wait_s = max(0.005, min([now + _POLL_S, *deadlines]) - now)
+        for key, mask in self._selector.select(wait_s):
+            session = self._sessions.get(key.fileobj)
+            if key.fileobj is self._listener:
                 self._accept()
-            elif sock is self._wake_in:
-                self._drain_wakeups()
-            elif sock in self._sessions:
-                session = self._sessions[sock]
+            elif key.fileobj is self._wake_in:
+                self._wake_in.recv(_READ_CHUNK)  # the wake-ups: replies were filled in
+            elif session is not None:
                 if mask & selectors.EVENT_READ:
                     self._read(session)
                 if mask & selectors.EVENT_WRITE and not session.closed:
@@ -438,22 +374,25 @@ class CommandReceiverLoop(ConsoleLoop):
         now = time.monotonic()
         for session in list(self._sessions.values()):
             self._serve(session)
-        self._enforce_time_limits(now)
+        for session in list(self._sessions.values()):
+            for when, act in self._limits(session):
+                if now > when:
+                    act(session)
+                    break
         if now - self._last_summary >= self._repeats.every_s:
             self._last_summary = now
             self._repeats.flush()  # counts of repeated warnings, even when they stopped
 
-    def _next_wake_s(self, now: float) -> float:
-        """Seconds until the nearest time limit (at most `_POLL_S`)."""
-        wake = _POLL_S
-        for session in self._sessions.values():
-            if not session.authenticated:
-                wake = min(wake, session.connected_at + self.auth_timeout_s - now)
-            elif self.idle_timeout_s is not None:
-                wake = min(wake, session.last_request + self.idle_timeout_s - now)
-            if session.out:
-                wake = min(wake, session.last_sent + _SEND_TIMEOUT_S - now)
-        return max(0.005, wake)
+    def _limits(self, session: _RemoteSession) -> List[Tuple[float, Callable[[Any], None]]]:
+        """The session's time limits: when each runs out, and what is done then."""
+        limits: List[Tuple[float, Callable[[Any], None]]] = []
+        if session.out:
+            limits.append((session.last_sent + _SEND_TIMEOUT_S, self._drop_slow_reader))
+        if not session.authenticated:
+            limits.append((session.connected_at + self.auth_timeout_s, self._no_token_in_time))
+        elif self.idle_timeout_s is not None and not session.waiting:
+            limits.append((session.last_request + self.idle_timeout_s, self._close_idle))
+        return limits
 
     def _accept(self) -> None:
         assert self._listener is not None and self._wake_out is not None
@@ -463,63 +402,44 @@ class CommandReceiverLoop(ConsoleLoop):
             return  # the client gave up before we accepted, or nothing is waiting
         sock.setblocking(False)
         session = _RemoteSession(sock, address, self._wake_out)
-        if self._token is None:
-            if self._count_connected() >= MAX_CONSOLES:
-                self._turn_away(session)
-                return
-            self._add(session)
-            self._admit(session)
+        if self.factory.token is None:
+            self._sessions[sock] = session
+            self._let_in(session)
             return
         waiting = [s for s in self._sessions.values() if not s.authenticated]
         if len(waiting) >= MAX_WAITING_CONSOLES:
-            oldest = min(waiting, key=lambda s: s.connected_at)
             self._repeats.report(
                 "waiting full",
                 "Consoles pushed out while waiting to give their token",
                 logging.WARNING,
-                "%d consoles are waiting to give their token, the most this receiver "
-                "keeps; disconnected the oldest, %s, to make room.",
-                MAX_WAITING_CONSOLES,
-                oldest.peer,
+                f"{MAX_WAITING_CONSOLES} consoles are waiting to give their token, the most "
+                f"this receiver keeps; disconnected the oldest, {waiting[0].peer}, to make room.",
             )
-            self._close_with(
-                oldest, Reply(Status.BYE, "Too many consoles are waiting to give their token.")
-            )
-        self._add(session)
-        session.answer(Reply(Status.AUTH, "This node needs a console token: send `auth <token>`."))
-
-    def _add(self, session: _RemoteSession) -> None:
-        self._sessions[session.sock] = session
+            text = "Too many consoles are waiting to give their token."
+            self._close_with(waiting[0], Reply(Status.BYE, text))
+        self._sessions[sock] = session
         self.dbg("Console %s connected", session.peer)
+        session.slot().send(
+            Reply(Status.AUTH, "This node needs a console token: send `auth <token>`.")
+        )
 
-    def _count_connected(self) -> int:
-        return sum(1 for s in self._sessions.values() if s.authenticated)
-
-    def _admit(self, session: _RemoteSession) -> None:
+    def _let_in(self, session: _RemoteSession) -> None:
+        """Greet the console, or turn it away if `MAX_CONSOLES` are connected."""
+        if sum(s.authenticated for s in self._sessions.values()) >= MAX_CONSOLES:
+            self._repeats.report(
+                "full",
+                "Consoles turned away (too many connected)",
+                logging.WARNING,
+                f"Turned away console {session.peer}: {MAX_CONSOLES} are connected, the most "
+                "this receiver serves.",
+            )
+            text = f"Too many consoles ({MAX_CONSOLES}) are open."
+            self._close_with(session, Reply(Status.BYE, text))
+            return
         session.authenticated = True
         session.last_request = time.monotonic()
-        session.answer(Reply(Status.HELLO, self.greeting()))
+        session.slot().send(Reply(Status.HELLO, self.greeting()))
         self.info("Console %s connected", session.peer)
-
-    def _turn_away(self, session: _RemoteSession) -> None:
-        self._repeats.report(
-            "full",
-            "Consoles turned away (too many connected)",
-            logging.WARNING,
-            "Turned away console %s: %d are connected, the most this receiver serves.",
-            session.peer,
-            MAX_CONSOLES,
-        )
-        self._close_with(
-            session, Reply(Status.BYE, f"Too many consoles ({MAX_CONSOLES}) are open.")
-        )
-
-    def _drain_wakeups(self) -> None:
-        assert self._wake_in is not None
-        try:
-            self._wake_in.recv(_READ_CHUNK)
-        except OSError:
-            pass
 
     def _read(self, session: _RemoteSession) -> None:
         try:
@@ -530,8 +450,7 @@ class CommandReceiverLoop(ConsoleLoop):
             data = b""
         if not data:
             self._drop(session, "disconnected")
-            return
-        session.receive(data)
+        session.lines.feed(data)
 
     def _write(self, session: _RemoteSession) -> bool:
         """Send what the socket takes now; False if the console has gone."""
@@ -544,21 +463,24 @@ class CommandReceiverLoop(ConsoleLoop):
 
     def _serve(self, session: _RemoteSession) -> None:
         """Run the lines the console may have run, send its replies, watch its socket."""
-        while True:
-            while not session.closed and session.takes_lines():
-                got, raw = session.next_line()
-                if not got:
-                    break
-                self._on_line(session, raw)
+        session.collect()
+        while session.takes_lines():
+            request = session.lines.next_request()
+            if request is None:
+                break
+            if isinstance(request, Reply):
+                session.slot().send(request)
+            elif not session.authenticated:
+                self._authenticate(session, request)
+            else:
+                session.last_request = time.monotonic()
+                if request:
+                    self.submit(request, session.slot())
+                else:
+                    session.slot().send(Reply(Status.OK, ""))
             if session.closed:
                 return
-            unanswered = session.unanswered
             session.collect()
-            # A reply filled after this pass read its wake-up is collected here:
-            # if that makes room for a line already read, run it now, or it would
-            # wait for the next wake-up (up to _POLL_S) with nothing to bring it.
-            if session.unanswered == unanswered or not session.has_line_waiting():
-                break
         if len(session.out) > MAX_SEND_BUFFER_BYTES:
             self._drop_slow_reader(session)
             return
@@ -567,97 +489,56 @@ class CommandReceiverLoop(ConsoleLoop):
         if session.bye_queued and not session.out:
             self._drop(session, "closed")
             return
-        self._watch(session)
-
-    def _watch(self, session: _RemoteSession) -> None:
-        """Tell the selector what this session waits for now."""
+        # Tell the selector what this session waits for now.
         assert self._selector is not None
         events = (selectors.EVENT_READ if session.wants_to_read() else 0) | (
             selectors.EVENT_WRITE if session.out else 0
         )
-        if events == session.events:
-            return
-        if session.events == 0:
-            self._selector.register(session.sock, events, None)
-        elif events == 0:
-            self._selector.unregister(session.sock)
-        else:
-            self._selector.modify(session.sock, events, None)
-        session.events = events
+        if events != session.events:
+            if session.events:
+                self._selector.unregister(session.sock)
+            if events:
+                self._selector.register(session.sock, events)
+            session.events = events
 
-    def _enforce_time_limits(self, now: float) -> None:
-        for session in list(self._sessions.values()):
-            if session.closed:
-                continue
-            if session.out and now - session.last_sent > _SEND_TIMEOUT_S:
-                self._drop_slow_reader(session)
-            elif not session.authenticated and now - session.connected_at > self.auth_timeout_s:
-                self._repeats.report(
-                    "no token",
-                    "Consoles disconnected for giving no token in time",
-                    logging.INFO,
-                    "Console %s gave no token within %g s; disconnected it.",
-                    session.peer,
-                    self.auth_timeout_s,
-                )
-                text = f"No console token within {self.auth_timeout_s:g} s: disconnected."
-                self._close_with(session, Reply(Status.BYE, text))
-            elif (
-                self.idle_timeout_s is not None
-                and session.authenticated
-                and session.unanswered == 0
-                and now - session.last_request > self.idle_timeout_s
-            ):
-                self._repeats.report(
-                    "idle",
-                    "Idle consoles disconnected",
-                    logging.INFO,
-                    "Console %s sent no command for %g s; disconnected it.",
-                    session.peer,
-                    self.idle_timeout_s,
-                )
-                text = (
-                    f"Closed this console after {self.idle_timeout_s:g} s without a command. "
-                    "Connect again to carry on."
-                )
-                self._close_with(session, Reply(Status.BYE, text))
+    def _no_token_in_time(self, session: _RemoteSession) -> None:
+        self._repeats.report(
+            "no token",
+            "Consoles disconnected for giving no token in time",
+            logging.INFO,
+            f"Console {session.peer} gave no token within {self.auth_timeout_s:g} s; "
+            "disconnected it.",
+        )
+        text = f"No console token within {self.auth_timeout_s:g} s: disconnected."
+        self._close_with(session, Reply(Status.BYE, text))
+
+    def _close_idle(self, session: _RemoteSession) -> None:
+        self._repeats.report(
+            "idle",
+            "Idle consoles disconnected",
+            logging.INFO,
+            f"Console {session.peer} sent no command for {self.idle_timeout_s:g} s; "
+            "disconnected it.",
+        )
+        text = (
+            f"Closed this console after {self.idle_timeout_s:g} s without a command. "
+            "Connect again to carry on."
+        )
+        self._close_with(session, Reply(Status.BYE, text))
 
     def _drop_slow_reader(self, session: _RemoteSession) -> None:
         self._repeats.report(
             "slow reader",
             "Consoles dropped for not reading their replies",
             logging.WARNING,
-            "Dropped console %s: it did not read its replies (%d bytes waiting, none "
-            "taken for %.1f s).",
-            session.peer,
-            len(session.out),
-            time.monotonic() - session.last_sent,
+            f"Dropped console {session.peer}: it did not read its replies ({len(session.out)} "
+            f"bytes waiting, none taken for {time.monotonic() - session.last_sent:.1f} s).",
         )
         self._drop(session, "dropped")
 
-    def _on_line(self, session: _RemoteSession, raw: Optional[bytes]) -> None:
-        if session.leaving:
-            return  # after `exit` or a refused token, later lines are not run
-        if raw is None:
-            message = f"Ignored a line longer than {MAX_LINE_BYTES} bytes."
-            session.answer(Reply(Status.ERROR, message))
-            return
-        try:
-            line = raw.decode("utf-8").strip()
-        except UnicodeDecodeError:
-            session.answer(Reply(Status.ERROR, "Ignored a line that is not UTF-8 text."))
-            return
-        if not session.authenticated:
-            self._authenticate(session, line)
-            return
-        session.last_request = time.monotonic()
-        if not line:
-            session.answer(Reply(Status.OK, ""))
-        else:
-            self.submit(line, session.slot())
-
     def _authenticate(self, session: _RemoteSession, line: str) -> None:
-        assert self._token is not None
+        token = self.factory.token
+        assert token is not None
         word, _, given = line.partition(" ")
         now = time.monotonic()
         wait_s = self._throttle.wait_s(session.host, now) if word == "auth" else 0.0
@@ -666,54 +547,41 @@ class CommandReceiverLoop(ConsoleLoop):
                 "too early",
                 "Console tokens refused unchecked (too soon after wrong ones)",
                 logging.WARNING,
-                "Console %s gave a token %.1f s too soon after wrong ones from %s; "
-                "refused it unchecked.",
-                session.peer,
-                wait_s,
-                session.host,
+                f"Console {session.peer} gave a token {wait_s:.1f} s too soon after wrong ones "
+                f"from {session.host}; refused it unchecked.",
             )
             text = (
                 f"Too many wrong console tokens from {session.host}: the next one is checked "
                 f"in {wait_s:.1f} s (each wrong token doubles the wait, up to "
                 f"{self._throttle.max_delay_s:g} s)."
             )
-            session.answer(Reply(Status.BYE, text))
-            return
-        if word == "auth" and tokens_match(self._token, given.strip()):
+            session.slot().send(Reply(Status.BYE, text))
+        elif word == "auth" and tokens_match(token, given.strip()):
             self._throttle.succeeded(session.host)
-            if self._count_connected() >= MAX_CONSOLES:
-                self._turn_away(session)
-                return
-            self._admit(session)
-            return
-        if word == "auth":
-            failures, delay_s = self._throttle.failed(session.host, now)
-            self._repeats.report(
-                "wrong token",
-                "Consoles that gave a wrong token",
-                logging.WARNING,
-                "Console %s gave a wrong token (%d in a row from %s); disconnected it. "
-                "The next token from there is checked after %.2f s.",
-                session.peer,
-                failures,
-                session.host,
-                delay_s,
-            )
+            self._let_in(session)
         else:
-            self._repeats.report(
-                "no auth",
-                "Consoles that sent a command instead of their token",
-                logging.WARNING,
-                "Console %s sent a command before its token; disconnected it.",
-                session.peer,
-            )
-        session.answer(
-            Reply(
-                Status.BYE,
+            if word == "auth":
+                failures, delay_s = self._throttle.failed(session.host, now)
+                self._repeats.report(
+                    "wrong token",
+                    "Consoles that gave a wrong token",
+                    logging.WARNING,
+                    f"Console {session.peer} gave a wrong token ({failures} in a row from "
+                    f"{session.host}); disconnected it. The next token from there is checked "
+                    f"after {delay_s:.2f} s.",
+                )
+            else:
+                self._repeats.report(
+                    "no auth",
+                    "Consoles that sent a command instead of their token",
+                    logging.WARNING,
+                    f"Console {session.peer} sent a command before its token; disconnected it.",
+                )
+            text = (
                 "Wrong or missing console token. Give the node's token with "
-                f"`snr-console HOST:PORT --token ...` or {TOKEN_ENV_VAR}.",
+                f"`snr-console HOST:PORT --token ...` or {TOKEN_ENV_VAR}."
             )
-        )
+            session.slot().send(Reply(Status.BYE, text))
 
     def _close_with(self, session: _RemoteSession, reply: Reply) -> None:
         """Queue what is ready and ``reply``, send what the socket takes now, and close."""
@@ -730,12 +598,12 @@ class CommandReceiverLoop(ConsoleLoop):
         if self._sessions.pop(session.sock, None) is not None and session.events:
             assert self._selector is not None
             self._selector.unregister(session.sock)
-            session.events = 0
         if session.authenticated:
             self.info("Console %s %s", session.peer, why)
         else:
             self.dbg("Console %s %s before giving its token", session.peer, why)
-        session.close()
+        session.closed = True
+        session.sock.close()
 
 
 class CommandReceiverFactory(LoopFactory):

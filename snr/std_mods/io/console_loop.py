@@ -3,13 +3,8 @@
 A console only turns the lines a user types into tasks; the command
 processor it adds to the node runs them on the node's thread and sends each
 reply to the line's `ConsoleSession`. Each console adds its own processor
-when it begins, so several consoles never run one command twice.
-
-Example::
-
-    class MyConsole(ConsoleLoop):
-        def loop(self) -> None:
-            self.submit(read_a_line(), self.session)
+when it begins, so several consoles never run one command twice. (How to
+write one: `ConsoleLoop`'s example.)
 """
 
 from __future__ import annotations

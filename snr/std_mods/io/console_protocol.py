@@ -24,7 +24,7 @@ import enum
 import json
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
-from typing import Any, List, Optional, Tuple
+from typing import Any, List, Optional, Tuple, Union
 
 from snr.prelude import ConfigError, WireFormatError
 from snr.prelude.errors import ConsoleConnectionError  # in the tree of every SNR error
@@ -37,6 +37,7 @@ __all__ = [
     "TOKEN_ENV_VAR",
     "ConsoleConnectionError",
     "ConsoleSession",
+    "LineReader",
     "Reply",
     "ReplyDecoder",
     "Status",
@@ -44,7 +45,6 @@ __all__ = [
     "is_loopback",
     "parse_address",
     "parse_values",
-    "split_command",
     "tokens_match",
 ]
 
@@ -203,17 +203,60 @@ class ReplyDecoder:
         )
 
 
-def split_command(line: str) -> Tuple[str, str]:
-    """The command word (lower case) and the rest of the line.
+class LineReader:
+    """Cuts the bytes a console sends into request lines, as the protocol says.
+
+    A line longer than `MAX_LINE_BYTES` is dropped up to its newline, and a
+    line that is not UTF-8 is not run: each gets an ``error`` reply instead.
 
     Example::
 
-        split_command("  Task event go 1 ")   # ('task', 'event go 1')
+        lines = LineReader()
+        lines.feed(b"help\\nstats\\n")
+        lines.next_request(), lines.next_request()   # ('help', 'stats')
     """
-    parts = line.strip().split(None, 1)
-    if not parts:
-        return "", ""
-    return parts[0].lower(), parts[1] if len(parts) > 1 else ""
+
+    def __init__(self) -> None:
+        self.inbox = bytearray()  # bytes read, not yet taken as lines
+        self._skipping = False  # dropping the rest of a line that was too long
+
+    def feed(self, data: bytes) -> None:
+        """Keep ``data`` until its lines are taken."""
+        self.inbox += data
+
+    def has_line(self) -> bool:
+        """True when a whole line waits to be taken."""
+        return b"\n" in self.inbox
+
+    def next_request(self, at_end: bool = False) -> Union[str, Reply, None]:
+        """The next line (stripped), the ``error`` reply refusing it, or None: no line yet.
+
+        ``at_end``: nothing more will come, so a last line without newline counts.
+        """
+        while True:
+            newline = self.inbox.find(b"\n")
+            if newline < 0 and at_end and self.inbox:
+                newline = len(self.inbox)
+            if newline < 0:
+                if len(self.inbox) <= MAX_LINE_BYTES:
+                    return None
+                self.inbox.clear()
+                skipping, self._skipping = self._skipping, True
+                return None if skipping else _LINE_TOO_LONG
+            raw = bytes(self.inbox[:newline])
+            del self.inbox[: newline + 1]
+            if self._skipping:  # the tail of a line already refused
+                self._skipping = False
+            elif len(raw) > MAX_LINE_BYTES:
+                return _LINE_TOO_LONG
+            else:
+                try:
+                    return raw.decode("utf-8").strip()
+                except UnicodeDecodeError:
+                    return Reply(Status.ERROR, "Ignored a line that is not UTF-8 text.")
+
+
+_LINE_TOO_LONG = Reply(Status.ERROR, f"Ignored a line longer than {MAX_LINE_BYTES} bytes.")
 
 
 _json_decoder = json.JSONDecoder()

@@ -7,18 +7,11 @@ ends (the handler is removed). A timer schedules a *tick* task every
 `TICK_S` while any watch is open, so a watch ends on time even when no page
 comes.
 
-``echo KEY [N]`` replies with the next pages of KEY, at most N (default
-`ECHO_DEFAULT_PAGES`, at most `ECHO_MAX_PAGES`): as soon as N have come, or
-`ECHO_BATCH_S` after the first one, or after `ECHO_WAIT_S` with none.
-Pages that come between two ``echo KEY`` of the same console (within
-`ECHO_KEEP_S`) wait for the next one, up to `ECHO_MAX_PAGES`; more are
-counted and the reply says how many were skipped. ``snr-console`` repeats
-``echo KEY`` until Ctrl-C, which streams the key.
-
-``hz KEY [WINDOW_S]`` counts the pages of KEY for WINDOW_S seconds (default
-`HZ_DEFAULT_WINDOW_S`) and replies with their rate and the spread of the
-time between them (mean, min, max, standard deviation), measured when the
-node stores each page, with constant memory however fast the key is.
+What each command replies, and when, is in its help (``COMMANDS`` in
+``command_table.py``). Pages that come between two ``echo KEY`` of the same
+console (within `ECHO_KEEP_S`) wait for the next one, up to `ECHO_MAX_PAGES`;
+more are counted and the reply says how many were skipped. ``hz`` keeps
+constant memory however fast the key is.
 
 Example::
 
@@ -160,7 +153,6 @@ class KeyWatches:
         )
         self._echoes: Dict[Tuple[str, DataKey], _Echo] = {}
         self._rates: List[_Rate] = []
-        self._watched: Dict[DataKey, int] = {}  # key -> open watches
         self._timer: Optional[threading.Timer] = None
         self._closed = False
 
@@ -172,7 +164,7 @@ class KeyWatches:
         if echo is None:
             self._check_room()
             echo = self._echoes[(console, key)] = _Echo(key, console)
-            self._watch(key)
+            self.owner.task_handlers[(TaskType.store_page, key)] = self.on_page
         elif echo.session is not None:  # a second request while one waits: answer that one
             self._answer_echo(echo)
         now = time.perf_counter()
@@ -187,7 +179,7 @@ class KeyWatches:
         """Count the pages of ``key`` for ``window_s``; the reply goes to ``session`` then."""
         self._check_room()
         self._rates.append(_Rate(key, session, window_s, time.perf_counter() + window_s))
-        self._watch(key)
+        self.owner.task_handlers[(TaskType.store_page, key)] = self.on_page
         self._arm()
 
     def _check_room(self) -> None:
@@ -248,19 +240,11 @@ class KeyWatches:
             self._timer = None
 
     # -- helpers ---------------------------------------------------------------------
-    def _watch(self, key: DataKey) -> None:
-        count = self._watched.get(key, 0)
-        self._watched[key] = count + 1
-        if count == 0:
-            self.owner.task_handlers[(TaskType.store_page, key)] = self.on_page
-
     def _unwatch(self, key: DataKey) -> None:
-        count = self._watched.get(key, 0) - 1
-        if count > 0:
-            self._watched[key] = count
-            return
-        self._watched.pop(key, None)
-        self.owner.task_handlers.pop((TaskType.store_page, key), None)
+        """Stop seeing the pages of ``key`` once no watch of it is left."""
+        keys = [rate.key for rate in self._rates] + [echo.key for echo in self._echoes.values()]
+        if key not in keys:
+            self.owner.task_handlers.pop((TaskType.store_page, key), None)
 
     def _arm(self) -> None:
         if self._timer is None and not self._closed:

@@ -1,17 +1,12 @@
 """`LocalConsoleFactory`: console commands typed in the node's own terminal (stdin).
 
-The same commands as `snr-console` (``docs/console.md``); the replies are
-printed on stdout. When stdin ends (Ctrl-D, or a file fed with ``<`` runs
-out) the console stops and the node keeps running.
-
-Example::
-
-    config = Config({"robot": [MotorFactory(), LocalConsoleFactory()]})
+The same commands as `snr-console` (``docs/console.md``); how it behaves is
+in `LocalConsole`, how to add it in `LocalConsoleFactory`. Stdin may also be
+a file fed with ``<``: its end stops the console, like Ctrl-D.
 """
 
 from __future__ import annotations
 
-import codecs
 import os
 import select
 import sys
@@ -21,7 +16,7 @@ from typing import IO, Any, Dict, Optional, Tuple
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, ComponentName
 from snr.std_mods.io.console_loop import ConsoleLoop
-from snr.std_mods.io.console_protocol import MAX_LINE_BYTES, ConsoleSession, Reply, Status
+from snr.std_mods.io.console_protocol import ConsoleSession, LineReader, Reply, Status
 
 __all__ = ["LocalConsole", "LocalConsoleFactory"]
 
@@ -74,8 +69,8 @@ class LocalConsole(ConsoleLoop):
         self.stream = stream
         self.session = _LocalSession(self, output)
         self._fd = _real_fd(stream)
-        self._decoder = codecs.getincrementaldecoder("utf-8")(errors="replace")
-        self._pending = ""
+        self._lines = LineReader()
+        self._at_end = False  # stdin has ended: what is left is the last line
         self._wake_pipe: Optional[Tuple[int, int]] = None  # lets halt() end a wait at once
 
     def begin(self) -> None:
@@ -104,38 +99,30 @@ class LocalConsole(ConsoleLoop):
 
     def loop(self) -> None:
         """Submit the next line typed, waiting at most a moment for it."""
-        line = self._next_line()
-        if line is None:
+        request = self._lines.next_request(self._at_end)
+        if request is None and self._at_end:
             self.info("stdin closed: the local console stops; the node keeps running.")
             self.set_terminate_flag("end of input")
-        elif line.strip():
-            self.submit(line.strip(), self.session)
+        elif request is None:
+            self._at_end = not self._read()
+        elif isinstance(request, Reply):
+            self.session.send(request)  # a line that cannot be run
+        elif request:
+            self.submit(request, self.session)
 
-    def _next_line(self) -> Optional[str]:
-        """A line, "" when none arrived yet, or None at the end of input."""
+    def _read(self) -> bool:
+        """Take what stdin has, waiting at most `_POLL_S` for it; False at its end."""
         if self._fd is None:  # an in-memory stream (tests) never blocks
-            line = self.stream.readline(MAX_LINE_BYTES)
-            return line if line else None
-        if "\n" not in self._pending:
-            # Wait until a line comes or halt() writes to the wake-up pipe.
+            data = self.stream.readline().encode("utf-8")
+        else:
+            # Wait until stdin has bytes or halt() writes to the wake-up pipe.
             # (select.select, unlike epoll, also accepts a plain file as stdin.)
             waiting = [self._fd] + ([self._wake_pipe[0]] if self._wake_pipe else [])
-            readable, _, _ = select.select(waiting, [], [], _POLL_S)
-            if self._fd not in readable:
-                return ""
-            chunk = os.read(self._fd, _READ_CHUNK)
-            if not chunk:
-                rest, self._pending = self._pending, ""
-                return rest or None
-            self._pending += self._decoder.decode(chunk)
-        line, newline, self._pending = self._pending.partition("\n")
-        if not newline:
-            self._pending = line
-            if len(line) > MAX_LINE_BYTES:  # not a command: binary data piped in?
-                self._pending = ""
-                self.session.send(Reply(Status.ERROR, "Ignored an over-long line."))
-            return ""
-        return line[:MAX_LINE_BYTES]
+            if self._fd not in select.select(waiting, [], [], _POLL_S)[0]:
+                return True
+            data = os.read(self._fd, _READ_CHUNK)
+        self._lines.feed(data)
+        return bool(data)
 
 
 def _real_fd(stream: IO[str]) -> Optional[int]:

@@ -179,15 +179,14 @@ class ConsoleClient(ABC):
 
     def _reply_timeout_s(self, line: str) -> float:
         """How long to wait for the reply to ``line``: ``hz KEY W`` replies after W s."""
-        words = line.split()
-        if len(words) == 3 and words[0].lower() == "hz":
-            try:
-                return max(self.timeout_s, float(words[2]) + self.timeout_s)
-            except ValueError:
-                pass
-        if words[:1] == ["hz"]:
-            return max(self.timeout_s, HZ_DEFAULT_WINDOW_S + self.timeout_s)
-        return self.timeout_s
+        words = line.lower().split()
+        if words[:1] != ["hz"]:
+            return self.timeout_s
+        try:
+            window_s = float(words[2]) if len(words) == 3 else HZ_DEFAULT_WINDOW_S
+        except ValueError:  # the node refuses it at once
+            window_s = 0.0
+        return self.timeout_s + max(0.0, window_s)
 
     def stream(self, line: str, output: IO[str], replies: Optional[int] = None) -> int:
         """Send ``line`` (an ``echo KEY``) again and again, printing each reply, until Ctrl-C.
