@@ -272,9 +272,8 @@ json_data = st.recursive(
 )
 
 
-# The usual robot page: a scalar, or a small flat list or dict (the fast path
-# that checks values instead of searching orjson's output), under ASCII names.
-# Mostly ASCII: one odd value sends the whole page down the slow path.
+# The usual robot page: a scalar, or a small flat list or dict, under ASCII
+# names. Mostly ASCII: one odd value sends the whole page to json.
 flat_scalars = (
     st.none()
     | st.booleans()
@@ -382,7 +381,7 @@ class TestBackendsAgree(BackendCase):
 
 
 class TestPageEncoder(BackendCase):
-    """The encoder that keeps the JSON around the data writes exactly what page_json writes."""
+    """A link's encoder writes exactly what page_json writes, and refuses what it refuses."""
 
     HEAD = {"v": 1, "kind": "page"}
     PAGES = [
@@ -414,13 +413,13 @@ class TestPageEncoder(BackendCase):
     def test_the_same_bytes_as_page_json(self) -> None:
         for _ in self.backends():
             encode = codec.PageEncoder(self.HEAD)
-            for page in self.PAGES * 2:  # the second time from what it learned
+            for page in self.PAGES:
                 with self.subTest(page=page):
                     self.assertEqual(encode(page), codec.page_json(page, self.HEAD))
 
     def test_lines_are_page_json_without_a_head(self) -> None:
         for _ in self.backends():
-            for page in self.PAGES * 2:
+            for page in self.PAGES:
                 with self.subTest(page=page):
                     expected = codec.page_json(page, to="to a recording or serial link")
                     self.assertEqual(codec.page_to_line(page), expected.decode("ascii"))
@@ -440,14 +439,6 @@ class TestPageEncoder(BackendCase):
                         encode(page)
                     self.assertEqual(str(got.exception), str(expected.exception))
 
-    def test_what_it_keeps_is_bounded(self) -> None:
-        encode = codec.PageEncoder(self.HEAD)
-        for number in range(3000):
-            page = Page(f"key{number}", number, "sender", 1.0)
-            self.assertEqual(encode(page), codec.page_json(page, self.HEAD))
-        self.assertLessEqual(len(encode._parts), 1024)
-        self.assertLessEqual(len(encode._std_parts), 1024)
-
     def test_the_same_bytes_for_every_key_and_origin_with_each_backend(self) -> None:
         for _ in self.backends():
             encode = codec.PageEncoder(self.HEAD)
@@ -460,7 +451,6 @@ class TestPageEncoder(BackendCase):
                         self.assertRaises(NotSerializableError, encode, page)
                         continue
                     self.assertEqual(encode(page), expected)
-                    self.assertEqual(encode(page), expected)  # from what it learned
 
 
 class TestChoosingTheBackend(BackendCase):

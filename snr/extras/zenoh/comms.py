@@ -513,8 +513,7 @@ class ZenohComms(Endpoint):
         self.bad_samples = 0
         self._sender_id = os.urandom(8)
         self._counts: Dict[DataKey, int] = {}
-        # The JSON around a page's data is made once per key and origin: the
-        # same bytes as page_json, at a third of its cost.
+        # page_json with the sample's head: the same bytes as a TCP frame's body.
         self._encode = PageEncoder(_PAGE_HEAD, to="over Zenoh")
         self._publishers: Dict[DataKey, Any] = {}
         self._declared: List[Any] = []
