@@ -20,15 +20,18 @@ from typing import (
     Callable,
     List,
     Mapping,
-    NoReturn,
     Optional,
     Sequence,
     Union,
 )
 
+from snr.core.checks.call_checks import (
+    check_cli_args,
+    check_runner_args,
+    no_sim_clock_across_processes,
+)
 from snr.core.config import Config
 from snr.core.node import Node
-from snr.core.sim_clock import clock_of
 from snr.prelude import (
     AbstractConfig,
     AbstractFactory,
@@ -39,7 +42,6 @@ from snr.prelude import (
     Role,
     SNRError,
 )
-from snr.prelude.error_text import wrong_call
 
 if TYPE_CHECKING:
     import argparse
@@ -84,18 +86,14 @@ def _as_config(components_or_config: _System) -> AbstractConfig:
     return Config(components_or_config)
 
 
-def _exit_with(error: ConfigError, exit_on_error: bool) -> NoReturn:
-    """Raise ``error``, or (at the top of a program) print it and exit with status 1."""
-    if not exit_on_error:
-        raise error
-    report_error(error)
-    raise SystemExit(1)
-
-
-def _config_or_exit(components_or_config: _System, exit_on_error: bool) -> AbstractConfig:
-    """The config; a wrong one is reported without a traceback (the runner is top level)."""
+def _config_or_exit(
+    check: Callable[[], None], config: _System, exit_on_error: bool
+) -> AbstractConfig:
+    """The config, after ``check()`` of the call; a wrong one is reported without a
+    traceback (a runner is the top of a program) unless ``exit_on_error`` is False."""
     try:
-        return _as_config(components_or_config)
+        check()
+        return _as_config(config)
     except ConfigError as error:
         if not exit_on_error:
             raise
@@ -135,22 +133,10 @@ class SynchronousRunner(AbstractRunner):
         announce_interrupt: bool = True,
         on_node: Optional[Callable[[Node], None]] = None,
     ) -> None:
-        given: object = config  # typed, but a student may pass anything
-        given_role: object = role
-        if not isinstance(given_role, str) and isinstance(given, str):
-            _exit_with(
-                ConfigError(
-                    wrong_call(
-                        "SynchronousRunner",
-                        SynchronousRunner,
-                        (role, config),
-                        "the role and the config are swapped: the role comes first.",
-                    )
-                ),
-                exit_on_error,
-            )
         self.role = role
-        self.config = _config_or_exit(config, exit_on_error)
+        self.config = _config_or_exit(
+            lambda: check_runner_args(SynchronousRunner, role, config), config, exit_on_error
+        )
         self.exit_on_error = exit_on_error
         self.announce_interrupt = announce_interrupt
         self.on_node = on_node
@@ -353,12 +339,7 @@ class MultiProcRunner(AbstractMultiRunner):
         join_timeout_s: float = 5.0,
     ) -> None:
         self.config = _as_config(config)
-        if clock_of(self.config) is not None:
-            raise ConfigError(
-                "MultiProcRunner runs each node in a process of its own, but a SimClock "
-                "keeps the time of one process. Run the nodes in one process (each "
-                "node's loop() on a thread of its own) or build the Config without clock=."
-            )
+        no_sim_clock_across_processes(self.config)
         known = self.config.roles()
         for role in roles:
             if role not in known:
@@ -486,22 +467,11 @@ class CliRunner(AbstractRunner):
         components_or_config: _System,
         argv: Optional[Sequence[str]] = None,
     ) -> None:
-        if isinstance(components_or_config, str):
-            _exit_with(
-                ConfigError(
-                    wrong_call(
-                        "CliRunner",
-                        CliRunner,
-                        (components_or_config, argv),
-                        f"the first argument is the role {components_or_config!r}, but "
-                        "CliRunner takes the components (or a Config) and reads the role "
-                        "from the command line: `python robot.py "
-                        f"{components_or_config}`.",
-                    )
-                ),
-                exit_on_error=True,
-            )
-        self.config = _config_or_exit(components_or_config, exit_on_error=True)
+        self.config = _config_or_exit(
+            lambda: check_cli_args(CliRunner, components_or_config, argv),
+            components_or_config,
+            exit_on_error=True,
+        )
         self.argv = list(sys.argv if argv is None else argv)
 
     def parse(self) -> argparse.Namespace:

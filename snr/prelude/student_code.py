@@ -4,7 +4,7 @@ Every SNR message names the student's file and line. This module is the one
 place that works them out: from a class or function (`describe_class`,
 `describe_callable`, `def_block`), from a traceback (`student_frames`,
 `trim_runtime_frames`), from the call in progress (`caller_location`,
-`caller_block`, `call_site`) and from another thread (`running_line`).
+`caller_block`) and from another thread (`running_line`).
 Frames of SNR's runtime (``snr/core``, ``snr/prelude``) are plumbing the
 student did not write, so they are skipped.
 
@@ -30,7 +30,6 @@ from types import CodeType, FrameType, TracebackType
 from typing import Any, Optional
 
 __all__ = [
-    "call_site",
     "caller_block",
     "caller_location",
     "code_name",
@@ -50,7 +49,6 @@ __all__ = [
 ]
 
 _SNR_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-_SNR_PACKAGE = _SNR_DIR + os.sep
 _RUNTIME_DIRS = tuple(os.path.join(_SNR_DIR, sub) + os.sep for sub in ("core", "prelude"))
 
 
@@ -203,23 +201,6 @@ def caller_location(skip: int = 1) -> str:
     """
     frame = outside_runtime(sys._getframe(skip))
     return "<unknown place>" if frame is None else frame_location(frame)
-
-
-def call_site() -> str:
-    """``"robot.py:12 in Sonar.loop"``: the nearest caller outside the whole ``snr`` package.
-
-    Unlike `caller_location`, SNR's ready-made components (``snr/std_mods``,
-    ``snr/utils``) are skipped too: a wrong call to one of their constructors
-    is the student's call.
-
-    Example::
-
-        raise ConfigError(f"... at {call_site()} ...")
-    """
-    frame = sys._getframe(1)
-    while frame.f_back is not None and frame.f_code.co_filename.startswith(_SNR_PACKAGE):
-        frame = frame.f_back
-    return frame_location(frame)
 
 
 def source_block(filename: str, line: int, name: str, context: str = "") -> str:
