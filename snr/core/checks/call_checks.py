@@ -22,7 +22,7 @@ import sys
 from typing import Any, Iterable, List, Mapping
 
 from snr.core.sim_clock import SimClock
-from snr.prelude import AbstractConfig, AbstractFactory, ConfigError, Mode
+from snr.prelude import AbstractConfig, AbstractFactory, ConfigError, HandlerError, Mode, Task
 from snr.prelude.error_text import short_repr
 from snr.prelude.student_code import frame_location
 
@@ -32,6 +32,7 @@ __all__ = [
     "check_cli_args",
     "check_config_args",
     "check_runner_args",
+    "check_schedule_args",
     "no_sim_clock_across_processes",
     "page_as_data",
     "plain_signature",
@@ -277,3 +278,26 @@ def no_sim_clock_across_processes(config: AbstractConfig) -> None:
             "keeps the time of one process. Run the nodes in one process (each "
             "node's loop() on a thread of its own) or build the Config without clock=."
         )
+
+
+def check_schedule_args(tasks: Any) -> None:
+    """Raise a `HandlerError` unless ``tasks`` (given to ``schedule()``) is a list of Tasks.
+
+    Example::
+
+        check_schedule_args([tasks.event("a")])   # fine
+        check_schedule_args("go")   # HandlerError: Cannot schedule 'go' (str): ...
+    """
+    if not isinstance(tasks, list):
+        raise HandlerError(
+            f"Cannot schedule {tasks!r} ({type(tasks).__name__}): schedule() takes a Task, "
+            "a list of Tasks or None. Build tasks with snr.tasks, e.g. "
+            "tasks.event('name')."
+        )
+    for task in tasks:
+        if not isinstance(task, Task):
+            raise HandlerError(
+                f"Cannot schedule {task!r} ({type(task).__name__}): only Task "
+                "objects can be queued. Build tasks with snr.tasks, e.g. "
+                "tasks.event('name') or self.store_data_task(key, data)."
+            )
