@@ -22,15 +22,25 @@ import sys
 from typing import Any, Iterable, List, Mapping
 
 from snr.core.sim_clock import SimClock
-from snr.prelude import AbstractConfig, AbstractFactory, ConfigError, HandlerError, Mode, Task
+from snr.prelude import (
+    AbstractConfig,
+    AbstractFactory,
+    ComponentError,
+    ConfigError,
+    HandlerError,
+    Mode,
+    Task,
+)
 from snr.prelude.error_text import short_repr
-from snr.prelude.student_code import frame_location
+from snr.prelude.student_code import describe_class, frame_location
 
 __all__ = [
     "bad_data_key",
+    "bad_reload_target",
     "call_site",
     "check_cli_args",
     "check_config_args",
+    "check_factory_class",
     "check_runner_args",
     "check_schedule_args",
     "no_sim_clock_across_processes",
@@ -301,3 +311,35 @@ def check_schedule_args(tasks: Any) -> None:
                 "objects can be queued. Build tasks with snr.tasks, e.g. "
                 "tasks.event('name') or self.store_data_task(key, data)."
             )
+
+
+def check_factory_class(factory_class: type, base_get: Any) -> None:
+    """Raise a `ComponentError` when a factory class has no ``get()`` of its own.
+
+    ``base_get`` is `Factory.get`, which every factory must replace.
+
+    Example::
+
+        check_factory_class(DoublerFactory, Factory.get)   # fine: it defines get()
+    """
+    if getattr(factory_class, "get", None) is base_get:
+        raise ComponentError(
+            f"{describe_class(factory_class)} has no get() method. A factory must build "
+            "its component: add `def get(self, parent: AbstractNode) -> MyEndpoint:` "
+            "returning `MyEndpoint(self, parent, ...)`."
+        )
+
+
+def bad_reload_target(owner: type, target: Any) -> str:
+    """The message for a factory that names something other than a module to reload.
+
+    Example::
+
+        bad_reload_target(DoublerFactory, 42)
+        # "DoublerFactory (robot.py:3) passed 42 as a module to reload. Pass the ..."
+    """
+    return (
+        f"{describe_class(owner)} passed {target!r} as a module to reload. Pass the "
+        "module object itself: `import my_endpoint` then "
+        "`super().__init__(my_endpoint)` (or a list of modules, or nothing)."
+    )
