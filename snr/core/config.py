@@ -4,18 +4,16 @@ from __future__ import annotations
 
 from typing import Dict, List, Mapping, Optional, Sequence
 
-from snr.core.checks.call_checks import check_config_args
+from snr.core.checks.call_checks import check_config_args, check_role
 from snr.core.checks.profiler import Profiler
 from snr.core.sim_clock import SimClock
 from snr.prelude import (
     AbstractConfig,
     AbstractFactory,
     AbstractProfiler,
-    ConfigError,
     Mode,
     Role,
 )
-from snr.prelude.error_text import did_you_mean
 
 __all__ = ["Config"]
 
@@ -68,17 +66,8 @@ class Config(AbstractConfig):
             ConfigError: the role is unknown (the message lists the known ones
                 and the closest match) or has no factories.
         """
-        if role not in self.factories:
-            known = ", ".join(repr(r) for r in self.factories) or "(none)"
-            hint = did_you_mean(role, self.factories)
-            raise ConfigError(f"Unknown role {role!r}. This config has roles: {known}.{hint}")
-        facs = self.factories[role]
-        if not facs:
-            raise ConfigError(
-                f"Role {role!r} has no components: its factory list is empty. Add at "
-                "least one factory, e.g. snr.TimeoutLoopFactory(seconds=5)."
-            )
-        return list(facs)
+        check_role(role, self.factories)
+        return list(self.factories[role])
 
     def get_profiler(self) -> Optional[AbstractProfiler]:
         """A new `Profiler` when profiling is on, else None."""

@@ -31,7 +31,7 @@ from snr.prelude import (
     Mode,
     Task,
 )
-from snr.prelude.error_text import short_repr
+from snr.prelude.error_text import did_you_mean, short_repr
 from snr.prelude.student_code import describe_class, frame_location
 
 __all__ = [
@@ -41,6 +41,7 @@ __all__ = [
     "check_cli_args",
     "check_config_args",
     "check_factory_class",
+    "check_role",
     "check_runner_args",
     "check_schedule_args",
     "no_sim_clock_across_processes",
@@ -231,6 +232,25 @@ def check_config_args(config_class: Any, factories: Any, mode: Any, clock: Any) 
         raise ConfigError(
             f"Config(clock=...) got {clock!r}; it takes a snr.SimClock (simulated "
             "time) or None (the wall clock)."
+        )
+
+
+def check_role(role: Any, factories: Mapping[Any, Any]) -> None:
+    """Raise a `ConfigError` unless ``role`` is one of ``factories`` with at least one factory.
+
+    Example::
+
+        check_role("urv", {"urov": [...]})
+        # ConfigError: Unknown role 'urv'. This config has roles: 'urov'. Did you mean 'urov'?
+    """
+    if role not in factories:
+        known = ", ".join(repr(r) for r in factories) or "(none)"
+        hint = did_you_mean(role, factories)
+        raise ConfigError(f"Unknown role {role!r}. This config has roles: {known}.{hint}")
+    if not factories[role]:
+        raise ConfigError(
+            f"Role {role!r} has no components: its factory list is empty. Add at "
+            "least one factory, e.g. snr.TimeoutLoopFactory(seconds=5)."
         )
 
 
