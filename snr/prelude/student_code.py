@@ -179,8 +179,14 @@ def frame_location(frame: FrameType, line: Optional[int] = None) -> str:
 
         frame_location(sys._getframe())
     """
+    at = frame.f_lineno if line is None else line
+    return f"{short_path(frame.f_code.co_filename)}:{at} in {_frame_name(frame)}"
+
+
+def _frame_name(frame: FrameType) -> str:
+    """``"MyFactory.get"``: the qualified name of the function a frame runs."""
     code = frame.f_code
-    name = getattr(code, "co_qualname", None)  # Python 3.11+
+    name: Optional[str] = getattr(code, "co_qualname", None)  # Python 3.11+
     if name is None:
         # Older Pythons know only the function's name: add the class of
         # `self` (or `cls`) when the frame has one, as co_qualname would.
@@ -189,7 +195,7 @@ def frame_location(frame: FrameType, line: Optional[int] = None) -> str:
         name = code.co_name
         if owner is not None and code.co_name in vars(owner_class):
             name = f"{owner_class.__qualname__}.{code.co_name}"
-    return f"{short_path(code.co_filename)}:{frame.f_lineno if line is None else line} in {name}"
+    return name
 
 
 def caller_location(skip: int = 1) -> str:
@@ -254,9 +260,7 @@ def caller_block(skip: int = 1) -> str:
     frame = outside_runtime(sys._getframe(skip))
     if frame is None:
         return ""
-    code = frame.f_code
-    name = code_name(code, frame_location(frame).rsplit(" in ", 1)[-1])
-    return source_block(code.co_filename, frame.f_lineno, name)
+    return source_block(frame.f_code.co_filename, frame.f_lineno, _frame_name(frame))
 
 
 def running_line(thread_id: Optional[int]) -> str:
