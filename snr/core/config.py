@@ -4,17 +4,16 @@ from __future__ import annotations
 
 from typing import Dict, List, Mapping, Optional, Sequence
 
+from snr.core.checks.call_checks import check_config_args, check_role
 from snr.core.checks.profiler import Profiler
 from snr.core.sim_clock import SimClock
 from snr.prelude import (
     AbstractConfig,
     AbstractFactory,
     AbstractProfiler,
-    ConfigError,
     Mode,
     Role,
 )
-from snr.prelude.error_text import did_you_mean, wrong_call
 
 __all__ = ["Config"]
 
@@ -48,48 +47,7 @@ class Config(AbstractConfig):
     ) -> None:
         if factories is None:
             factories = {}
-        given: object = factories  # typed as a dict, but a student may pass anything
-        if isinstance(given, (list, tuple)):
-            raise ConfigError(
-                wrong_call(
-                    "Config",
-                    Config,
-                    (factories,),
-                    "a Config needs a dict from each role to its list of factories, not "
-                    'the list alone: Config({"robot": [...]}).',
-                )
-            )
-        if not isinstance(factories, Mapping):
-            raise ConfigError(
-                f"Config(factories=...) got {type(factories).__name__}; it needs a dict "
-                'from role to a list of factories, e.g. {"robot": [MyFactory()]}.'
-            )
-        if not isinstance(mode, Mode):
-            raise ConfigError(
-                f"Config(mode=...) got {mode!r}; use Mode.DEBUG, Mode.TEST or Mode.DEPLOYED."
-            )
-        for role, facs in factories.items():
-            if not isinstance(facs, (list, tuple)):
-                raise ConfigError(
-                    f"Role {role!r} maps to {type(facs).__name__}, not a list of "
-                    f"factories. Write {role!r}: [MyFactory(), ...]."
-                )
-            for fac in list[object](facs):
-                if not isinstance(fac, AbstractFactory):
-                    hint = (
-                        " It looks like a class: add () to make a factory object."
-                        if isinstance(fac, type)
-                        else ""
-                    )
-                    raise ConfigError(
-                        f"Role {role!r} lists {fac!r}, which is not a factory (an "
-                        f"EndpointFactory or LoopFactory object).{hint}"
-                    )
-        if clock is not None and not isinstance(clock, SimClock):
-            raise ConfigError(
-                f"Config(clock=...) got {clock!r}; it takes a snr.SimClock (simulated "
-                "time) or None (the wall clock)."
-            )
+        check_config_args(Config, factories, mode, clock)
         self.factories: Dict[Role, List[AbstractFactory]] = {
             role: list(f) for role, f in factories.items()
         }
@@ -108,17 +66,8 @@ class Config(AbstractConfig):
             ConfigError: the role is unknown (the message lists the known ones
                 and the closest match) or has no factories.
         """
-        if role not in self.factories:
-            known = ", ".join(repr(r) for r in self.factories) or "(none)"
-            hint = did_you_mean(role, self.factories)
-            raise ConfigError(f"Unknown role {role!r}. This config has roles: {known}.{hint}")
-        facs = self.factories[role]
-        if not facs:
-            raise ConfigError(
-                f"Role {role!r} has no components: its factory list is empty. Add at "
-                "least one factory, e.g. snr.TimeoutLoopFactory(seconds=5)."
-            )
-        return list(facs)
+        check_role(role, self.factories)
+        return list(self.factories[role])
 
     def get_profiler(self) -> Optional[AbstractProfiler]:
         """A new `Profiler` when profiling is on, else None."""

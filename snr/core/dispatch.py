@@ -29,22 +29,24 @@ from typing import (
     List,
     Mapping,
     Optional,
-    Set,
     Tuple,
 )
 
-from snr.core.checks.handler_checks import check_burst_handlers, check_handler, check_task_id
+from snr.core.checks.handler_checks import (
+    check_burst_handlers,
+    check_entry,
+    check_handler,
+    check_task_id,
+)
 from snr.prelude import (
     AbstractComponent,
     AbstractProfiler,
     BurstHandler,
-    ComponentError,
     StatsCell,
     TaskHandler,
     TaskId,
     TaskType,
 )
-from snr.prelude.student_code import caller_block
 
 __all__ = [
     "BurstEntry",
@@ -64,7 +66,6 @@ BurstEntry = Tuple[BurstHandler, AbstractComponent, StatsCell]
 """A burst handler that may serve a run of ``store_page`` tasks under one key,
 its component, and the profiler cell of the same component's task handler."""
 
-SpecificId = Tuple[TaskType, str]
 _STORE_PAGE = TaskType.store_page
 
 
@@ -93,29 +94,15 @@ class HandlerMap(Dict[TaskId, TaskHandler]):
         self._on_change = on_change
         if items:
             for key, handler in items.items():
-                self._check(key, handler)
+                check_entry(key, handler, owner_class)
                 super().__setitem__(key, handler)
-
-    def _check(self, key: Any, handler: Any) -> None:
-        try:
-            check_task_id(key, self._owner_class)
-            if not callable(handler):
-                check_handler(handler, key, self._owner_class)
-        except ComponentError as error:
-            # The mistake is in the line that registered it: point there, not
-            # only at the class (found only now, while explaining).
-            where = caller_block()
-            if not where:
-                raise
-            raise ComponentError(f"{error}\n{where}") from None
-        check_handler(handler, key, self._owner_class)  # names the def to fix itself
 
     def _changed(self) -> None:
         if self._on_change is not None:
             self._on_change()
 
     def __setitem__(self, key: TaskId, handler: TaskHandler) -> None:
-        self._check(key, handler)
+        check_entry(key, handler, self._owner_class)
         super().__setitem__(key, handler)
         self._changed()
 
@@ -167,7 +154,6 @@ class HandlerTable:
         #: (`AbstractComponent.burst_handlers`). Refilled in place, as ``table``.
         self.bursts: Dict[Hashable, BurstEntry] = {}
         self.profiler = profiler
-        self._specific_by_type: Dict[TaskType, Set[SpecificId]] = {}
 
     def lookup(self, task_type: TaskType, name: str) -> List[Entry]:
         """The handlers to run for a task, in component order (maybe empty)."""
@@ -179,30 +165,39 @@ class HandlerTable:
     def rebuild(self, components: Iterable[AbstractComponent]) -> None:
         """Recompute the whole table from the components, in order.
 
-        The dict is refilled in place, so a caller holding ``table`` sees the
+        The dicts are refilled in place, so a caller holding ``table`` sees the
         new contents; lists are new, so a pass iterating an old list is safe.
         """
         self.table.clear()
-        self._specific_by_type = {}
-        ordered = list(components)
-        for component in ordered:
-            for key in component.task_handlers:
-                if isinstance(key, tuple):
-                    self._specific_by_type.setdefault(key[0], set()).add(key)
-        for component in ordered:
-            self._extend(component, create_missing=False)
         self.bursts.clear()
-        self._find_bursts(list(self.table))
+        for component in components:
+            self.add(component)
 
     def add(self, component: AbstractComponent) -> None:
-        """Extend the table for a component added after all the others."""
-        self._extend(component, create_missing=True)
+        """Extend the table for a component added after all the others.
+
+        Never raises for a student's mistake: it runs between two tasks, where
+        nothing could report it. `check_burst_handlers` refuses those earlier.
+        """
+        handlers = component.task_handlers
+        table = self.table
+        for key in handlers:
+            if isinstance(key, tuple) and key not in table:
+                # A new specific id first inherits every earlier component's
+                # type-level handler, exactly as the two-phase match would.
+                table[key] = list(table.get(key[0], []))
+        for key, handler in handlers.items():
+            entry: Entry = (handler, key, component, self._cell(handler, key))
+            table.setdefault(key, []).append(entry)
+            if isinstance(key, TaskType):
+                # Fallback: this type-level handler also serves every specific
+                # id of its type that this component did not register itself.
+                for specific in [k for k in table if isinstance(k, tuple) and k[0] is key]:
+                    if specific not in handlers:
+                        table[specific].append(entry)
         # Only the ids this component handles can have changed (a type-level
         # store_page handler joins every specific id of that type).
-        changed: Iterable[Hashable] = component.task_handlers
-        if _STORE_PAGE in component.task_handlers:
-            changed = self._specific_by_type.get(_STORE_PAGE, ())
-        self._find_bursts(changed)
+        self._find_bursts(table if _STORE_PAGE in handlers else handlers)
 
     def _find_bursts(self, keys: Iterable[Hashable]) -> None:
         """Say again, for each of ``keys``, whether a burst handler serves it."""
@@ -218,28 +213,6 @@ class HandlerTable:
             burst = component.burst_handlers.get(matched)  # None for a type-level match
             if burst is not None:
                 bursts[key] = (burst, component, cell)
-
-    def _extend(self, component: AbstractComponent, create_missing: bool) -> None:
-        # Never raises for a student's mistake: it runs between two tasks, where
-        # nothing could report it. `check_burst_handlers` refuses those earlier.
-        handlers = component.task_handlers
-        table = self.table
-        if create_missing:
-            for key in handlers:
-                if isinstance(key, tuple) and key not in table:
-                    # A new specific id first inherits every earlier component's
-                    # type-level handler, exactly as the two-phase match would.
-                    table[key] = list(table.get(key[0], []))
-                    self._specific_by_type.setdefault(key[0], set()).add(key)
-        for key, handler in handlers.items():
-            entry: Entry = (handler, key, component, self._cell(handler, key))
-            table.setdefault(key, []).append(entry)
-            if isinstance(key, TaskType):
-                # Fallback: this type-level handler also serves every specific
-                # id of its type that this component did not register itself.
-                for specific in self._specific_by_type.get(key, ()):
-                    if specific not in handlers:
-                        table.setdefault(specific, []).append(entry)
 
     def _cell(self, handler: TaskHandler, key: TaskId) -> StatsCell:
         if self.profiler is None:

@@ -14,8 +14,8 @@ import sys
 from types import ModuleType
 from typing import Any, Dict, List, Optional, Sequence, Union
 
+from snr.core.checks.call_checks import bad_reload_target, check_factory_class
 from snr.prelude import AbstractComponent, AbstractFactory, AbstractNode, ComponentError
-from snr.prelude.student_code import describe_class
 
 __all__ = ["EndpointFactory", "Factory", "LoopFactory", "ReloadTargets"]
 
@@ -28,11 +28,7 @@ def _as_module(target: Union[ModuleType, str], owner: type) -> ModuleType:
         return target
     if isinstance(target, str):
         return sys.modules.get(target) or importlib.import_module(target)
-    raise ComponentError(
-        f"{describe_class(owner)} passed {target!r} as a module to reload. Pass the "
-        "module object itself: `import my_endpoint` then "
-        "`super().__init__(my_endpoint)` (or a list of modules, or nothing)."
-    )
+    raise ComponentError(bad_reload_target(owner, target))
 
 
 class Factory(AbstractFactory):
@@ -49,19 +45,10 @@ class Factory(AbstractFactory):
     """
 
     def __init__(self, reload_targets: ReloadTargets = None) -> None:
-        if type(self).get is Factory.get:
-            raise ComponentError(
-                f"{describe_class(type(self))} has no get() method. A factory must build "
-                "its component: add `def get(self, parent: AbstractNode) -> MyEndpoint:` "
-                "returning `MyEndpoint(self, parent, ...)`."
-            )
-        if reload_targets is None:
-            targets: List[Union[ModuleType, str]] = []
-        elif isinstance(reload_targets, (ModuleType, str)):
-            targets = [reload_targets]
-        else:
-            targets = list(reload_targets)
-        self.reload_targets = [_as_module(t, type(self)) for t in targets]
+        check_factory_class(type(self), Factory.get)
+        if isinstance(reload_targets, (ModuleType, str)):
+            reload_targets = [reload_targets]
+        self.reload_targets = [_as_module(t, type(self)) for t in reload_targets or []]
 
     def get(self, parent: AbstractNode) -> Optional[AbstractComponent]:
         """Build the component for ``parent`` (override this), or return None."""

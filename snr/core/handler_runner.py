@@ -190,7 +190,7 @@ class HandlerRunner:
                         self.report_slow(handler, task, took)
                 if result is None:
                     continue
-                if result.__class__ is Task:
+                if isinstance(result, Task):
                     (urgent if result.priority else normal).append(result)
                 else:
                     self.queue_all(self.check_result(result, handler, task))
@@ -232,13 +232,8 @@ class HandlerRunner:
             self.handler_failed(named, first, component, error, run_size=len(run))
             return
         if self.timed:
-            took = time.perf_counter() - started
-            cell[0] += len(run)
-            cell[1] += took
-            if took > self.slow_handler_s:
-                self.report_slow(named, first, took)
-        if result is not None:
-            self.queue_all(self.check_result(result, named, first))
+            self._count(named, first, cell, time.perf_counter() - started, len(run))
+        self.queue_all(self.check_result(result, named, first))
 
     def run(
         self,
@@ -255,13 +250,19 @@ class HandlerRunner:
         except Exception as error:
             self.handler_failed(handler, task, component, error)
             return None
-        took = time.perf_counter() - started
-        if cell is not None:
-            cell[0] += 1
-            cell[1] += took
+        self._count(
+            handler, task, [0, 0.0] if cell is None else cell, time.perf_counter() - started
+        )
+        return self.check_result(result, handler, task)
+
+    def _count(
+        self, handler: TaskHandler, task: Task, cell: StatsCell, took: float, calls: int = 1
+    ) -> None:
+        """Add a call that took ``took`` s to ``cell``; report it if it was slow."""
+        cell[0] += calls
+        cell[1] += took
         if took > self.slow_handler_s:
             self.report_slow(handler, task, took)
-        return self.check_result(result, handler, task)
 
     def store_first(self, task: Task) -> Optional[Task]:
         """For a ``store_page`` task: store its page now, queue and return what follows.
@@ -282,7 +283,7 @@ class HandlerRunner:
         except Exception as error:
             self.handler_failed(store_page, task, getattr(store_page, "__self__", None), error)
             return None
-        if follow_up.__class__ is not Task:
+        if not isinstance(follow_up, Task):
             return None
         self.queue.normal.append(follow_up)
         return follow_up

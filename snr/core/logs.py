@@ -13,7 +13,7 @@ import logging
 import sys
 import threading
 import time
-from typing import Any, Callable, Deque, Dict, Hashable, List, Optional, Tuple
+from typing import Any, Callable, Deque, Dict, Hashable, List, Optional
 
 from snr.prelude import Mode
 
@@ -124,17 +124,13 @@ class RepeatFilter:
         self.first = first
         self.every_s = every_s
         self._clock = clock
-        # key -> [times seen, not yet summarised, start of this summary period, level]
+        # key -> [times seen, not yet summarised, start of this summary period, level, what]
         self._seen: Dict[Hashable, List[Any]] = {}
-        self._what: Dict[Hashable, str] = {}
 
     def report(self, key: Hashable, what: str, level: int, msg: str, *args: Any) -> None:
         """Log ``msg % args`` in full, or count it under ``key`` (``what`` names it)."""
         now = self._clock()
-        seen = self._seen.get(key)
-        if seen is None:
-            seen = self._seen[key] = [0, 0, now, level]
-            self._what[key] = what
+        seen = self._seen.setdefault(key, [0, 0, now, level, what])
         seen[0] += 1
         if seen[0] <= self.first:
             if seen[0] == self.first:
@@ -146,31 +142,26 @@ class RepeatFilter:
             return
         seen[1] += 1
         if now - seen[2] >= self.every_s:
-            self._summarise(key, seen, now)
+            self._summarise(seen, now)
 
-    def _summarise(self, key: Hashable, seen: List[Any], now: float) -> None:
+    def _summarise(self, seen: List[Any], now: float) -> None:
+        count, unsaid, since, level, what = seen
         self.log.log(
-            seen[3],
-            "%s: %d more times in the last %.1f s (%d in all).",
-            self._what[key],
-            seen[1],
-            now - seen[2],
-            seen[0],
+            level, f"{what}: {unsaid} more times in the last {now - since:.1f} s ({count} in all)."
         )
         seen[1] = 0
         seen[2] = now
 
     def count(self, key: Hashable) -> int:
         """How many times ``key`` was reported in all."""
-        seen = self._seen.get(key)
-        return 0 if seen is None else int(seen[0])
+        return int(self._seen.get(key, [0])[0])
 
     def flush(self) -> None:
         """Log the summary of every group with uncounted repeats (e.g. at shutdown)."""
         now = self._clock()
-        for key, seen in self._seen.items():
+        for seen in self._seen.values():
             if seen[1]:
-                self._summarise(key, seen, now)
+                self._summarise(seen, now)
 
 
 class RateLimitedLog:
@@ -216,43 +207,33 @@ class RateLimitedLog:
             if full:
                 shown.append(now)
             else:
-                unsaid = self._unsaid.setdefault(what, [0, now, level])
-                unsaid[0] += 1
-            due = self._take_due(now, self.window_s)
-        self._say(due, now)
+                self._unsaid.setdefault(what, [0, now, level])[0] += 1
+        self._say_counts(self.window_s)
         if full:
             self.log.log(level, msg, *args)
 
     def tick(self) -> None:
         """Log the counts whose window has passed (any thread)."""
-        with self._lock:
-            now = self._clock()
-            due = self._take_due(now, self.window_s)
-        self._say(due, now)
+        self._say_counts(self.window_s)
 
     def flush(self) -> None:
         """Log every count not yet said (e.g. when the component stops)."""
+        self._say_counts(0.0)
+
+    def _say_counts(self, age_s: float) -> None:
+        """Log, and forget, every count at least ``age_s`` old."""
         with self._lock:
             now = self._clock()
-            due = self._take_due(now, 0.0)
-        self._say(due, now)
-
-    def _take_due(self, now: float, age_s: float) -> List[Tuple[str, List[Any]]]:
-        due = [(what, unsaid) for what, unsaid in self._unsaid.items() if now - unsaid[1] >= age_s]
-        for what, _ in due:
-            del self._unsaid[what]
-        return due
-
-    def _say(self, due: List[Tuple[str, List[Any]]], now: float) -> None:
+            due = [
+                (what, unsaid) for what, unsaid in self._unsaid.items() if now - unsaid[1] >= age_s
+            ]
+            for what, _ in due:
+                del self._unsaid[what]
         for what, (count, since, level) in due:
             self.log.log(
                 level,
-                "%s: %d more in the last %.1f s, not logged one by one (over %d in %g s).",
-                what,
-                count,
-                now - since,
-                self.burst,
-                self.window_s,
+                f"{what}: {count} more in the last {now - since:.1f} s, not logged one by one "
+                f"(over {self.burst} in {self.window_s:g} s).",
             )
 
 
@@ -315,14 +296,8 @@ class LossReport:
             unsaid, self._unsaid = self._unsaid, 0
             episode, since = self._episode, now - self._episode_start
         self.log.warning(
-            "%s %d %s (%d in the last %.1f s, %d in all): %s.",
-            self.verb,
-            unsaid,
-            self.what,
-            episode,
-            since,
-            self.total,
-            self.why,
+            f"{self.verb} {unsaid} {self.what} ({episode} in the last {since:.1f} s, "
+            f"{self.total} in all): {self.why}."
         )
 
     def recovered(self, quiet_s: float = 0.0) -> bool:
@@ -339,7 +314,7 @@ class LossReport:
             episode, since = self._episode, now - self._episode_start
             self._episode, self._unsaid, self._episode_start = 0, 0, None
         self.log.warning(
-            "Recovered: %d %s %s over %.1f s.", episode, self.what, self.verb.lower(), since
+            f"Recovered: {episode} {self.what} {self.verb.lower()} over {since:.1f} s."
         )
         return True
 
@@ -364,14 +339,8 @@ class LossReport:
         if not unsaid:  # every drop is in the log already
             return False
         self.log.warning(
-            "%s %d more %s before %s (%d over %.1f s, %d in all).",
-            self.verb,
-            unsaid,
-            self.what,
-            how,
-            episode,
-            since,
-            self.total,
+            f"{self.verb} {unsaid} more {self.what} before {how} ({episode} over {since:.1f} s, "
+            f"{self.total} in all)."
         )
         return True
 

@@ -20,15 +20,18 @@ from typing import (
     Callable,
     List,
     Mapping,
-    NoReturn,
     Optional,
     Sequence,
     Union,
 )
 
+from snr.core.checks.call_checks import (
+    check_cli_args,
+    check_runner_args,
+    no_sim_clock_across_processes,
+)
 from snr.core.config import Config
 from snr.core.node import Node
-from snr.core.sim_clock import clock_of
 from snr.prelude import (
     AbstractConfig,
     AbstractFactory,
@@ -39,7 +42,6 @@ from snr.prelude import (
     Role,
     SNRError,
 )
-from snr.prelude.error_text import wrong_call
 
 if TYPE_CHECKING:
     import argparse
@@ -84,18 +86,14 @@ def _as_config(components_or_config: _System) -> AbstractConfig:
     return Config(components_or_config)
 
 
-def _exit_with(error: ConfigError, exit_on_error: bool) -> NoReturn:
-    """Raise ``error``, or (at the top of a program) print it and exit with status 1."""
-    if not exit_on_error:
-        raise error
-    report_error(error)
-    raise SystemExit(1)
-
-
-def _config_or_exit(components_or_config: _System, exit_on_error: bool) -> AbstractConfig:
-    """The config; a wrong one is reported without a traceback (the runner is top level)."""
+def _config_or_exit(
+    check: Callable[[], None], config: _System, exit_on_error: bool
+) -> AbstractConfig:
+    """The config, after ``check()`` of the call; a wrong one is reported without a
+    traceback (a runner is the top of a program) unless ``exit_on_error`` is False."""
     try:
-        return _as_config(components_or_config)
+        check()
+        return _as_config(config)
     except ConfigError as error:
         if not exit_on_error:
             raise
@@ -135,22 +133,10 @@ class SynchronousRunner(AbstractRunner):
         announce_interrupt: bool = True,
         on_node: Optional[Callable[[Node], None]] = None,
     ) -> None:
-        given: object = config  # typed, but a student may pass anything
-        given_role: object = role
-        if not isinstance(given_role, str) and isinstance(given, str):
-            _exit_with(
-                ConfigError(
-                    wrong_call(
-                        "SynchronousRunner",
-                        SynchronousRunner,
-                        (role, config),
-                        "the role and the config are swapped: the role comes first.",
-                    )
-                ),
-                exit_on_error,
-            )
         self.role = role
-        self.config = _config_or_exit(config, exit_on_error)
+        self.config = _config_or_exit(
+            lambda: check_runner_args(SynchronousRunner, role, config), config, exit_on_error
+        )
         self.exit_on_error = exit_on_error
         self.announce_interrupt = announce_interrupt
         self.on_node = on_node
@@ -232,51 +218,27 @@ class TestRunner(AbstractRunner):
             watchdog.cancel()
 
 
-class _ParentWatch:
-    """Stops a child's node when its parent asks to, or when the parent dies.
+def _watch_parent(role: Role, link: Connection, node: Node) -> None:
+    """Stop ``node`` when its parent asks to, or when the parent dies (a thread's target).
 
     The parent holds the write end of a pipe to each child. It writes a reason
     to ask the child to stop; if the parent dies in any way (even SIGKILL) the
     OS closes the write end and the child reads EOF. A pipe works with every
     start method and OS, unlike ``prctl(PR_SET_PDEATHSIG)`` (Linux only) or
-    polling the parent's pid (slow, and pids are reused).
+    polling the parent's pid (slow, and pids are reused). A stop asked for
+    while the node was being built waits in the pipe until it is read here.
     """
-
-    def __init__(self, role: Role, link: Connection) -> None:
-        self.role = role
-        self.link = link
-        self._lock = threading.Lock()
-        self._node: Optional[Node] = None
-        self._reason: Optional[str] = None
-
-    def start(self) -> None:
-        # Daemon: a child whose node stopped on its own must not wait for it.
-        threading.Thread(target=self._watch, name="snr-parent-watch", daemon=True).start()
-
-    def attach(self, node: Node) -> None:
-        """Called once the node is built; a stop that came earlier applies now."""
-        with self._lock:
-            self._node = node
-            reason = self._reason
-        if reason is not None:
-            node.set_terminate_flag(reason)
-
-    def _watch(self) -> None:
-        try:
-            reason = self.link.recv_bytes().decode("utf-8", "replace")
-        except (EOFError, OSError):
-            reason = "parent process died"
-            # Nobody is left to report this for the child, so say it here.
-            logging.getLogger(f"snr.{self.role}").warning(
-                "Node %r: its parent process died, stopping it.", self.role
-            )
-        with self._lock:
-            self._reason = reason
-            node = self._node
-        if node is not None:
-            # Thread-safe, unlike a signal handler, which could interrupt the
-            # node's thread while it holds the task queue's lock.
-            node.set_terminate_flag(reason)
+    try:
+        reason = link.recv_bytes().decode("utf-8", "replace")
+    except (EOFError, OSError):
+        reason = "parent process died"
+        # Nobody is left to report this for the child, so say it here.
+        logging.getLogger(f"snr.{role}").warning(
+            "Node %r: its parent process died, stopping it.", role
+        )
+    # Thread-safe, unlike a signal handler, which could interrupt the node's
+    # thread while it holds the task queue's lock.
+    node.set_terminate_flag(reason)
 
 
 def _run_role(
@@ -287,10 +249,16 @@ def _run_role(
     # holds them, no child could see its parent die.
     for writer in inherited:
         writer.close()
-    watch = _ParentWatch(role, link)
-    watch.start()
+
+    def watch(node: Node) -> None:
+        # Daemon: a child whose node stopped on its own must not wait for it.
+        args = (role, link, node)
+        threading.Thread(
+            target=_watch_parent, args=args, name="snr-parent-watch", daemon=True
+        ).start()
+
     # Ctrl-C reaches every process of the group; only the parent says so.
-    SynchronousRunner(role, config, announce_interrupt=False, on_node=watch.attach).run()
+    SynchronousRunner(role, config, announce_interrupt=False, on_node=watch).run()
 
 
 def _start_method(requested: Optional[str]) -> str:
@@ -304,15 +272,6 @@ def _start_method(requested: Optional[str]) -> str:
     if "fork" in methods and threading.active_count() == 1:
         return "fork"
     return "spawn"
-
-
-def _note_signal(requested: List[str]) -> Callable[[int, Optional[FrameType]], None]:
-    """A signal handler that appends the signal's name to ``requested``."""
-
-    def note(signum: int, frame: Optional[FrameType]) -> None:
-        requested.append(signal.Signals(signum).name)
-
-    return note
 
 
 def _set_handlers(sigint: Any, sigterm: Any) -> None:
@@ -353,12 +312,7 @@ class MultiProcRunner(AbstractMultiRunner):
         join_timeout_s: float = 5.0,
     ) -> None:
         self.config = _as_config(config)
-        if clock_of(self.config) is not None:
-            raise ConfigError(
-                "MultiProcRunner runs each node in a process of its own, but a SimClock "
-                "keeps the time of one process. Run the nodes in one process (each "
-                "node's loop() on a thread of its own) or build the Config without clock=."
-            )
+        no_sim_clock_across_processes(self.config)
         known = self.config.roles()
         for role in roles:
             if role not in known:
@@ -395,20 +349,17 @@ class MultiProcRunner(AbstractMultiRunner):
         main = threading.current_thread() is threading.main_thread()
         previous = [signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)]
         requested: List[str] = []
+
+        def note(signum: int, frame: Optional[FrameType]) -> None:
+            requested.append(signal.Signals(signum).name)
+
         try:
             try:
                 for proc in procs:
                     proc.start()
                 if main:  # after forking, so children keep the default actions
-                    _set_handlers(
-                        _note_signal(requested)
-                        if previous[0] is signal.default_int_handler
-                        else None,
-                        _note_signal(requested),
-                    )
+                    _set_handlers(note if previous[0] is signal.default_int_handler else None, note)
                 self._wait(procs, requested)
-                if main and not requested:  # every child ended: nothing more to stop
-                    _set_handlers(*previous)
             except KeyboardInterrupt:  # Ctrl-C while the children were starting
                 requested.append("SIGINT")
             if requested:
@@ -486,22 +437,11 @@ class CliRunner(AbstractRunner):
         components_or_config: _System,
         argv: Optional[Sequence[str]] = None,
     ) -> None:
-        if isinstance(components_or_config, str):
-            _exit_with(
-                ConfigError(
-                    wrong_call(
-                        "CliRunner",
-                        CliRunner,
-                        (components_or_config, argv),
-                        f"the first argument is the role {components_or_config!r}, but "
-                        "CliRunner takes the components (or a Config) and reads the role "
-                        "from the command line: `python robot.py "
-                        f"{components_or_config}`.",
-                    )
-                ),
-                exit_on_error=True,
-            )
-        self.config = _config_or_exit(components_or_config, exit_on_error=True)
+        self.config = _config_or_exit(
+            lambda: check_cli_args(CliRunner, components_or_config, argv),
+            components_or_config,
+            exit_on_error=True,
+        )
         self.argv = list(sys.argv if argv is None else argv)
 
     def parse(self) -> argparse.Namespace:

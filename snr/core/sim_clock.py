@@ -244,7 +244,7 @@ class SimClock:
         turn = NodeTurn(self, role, tasks, stopping)
         with self._lock:
             self._nodes.append(turn)
-            self._nodes.sort(key=_key)
+            self._nodes.sort(key=lambda t: t.key)
             if self._holder is None:
                 self._pick_next()
         return turn
@@ -263,7 +263,7 @@ class SimClock:
         with self._lock:
             turn.deadline_ns = self._now_ns
             self._loops.append(turn)
-            self._loops.sort(key=_key)
+            self._loops.sort(key=lambda t: t.key)
             if self._holder is None:
                 self._pick_next()
         return turn
@@ -316,10 +316,8 @@ class SimClock:
     def _leave(self, turn: Turn) -> None:
         with self._lock:
             turn.waiting = False
-            if isinstance(turn, NodeTurn) and turn in self._nodes:
-                self._nodes.remove(turn)
-            if isinstance(turn, LoopTurn) and turn in self._loops:
-                self._loops.remove(turn)
+            self._nodes = [node for node in self._nodes if node is not turn]
+            self._loops = [loop for loop in self._loops if loop is not turn]
             if self._pacer is turn:
                 self._pacer = None
             if self._holder is turn:
@@ -379,10 +377,6 @@ class SimClock:
     def __repr__(self) -> str:
         speed = "as fast as possible" if self.speed is None else f"speed={self.speed:g}"
         return f"<SimClock t={self():.3f} s, {speed}, {self.turns} turns>"
-
-
-def _key(turn: Turn) -> Tuple[str, str]:
-    return turn.key
 
 
 def clock_of(config: object) -> Optional[SimClock]:

@@ -37,8 +37,9 @@ import time
 from types import FrameType
 from typing import Deque, Dict, Optional, Protocol, Set, Tuple
 
+from snr.core.checks.call_checks import check_schedule_args
 from snr.core.logs import LossReport
-from snr.prelude import AbstractTaskQueue, HandlerError, SomeTasks, Task
+from snr.prelude import AbstractTaskQueue, SomeTasks, Task
 from snr.prelude.student_code import outside_runtime
 
 __all__ = ["IdleWaiter", "TaskQueue"]
@@ -171,27 +172,11 @@ class TaskQueue(AbstractTaskQueue):
         if isinstance(t, Task):
             self.put(t)
             return
-        if not isinstance(t, list):
-            raise HandlerError(
-                f"Cannot schedule {t!r} ({type(t).__name__}): schedule() takes a Task, "
-                "a list of Tasks or None. Build tasks with snr.tasks, e.g. "
-                "tasks.event('name')."
-            )
-        for task in t:
-            if not isinstance(task, Task):
-                raise HandlerError(
-                    f"Cannot schedule {task!r} ({type(task).__name__}): only Task "
-                    "objects can be queued. Build tasks with snr.tasks, e.g. "
-                    "tasks.event('name') or self.store_data_task(key, data)."
-                )
+        check_schedule_args(t)
         if len(self.normal) >= self.high_water and not self._make_room(len(t)):
-            urgent = [task for task in t if task.priority]
-            self.urgent.extend(urgent)
-            if not urgent:
-                return
-        else:
-            for task in t:
-                (self.urgent if task.priority else self.normal).append(task)
+            t = [task for task in t if task.priority]  # dropped: only urgent ones get in
+        for task in t:
+            (self.urgent if task.priority else self.normal).append(task)
         if self._sleeping and not self._rung:
             self._ring()
 
@@ -212,18 +197,27 @@ class TaskQueue(AbstractTaskQueue):
         if self._closed.is_set():
             return True  # shutting down: the queue is cleared anyway
         self._count_wait(me)
-        deadline = time.monotonic() + self.max_wait_s
+        if not self._drain(self.max_wait_s):
+            self.loss.dropped(n)
+            return False
+        if self.loss.dropping:
+            self.loss.recovered()
+        return True
+
+    def _drain(self, timeout_s: float) -> bool:
+        """Wait up to ``timeout_s`` until the normal lane is down to the low-water mark.
+
+        False on timeout; True once it is there, or when `close` ends the wait.
+        """
+        deadline = time.monotonic() + timeout_s
         while len(self.normal) > self.low_water:
             left = deadline - time.monotonic()
             if left <= 0:
-                self.loss.dropped(n)
                 return False
             # Poll: the node works the lane down without a word to producers,
             # so its hot path pays nothing. close() ends the wait at once.
             if self._closed.wait(min(left, 0.005)):
                 return True
-        if self.loss.dropping:
-            self.loss.recovered()
         return True
 
     def _count_wait(self, me: int) -> None:
@@ -264,26 +258,7 @@ class TaskQueue(AbstractTaskQueue):
                 if link_closed:
                     return
         """
-        if len(self.normal) < self.high_water or self._closed.is_set():
-            return True
-        deadline = time.monotonic() + timeout_s
-        while len(self.normal) > self.low_water:
-            left = deadline - time.monotonic()
-            if left <= 0:
-                return False
-            if self._closed.wait(min(left, 0.005)):
-                return True
-        return True
-
-    def over_high_water(self) -> bool:
-        """True while the normal lane is above the high-water mark.
-
-        Example (a reader that can simply stop reading for a while)::
-
-            if parent.queue.over_high_water():
-                return   # read the socket again later
-        """
-        return len(self.normal) >= self.high_water
+        return len(self.normal) < self.high_water or self._closed.is_set() or self._drain(timeout_s)
 
     def get(self, timeout_s: Optional[float] = None) -> Optional[Task]:
         """The next task; waits up to ``timeout_s`` (None: forever) if empty."""

@@ -13,6 +13,7 @@ from __future__ import annotations
 import time
 from typing import Any, List, Optional
 
+from snr.core.checks.call_checks import values_not_a_list
 from snr.core.checks.explain import check_page_args
 from snr.prelude import (
     AbstractFactory,
@@ -25,7 +26,6 @@ from snr.prelude import (
     TaskPriority,
     TaskType,
 )
-from snr.prelude.error_text import values_not_a_list
 
 __all__ = [
     "ADD_COMPONENT",

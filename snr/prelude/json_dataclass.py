@@ -12,7 +12,7 @@ them runs.
 from __future__ import annotations
 
 import sys
-from typing import TYPE_CHECKING, Any, Callable, Dict, Optional, Tuple, Type, TypeVar, Union, cast
+from typing import TYPE_CHECKING, Any, Dict, Type, TypeVar, cast
 
 if TYPE_CHECKING:
     from dataclasses_json.core import Json
@@ -60,19 +60,10 @@ class JsonDataclass:
 
     __slots__ = ()  # so a slotted subclass (Page, Task) has no per-object dict
 
-    def to_json(
-        self,
-        *,
-        skipkeys: bool = False,
-        ensure_ascii: bool = True,
-        check_circular: bool = True,
-        allow_nan: bool = True,
-        indent: Optional[Union[int, str]] = None,
-        separators: Optional[Tuple[str, str]] = None,
-        default: Optional[Callable[[Any], Any]] = None,
-        sort_keys: bool = False,
-        **kw: Any,
-    ) -> str:
+    # Each method hands its arguments to the mixin's method of the same name,
+    # so they take exactly the mixin's arguments (indent=, infer_missing=, ...).
+
+    def to_json(self, **kw: Any) -> str:
         """This object as JSON text (dataclasses-json's ``to_json``).
 
         Example::
@@ -80,60 +71,27 @@ class JsonDataclass:
             Page("k", 1, "a", 0.0).to_json()
             # '{"key": "k", "data": 1, "origin": "a", "created_at_s": 0.0, "process": true}'
         """
-        text: str = _mixin().to_json(
-            self,
-            skipkeys=skipkeys,
-            ensure_ascii=ensure_ascii,
-            check_circular=check_circular,
-            allow_nan=allow_nan,
-            indent=indent,
-            separators=separators,
-            default=default,
-            sort_keys=sort_keys,
-            **kw,
-        )
-        return text
+        return cast(str, _mixin().to_json(self, **kw))
 
     @classmethod
-    def from_json(
-        cls: Type[_J],
-        s: JsonData,
-        *,
-        parse_float: Optional[Callable[[str], Any]] = None,
-        parse_int: Optional[Callable[[str], Any]] = None,
-        parse_constant: Optional[Callable[[str], Any]] = None,
-        infer_missing: bool = False,
-        **kw: Any,
-    ) -> _J:
+    def from_json(cls: Type[_J], s: JsonData, **kw: Any) -> _J:
         """The object that :meth:`to_json` wrote as ``s``.
 
         Example::
 
             Page.from_json('{"key": "k", "data": 1, "origin": "a", "created_at_s": 0.0}')
         """
-        function = _mixin().from_json.__func__
-        return cast(
-            _J,
-            function(
-                cls,
-                s,
-                parse_float=parse_float,
-                parse_int=parse_int,
-                parse_constant=parse_constant,
-                infer_missing=infer_missing,
-                **kw,
-            ),
-        )
+        return cast(_J, _mixin().from_json.__func__(cls, s, **kw))
 
     @classmethod
-    def from_dict(cls: Type[_J], kvs: Json, *, infer_missing: bool = False) -> _J:
+    def from_dict(cls: Type[_J], kvs: Json, **kw: Any) -> _J:
         """The object whose :meth:`to_dict` is ``kvs``.
 
         Example::
 
             Page.from_dict({"key": "k", "data": 1, "origin": "a", "created_at_s": 0.0})
         """
-        return cast(_J, _mixin().from_dict.__func__(cls, kvs, infer_missing=infer_missing))
+        return cast(_J, _mixin().from_dict.__func__(cls, kvs, **kw))
 
     def to_dict(self, encode_json: bool = False) -> Dict[str, Json]:
         """This object's fields as a dict (dataclasses-json's ``to_dict``).
@@ -142,45 +100,17 @@ class JsonDataclass:
 
             Page("k", 1, "a", 0.0).to_dict()["data"]   # 1
         """
-        fields: Dict[str, Json] = _mixin().to_dict(self, encode_json=encode_json)
-        return fields
+        return cast(Dict[str, "Json"], _mixin().to_dict(self, encode_json=encode_json))
 
     @classmethod
-    def schema(
-        cls: Type[_J],
-        *,
-        infer_missing: bool = False,
-        only: Any = None,
-        exclude: Any = (),
-        many: bool = False,
-        context: Any = None,
-        load_only: Any = (),
-        dump_only: Any = (),
-        partial: bool = False,
-        unknown: Any = None,
-    ) -> SchemaType[_J]:
+    def schema(cls: Type[_J], **kw: Any) -> SchemaType[_J]:
         """A marshmallow schema for this class (dataclasses-json's ``schema``).
 
         Example::
 
             Page.schema().dump(Page("k", 1, "a", 0.0))["key"]   # 'k'
         """
-        function = _mixin().schema.__func__
-        return cast(
-            "SchemaType[_J]",
-            function(
-                cls,
-                infer_missing=infer_missing,
-                only=only,
-                exclude=exclude,
-                many=many,
-                context=context,
-                load_only=load_only,
-                dump_only=dump_only,
-                partial=partial,
-                unknown=unknown,
-            ),
-        )
+        return cast("SchemaType[_J]", _mixin().schema.__func__(cls, **kw))
 
 
 if "dataclasses_json" in sys.modules:  # already paid for: register now

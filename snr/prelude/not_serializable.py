@@ -26,74 +26,63 @@ __all__ = ["check_serializable", "not_serializable_error"]
 
 _JSON_SCALARS = (str, int, float, bool, type(None))
 _MAX_DEPTH = 100
-_KEY_PROBLEM = "key"
-_LOOP_PROBLEM = "loop"
-_TYPE_PROBLEM = "type"
-_NUMBER_PROBLEM = "number"  # NaN or infinity: JSON has no such numbers
-_TEXT_PROBLEM = "text"  # a lone surrogate: not Unicode text, UTF-8 cannot hold it
-_Found = Tuple[str, Any, str]  # (path, offending value, which problem)
+_LOOP_HINT = "It contains itself (or nests too deep); send a copy without the loop."
+_KEY_HINT = "Dict keys sent between nodes must be str (or numbers): use str(key)."
+_NUMBER_HINT = (  # NaN or infinity: JSON has no such numbers
+    "JSON has no NaN or infinity: send None (or leave the page out) when there is "
+    "no valid number, e.g. None if math.isnan(x) else x."
+)
+_TEXT_HINT = (  # a lone surrogate: not Unicode text, UTF-8 cannot hold it
+    "It holds a lone surrogate, which is not text: decode bytes with "
+    "errors='replace', or send them as value.hex()."
+)
+_Found = Tuple[str, Any, str]  # (path, offending value, the hint to fix it)
 
 
-def _scalar_problem(value: Any) -> Optional[str]:
+def _scalar_hint(value: Any) -> Optional[str]:
+    """The hint for a str or number JSON cannot hold, or None when it can."""
     if isinstance(value, float) and not math.isfinite(value):
-        return _NUMBER_PROBLEM
+        return _NUMBER_HINT
     if isinstance(value, str) and not value.isascii():
         try:
             value.encode("utf-8")
         except UnicodeEncodeError:
-            return _TEXT_PROBLEM
+            return _TEXT_HINT
     return None
 
 
+def _key_hint(key: Any) -> Optional[str]:
+    if not isinstance(key, _JSON_SCALARS):
+        return _KEY_HINT
+    hint = _scalar_hint(key)
+    return _KEY_HINT if hint is _NUMBER_HINT else hint
+
+
 def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optional[_Found]:
+    """The first part of ``value`` JSON cannot hold, as (path, part, hint), or None."""
     if isinstance(value, _JSON_SCALARS):
-        problem = _scalar_problem(value)
-        return None if problem is None else (path, value, problem)
+        hint = _scalar_hint(value)
+        return None if hint is None else (path, value, hint)
     if not isinstance(value, (list, tuple, dict)):
-        return path, value, _TYPE_PROBLEM
+        return path, value, _type_hint(value)
     if id(value) in open_containers or depth > _MAX_DEPTH:
-        return path, value, _LOOP_PROBLEM
+        return path, value, _LOOP_HINT
     open_containers.add(id(value))
     try:
-        if isinstance(value, dict):
-            for key, item in value.items():
-                if not isinstance(key, _JSON_SCALARS):
-                    return path, key, _KEY_PROBLEM
-                key_problem = _scalar_problem(key)
-                if key_problem is not None:
-                    return (
-                        path,
-                        key,
-                        _KEY_PROBLEM if key_problem == _NUMBER_PROBLEM else key_problem,
-                    )
-                found = _find(item, f"{path}[{key!r}]", open_containers, depth + 1)
-                if found is not None:
-                    return found
-        else:
-            for index, item in enumerate(value):
-                found = _find(item, f"{path}[{index}]", open_containers, depth + 1)
-                if found is not None:
-                    return found
+        pairs = value.items() if isinstance(value, dict) else enumerate(value)
+        for key, item in pairs:
+            hint = _key_hint(key) if isinstance(value, dict) else None
+            if hint is not None:
+                return path, key, hint
+            found = _find(item, f"{path}[{key!r}]", open_containers, depth + 1)
+            if found is not None:
+                return found
         return None
     finally:
         open_containers.discard(id(value))
 
 
-def _serializable_hint(value: Any, problem: str) -> str:
-    if problem == _LOOP_PROBLEM:
-        return "It contains itself (or nests too deep); send a copy without the loop."
-    if problem == _KEY_PROBLEM:
-        return "Dict keys sent between nodes must be str (or numbers): use str(key)."
-    if problem == _NUMBER_PROBLEM:
-        return (
-            "JSON has no NaN or infinity: send None (or leave the page out) when there is "
-            "no valid number, e.g. None if math.isnan(x) else x."
-        )
-    if problem == _TEXT_PROBLEM:
-        return (
-            "It holds a lone surrogate, which is not text: decode bytes with "
-            "errors='replace', or send them as value.hex()."
-        )
+def _type_hint(value: Any) -> str:
     if isinstance(value, (set, frozenset)):
         return "Send a list instead: list(value), or sorted(value) for a stable order."
     if isinstance(value, (bytes, bytearray)):
@@ -137,14 +126,10 @@ def not_serializable_error(
     if found is None:
         why = reason or "it cannot be written as JSON"
         return NotSerializableError(f"{head}: {why}. {allowed}")
-    path, bad, problem = found
-    if problem == _KEY_PROBLEM:
-        what = f"{path} has a key that is a {type(bad).__name__} ({short_repr(bad, 60)})"
-    else:
-        what = f"{path} is a {type(bad).__name__} ({short_repr(bad, 60)})"
-    return NotSerializableError(
-        f"{head}: {what}, which JSON cannot hold. {_serializable_hint(bad, problem)} {allowed}"
-    )
+    path, bad, hint = found
+    has = "has a key that is" if hint is _KEY_HINT else "is"
+    what = f"{path} {has} a {type(bad).__name__} ({short_repr(bad, 60)})"
+    return NotSerializableError(f"{head}: {what}, which JSON cannot hold. {hint} {allowed}")
 
 
 def check_serializable(key: str, data: Any, to: str = "to another node") -> None:

@@ -4,7 +4,7 @@ Every SNR message names the student's file and line. This module is the one
 place that works them out: from a class or function (`describe_class`,
 `describe_callable`, `def_block`), from a traceback (`student_frames`,
 `trim_runtime_frames`), from the call in progress (`caller_location`,
-`caller_block`, `call_site`) and from another thread (`running_line`).
+`caller_block`) and from another thread (`running_line`).
 Frames of SNR's runtime (``snr/core``, ``snr/prelude``) are plumbing the
 student did not write, so they are skipped.
 
@@ -30,7 +30,6 @@ from types import CodeType, FrameType, TracebackType
 from typing import Any, Optional
 
 __all__ = [
-    "call_site",
     "caller_block",
     "caller_location",
     "code_name",
@@ -50,7 +49,6 @@ __all__ = [
 ]
 
 _SNR_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
-_SNR_PACKAGE = _SNR_DIR + os.sep
 _RUNTIME_DIRS = tuple(os.path.join(_SNR_DIR, sub) + os.sep for sub in ("core", "prelude"))
 
 
@@ -181,8 +179,14 @@ def frame_location(frame: FrameType, line: Optional[int] = None) -> str:
 
         frame_location(sys._getframe())
     """
+    at = frame.f_lineno if line is None else line
+    return f"{short_path(frame.f_code.co_filename)}:{at} in {_frame_name(frame)}"
+
+
+def _frame_name(frame: FrameType) -> str:
+    """``"MyFactory.get"``: the qualified name of the function a frame runs."""
     code = frame.f_code
-    name = getattr(code, "co_qualname", None)  # Python 3.11+
+    name: Optional[str] = getattr(code, "co_qualname", None)  # Python 3.11+
     if name is None:
         # Older Pythons know only the function's name: add the class of
         # `self` (or `cls`) when the frame has one, as co_qualname would.
@@ -191,7 +195,7 @@ def frame_location(frame: FrameType, line: Optional[int] = None) -> str:
         name = code.co_name
         if owner is not None and code.co_name in vars(owner_class):
             name = f"{owner_class.__qualname__}.{code.co_name}"
-    return f"{short_path(code.co_filename)}:{frame.f_lineno if line is None else line} in {name}"
+    return name
 
 
 def caller_location(skip: int = 1) -> str:
@@ -203,23 +207,6 @@ def caller_location(skip: int = 1) -> str:
     """
     frame = outside_runtime(sys._getframe(skip))
     return "<unknown place>" if frame is None else frame_location(frame)
-
-
-def call_site() -> str:
-    """``"robot.py:12 in Sonar.loop"``: the nearest caller outside the whole ``snr`` package.
-
-    Unlike `caller_location`, SNR's ready-made components (``snr/std_mods``,
-    ``snr/utils``) are skipped too: a wrong call to one of their constructors
-    is the student's call.
-
-    Example::
-
-        raise ConfigError(f"... at {call_site()} ...")
-    """
-    frame = sys._getframe(1)
-    while frame.f_back is not None and frame.f_code.co_filename.startswith(_SNR_PACKAGE):
-        frame = frame.f_back
-    return frame_location(frame)
 
 
 def source_block(filename: str, line: int, name: str, context: str = "") -> str:
@@ -273,9 +260,7 @@ def caller_block(skip: int = 1) -> str:
     frame = outside_runtime(sys._getframe(skip))
     if frame is None:
         return ""
-    code = frame.f_code
-    name = code_name(code, frame_location(frame).rsplit(" in ", 1)[-1])
-    return source_block(code.co_filename, frame.f_lineno, name)
+    return source_block(frame.f_code.co_filename, frame.f_lineno, _frame_name(frame))
 
 
 def running_line(thread_id: Optional[int]) -> str:

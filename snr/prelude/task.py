@@ -52,10 +52,6 @@ class Task(JsonDataclass):
                 return self.store_data_task("depth_avg", self.average(page.data))
         """
         values: object = self.val_list  # a task built by hand may hold anything
-        # The usual task (a list holding a Page) first: every page stored or
-        # sent passes here. Subclasses of list or Page take the second test.
-        if values.__class__ is list and values and values[0].__class__ is Page:
-            return values[0]
         if isinstance(values, list) and values and isinstance(values[0], Page):
             return values[0]
         return None

@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Any, Optional, Sequence
 
 from snr.core import LoopFactory, ThreadLoop
+from snr.core.checks.call_checks import wrong_call
 from snr.prelude import AbstractNode, ConfigError, DataKey, Task, TaskType
-from snr.prelude.error_text import wrong_call
 
 __all__ = ["ListReplayerFactory", "ListReplayerLoop"]
 

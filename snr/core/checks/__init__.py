@@ -9,6 +9,9 @@ call as "check this" and come back here for the how:
 * ``explain.py``: the words of the errors a node raises or logs, e.g. a handler
   that returns something that is not a Task, swapped arguments, or a loop
   thread that calls a method only the node's thread may call (every mode);
+* ``call_checks.py``: a constructor or task builder called with the wrong
+  arguments (``Config``, the runners, ``tasks.event``, ``store_data``), shown
+  as written, with where and the signature to follow (every mode);
 * ``handler_checks.py``: a handler registered under a wrong task id, or with
   the wrong parameters, refused when it is registered (every mode);
 * ``os_errors.py``: an OS error (a port in use, a missing serial device) in

@@ -21,6 +21,7 @@ import threading
 from types import CodeType
 from typing import Any, Dict, Iterator, List, Optional, Union
 
+from snr.core.checks.call_checks import bad_data_key, page_as_data, wrong_call
 from snr.prelude import (
     AbstractComponent,
     AbstractConfig,
@@ -37,13 +38,7 @@ from snr.prelude import (
     TaskHandler,
     ThreadSafetyError,
 )
-from snr.prelude.error_text import (
-    bad_data_key,
-    exception_text,
-    page_as_data,
-    short_repr,
-    wrong_call,
-)
+from snr.prelude.error_text import exception_text, short_repr
 from snr.prelude.student_code import (
     caller_location,
     code_name,

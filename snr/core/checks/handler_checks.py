@@ -1,7 +1,7 @@
 """Checks of what a component registers as task handlers, with the fix in words.
 
-`HandlerMap` (``snr/core/dispatch.py``) calls `check_task_id` and
-`check_handler` on every entry of a ``task_handlers`` mapping as it is set, and
+`HandlerMap` (``snr/core/dispatch.py``) calls `check_entry` (`check_task_id`
+and `check_handler`) on every entry of a ``task_handlers`` mapping as it is set, and
 the node calls `check_burst_handlers` when a component is added or changes its
 handlers. So a handler registered under a wrong id, or written with the wrong
 parameters, is refused at start-up, before the robot moves, in every mode.
@@ -20,9 +20,9 @@ from typing import Any, Set
 
 from snr.prelude import AbstractComponent, ComponentError, TaskId, TaskType
 from snr.prelude.error_text import closest_match
-from snr.prelude.student_code import def_block, describe_callable, describe_class
+from snr.prelude.student_code import caller_block, def_block, describe_callable, describe_class
 
-__all__ = ["check_burst_handlers", "check_handler", "check_task_id"]
+__all__ = ["check_burst_handlers", "check_entry", "check_handler", "check_task_id"]
 
 _STORE_PAGE = TaskType.store_page
 
@@ -68,6 +68,29 @@ def check_task_id(key: Any, owner_class: type = object) -> None:
 
 
 _checked_code: Set[CodeType] = set()
+
+
+def check_entry(key: Any, handler: Any, owner_class: type = object) -> None:
+    """Raise a ComponentError unless ``key: handler`` is a valid ``task_handlers`` entry.
+
+    A wrong id, or something that is not a function, is a mistake in the line
+    that registered it, so the message points there too (not only at the class).
+
+    Example::
+
+        check_entry((TaskType.event, "go"), self.on_go, MyEndpoint)   # fine
+        check_entry("go", self.on_go, MyEndpoint)   # ComponentError, with the line
+    """
+    try:
+        check_task_id(key, owner_class)
+        if not callable(handler):
+            check_handler(handler, key, owner_class)
+    except ComponentError as error:
+        where = caller_block()  # the student's line, found only now, while explaining
+        if not where:
+            raise
+        raise ComponentError(f"{error}\n{where}") from None
+    check_handler(handler, key, owner_class)  # names the def to fix itself
 
 
 def _param_text(param: inspect.Parameter) -> str:

@@ -5,8 +5,8 @@ from __future__ import annotations
 from typing import Optional
 
 from snr.core import LoopFactory, ThreadLoop, tasks
+from snr.core.checks.call_checks import wrong_call
 from snr.prelude import AbstractNode, ComponentError
-from snr.prelude.error_text import wrong_call
 
 __all__ = ["TimeoutLoop", "TimeoutLoopFactory"]
 
