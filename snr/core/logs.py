@@ -196,8 +196,11 @@ class RateLimitedLog:
         self._shown: Dict[str, Deque[float]] = {}  # what -> when its recent full lines went out
         self._unsaid: Dict[str, List[Any]] = {}  # what -> [count, since, level]
 
-    def report(self, what: str, level: int, msg: str, *args: Any) -> None:
-        """Log ``msg % args`` in full, or count it under ``what`` if they come too fast."""
+    def report(self, what: str, level: int, msg: str, *args: Any) -> bool:
+        """Log ``msg % args`` in full, or count it under ``what`` if they come too fast.
+
+        Returns True if it was counted: a `tick` must then come after the window.
+        """
         with self._lock:
             now = self._clock()
             shown = self._shown.setdefault(what, collections.deque())
@@ -211,6 +214,7 @@ class RateLimitedLog:
         self._say_counts(self.window_s)
         if full:
             self.log.log(level, msg, *args)
+        return not full
 
     def tick(self) -> None:
         """Log the counts whose window has passed (any thread)."""

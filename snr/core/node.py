@@ -118,8 +118,12 @@ class Node(AbstractNode):
     key_hints: Optional[MissingKeyHints]
     wiring_checks: Optional[WiringChecks]
     watchdog: Optional[Watchdog]
-    idle_wake_s: float = 1.0
-    """How long an idle node sleeps before checking that it should still run."""
+    idle_wake_s: Optional[float] = None
+    """How long an idle node sleeps at most (None: until a task comes or it is stopped).
+
+    Stopping closes the queue, which wakes the node, so an idle node need not
+    look now and then: it uses no CPU at all.
+    """
     max_queued_tasks: int = 10_000
     """The queue's high-water mark: loops wait (then drop) above it; see `TaskQueue`."""
 

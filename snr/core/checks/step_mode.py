@@ -171,7 +171,7 @@ class StepMode:
         queue = self.queue
         return queue.waits - self._waits_at_pause, queue.loss.total - self._drops_at_pause
 
-    def run_paused(self, idle_s: float) -> None:
+    def run_paused(self, idle_s: Optional[float]) -> None:
         """One turn of the node's run loop while paused: urgent tasks, then a step, else sleep."""
         queue = self.queue
         if queue.urgent:

@@ -36,7 +36,11 @@ has stored it" hints (the node asks ``handler_stuck``): the page is late, not
 missing.
 
 **What it costs the node: nothing on the hot path.** A daemon thread wakes
-every ``every_s`` (0.5 s) and samples the stacks of the node's thread and its
+every ``every_s`` (0.5 s), or every ``stuck_s`` (2 s) after a look that found
+nothing to watch (the node's thread in no handler, no loop of the student's
+inside its ``loop()``, no flood, no idle countdown: a quiet robot then costs
+its watchdog one look in 2 s, and a handler that hangs is said within
+``2 * stuck_s``), and samples the stacks of the node's thread and its
 loops' threads with ``sys._current_frames()``. A handler call is the frame
 that `HandlerRunner` called; as long as the very same frame object is there
 look after look, the same call is still running (a new call is a new frame
@@ -170,6 +174,7 @@ class Watchdog:
         self._behind_s = 0.0  # the last look at which the node was behind
         self._flooders: List[ThreadLoop] = []
         self._idle_since: Optional[float] = None
+        self._quiet = False  # the last look found nothing to watch: the next comes later
 
     # -- life cycle ---------------------------------------------------------
     def start(self, node_thread: int, ignore: Iterable[threading.Thread] = ()) -> None:
@@ -195,7 +200,7 @@ class Watchdog:
         self._flooders = []
 
     def _run(self) -> None:
-        while not self._stop.wait(self.every_s):
+        while not self._stop.wait(self.stuck_s if self._quiet else self.every_s):
             try:
                 self.check()
             except Exception:  # a bug here must not take the node down with it
@@ -214,6 +219,12 @@ class Watchdog:
         self._check_loops(theirs, frames, now)
         self._check_flood(theirs, now)
         self._check_idle(handler is None, loops, now)
+        self._quiet = (
+            handler is None
+            and not self._loop_calls
+            and self._idle_since is None
+            and now - self._behind_s > self.FLOOD_GRACE_S
+        )
 
     def _say(self, about: object, label: str, text: str) -> None:
         if about in self._said_about:

@@ -78,6 +78,8 @@ DEFAULT_MAX_BACKLOG_BYTES = 8 * 1024 * 1024
 """How many bytes of frames may wait for one slow peer before pages are dropped (8 MiB)."""
 
 DEFAULT_DEAD_AFTER_S = 4.0
+_NEWS_TICK_S = 0.5  # while news may be counted, how often its counts are looked at
+_NEWS_WINDOW_S = 10.0  # the longest window of the news logs (RateLimitedLog)
 """Seconds of silence after which a peer that promised beats counts as lost."""
 
 Keys = Union[DataKey, Sequence[DataKey], None]
@@ -163,6 +165,9 @@ class CommsLoop(ThreadLoop):
         self.links: Tuple[Link, ...] = ()
         self.news = RateLimitedLog(self.log, burst=20, window_s=10.0)
         self.bad_frame_news = RateLimitedLog(self.log, burst=5, window_s=5.0)
+        self._news_lock = threading.Lock()
+        self._news_at = 0.0  # when news was last counted
+        self._news_ticking = False  # the I/O thread ticks the news (see _news_came)
         self.closed_totals: Dict[str, int] = dict.fromkeys(
             ("links", "pages_sent", "pages_received", "dropped", "bad_frames"), 0
         )
@@ -348,28 +353,65 @@ class CommsLoop(ThreadLoop):
         ``what`` names the kind of news, e.g. ``"Clients connected"``: each
         line is logged in full while no more than 20 of its kind came in the
         last 10 s; past that they are counted, and the count is logged once
-        every 10 s (from the component's loop, see `RateLimitedLog`). A class
-        of robots connecting is logged robot by robot; a program that connects
-        a thousand times a second costs a line every 10 s.
+        every 10 s (see `RateLimitedLog`; `tick_news` says the last count). A
+        class of robots connecting is logged robot by robot; a program that
+        connects a thousand times a second costs a line every 10 s.
 
         Example::
 
             self.say("Links lost", logging.WARNING, "Lost the link to %s", link.label)
         """
-        self.news.report(what, level, msg, *args)
+        if self.news.report(what, level, msg, *args):
+            self._news_came()
+
+    def say_bad_frame(self, what: str, level: int, msg: str, *args: Any) -> None:
+        """`say` for bad frames: at most five lines in 5 s, then a count.
+
+        Example::
+
+            self.say_bad_frame("Bad frames", logging.WARNING, "Bad frame from %s", link.label)
+        """
+        if self.bad_frame_news.report(what, level, msg, *args):
+            self._news_came()
 
     def tick_news(self) -> None:
         """Log the counts of news that came in a flood, once their window has passed.
 
-        Called by the component's loop every half second or so.
+        The node's I/O thread calls it every half second for a while after
+        news was counted rather than logged (`say`), and never otherwise:
+        quiet comms wake no thread for it.
 
         Example::
 
-            def loop(self) -> None:
-                self.tick_news()
+            comms.tick_news()
         """
         self.news.tick()
         self.bad_frame_news.tick()
+
+    def _news_came(self) -> None:
+        """Any thread: news was counted, not logged; tick until its window has passed."""
+        with self._news_lock:
+            self._news_at = time.monotonic()
+            io = self.io_loop
+            if self._news_ticking or io is None:
+                return
+            self._news_ticking = True
+        io.call_soon(self._tick_news_soon)
+
+    def _tick_news_soon(self) -> None:
+        io = self.io_loop
+        if io is not None:
+            io.call_later(_NEWS_TICK_S, self._tick_news_later)
+
+    def _tick_news_later(self) -> None:
+        """I/O thread: say what a flood left counted; again soon while news may be pending."""
+        self.tick_news()
+        io = self.io_loop
+        with self._news_lock:
+            if io is None or time.monotonic() - self._news_at > _NEWS_WINDOW_S + _NEWS_TICK_S:
+                self._news_ticking = False  # every count has been said
+                return
+        io.call_later(_NEWS_TICK_S, self._tick_news_later)
 
     def on_hello(self, link: Link) -> None:
         """The peer said which node it is (called on the node's I/O thread)."""

@@ -67,6 +67,13 @@ BUSY_READS_S = 0.05
 IDLE_CHECK_S = 0.25
 """While the node's thread sleeps, how often the I/O thread looks whether it is busy again."""
 
+IDLE_STOP_S = 1.0
+"""After this long with no work for the node's thread, the I/O thread stops looking.
+
+An idle node then costs its I/O thread no wake-up at all; the node's thread
+starts the looks again when it next leaves its wait with work (`IOLoop.woken`).
+"""
+
 JOIN_TIMEOUT_S = 1.0
 """How long the last `IOLoop.release` waits for the thread to end."""
 
@@ -205,7 +212,9 @@ class IOLoop:
         self._gate_open = False  # `_reads` is in `_gate`: the I/O thread reads
         self._node_idle = False  # the node's thread is in wait(): never open the gate
         self._busy_since = 0.0  # when the node's thread last left wait()
-        self._busy_timer: Optional[IOTimer] = None
+        self._work_at = 0.0  # when it last left wait() with work to do
+        self._looking = False  # _check_busy is due (else it waits for the node's work)
+        self._queue = _queue_of(node)
         if self.node_reads:
             self._reads = select.epoll()
             self._gate = select.epoll()
@@ -459,21 +468,38 @@ class IOLoop:
         finally:
             self._node_ready = []
             self._node_waiting = False
-            self._busy_since = time.monotonic()
-            self._node_idle = False
+            look = False
+            with self._gate_lock:
+                self._busy_since = now = time.monotonic()
+                self._node_idle = False
+                if self._queue is not None and len(self._queue):
+                    self._work_at = now
+                    look = not self._looking
+                    self._looking = True
             self._role.release()
+            if look:  # the I/O thread had stopped looking (a long idle spell)
+                self.call_soon(self._check_busy)
 
     def _check_busy(self) -> None:
         """Loop thread: once the node's thread has worked `BUSY_READS_S`, read its links too.
 
         Runs every `BUSY_READS_S` while the node's thread works, every
-        `IDLE_CHECK_S` while it sleeps (an idle node costs next to nothing).
+        `IDLE_CHECK_S` while it sleeps between pieces of work, and not at all
+        once it has had no work for `IDLE_STOP_S`: an idle node costs its I/O
+        thread no wake-up. `woken` starts the looks again; the lock makes
+        sure the node's thread never leaves its wait with work while the
+        looks stop unseen.
         """
         if not self._waiter_installed:  # the node waits on another's: the gate stays open
+            self._looking = False
             return
         with self._gate_lock:
             idle = self._node_idle
-        self._busy_timer = self.call_later(IDLE_CHECK_S if idle else BUSY_READS_S, self._check_busy)
+            if idle and time.monotonic() - self._work_at >= IDLE_STOP_S:
+                self._looking = False
+                return
+            self._looking = True
+        self.call_later(IDLE_CHECK_S if idle else BUSY_READS_S, self._check_busy)
         with self._gate_lock:
             if self._node_idle or self._gate_open:
                 return
@@ -484,6 +510,18 @@ class IOLoop:
             except (OSError, ValueError):  # closed: the loop is stopping
                 return
             self._gate_open = True
+
+    def _look_if_busy(self) -> None:
+        """Loop thread, on a timer: start looking if the node's thread works unseen.
+
+        It can get work without leaving a wait with it (a task queued a moment
+        after it woke); then the looks start again within a timer's period.
+        """
+        with self._gate_lock:
+            if self._looking or self._node_idle:
+                return
+            self._looking = True
+        self.call_later(BUSY_READS_S, self._check_busy)
 
     def wake(self) -> None:
         """End the node thread's idle wait (any thread; the queue rings it once per sleep)."""
@@ -560,7 +598,8 @@ class IOLoop:
         if queue is not None:
             queue.never_wait(threading.get_ident())
         if self._reads is not None:
-            self._busy_timer = self.call_later(BUSY_READS_S, self._check_busy)
+            self._looking = True
+            self.call_later(BUSY_READS_S, self._check_busy)
         select, monotonic = self._selector.select, time.monotonic
         calls, timers, handlers = self._calls, self._timers, self._handlers
         try:
@@ -595,6 +634,8 @@ class IOLoop:
                         timer = heapq.heappop(timers)[2]
                         if not timer.cancelled:
                             self._safely(timer.callback)
+                    if not self._looking and self._waiter_installed:
+                        self._look_if_busy()
         except Exception:  # the selector itself failed: close every link, say so
             self.log.exception("The comms I/O loop of node %r failed", self.node.role)
         finally:

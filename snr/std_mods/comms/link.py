@@ -62,7 +62,8 @@ __all__ = ["Link", "LinkState", "Transport", "shown_role", "unread_bytes"]
 
 _WRITE_NOW_BYTES = 64 * 1024  # the node's thread writes a backlog this big before it goes idle
 _BURST_S = 0.0002  # a frame this soon after the last send joins a batch for the I/O thread
-_TICK_S = 0.25  # how often a link checks its peer's silence and whether it owes a beat
+_TICK_S = 0.25  # the shortest wait between two looks at a link's beat, silence and drops
+_LATE_S = 0.001  # a look at a deadline comes just after it, so the limit has passed
 _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
 _MAX_KEYS_NOTED = 1000  # DEBUG: how many received keys a link remembers for the hints
@@ -405,7 +406,7 @@ class Link:
         if self.state in _ENDED:  # aborted before the loop got to it
             return
         self.io.watch(self, _READ)
-        self._timer = self.io.call_later(self._tick_s, self._tick)
+        self._timer = self.io.call_later(self.hello_timeout_s + _LATE_S, self._tick)
         self.on_writable()  # the hello goes at once
 
     def _wake_writer(self) -> None:
@@ -453,7 +454,7 @@ class Link:
         self._timer = self.io.call_later(self.drain_s, lambda: self._finish("the link was closed"))
 
     def _tick(self) -> None:
-        """Every quarter beat or so: is the peer still there, and do we owe it a beat?"""
+        """At the link's next deadline: is the peer still there, and do we owe it a beat?"""
         self._timer = None
         if self.state in _ENDED:
             return
@@ -471,7 +472,37 @@ class Link:
                 if outcome == FIRST:  # quiet for beat_s: a sign of life, written later
                     self._want_write()
             self._check_recovered()
-            self._timer = self.io.call_later(self._tick_s, self._tick)
+            self._timer = self.io.call_later(self._next_look_s(), self._tick)
+
+    def _look_again(self) -> None:
+        """Loop thread: put the next look at the link's first deadline (they moved)."""
+        if self._timer is not None and self.state is _OPEN:  # (else it is the drain's timer)
+            self._timer.cancel()
+            self._timer = self.io.call_later(self._next_look_s(), self._tick)
+
+    def _next_look_s(self) -> float:
+        """Seconds until the link must be looked at again: its first deadline.
+
+        A quiet link wakes its I/O thread once a beat, not four times: the
+        deadlines are when a beat is owed, when the peer's silence (or the
+        wait for its first frame) passes the limit, and, every quarter beat,
+        while pages are held or dropped (their counts move without a frame).
+        A deadline already past (a beat held back by frames still waiting)
+        is looked at again a quarter beat later.
+        """
+        now = time.monotonic()
+        if self._held or self.loss.dropping:
+            return self._tick_s
+        due = []
+        if not self._heard_frame:
+            due.append(self._progress_at + self.hello_timeout_s)
+        if self.peer_beat_s is not None:
+            due.append(self.outbox.last_sent_at + self.beat_s)
+            due.append(self.last_heard + max(self.dead_after_s, 3 * self.peer_beat_s))
+        if not due:
+            return self._tick_s
+        wait_s = min(due) + _LATE_S - now
+        return wait_s if wait_s > 0 else self._tick_s
 
     def _check_recovered(self) -> None:
         # The peer has caught up once everything queued went out and nothing
@@ -735,6 +766,7 @@ class Link:
             self.hello_at = time.monotonic()
             self.peer_beat_s = message.beat_s
             self._peer_takes_bye = message.bye
+            self.io.call_soon(self._look_again)  # beats are owed from now on
             self.owner.on_hello(self)
             watch_link(self.owner, self)
         elif isinstance(message, Bye):
@@ -747,7 +779,7 @@ class Link:
         what = "reset the connection" if resetting else "dropped the frame"
         count = self.bad_frames
         more = f"; {count} bad frames from this peer so far" if count > 1 else ""
-        self.owner.bad_frame_news.report(
+        self.owner.say_bad_frame(
             "Connections reset after a bad frame" if resetting else "Bad frames",
             logging.WARNING,
             "Bad frame from %s: %s (%s; the node keeps running%s; see docs/wire-format.md)",

@@ -176,9 +176,11 @@ class PipeLoop(CommsLoop):
         self.link = self.open_link(PipeTransport(self.connection, self.peer_name))
 
     def loop(self) -> None:
-        """Wait; stop once the pipe has closed (a pipe cannot reconnect)."""
-        self.tick_news()
-        if self.link is None or self.link.wait_closed(0.5):
+        """Wait; stop once the pipe has closed (a pipe cannot reconnect).
+
+        Stopping the node closes the link (`halt`), which ends the wait.
+        """
+        if self.link is None or self.link.wait_closed(None):
             self.set_terminate_flag("the pipe closed")
 
     def decode_message(self, body: bytes) -> Message:

@@ -20,6 +20,7 @@ from __future__ import annotations
 
 import logging
 import os
+import select
 import socket
 import time
 from typing import Optional, Tuple
@@ -57,7 +58,6 @@ said hello is closed to make room (counted and logged); if every one has,
 the new client is refused (counted and logged) and retries later.
 """
 
-_ACCEPT_WAKE_S = 0.5  # how often a waiting server checks whether it should stop
 _CONNECT_TIMEOUT_S = 0.5
 _FIRST_RETRY_S = 0.05
 _MAX_RETRY_S = 1.0
@@ -165,7 +165,7 @@ def _listen(address: Address, role: str) -> socket.socket:
                 setting="SocketsPair(server_tuple=(host, port)), on both sides",
             )
         ) from error
-    listener.settimeout(_ACCEPT_WAKE_S)
+    listener.setblocking(False)  # it waits in select, with the stop's wake-up socket
     return listener
 
 
@@ -216,21 +216,30 @@ class SocketsServerLoop(CommsLoop):
             verb="Closed",
         )
         self._listener: Optional[socket.socket] = None
+        # halt() writes a byte to _stop_w: the accepting thread waits for a
+        # client or for it, never waking in between (an idle server costs nothing).
+        self._stop_r: Optional[socket.socket] = None
+        self._stop_w: Optional[socket.socket] = None
 
     def begin(self) -> None:
         """Start listening (on the node's thread, so errors stop the node)."""
         self._listener = _listen(self.address, self.parent.role)
+        self._stop_r, self._stop_w = socket.socketpair()
         self.info("Listening for sockets clients on %s", _describe(self.address))
 
     def loop(self) -> None:
-        """Accept one client, or return after a short wait to check for stop."""
-        self.tick_news()
-        listener = self._listener
-        if listener is None:
+        """Wait for a client (or the stop) and accept it."""
+        listener, stop = self._listener, self._stop_r
+        if listener is None or stop is None:
             return
         try:
+            readable = select.select([listener, stop], [], [])[0]
+            if listener not in readable:  # halt(): stopping
+                if not self.is_terminated():  # the stop was taken back (cancel_stop)
+                    stop.recv(64)
+                return
             sock, peer = listener.accept()
-        except socket.timeout:
+        except BlockingIOError:  # the client gave up before we took it
             return
         except OSError as error:
             if not self.is_terminated():
@@ -289,9 +298,9 @@ class SocketsServerLoop(CommsLoop):
 
     def halt(self) -> None:
         """Stop accepting, then flush and close every client link."""
-        if self._listener is not None:
+        if self._stop_w is not None:
             try:
-                self._listener.shutdown(socket.SHUT_RDWR)  # wakes a blocked accept()
+                self._stop_w.send(b"\0")  # ends the wait for a client
             except OSError:
                 pass
         super().halt()
@@ -301,6 +310,9 @@ class SocketsServerLoop(CommsLoop):
         super().terminate()
         if self._listener is not None:
             self._listener.close()
+        for end in (self._stop_r, self._stop_w):
+            if end is not None:
+                end.close()
 
 
 class SocketsClientLoop(CommsLoop):
@@ -337,11 +349,10 @@ class SocketsClientLoop(CommsLoop):
 
     def loop(self) -> None:
         """Watch the current link, or try to connect once (then back off)."""
-        self.tick_news()
         link = self.link
         if link is not None:
             if not link.is_closed():
-                link.wait_closed(_ACCEPT_WAKE_S)
+                link.wait_closed(None)  # it ends, or halt() closes it
                 return
             self.link = None
             hello_at = link.hello_at
