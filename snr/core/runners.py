@@ -26,6 +26,7 @@ from typing import (
     Union,
 )
 
+from snr.core.checks.runner_checks import runner_built, runner_ran
 from snr.core.config import Config
 from snr.core.node import Node
 from snr.core.sim_clock import clock_of
@@ -155,6 +156,7 @@ class SynchronousRunner(AbstractRunner):
         self.announce_interrupt = announce_interrupt
         self.on_node = on_node
         self.node: Optional[Node] = None
+        runner_built(self, self.config)  # a runner never run is said at exit (DEBUG, TEST)
 
     def run(self) -> None:
         """Build the node and run it; Ctrl-C stops it cleanly.
@@ -162,6 +164,7 @@ class SynchronousRunner(AbstractRunner):
         Raises:
             SystemExit: with status 1 after printing an SNR error (see above).
         """
+        runner_ran(self)
         try:
             self.node = Node(self.role, self.config)
             if self.on_node is not None:
@@ -503,6 +506,7 @@ class CliRunner(AbstractRunner):
             )
         self.config = _config_or_exit(components_or_config, exit_on_error=True)
         self.argv = list(sys.argv if argv is None else argv)
+        runner_built(self, self.config)
 
     def parse(self) -> argparse.Namespace:
         """The parsed command line; exits with a clear message when it is wrong."""
@@ -545,6 +549,7 @@ class CliRunner(AbstractRunner):
 
     def run(self) -> None:
         """Run the chosen role(s); Ctrl-C exits cleanly."""
+        runner_ran(self)
         args = self.parse()
         config = self.config
         if args.mode is not None and isinstance(config, Config):

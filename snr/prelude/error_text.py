@@ -118,8 +118,11 @@ def _guess_name(error: BaseException) -> Optional[str]:
     return closest_match(name, choices)
 
 
-def closest_match(word: str, choices: Iterable[str]) -> Optional[str]:
-    """The choice most like ``word``, or None: used for "did you mean" hints.
+def closest_match(word: str, choices: Iterable[str], cutoff: float = 0.6) -> Optional[str]:
+    """The choice most like ``word``, or None: the one rule of every "did you mean" hint.
+
+    Capitals and underscores do not count (``taskHandlers`` is ``task_handlers``);
+    a near miss of SNR's own names (`class_checks`) asks for ``cutoff=0.8``.
 
     Example::
 
@@ -127,8 +130,9 @@ def closest_match(word: str, choices: Iterable[str]) -> Optional[str]:
     """
     import difflib  # here, not at the top: hints are only made when something is wrong
 
-    found: List[str] = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
-    return found[0] if found else None
+    plain = {c.lower().replace("_", ""): c for c in reversed(list(choices))}
+    found = difflib.get_close_matches(word.lower().replace("_", ""), list(plain), 1, cutoff)
+    return plain[found[0]] if found else None
 
 
 def did_you_mean(word: str, choices: Iterable[str]) -> str:

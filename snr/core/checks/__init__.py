@@ -19,6 +19,7 @@ call as "check this" and come back here for the how:
   node; `Node` imports it only when its mode is not DEPLOYED;
 * ``key_hints.py``: a data key read but never stored (DEBUG);
 * ``wiring_checks.py``: an event nothing handles, a handler nothing reaches (DEBUG);
+* ``runner_checks.py``: a runner built and never run, said at exit (not in tests);
 * ``watchdog.py``: a node stuck without a word, a loop flooding the queue (DEBUG);
 * ``step_mode.py``: a console pauses the node and runs its tasks one at a time
   (every mode: a debugger for event-driven code);

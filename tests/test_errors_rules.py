@@ -1,0 +1,271 @@
+"""Mistakes caught by the rule they break, not by the catalogue entry they came from.
+
+The catalogue entries of docs/errors.md for these rules (NEW_ENTRIES) are run
+as printed and compared line by line and in order, as
+`tests.test_errors_catalogue` compares its sections. The tests after them try
+each rule on fresh mistakes, written as a student would, that no entry shows.
+"""
+
+from __future__ import annotations
+
+import textwrap
+import unittest
+from typing import Any, Dict, List
+
+import tests.test_errors_catalogue as catalogue_tests
+import tests.test_errors_silence as silence
+from snr import (
+    AbstractNode,
+    Config,
+    Endpoint,
+    EndpointFactory,
+    LoopFactory,
+    Mode,
+    Node,
+    SomeTasks,
+    Task,
+    TaskId,
+    TaskType,
+    ThreadLoop,
+)
+from snr.prelude import ComponentError
+from snr.prelude.error_text import closest_match
+
+NEW_ENTRIES = ["15n", "15o", "15p", "15q"]
+
+
+class TestNewEntriesLineByLine(unittest.TestCase):
+    """Each new entry prints exactly the page's lines, in order."""
+
+    entries: Dict[str, silence.Entry]
+
+    @classmethod
+    def setUpClass(cls) -> None:
+        cls.entries = silence.catalogue()
+
+    def check(self, label: str) -> None:
+        entry = self.entries[label]
+        if label in silence.AS_A_PROCESS:
+            lines, status = silence.run_process(entry.program)
+        else:
+            wanted = [c for c in map(silence.comparable, entry.output) if c is not None]
+            lines, status = silence.run_program(entry.program, wanted)
+        shown = [c for c in map(catalogue_tests.as_shown, entry.output) if c is not None]
+        printed = [c for c in map(catalogue_tests.as_on_the_page, lines) if c is not None]
+        self.assertTrue(
+            catalogue_tests.matches(shown, printed),
+            f"{label}: printed instead:\n" + "\n".join(lines),
+        )
+        self.assertEqual(status, entry.status, label)
+
+
+silence.add_entry_tests(TestNewEntriesLineByLine, NEW_ENTRIES)
+
+
+# -- fresh mistakes -----------------------------------------------------------------
+class Builds(EndpointFactory):
+    def __init__(self, cls: type) -> None:
+        super().__init__()
+        self.cls = cls
+
+    def get(self, parent: AbstractNode) -> Any:
+        return self.cls(self, parent)
+
+
+class LoopBuilds(LoopFactory):
+    def __init__(self, cls: type) -> None:
+        super().__init__()
+        self.cls = cls
+
+    def get(self, parent: AbstractNode) -> Any:
+        return self.cls(self, parent)
+
+
+class CamelCase(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "camel")
+        self.taskHandlers = {(TaskType.event, "go"): self.go}
+
+    def go(self, task: Task, key: TaskId) -> SomeTasks:
+        return None
+
+
+class Handles(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "handles")
+        self.task_handles = {TaskType.terminate: self.stop}
+
+    def stop(self, task: Task, key: TaskId) -> SomeTasks:
+        return None
+
+
+class CountsHandled(Endpoint):
+    """A counter whose name is near task_handlers: not a dict, so not a slip."""
+
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "counts")
+        self.task_handled = 0
+
+
+class RateSlip(ThreadLoop):
+    def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "rate_slip")
+        self.max_tick_rate = 20
+
+    def loop(self) -> None:
+        self.set_terminate_flag("once")
+
+
+class AsyncBegin(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "async_begin")
+
+    async def begin(self) -> None:  # type: ignore[override]
+        print("never")
+
+
+class AsyncTerminateHandler(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "async_handler")
+        self.task_handlers = {TaskType.terminate: self.on_end}  # type: ignore[dict-item]
+
+    async def on_end(self, task: Task, key: TaskId) -> SomeTasks:
+        return None
+
+
+class HookSlips(Endpoint):
+    def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "slips")
+
+    def begining(self) -> None:
+        print("lights on")
+
+    def halt_(self) -> None:
+        print("lights off")
+
+
+def build(cls: type, mode: Mode = Mode.TEST, loop: bool = False) -> Node:
+    factory = LoopBuilds(cls) if loop else Builds(cls)
+    return Node("rules", Config({"rules": [factory]}, mode))
+
+
+class TestNearMisses(unittest.TestCase):
+    def test_the_one_rule_ignores_capitals_and_underscores(self) -> None:
+        self.assertEqual(closest_match("taskHandlers", ["task_handlers"]), "task_handlers")
+        self.assertEqual(closest_match("URV", ["urov", "topside"]), "urov")
+        self.assertIsNone(closest_match("beginner", ["begin"], cutoff=0.8))
+
+    def test_camel_case_and_a_dropped_letter_are_named_with_their_line(self) -> None:
+        for cls, attr in ((CamelCase, "taskHandlers"), (Handles, "task_handles")):
+            with self.subTest(attr), self.assertRaises(ComponentError) as caught:
+                build(cls)
+            message = str(caught.exception)
+            self.assertIn(f"sets self.{attr}, but SNR reads self.task_handlers", message)
+            self.assertIn("Did you mean self.task_handlers?", message)
+            self.assertIn(f"in {cls.__name__}.__init__", message)
+            self.assertIn(f"self.{attr} = ", message)
+
+    def test_a_value_unlike_snrs_is_the_students_own_name(self) -> None:
+        build(CountsHandled)  # no error: a count is not a handler mapping
+
+    def test_a_rate_slip_in_a_loop_names_max_tick_rate_hz(self) -> None:
+        with self.assertRaises(ComponentError) as caught:
+            build(RateSlip, loop=True)
+        self.assertIn("SNR reads self.max_tick_rate_hz, which stays 0", str(caught.exception))
+
+    def test_hooks_with_ing_or_a_trailing_underscore_are_said(self) -> None:
+        _, lines = silence.run_node([Builds(HookSlips)])
+        text = "\n".join(lines)
+        self.assertIn("HookSlips.begining() is never called", text)
+        self.assertIn("Did you mean begin?", text)
+        self.assertIn("HookSlips.halt_() is never called", text)
+        self.assertIn("Did you mean halt?", text)
+
+    def test_deployed_nodes_do_not_look(self) -> None:
+        build(CamelCase, Mode.DEPLOYED)
+
+
+class TestCoroutines(unittest.TestCase):
+    def test_an_async_hook_is_refused_in_test_mode(self) -> None:
+        with self.assertRaises(ComponentError) as caught:
+            build(AsyncBegin)
+        message = str(caught.exception)
+        self.assertIn("AsyncBegin.begin", message)
+        self.assertIn("is an `async def`, but SNR's handlers, hooks and loop()", message)
+        self.assertIn("async def begin(self)", message)
+
+    def test_an_async_handler_is_refused_in_every_mode(self) -> None:
+        for mode in Mode:
+            with self.subTest(mode), self.assertRaises(ComponentError) as caught:
+                build(AsyncTerminateHandler, mode)
+            self.assertIn("AsyncTerminateHandler.on_end", str(caught.exception))
+
+
+def program(body: str) -> str:
+    return "from snr import *\n" + textwrap.dedent(body)
+
+
+class TestRunnerNeverRan(unittest.TestCase):
+    """Run as processes: the message comes as the interpreter exits."""
+
+    def said(self, source: str) -> List[str]:
+        lines, _ = silence.run_process(source)
+        return [line for line in lines if "never ran" in line]
+
+    def test_a_runner_built_in_a_function_of_the_program_is_named(self) -> None:
+        source = program(
+            """
+            def main() -> None:
+                config = Config({"robot": [TimeoutLoopFactory(seconds=1)]})
+                SynchronousRunner("robot", config)
+
+            main()
+            """
+        )
+        said = self.said(source)
+        self.assertEqual(len(said), 1, said)
+        self.assertIn("SynchronousRunner built at robot.py:5 in main never ran", said[0])
+
+    def test_a_runner_that_ran_is_not_named(self) -> None:
+        source = program('CliRunner({"robot": [TimeoutLoopFactory(ms=1)]}).run()\n')
+        self.assertEqual(self.said(source), [])
+
+    def test_a_runner_inspected_in_a_test_is_not_named(self) -> None:
+        source = program(
+            """
+            import unittest
+
+            class TestConfig(unittest.TestCase):
+                def test_roles(self) -> None:
+                    runner = CliRunner({"robot": [TimeoutLoopFactory(seconds=1)]})
+                    self.assertEqual(runner.config.roles(), ["robot"])
+
+            unittest.main(argv=["robot.py"])
+            """
+        )
+        self.assertEqual(self.said(source), [])
+
+    def test_a_program_that_died_of_an_error_is_told_only_that(self) -> None:
+        source = program(
+            """
+            runner = CliRunner({"robot": [TimeoutLoopFactory(seconds=1)]})
+            print(1 / 0)
+            """
+        )
+        lines, status = silence.run_process(source)
+        self.assertEqual([line for line in lines if "never ran" in line], [])
+        self.assertIn("ZeroDivisionError: division by zero", lines)
+        self.assertEqual(status, 1)
+
+    def test_deployed_mode_says_nothing(self) -> None:
+        source = program(
+            'config = Config({"robot": [TimeoutLoopFactory(seconds=1)]}, Mode.DEPLOYED)\n'
+            'SynchronousRunner("robot", config)\n'
+            'print("built")\n'
+        )
+        lines, status = silence.run_process(source)
+        self.assertEqual((lines, status), (["built"], 0))
+
+
+if __name__ == "__main__":
+    unittest.main()
