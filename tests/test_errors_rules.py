@@ -8,9 +8,11 @@ each rule on fresh mistakes, written as a student would, that no entry shows.
 
 from __future__ import annotations
 
+import re
 import textwrap
+import threading
 import unittest
-from typing import Any, Dict, List
+from typing import Any, Dict, List, Tuple
 
 import tests.test_errors_catalogue as catalogue_tests
 import tests.test_errors_silence as silence
@@ -30,6 +32,7 @@ from snr import (
 )
 from snr.prelude import ComponentError
 from snr.prelude.error_text import closest_match
+from tests.quiet import captured_logs
 
 NEW_ENTRIES = ["15n", "15o", "15p", "15q"]
 
@@ -199,6 +202,99 @@ class TestCoroutines(unittest.TestCase):
             with self.subTest(mode), self.assertRaises(ComponentError) as caught:
                 build(AsyncTerminateHandler, mode)
             self.assertIn("AsyncTerminateHandler.on_end", str(caught.exception))
+
+
+class TestASpinningLoop(unittest.TestCase):
+    """Entry 17e: the watchdog's times cut to 0.01 s a look and 0.1 s stuck (0.2 s a window)."""
+
+    # (what the run prints, what the page shows): the window and the rate vary.
+    AS_ON_THE_PAGE = [
+        (r"for 0\.2 s (.*) ran about [\d,]+ times", r"for 4 s \1 ran about 310,000 times")
+    ]
+
+    @staticmethod
+    def tune(node: AbstractNode) -> None:
+        watchdog = getattr(node, "watchdog", None)
+        assert watchdog is not None
+        watchdog.every_s, watchdog.stuck_s = 0.01, 0.1
+        node.queue.high_water = 10**7  # type: ignore[attr-defined]  # no 17d: it never fills
+
+    def normalised(self, lines: List[str]) -> List[str]:
+        # The suite's own timeout loop waits in a `while` (17b), which the cut times notice.
+        lines = [line for line in lines if "Loop 'timeout_loop'" not in line]
+        kept = [c for c in map(catalogue_tests.as_on_the_page, lines) if c is not None]
+        for pattern, shown in self.AS_ON_THE_PAGE:
+            kept = [re.sub(pattern, shown, line) for line in kept]
+        return kept
+
+    def test_17e_line_by_line(self) -> None:
+        program_text, shown = docs_entry("17e")
+        lines, status = silence.run_program(
+            program_text, [], tune=self.tune, done=lambda text: "has no max_tick_rate_hz" in text
+        )
+        output = shown[1 : shown.index("$ echo $?")]
+        page = [c for c in map(catalogue_tests.as_shown, output) if c is not None]
+        self.assertTrue(
+            catalogue_tests.matches(page, self.normalised(lines)), "printed:\n" + "\n".join(lines)
+        )
+        self.assertEqual(status, int(shown[shown.index("$ echo $?") + 1]))
+
+    def test_a_rate_or_a_loop_that_stores_nothing_is_not_told_off(self) -> None:
+        class Ticking(ThreadLoop):
+            def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+                super().__init__(factory, parent, "ticking", max_tick_rate_hz=2000)
+
+            def loop(self) -> None:
+                self.schedule([])
+
+        class Counting(ThreadLoop):
+            def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+                super().__init__(factory, parent, "counting")
+                self.n = 0
+
+            def loop(self) -> None:
+                self.n += 1
+
+        source = program(
+            """
+            class Scheduler(ThreadLoop):
+                def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+                    super().__init__(factory, parent, "scheduler")
+
+                def loop(self) -> None:
+                    self.schedule(tasks.event("tick"))
+
+
+            class SchedulerFactory(LoopFactory):
+                def get(self, parent: AbstractNode) -> Scheduler:
+                    return Scheduler(self, parent)
+
+
+            CliRunner({"robot": [SchedulerFactory(), TimeoutLoopFactory(seconds=6)]}).run()
+            """
+        )
+        lines, _ = silence.run_program(
+            source, [], tune=self.tune, done=lambda text: "has no max_tick_rate_hz" in text
+        )
+        self.assertTrue(any("Loop 'scheduler'" in line for line in lines), lines)
+        node = Node("quiet", Config({"quiet": [LoopBuilds(Ticking), LoopBuilds(Counting)]}))
+        assert node.watchdog is not None
+        node.watchdog.every_s, node.watchdog.stuck_s = 0.01, 0.05
+        timer = threading.Timer(0.5, node.set_terminate_flag, ["enough"])
+        timer.start()
+        with captured_logs("snr.quiet"):
+            node.loop()
+        timer.cancel()
+        self.assertEqual([s for s in node.watchdog.said if s.startswith("spin")], [])
+
+
+def docs_entry(label: str) -> Tuple[str, List[str]]:
+    """The program and the output lines of errors.md entry ``label``."""
+    text = catalogue_tests.DOCS.read_text("utf-8")
+    chunk = text[text.index(f"\n### {label}. ") :]
+    chunk = chunk[: re.compile(r"\n##+ ").search(chunk, 5).start()]  # type: ignore[union-attr]
+    program_text = chunk.split("```python\n", 1)[1].split("```", 1)[0]
+    return program_text, chunk.split("```text\n", 1)[1].split("```", 1)[0].splitlines()
 
 
 def program(body: str) -> str:
