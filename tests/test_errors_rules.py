@@ -34,7 +34,7 @@ from snr.prelude import ComponentError
 from snr.prelude.error_text import closest_match
 from tests.quiet import captured_logs
 
-NEW_ENTRIES = ["15n", "15o", "15p", "15q"]
+NEW_ENTRIES = ["15n", "15o", "15p", "15q", "16p"]
 
 
 class TestNewEntriesLineByLine(unittest.TestCase):
@@ -361,6 +361,41 @@ class TestRunnerNeverRan(unittest.TestCase):
         )
         lines, status = silence.run_process(source)
         self.assertEqual((lines, status), (["built"], 0))
+
+
+class TestUncaughtSNRErrors(unittest.TestCase):
+    """Run as processes: what Python's report of an uncaught error becomes."""
+
+    WRONG_MODE = program(
+        """
+        def build() -> Config:
+            return Config({"robot": [TimeoutLoopFactory(seconds=1)]}, mode="test")
+
+        build()
+        """
+    )
+
+    def test_a_call_in_a_function_shows_both_student_frames_and_no_snr_frame(self) -> None:
+        lines, status = silence.run_process(self.WRONG_MODE)
+        text = "\n".join(lines)
+        self.assertEqual(status, 1)
+        self.assertIn('robot.py", line 6, in <module>', text)
+        self.assertIn('robot.py", line 4, in build', text)
+        self.assertIn("ConfigError: Config(mode=...) got 'test'", text)
+        self.assertNotIn("snr/", text.replace("SNR_VERBOSE", ""))
+
+    def test_snr_verbose_or_dash_dash_verbose_shows_everything(self) -> None:
+        for argv in (("robot.py", "robot", "--verbose"),):
+            lines, _ = silence.run_process(self.WRONG_MODE, argv)
+            self.assertIn("snr.prelude.errors.ConfigError", "\n".join(lines))
+            self.assertTrue(any("snr/core/config.py" in line for line in lines), lines)
+
+    def test_other_errors_and_a_programs_own_hook_are_left_alone(self) -> None:
+        lines, _ = silence.run_process(program("import json\njson.loads('{')\n"))
+        self.assertTrue(any("json/decoder.py" in line for line in lines), lines)
+        own = "import sys\nsys.excepthook = lambda *a: print('mine')\n" + self.WRONG_MODE
+        lines, _ = silence.run_process(own)
+        self.assertEqual(lines, ["mine"])
 
 
 if __name__ == "__main__":

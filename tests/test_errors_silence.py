@@ -53,7 +53,8 @@ from snr import (
     TimeoutLoopFactory,
     tasks,
 )
-from snr.prelude import ComponentError, HandlerError
+from snr.core.checks.top_level import snr_excepthook
+from snr.prelude import ComponentError, HandlerError, SNRError
 from snr.std_mods.utils.timeout import TimeoutLoop
 from tests.examples_support import ROOT
 from tests.quiet import captured_logs
@@ -160,6 +161,12 @@ def run_program(
                 runpy.run_path(path, run_name="__main__")
             except SystemExit as end:
                 status = end.code if isinstance(end.code, int) else 1
+            except SNRError as error:  # what `import snr`'s sys.excepthook prints for it
+                tb = error.__traceback__
+                while tb is not None and tb.tb_frame.f_code.co_filename != path:
+                    tb = tb.tb_next  # runpy's frames: `python robot.py` has none
+                snr_excepthook(type(error), error, tb)
+                status = 1
             except Exception as error:  # what Python prints for an uncaught error
                 frames = [f for f in traceback.extract_tb(error.__traceback__)]
                 theirs = [f for f in frames if f.filename == path]
@@ -176,8 +183,9 @@ def run_program(
     return lines, status
 
 
-# Entries whose message comes as the interpreter exits: run as a process of their own.
-AS_A_PROCESS = {"15q"}
+# Entries whose message the interpreter itself gives (at exit, or its report of an
+# uncaught error): run as a process of their own.
+AS_A_PROCESS = {"15q", "16p"}
 
 
 def run_process(source: str, argv: Sequence[str] = ("robot.py", "robot")) -> Tuple[List[str], int]:

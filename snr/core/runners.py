@@ -531,6 +531,7 @@ class CliRunner(AbstractRunner):
             default=None,
             help="override the config's mode",
         )
+        parser.add_argument("--verbose", action="store_true", help=argparse.SUPPRESS)  # top_level
         if len(self.argv) < 2:
             parser.print_usage(sys.stderr)
             print(
