@@ -12,7 +12,7 @@ import re
 import textwrap
 import threading
 import unittest
-from typing import Any, Dict, List, Tuple
+from typing import Any, Callable, Dict, List, Tuple
 
 import tests.test_errors_catalogue as catalogue_tests
 import tests.test_errors_silence as silence
@@ -24,17 +24,19 @@ from snr import (
     LoopFactory,
     Mode,
     Node,
+    Page,
     SomeTasks,
     Task,
     TaskId,
     TaskType,
     ThreadLoop,
 )
+from snr.core.checks.explain import page_hint
 from snr.prelude import ComponentError
-from snr.prelude.error_text import closest_match
+from snr.prelude.error_text import closest_match, exception_text
 from tests.quiet import captured_logs
 
-NEW_ENTRIES = ["15n", "15o", "15p", "15q", "16p"]
+NEW_ENTRIES = ["15n", "15o", "15p", "15q", "16p", "16q", "16r"]
 
 
 class TestNewEntriesLineByLine(unittest.TestCase):
@@ -361,6 +363,52 @@ class TestRunnerNeverRan(unittest.TestCase):
         )
         lines, status = silence.run_process(source)
         self.assertEqual((lines, status), (["built"], 0))
+
+
+def _unpack(page: Any) -> object:
+    left, right = page
+    return (left, right)
+
+
+class TestAPageUsedAsItsValue(unittest.TestCase):
+    """Every use of a Page as a value names the fix for where the page came from."""
+
+    PAGE = Page("depth", 2.5, "robot", 0.0)
+
+    def raised(self, use: Callable[[Page], object]) -> BaseException:
+        try:
+            use(self.PAGE)
+        except TypeError as error:
+            return error
+        raise AssertionError("no TypeError")
+
+    def test_every_use_gets_the_handlers_fix(self) -> None:
+        uses: Dict[str, Callable[[Page], object]] = {
+            "unpacking": _unpack,
+            "indexing": lambda page: page[0],  # type: ignore[index]
+            "iterating": lambda page: list(page),  # type: ignore[call-overload]
+            "comparing": lambda page: page < 2.0,  # type: ignore[operator]
+            "arithmetic": lambda page: page * 2,  # type: ignore[operator]
+            "len": lambda page: len(page),  # type: ignore[arg-type]
+            "formatting": lambda page: f"{page:.1f}",
+        }
+        for what, use in uses.items():
+            with self.subTest(what):
+                text = exception_text(self.raised(use))
+                self.assertIn("its value is page.data, e.g. task.val_list[0].data", text)
+
+    def test_a_page_from_get_page_gets_get_data(self) -> None:
+        def on_depth(node: Any) -> object:
+            return node.get_page("depth") + 1.0
+
+        class Reads:
+            def get_page(self, key: str) -> Page:
+                return TestAPageUsedAsItsValue.PAGE
+
+        error = self.raised(lambda page: on_depth(Reads()))
+        text = page_hint(error, exception_text(error))
+        self.assertIn("read self.get_data(key)", text)
+        self.assertNotIn("val_list", text)
 
 
 class TestUncaughtSNRErrors(unittest.TestCase):

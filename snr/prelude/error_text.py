@@ -22,12 +22,14 @@ from __future__ import annotations
 
 import builtins
 import enum
+import re
 import traceback
 from typing import Any, Iterable, List, Optional
 
 from snr.prelude.student_code import call_site
 
 __all__ = [
+    "PAGE_IN_A_HANDLER",
     "bad_data_key",
     "closest_match",
     "did_you_mean",
@@ -63,12 +65,15 @@ def exception_text(error: BaseException) -> str:
             guess = _guess_name(error)
             if guess is not None:
                 text = f"{text}. {_SUGGESTION}: {guess!r}?"
-    if isinstance(error, TypeError) and "'Page'" in text:
-        text += (
-            ". A stored page reaches a handler as a Page in task.val_list; "
-            "its value is page.data, e.g. task.val_list[0].data."
-        )
+    if isinstance(error, TypeError) and re.search(r"\bPage\b", text):  # 'Page', Page object
+        text += PAGE_IN_A_HANDLER  # checks/explain.py says it for get_page and loops
     return text
+
+
+PAGE_IN_A_HANDLER = (
+    ". A stored page reaches a handler as a Page in task.val_list; "
+    "its value is page.data, e.g. task.val_list[0].data."
+)
 
 
 def _innermost_locals(error: BaseException) -> Optional[dict[str, Any]]:
