@@ -156,7 +156,7 @@ class SynchronousRunner(AbstractRunner):
         self.announce_interrupt = announce_interrupt
         self.on_node = on_node
         self.node: Optional[Node] = None
-        runner_built(self, self.config)  # a runner never run is said at exit (DEBUG, TEST)
+        runner_built(self, self.config)  # one never run is said at exit (checks/runner_checks)
 
     def run(self) -> None:
         """Build the node and run it; Ctrl-C stops it cleanly.
