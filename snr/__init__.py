@@ -277,6 +277,16 @@ __all__ = [
     "tasks",
 ]
 
+
+def _set_excepthook() -> None:
+    """An SNR error a student's own call raises shows their frames, not SNR's (errors.md 16p)."""
+    from snr.core.checks.top_level import install_excepthook
+
+    install_excepthook()
+
+
+_set_excepthook()
+
 _HOME: Dict[str, str] = {name: module for module, names in _LAZY.items() for name in names}
 
 

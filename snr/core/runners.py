@@ -30,6 +30,7 @@ from snr.core.checks.call_checks import (
     check_runner_args,
     no_sim_clock_across_processes,
 )
+from snr.core.checks.runner_checks import runner_built, runner_ran
 from snr.core.config import Config
 from snr.core.node import Node
 from snr.prelude import (
@@ -141,6 +142,7 @@ class SynchronousRunner(AbstractRunner):
         self.announce_interrupt = announce_interrupt
         self.on_node = on_node
         self.node: Optional[Node] = None
+        runner_built(self, self.config)  # one never run is said at exit (checks/runner_checks)
 
     def run(self) -> None:
         """Build the node and run it; Ctrl-C stops it cleanly.
@@ -148,6 +150,7 @@ class SynchronousRunner(AbstractRunner):
         Raises:
             SystemExit: with status 1 after printing an SNR error (see above).
         """
+        runner_ran(self)
         try:
             self.node = Node(self.role, self.config)
             if self.on_node is not None:
@@ -443,6 +446,7 @@ class CliRunner(AbstractRunner):
             exit_on_error=True,
         )
         self.argv = list(sys.argv if argv is None else argv)
+        runner_built(self, self.config)
 
     def parse(self) -> argparse.Namespace:
         """The parsed command line; exits with a clear message when it is wrong."""
@@ -467,6 +471,7 @@ class CliRunner(AbstractRunner):
             default=None,
             help="override the config's mode",
         )
+        parser.add_argument("--verbose", action="store_true", help=argparse.SUPPRESS)  # top_level
         if len(self.argv) < 2:
             parser.print_usage(sys.stderr)
             print(
@@ -485,6 +490,7 @@ class CliRunner(AbstractRunner):
 
     def run(self) -> None:
         """Run the chosen role(s); Ctrl-C exits cleanly."""
+        runner_ran(self)
         args = self.parse()
         config = self.config
         if args.mode is not None and isinstance(config, Config):

@@ -22,10 +22,11 @@ from __future__ import annotations
 
 import builtins
 import enum
+import re
 import traceback
 from typing import Any, Iterable, List, Optional
 
-__all__ = ["closest_match", "did_you_mean", "exception_text", "short_repr"]
+__all__ = ["PAGE_IN_A_HANDLER", "closest_match", "did_you_mean", "exception_text", "short_repr"]
 
 _SUGGESTION = "Did you mean"
 
@@ -51,12 +52,15 @@ def exception_text(error: BaseException) -> str:
             guess = _guess_name(error)
             if guess is not None:
                 text = f"{text}. {_SUGGESTION}: {guess!r}?"
-    if isinstance(error, TypeError) and "'Page'" in text:
-        text += (
-            ". A stored page reaches a handler as a Page in task.val_list; "
-            "its value is page.data, e.g. task.val_list[0].data."
-        )
+    if isinstance(error, TypeError) and re.search(r"\bPage\b", text):  # 'Page', Page object
+        text += PAGE_IN_A_HANDLER  # checks/explain.py says it for get_page and loops
     return text
+
+
+PAGE_IN_A_HANDLER = (
+    ". A stored page reaches a handler as a Page in task.val_list; "
+    "its value is page.data, e.g. task.val_list[0].data."
+)
 
 
 def _innermost_locals(error: BaseException) -> Optional[dict[str, Any]]:
@@ -106,8 +110,11 @@ def _guess_name(error: BaseException) -> Optional[str]:
     return closest_match(name, choices)
 
 
-def closest_match(word: str, choices: Iterable[str]) -> Optional[str]:
-    """The choice most like ``word``, or None: used for "did you mean" hints.
+def closest_match(word: str, choices: Iterable[str], cutoff: float = 0.6) -> Optional[str]:
+    """The choice most like ``word``, or None: the one rule of every "did you mean" hint.
+
+    Capitals and underscores do not count (``taskHandlers`` is ``task_handlers``);
+    a near miss of SNR's own names (`class_checks`) asks for ``cutoff=0.8``.
 
     Example::
 
@@ -115,8 +122,9 @@ def closest_match(word: str, choices: Iterable[str]) -> Optional[str]:
     """
     import difflib  # here, not at the top: hints are only made when something is wrong
 
-    found: List[str] = difflib.get_close_matches(word, list(choices), n=1, cutoff=0.6)
-    return found[0] if found else None
+    plain = {c.lower().replace("_", ""): c for c in reversed(list(choices))}
+    found = difflib.get_close_matches(word.lower().replace("_", ""), list(plain), 1, cutoff)
+    return plain[found[0]] if found else None
 
 
 def did_you_mean(word: str, choices: Iterable[str]) -> str:

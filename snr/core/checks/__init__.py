@@ -22,6 +22,9 @@ call as "check this" and come back here for the how:
   node; `Node` imports it only when its mode is not DEPLOYED;
 * ``key_hints.py``: a data key read but never stored (DEBUG);
 * ``wiring_checks.py``: an event nothing handles, a handler nothing reaches (DEBUG);
+* ``runner_checks.py``: a runner built and never run, said at exit (not in tests);
+* ``top_level.py``: an SNR error nobody caught, printed with the student's frames
+  only (``import snr`` sets it as ``sys.excepthook``);
 * ``watchdog.py``: a node stuck without a word, a loop flooding the queue (DEBUG);
 * ``step_mode.py``: a console pauses the node and runs its tasks one at a time
   (every mode: a debugger for event-driven code);

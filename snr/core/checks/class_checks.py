@@ -15,7 +15,15 @@ component is added (SNR's own classes are skipped):
 * **a return nobody reads** (warnings, DEBUG): ``begin()``, ``setup()``,
   ``loop()``, ``halt()`` or ``terminate()`` returning a task;
 * **a hook SNR never calls** (warnings, DEBUG): ``def setup`` in an
-  `Endpoint` (endpoints have ``begin``), ``def terminte`` (misspelt).
+  `Endpoint` (endpoints have ``begin``), ``def terminte`` (misspelt);
+* **a near miss of a name SNR reads** (errors, DEBUG and TEST):
+  ``self.task_handler = {...}`` or ``self.taskHandlers`` while
+  ``task_handlers`` stays empty, ``self.max_tick_rate = 10`` while
+  ``max_tick_rate_hz`` stays 0. "Near" is `closest_match` with ``cutoff=0.8``,
+  the rule of every "did you mean" hint, made stricter;
+* **an ``async def`` hook or loop()** (errors, DEBUG and TEST): SNR calls them
+  and never awaits them (an ``async def`` handler is refused in every mode,
+  by `check_handler`).
 
 The source is read with `inspect`; a class whose source cannot be read
 (typed in a console, shipped as ``.pyc``) is checked only for attributes
@@ -33,6 +41,7 @@ import inspect
 import textwrap
 from typing import Callable, Dict, Iterator, List, Optional, Set, Tuple
 
+from snr.core.checks.handler_checks import async_text
 from snr.core.endpoint import Endpoint
 from snr.core.loop import LoopState, ThreadLoop
 from snr.prelude import (
@@ -42,9 +51,9 @@ from snr.prelude import (
     ComponentError,
 )
 from snr.prelude.error_text import closest_match
-from snr.prelude.student_code import describe_class, parse_source, source_block
+from snr.prelude.student_code import describe_callable, describe_class, parse_source, source_block
 
-__all__ = ["check_component", "framework_names"]
+__all__ = ["NEAR_MISS", "check_component", "framework_names"]
 
 # Names a student is meant to set or define.
 _MAY_SET = {"name", "task_handlers", "max_tick_rate_hz", "terminate_reason"}
@@ -72,6 +81,21 @@ _SELF_BUILDERS = {
     "store_page_task",
     "task_store_data",  # the thesis's names (listing 6.3) for the two above
     "task_store_page",
+}
+
+NEAR_MISS = 0.8  # closest_match's cutoff for a slip of the keys in a name SNR uses
+# Names SNR reads: when SNR's stays unset, and what a value meant for it looks like.
+_READ_BY_SNR: Dict[str, Tuple[Callable[[AbstractComponent], bool], Tuple[type, ...], str]] = {
+    "task_handlers": (
+        lambda component: not component.task_handlers,
+        (dict,),
+        "stays empty, so none of its handlers ever runs",
+    ),
+    "max_tick_rate_hz": (
+        lambda component: getattr(component, "max_tick_rate_hz", 1) == 0,
+        (int, float),
+        "stays 0, so loop() runs again the moment it returns",
+    ),
 }
 
 _checked: Dict[type, List[Tuple[str, bool]]] = {}  # class -> [(message, is_error)]
@@ -142,12 +166,51 @@ def _check_instance(component: AbstractComponent, kind: type) -> None:
     """Collisions seen in the built object (for classes whose source is unreadable)."""
     names = framework_names(kind)
     owned = vars(component)
+    _check_near_misses(component, names)
+    for hook in _LOOP_HOOKS if kind is ThreadLoop else _ENDPOINT_HOOKS:
+        method = getattr(component, hook, None)
+        if inspect.iscoroutinefunction(method):
+            raise ComponentError(async_text(f"{describe_callable(method)}", method))
     for name in owned:
         if name in names and name not in _INSTANCE_NAMES and name not in _LOOP_INSTANCE_NAMES:
             raise ComponentError(_collision(type(component), name, names[name], ""))
     state = owned.get("state", LoopState.NEW)
     if kind is ThreadLoop and not isinstance(state, LoopState):
         raise ComponentError(_collision(type(component), "state", names["state"], ""))
+
+
+def _check_near_misses(component: AbstractComponent, names: Dict[str, str]) -> None:
+    """``self.task_handler = {...}`` while ``task_handlers`` stays empty: raise, at the line."""
+    unset = [name for name, (is_unset, _, _) in _READ_BY_SNR.items() if is_unset(component)]
+    if not unset:
+        return
+    for attr, value in vars(component).items():
+        if attr.startswith("_") or attr in names or attr in _MAY_SET:
+            continue
+        guess = closest_match(attr, unset, cutoff=NEAR_MISS)
+        if guess is None or not isinstance(value, _READ_BY_SNR[guess][1]):
+            continue
+        cls = type(component)
+        raise ComponentError(
+            f"{describe_class(cls)} sets self.{attr}, but SNR reads self.{guess}, which "
+            f"{_READ_BY_SNR[guess][2]}. Did you mean self.{guess}? Rename it: "
+            f"`self.{guess} = ...`.{_assignment(cls, attr)}"
+        )
+
+
+def _assignment(cls: type, attr: str) -> str:
+    """The line of the student's class that assigns ``self.attr``, as a block, or ""."""
+    for own in cls.__mro__:
+        found = _class_tree(own) if own.__module__.split(".", 1)[0] != "snr" else None
+        if found is None:
+            continue
+        filename, tree = found
+        for method in _methods(tree):
+            for node in _walk_own(method):
+                for target in _targets(node):
+                    if isinstance(target, ast.Attribute) and target.attr == attr:
+                        return _block(filename, own, method.name, target.lineno)
+    return ""
 
 
 def _collision(cls: type, name: str, what: str, where: str) -> str:
@@ -337,20 +400,16 @@ def _uncalled_hooks(
                 False,
             )
             continue
-        guess = closest_match(name, hooks)
-        if guess is not None and _close(name, guess):
+        # "begining", "halting": a hook's name with "ing" is still that hook.
+        guess = closest_match(name, hooks, NEAR_MISS) or closest_match(
+            name.removesuffix("ing"), hooks, NEAR_MISS
+        )
+        if guess is not None:
             yield (
                 f"{cls.__name__}.{name}() is never called: SNR calls {guess}(), and "
                 f"nothing in the class calls {name}(). Did you mean {guess}?{where}",
                 False,
             )
-
-
-def _close(name: str, hook: str) -> bool:
-    """A slip of the keys (``terminte``, ``Begin``), not another word (``beginner``)."""
-    import difflib
-
-    return difflib.SequenceMatcher(None, name.lower(), hook).ratio() >= 0.8
 
 
 def _names_used(tree: ast.ClassDef) -> Set[str]:

@@ -19,7 +19,7 @@ import inspect
 import linecache
 import threading
 from types import CodeType
-from typing import Any, Dict, Iterator, List, Optional, Union
+from typing import Any, Dict, Iterator, List, Optional, Tuple, Union
 
 from snr.core.checks.call_checks import bad_data_key, page_as_data, wrong_call
 from snr.prelude import (
@@ -38,13 +38,14 @@ from snr.prelude import (
     TaskHandler,
     ThreadSafetyError,
 )
-from snr.prelude.error_text import exception_text, short_repr
+from snr.prelude.error_text import PAGE_IN_A_HANDLER, exception_text, short_repr
 from snr.prelude.student_code import (
     caller_location,
     code_name,
     def_block,
     describe_callable,
     describe_class,
+    is_runtime_file,
     parse_source,
     short_path,
     source_block,
@@ -54,6 +55,7 @@ from snr.prelude.student_code import (
 from snr.prelude.task import format_task
 
 __all__ = [
+    "PAGE_FROM_GET_PAGE",
     "THREAD_SAFE_INSTEAD",
     "bad_result_error",
     "bad_result_hint",
@@ -65,6 +67,7 @@ __all__ = [
     "handler_failure",
     "loop_failure",
     "only_returns_none",
+    "page_hint",
     "reload_failure",
     "returning_lines",
     "slow_handler_text",
@@ -180,7 +183,7 @@ def handler_failure(
         handling = f"a run of {run_size} tasks given to it at once, the first being {handling}"
     message = (
         f"Task handler {describe_callable(handler)}{where} raised "
-        f"{exception_text(error)}\nwhile handling {handling} "
+        f"{page_hint(error, exception_text(error))}\nwhile handling {handling} "
         f"{task_values(task)}.{_values_hint(task)}\n"
         f"Where it happened (most recent call last):\n{frames}"
     )
@@ -333,6 +336,37 @@ def _own_returns(function: ast.AST) -> Iterator[ast.Return]:
             stack.extend(ast.iter_child_nodes(node))
 
 
+PAGE_FROM_GET_PAGE = (
+    ". get_page(key) gives the whole Page (its data, time and origin); for the value "
+    "alone, read self.get_data(key), or use page.data."
+)
+
+
+def page_hint(error: BaseException, text: str, in_a_loop: bool = False) -> str:
+    """``text`` with the fix for a Page used as its value, for where the page came from.
+
+    `exception_text` gives a handler's fix (``task.val_list[0].data``); a page
+    that came from ``get_page`` (always, in a loop) is read with ``get_data``.
+    Where it came from is told by the names the failing function uses.
+
+    Example::
+
+        page_hint(error, exception_text(error), in_a_loop=True)
+        # "TypeError: '>' not supported ... 'Page' and 'float'. get_page(key) gives ..."
+    """
+    if PAGE_IN_A_HANDLER not in text:
+        return text
+    tb = error.__traceback__
+    names: Tuple[str, ...] = ()
+    while tb is not None:
+        if not is_runtime_file(tb.tb_frame.f_code.co_filename):
+            names = tb.tb_frame.f_code.co_names  # the innermost frame of the student's
+        tb = tb.tb_next
+    if in_a_loop or ("get_page" in names and "val_list" not in names):
+        return text.replace(PAGE_IN_A_HANDLER, PAGE_FROM_GET_PAGE)
+    return text
+
+
 def slow_handler_text(handler: TaskHandler, task: Task, took_s: float) -> str:
     """The warning for a handler that held the node's thread too long."""
     return (
@@ -350,7 +384,7 @@ def loop_failure(loop: AbstractLoop, error: BaseException, deployed: bool) -> Lo
     raised in ``loop()`` is explained too, instead of vanishing with the thread.
     """
     frames = student_frames(error.__traceback__)
-    what = exception_text(error)
+    what = page_hint(error, exception_text(error), in_a_loop=True)
     if isinstance(error, SystemExit):
         what = f"sys.exit({'' if error.code is None else repr(error.code)})"
     message = (

@@ -3,8 +3,9 @@
 `HandlerMap` (``snr/core/dispatch.py``) calls `check_entry` (`check_task_id`
 and `check_handler`) on every entry of a ``task_handlers`` mapping as it is set, and
 the node calls `check_burst_handlers` when a component is added or changes its
-handlers. So a handler registered under a wrong id, or written with the wrong
-parameters, is refused at start-up, before the robot moves, in every mode.
+handlers. So a handler registered under a wrong id, written with the wrong
+parameters, or written as an ``async def`` (`async_text`), is refused at
+start-up, before the robot moves, in every mode.
 
 Example::
 
@@ -22,7 +23,7 @@ from snr.prelude import AbstractComponent, ComponentError, TaskId, TaskType
 from snr.prelude.error_text import closest_match
 from snr.prelude.student_code import caller_block, def_block, describe_callable, describe_class
 
-__all__ = ["check_burst_handlers", "check_entry", "check_handler", "check_task_id"]
+__all__ = ["async_text", "check_burst_handlers", "check_entry", "check_handler", "check_task_id"]
 
 _STORE_PAGE = TaskType.store_page
 
@@ -122,6 +123,8 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
     code = getattr(getattr(handler, "__func__", handler), "__code__", None)
     if code is not None and code in _checked_code:
         return
+    if inspect.iscoroutinefunction(handler):
+        raise ComponentError(async_text(f"Task handler {describe_callable(handler)}", handler))
     try:
         signature = inspect.signature(handler)
     except (TypeError, ValueError):  # builtins without signatures: trust them
@@ -144,6 +147,30 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
         ) from None
     if code is not None:
         _checked_code.add(code)
+
+
+def async_text(what: str, function: Any) -> str:
+    """Why an ``async def`` handler, hook or ``loop()`` cannot work, and what to write.
+
+    Example::
+
+        async_text("Task handler Pump.on_go (robot.py:9)", pump.on_go)
+        # "... is an `async def`, but SNR's handlers, hooks and loop() are plain functions ..."
+    """
+    name = getattr(function, "__name__", "handler")
+    wait = (
+        "loop() runs on a thread of its own, so it may wait the plain way: "
+        "time.sleep(0.1), not await asyncio.sleep(0.1); max_tick_rate_hz sets its pace"
+        if name == "loop"
+        else "to wait for something, do it in a ThreadLoop's loop(), which runs on a "
+        "thread of its own"
+    )
+    return (
+        f"{what} is an `async def`, but SNR's handlers, hooks and loop() are plain "
+        f"functions: the node calls {name}() and goes on when it returns, and never awaits "
+        f"it, so none of its body would run. Write it as `def {name}(...)`, without "
+        f"`async` and without `await` inside; {wait}.\n{def_block(function)}"
+    ).rstrip()
 
 
 def check_burst_handlers(component: AbstractComponent) -> None:

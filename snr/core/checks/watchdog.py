@@ -22,6 +22,14 @@ rule it breaks:
    tenth of its high-water mark or a producer had to wait for room since the
    last look; the queue swings from full to nearly empty while a loop floods
    it, so a look that finds it shallow counts as behind for ``FLOOD_GRACE_S``.
+3b. **A loop with no rate that spins**: a student's loop with no
+   ``max_tick_rate_hz`` whose ``loop()`` stores or schedules (it names
+   ``store_data``, ``store_page`` or ``schedule``) ran more than ``spin_hz``
+   (1,000) passes a second for twice ``stuck_s`` (4 s) and was not reported
+   by rule 3 (which has ``stuck_s`` to speak for a loop that had to wait for
+   room). *Set max_tick_rate_hz*: no sensor needs more.
+   The passes are the profiler's count (on in DEBUG unless
+   ``Config(profile=False)``; without it this rule is off).
 4. **A node nothing will ever stop**: for ``idle_s`` its queue was empty, no
    handler ran, no loop of it was alive, and no other thread was running in
    the program (the main thread when the node runs on another, a comms I/O
@@ -64,6 +72,7 @@ from types import CodeType, FrameType
 from typing import TYPE_CHECKING, Dict, FrozenSet, Iterable, List, Optional, Protocol, Set, Tuple
 
 from snr.core import tasks
+from snr.core.checks.profiler import Profiler
 from snr.core.handler_runner import HandlerRunner
 from snr.core.loop import ThreadLoop
 from snr.core.task_queue import TaskQueue
@@ -147,6 +156,8 @@ class Watchdog:
     every_s: float = 0.5
     stuck_s: float = 2.0
     idle_s: float = 3.0
+    spin_hz: float = 1000.0
+    """Passes a second of a rate-less, storing loop that are reported (rule 3b)."""
     FLOOD_GRACE_S = 1.0
     """A node that was behind less than this long ago still counts as behind
     (its queue swings from full to empty and back while a loop floods it)."""
@@ -175,6 +186,7 @@ class Watchdog:
         self._flooders: List[ThreadLoop] = []
         self._idle_since: Optional[float] = None
         self._quiet = False  # the last look found nothing to watch: the next comes later
+        self._passes: Dict[ThreadLoop, Tuple[float, float]] = {}  # (passes, when) at a look
 
     # -- life cycle ---------------------------------------------------------
     def start(self, node_thread: int, ignore: Iterable[threading.Thread] = ()) -> None:
@@ -218,6 +230,7 @@ class Watchdog:
         theirs = [loop for loop in loops if _is_students(loop)]
         self._check_loops(theirs, frames, now)
         self._check_flood(theirs, now)
+        self._check_spin(theirs, now)
         self._check_idle(handler is None, loops, now)
         self._quiet = (
             handler is None
@@ -371,6 +384,38 @@ class Watchdog:
             f"for room{f' (at {where})' if where else ''}. {fix}"
         )
 
+    # -- 3b. a loop with no rate that spins -------------------------------
+    def _check_spin(self, loops: List[ThreadLoop], now: float) -> None:
+        profiler = getattr(self.node, "profiler", None)
+        if not isinstance(profiler, Profiler):
+            return
+        if self.handler_stuck or self.node.step_mode.paused:
+            self._passes.clear()  # the node's thread is held: rule 1 (or a console) speaks
+            return
+        for loop in loops:
+            # Rule 3 speaks for a loop that waited for room; it has stuck_s to do so.
+            if loop.max_tick_rate_hz > 0 or loop in self._flooders or not _stores(loop):
+                continue
+            passes = profiler.loop_cell(loop.name)[0]
+            first, since = self._passes.setdefault(loop, (passes, now))
+            if now - since < 2 * self.stuck_s:
+                continue
+            rate = (passes - first) / (now - since)
+            if rate >= self.spin_hz and (loop, "flood") not in self._said_about:
+                self._say((loop, "flood"), f"spin {loop.name}", self._spin_text(loop, rate))
+            self._passes[loop] = (passes, now)
+
+    def _spin_text(self, loop: ThreadLoop, rate: float) -> str:
+        return (
+            f"Loop {loop.name!r} ({describe_class(type(loop))}) has no max_tick_rate_hz, so "
+            f"loop() runs again the moment it returns: for {2 * self.stuck_s:g} s "
+            f"{describe_callable(type(loop).loop)} ran {_about(rate)} times a second, "
+            "storing or scheduling each time. That is far faster than any sensor "
+            "needs, keeps a core busy, and makes every other task wait behind its own. Give "
+            f"it a rate: super().__init__(factory, parent, {loop.name!r}, max_tick_rate_hz=50) "
+            "runs loop() at most 50 times a second."
+        )
+
     # -- 4. a node nothing will ever stop -----------------------------------
     def _check_idle(self, no_handler: bool, loops: List[ThreadLoop], now: float) -> None:
         idle = (
@@ -483,6 +528,20 @@ def _called_by(frame: Optional[FrameType], callers: FrozenSet[CodeType]) -> Opti
             return frame
         frame = back
     return None
+
+
+_STORES = frozenset({"store_data", "store_page", "schedule"})
+
+
+def _stores(loop: ThreadLoop) -> bool:
+    """True if the loop's own loop() names a way to store or schedule (no source needed)."""
+    code = getattr(type(loop).loop, "__code__", None)
+    return code is not None and not _STORES.isdisjoint(code.co_names)
+
+
+def _about(rate: float) -> str:
+    """``"about 40,000"``: a rate in two significant figures (it varies from run to run)."""
+    return f"about {float(f'{rate:.2g}'):,.0f}"
 
 
 def _is_students(loop: ThreadLoop) -> bool:

@@ -1,0 +1,84 @@
+"""`runner_built` and `runner_ran`: a runner built and never run is said at exit.
+
+``CliRunner({...})`` without ``.run()`` builds the runner and stops there: the
+program ends at once, with status 0 and not a word. The runners tell this
+module when they are built and when they run; at interpreter exit, a runner
+that was built and never run is named, with the line that built it.
+
+The rule, so that a runner built to be looked at in a test is never named:
+only a runner built by the program being run (its ``__main__`` module, as in
+``python robot.py``), not inside a ``unittest.TestCase`` method, not while
+pytest is loaded, not in DEPLOYED mode, and not when the program ended with an
+uncaught error (that error is the news). Nothing is done per task.
+
+Example::
+
+    runner = CliRunner({"robot": [...]})   # runner_built(runner, config) in __init__
+    runner.run()                            # runner_ran(runner) as run() starts
+"""
+
+from __future__ import annotations
+
+import atexit
+import sys
+from typing import Dict, List, Tuple
+
+from snr.prelude import AbstractConfig, Mode
+from snr.prelude.student_code import frame_location, outside_runtime, source_block
+
+__all__ = ["runner_built", "runner_ran"]
+
+# id(runner) -> (runner, "robot.py:4 in <module>\n" + its line as a traceback shows it)
+_not_run: Dict[int, Tuple[object, str]] = {}
+_registered: List[bool] = []
+
+
+def runner_built(runner: object, config: AbstractConfig) -> None:
+    """Remember ``runner`` until it runs, if the program's own code built it.
+
+    Example::
+
+        runner_built(self, self.config)   # last line of a runner's __init__
+    """
+    frame = outside_runtime(sys._getframe(1))
+    if frame is None or frame.f_globals.get("__name__") != "__main__":
+        return
+    if config.mode is Mode.DEPLOYED or "pytest" in sys.modules:
+        return
+    unittest = sys.modules.get("unittest")
+    if unittest is not None and isinstance(frame.f_locals.get("self"), unittest.TestCase):
+        return
+    block = source_block(frame.f_code.co_filename, frame.f_lineno, frame.f_code.co_name)
+    _not_run[id(runner)] = (
+        runner,
+        f"{frame_location(frame)}\n{block}",
+    )  # the runner is kept, so its id is not reused
+    if not _registered:
+        _registered.append(True)
+        atexit.register(_say_not_run)
+
+
+def runner_ran(runner: object) -> None:
+    """``runner.run()`` was called: nothing to say about it at exit.
+
+    Example::
+
+        runner_ran(self)   # first line of a runner's run()
+    """
+    _not_run.pop(id(runner), None)
+
+
+def _say_not_run() -> None:
+    if getattr(sys, "last_value", None) is not None:  # the program died of an error
+        return
+    for runner, where in _not_run.values():
+        name = type(runner).__name__
+        place, block = where.split("\n", 1)
+        print(
+            f"{name} built at {place} never ran: the program ended without starting a "
+            f"node. Call its run(): `{name}(...).run()`, or `runner.run()` on the name "
+            f"you gave it.\n{block}",
+            file=sys.stderr,
+            flush=True,
+        )
+    _not_run.clear()
