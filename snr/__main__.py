@@ -12,6 +12,8 @@ Commands::
                                        draw the system FILE runs, without running it
     python -m snr docs [--serve]       build (if needed) and open the docs, offline
     python -m snr convert IN OUT       convert a recording: JSON lines <-> MCAP (by OUT's name)
+    python -m snr secret new [--force] write a fresh secret for this computer's nodes
+                                       (docs/comms.md, "Who may connect")
     python -m snr version              print the installed version (also: --version)
 """
 
@@ -109,6 +111,17 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "lines. The source's format is read from its first bytes, the target's from its "
         "name (*.mcap: MCAP, anything else: JSON lines).",
     )
+    secret_parser = sub.add_parser(
+        "secret",
+        help="make the secret that only your team's nodes know (docs/comms.md)",
+        description="new: write a fresh random secret to the secret file, which every "
+        "node on this computer then uses to prove it belongs to your system; copy the "
+        "file to each computer of your team. SNR_SECRET in the environment wins over it.",
+    )
+    secret_parser.add_argument("action", choices=["new"], help="new: make a fresh secret")
+    secret_parser.add_argument(
+        "--force", action="store_true", help="replace the secret file if it exists"
+    )
     sub.add_parser(
         "version",
         help="print the installed SNR version",
@@ -145,8 +158,36 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     if args.command == "version":
         print(snr.__version__)
         return 0
+    if args.command == "secret":
+        return _new_secret(bool(args.force))
     parser.print_help()
     return 2
+
+
+def _new_secret(force: bool) -> int:
+    """``snr secret new``: write a fresh secret to the secret file (owner-only), say where."""
+    import os
+
+    from snr.std_mods.comms.handshake import new_secret, secret_file
+
+    path = secret_file()
+    if path.exists() and not force:
+        print(
+            f"snr secret: {path} exists already; nodes on this computer use it. Copy it to "
+            "your team's other computers, or replace it with `snr secret new --force` "
+            "(then copy the new one to every computer of the team).",
+            file=sys.stderr,
+        )
+        return 1
+    path.parent.mkdir(parents=True, exist_ok=True)
+    descriptor = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_TRUNC, 0o600)
+    with os.fdopen(descriptor, "w", encoding="utf-8") as file:
+        file.write(new_secret() + "\n")
+    print(
+        f"Wrote a new secret to {path} (readable by you only). Copy this file to the same "
+        "place on every computer of your team: nodes with it link only to each other."
+    )
+    return 0
 
 
 class _PrintVersion(argparse.Action):

@@ -151,9 +151,11 @@ class TestStrictReading(BackendCase):
 
     def test_the_version_must_be_the_integer_1(self) -> None:
         for _ in self.backends():
-            for version in (b"1.0", b'"1"', b"true", b"null", b"[1]", b"2"):
+            for version in (b"1.0", b'"1"', b"true", b"null", b"[1]", b"3"):
                 with self.subTest(version=version), self.assertRaises(WireFormatError) as ctx:
                     decode_body(b'{"v":%s,"kind":"hello","role":"r"}' % version)
+                with self.subTest(page_version=version), self.assertRaises(WireFormatError):
+                    decode_body(b'{"v":2,"kind":"page","key":"k","data":1,"origin":"o"}')
                 self.assertIn("version", str(ctx.exception))
             for version in (b"1.0", b'"1"', b"true", b"0"):
                 with self.subTest(header=version), self.assertRaises(WireFormatError):

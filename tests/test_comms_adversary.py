@@ -73,7 +73,7 @@ class Trickler:
 
 class TestOddHellos(CommsFaultTest):
     def serve(self, counter: CounterFactory, **options: Any) -> socket.socket:
-        pair = SocketsPair(("127.0.0.1", self.port), **options)
+        pair = SocketsPair(("127.0.0.1", self.port), **{"system": None, **options})
         self.nodes = self.run_nodes(
             Config({"server": [pair.server(), counter]}, mode=Mode.TEST), ["server"]
         )
@@ -178,7 +178,7 @@ class TestConnectionsThatOnlyHoldASlot(CommsFaultTest):
         original = CommsLoop.hello_timeout_s
         CommsLoop.hello_timeout_s = 0.1
         self.addCleanup(setattr, CommsLoop, "hello_timeout_s", original)
-        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=dead_after_s)
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=dead_after_s, system=None)
         self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
         sock = connect_when_listening(self.port)
         self.addCleanup(sock.close)
@@ -210,7 +210,7 @@ class TestAReceiverThatIsBehind(CommsFaultTest):
         Node.max_queued_tasks = 2  # two waiting tasks and the link stops reading
         self.addCleanup(setattr, Node, "max_queued_tasks", original)
         counter = CounterFactory("tick", pause_s=1.5)  # the first page holds the node
-        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.25)
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.25, system=None)
         nodes = self.run_nodes(
             Config({"server": [pair.server(), counter]}, mode=Mode.TEST), ["server"]
         )
@@ -254,7 +254,7 @@ class TestABigPageOnASlowLink(CommsFaultTest):
         original = CommsLoop.hello_timeout_s
         CommsLoop.hello_timeout_s = 0.25
         self.addCleanup(setattr, CommsLoop, "hello_timeout_s", original)
-        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.25)
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.25, system=None)
         self.run_nodes(Config({"server": [pair.server(), counter]}, mode=Mode.TEST), ["server"])
         sock = connect_when_listening(self.port)
         self.addCleanup(sock.close)
@@ -299,7 +299,7 @@ class TestAServerThatHangsUp(CommsFaultTest):
                 accepted += 1
                 sock.close()
 
-        pair = SocketsPair(("127.0.0.1", int(listener.getsockname()[1])))
+        pair = SocketsPair(("127.0.0.1", int(listener.getsockname()[1])), system=None)
         server = threading.Thread(target=hang_up_on_everyone, daemon=True)
         server.start()
         self.run_nodes(Config({"client": [pair.client()]}, mode=Mode.TEST), ["client"])
@@ -311,7 +311,7 @@ class TestAServerThatHangsUp(CommsFaultTest):
 
 class TestDropsBeforeALinkEnds(CommsFaultTest):
     def test_drops_just_before_a_link_ends_are_said_and_kept(self) -> None:
-        pair = SocketsPair(("127.0.0.1", self.port), max_backlog_bytes=64 * 1024)
+        pair = SocketsPair(("127.0.0.1", self.port), max_backlog_bytes=64 * 1024, system=None)
         flood = FloodFactory(count=600)  # 12 MB of pages for a reader that takes none
         nodes = self.run_nodes(
             Config({"server": [pair.server("flood"), flood]}, mode=Mode.TEST), ["server"]

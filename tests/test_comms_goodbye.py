@@ -104,7 +104,7 @@ def goodbyes(lines: List[str]) -> List[str]:
 class TestGoodbyeToOtherPrograms(unittest.TestCase):
     def test_only_a_peer_that_understands_bye_is_sent_one(self) -> None:
         port = free_port()
-        server = SocketsPair(("127.0.0.1", port)).server()
+        server = SocketsPair(("127.0.0.1", port), system=None).server()
         nodes = LocalNodes(Config({"urov": [server]}, mode=Mode.TEST), ["urov"])
         self.addCleanup(nodes.stop)
         old = connect_when_listening(port)  # an older SNR node: its hello has no "bye"

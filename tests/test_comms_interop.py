@@ -1,4 +1,6 @@
-"""Talking to an SNR node with nothing but `socket` and `json` (docs/wire-format.md).
+"""Talking to an SNR node with nothing but `socket`, `json`, `hmac` and `hashlib`.
+
+(docs/wire-format.md; `os.urandom` gives the challenge's random bytes.)
 
 The node runs in a child process. The test's side of each conversation uses
 only the functions below, written from the spec alone (no snr imports), the
@@ -7,12 +9,15 @@ way a program in another language would.
 
 from __future__ import annotations
 
+import hashlib
+import hmac
 import json
+import os
 import random
 import socket
 import time
 import unittest
-from typing import Any, Dict, List
+from typing import Any, Dict, List, Optional
 
 from snr import SocketsPair
 from tests.comms_helpers import (
@@ -64,6 +69,38 @@ def recv_json(sock: socket.socket) -> Dict[str, Any]:
     n = int.from_bytes(recv_exactly(sock, 4), "big")
     obj: Dict[str, Any] = json.loads(recv_exactly(sock, n).decode("utf-8"))
     return obj
+
+
+SYSTEM = "interop"
+SECRET = "a secret the whole team shares"
+
+
+def say_hello(
+    sock: socket.socket, role: str = "foreign", secret: Optional[str] = None
+) -> Dict[str, Any]:
+    """The version 2 hello (docs/wire-format.md 3.1), and the proofs (3.5) with a secret.
+
+    Returns the server's hello; with a secret, checks the server's proof too.
+    """
+    hello: Dict[str, Any] = {"v": 2, "kind": "hello", "role": role, "system": SYSTEM}
+    nonce = os.urandom(32).hex()
+    if secret is not None:
+        hello["nonce"] = nonce
+    send_json(sock, hello)
+    theirs = recv_json(sock)
+    if secret is None:
+        return theirs
+    key = secret.encode("utf-8")
+
+    def mac(side: str, prover: str, verifier: str) -> str:
+        text = f"snr-proof {side} {prover} {verifier}".encode("ascii")
+        return hmac.new(key, text, hashlib.sha256).hexdigest()
+
+    send_json(sock, {"v": 2, "kind": "proof", "mac": mac("client", nonce, theirs["nonce"])})
+    proof = recv_json(sock)
+    assert proof["kind"] == "proof", proof
+    assert hmac.compare_digest(proof["mac"], mac("server", theirs["nonce"], nonce)), "not ours"
+    return theirs
 
 
 def page(key: str, data: Any, origin: str = "foreign", created: float = 42.5) -> Dict[str, Any]:
@@ -142,7 +179,7 @@ class InteropTest(unittest.TestCase):
         self.reports = Reports(self.ctx)
         self.addCleanup(self.reports.close)
         self.port = free_port()
-        self.pair = SocketsPair(server_tuple=("127.0.0.1", self.port))
+        self.pair = SocketsPair(server_tuple=("127.0.0.1", self.port), system=SYSTEM, secret=None)
         self.sockets: List[socket.socket] = []
 
     def start_server(self, *factories: Any) -> NodeProcess:
@@ -166,41 +203,58 @@ class InteropTest(unittest.TestCase):
     def test_a_foreign_program_sends_a_page(self) -> None:
         self.start_server(self.pair.server(), ReporterFactory(self.reports.writer, ["cmd"]))
         sock = self.connect()
-        send_json(sock, {"v": 1, "kind": "hello", "role": "foreign"})
-        send_json(sock, page("cmd", {"A": 1, "stick": [0.5, -1]}))
         self.assertEqual(
-            recv_json(sock),
-            {"v": 1, "kind": "hello", "role": "snr_server", "beat_s": 1.0, "bye": True},
+            say_hello(sock),
+            {"v": 2, "kind": "hello", "role": "snr_server", "beat_s": 1.0, "bye": True}
+            | {"system": SYSTEM},
         )
+        send_json(sock, page("cmd", {"A": 1, "stick": [0.5, -1]}))
         self.assertEqual(self.wait_pages("cmd", 1), [{"A": 1, "stick": [0.5, -1]}])
         self.assertEqual(self.reports.seen[0][3:], ("foreign", 42.5), "origin and time kept")
 
     def test_a_foreign_program_receives_pages(self) -> None:
         self.start_server(self.pair.server(["greeting"]), SendOnConnectFactory("greeting", 3))
-        sock = self.connect()  # sends no hello: it is optional
-        received = [recv_json(sock) for _ in range(4)]
+        sock = self.connect()
+        say_hello(sock)  # the server sends pages once the hello is judged
+        received = [recv_json(sock) for _ in range(3)]
         self.assertEqual(
-            received[0], {"v": 1, "kind": "hello", "role": "snr_server", "beat_s": 1.0, "bye": True}
+            received, [page("greeting", i, "snr_server", 1000.0 + i) for i in range(3)]
         )
-        self.assertEqual(
-            received[1:], [page("greeting", i, "snr_server", 1000.0 + i) for i in range(3)]
-        )
+
+    def test_a_foreign_program_with_the_secret_sends_a_page(self) -> None:
+        pair = SocketsPair(("127.0.0.1", self.port), system=SYSTEM, secret=SECRET)
+        self.start_server(pair.server(), ReporterFactory(self.reports.writer, ["cmd"]))
+        sock = self.connect()
+        self.assertEqual(len(say_hello(sock, secret=SECRET)["nonce"]), 64)
+        send_json(sock, page("cmd", 7))
+        self.assertEqual(self.wait_pages("cmd", 1), [7])
 
     @needs("hypothesis")
     def test_bad_input_barrage_then_good_pages_still_flow(self) -> None:
+        self.barrage(None)
+
+    @needs("hypothesis")
+    def test_bad_input_barrage_with_a_secret_set(self) -> None:
+        self.barrage(SECRET)
+
+    def barrage(self, secret: Optional[str]) -> None:
         writer = self.reports.writer
+        if secret is not None:
+            self.pair = SocketsPair(("127.0.0.1", self.port), system=SYSTEM, secret=secret)
         server = self.start_server(
             self.pair.server(),
             ReporterFactory(writer, ["good", "bad"]),
             LogForwarderFactory(writer),
         )
         steady = self.connect()  # a good connection open during the whole barrage
+        say_hello(steady, secret=secret)
         send_json(steady, page("good", 1))
         self.assertEqual(self.wait_pages("good", 1), [1])
 
         # Several hundred well-framed but malformed bodies on one connection:
         # each is dropped, and the frames after them are still read.
         barrage = self.connect()
+        say_hello(barrage, secret=secret)
 
         @settings(
             max_examples=300,
@@ -232,6 +286,7 @@ class InteropTest(unittest.TestCase):
         send_json(steady, page("good", 3))  # the steady connection was not disturbed
         self.assertEqual(self.wait_pages("good", 3), [1, 2, 3])
         fresh = self.connect()
+        say_hello(fresh, secret=secret)
         send_json(fresh, page("good", 4))
         self.assertEqual(self.wait_pages("good", 4), [1, 2, 3, 4])
         self.assertTrue(server.process.is_alive())
@@ -240,7 +295,7 @@ class InteropTest(unittest.TestCase):
         self.assertTrue(any(line.startswith("Bad frame from 127.0.0.1:") for line in logs))
         self.assertTrue(any("maximum frame size" in line for line in logs))
         # 300 bad frames: the first five in full, then a count every few seconds
-        from_barrage = [line for line in logs if f"from {barrage_label}" in line]
+        from_barrage = [line for line in logs if f"'foreign' at {barrage_label}" in line]
         self.assertGreaterEqual(len(from_barrage), 5)
         self.assertLessEqual(len(from_barrage), 12, from_barrage)
 

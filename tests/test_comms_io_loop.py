@@ -104,7 +104,7 @@ class TestOneIOThreadPerNode(unittest.TestCase):
     def test_300_idle_peers_cost_no_thread_and_pages_still_arrive_on_time(self) -> None:
         ensure_open_files(2 * IDLE_PEERS + 200)  # both ends live in this process
         port = free_port()
-        pair = SocketsPair(("127.0.0.1", port), max_connections=IDLE_PEERS + 10)
+        pair = SocketsPair(("127.0.0.1", port), max_connections=IDLE_PEERS + 10, system=None)
         latency = LatencyFactory("tick")
         config = Config(
             {"receiver": [pair.server(), latency], "sender": [pair.client("tick")]},
@@ -149,7 +149,7 @@ class TestOneIOThreadPerNode(unittest.TestCase):
 
     def test_reload_and_terminate_never_leave_a_second_io_thread(self) -> None:
         port = free_port()
-        pair = SocketsPair(("127.0.0.1", port))
+        pair = SocketsPair(("127.0.0.1", port), system=None)
         config = Config({"both": [pair.server("a"), pair.client("b")]}, mode=Mode.TEST)
         # A reload of a link's component waits on the node's thread while the old
         # link says goodbye (0.25 s): LocalNodes' threshold (tests/quiet.py) allows it.

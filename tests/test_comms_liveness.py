@@ -254,7 +254,7 @@ class TestDeadPath(CommsFaultTest):
 
 class TestCountersInTheProfile(CommsFaultTest):
     def test_the_profiler_dump_shows_every_link(self) -> None:
-        pair = SocketsPair(("127.0.0.1", self.port))
+        pair = SocketsPair(("127.0.0.1", self.port), system=None)
         counter = CounterFactory("hello")
         config = Config(
             {"a": [pair.server(), counter], "b": [pair.client("hello")]}, mode=Mode.DEBUG
@@ -440,7 +440,7 @@ class TestSlowReader(CommsFaultTest):
 
 class TestConnectionLimits(CommsFaultTest):
     def test_connections_over_the_cap_are_refused_once_every_one_said_hello(self) -> None:
-        pair = SocketsPair(("127.0.0.1", self.port), max_connections=3)
+        pair = SocketsPair(("127.0.0.1", self.port), max_connections=3, system=None)
         nodes = self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
         comms = comms_of(nodes.nodes[0])
         socks = [connect_when_listening(self.port) for _ in range(3)]
@@ -469,7 +469,7 @@ class TestConnectionLimits(CommsFaultTest):
         CommsLoop.hello_timeout_s = 60.0  # none times out during the test: room must be made
         self.addCleanup(setattr, CommsLoop, "hello_timeout_s", original)
         cap, idle, count = 4, 12, 500
-        pair = SocketsPair(("127.0.0.1", self.port), max_connections=cap)
+        pair = SocketsPair(("127.0.0.1", self.port), max_connections=cap, system=None)
         counter, sender = CounterFactory("tick"), SenderFactory(count)
         config = Config(
             {"server": [pair.server(), counter], "robot": [pair.client("tick"), sender]},
@@ -499,7 +499,7 @@ class TestConnectionLimits(CommsFaultTest):
         CommsLoop.hello_timeout_s = 0.1
         self.addCleanup(setattr, CommsLoop, "hello_timeout_s", original)
         # A short silence limit makes the link check its peer every 0.025 s (else 0.25 s).
-        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.4)
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.4, system=None)
         self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
         sock = connect_when_listening(self.port)
         self.addCleanup(sock.close)
@@ -516,7 +516,7 @@ class TestConnectionLimits(CommsFaultTest):
         self.assertTrue(wait_until(lambda: bool(self.log.matching("not even a hello")), 2.0))
 
     def test_a_peer_that_promised_no_beats_may_stay_quiet(self) -> None:
-        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.05)
+        pair = SocketsPair(("127.0.0.1", self.port), dead_after_s=0.05, system=None)
         self.run_nodes(Config({"server": [pair.server()]}, mode=Mode.TEST), ["server"])
         sock = connect_when_listening(self.port)
         self.addCleanup(sock.close)

@@ -46,6 +46,7 @@ from snr.prelude import (
     TaskId,
     TaskType,
 )
+from snr.std_mods.comms.handshake import Refused
 from snr.std_mods.comms.io_loop import IOLoop
 from snr.std_mods.comms.link import Link, LinkState, Transport
 from snr.std_mods.comms.wire import Message, decode_body, encode_page
@@ -80,6 +81,7 @@ DEFAULT_MAX_BACKLOG_BYTES = 8 * 1024 * 1024
 DEFAULT_DEAD_AFTER_S = 4.0
 _NEWS_TICK_S = 0.5  # while news may be counted, how often its counts are looked at
 _NEWS_WINDOW_S = 10.0  # the longest window of the news logs (RateLimitedLog)
+_MAX_REFUSED_NOTED = 10_000  # refused peers remembered (so each is logged once)
 """Seconds of silence after which a peer that promised beats counts as lost."""
 
 Keys = Union[DataKey, Sequence[DataKey], None]
@@ -143,6 +145,18 @@ class CommsLoop(ThreadLoop):
     checks_keys_per_link = True
     """In DEBUG mode its keys are checked once a link is up (link_hints.py), not at start."""
 
+    side: str = "pipe"
+    """Which end of its links it is: ``"server"``, ``"client"`` or ``"pipe"`` (in the proofs)."""
+
+    peer_noun: str = "peer"
+    """What its log lines call the other end, e.g. ``"client"``."""
+
+    system: Optional[str] = None
+    """The system its hellos name; peers of another (or none) are refused. None: no check."""
+
+    secret: Optional[bytes] = None
+    """The secret its links prove they know and ask peers to prove; None: no authentication."""
+
     def __init__(
         self,
         factory: AbstractFactory,
@@ -169,8 +183,11 @@ class CommsLoop(ThreadLoop):
         self._news_at = 0.0  # when news was last counted
         self._news_ticking = False  # the I/O thread ticks the news (see _news_came)
         self.closed_totals: Dict[str, int] = dict.fromkeys(
-            ("links", "pages_sent", "pages_received", "dropped", "bad_frames"), 0
+            ("links", "pages_sent", "pages_received", "dropped", "bad_frames", "refused"), 0
         )
+        # (peer's host, its role, why) -> how many times it was refused: said once each
+        self.refused_peers: Dict[Tuple[str, str, str], int] = {}
+        self.refusal_news = RateLimitedLog(self.log, burst=5, window_s=5.0)
         self.io_loop: Optional[IOLoop] = None  # the node's, while this component runs
         self._links_lock = threading.Lock()
         self._opened: List[Link] = []  # every link that may not have ended yet
@@ -330,8 +347,49 @@ class CommsLoop(ThreadLoop):
             self._opened = [old for old in self._opened if not old.is_closed()] + [link]
         self._unsent_reported = False
         link.start()
-        self.schedule(tasks.event(COMMS_CONNECTED, [self.name, transport.peer]))
+        if link.state is _OPEN:  # no handshake: pages may pass at once (else: announce)
+            self.announce(link)
         return link
+
+    def announce(self, link: Link) -> None:
+        """The link is open for pages: schedule ``COMMS_CONNECTED`` (once per link)."""
+        if not link.announced:
+            link.announced = True
+            self.schedule(tasks.event(COMMS_CONNECTED, [self.name, link.transport.peer]))
+
+    def on_refused(self, link: Link, refusal: Refused) -> None:
+        """A peer was refused (I/O thread): log it once per peer, count it every time.
+
+        A peer is its host, its role and why: a client that retries every
+        second is one line, however long it tries; many peers at once are
+        at most five lines in 5 s, then a count (`RateLimitedLog`).
+
+        Example (what the log says)::
+
+            Refused client 'topside' at 10.0.0.7:51234: it belongs to system 'team3', ...
+        """
+        host = link.transport.peer.rsplit(":", 1)[0]
+        key = (host, link.peer_role or "", refusal.kind)
+        with self._links_lock:
+            seen = self.refused_peers.get(key, 0)
+            if seen == 0 and len(self.refused_peers) >= _MAX_REFUSED_NOTED:
+                self.refused_peers.clear()  # a flood of peers: remember the newest ones
+            self.refused_peers[key] = seen + 1
+        if seen:
+            return
+        if self.refusal_news.report(
+            "Peers refused",
+            logging.WARNING,
+            "Refused %s %s at %s (this node: %r, system %r): %s. The connection was "
+            "closed; nothing it sent was stored.",
+            self.peer_noun,
+            link.peer_name if link.peer_role else "(no hello yet)",
+            link.transport.peer,
+            self.parent.role,
+            self.system,
+            refusal.reason,
+        ):
+            self._news_came()
 
     def link_closed(self, link: Link, reason: str) -> None:
         """A link has closed (called on the I/O thread); log it once."""
@@ -343,9 +401,13 @@ class CommsLoop(ThreadLoop):
             totals["pages_received"] += link.pages_received
             totals["dropped"] += link.outbox.dropped
             totals["bad_frames"] += link.bad_frames
+            totals["refused"] += link.refusal is not None
+        if link.refusal is not None:
+            return  # said once per peer by on_refused; it was never open for pages
         if not self.is_terminated():
             self.on_link_lost(link, reason)
-            self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
+            if link.announced:  # only a link that was open for pages is news to handlers
+                self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
 
     def say(self, what: str, level: int, msg: str, *args: Any) -> None:
         """Log news of links (connects, hellos, losses) in full, unless it comes in a flood.
@@ -387,6 +449,7 @@ class CommsLoop(ThreadLoop):
         """
         self.news.tick()
         self.bad_frame_news.tick()
+        self.refusal_news.tick()
 
     def _news_came(self) -> None:
         """Any thread: news was counted, not logged; tick until its window has passed."""
@@ -501,3 +564,4 @@ class CommsLoop(ThreadLoop):
         self._release_io_loop()
         self.news.flush()  # what a flood of connections or bad frames left uncounted aloud
         self.bad_frame_news.flush()
+        self.refusal_news.flush()

@@ -34,17 +34,19 @@ from typing import (
 
 from snr.core.logs import LossReport
 from snr.prelude import CommsError, DataKey, Page, WireFormatError
+from snr.std_mods.comms.handshake import Handshake, Refused
 from snr.std_mods.comms.io_loop import IOLoop, IOTimer
 from snr.std_mods.comms.link_hints import watch_link
 from snr.std_mods.comms.outbox import CLOSED, FIRST, Outbox
 from snr.std_mods.comms.wire import (
+    Beat,
     Bye,
     FrameDecoder,
     Hello,
     Message,
+    Proof,
     encode_beat,
     encode_bye,
-    encode_hello,
 )
 
 if TYPE_CHECKING:
@@ -148,6 +150,8 @@ class LinkState(enum.Enum):
     ======== ================================================ ==========================
     state    the link                                         moves on to
     ======== ================================================ ==========================
+    HELLO    waits for the peer's hello (and proof, with a    OPEN, ENDING, CLOSED
+             secret): sends no page, takes none
     OPEN     sends pages, reads, beats, judges silence        CLOSING, ENDING, CLOSED
     CLOSING  ``close()``: writes what waits, then a bye       DRAINING, ENDING, CLOSED
     DRAINING all written, half-closed: reads what still comes CLOSED (after ``drain_s``)
@@ -159,11 +163,15 @@ class LinkState(enum.Enum):
     Whether the link reads is the one other thing that changes: it stops
     while pages it read wait for room in the node's queue (``Link._held``).
 
+    A link whose node names no system and has no secret starts OPEN (as
+    older SNR did); any other starts in HELLO (docs/comms.md, "Who may connect").
+
     Example::
 
         link.state is LinkState.OPEN
     """
 
+    HELLO = "hello"
     OPEN = "open"
     CLOSING = "closing"
     DRAINING = "draining"
@@ -172,6 +180,8 @@ class LinkState(enum.Enum):
 
 
 _OPEN, _CLOSING, _DRAINING = LinkState.OPEN, LinkState.CLOSING, LinkState.DRAINING
+_HELLO = LinkState.HELLO
+_LIVE = (LinkState.HELLO, LinkState.OPEN)  # looked at on a clock (silence, beats, handshake)
 _ENDED = (LinkState.ENDING, LinkState.CLOSED)  # no more reading or writing
 
 
@@ -221,6 +231,9 @@ class Link:
         keys_received: in DEBUG mode, the keys of the pages that arrived (up to
             1,000, for the hints of ``link_hints.py``); None otherwise.
         went_silent: the link was closed because the peer fell silent.
+        refusal: why the peer was refused (another system, no or a wrong
+            secret, a page before the handshake ended), or None.
+        announced: the link reached OPEN and COMMS_CONNECTED was scheduled.
         peer_said_bye: the peer sent a bye: the end that follows is orderly.
         loss: the `LossReport` of pages dropped because the peer fell behind.
     """
@@ -249,6 +262,8 @@ class Link:
         self.state = LinkState.OPEN
         self.bad_frames = 0
         self.went_silent = False
+        self.refusal: Optional[Refused] = None
+        self.announced = False
         self.peer_said_bye = False
         self._peer_takes_bye = False  # its hello said it understands a bye frame
         self.pages_sent = 0
@@ -278,7 +293,10 @@ class Link:
         self._tick_s = min(_TICK_S, owner.beat_s / 4)
         self._answer_due = False  # the peer was heard since the last send: answer at once
         self.outbox = Outbox(owner.max_backlog_bytes, self.loss)
-        self.outbox.put(encode_hello(owner.parent.role, self.beat_s, bye=True))
+        self.handshake = Handshake(owner.parent.role, owner.side, owner.system, owner.secret)
+        if self.handshake.needed:  # no page passes either way until the peer is judged
+            self.state = LinkState.HELLO
+        self.outbox.put(self.handshake.hello_frame(self.beat_s))
 
     @property
     def label(self) -> str:
@@ -357,7 +375,9 @@ class Link:
 
     def close(self) -> None:
         """Send what is queued and a goodbye, then end the connection (graceful)."""
-        if self.state is _OPEN:
+        if self.state is _HELLO:  # no page was sent yet: nothing to flush
+            self.abort("the link was closed during its handshake")
+        elif self.state is _OPEN:
             self.state = _CLOSING
             if self._peer_takes_bye:  # older peers never get a frame they do not know
                 outcome = self.outbox.put(encode_bye(), None, self.transport.send)
@@ -462,9 +482,10 @@ class Link:
         if silence is not None:
             self._finish(silence)
             return
-        if self.state is _OPEN:
+        if self.state in _LIVE:
             if (
-                self.peer_beat_s is not None
+                self.state is _OPEN
+                and self.peer_beat_s is not None
                 and not len(self.outbox)
                 and time.monotonic() - self.outbox.last_sent_at >= self.beat_s
             ):
@@ -476,7 +497,7 @@ class Link:
 
     def _look_again(self) -> None:
         """Loop thread: put the next look at the link's first deadline (they moved)."""
-        if self._timer is not None and self.state is _OPEN:  # (else it is the drain's timer)
+        if self._timer is not None and self.state in _LIVE:  # (else it is the drain's timer)
             self._timer.cancel()
             self._timer = self.io.call_later(self._next_look_s(), self._tick)
 
@@ -496,6 +517,8 @@ class Link:
         due = []
         if not self._heard_frame:
             due.append(self._progress_at + self.hello_timeout_s)
+        if self.state is _HELLO:
+            due.append(self.opened_at + self.hello_timeout_s)
         if self.peer_beat_s is not None:
             due.append(self.outbox.last_sent_at + self.beat_s)
             due.append(self.last_heard + max(self.dead_after_s, 3 * self.peer_beat_s))
@@ -637,7 +660,7 @@ class Link:
                 self._progress_at = now = time.monotonic()
                 self._heard(now)
         self._decode_bodies(bodies, pages)
-        if pages:
+        if pages and self.state not in _ENDED:  # (a refused peer's pages are not stored)
             self._heard_frame = True
             self._deliver(pages)
 
@@ -655,16 +678,22 @@ class Link:
             try:
                 message = decode(body)
             except WireFormatError as error:
+                if self.state is _HELLO:  # before the handshake ends, a bad frame ends it
+                    self._refuse(Refused("order", f"a bad frame before its hello: {error}"))
+                    return
                 self._bad_frame(error)
                 continue
             except Exception as error:  # a bug in decoding: say so, and lose no other frame
                 self.log.exception("Decoding a frame from %s failed", self.label)
                 self._bad_frame(WireFormatError(f"it could not be decoded ({error!r:.80})"))
                 continue
-            if message.__class__ is Page:
+            if message.__class__ is Page and self.state is not _HELLO:
                 pages.append(message)
             else:
                 self._on_message(message)
+                if self.state in _ENDED:  # refused: nothing more it sent is looked at
+                    pages.clear()
+                    return
 
     def _deliver(self, pages: List[Page]) -> None:
         if not pages:
@@ -730,6 +759,8 @@ class Link:
         """Why the link is lost if the peer has been quiet too long, else None."""
         quiet_s = time.monotonic() - self.last_heard
         limit_s = self.hello_timeout_s
+        if self.state is _HELLO and time.monotonic() - self.opened_at > limit_s:
+            return f"it did not finish the hello (and proof) within {limit_s:g} s of connecting"
         # Nothing well-formed yet, and no big first frame still coming in steadily:
         if not self._heard_frame and time.monotonic() - self._progress_at > limit_s:
             return (
@@ -750,8 +781,23 @@ class Link:
         )
 
     def _on_message(self, message: Message) -> None:
-        """A frame that is not a page: a hello, a beat or a bye."""
+        """A frame that is not a page (or a page before the handshake ended)."""
         self._heard_frame = True
+        if self.state is _HELLO and not isinstance(message, (Hello, Proof, Beat, Bye)):
+            what = "a page" if isinstance(message, Page) else "a frame"
+            self._refuse(Refused("order", f"it sent {what} before the handshake ended"))
+            return
+        if isinstance(message, Proof):
+            if self.state is not _HELLO:  # once open, a proof is a mistake, not a danger
+                self._bad_frame(WireFormatError("a proof frame after the handshake ended"))
+                return
+            try:
+                self.handshake.on_proof(message)
+            except Refused as refusal:
+                self._refuse(refusal)
+                return
+            self._handshake_done()
+            return
         if isinstance(message, Hello):
             if self.peer_role is not None:  # said once per connection; more is a mistake
                 if message.role != self.peer_role:
@@ -763,14 +809,41 @@ class Link:
                     )
                 return
             self.peer_role = message.role
-            self.hello_at = time.monotonic()
             self.peer_beat_s = message.beat_s
             self._peer_takes_bye = message.bye
-            self.io.call_soon(self._look_again)  # beats are owed from now on
-            self.owner.on_hello(self)
-            watch_link(self.owner, self)
+            try:
+                proof = self.handshake.on_hello(message)
+            except Refused as refusal:
+                self._refuse(refusal)
+                return
+            # our answer to its challenge, if it sent one; its answer comes next
+            if proof is not None and self.outbox.put(proof, None, self.transport.send) == FIRST:
+                self._want_write()
+            if self.handshake.done:
+                self._handshake_done()
         elif isinstance(message, Bye):
             self.peer_said_bye = True
+
+    def _handshake_done(self) -> None:
+        """The peer is one of ours: pages may pass (HELLO → OPEN), say so once."""
+        self.hello_at = time.monotonic()
+        if self.state is _HELLO:
+            self.state = _OPEN
+            self.owner.announce(self)
+        self.io.call_soon(self._look_again)  # beats are owed from now on
+        self.owner.on_hello(self)
+        watch_link(self.owner, self)
+
+    def _refuse(self, refusal: Refused) -> None:
+        """The peer may not link here: say why (once per peer), count it, close the connection.
+
+        Nothing it sent is stored: pages read with the refused frame are dropped.
+        """
+        if self.state in _ENDED:
+            return
+        self.refusal = refusal
+        self.owner.on_refused(self, refusal)
+        self.abort(f"refused: {refusal.reason}")
 
     def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
         # Counted by the component, not per link: sixty hostile connections

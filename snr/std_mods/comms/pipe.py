@@ -33,6 +33,11 @@ from snr.std_mods.comms.comms_loop import (
     Keys,
     normalize_keys,
 )
+from snr.std_mods.comms.handshake import (
+    FROM_ENVIRONMENT,
+    find_secret,
+    resolve_system,
+)
 from snr.std_mods.comms.link import Link
 from snr.std_mods.comms.wire import Message, decode_body
 
@@ -169,6 +174,9 @@ class PipeLoop(CommsLoop):
         )
         self.connection = factory.connection
         self.peer_name = factory.peer
+        where = f"The pipe loop {factory.name!r} of node {parent.role!r}"
+        self.system = resolve_system(factory.system, parent.config, where)
+        self.secret = find_secret(factory.secret, where)
         self.link: Optional[Link] = None
 
     def begin(self) -> None:
@@ -227,6 +235,13 @@ class PipeLoopFactory(LoopFactory):
         max_backlog_bytes: how much may wait for a slow peer before pages are dropped.
         dead_after_s: seconds of silence after which the other end counts as lost.
         peer: what the logs call the other end (default ``"pipe"``).
+        system: the system both ends name (as for `SocketsPair`). Default
+            None, no check: only the processes of the program that made the
+            pipe can reach it, so no other system's node can come by mistake,
+            and code of the 2021 release that writes pages into the pipe
+            with no hello keeps working. ``system=SCRIPT_FOLDER`` checks as sockets do.
+        secret: the secret both ends prove they know (as for `SocketsPair`;
+            default ``$SNR_SECRET`` or the secret file). None: none.
 
     Example::
 
@@ -242,6 +257,8 @@ class PipeLoopFactory(LoopFactory):
         max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
         dead_after_s: float = DEFAULT_DEAD_AFTER_S,
         peer: str = "pipe",
+        system: Optional[str] = None,
+        secret: Optional[str] = FROM_ENVIRONMENT,
     ) -> None:
         super().__init__()
         if not all(hasattr(connection, m) for m in ("send_bytes", "recv_bytes", "poll")):
@@ -262,6 +279,8 @@ class PipeLoopFactory(LoopFactory):
         self.max_backlog_bytes = max_backlog_bytes
         self.dead_after_s = dead_after_s
         self.peer = peer
+        self.system = system
+        self.secret = secret
 
     def get(self, parent: AbstractNode) -> PipeLoop:
         return PipeLoop(self, parent)

@@ -11,9 +11,15 @@ role's config and its ``client(keys)`` in another's (listing 5.3)::
 
 The client connects to the server (retrying with backoff until it is up, and
 again whenever the link drops) and forwards every page stored under its keys.
-The server accepts any number of clients and stores what they send; given
+The server accepts clients of its own system and stores what they send; given
 keys of its own (``sockets.server(["sensor_data"])``) it forwards those to
 every client over the same connections.
+
+Who may connect: every node names its *system* (``system=``, by default the
+config's name or the script's folder) and a peer of another system is
+refused; with a secret (``SNR_SECRET``, ``secret=``, or the file written by
+``python -m snr secret new``) each side must also prove it knows it
+(docs/comms.md, "Who may connect").
 """
 
 from __future__ import annotations
@@ -35,6 +41,12 @@ from snr.std_mods.comms.comms_loop import (
     CommsLoop,
     Keys,
     normalize_keys,
+)
+from snr.std_mods.comms.handshake import (
+    FROM_ENVIRONMENT,
+    SCRIPT_FOLDER,
+    find_secret,
+    resolve_system,
 )
 from snr.std_mods.comms.link import Link, LinkState
 
@@ -189,6 +201,9 @@ class SocketsServerLoop(CommsLoop):
         {"receiver": [sockets.server(), ...]}
     """
 
+    side = "server"
+    peer_noun = "client"
+
     def __init__(self, factory: SocketsServerFactory, parent: AbstractNode) -> None:
         super().__init__(
             factory,
@@ -200,6 +215,9 @@ class SocketsServerLoop(CommsLoop):
         )
         self.address = factory.address
         self.max_connections = factory.max_connections
+        where = f"The sockets server of node {parent.role!r} ({_describe(factory.address)})"
+        self.system = resolve_system(factory.system, parent.config, where)
+        self.secret = find_secret(factory.secret, where)
         self.refused = LossReport(
             self.log,
             "connections",
@@ -268,7 +286,8 @@ class SocketsServerLoop(CommsLoop):
         thread a moment later).
         """
         for link in self.links:
-            if link.peer_role is None and link.state is LinkState.OPEN:
+            unproven = link.state is LinkState.HELLO  # no hello, or no proof yet
+            if unproven or (link.peer_role is None and link.state is LinkState.OPEN):
                 link.abort(
                     f"it had not said hello in {time.monotonic() - link.opened_at:.1f} s and "
                     f"the server, full ({self.max_connections} clients), made room for a new one"
@@ -331,6 +350,9 @@ class SocketsClientLoop(CommsLoop):
         {"input_device": [..., sockets.client(["controller_data"])]}
     """
 
+    side = "client"
+    peer_noun = "sockets server"
+
     def __init__(self, factory: SocketsClientFactory, parent: AbstractNode) -> None:
         super().__init__(
             factory,
@@ -341,6 +363,9 @@ class SocketsClientLoop(CommsLoop):
             factory.dead_after_s,
         )
         self.address = factory.address
+        where = f"The sockets client of node {parent.role!r} (to {_describe(factory.address)})"
+        self.system = resolve_system(factory.system, parent.config, where)
+        self.secret = find_secret(factory.secret, where)
         self.link: Optional[Link] = None
         self._retry_s = _FIRST_RETRY_S
         self._waiting_reported = False
@@ -445,8 +470,12 @@ class _SocketsFactory(LoopFactory):
         max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
         dead_after_s: float = DEFAULT_DEAD_AFTER_S,
         max_connections: int = DEFAULT_MAX_CONNECTIONS,
+        system: Optional[str] = SCRIPT_FOLDER,
+        secret: Optional[str] = FROM_ENVIRONMENT,
     ) -> None:
         super().__init__()
+        self.system = system
+        self.secret = secret
         self.address = address
         self.keys = normalize_keys(keys, f"{type(self).__name__} for {_describe(address)}")
         self.name = name or f"sockets_{self.side}_{address[1]}"
@@ -455,6 +484,7 @@ class _SocketsFactory(LoopFactory):
         self.max_connections = max_connections
 
     def __repr__(self) -> str:
+        # (never the secret: a repr may end up in a log or a screenshot)
         return f"{type(self).__name__}({_describe(self.address)}, keys={list(self.keys)})"
 
 
@@ -497,6 +527,14 @@ class SocketsPair:
         dead_after_s: seconds of silence after which a peer counts as lost
             (both sides send a beat every quarter of it while quiet).
         max_connections: how many clients the server takes at once (64).
+        system: the system both ends name in their hello; a peer of another
+            system, or one that names none, is refused. Default: the config's
+            ``name``, else the folder of the script that runs (so a team's
+            scripts in one folder agree). None: no check, which lets in older
+            SNR nodes and programs that send no system.
+        secret: the secret both ends prove they know (docs/comms.md, "Who
+            may connect"). Default: ``$SNR_SECRET``, else the file written by
+            ``python -m snr secret new``, else none. None: no authentication.
 
     Example::
 
@@ -513,6 +551,8 @@ class SocketsPair:
         max_backlog_bytes: int = DEFAULT_MAX_BACKLOG_BYTES,
         dead_after_s: float = DEFAULT_DEAD_AFTER_S,
         max_connections: int = DEFAULT_MAX_CONNECTIONS,
+        system: Optional[str] = SCRIPT_FOLDER,
+        secret: Optional[str] = FROM_ENVIRONMENT,
     ) -> None:
         if (
             not isinstance(server_tuple, tuple)
@@ -531,6 +571,8 @@ class SocketsPair:
         self.max_backlog_bytes = max_backlog_bytes
         self.dead_after_s = dead_after_s
         self.max_connections = max_connections
+        self.system = system
+        self.secret = secret
 
     def server(self, keys: Keys = None, name: Optional[str] = None) -> SocketsServerFactory:
         """The factory for the listening side; ``keys`` it forwards to clients.
@@ -547,6 +589,8 @@ class SocketsPair:
             self.max_backlog_bytes,
             self.dead_after_s,
             self.max_connections,
+            self.system,
+            self.secret,
         )
 
     def client(self, keys: Keys = None, name: Optional[str] = None) -> SocketsClientFactory:
@@ -558,7 +602,13 @@ class SocketsPair:
             sockets.client("controller_input")
         """
         return SocketsClientFactory(
-            self.server_tuple, keys, name, self.max_backlog_bytes, self.dead_after_s
+            self.server_tuple,
+            keys,
+            name,
+            self.max_backlog_bytes,
+            self.dead_after_s,
+            system=self.system,
+            secret=self.secret,
         )
 
     def __repr__(self) -> str:

@@ -4,7 +4,9 @@ A *frame* is a 4-byte big-endian unsigned length ``N`` followed by ``N`` bytes
 of UTF-8 JSON text (the *body*). Every body is a JSON object with a version
 ``"v": 1`` and a ``"kind"``:
 
-* ``"hello"``: the first frame each side sends; names its role.
+* ``"hello"``: the first frame each side sends; names its role (version 2 also
+  its system and, with a secret, a challenge).
+* ``"proof"``: the answer to the peer's challenge (version 2, with a secret).
 * ``"page"``: one page, with the fields of `Page`.
 * ``"beat"``: a sign of life on a quiet link.
 * ``"bye"``: the last frame before an orderly close ("my node is stopping").
@@ -34,6 +36,7 @@ from snr.std_mods.codec import PageEncoder, dump_json, load_object, page_from_fi
 
 __all__ = [
     "HEADER_BYTES",
+    "HELLO_VERSION",
     "MAX_FRAME_BYTES",
     "WIRE_VERSION",
     "Beat",
@@ -41,15 +44,24 @@ __all__ = [
     "FrameDecoder",
     "Hello",
     "Message",
+    "Proof",
     "decode_body",
     "encode_beat",
     "encode_bye",
     "encode_hello",
     "encode_page",
+    "encode_proof",
 ]
 
 WIRE_VERSION = 1
-"""The ``"v"`` field of every frame this SNR writes and the only one it reads."""
+"""The ``"v"`` field of page, beat and bye frames, and of the first hello (no system)."""
+
+HELLO_VERSION = 2
+"""The ``"v"`` of the hello that names a system and may carry a challenge, and of proofs.
+
+A node that names no system and has no secret still sends a version 1
+hello, so older nodes understand it (docs/wire-format.md, section 3.1).
+"""
 
 HEADER_BYTES = 4
 """Length of the frame header: an unsigned 32-bit big-endian body length."""
@@ -69,17 +81,35 @@ class Hello:
     nothing else to send (a `Beat`); None from a peer that makes no promise
     (older SNR nodes, or a program that does not send beats). ``bye`` is
     true when the sender understands a `Bye` frame (older nodes do not, so
-    they are never sent one).
+    they are never sent one). ``system`` is the system the sender belongs to
+    (None from a version 1 hello, or one that names none), and ``nonce`` its
+    challenge: 64 hex digits from a node with a secret, else None.
 
     Example::
 
         decode_body(encode_hello("receiver", 1.0)[HEADER_BYTES:])
-        # Hello(role='receiver', beat_s=1.0, bye=False)
+        # Hello(role='receiver', beat_s=1.0, bye=False, system=None, nonce=None)
     """
 
     role: str
     beat_s: Optional[float] = None
     bye: bool = False
+    system: Optional[str] = None
+    nonce: Optional[str] = None
+
+
+@dataclass(frozen=True)
+class Proof:
+    """The answer to the peer's challenge: ``mac`` proves the sender knows the secret.
+
+    64 lowercase hex digits of an HMAC-SHA256 (see ``handshake.proof_mac``).
+
+    Example::
+
+        decode_body(encode_proof("ab" * 32)[HEADER_BYTES:])   # Proof(mac='abab...')
+    """
+
+    mac: str
 
 
 @dataclass(frozen=True)
@@ -104,8 +134,8 @@ class Bye:
     """
 
 
-Message = Union[Page, Hello, Beat, Bye]
-"""What a frame carries: a `Page`, a `Hello`, a `Beat` or a `Bye`."""
+Message = Union[Page, Hello, Beat, Bye, Proof]
+"""What a frame carries: a `Page`, a `Hello`, a `Beat`, a `Bye` or a `Proof`."""
 
 
 def _frame(body: bytes, what: str) -> bytes:
@@ -136,24 +166,49 @@ def encode_page(page: Page) -> bytes:
     return _HEADER.pack(len(body)) + body
 
 
-def encode_hello(role: str, beat_s: Optional[float] = None, bye: bool = False) -> bytes:
+def encode_hello(
+    role: str,
+    beat_s: Optional[float] = None,
+    bye: bool = False,
+    system: Optional[str] = None,
+    nonce: Optional[str] = None,
+) -> bytes:
     """The hello frame a node sends first on every link.
 
     With ``beat_s`` the node promises a beat at least that often while it has
     nothing else to send, so the peer can tell a silent link from a dead one.
-    With ``bye`` it says it understands a bye frame.
+    With ``bye`` it says it understands a bye frame. With a ``system`` or a
+    ``nonce`` (a challenge, from a node with a secret) it is a version 2
+    hello; without either, the version 1 hello older nodes know.
 
     Example::
 
         encode_hello("receiver")   # b'\\x00\\x00\\x00,{"v":1,"kind":"hello","role":"receiver"}'
         encode_hello("receiver", 1.0, bye=True)   # ...,"beat_s":1.0,"bye":true}
+        encode_hello("receiver", system="team7")  # {"v":2,...,"system":"team7"}
     """
-    fields: Dict[str, Any] = {"v": WIRE_VERSION, "kind": "hello", "role": role}
+    version = HELLO_VERSION if system is not None or nonce is not None else WIRE_VERSION
+    fields: Dict[str, Any] = {"v": version, "kind": "hello", "role": role}
     if beat_s is not None:
         fields["beat_s"] = beat_s
     if bye:
         fields["bye"] = True
+    if version == HELLO_VERSION:
+        fields["system"] = system
+        if nonce is not None:
+            fields["nonce"] = nonce
     return _frame(dump_json(fields, "the hello frame"), "the hello frame")
+
+
+def encode_proof(mac: str) -> bytes:
+    """The proof frame: the answer to the peer's challenge (``{"v":2,"kind":"proof",...}``).
+
+    Example::
+
+        encode_proof("ab" * 32)   # b'...{"v":2,"kind":"proof","mac":"abab..."}'
+    """
+    fields = {"v": HELLO_VERSION, "kind": "proof", "mac": mac}
+    return _frame(dump_json(fields, "the proof frame"), "the proof frame")
 
 
 _BEAT_FRAME = _frame(b'{"v":1,"kind":"beat"}', "a beat")
@@ -208,12 +263,17 @@ def decode_body(body: bytes) -> Message:
     except WireFormatError as error:
         raise WireFormatError(f"the body: {error}") from None
     version = obj.get("v")
-    if type(version) is not int or version != WIRE_VERSION:
+    kind = obj.get("kind")
+    if type(version) is not int or not (
+        version == WIRE_VERSION or (version == HELLO_VERSION and kind in ("hello", "proof"))
+    ):
         raise WireFormatError(
             f"the frame has version {version!r:.40}; this SNR speaks version {WIRE_VERSION} "
-            "(the 'v' field, a whole number); update the older side"
+            f"(and {HELLO_VERSION} for hellos and proofs; the 'v' field, a whole number); "
+            "update the older side"
         )
-    kind = obj.get("kind")
+    if kind == "proof":
+        return _decode_proof(obj, version)
     if kind == "page":
         return page_from_fields(obj, default_origin=None)
     if kind == "beat":
@@ -249,10 +309,44 @@ def decode_body(body: bytes) -> Message:
                     "the hello's 'beat_s' is a whole number too large for a double; it must "
                     "be a number of seconds above 0"
                 ) from None
-        return Hello(role, beat_s, bye)
+        if version == WIRE_VERSION:
+            return Hello(role, beat_s, bye)  # the first hello: no system, no challenge
+        system = obj.get("system")
+        if system is not None and (type(system) is not str or not system):
+            raise WireFormatError(
+                f"the hello's 'system' is {system!r:.40}; it must be a non-empty string or null"
+            )
+        nonce = obj.get("nonce")
+        if nonce is not None and not _is_hex(nonce):
+            raise WireFormatError(
+                f"the hello's 'nonce' is {nonce!r:.40}; it must be {_HEX_DIGITS} lowercase "
+                "hex digits"
+            )
+        return Hello(role, beat_s, bye, system, nonce)
     raise WireFormatError(
-        f"unknown frame kind {kind!r:.40}; known kinds are 'page', 'hello', 'beat' and 'bye'"
+        f"unknown frame kind {kind!r:.40}; known kinds are 'page', 'hello', 'beat', 'bye' "
+        "and 'proof'"
     )
+
+
+_HEX_DIGITS = 64  # a nonce (32 random bytes) and an HMAC-SHA256 are both this long in hex
+_HEX = frozenset("0123456789abcdef")
+
+
+def _is_hex(value: object) -> bool:
+    return type(value) is str and len(value) == _HEX_DIGITS and _HEX.issuperset(value)
+
+
+def _decode_proof(obj: Dict[str, Any], version: object) -> Proof:
+    if version != HELLO_VERSION:
+        raise WireFormatError(f"a proof frame must have version {HELLO_VERSION}")
+    mac = obj.get("mac")
+    if not _is_hex(mac):
+        raise WireFormatError(
+            f"the proof's 'mac' is {mac!r:.40}; it must be {_HEX_DIGITS} lowercase hex digits"
+        )
+    assert isinstance(mac, str)
+    return Proof(mac)
 
 
 def _too_long(length: int, limit: int) -> str:

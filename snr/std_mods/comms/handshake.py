@@ -1,0 +1,314 @@
+"""Who may link to a node: its system's name, and its secret (docs/comms.md, "Who may connect").
+
+A classroom network is not a trusted one. Two things keep one team's nodes
+apart from another's, both in the hello that starts every link
+(docs/wire-format.md, section 3.1):
+
+* **The system name** (``system=``, default: the script's folder) stops
+  *accidents*: a node of system ``"team3"`` that reaches team 7's robot by a
+  typo in an address is refused, and both sides say so. No set-up needed.
+* **The secret** (``SNR_SECRET``, ``secret=``, or the file that
+  ``python -m snr secret new`` writes) stops *malice*: each side proves that
+  it knows the secret with an HMAC-SHA256 over a fresh random number (a
+  *nonce*) of the other side, so the secret never crosses the wire and a
+  recorded hello cannot be replayed.
+
+Example::
+
+    handshake = Handshake(role="urov", side="server", system="team7", secret=b"s3cret")
+    link_first_frame = handshake.hello_frame(beat_s=1.0)
+    proof_frame = handshake.on_hello(peer_hello)   # raises Refused if it must be refused
+    handshake.on_proof(peer_proof)                 # handshake.done is then True
+"""
+
+from __future__ import annotations
+
+import hashlib
+import hmac
+import os
+import secrets
+import sys
+from pathlib import Path
+from typing import Any, Optional
+
+from snr.prelude import ConfigError
+from snr.std_mods.comms.wire import Hello, Proof, encode_hello, encode_proof
+
+__all__ = [
+    "FROM_ENVIRONMENT",
+    "NONCE_BYTES",
+    "SCRIPT_FOLDER",
+    "SECRET_ENV_VAR",
+    "Handshake",
+    "Refused",
+    "default_system",
+    "find_secret",
+    "new_secret",
+    "proof_mac",
+    "resolve_system",
+    "secret_file",
+]
+
+SCRIPT_FOLDER = "<the script's folder>"
+"""The default ``system=`` of comms factories: the config's ``name``, else the script's folder.
+
+Example::
+
+    SocketsPair(("localhost", 9000)).system   # '<the script's folder>' until the node starts
+"""
+
+FROM_ENVIRONMENT = "<SNR_SECRET or the secret file>"
+"""The default ``secret=`` of comms factories: ``$SNR_SECRET``, else the secret file, else none."""
+
+SECRET_ENV_VAR = "SNR_SECRET"
+"""The environment variable that holds a node's secret."""
+
+SECRET_FILE_ENV_VAR = "SNR_SECRET_FILE"
+"""The environment variable naming another secret file than the default one."""
+
+NONCE_BYTES = 32
+"""Random bytes in each side's nonce (sent as 64 lowercase hex digits)."""
+
+_SIDES = {"client": "server", "server": "client", "pipe": "pipe"}
+
+
+def default_system(config: Any = None) -> str:
+    """The system a node names when its comms were given no ``system=``.
+
+    The config's ``name`` attribute if it has a non-empty one, else the name
+    of the folder holding the script that runs (``sys.argv[0]``), else the
+    current folder's name. Two scripts in one folder (a team's project)
+    therefore agree without any set-up.
+
+    Example::
+
+        default_system()   # 'team7' for python ~/team7/robot.py
+    """
+    name = getattr(config, "name", None)
+    if isinstance(name, str) and name:
+        return name
+    script = sys.argv[0] if sys.argv else ""
+    path = Path(script).resolve() if script and os.path.isfile(script) else Path.cwd()
+    folder = path.parent.name if path.is_file() else path.name
+    return folder or "snr"
+
+
+def resolve_system(system: Optional[str], config: Any, where: str) -> Optional[str]:
+    """The system a comms component names: ``system`` as given, or its default.
+
+    Raises:
+        ConfigError: ``system`` is not a non-empty string or None.
+
+    Example::
+
+        resolve_system(SCRIPT_FOLDER, config, "SocketsPair")   # 'team7'
+        resolve_system(None, config, "SocketsPair")            # None: names none
+    """
+    if system == SCRIPT_FOLDER:
+        return default_system(config)
+    if system is None or (isinstance(system, str) and system):
+        return system
+    raise ConfigError(
+        f"{where} got system={system!r}. Give one word naming your robot's system, e.g. "
+        '"team7" (every node of it the same), or None to let in nodes that name no system.'
+    )
+
+
+def secret_file() -> Path:
+    """Where ``python -m snr secret new`` writes the secret, and nodes look for it.
+
+    ``$SNR_SECRET_FILE`` if set, else ``snr/secret`` under ``$XDG_CONFIG_HOME``
+    (by default ``~/.config/snr/secret``).
+
+    Example::
+
+        secret_file()   # PosixPath('/home/student/.config/snr/secret')
+    """
+    named = os.environ.get(SECRET_FILE_ENV_VAR)
+    if named:
+        return Path(named).expanduser()
+    config_home = os.environ.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
+    return Path(config_home) / "snr" / "secret"
+
+
+def find_secret(secret: Optional[str], where: str) -> Optional[bytes]:
+    """The secret a node proves it knows, as bytes, or None for no authentication.
+
+    ``secret`` as given (None: none), or, by default (`FROM_ENVIRONMENT`),
+    ``$SNR_SECRET``, else the first line of `secret_file`, else None. Spaces
+    around it are not part of it.
+
+    Raises:
+        ConfigError: the secret is empty, or the secret file cannot be read.
+
+    Example::
+
+        find_secret("correct horse battery", "SocketsPair")   # b'correct horse battery'
+    """
+    if secret is None:
+        return None
+    if secret != FROM_ENVIRONMENT:
+        if not isinstance(secret, str) or not secret.strip():
+            raise ConfigError(
+                f"{where} got secret={secret!r:.20}; give a non-empty string (every node of "
+                "the system the same), or secret=None for no authentication."
+            )
+        return secret.strip().encode("utf-8")
+    text = os.environ.get(SECRET_ENV_VAR)
+    source = f"${SECRET_ENV_VAR}"
+    if text is None:
+        path = secret_file()
+        if not path.is_file():
+            return None
+        try:
+            lines = path.read_text(encoding="utf-8").strip().splitlines()
+        except (OSError, UnicodeDecodeError) as error:
+            raise ConfigError(
+                f"{where} cannot read its secret from {path}: {error}. Make a new one "
+                "with `python -m snr secret new`, or delete the file to run without one."
+            ) from None
+        text, source = (lines[0] if lines else ""), str(path)
+    if not text.strip():
+        raise ConfigError(
+            f"{where}: the secret in {source} is empty. Make one with "
+            "`python -m snr secret new`, or unset it to run without one."
+        )
+    return text.strip().encode("utf-8")
+
+
+def new_secret() -> str:
+    """A fresh random secret: 32 random bytes as 43 URL-safe characters.
+
+    Example::
+
+        new_secret()   # 'mZ3k...'
+    """
+    return secrets.token_urlsafe(32)
+
+
+def proof_mac(secret: bytes, side: str, prover_nonce: str, verifier_nonce: str) -> str:
+    """The proof that the ``side`` (``"client"``, ``"server"`` or ``"pipe"``) knows the secret.
+
+    HMAC-SHA256 keyed with the secret over the ASCII text
+    ``snr-proof <side> <prover's nonce> <verifier's nonce>``, as 64 lowercase
+    hex digits (docs/wire-format.md, section 3.5). The side in it keeps a
+    server from being used to answer its own challenge.
+
+    Example::
+
+        proof_mac(b"s3cret", "client", "ab" * 32, "cd" * 32)   # '5f0c...'
+    """
+    text = f"snr-proof {side} {prover_nonce} {verifier_nonce}".encode("ascii")
+    return hmac.new(secret, text, hashlib.sha256).hexdigest()
+
+
+class Refused(Exception):
+    """The peer may not link to this node; ``kind`` is ``"system"``, ``"secret"`` or ``"order"``.
+
+    The message says why in words, for the log line.
+
+    Example::
+
+        raise Refused("system", "it belongs to system 'team3', this node to 'team7'")
+    """
+
+    def __init__(self, kind: str, reason: str) -> None:
+        super().__init__(reason)
+        self.kind = kind
+        self.reason = reason
+
+
+class Handshake:
+    """One link's hello and proofs: judges what the peer says before any page may pass.
+
+    ``needed`` is False for a node with no system and no secret: it speaks
+    the first hello (version 1) and takes pages at once, as older SNR did.
+
+    Example::
+
+        shake = Handshake("urov", "server", system="team7", secret=None)
+        shake.on_hello(Hello("topside", system="team7"))   # None: nothing to send
+        shake.done                                          # True
+    """
+
+    def __init__(self, role: str, side: str, system: Optional[str], secret: Optional[bytes]):
+        self.role = role
+        self.side = side
+        self.system = system
+        self.secret = secret
+        self.nonce = secrets.token_hex(NONCE_BYTES) if secret is not None else None
+        self.needed = system is not None or secret is not None
+        self.peer_nonce: Optional[str] = None
+        self.done = not self.needed
+
+    def hello_frame(self, beat_s: Optional[float]) -> bytes:
+        """The hello this node sends first: version 2 with its system and nonce if it has them."""
+        return encode_hello(self.role, beat_s, bye=True, system=self.system, nonce=self.nonce)
+
+    def on_hello(self, hello: Hello) -> Optional[bytes]:
+        """Judge the peer's hello; the proof frame to send back, if any.
+
+        Raises:
+            Refused: another system, no system while this node names one, a
+                secret on one side only, or this node's own nonce sent back.
+        """
+        # A client trusts the address it was given to a server that names no
+        # system (an older SNR, or one told system=None); a server does not
+        # trust every program that reaches its port.
+        if self.system is not None and hello.system != self.system:
+            if hello.system is None and self.side == "client":
+                pass
+            elif hello.system is None:
+                raise Refused(
+                    "system",
+                    "it names no system (an older SNR, or a program that sends a version 1 "
+                    f"hello) and this node belongs to system {self.system!r} "
+                    "(to let such nodes in, give this node system=None; see docs/comms.md)",
+                )
+            else:
+                raise Refused(
+                    "system",
+                    f"it belongs to system {hello.system!r:.60}, this node to system "
+                    f"{self.system!r} (a wrong address? if it is one "
+                    "of yours, give both sides the same system=...; see docs/comms.md)",
+                )
+        if self.secret is None:
+            if hello.nonce is not None:
+                raise Refused(
+                    "secret",
+                    "it asks for a secret and this node has none: give this node the same "
+                    f"secret (${SECRET_ENV_VAR}, secret=..., or `python -m snr secret new` "
+                    "and copy the file; see docs/comms.md)",
+                )
+            self.done = True
+            return None
+        if hello.nonce is None:
+            raise Refused(
+                "secret",
+                "it has no secret and this node has one: it cannot prove it belongs here "
+                f"(give it the same secret: ${SECRET_ENV_VAR} or the secret file; "
+                "see docs/comms.md)",
+            )
+        if hello.nonce == self.nonce:
+            raise Refused("secret", "it sent this node's own challenge back (a replay)")
+        self.peer_nonce = hello.nonce
+        assert self.nonce is not None
+        return encode_proof(proof_mac(self.secret, self.side, self.nonce, hello.nonce))
+
+    def on_proof(self, proof: Proof) -> None:
+        """Check the peer's proof; ``done`` is True after.
+
+        Raises:
+            Refused: a proof before a hello, or one made with another secret.
+        """
+        if self.secret is None or self.peer_nonce is None or self.nonce is None:
+            raise Refused("order", "it sent a proof before its hello, or one nobody asked for")
+        expected = proof_mac(self.secret, _SIDES[self.side], self.peer_nonce, self.nonce)
+        if not hmac.compare_digest(expected, proof.mac):
+            raise Refused(
+                "secret",
+                "its proof does not match this node's secret: the two secrets differ "
+                f"(give both the same one: ${SECRET_ENV_VAR} or the secret file; see "
+                "docs/comms.md)",
+            )
+        self.done = True
