@@ -410,6 +410,10 @@ class TestPageEncoder(BackendCase):
         Page("bench", {2.5: 1, True: 2, None: 3}, "sender", 1.0),  # keys json turns to text
         Page("bench", json.loads(nested(codec.MAX_DEPTH - 1)), "sender", 1.0),  # as deep as may be
         Page("bench", "x", "sender", 1700000000),  # an int time
+        Page("bench", {"a": [1e16, -0.0, 1e-4], "b": ["\U0001f600"]}, "sender", 1e22),
+        Page("bench", [[0.5] * 17, list(range(17))], "sender", 1.0),  # past _SMALL
+        Page("bench", [None, "null", "e-5"], "sender", 1.0),  # what the search looks for
+        Page("bench", ["\u00e9"] * 3, "sender", 1.0),
     ]
 
     def test_the_same_bytes_as_page_json(self) -> None:
@@ -453,6 +457,22 @@ class TestPageEncoder(BackendCase):
                         self.assertRaises(NotSerializableError, encode, page)
                         continue
                     self.assertEqual(encode(page), expected)
+
+    def test_a_head_naming_a_page_field_keeps_page_json_s_order(self) -> None:
+        for _ in self.backends():
+            for head in ({"origin": "x", "v": 1}, {"key": 0}, {"process": 1}):
+                encode = codec.PageEncoder(head)
+                page = Page("bench", 0.5, "sender", 1.0)
+                with self.subTest(head=head):
+                    self.assertEqual(encode(page), codec.page_json(page, head))
+
+    def test_many_keys_keep_the_same_bytes_past_the_bound(self) -> None:
+        for _ in self.backends():
+            encode = codec.PageEncoder(self.HEAD)
+            for i in range(codec._MAX_ENVELOPES + 10):
+                page = Page(f"k{i % (codec._MAX_ENVELOPES + 5)}", i, "sender", 1.0)
+                self.assertEqual(encode(page), codec.page_json(page, self.HEAD))
+            self.assertLessEqual(len(encode._envelopes), codec._MAX_ENVELOPES)
 
 
 class TestChoosingTheBackend(BackendCase):
