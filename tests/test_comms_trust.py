@@ -20,7 +20,7 @@ from snr import Config, Mode, SocketsPair
 from snr.prelude import ConfigError, WireFormatError
 from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret, proof_mac, resolve_system
 from snr.std_mods.comms.wire import HEADER_BYTES, Hello, Proof, decode_body, encode_hello
-from tests.helpers import wait_until
+from tests.helpers import free_port, wait_until
 from tests.test_comms_liveness import CommsFaultTest, CounterFactory, frame, read_until_closed
 from tests.test_comms_local import connect_when_listening
 
@@ -204,7 +204,7 @@ class TestMalice(TrustTest):
 
         for client_secret, flows in ((SECRET, True), ("another", False), (None, False)):
             with self.subTest(client_secret=client_secret):
-                self.port += 1
+                self.port = free_port()  # a fresh port for each pair of nodes
                 counter = CounterFactory("tick")
                 pair = SocketsPair(("127.0.0.1", self.port), system=SYSTEM, secret=SECRET)
                 other = SocketsPair(("127.0.0.1", self.port), system=SYSTEM, secret=client_secret)
