@@ -11,6 +11,7 @@ import logging
 from typing import TYPE_CHECKING, Any, Optional, Sequence
 
 from snr.core.checks.explain import check_component_args
+from snr.core.checks.student_code import caller_block, describe_class
 from snr.core.dispatch import HandlerMap
 from snr.prelude import (
     AbstractComponent,
@@ -25,7 +26,6 @@ from snr.prelude import (
     Task,
     TaskHandlerMap,
 )
-from snr.prelude.student_code import caller_block, describe_class
 
 __all__ = ["Component"]
 

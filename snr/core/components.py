@@ -27,6 +27,7 @@ import functools
 import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
+from snr.core.checks.error_text import exception_text
 from snr.core.checks.explain import (
     failed_get_error,
     only_returns_none,
@@ -35,6 +36,14 @@ from snr.core.checks.explain import (
     wrong_get_signature,
 )
 from snr.core.checks.handler_checks import check_burst_handlers
+from snr.core.checks.student_code import (
+    def_block,
+    describe_callable,
+    describe_class,
+    is_runtime_file,
+    student_frames,
+    trim_runtime_frames,
+)
 from snr.core.dispatch import HandlerTable
 from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
@@ -48,15 +57,6 @@ from snr.prelude import (
     SNRError,
 )
 from snr.prelude.abstract import explain_abstract_error
-from snr.prelude.error_text import exception_text
-from snr.prelude.student_code import (
-    def_block,
-    describe_callable,
-    describe_class,
-    is_runtime_file,
-    student_frames,
-    trim_runtime_frames,
-)
 
 __all__ = ["ComponentSet"]
 

@@ -8,6 +8,7 @@ import time
 from typing import ClassVar, Optional
 
 from snr.core import tasks
+from snr.core.checks.student_code import describe_class, running_line
 from snr.core.component import Component
 from snr.core.sim_clock import LoopTurn, clock_of
 from snr.prelude import (
@@ -20,7 +21,6 @@ from snr.prelude import (
     Task,
     TaskType,
 )
-from snr.prelude.student_code import describe_class, running_line
 
 __all__ = ["LoopState", "ThreadLoop"]
 

@@ -22,6 +22,19 @@ from types import CodeType
 from typing import Any, Dict, Iterator, List, Optional, Union
 
 from snr.core.checks.call_checks import bad_data_key, page_as_data, wrong_call
+from snr.core.checks.error_text import exception_text, short_repr
+from snr.core.checks.student_code import (
+    caller_location,
+    code_name,
+    def_block,
+    describe_callable,
+    describe_class,
+    parse_source,
+    short_path,
+    source_block,
+    student_frames,
+    trim_runtime_frames,
+)
 from snr.prelude import (
     AbstractComponent,
     AbstractConfig,
@@ -37,19 +50,6 @@ from snr.prelude import (
     Task,
     TaskHandler,
     ThreadSafetyError,
-)
-from snr.prelude.error_text import exception_text, short_repr
-from snr.prelude.student_code import (
-    caller_location,
-    code_name,
-    def_block,
-    describe_callable,
-    describe_class,
-    parse_source,
-    short_path,
-    source_block,
-    student_frames,
-    trim_runtime_frames,
 )
 from snr.prelude.task import format_task
 
