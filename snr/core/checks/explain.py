@@ -22,6 +22,7 @@ import threading
 from types import CodeType
 from typing import Any, Dict, Iterator, List, NoReturn, Optional, Set, Union
 
+from snr.core.checks.abstract_errors import explain_abstract_error
 from snr.core.checks.call_checks import bad_data_key, page_as_data, wrong_call
 from snr.core.checks.error_text import exception_text, short_repr
 from snr.core.checks.student_code import (
@@ -55,7 +56,6 @@ from snr.prelude import (
     TaskHandler,
     ThreadSafetyError,
 )
-from snr.prelude.abstract import explain_abstract_error
 from snr.prelude.task import format_task
 
 __all__ = [
