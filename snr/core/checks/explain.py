@@ -65,6 +65,7 @@ __all__ = [
     "bad_result_error",
     "bad_result_hint",
     "check_component_args",
+    "check_loop_class",
     "check_node_args",
     "check_page_args",
     "component_without_init",
@@ -773,3 +774,28 @@ def used_before_init(component: Any, attribute: str) -> AttributeError:
         'before calling it. Make `super().__init__(factory, parent, "my_name")` '
         f"the first line of __init__.\n{caller_block()}".rstrip()
     )
+
+
+def check_loop_class(loop_class: type, base_loop: Any, max_tick_rate_hz: float) -> None:
+    """Refuse a ThreadLoop without its own ``loop()``, or with a negative tick rate.
+
+    ``base_loop`` is ``ThreadLoop.loop``, which a loop must override.
+
+    Example::
+
+        check_loop_class(type(self), ThreadLoop.loop, max_tick_rate_hz)
+
+    Raises:
+        ComponentError: saying which, and what to write instead.
+    """
+    if getattr(loop_class, "loop", None) is base_loop:
+        raise ComponentError(
+            f"{describe_class(loop_class)} is a ThreadLoop but has no loop() method. "
+            "Add `def loop(self) -> None:` with the work to repeat, or make it an "
+            "Endpoint if it only reacts to tasks."
+        )
+    if max_tick_rate_hz < 0:
+        raise ComponentError(
+            f"{describe_class(loop_class)} asked for max_tick_rate_hz="
+            f"{max_tick_rate_hz}; use a positive rate, or 0 for no limit."
+        )
