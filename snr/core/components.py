@@ -140,22 +140,31 @@ class ComponentSet:
 
         The node's core (``node_core``) is never removed: the refusal is logged.
         """
-        if name == NODE_CORE_NAME:
-            self.node.log.error(CORE_REFUSED["remove"], name, self.node.role)
-            return
-        component = self.by_name.pop(name, None)
+        component = self._find("remove component", name)
         if component is None:
-            self.node.log.error(
-                "Cannot remove component %r: node %r has no such component. It has: %s.",
-                name,
-                self.node.role,
-                ", ".join(self.by_name),
-            )
             return
+        del self.by_name[name]
         self.stop(component)
         self._warn_if_alive(component)
         self.call_safely(component.terminate, component, "terminate")
         self.table_stale = True
+
+    def _find(self, action: str, name: ComponentName) -> Optional[AbstractComponent]:
+        """The component called ``name``; None, with the refusal logged, for node_core or none."""
+        log = self.node.log
+        if name == NODE_CORE_NAME:
+            log.error(CORE_REFUSED[action], name, self.node.role)
+            return None
+        component = self.by_name.get(name)
+        if component is None:
+            log.error(
+                "Cannot %s %r: node %r has no such component. It has: %s.",
+                action,
+                name,
+                self.node.role,
+                ", ".join(self.by_name),
+            )
+        return component
 
     # -- hot reload ---------------------------------------------------------
     def reload(self, name: ComponentName = "all") -> List[ComponentName]:
@@ -171,19 +180,9 @@ class ComponentSet:
                 for n, c in self.by_name.items()
                 if c.factory.reload_targets and n != NODE_CORE_NAME
             ]
-        elif name == NODE_CORE_NAME:
-            self.node.log.error(CORE_REFUSED["reload"], name, self.node.role)
-            return []
-        elif name in self.by_name:
-            targets = [self.by_name[name]]
         else:
-            self.node.log.error(
-                "Cannot reload %r: node %r has no such component. It has: %s.",
-                name,
-                self.node.role,
-                ", ".join(self.by_name),
-            )
-            return []
+            component = self._find("reload", name)
+            targets = [] if component is None else [component]
         return [old.name for old in targets if self._reload_one(old)]
 
     def _reload_one(self, old: AbstractComponent) -> bool:

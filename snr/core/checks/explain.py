@@ -677,7 +677,7 @@ def name_taken_error(role: str, component: Any, other: Any) -> ConfigError:
 
 
 CORE_REFUSED = {
-    "remove": (
+    "remove component": (
         "Refused to remove %r from node %r: it is the node's own core, which "
         "stores every page, adds, removes and reloads components, and stops the "
         "node on a terminate task; without it the node would run on deaf. To stop "
@@ -689,7 +689,12 @@ CORE_REFUSED = {
         "is not reloaded while the node runs. Restart the node to load a new SNR."
     ),
 }
-"""The log messages (``%r`` the name, ``%r`` the role) for removing or reloading ``node_core``."""
+"""The log messages (``%r`` the name, ``%r`` the role) for removing or reloading ``node_core``.
+
+Example::
+
+    log.error(CORE_REFUSED["reload"], "node_core", node.role)
+"""
 
 BLOCKED_ADVICE = (
     "Make loop() return often: give reads a timeout and wait with self.wait_s(seconds) "
