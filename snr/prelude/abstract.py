@@ -101,7 +101,7 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
     """The ComponentError for building ``cls`` while it lacks required methods.
 
     The words are made by `snr.core.checks.abstract_errors` (read second),
-    loaded only when this mistake happens.
+    imported here only when this mistake happens.
 
     Example::
 
