@@ -164,9 +164,6 @@ class Node(AbstractNode):
             from snr.core.checks.node_checks import NodeChecks
 
             self._checks = NodeChecks(self, self._components, self._runner)
-        # A deployed robot's code was checked while it was developed: its pages
-        # are made without the checks of `page` (see performance.md for their cost).
-        self._check_pages = self.mode is not Mode.DEPLOYED
         core = NodeCoreFactory().get(self)
         self.add_component(core, start=False)
         self._runner.store_page = core.store_page_handler  # pages are stored before handlers
@@ -398,7 +395,9 @@ class Node(AbstractNode):
                 ``data`` is a whole `Page` (store ``page.data``). DEBUG and
                 TEST modes only: DEPLOYED makes pages without these checks.
         """
-        if self._check_pages:
+        # A deployed robot's code was checked while it was developed (in DEBUG or
+        # TEST, with the checks): its pages are made without them (performance.md).
+        if self._checks is not None:
             check_page_args(key, data)
         return Page(key, data, self.role, self._page_time(), process)
 
