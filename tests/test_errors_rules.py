@@ -31,9 +31,9 @@ from snr import (
     TaskType,
     ThreadLoop,
 )
+from snr.core.checks.error_text import closest_match, exception_text
 from snr.core.checks.explain import page_hint
 from snr.prelude import ComponentError
-from snr.prelude.error_text import closest_match, exception_text
 from tests.quiet import captured_logs
 
 NEW_ENTRIES = ["15n", "15o", "15p", "15q", "16p", "16q", "16r"]

@@ -10,22 +10,24 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING, Any, Optional, Sequence
 
-from snr.core.checks.explain import check_component_args
+from snr.core.checks.explain import (
+    check_component_args,
+    handlers_before_init,
+    log_name_taken,
+    used_before_init,
+)
 from snr.core.dispatch import HandlerMap
 from snr.prelude import (
     AbstractComponent,
     AbstractFactory,
     AbstractNode,
-    ComponentError,
     ComponentName,
     DataKey,
-    MissingSuperInitError,
     Page,
     SomeTasks,
     Task,
     TaskHandlerMap,
 )
-from snr.prelude.student_code import caller_block, describe_class
 
 __all__ = ["Component"]
 
@@ -87,14 +89,7 @@ class Component(AbstractComponent):
 
     @log.setter
     def log(self, value: Any) -> None:
-        # Without this setter Python says "property 'log' of 'X' object has no
-        # setter", which names neither the clash nor the fix.
-        cls = type(self)
-        raise ComponentError(
-            f"{describe_class(cls)} uses the name 'log' for its own value, but 'log' is "
-            "already the component's logger (self.info(...), self.warn(...) write to it). "
-            f"Use another name, e.g. self.{cls.__name__.lower()}_log.\n{caller_block()}".rstrip()
-        )
+        raise log_name_taken(type(self))  # a clearer word than "property has no setter"
 
     # -- handlers ---------------------------------------------------------
     @property
@@ -110,11 +105,7 @@ class Component(AbstractComponent):
     @task_handlers.setter
     def task_handlers(self, handlers: TaskHandlerMap) -> None:
         if "_task_handlers" not in self.__dict__:
-            raise MissingSuperInitError(
-                f"{describe_class(type(self))} sets self.task_handlers before calling "
-                "super().__init__(factory, parent, name). Call super().__init__(...) "
-                f"first in __init__, then set task_handlers.\n{caller_block()}".rstrip()
-            )
+            raise handlers_before_init(type(self))
         self._task_handlers = HandlerMap(
             handlers, owner_class=type(self), on_change=self._handlers_changed
         )
@@ -216,18 +207,7 @@ class Component(AbstractComponent):
             # Only reached when normal lookup fails. Before Component.__init__ has
             # run, every missing attribute means "super().__init__ was forgotten":
             # say so instead of a bare AttributeError deep inside SNR.
-            if "_task_handlers" in self.__dict__ or attribute.startswith("__"):
-                error = AttributeError(
-                    f"{type(self).__name__!r} object has no attribute {attribute!r}"
-                )
-                error.name, error.obj = attribute, self  # Python's "Did you mean" uses these
-                raise error
-            raise MissingSuperInitError(
-                f"{describe_class(type(self))} has no {attribute!r} yet: its __init__ did "
-                "not call super().__init__(factory, parent, name), or used the component "
-                'before calling it. Make `super().__init__(factory, parent, "my_name")` '
-                f"the first line of __init__.\n{caller_block()}".rstrip()
-            )
+            raise used_before_init(self, attribute)
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.__dict__.get('name', '?')!r}>"

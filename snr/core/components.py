@@ -28,13 +28,19 @@ import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
 from snr.core.checks.explain import (
-    failed_get_error,
-    only_returns_none,
+    CORE_REFUSED,
+    component_without_init,
+    factory_without_init,
+    name_taken_error,
+    not_stopped_text,
+    raise_get_failure,
     reload_failure,
+    start_failure,
+    warn_get_returned_none,
     wrong_get_result_error,
-    wrong_get_signature,
 )
 from snr.core.checks.handler_checks import check_burst_handlers
+from snr.core.checks.student_code import describe_callable
 from snr.core.dispatch import HandlerTable
 from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
@@ -42,28 +48,11 @@ from snr.prelude import (
     AbstractFactory,
     AbstractLoop,
     AbstractNode,
-    ComponentError,
     ComponentName,
-    ConfigError,
     SNRError,
-)
-from snr.prelude.abstract import explain_abstract_error
-from snr.prelude.error_text import exception_text
-from snr.prelude.student_code import (
-    def_block,
-    describe_callable,
-    describe_class,
-    is_runtime_file,
-    student_frames,
-    trim_runtime_frames,
 )
 
 __all__ = ["ComponentSet"]
-
-_BLOCKED_ADVICE = (
-    "Make loop() return often: give reads a timeout and wait with self.wait_s(seconds) "
-    "instead of time.sleep(), so the loop notices when it should stop."
-)
 
 
 class ComponentSet:
@@ -82,6 +71,7 @@ class ComponentSet:
     Attributes:
         by_name: the components by name, in start order (the node's ``components``).
         table: the `HandlerTable`; call `refresh_table` before using it.
+        table_stale: True when a change since the table was built is not in it yet.
         running: True between `start_all` and `shutdown`.
     """
 
@@ -91,9 +81,7 @@ class ComponentSet:
         self.join_timeout_s = join_timeout_s
         self.by_name: Dict[ComponentName, AbstractComponent] = {}
         self.running = False
-        self.table_stale = False
-        self._rebuild_needed = False
-        self._pending_adds: List[AbstractComponent] = []
+        self.table_stale = True
         self._none_told: Set[Any] = set()  # factories' get() already said to return None
         #: Called with each component before it is added (set by the node in DEBUG
         #: and TEST mode to read the student's class; see `check_component`).
@@ -108,51 +96,21 @@ class ComponentSet:
                 component, or the factory skipped ``super().__init__()``.
         """
         if not hasattr(factory, "reload_targets"):
-            raise ComponentError(
-                f"{describe_class(type(factory))} did not call super().__init__() in its "
-                "__init__. Add "
-                "`super().__init__()` (or `super().__init__(my_module)` to hot-reload "
-                "my_module) as its first line."
-            )
+            raise factory_without_init(factory)
         component: Any  # get() is typed, but a student's get() may return anything
         try:
             component = factory.get(self.node)
         except SNRError:
             raise
-        except TypeError as error:
-            explained = explain_abstract_error(error) or wrong_get_signature(factory, error)
-            if explained is not None:
-                raise explained from None  # Python's own text blames SNR's call
-            raise failed_get_error(factory, error, self.node.role) from error
         except Exception as error:
-            raise failed_get_error(factory, error, self.node.role) from error
+            raise_get_failure(factory, error, self.node.role)
         if component is None:
-            self._got_none(factory)
+            node = self.node
+            warn_get_returned_none(factory, node.role, self.running, self._none_told, node.log)
             return None
         if not isinstance(component, AbstractComponent):
             raise wrong_get_result_error(factory, component)
         return component
-
-    def _got_none(self, factory: AbstractFactory) -> None:
-        get = type(factory).get
-        if only_returns_none(get):
-            raise ComponentError(
-                f"{describe_callable(get)} returned None: it has no `return` with a "
-                f"value, so role {self.node.role!r} can never get a component from it. "
-                "Return what it builds: `return MyEndpoint(self, parent)`."
-            )
-        if self.running:
-            return  # at run time None is the documented "add nothing" (listing A.5)
-        if get in self._none_told:
-            return  # said once: the same factory listed twice says the same thing
-        self._none_told.add(get)
-        self.node.log.warning(
-            "%s returned None this time, so role %r gets no component from it. If you "
-            "meant to add one, check the conditions before its `return`. (Said once per "
-            "factory class.)",
-            describe_callable(get),
-            self.node.role,
-        )
 
     # -- adding and removing ------------------------------------------------
     def add(self, component: AbstractComponent, start: bool = True) -> None:
@@ -165,73 +123,48 @@ class ComponentSet:
         if not hasattr(component, "name") or (
             not hasattr(component, "_task_handlers") and not hasattr(component, "parent")
         ):
-            raise ComponentError(
-                f"{describe_class(type(component))}: its __init__ did not call "
-                "super().__init__(factory, parent, name). Add that line first in "
-                "__init__ so SNR can give the component its name and task handlers."
-                f"{_init_block(type(component))}"
-            )
+            raise component_without_init(component)
         if self.check_added is not None:
             self.check_added(component)
         check_burst_handlers(component)
-        self._check_name_free(component)
+        other = self.by_name.get(component.name)
+        if other is not None:
+            raise name_taken_error(self.node.role, component, other)
         self.by_name[component.name] = component
-        if self.table_stale or self.running:
-            self._pending_adds.append(component)  # applied before the next task
-            self.table_stale = True
-        else:
-            self.table.add(component)
+        self.table_stale = True  # the table is rebuilt before the next task
         if start and self.running:
             self.start(component)
-
-    def _check_name_free(self, component: AbstractComponent) -> None:
-        name = component.name
-        other = self.by_name.get(name)
-        if other is None:
-            return
-        factory = getattr(component, "factory", None)
-        if getattr(other, "factory", None) is factory:
-            raise ConfigError(
-                f"Node {self.node.role!r} got two components named {name!r} from the same "
-                f"{type(factory).__name__} object: it is listed twice in the config, "
-                "or its get() gives every component the same name. List it once, or "
-                "add another factory object that uses another name."
-            )
-        raise ConfigError(
-            f"Node {self.node.role!r} already has a component named {name!r} "
-            f"({describe_class(type(other))}); "
-            f"{describe_class(type(component))} wants the same name. Give each "
-            "component a unique name (e.g. pass a name to its factory)."
-        )
 
     def remove(self, name: ComponentName) -> None:
         """Halt, join, terminate and forget the component called ``name``.
 
         The node's core (``node_core``) is never removed: the refusal is logged.
         """
-        if name == NODE_CORE_NAME:
-            self.node.log.error(
-                "Refused to remove %r from node %r: it is the node's own core, which "
-                "stores every page, adds, removes and reloads components, and stops the "
-                "node on a terminate task; without it the node would run on deaf. To stop "
-                "the node, schedule a terminate task (or type `exit` in a console).",
-                name,
-                self.node.role,
-            )
-            return
-        component = self.by_name.pop(name, None)
+        component = self._find("remove component", name)
         if component is None:
-            self.node.log.error(
-                "Cannot remove component %r: node %r has no such component. It has: %s.",
+            return
+        del self.by_name[name]
+        self.stop(component)
+        self._warn_if_alive(component)
+        self.call_safely(component.terminate, component, "terminate")
+        self.table_stale = True
+
+    def _find(self, action: str, name: ComponentName) -> Optional[AbstractComponent]:
+        """The component called ``name``; None, with the refusal logged, for node_core or none."""
+        log = self.node.log
+        if name == NODE_CORE_NAME:
+            log.error(CORE_REFUSED[action], name, self.node.role)
+            return None
+        component = self.by_name.get(name)
+        if component is None:
+            log.error(
+                "Cannot %s %r: node %r has no such component. It has: %s.",
+                action,
                 name,
                 self.node.role,
                 ", ".join(self.by_name),
             )
-            return
-        self.stop(component)
-        self._warn_if_alive(component)
-        self.call_safely(component.terminate, component, "terminate")
-        self.mark_rebuild()
+        return component
 
     # -- hot reload ---------------------------------------------------------
     def reload(self, name: ComponentName = "all") -> List[ComponentName]:
@@ -247,25 +180,9 @@ class ComponentSet:
                 for n, c in self.by_name.items()
                 if c.factory.reload_targets and n != NODE_CORE_NAME
             ]
-        elif name == NODE_CORE_NAME:
-            self.node.log.error(
-                "Refused to reload %r in node %r: it is the node's own core and runs this "
-                "very reload (and every store, add, remove and terminate); SNR's own code "
-                "is not reloaded while the node runs. Restart the node to load a new SNR.",
-                name,
-                self.node.role,
-            )
-            return []
-        elif name in self.by_name:
-            targets = [self.by_name[name]]
         else:
-            self.node.log.error(
-                "Cannot reload %r: node %r has no such component. It has: %s.",
-                name,
-                self.node.role,
-                ", ".join(self.by_name),
-            )
-            return []
+            component = self._find("reload", name)
+            targets = [] if component is None else [component]
         return [old.name for old in targets if self._reload_one(old)]
 
     def _reload_one(self, old: AbstractComponent) -> bool:
@@ -293,7 +210,7 @@ class ComponentSet:
         ]
         self.by_name.clear()  # refilled in place: the node's `components` is this dict
         self.by_name.update(items)
-        self.mark_rebuild()
+        self.table_stale = True
         if self.running:
             try:
                 self.start(new)
@@ -308,16 +225,7 @@ class ComponentSet:
         self.stop(old)
         if not old.is_alive():
             return True
-        where = old.where_running() if isinstance(old, AbstractLoop) else ""
-        self.node.log.error(
-            "Cannot reload loop %r: it did not stop within %.1f s of being asked%s, and "
-            "a new copy would run beside it. Reload refused; the old version keeps "
-            "running. %s",
-            old.name,
-            self.join_timeout_s,
-            f" (it is at {where})" if where else "",
-            _BLOCKED_ADVICE,
-        )
+        self.node.log.error("%s", not_stopped_text(old, self.join_timeout_s, reload=True))
         if isinstance(old, AbstractLoop):
             old.cancel_stop()
         return False
@@ -385,14 +293,7 @@ class ComponentSet:
         except SNRError:
             raise
         except Exception as error:
-            frames = student_frames(error.__traceback__)
-            what = exception_text(error)
-            trim_runtime_frames(error)
-            raise ComponentError(
-                f"{describe_class(type(component))} {component.name!r} failed to start: "
-                f"{what}\n"
-                f"Where it happened (most recent call last):\n{frames}"
-            ) from error
+            raise start_failure(component, error) from error
 
     def stop(self, component: AbstractComponent) -> None:
         """Halt ``component`` and wait (up to ``join_timeout_s``) for its thread."""
@@ -413,18 +314,9 @@ class ComponentSet:
             self.call_safely(component.terminate, component, "terminate")
 
     def _warn_if_alive(self, component: AbstractComponent) -> None:
-        if not component.is_alive():
-            return
-        where = component.where_running() if isinstance(component, AbstractLoop) else ""
-        self.node.log.warning(
-            "Loop %r did not stop within %.1f s of being asked%s. Its terminate() runs "
-            "now anyway, while its thread is still going (the thread ends with the "
-            "program). %s",
-            component.name,
-            self.join_timeout_s,
-            f": it is at {where}" if where else "",
-            _BLOCKED_ADVICE,
-        )
+        if component.is_alive():
+            text = not_stopped_text(component, self.join_timeout_s, reload=False)
+            self.node.log.warning("%s", text)
 
     def call_safely(
         self, method: Callable[[], None], component: AbstractComponent, what: str
@@ -449,23 +341,12 @@ class ComponentSet:
                 handler (raised in the handler that made the change).
         """
         if self.by_name.get(component.name) is component:
-            self.mark_rebuild()
+            self.table_stale = True
             check_burst_handlers(component)
 
-    def mark_rebuild(self) -> None:
-        """Rebuild the whole table before the next task."""
-        self._rebuild_needed = True
-        self.table_stale = True
-
     def refresh_table(self) -> None:
-        """Bring the table up to date with every change made since it was built."""
-        if self._rebuild_needed:
-            self.table.rebuild(self.by_name.values())
-        else:
-            for component in self._pending_adds:
-                self.table.add(component)
-        self._pending_adds = []
-        self._rebuild_needed = False
+        """Rebuild the table from the components, with every change made since it was built."""
+        self.table.rebuild(self.by_name.values())
         self.table_stale = False
 
 
@@ -482,12 +363,3 @@ def _halt(component: AbstractComponent) -> None:
     if isinstance(component, AbstractLoop):
         component.set_terminate_flag("node stopping")
     component.halt()
-
-
-def _init_block(cls: type) -> str:
-    """The ``def __init__`` line of ``cls`` (where the call is missing), or ""."""
-    init = next((vars(k)["__init__"] for k in cls.__mro__ if "__init__" in vars(k)), None)
-    code = getattr(init, "__code__", None)
-    if code is None or is_runtime_file(code.co_filename):
-        return ""
-    return "\n" + def_block(init)

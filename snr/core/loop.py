@@ -8,19 +8,19 @@ import time
 from typing import ClassVar, Optional
 
 from snr.core import tasks
+from snr.core.checks.explain import check_loop_class
+from snr.core.checks.student_code import running_line
 from snr.core.component import Component
 from snr.core.sim_clock import LoopTurn, clock_of
 from snr.prelude import (
     AbstractFactory,
     AbstractLoop,
     AbstractNode,
-    ComponentError,
     ComponentName,
     NodeStateError,
     Task,
     TaskType,
 )
-from snr.prelude.student_code import describe_class, running_line
 
 __all__ = ["LoopState", "ThreadLoop"]
 
@@ -81,17 +81,7 @@ class ThreadLoop(Component, AbstractLoop):
         max_tick_rate_hz: float = 0.0,
     ) -> None:
         super().__init__(factory, parent, name)
-        if type(self).loop is ThreadLoop.loop:
-            raise ComponentError(
-                f"{describe_class(type(self))} is a ThreadLoop but has no loop() method. "
-                "Add `def loop(self) -> None:` with the work to repeat, or make it an "
-                "Endpoint if it only reacts to tasks."
-            )
-        if max_tick_rate_hz < 0:
-            raise ComponentError(
-                f"{describe_class(type(self))} asked for max_tick_rate_hz="
-                f"{max_tick_rate_hz}; use a positive rate, or 0 for no limit."
-            )
+        check_loop_class(type(self), ThreadLoop.loop, max_tick_rate_hz)
         self.max_tick_rate_hz = max_tick_rate_hz
         self.state = LoopState.NEW
         self._clock_turn: Optional[LoopTurn] = None  # its place on a SimClock, if any
@@ -224,10 +214,7 @@ class ThreadLoop(Component, AbstractLoop):
 
     def where_running(self) -> str:
         """The line the loop's thread is on now (e.g. where it is blocked), or ""."""
-        thread = self._thread
-        if thread is None or not thread.is_alive():
-            return ""
-        return running_line(thread.ident)
+        return running_line(self.thread_id) if self.is_alive() else ""
 
     def _wait_for_setup_tasks(self, timeout_s: float = 1.0) -> None:
         """Let the node handle what ``setup()`` stored before the first ``loop()``.
@@ -264,37 +251,29 @@ class ThreadLoop(Component, AbstractLoop):
             self.setup()
             if type(self).setup is not ThreadLoop.setup:
                 self._wait_for_setup_tasks()
-            if turn is None:
-                # Between loop() and the wait, as little as can be: a page that
-                # loop() stored reaches the node's thread only once this thread
-                # blocks and lets go of the GIL. So the wait is the lock's own
-                # (what wait_s does), and the pass is counted after it.
-                running = self._running_lock
-                while not stop.is_set():
-                    started = clock()
-                    self.loop()
-                    ended = clock()
-                    if period_s and period_s > ended - started:
-                        stopped = running.acquire(True, period_s - (ended - started))
-                    else:
-                        stopped = False
-                    if cell is not None:
-                        cell[0] += 1
-                        cell[1] += ended - started
+            # Between loop() and the wait, as little as can be: a page that
+            # loop() stored reaches the node's thread only once this thread
+            # blocks and lets go of the GIL. So the wait is the lock's own
+            # (what wait_s does), and the pass is counted after it.
+            running, rate_hz = self._running_lock, self.max_tick_rate_hz
+            first_s, ticks = (0.0 if turn is None else turn.now_s()), 0
+            while not stop.is_set():
+                started = clock()
+                self.loop()
+                ended = clock()
+                if turn is not None:  # simulated time: tick n is at first + n / rate, exactly
+                    ticks += 1
+                    stopped = rate_hz > 0 and turn.sleep_until(first_s + ticks / rate_hz)
+                else:
+                    left_s = period_s - (ended - started)  # of this pass's period
+                    stopped = left_s > 0 and running.acquire(True, left_s)
                     if stopped:
                         running.release()  # stays released: the loop is stopped
-                        break
-            else:  # simulated time: tick n is at first + n / rate, exactly
-                first_s, ticks, rate_hz = turn.now_s(), 0, self.max_tick_rate_hz
-                while not stop.is_set():
-                    started = clock()
-                    self.loop()
-                    if cell is not None:
-                        cell[0] += 1
-                        cell[1] += clock() - started
-                    ticks += 1
-                    if rate_hz and turn.sleep_until(first_s + ticks / rate_hz):
-                        break
+                if cell is not None:
+                    cell[0] += 1
+                    cell[1] += ended - started
+                if stopped:
+                    break
         except BaseException as error:  # every way out is reported, in words
             # sys.exit() and KeyboardInterrupt included: either would end this
             # thread with no word (or a raw traceback), never the program.

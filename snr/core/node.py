@@ -23,7 +23,6 @@ import enum
 import logging
 import threading
 import time
-from threading import get_ident
 from typing import TYPE_CHECKING, Any, Callable, List, Optional
 
 from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
@@ -147,7 +146,6 @@ class Node(AbstractNode):
         self.state = NodeState.CREATED
         self.terminate_reason: Optional[str] = None
         self._stop_requested = False
-        self._running = False
         self._thread_id: Optional[int] = None
         self._components = ComponentSet(self, HandlerTable(self.profiler), join_timeout_s=1.0)
         self.components = self._components.by_name
@@ -170,9 +168,6 @@ class Node(AbstractNode):
             from snr.core.checks.node_checks import NodeChecks
 
             self._checks = NodeChecks(self, self._components, self._runner)
-        # A deployed robot's code was checked while it was developed: its pages
-        # are made without the checks of `page` (see performance.md for their cost).
-        self._check_pages = self.mode is not Mode.DEPLOYED
         core = NodeCoreFactory().get(self)
         self.add_component(core, start=False)
         self._runner.store_page = core.store_page_handler  # pages are stored before handlers
@@ -220,13 +215,12 @@ class Node(AbstractNode):
             )
         self.state = NodeState.RUNNING
         self._thread_id = self.queue.owner_thread = threading.get_ident()
-        self._running = not self._stop_requested
         if self._checks is not None:
             self._checks.start(self._thread_id)
         try:
             if self._clock_turn is not None:
                 self._clock_turn.begin()
-            self._components.start_all(lambda: self._running)
+            self._components.start_all(lambda: not self._stop_requested)
             self._run_tasks()
         except KeyboardInterrupt:
             self.set_terminate_flag("interrupted by user (Ctrl-C)")
@@ -259,7 +253,7 @@ class Node(AbstractNode):
         if not self._stop_requested:
             self._stop_requested = True
             self.terminate_reason = reason
-        self._running = self._runner.running = False
+        self._runner.running = False
         self.queue.close()
 
     def is_terminated(self) -> bool:
@@ -277,7 +271,6 @@ class Node(AbstractNode):
         self._check_owner_thread("terminate")
         if not self._stop_requested:
             self.set_terminate_flag("terminate() called")
-        self._running = False
         self.state = NodeState.TERMINATING
         if self._checks is not None:  # stopping loops and waiting for them is no mistake
             self._checks.stop()
@@ -296,12 +289,12 @@ class Node(AbstractNode):
         queue = self.queue
         run_queued = self._runner.run_queued
         step_mode = self.step_mode
-        while self._running:
+        while not self._stop_requested:
             if step_mode.paused:  # a console paused the node: see checks/step_mode.py
                 step_mode.run_paused(self.idle_wake_s)
                 continue
             run_queued()
-            if self._running and not queue:
+            if not (self._stop_requested or queue):
                 queue.wait(self.idle_wake_s)  # a producer's task or stop wakes it
 
     def get_task_handlers(self, task: Task) -> List[tuple[TaskHandler, TaskId]]:
@@ -315,32 +308,23 @@ class Node(AbstractNode):
 
             node.is_handled(TaskType.process_data, "depth_m")   # a filter waits for it?
         """
-        components = self._components
-        if components.table_stale:
-            components.refresh_table()
-        table = components.table.table
+        table = self._table().table
         return (task_type, name) in table or task_type in table
 
     def _lookup(self, task: Task) -> List[Any]:
+        return self._table().lookup(task.type, task.name)
+
+    def _table(self) -> HandlerTable:
+        """The handler table, with every change to the components in it."""
         if self._components.table_stale:
             self._components.refresh_table()
-        return self._components.table.lookup(task.type, task.name)
+        return self._components.table
 
     def handle_task(self, handler: TaskHandler, task: Task, key: TaskId) -> Optional[List[Task]]:
         """Run one handler with timing and error reporting; its tasks as a list."""
         self._check_owner_thread("handle_task")
         owner = getattr(handler, "__self__", None)
         component = owner if isinstance(owner, AbstractComponent) else None
-        return self.handle_task_entry(handler, task, key, component)
-
-    def handle_task_entry(
-        self,
-        handler: TaskHandler,
-        task: Task,
-        key: TaskId,
-        component: Optional[AbstractComponent],
-    ) -> Optional[List[Task]]:
-        """`handle_task` when the handler's component is already known."""
         cell = None
         if self.profiler is not None:
             cell = self.profiler.task_cell(key, getattr(handler, "__module__", None) or "?")
@@ -415,7 +399,9 @@ class Node(AbstractNode):
                 ``data`` is a whole `Page` (store ``page.data``). DEBUG and
                 TEST modes only: DEPLOYED makes pages without these checks.
         """
-        if self._check_pages:
+        # A deployed robot's code was checked while it was developed (in DEBUG or
+        # TEST, with the checks): its pages are made without them (performance.md).
+        if self._checks is not None:
             check_page_args(key, data)
         return Page(key, data, self.role, self._page_time(), process)
 
@@ -455,8 +441,7 @@ class Node(AbstractNode):
         this is for a handler that must store one at once. Other threads use
         ``store_page``/``store_data``, which queue it.
         """
-        if get_ident() != self._thread_id and self.state is NodeState.RUNNING:
-            raise wrong_thread_error(self.role, "write_page")
+        self._check_owner_thread("write_page")
         self.datastore[page.key] = page
 
     # ------------------------------------------------------------------
@@ -505,11 +490,7 @@ class Node(AbstractNode):
         self._components.handlers_changed(component)
 
     def _check_owner_thread(self, method: str) -> None:
-        if (
-            self.state is NodeState.RUNNING
-            and self._thread_id is not None
-            and threading.get_ident() != self._thread_id
-        ):
+        if self.state is NodeState.RUNNING and threading.get_ident() != self._thread_id:
             raise wrong_thread_error(self.role, method)
 
     def __repr__(self) -> str:

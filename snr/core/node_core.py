@@ -93,29 +93,22 @@ class NodeCoreEndpoint(Endpoint):
         task each, so every handler sees them in the usual order.
         """
         node = self.node
-        datastore = node.datastore
         processed: List[Task] = []
-        # Per key, asked once a burst: only this core handles its store_page
-        # (else page by page from there), and someone handles its process_data.
-        alone: Dict[DataKey, bool] = {}
-        wanted: Dict[DataKey, bool] = {}
+        wanted: Dict[DataKey, bool] = {}  # per key, asked once a burst: is it processed?
         pages = task.val_list
         for index, page in enumerate(pages):
-            if not isinstance(page, Page) or not page.origin:
-                self._store_one_by_one(pages[index:])  # the usual handler explains or fixes it
-                break
-            data_key = page.key
-            only_core = alone.get(data_key)
-            if only_core is None:
-                handlers = node.get_task_handlers(Task(_STORE_PAGE, data_key))
-                only_core = alone[data_key] = not handlers
-                wanted[data_key] = node.is_handled(_PROCESS_DATA, data_key)
-            if not only_core:
+            # Page by page from here when the usual handler must explain or fix
+            # the page, or when a handler besides this core stores its key.
+            if not (isinstance(page, Page) and page.origin) or (
+                page.key not in wanted and node.is_handled(_STORE_PAGE, page.key)
+            ):
                 self._store_one_by_one(pages[index:])
                 break
-            datastore[data_key] = page  # node.write_page, on the node's own thread
-            if page.process and wanted[data_key]:
-                processed.append(Task(_PROCESS_DATA, data_key, [page]))
+            node.datastore[page.key] = page  # node.write_page, on the node's own thread
+            if page.key not in wanted:
+                wanted[page.key] = node.is_handled(_PROCESS_DATA, page.key)
+            if page.process and wanted[page.key]:
+                processed.append(Task(_PROCESS_DATA, page.key, [page]))
         return processed
 
     def _store_one_by_one(self, pages: List[Any]) -> None:

@@ -3,7 +3,7 @@
 Every SNR error is an :class:`SNRError`, so one ``except SNRError`` catches them
 all. Messages follow one shape: *what* went wrong (naming your class, handler,
 file and line), *why* it probably happened, and *what to do*. The helpers that
-find your file and line are in `snr.prelude.student_code`; the words for each
+find your file and line are in `snr.core.checks.student_code`; the words for each
 mistake are next to the code that finds it.
 
 Example::

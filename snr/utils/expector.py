@@ -31,8 +31,8 @@ from typing import (
     cast,
 )
 
+from snr.core.checks.error_text import closest_match
 from snr.prelude import TaskId, TaskName, TaskType
-from snr.prelude.error_text import closest_match
 from snr.prelude.task import format_task
 
 if TYPE_CHECKING:  # unittest and multiprocessing cost ~20 ms to import

@@ -21,6 +21,8 @@ import os
 import sys
 from typing import Any, Iterable, List, Mapping
 
+from snr.core.checks.error_text import did_you_mean, short_repr
+from snr.core.checks.student_code import describe_class, frame_location
 from snr.core.sim_clock import SimClock
 from snr.prelude import (
     AbstractConfig,
@@ -31,8 +33,6 @@ from snr.prelude import (
     Mode,
     Task,
 )
-from snr.prelude.error_text import did_you_mean, short_repr
-from snr.prelude.student_code import describe_class, frame_location
 
 __all__ = [
     "bad_data_key",

@@ -41,7 +41,14 @@ import inspect
 import textwrap
 from typing import Callable, Dict, Iterator, List, Optional, Set, Tuple
 
+from snr.core.checks.error_text import closest_match
 from snr.core.checks.handler_checks import async_text
+from snr.core.checks.student_code import (
+    describe_callable,
+    describe_class,
+    parse_source,
+    source_block,
+)
 from snr.core.endpoint import Endpoint
 from snr.core.loop import LoopState, ThreadLoop
 from snr.prelude import (
@@ -50,8 +57,6 @@ from snr.prelude import (
     AbstractLoop,
     ComponentError,
 )
-from snr.prelude.error_text import closest_match
-from snr.prelude.student_code import describe_callable, describe_class, parse_source, source_block
 
 __all__ = ["NEAR_MISS", "check_component", "framework_names"]
 

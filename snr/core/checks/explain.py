@@ -17,29 +17,16 @@ import dis
 import functools
 import inspect
 import linecache
+import logging
 import threading
 from types import CodeType
-from typing import Any, Dict, Iterator, List, Optional, Tuple, Union
+from typing import Any, Dict, Iterator, List, NoReturn, Optional, Set, Tuple, Union
 
+from snr.core.checks.abstract_errors import explain_abstract_error
 from snr.core.checks.call_checks import bad_data_key, page_as_data, wrong_call
-from snr.prelude import (
-    AbstractComponent,
-    AbstractConfig,
-    AbstractFactory,
-    AbstractLoop,
-    AbstractNode,
-    ComponentError,
-    ConfigError,
-    HandlerError,
-    LoopError,
-    Page,
-    SNRError,
-    Task,
-    TaskHandler,
-    ThreadSafetyError,
-)
-from snr.prelude.error_text import PAGE_IN_A_HANDLER, exception_text, short_repr
-from snr.prelude.student_code import (
+from snr.core.checks.error_text import PAGE_IN_A_HANDLER, exception_text, short_repr
+from snr.core.checks.student_code import (
+    caller_block,
     caller_location,
     code_name,
     def_block,
@@ -52,26 +39,56 @@ from snr.prelude.student_code import (
     student_frames,
     trim_runtime_frames,
 )
+from snr.prelude import (
+    AbstractComponent,
+    AbstractConfig,
+    AbstractFactory,
+    AbstractLoop,
+    AbstractNode,
+    ComponentError,
+    ConfigError,
+    HandlerError,
+    LoopError,
+    MissingSuperInitError,
+    Page,
+    SNRError,
+    Task,
+    TaskHandler,
+    ThreadSafetyError,
+)
 from snr.prelude.task import format_task
 
 __all__ = [
+    "BLOCKED_ADVICE",
+    "CORE_REFUSED",
     "PAGE_FROM_GET_PAGE",
     "THREAD_SAFE_INSTEAD",
     "bad_result_error",
     "bad_result_hint",
     "check_component_args",
+    "check_loop_class",
     "check_node_args",
     "check_page_args",
+    "component_without_init",
     "describe_bad_result",
+    "factory_without_init",
     "failed_get_error",
     "handler_failure",
+    "handlers_before_init",
+    "log_name_taken",
     "loop_failure",
+    "name_taken_error",
+    "not_stopped_text",
+    "raise_get_failure",
     "only_returns_none",
     "page_hint",
     "reload_failure",
     "returning_lines",
     "slow_handler_text",
+    "start_failure",
     "task_values",
+    "used_before_init",
+    "warn_get_returned_none",
     "wrong_get_result_error",
     "wrong_get_signature",
     "wrong_thread_error",
@@ -593,3 +610,230 @@ def wrong_thread_error(role: str, method: str) -> ThreadSafetyError:
         f"of its own. Use {instead} instead: it hands the work to the node's "
         "thread and is safe from any thread."
     )
+
+
+def raise_get_failure(factory: AbstractFactory, error: Exception, role: str) -> NoReturn:
+    """Raise the ComponentError for a factory's ``get()`` that raised ``error``.
+
+    A ``get()`` written with the wrong parameters, or a class that lacks
+    abstract methods, is said as such, without Python's own text (which
+    blames SNR's call); anything else is `failed_get_error`.
+
+    Example::
+
+        except Exception as error:
+            raise_get_failure(factory, error, node.role)
+    """
+    if isinstance(error, TypeError):
+        explained = explain_abstract_error(error) or wrong_get_signature(factory, error)
+        if explained is not None:
+            raise explained from None
+    raise failed_get_error(factory, error, role) from error
+
+
+def factory_without_init(factory: AbstractFactory) -> ComponentError:
+    """The ComponentError for a factory whose ``__init__`` skipped ``super().__init__()``."""
+    return ComponentError(
+        f"{describe_class(type(factory))} did not call super().__init__() in its "
+        "__init__. Add "
+        "`super().__init__()` (or `super().__init__(my_module)` to hot-reload "
+        "my_module) as its first line."
+    )
+
+
+def component_without_init(component: Any) -> ComponentError:
+    """The ComponentError for a component whose ``__init__`` skipped ``super().__init__``.
+
+    It shows the ``def __init__`` line (where the call is missing) when it
+    is the student's.
+    """
+    cls = type(component)
+    init = next((vars(k)["__init__"] for k in cls.__mro__ if "__init__" in vars(k)), None)
+    code = getattr(init, "__code__", None)
+    block = "" if code is None or is_runtime_file(code.co_filename) else "\n" + def_block(init)
+    return ComponentError(
+        f"{describe_class(cls)}: its __init__ did not call "
+        "super().__init__(factory, parent, name). Add that line first in "
+        "__init__ so SNR can give the component its name and task handlers."
+        f"{block}"
+    )
+
+
+def warn_get_returned_none(
+    factory: AbstractFactory, role: str, running: bool, told: Set[Any], log: logging.Logger
+) -> None:
+    """A ``get()`` returned None: refuse one that never returns a value, warn once otherwise.
+
+    At run time None is the documented "add nothing" (thesis listing A.5),
+    so nothing is said then; before, it is said once per factory class
+    (``told`` holds the ``get`` functions already named).
+
+    Raises:
+        ComponentError: ``get()`` has no ``return`` with a value.
+    """
+    get = type(factory).get
+    if only_returns_none(get):
+        raise ComponentError(
+            f"{describe_callable(get)} returned None: it has no `return` with a "
+            f"value, so role {role!r} can never get a component from it. "
+            "Return what it builds: `return MyEndpoint(self, parent)`."
+        )
+    if running or get in told:
+        return  # the same factory listed twice says the same thing once
+    told.add(get)
+    log.warning(
+        "%s returned None this time, so role %r gets no component from it. If you "
+        "meant to add one, check the conditions before its `return`. (Said once per "
+        "factory class.)",
+        describe_callable(get),
+        role,
+    )
+
+
+def name_taken_error(role: str, component: Any, other: Any) -> ConfigError:
+    """The ConfigError for a component whose name ``other`` already has in node ``role``."""
+    name = component.name
+    factory = getattr(component, "factory", None)
+    if getattr(other, "factory", None) is factory:
+        return ConfigError(
+            f"Node {role!r} got two components named {name!r} from the same "
+            f"{type(factory).__name__} object: it is listed twice in the config, "
+            "or its get() gives every component the same name. List it once, or "
+            "add another factory object that uses another name."
+        )
+    return ConfigError(
+        f"Node {role!r} already has a component named {name!r} "
+        f"({describe_class(type(other))}); "
+        f"{describe_class(type(component))} wants the same name. Give each "
+        "component a unique name (e.g. pass a name to its factory)."
+    )
+
+
+CORE_REFUSED = {
+    "remove component": (
+        "Refused to remove %r from node %r: it is the node's own core, which "
+        "stores every page, adds, removes and reloads components, and stops the "
+        "node on a terminate task; without it the node would run on deaf. To stop "
+        "the node, schedule a terminate task (or type `exit` in a console)."
+    ),
+    "reload": (
+        "Refused to reload %r in node %r: it is the node's own core and runs this "
+        "very reload (and every store, add, remove and terminate); SNR's own code "
+        "is not reloaded while the node runs. Restart the node to load a new SNR."
+    ),
+}
+"""The log messages (``%r`` the name, ``%r`` the role) for removing or reloading ``node_core``.
+
+Example::
+
+    log.error(CORE_REFUSED["reload"], "node_core", node.role)
+"""
+
+BLOCKED_ADVICE = (
+    "Make loop() return often: give reads a timeout and wait with self.wait_s(seconds) "
+    "instead of time.sleep(), so the loop notices when it should stop."
+)
+"""What to do about a loop that does not stop when asked."""
+
+
+def not_stopped_text(component: AbstractComponent, timeout_s: float, reload: bool) -> str:
+    """The log message for a loop still running ``timeout_s`` after it was asked to stop.
+
+    ``reload``: it was stopped to be reloaded (refused: the old one runs on);
+    else the node is stopping and terminates it anyway.
+    """
+    where = component.where_running() if isinstance(component, AbstractLoop) else ""
+    asked = f"Loop {component.name!r} did not stop within {timeout_s:.1f} s of being asked"
+    if reload:
+        return (
+            f"Cannot reload loop {component.name!r}: it did not stop within "
+            f"{timeout_s:.1f} s of being asked{f' (it is at {where})' if where else ''}, and "
+            "a new copy would run beside it. Reload refused; the old version keeps "
+            f"running. {BLOCKED_ADVICE}"
+        )
+    return (
+        f"{asked}{f': it is at {where}' if where else ''}. Its terminate() runs "
+        "now anyway, while its thread is still going (the thread ends with the "
+        f"program). {BLOCKED_ADVICE}"
+    )
+
+
+def start_failure(component: AbstractComponent, error: Exception) -> ComponentError:
+    """The ComponentError for a component whose ``begin()`` (or thread start) raised ``error``."""
+    frames = student_frames(error.__traceback__)
+    what = exception_text(error)
+    trim_runtime_frames(error)
+    return ComponentError(
+        f"{describe_class(type(component))} {component.name!r} failed to start: "
+        f"{what}\n"
+        f"Where it happened (most recent call last):\n{frames}"
+    )
+
+
+def log_name_taken(component_class: type) -> ComponentError:
+    """The ComponentError for ``self.log = ...`` in a component: ``log`` is its logger.
+
+    Without it Python says "property 'log' of 'X' object has no setter", which
+    names neither the clash nor the fix.
+    """
+    return ComponentError(
+        f"{describe_class(component_class)} uses the name 'log' for its own value, but 'log' "
+        "is already the component's logger (self.info(...), self.warn(...) write to it). "
+        f"Use another name, e.g. self.{component_class.__name__.lower()}_log.\n"
+        f"{caller_block()}".rstrip()
+    )
+
+
+def handlers_before_init(component_class: type) -> MissingSuperInitError:
+    """The error for ``self.task_handlers = ...`` before ``super().__init__``."""
+    return MissingSuperInitError(
+        f"{describe_class(component_class)} sets self.task_handlers before calling "
+        "super().__init__(factory, parent, name). Call super().__init__(...) "
+        f"first in __init__, then set task_handlers.\n{caller_block()}".rstrip()
+    )
+
+
+def used_before_init(component: Any, attribute: str) -> AttributeError:
+    """The error for a component attribute that is missing (from its ``__getattr__``).
+
+    After ``Component.__init__`` it is Python's own AttributeError, with what
+    its "Did you mean" needs; before it, every missing attribute means
+    ``super().__init__`` was forgotten (or came too late), and says so.
+    """
+    if "_task_handlers" in component.__dict__ or attribute.startswith("__"):
+        error = AttributeError(
+            f"{type(component).__name__!r} object has no attribute {attribute!r}"
+        )
+        error.name, error.obj = attribute, component  # Python's "Did you mean" uses these
+        return error
+    return MissingSuperInitError(
+        f"{describe_class(type(component))} has no {attribute!r} yet: its __init__ did "
+        "not call super().__init__(factory, parent, name), or used the component "
+        'before calling it. Make `super().__init__(factory, parent, "my_name")` '
+        f"the first line of __init__.\n{caller_block()}".rstrip()
+    )
+
+
+def check_loop_class(loop_class: type, base_loop: Any, max_tick_rate_hz: float) -> None:
+    """Refuse a ThreadLoop without its own ``loop()``, or with a negative tick rate.
+
+    ``base_loop`` is ``ThreadLoop.loop``, which a loop must override.
+
+    Example::
+
+        check_loop_class(type(self), ThreadLoop.loop, max_tick_rate_hz)
+
+    Raises:
+        ComponentError: saying which, and what to write instead.
+    """
+    if getattr(loop_class, "loop", None) is base_loop:
+        raise ComponentError(
+            f"{describe_class(loop_class)} is a ThreadLoop but has no loop() method. "
+            "Add `def loop(self) -> None:` with the work to repeat, or make it an "
+            "Endpoint if it only reacts to tasks."
+        )
+    if max_tick_rate_hz < 0:
+        raise ComponentError(
+            f"{describe_class(loop_class)} asked for max_tick_rate_hz="
+            f"{max_tick_rate_hz}; use a positive rate, or 0 for no limit."
+        )

@@ -19,9 +19,9 @@ import inspect
 from types import CodeType
 from typing import Any, Set
 
+from snr.core.checks.error_text import closest_match
+from snr.core.checks.student_code import caller_block, def_block, describe_callable, describe_class
 from snr.prelude import AbstractComponent, ComponentError, TaskId, TaskType
-from snr.prelude.error_text import closest_match
-from snr.prelude.student_code import caller_block, def_block, describe_callable, describe_class
 
 __all__ = ["async_text", "check_burst_handlers", "check_entry", "check_handler", "check_task_id"]
 

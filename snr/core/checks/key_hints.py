@@ -32,9 +32,9 @@ import logging
 import threading
 from typing import Callable, Dict, Iterable, List, Mapping, Optional, Set, Tuple
 
+from snr.core.checks.error_text import closest_match
+from snr.core.checks.student_code import caller_location, describe_callable
 from snr.prelude import DataKey, TaskHandler
-from snr.prelude.error_text import closest_match
-from snr.prelude.student_code import caller_location, describe_callable
 
 __all__ = ["MissingKeyHints"]
 

@@ -23,8 +23,8 @@ import atexit
 import sys
 from typing import Dict, List, Tuple
 
+from snr.core.checks.student_code import frame_location, outside_runtime, source_block
 from snr.prelude import AbstractConfig, Mode
-from snr.prelude.student_code import frame_location, outside_runtime, source_block
 
 __all__ = ["runner_built", "runner_ran"]
 

@@ -73,6 +73,15 @@ from typing import TYPE_CHECKING, Dict, FrozenSet, Iterable, List, Optional, Pro
 
 from snr.core import tasks
 from snr.core.checks.profiler import Profiler
+from snr.core.checks.student_code import (
+    code_name,
+    describe_callable,
+    describe_class,
+    frame_location,
+    line_with_code,
+    parse_source,
+    running_line,
+)
 from snr.core.handler_runner import HandlerRunner
 from snr.core.loop import ThreadLoop
 from snr.core.task_queue import TaskQueue
@@ -85,15 +94,6 @@ from snr.prelude import (
     Role,
     Task,
     TaskType,
-)
-from snr.prelude.student_code import (
-    code_name,
-    describe_callable,
-    describe_class,
-    frame_location,
-    line_with_code,
-    parse_source,
-    running_line,
 )
 from snr.prelude.task import format_task
 

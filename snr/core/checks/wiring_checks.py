@@ -30,10 +30,10 @@ from __future__ import annotations
 import logging
 from typing import Iterator, List, Mapping, Optional, Set, Tuple
 
+from snr.core.checks.error_text import closest_match, short_repr
+from snr.core.checks.student_code import describe_callable
 from snr.core.dispatch import HandlerTable
 from snr.prelude import DataKey, Page, Task, TaskName, TaskType
-from snr.prelude.error_text import closest_match, short_repr
-from snr.prelude.student_code import describe_callable
 
 __all__ = ["OPTIONAL_EVENTS", "WiringChecks"]
 

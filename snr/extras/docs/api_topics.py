@@ -26,7 +26,7 @@ from types import ModuleType
 from typing import Dict, List, Optional, Sequence, Tuple
 
 import snr
-from snr.prelude.student_code import parse_source
+from snr.core.checks.student_code import parse_source
 
 __all__ = ["PAGE_MODULES", "TOPICS", "Topic", "check_topics", "full_entry", "summary"]
 

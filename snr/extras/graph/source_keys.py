@@ -33,8 +33,8 @@ import weakref
 from dataclasses import dataclass, field
 from typing import Any, Dict, List, Optional, Set, Tuple, Union
 
+from snr.core.checks.student_code import parse_source
 from snr.prelude import DataKey
-from snr.prelude.student_code import parse_source
 
 __all__ = ["KeyUse", "KeysInCode", "key_uses", "resolve"]
 

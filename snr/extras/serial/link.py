@@ -32,6 +32,7 @@ import time
 from typing import Any, List, Optional, Sequence
 
 from snr.core import LoopFactory, ThreadLoop, tasks
+from snr.core.checks.error_text import did_you_mean
 from snr.core.logs import LossReport, RepeatFilter
 from snr.extras.serial.board import (
     HEARTBEAT_KEY,
@@ -54,7 +55,6 @@ from snr.prelude import (
     TaskType,
     WireFormatError,
 )
-from snr.prelude.error_text import did_you_mean
 from snr.std_mods.codec import data_json, header_line, page_from_line, page_to_line
 from snr.std_mods.comms import Outbox
 

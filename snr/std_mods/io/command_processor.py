@@ -23,6 +23,7 @@ from dataclasses import dataclass
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, plugins, tasks
+from snr.core.checks.error_text import closest_match, did_you_mean
 from snr.core.checks.step_mode import MAX_STEPS, Step
 from snr.core.logs import RepeatFilter
 from snr.core.node_core import NODE_CORE_NAME
@@ -38,7 +39,6 @@ from snr.prelude import (
     TaskName,
     TaskType,
 )
-from snr.prelude.error_text import closest_match, did_you_mean
 from snr.prelude.task import format_task
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.io.command_table import COMMANDS, commands_table

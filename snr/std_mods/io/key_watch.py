@@ -28,10 +28,10 @@ from collections import deque
 from dataclasses import dataclass, field
 from typing import Any, Callable, Deque, Dict, List, Optional, Tuple
 
+from snr.core.checks.error_text import did_you_mean
 from snr.core.checks.step_mode import console_priority
 from snr.core.component import Component
 from snr.prelude import DataKey, Page, SomeTasks, Task, TaskId, TaskType
-from snr.prelude.error_text import did_you_mean
 from snr.std_mods.io.console_protocol import ConsoleSession, Reply, Status
 
 __all__ = [

@@ -1,0 +1,145 @@
+"""Why a class cannot be built: the methods it lacks, in words (thesis 7.3).
+
+Python's own message, "Can't instantiate abstract class X with abstract
+methods halt", talks about abstract classes to a student who wrote a
+concrete one. SNR's interfaces (`snr.prelude.abstract`) raise the
+ComponentError made here instead: it names the class, its file and line, the
+missing methods and the easy fix. `snr.prelude.abstract` loads this module
+only when such a mistake happens.
+
+Example::
+
+    missing_methods_error(HalfEndpoint)
+    # Cannot create HalfEndpoint (robot.py:5): it lacks these methods that
+    # AbstractEndpoint requires: halt, terminate. Easiest fix: subclass ...
+"""
+
+from __future__ import annotations
+
+import builtins
+import re
+from typing import Any, Dict, List, Optional
+
+from snr.core.checks.student_code import describe_class, frame_location
+from snr.prelude.abstract import (
+    AbstractComponent,
+    AbstractEndpoint,
+    AbstractFactory,
+    AbstractLoop,
+)
+from snr.prelude.errors import ComponentError
+
+__all__ = ["explain_abstract_error", "missing_methods_error"]
+
+_SNR_INTERFACES = "snr.prelude.abstract"
+
+
+def _interface_of(cls: type) -> Optional[type]:
+    for base in (AbstractLoop, AbstractEndpoint, AbstractComponent, AbstractFactory):
+        if issubclass(cls, base):
+            return base
+    return None
+
+
+_EASY_FIX = {
+    "AbstractLoop": (
+        "subclass snr.ThreadLoop instead of AbstractLoop: it runs loop() on its own "
+        "thread and provides everything else (setup(), halt() and terminate() do "
+        "nothing unless you override them). Then write `def loop(self) -> None:`."
+    ),
+    "AbstractEndpoint": (
+        "subclass snr.Endpoint instead of AbstractEndpoint: it provides all of these "
+        "(begin(), halt() and terminate() do nothing unless you override them)."
+    ),
+    "AbstractComponent": (
+        "subclass snr.Endpoint (or snr.ThreadLoop for code that loops on its own "
+        "thread): they provide all of these."
+    ),
+    "AbstractFactory": (
+        "subclass snr.EndpointFactory or snr.LoopFactory instead of AbstractFactory: "
+        "they provide reload(); you write only "
+        "`def get(self, parent: AbstractNode) -> MyEndpoint:`."
+    ),
+}
+
+
+def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
+    """The ComponentError for building ``cls`` while it lacks required methods.
+
+    Example::
+
+        missing_methods_error(HalfEndpoint)
+        # Cannot create HalfEndpoint (robot.py:5): it lacks these methods that
+        # AbstractEndpoint requires: halt, terminate. Easiest fix: subclass ...
+    """
+    by_requirer: Dict[type, List[str]] = {}
+    for name in sorted(getattr(cls, "__abstractmethods__", ())):
+        requirer = _requirer_of(cls, name)
+        if requirer.__module__ == _SNR_INTERFACES:  # one of SNR's: name the one cls subclasses
+            requirer = _interface_of(cls) or requirer
+        by_requirer.setdefault(requirer, []).append(name)
+    lacks = "; and ".join(
+        f"that {requirer.__name__} requires: {', '.join(names)}"
+        for requirer, names in by_requirer.items()
+    )
+    fixes = []
+    for requirer, names in by_requirer.items():
+        interface = _interface_of(requirer)
+        if interface is not None and requirer.__module__ == _SNR_INTERFACES:
+            fixes.append("Easiest fix: " + _EASY_FIX[interface.__name__] + " Or add them.")
+        else:
+            fixes.append(
+                f"Add {', '.join(names)} to {cls.__name__}, with the same arguments as "
+                f"in {requirer.__name__}."
+            )
+    where = f" (It was being created at {created_at}.)" if created_at else ""
+    return ComponentError(
+        f"Cannot create {describe_class(cls)}: it lacks these methods {lacks}. "
+        f"{' '.join(fixes)}{where}"
+    )
+
+
+def _requirer_of(cls: type, method: str) -> type:
+    """The nearest base class that declares ``method`` abstract."""
+    for base in cls.__mro__[1:]:
+        if getattr(base.__dict__.get(method), "__isabstractmethod__", False):
+            return base
+    return cls
+
+
+_ABSTRACT_TEXT = re.compile(r"Can't instantiate abstract class (\w+)")
+
+
+def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
+    """Re-word Python's "Can't instantiate abstract class" TypeError, or None.
+
+    Used where SNR builds things (a factory's ``get()``) for abstract classes
+    that are not SNR's own, e.g. a student's ``Sensor(ABC)`` base class.
+
+    Example::
+
+        try:
+            component = factory.get(node)
+        except TypeError as error:
+            raise (explain_abstract_error(error) or error) from error
+    """
+    match = _ABSTRACT_TEXT.search(str(error))
+    if match is None:
+        return None
+    name = match.group(1)
+    tb = error.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    cls: Any = None
+    created_at = ""
+    if tb is not None:  # the frame that called the class: look the name up there
+        frame = tb.tb_frame
+        cls = frame.f_locals.get(name, frame.f_globals.get(name, getattr(builtins, name, None)))
+        created_at = frame_location(frame, tb.tb_lineno)
+    if not isinstance(cls, type) or not getattr(cls, "__abstractmethods__", None):
+        where = f" (It was being created at {created_at}.)" if created_at else ""
+        return ComponentError(
+            f"Cannot create {name}: it lacks methods that its base class requires "
+            f"({error}). Add them to {name}.{where}"
+        )
+    return missing_methods_error(cls, created_at)

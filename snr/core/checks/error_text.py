@@ -1,0 +1,145 @@
+"""What Python said about an error, kept whole when SNR wraps it, plus a hint.
+
+SNR puts a student's exception inside its own message (a `HandlerError`
+names the handler and the task). ``f"{type(error).__name__}: {error}"``
+would lose part of what Python says: the "Did you mean" of an
+``AttributeError`` or ``NameError`` is not in ``str(error)``, it is added
+when Python prints the traceback. `exception_text` keeps it, works it out
+where Python 3.11 does not (a misspelt enum member, ``TaskType.evnt``), and
+adds a hint for the commonest mix-up with SNR's own types (a `Page` used as
+its value).
+
+Example::
+
+    try:
+        TaskType.evnt
+    except AttributeError as error:
+        exception_text(error)
+        # "AttributeError: type object 'TaskType' has no attribute 'evnt'. Did you mean: 'event'?"
+
+`short_repr` (a value cut to fit a message) is in `snr.prelude.error_text`,
+which the prelude's own messages use; it is named here too.
+"""
+
+from __future__ import annotations
+
+import builtins
+import enum
+import re
+import traceback
+from typing import Any, Iterable, List, Optional
+
+from snr.prelude.error_text import short_repr
+
+__all__ = ["PAGE_IN_A_HANDLER", "closest_match", "did_you_mean", "exception_text", "short_repr"]
+
+
+_SUGGESTION = "Did you mean"
+
+
+def exception_text(error: BaseException) -> str:
+    """``"Type: message"`` as Python prints it, with its "Did you mean" and SNR's hint.
+
+    Call it before trimming the traceback: a misspelt name is looked up in
+    the frame where it was used.
+
+    Example::
+
+        exception_text(AttributeError("'Task' object has no attribute 'val_lst'"))
+    """
+    lines = traceback.format_exception_only(type(error), error)
+    text = "".join(lines).strip()
+    kind = type(error)
+    if kind.__module__.split(".", 1)[0] == "snr":  # "ComponentError", as SNR's messages say
+        text = text.replace(f"{kind.__module__}.{kind.__qualname__}", kind.__qualname__, 1)
+    if isinstance(error, (AttributeError, NameError)) and _SUGGESTION not in text:
+        text = _enum_text(error) or text
+        if _SUGGESTION not in text:
+            guess = _guess_name(error)
+            if guess is not None:
+                text = f"{text}. {_SUGGESTION}: {guess!r}?"
+    if isinstance(error, TypeError) and re.search(r"\bPage\b", text):  # 'Page', Page object
+        text += PAGE_IN_A_HANDLER  # checks/explain.py says it for get_page and loops
+    return text
+
+
+PAGE_IN_A_HANDLER = (
+    ". A stored page reaches a handler as a Page in task.val_list; "
+    "its value is page.data, e.g. task.val_list[0].data."
+)
+
+
+def _innermost_locals(error: BaseException) -> Optional[dict[str, Any]]:
+    tb = error.__traceback__
+    if tb is None:
+        return None
+    while tb.tb_next is not None:
+        tb = tb.tb_next
+    return tb.tb_frame.f_locals
+
+
+def _enum_text(error: BaseException) -> Optional[str]:
+    """Python 3.11's ``AttributeError: evnt`` for ``TaskType.evnt``, said as 3.12 says it."""
+    found = _innermost_locals(error)
+    cls = found.get("cls") if found else None
+    name = found.get("name") if found else None
+    if not (isinstance(cls, type) and issubclass(cls, enum.Enum) and isinstance(name, str)):
+        return None
+    text = f"AttributeError: type object {cls.__name__!r} has no attribute {name!r}"
+    guess = closest_match(name, list(cls.__members__))
+    return f"{text}. {_SUGGESTION}: {guess!r}?" if guess else text
+
+
+def _guess_name(error: BaseException) -> Optional[str]:
+    """The close match Python 3.12 would name for a misspelt attribute or name."""
+    name = getattr(error, "name", None)
+    if not isinstance(name, str):
+        return None
+    choices: Iterable[str]
+    if isinstance(error, AttributeError):
+        obj = getattr(error, "obj", None)
+        if obj is None:
+            return None
+        try:
+            choices = [c for c in dir(obj) if not c.startswith("_")]
+        except Exception:  # a broken __dir__ must not hide the student's error
+            return None
+    else:
+        tb = error.__traceback__
+        while tb is not None and tb.tb_next is not None:
+            tb = tb.tb_next
+        if tb is None:
+            return None
+        frame = tb.tb_frame
+        names: List[str] = [*frame.f_locals, *frame.f_globals, *dir(builtins)]
+        choices = names
+    return closest_match(name, choices)
+
+
+def closest_match(word: str, choices: Iterable[str], cutoff: float = 0.6) -> Optional[str]:
+    """The choice most like ``word``, or None: the one rule of every "did you mean" hint.
+
+    Capitals and underscores do not count (``taskHandlers`` is ``task_handlers``);
+    a near miss of SNR's own names (`class_checks`) asks for ``cutoff=0.8``.
+
+    Example::
+
+        closest_match("urv", ["urov", "topside"])  # 'urov'
+    """
+    import difflib  # here, not at the top: hints are only made when something is wrong
+
+    plain = {c.lower().replace("_", ""): c for c in reversed(list(choices))}
+    found = difflib.get_close_matches(word.lower().replace("_", ""), list(plain), 1, cutoff)
+    return plain[found[0]] if found else None
+
+
+def did_you_mean(word: str, choices: Iterable[str]) -> str:
+    """`` Did you mean 'x'?`` for the choice most like ``word``, or "" if none is close.
+
+    Example::
+
+        f"There is no role 'urv'.{did_you_mean('urv', ['urov', 'topside'])}"
+        # "There is no role 'urv'. Did you mean 'urov'?"
+    """
+    guess = closest_match(word, choices)
+    return f" {_SUGGESTION} {guess!r}?" if guess else ""
