@@ -15,6 +15,7 @@ import socket
 import time
 import unittest
 from typing import Any, Callable, Dict, List, Optional
+from unittest import mock
 
 from snr import Config, Mode, SocketsPair
 from snr.prelude import ConfigError, WireFormatError
@@ -228,11 +229,16 @@ class TestMalice(TrustTest):
 
 
 class TestSecretSetting(unittest.TestCase):
+    def setUp(self) -> None:
+        # Whatever a test sets, the environment is as before after it (tests/__init__.py).
+        environment = mock.patch.dict(os.environ)
+        environment.start()
+        self.addCleanup(environment.stop)
+
     def test_the_environment_and_the_option(self) -> None:
         old = os.environ.pop("SNR_SECRET", None)
         self.addCleanup(restore_secret, old)
         os.environ["SNR_SECRET_FILE"] = os.devnull + ".missing"
-        self.addCleanup(os.environ.pop, "SNR_SECRET_FILE")
         self.assertIsNone(find_secret(FROM_ENVIRONMENT, "test"))
         os.environ["SNR_SECRET"] = " abc \n"
         self.addCleanup(os.environ.pop, "SNR_SECRET")
@@ -275,7 +281,6 @@ class TestSecretSetting(unittest.TestCase):
         with tempfile.TemporaryDirectory() as folder:
             path = os.path.join(folder, "snr", "secret")
             os.environ["SNR_SECRET_FILE"] = path
-            self.addCleanup(os.environ.pop, "SNR_SECRET_FILE")
             with contextlib.redirect_stdout(io.StringIO()) as out:
                 self.assertEqual(main(["secret", "new"]), 0)
             self.assertIn(path, out.getvalue())
