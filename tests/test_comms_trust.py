@@ -19,6 +19,7 @@ from unittest import mock
 
 from snr import Config, Mode, SocketsPair
 from snr.prelude import ConfigError, WireFormatError
+from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret, proof_mac, resolve_system
 from snr.std_mods.comms.wire import HEADER_BYTES, Hello, Proof, decode_body, encode_hello
 from tests.helpers import wait_until
@@ -226,6 +227,38 @@ class TestMalice(TrustTest):
                     self.assertEqual(counter.seen, [])
                 nodes.stop()
         self.assertTrue(self.log.matching("Refused sockets server"), "the client says so too")
+
+
+class TestIdleConnectionsWithASecret(TrustTest):
+    """The idle-connection fault tests (tests/test_comms_liveness.py) with a secret set."""
+
+    def serve_briefly(self) -> None:
+        original = CommsLoop.hello_timeout_s
+        CommsLoop.hello_timeout_s = 0.1
+        self.addCleanup(setattr, CommsLoop, "hello_timeout_s", original)
+        # A short silence limit makes the link check its peer every 0.025 s (else 0.25 s).
+        self.serve(CounterFactory("tick"), secret=SECRET, dead_after_s=0.4)
+
+    def test_a_connection_that_never_speaks_is_closed(self) -> None:
+        self.serve_briefly()
+        sock = self.connect()
+        started = time.monotonic()
+        self.assertEqual(recv_frame(sock)["kind"], "hello", "the server's hello, with its nonce")
+        self.assertTrue(read_until_closed(sock, 3.0), "then it closes the connection")
+        self.assertLess(time.monotonic() - started, 2.5)
+        self.assertTrue(wait_until(self.closed_unfinished, 2.0), self.log.lines)
+
+    def test_a_peer_that_says_hello_and_never_proves_it_is_closed(self) -> None:
+        self.serve_briefly()
+        sock = self.connect()
+        started = time.monotonic()
+        self.hello(sock, os.urandom(32).hex(), role="mute")
+        self.assertTrue(read_until_closed(sock, 3.0), self.log.lines)
+        self.assertLess(time.monotonic() - started, 2.5)
+        self.assertTrue(wait_until(self.closed_unfinished, 2.0), self.log.lines)
+
+    def closed_unfinished(self) -> bool:
+        return bool(self.log.matching("did not finish the hello (and proof) within 0.1 s"))
 
 
 class TestSecretSetting(unittest.TestCase):
