@@ -15,9 +15,11 @@ import socket
 import time
 import unittest
 from typing import Any, Callable, Dict, List, Optional
+from unittest import mock
 
 from snr import Config, Mode, SocketsPair
 from snr.prelude import ConfigError, WireFormatError
+from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret, proof_mac, resolve_system
 from snr.std_mods.comms.wire import HEADER_BYTES, Hello, Proof, decode_body, encode_hello
 from tests.helpers import free_port, wait_until
@@ -227,12 +229,49 @@ class TestMalice(TrustTest):
         self.assertTrue(self.log.matching("Refused sockets server"), "the client says so too")
 
 
+class TestIdleConnectionsWithASecret(TrustTest):
+    """The idle-connection fault tests (tests/test_comms_liveness.py) with a secret set."""
+
+    def serve_briefly(self) -> None:
+        original = CommsLoop.hello_timeout_s
+        CommsLoop.hello_timeout_s = 0.1
+        self.addCleanup(setattr, CommsLoop, "hello_timeout_s", original)
+        # A short silence limit makes the link check its peer every 0.025 s (else 0.25 s).
+        self.serve(CounterFactory("tick"), secret=SECRET, dead_after_s=0.4)
+
+    def test_a_connection_that_never_speaks_is_closed(self) -> None:
+        self.serve_briefly()
+        sock = self.connect()
+        started = time.monotonic()
+        self.assertEqual(recv_frame(sock)["kind"], "hello", "the server's hello, with its nonce")
+        self.assertTrue(read_until_closed(sock, 3.0), "then it closes the connection")
+        self.assertLess(time.monotonic() - started, 2.5)
+        self.assertTrue(wait_until(self.closed_unfinished, 2.0), self.log.lines)
+
+    def test_a_peer_that_says_hello_and_never_proves_it_is_closed(self) -> None:
+        self.serve_briefly()
+        sock = self.connect()
+        started = time.monotonic()
+        self.hello(sock, os.urandom(32).hex(), role="mute")
+        self.assertTrue(read_until_closed(sock, 3.0), self.log.lines)
+        self.assertLess(time.monotonic() - started, 2.5)
+        self.assertTrue(wait_until(self.closed_unfinished, 2.0), self.log.lines)
+
+    def closed_unfinished(self) -> bool:
+        return bool(self.log.matching("did not finish the hello (and proof) within 0.1 s"))
+
+
 class TestSecretSetting(unittest.TestCase):
+    def setUp(self) -> None:
+        # Whatever a test sets, the environment is as before after it (tests/__init__.py).
+        environment = mock.patch.dict(os.environ)
+        environment.start()
+        self.addCleanup(environment.stop)
+
     def test_the_environment_and_the_option(self) -> None:
         old = os.environ.pop("SNR_SECRET", None)
         self.addCleanup(restore_secret, old)
         os.environ["SNR_SECRET_FILE"] = os.devnull + ".missing"
-        self.addCleanup(os.environ.pop, "SNR_SECRET_FILE")
         self.assertIsNone(find_secret(FROM_ENVIRONMENT, "test"))
         os.environ["SNR_SECRET"] = " abc \n"
         self.addCleanup(os.environ.pop, "SNR_SECRET")
@@ -275,7 +314,6 @@ class TestSecretSetting(unittest.TestCase):
         with tempfile.TemporaryDirectory() as folder:
             path = os.path.join(folder, "snr", "secret")
             os.environ["SNR_SECRET_FILE"] = path
-            self.addCleanup(os.environ.pop, "SNR_SECRET_FILE")
             with contextlib.redirect_stdout(io.StringIO()) as out:
                 self.assertEqual(main(["secret", "new"]), 0)
             self.assertIn(path, out.getvalue())

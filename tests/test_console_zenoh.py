@@ -248,7 +248,7 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
 
         greeting = console.connect()
         self.assertIs(greeting.status, Status.HELLO)
-        refused = "[arm] refused: this node needs its console token (give it: --token"
+        refused = "[arm] refused: this node needs its console token (give it: --token,"
         self.assertIn(refused, greeting.text)
         self.assertIn("[urov] Connected to node 'urov'", greeting.text)
         stats = console.send("stats")
@@ -336,7 +336,7 @@ class TestZenohConsoleEveryNode(unittest.TestCase):
         assert isinstance(every, ZenohConsole)
         self.start_arm(endpoint, token="sesame")
         self.assertTrue(wait_until(lambda: "arm" in every.roles()), "arm joined")
-        refused = "[arm] refused: this node needs its console token (give it: --token"
+        refused = "[arm] refused: this node needs its console token (give it: --token,"
         for command in ("stats", "help"):
             reply = every.send(command)
             self.assertIs(reply.status, Status.OK, reply.text)

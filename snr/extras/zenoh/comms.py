@@ -30,9 +30,12 @@ that came from Zenoh is never published again (no echo).
 
 from __future__ import annotations
 
+import atexit
 import collections
 import json
 import os
+import shutil
+import tempfile
 import threading
 import time
 from itertools import zip_longest
@@ -86,6 +89,7 @@ from snr.std_mods.comms.comms_loop import (
     Keys,
     normalize_keys,
 )
+from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, derived_word, find_secret
 from snr.std_mods.comms.wire import WIRE_VERSION
 
 if TYPE_CHECKING:  # imported when a node starts: the extra is optional
@@ -95,6 +99,7 @@ __all__ = [
     "BATCH_TIME_LIMIT_MS",
     "DEFAULT_ORIGIN",
     "KEY_PREFIX",
+    "ZENOH_USER",
     "IdleReader",
     "SampleChannel",
     "ZenohComms",
@@ -103,6 +108,7 @@ __all__ = [
     "page_from_sample",
     "wake_key",
     "zenoh_config",
+    "zenoh_credentials",
 ]
 
 KEY_PREFIX = "snr"
@@ -124,6 +130,14 @@ Example::
 
     ZenohCommsFactory("team7", publish="scan",
                       zenoh_settings={"transport/link/tx/queue/batching/time_limit": 1})
+"""
+
+ZENOH_USER = "snr"
+"""The Zenoh user name of every node with a secret (its password comes from the secret).
+
+Example::
+
+    zenoh_credentials(b"s3cret")   # ('snr', '6f1d...'): give a zenohd router these
 """
 
 _PAGE_HEAD = {"v": WIRE_VERSION, "kind": "page"}
@@ -269,6 +283,44 @@ def page_from_sample(key: str, payload: bytes) -> Page:
     return page_from_fields(fields, default_origin=DEFAULT_ORIGIN)
 
 
+def zenoh_credentials(secret: bytes) -> Tuple[str, str]:
+    """The Zenoh user name and password of a node with this secret.
+
+    The password is a word made from the secret (`derived_word`), so the
+    secret itself is neither given to Zenoh nor written to its password file.
+    Give a Zenoh router (``zenohd``) these, for nodes with a secret to link to
+    it (docs/comms.md, "Who may connect").
+
+    Example::
+
+        zenoh_credentials(b"s3cret")   # ('snr', '6f1d...' (64 hex digits))
+    """
+    return ZENOH_USER, derived_word(secret, "zenoh-password")
+
+
+_dictionary_lock = threading.Lock()
+_dictionaries: Dict[str, str] = {}  # password -> its file, for the life of this process
+
+
+def _dictionary_file(user: str, password: str) -> str:
+    """Zenoh's list of who may link (one ``user:password`` line), private to this process.
+
+    Zenoh reads it when a session opens; it stays in a folder only this
+    process's user can open (``mkdtemp``: mode 0700), and goes at exit.
+    """
+    with _dictionary_lock:
+        path = _dictionaries.get(password)
+        if path is None or not os.path.isfile(path):
+            folder = tempfile.mkdtemp(prefix="snr-zenoh-")
+            atexit.register(shutil.rmtree, folder, True)
+            path = os.path.join(folder, "users")
+            handle = os.open(path, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o600)
+            with os.fdopen(handle, "w", encoding="ascii") as file:
+                file.write(f"{user}:{password}\n")
+            _dictionaries[password] = path
+        return path
+
+
 def zenoh_config(
     mode: str = "peer",
     connect: Sequence[str] = (),
@@ -276,15 +328,22 @@ def zenoh_config(
     scouting: bool = True,
     dead_after_s: float = DEFAULT_DEAD_AFTER_S,
     extra: Optional[Mapping[str, Any]] = None,
+    secret: Optional[bytes] = None,
 ) -> Any:
     """A ``zenoh.Config`` for one node (what `ZenohCommsFactory` opens its session with).
 
     ``extra`` maps more Zenoh configuration paths to values (JSON), set last,
     e.g. ``{"transport/link/tx/queue/congestion_control/drop/wait_before_drop": 5000}``.
 
+    With a ``secret``, Zenoh's own user/password authentication is on
+    (``transport/auth/usrpwd``, with `zenoh_credentials`): the session links
+    only to peers that prove the same password, in both directions, so a
+    session without it neither hears this system nor speaks into it.
+
     Example::
 
         zenoh.open(zenoh_config(connect=["tcp/127.0.0.1:7447"], scouting=False))
+        zenoh.open(zenoh_config(listen=["tcp/127.0.0.1:7447"], secret=b"s3cret"))
     """
     zenoh = _zenoh_module()
     config = zenoh.Config()
@@ -311,6 +370,11 @@ def zenoh_config(
         settings["listen/endpoints"] = list(listen)
     if not scouting:
         settings["scouting/delay"] = 0  # nothing to wait for: open at once
+    if secret is not None:
+        user, password = zenoh_credentials(secret)
+        settings["transport/auth/usrpwd/user"] = user
+        settings["transport/auth/usrpwd/password"] = password
+        settings["transport/auth/usrpwd/dictionary_file"] = _dictionary_file(user, password)
     settings.update(extra or {})
     for path, value in settings.items():
         try:
@@ -347,6 +411,10 @@ class ZenohCommsFactory(EndpointFactory):
         max_wait_s: how long a received page waits for room in the node's queue
             before it is dropped (and counted).
         zenoh_settings: more Zenoh configuration paths and values, set last.
+        secret: the system's secret: by default ``SNR_SECRET`` or the secret
+            file (docs/comms.md, "Who may connect"); ``None``: none. With one,
+            the session links only to sessions with the same secret (Zenoh's
+            user/password authentication).
         name: the component name (default ``"zenoh_comms"``).
 
     Example::
@@ -370,6 +438,7 @@ class ZenohCommsFactory(EndpointFactory):
         dead_after_s: float = DEFAULT_DEAD_AFTER_S,
         max_wait_s: float = 1.0,
         zenoh_settings: Optional[Mapping[str, Any]] = None,
+        secret: Optional[str] = FROM_ENVIRONMENT,
         name: Optional[str] = None,
     ) -> None:
         super().__init__()
@@ -417,6 +486,7 @@ class ZenohCommsFactory(EndpointFactory):
         self.dead_after_s = dead_after_s
         self.max_wait_s = max_wait_s
         self.zenoh_settings = dict(zenoh_settings or {})
+        self.secret = secret
         self.name = name or "zenoh_comms"
 
     def get(self, parent: AbstractNode) -> ZenohComms:
@@ -512,6 +582,7 @@ class ZenohComms(Endpoint):
             spec.scouting,
             spec.dead_after_s,
             spec.zenoh_settings,
+            find_secret(spec.secret, f"ZenohCommsFactory of node {self.parent.role!r}"),
         )
         try:
             self.session = zenoh.open(config)

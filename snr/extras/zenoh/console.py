@@ -26,7 +26,6 @@ Example::
 from __future__ import annotations
 
 import argparse
-import os
 import sys
 import threading
 import time
@@ -40,6 +39,7 @@ from snr.extras.zenoh.comms import (
     zenoh_config,
 )
 from snr.prelude import AbstractNode, CommsError
+from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret
 from snr.std_mods.io.command_table import COMMANDS
 from snr.std_mods.io.console_loop import ConsoleLoop
 from snr.std_mods.io.console_protocol import (
@@ -50,6 +50,7 @@ from snr.std_mods.io.console_protocol import (
     Reply,
     ReplyDecoder,
     Status,
+    default_token,
     tokens_match,
 )
 from snr.std_mods.io.remote_console import EXIT_CONNECTION, EXIT_OK, ConsoleClient, say
@@ -126,7 +127,9 @@ class ZenohConsoleLoop(ConsoleLoop):
         """Add the command processor; open a Zenoh session, say it is alive and answer on `key`."""
         super().begin()
         spec = self.spec
-        config = zenoh_config(spec.mode, spec.connect, spec.listen, spec.scouting)
+        where = f"ZenohConsoleFactory of node {self.parent.role!r}"
+        secret = find_secret(spec.secret, where)
+        config = zenoh_config(spec.mode, spec.connect, spec.listen, spec.scouting, secret=secret)
         try:
             self.session = self.zenoh.open(config)
         except self.zenoh.ZError as error:
@@ -210,8 +213,13 @@ class ZenohConsoleFactory(LoopFactory):
         mode, connect, listen, scouting: the Zenoh session's set-up, as in
             `ZenohCommsFactory` (peer mode with multicast scouting by default).
         token: a shared secret queries must carry (default: ``SNR_CONSOLE_TOKEN``
-            if set, else none: anyone on the Zenoh network can type commands).
+            if set, else a word made from the node's secret, ``SNR_SECRET`` or
+            the secret file, else none: anyone on the Zenoh network can type
+            commands).
         name: the component name (default ``"zenoh_console"``).
+        secret: the system's secret (default: ``SNR_SECRET`` or the secret
+            file; None: none), as in `ZenohCommsFactory`: with one, only
+            Zenoh sessions with the same secret reach this console at all.
 
     Example::
 
@@ -229,6 +237,7 @@ class ZenohConsoleFactory(LoopFactory):
         scouting: bool = True,
         token: Optional[str] = None,
         name: Optional[str] = None,
+        secret: Optional[str] = FROM_ENVIRONMENT,
     ) -> None:
         super().__init__()
         _check_chunk_text(system, "The system name", wildcards=False)
@@ -237,7 +246,8 @@ class ZenohConsoleFactory(LoopFactory):
         self.connect = list(connect)
         self.listen = list(listen)
         self.scouting = scouting
-        self.token = token if token is not None else os.environ.get(TOKEN_ENV_VAR) or None
+        self.token = default_token(token, "ZenohConsoleFactory")
+        self.secret = secret
         self.name = name or "zenoh_console"
 
     def get(self, parent: AbstractNode) -> ZenohConsoleLoop:
@@ -262,6 +272,11 @@ class ZenohConsole(ConsoleClient):
     gone is named as having left, which does not fail the command; one
     still there that does not reply in time does.
 
+    Its Zenoh session has the system's secret (``secret=``, by default
+    ``SNR_SECRET`` or the secret file, as the nodes find it), so it reaches
+    the nodes of a system that has one, and its console token is made from
+    that secret unless a token is given.
+
     Example::
 
         with ZenohConsole("team7", "urov", connect=["tcp/127.0.0.1:7447"], scouting=False) as c:
@@ -282,11 +297,14 @@ class ZenohConsole(ConsoleClient):
         scouting: bool = True,
         token: Optional[str] = None,
         timeout_s: float = 10.0,
+        secret: Optional[str] = FROM_ENVIRONMENT,
     ) -> None:
         super().__init__(token, timeout_s)
         self.system, self.role = system, role
         self.zenoh = _zenoh_module()
-        self._config = zenoh_config(mode, connect, listen, scouting)
+        self._config = zenoh_config(
+            mode, connect, listen, scouting, secret=find_secret(secret, "ZenohConsole")
+        )
         self._mode, self._connect = mode, list(connect)
         self.session: Any = None
         # With a pattern: the roles that greeted this console, so a command's
@@ -658,8 +676,10 @@ def _refusal(text: str) -> str:
     Example::
 
         _refusal("This node needs its console token.")
-        # 'refused: this node needs its console token (give it: --token or SNR_CONSOLE_TOKEN)'
+        # 'refused: this node needs its console token (give it: --token,
+        #  SNR_CONSOLE_TOKEN, or the node's $SNR_SECRET)'
     """
     why = text.rstrip(".")
-    hint = f" (give it: --token or {TOKEN_ENV_VAR})" if "token" in why else ""
+    hint = f" (give it: --token, {TOKEN_ENV_VAR}, or the node's $SNR_SECRET)"
+    hint = hint if "token" in why else ""
     return f"refused: {why[:1].lower()}{why[1:]}{hint}"

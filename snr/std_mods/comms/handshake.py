@@ -42,6 +42,7 @@ __all__ = [
     "Handshake",
     "Refused",
     "default_system",
+    "derived_word",
     "find_secret",
     "new_secret",
     "proof_mac",
@@ -174,6 +175,21 @@ def find_secret(secret: Optional[str], where: str) -> Optional[bytes]:
             "`python -m snr secret new`, or unset it to run without one."
         )
     return text.strip().encode("utf-8")
+
+
+def derived_word(secret: bytes, purpose: str) -> str:
+    """A word made from the secret for one ``purpose``, from which the secret cannot be found.
+
+    HMAC-SHA256 keyed with the secret over the ASCII text ``snr-<purpose>``,
+    as 64 lowercase hex digits. The console sends its word as its token and
+    Zenoh checks its word as a password: each may be seen or kept on disk
+    without giving away the secret that the TCP and pipe hellos prove.
+
+    Example::
+
+        derived_word(b"s3cret", "console-token")   # '9a1e...' (64 hex digits)
+    """
+    return hmac.new(secret, f"snr-{purpose}".encode("ascii"), hashlib.sha256).hexdigest()
 
 
 def new_secret() -> str:

@@ -15,7 +15,6 @@ Example::
 from __future__ import annotations
 
 import logging
-import os
 import selectors
 import socket
 import threading
@@ -36,6 +35,7 @@ from snr.std_mods.io.console_protocol import (
     Reply,
     Status,
     check_listen_policy,
+    default_token,
     tokens_match,
 )
 
@@ -579,7 +579,9 @@ class CommandReceiverLoop(ConsoleLoop):
                 )
             text = (
                 "Wrong or missing console token. Give the node's token with "
-                f"`snr-console HOST:PORT --token ...` or {TOKEN_ENV_VAR}."
+                f"`snr-console HOST:PORT --token ...` or {TOKEN_ENV_VAR}, or, if the node "
+                "has a secret, run the console with the same secret ($SNR_SECRET or "
+                "the secret file; see docs/console.md)."
             )
             session.slot().send(Reply(Status.BYE, text))
 
@@ -618,7 +620,9 @@ class CommandReceiverFactory(LoopFactory):
             consoles on this machine only. Any other address needs a token.
         port: TCP port; ``0`` lets the system pick a free one (see `address`).
         token: shared secret consoles must present; defaults to the
-            ``SNR_CONSOLE_TOKEN`` environment variable.
+            ``SNR_CONSOLE_TOKEN`` environment variable, else a word made from
+            the node's secret (``SNR_SECRET`` or the secret file; see
+            `default_token`), else none.
         name: the loop's component name.
         auth_timeout_s: seconds a console may take to give its token
             (default `DEFAULT_AUTH_TIMEOUT_S`, 5 s).
@@ -647,8 +651,7 @@ class CommandReceiverFactory(LoopFactory):
         idle_timeout_s: Optional[float] = DEFAULT_IDLE_TIMEOUT_S,
     ) -> None:
         super().__init__()
-        if token is None:
-            token = os.environ.get(TOKEN_ENV_VAR) or None
+        token = default_token(token, "CommandReceiverFactory")
         check_listen_policy(host, token)
         for what, seconds in (
             ("auth_timeout_s", auth_timeout_s),

@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import enum
 import json
+import os
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
 from typing import Any, List, Optional, Tuple, Union
@@ -34,6 +35,7 @@ __all__ = [
     "MAX_LINE_BYTES",
     "MAX_REPLY_BYTES",
     "PROTOCOL",
+    "SECRET_TOKEN_PURPOSE",
     "TOKEN_ENV_VAR",
     "ConsoleConnectionError",
     "ConsoleSession",
@@ -42,6 +44,7 @@ __all__ = [
     "ReplyDecoder",
     "Status",
     "check_listen_policy",
+    "default_token",
     "is_loopback",
     "parse_address",
     "parse_values",
@@ -65,6 +68,39 @@ _TRUNCATION_ROOM = 256  # the "(reply cut)" note added to a reply at the limit
 
 TOKEN_ENV_VAR = "SNR_CONSOLE_TOKEN"
 """Environment variable holding the shared console token (node and console)."""
+
+SECRET_TOKEN_PURPOSE = "console-token"
+"""What the console token made from the node's secret is for (see `default_token`)."""
+
+
+def default_token(token: Optional[str], where: str) -> Optional[str]:
+    """The console token of a node or console that was given ``token`` (None: the default).
+
+    ``token`` if given, else ``$SNR_CONSOLE_TOKEN`` if set, else a word made
+    from the node's secret (``$SNR_SECRET`` or the secret file, as the comms
+    find it: docs/comms.md, "Who may connect"), else None: no token. So one
+    secret guards the links and the console alike, and a console that has
+    the secret gets in with no ``--token``. The word, not the secret, is
+    sent: it lets a console in, but does not let a program link to the node.
+
+    Raises:
+        ConfigError: the secret is empty or its file cannot be read.
+
+    Example::
+
+        default_token("s3cret-word", "CommandReceiverFactory")   # 's3cret-word'
+        default_token(None, "CommandReceiverFactory")   # None, or '9a1e...' with $SNR_SECRET
+    """
+    if token is not None:
+        return token
+    from_env = os.environ.get(TOKEN_ENV_VAR)
+    if from_env:
+        return from_env
+    # Here, not at the top: it loads OpenSSL, and only a node with a secret needs it.
+    from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, derived_word, find_secret
+
+    secret = find_secret(FROM_ENVIRONMENT, where)
+    return None if secret is None else derived_word(secret, SECRET_TOKEN_PURPOSE)
 
 
 class Status(enum.Enum):

@@ -18,7 +18,6 @@ Example::
 
 from __future__ import annotations
 
-import os
 import socket
 import sys
 from abc import ABC, abstractmethod
@@ -36,6 +35,7 @@ from snr.std_mods.io.console_protocol import (
     Reply,
     ReplyDecoder,
     Status,
+    default_token,
     parse_address,
 )
 from snr.std_mods.io.key_watch import HZ_DEFAULT_WINDOW_S
@@ -86,12 +86,13 @@ class ConsoleClient(ABC):
 
     Args:
         token: the shared token, if the node needs one (default: the
-            ``SNR_CONSOLE_TOKEN`` environment variable).
+            ``SNR_CONSOLE_TOKEN`` environment variable, else a word made from
+            the secret, ``SNR_SECRET`` or the secret file, as the node makes it).
         timeout_s: how long to wait to connect, and for each reply.
     """
 
     def __init__(self, token: Optional[str] = None, timeout_s: float = 10.0) -> None:
-        self.token = token if token is not None else os.environ.get(TOKEN_ENV_VAR) or None
+        self.token = default_token(token, "The console")
         self.timeout_s = timeout_s
         self.greeting: Optional[Reply] = None
 
@@ -391,7 +392,9 @@ class RemoteConsole(ConsoleClient):
                 self.close()
                 raise ConsoleConnectionError(
                     f"The node at {self.where} needs a console token. Give it with "
-                    f"`--token TOKEN` or the {TOKEN_ENV_VAR} environment variable."
+                    f"`--token TOKEN` or the {TOKEN_ENV_VAR} environment variable, or, if "
+                    "the node has a secret, run the console with the same secret "
+                    "($SNR_SECRET or the secret file; see docs/console.md)."
                 )
             self._send_line(f"auth {self.token}")
             greeting = self._receive(self.timeout_s)

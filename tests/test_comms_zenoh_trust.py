@@ -1,0 +1,161 @@
+"""Zenoh with a secret: only sessions with the same secret hear the system or speak into it.
+
+The node under test is a real SNR node with `ZenohCommsFactory(secret=...)`;
+the others are plain Zenoh sessions set up by `zenoh_config`, with the secret,
+with another one, and with none. Everything runs on 127.0.0.1 with multicast
+scouting off, explicit endpoints and ports chosen at run time. Skipped when
+the Zenoh extra is not installed.
+"""
+
+from __future__ import annotations
+
+import importlib.util
+import json
+import os
+import stat
+import threading
+import time
+import unittest
+from typing import Any, List, Optional
+from unittest import mock
+
+from snr import Config, Mode, TimeoutLoopFactory
+from tests.helpers import free_port, wait_until
+from tests.optional import reason
+from tests.quiet import capture_test_logs
+from tests.test_comms_liveness import CommsFaultTest, CounterFactory, TickerFactory
+from tests.test_comms_local import LocalNodes
+
+HAVE_ZENOH = importlib.util.find_spec("zenoh") is not None
+SECRET = "correct horse battery staple"
+SYSTEM = "team7"
+
+if HAVE_ZENOH:
+    from snr import ZenohCommsFactory
+    from snr.extras.zenoh.comms import _zenoh_module, zenoh_config, zenoh_credentials
+
+
+class Session:
+    """A plain Zenoh session that listens to the system's pages and can put one."""
+
+    def __init__(self, test: unittest.TestCase, endpoint: str, secret: Optional[bytes]) -> None:
+        zenoh = _zenoh_module()
+        self.session = zenoh.open(zenoh_config(connect=[endpoint], scouting=False, secret=secret))
+        test.addCleanup(self.session.close)
+        self.heard: List[Any] = []
+        self._lock = threading.Lock()
+        self.session.declare_subscriber(f"snr/{SYSTEM}/tick", self._on_sample)
+
+    def _on_sample(self, sample: Any) -> None:
+        with self._lock:
+            self.heard.append(json.loads(sample.payload.to_bytes())["data"])
+
+    def put(self, data: int) -> None:
+        self.session.put(f"snr/{SYSTEM}/cmd", json.dumps({"data": data}).encode())
+
+
+@unittest.skipUnless(HAVE_ZENOH, reason("zenoh"))
+class TestZenohSecret(CommsFaultTest):
+    def test_only_a_session_with_the_secret_hears_the_system_or_speaks_into_it(self) -> None:
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        commands = CounterFactory("cmd")
+        comms = ZenohCommsFactory(
+            SYSTEM,
+            publish="tick",
+            subscribe="cmd",
+            listen=[endpoint],
+            scouting=False,
+            secret=SECRET,
+        )
+        config = Config({"robot": [TickerFactory(hz=50), comms, commands]}, mode=Mode.TEST)
+        nodes = self.run_nodes(config, ["robot"])
+        self.addCleanup(nodes.stop)
+
+        friend = Session(self, endpoint, SECRET.encode())
+        wrong = Session(self, endpoint, b"a guess")
+        stranger = Session(self, endpoint, None)
+        # The friend hears the node and is heard by it: the link is up, the others have had
+        # as long to link, and only now do they all put (each its own numbers).
+        self.assertTrue(wait_until(lambda: len(friend.heard) > 5, 10.0), "the friend hears")
+        deadline = time.monotonic() + 1.0
+        while time.monotonic() < deadline:
+            friend.put(1)
+            wrong.put(2)
+            stranger.put(3)
+            time.sleep(0.05)
+        self.assertTrue(wait_until(lambda: 1 in commands.seen, 5.0), "the node hears the friend")
+        time.sleep(0.3)
+        self.assertEqual(set(commands.seen), {1}, "only the friend's pages were stored")
+        self.assertEqual(wrong.heard, [], "a session with another secret hears nothing")
+        self.assertEqual(stranger.heard, [], "a session without a secret hears nothing")
+
+    def test_the_password_file_is_private_and_holds_no_secret(self) -> None:
+        config = zenoh_config(scouting=False, secret=SECRET.encode())
+        path = json.loads(config.get_json("transport/auth/usrpwd/dictionary_file"))
+        user, password = zenoh_credentials(SECRET.encode())
+        with open(path, encoding="ascii") as file:
+            self.assertEqual(file.read(), f"{user}:{password}\n")
+        self.assertNotIn("horse", password)
+        self.assertEqual(stat.S_IMODE(os.stat(path).st_mode), 0o600)
+        self.assertEqual(stat.S_IMODE(os.stat(os.path.dirname(path)).st_mode), 0o700)
+
+
+@unittest.skipUnless(HAVE_ZENOH, reason("zenoh"))
+class TestZenohConsoleSecret(unittest.TestCase):
+    def test_exit_from_a_console_without_the_secret_does_not_stop_the_node(self) -> None:
+        from snr.extras.zenoh.console import ZenohConsole, ZenohConsoleFactory
+        from snr.std_mods.io.console_protocol import ConsoleConnectionError, Status
+
+        capture_test_logs(self, "snr")
+        no_secret = {"SNR_SECRET_FILE": os.devnull + ".missing", "SNR_CONSOLE_TOKEN": ""}
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        # The node finds its secret when it starts (its Zenoh session) and when it is built
+        # (its console token): this process's environment has it until the test ends.
+        node_environment = mock.patch.dict(os.environ, {**no_secret, "SNR_SECRET": SECRET})
+        node_environment.start()
+        self.addCleanup(node_environment.stop)
+        factory = ZenohConsoleFactory(SYSTEM, listen=[endpoint], scouting=False)
+        nodes = LocalNodes(
+            Config({"urov": [factory, TimeoutLoopFactory(seconds=15)]}, mode=Mode.TEST), ["urov"]
+        )
+        self.addCleanup(nodes.stop)
+
+        def console(secret: Optional[str]) -> ZenohConsole:
+            with mock.patch.dict(os.environ, no_secret):
+                os.environ.pop("SNR_SECRET", None)
+                if secret is not None:
+                    os.environ["SNR_SECRET"] = secret
+                made = ZenohConsole(
+                    SYSTEM, "urov", connect=[endpoint], scouting=False, timeout_s=1.0
+                )
+            self.addCleanup(made.close)
+            return made
+
+        friend = console(SECRET)
+        self.assertTrue(wait_until(lambda: _greets(friend), 10.0), "the node is up")
+        for secret in (None, "a guess"):
+            with self.subTest(secret=secret):
+                stranger = console(secret)
+                # Its session links to nothing: no node answers it, and `exit` goes nowhere.
+                with self.assertRaisesRegex(ConsoleConnectionError, "No node"):
+                    stranger.connect()
+                with self.assertRaises(ConsoleConnectionError):
+                    stranger.send("exit")
+        self.assertTrue(nodes.threads[0].is_alive(), "the node runs on")
+        self.assertIs(friend.send("exit").status, Status.BYE)
+        nodes.threads[0].join(5.0)
+        self.assertFalse(nodes.threads[0].is_alive(), "the console with the secret stopped it")
+
+
+def _greets(console: Any) -> bool:
+    from snr.std_mods.io.console_protocol import ConsoleConnectionError
+
+    try:
+        console.connect()
+    except ConsoleConnectionError:
+        return False
+    return True
+
+
+if __name__ == "__main__":
+    unittest.main()
