@@ -140,8 +140,50 @@ def snr_sources() -> Dict[Path, str]:
     }
 
 
+PRELUDE = SNR / "prelude"
+PRELUDE_MAY_IMPORT = "snr.prelude"
+"""The only SNR modules layer 0 imports (besides the standard library, dataclasses-json and
+typing-extensions): its own. The node, the checks and the rest build on it, never under it."""
+
+
+def prelude_problems(files: Dict[Path, str]) -> List[str]:
+    """``file:line imports module`` for each prelude import of SNR above the prelude.
+
+    Example::
+
+        prelude_problems({SNR / "prelude" / "page.py": "from snr.core import Node\n"})
+        # ['snr/prelude/page.py:1 imports snr.core']
+    """
+    problems = []
+    for path, source in sorted(files.items()):
+        if PRELUDE not in path.parents:
+            continue
+        for line, module, _names in imports_of(path, source):
+            if module.split(".")[0] == "snr" and not module.startswith(PRELUDE_MAY_IMPORT):
+                where = path.relative_to(ROOT).as_posix()
+                problems.append(f"{where}:{line} imports {module}")
+    return problems
+
+
 class ImportContractTest(unittest.TestCase):
     """The kernel never imports an extra; extras use the kernel's public names."""
+
+    def test_the_prelude_imports_nothing_of_snr_above_it(self) -> None:
+        self.assertEqual(prelude_problems(snr_sources()), [])
+
+    def test_a_prelude_import_from_above_is_found(self) -> None:
+        bad = {
+            PRELUDE / "page.py": "import json\nfrom snr.core import Node\n",
+            PRELUDE / "abstract.py": "def f():\n    from snr.core.checks import explain\n",
+            PRELUDE / "task.py": "from snr.prelude.names import TaskType\n",
+        }
+        self.assertEqual(
+            prelude_problems(bad),
+            [
+                "snr/prelude/abstract.py:2 imports snr.core.checks",
+                "snr/prelude/page.py:2 imports snr.core",
+            ],
+        )
 
     def test_the_kernel_imports_no_extra(self) -> None:
         self.assertEqual(kernel_problems(snr_sources()), [])

@@ -100,8 +100,8 @@ class _FriendlyABC(metaclass=_FriendlyABCMeta):
 def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
     """The ComponentError for building ``cls`` while it lacks required methods.
 
-    The words are made by `snr.core.checks.abstract_errors` (read second),
-    imported here only when this mistake happens.
+    The words are made by `snr.prelude.abstract_errors`, imported here only
+    when this mistake happens.
 
     Example::
 
@@ -109,7 +109,7 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
         # Cannot create HalfEndpoint (robot.py:5): it lacks these methods that
         # AbstractEndpoint requires: halt, terminate. Easiest fix: subclass ...
     """
-    from snr.core.checks import abstract_errors
+    from snr.prelude import abstract_errors
 
     return abstract_errors.missing_methods_error(cls, created_at)
 
@@ -119,7 +119,7 @@ def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
 
     Used where SNR builds things (a factory's ``get()``) for abstract classes
     that are not SNR's own, e.g. a student's ``Sensor(ABC)`` base class. The
-    words are made by `snr.core.checks.abstract_errors`, as above.
+    words are made by `snr.prelude.abstract_errors`, as above.
 
     Example::
 
@@ -128,7 +128,7 @@ def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
         except TypeError as error:
             raise (explain_abstract_error(error) or error) from error
     """
-    from snr.core.checks import abstract_errors
+    from snr.prelude import abstract_errors
 
     return abstract_errors.explain_abstract_error(error)
 

@@ -33,8 +33,6 @@ call as "check this" and come back here for the how:
 * ``student_code.py``, ``error_text.py``: where the student's code is (source
   lines, tracebacks, another thread's line) and what Python said about an
   error, for the messages of all of the above.
-* ``abstract_errors.py``: a class that lacks methods its interface requires
-  (every mode; the prelude's interfaces load it when that happens).
 
 The package itself imports none of them, so importing one of them does not
 load the others. These modules may import `snr.core` and `snr.prelude`; none

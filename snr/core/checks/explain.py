@@ -22,7 +22,6 @@ import threading
 from types import CodeType
 from typing import Any, Dict, Iterator, List, NoReturn, Optional, Set, Tuple, Union
 
-from snr.core.checks.abstract_errors import explain_abstract_error
 from snr.core.checks.call_checks import bad_data_key, page_as_data, wrong_call
 from snr.core.checks.error_text import PAGE_IN_A_HANDLER, exception_text, short_repr
 from snr.core.checks.student_code import (
@@ -56,6 +55,7 @@ from snr.prelude import (
     TaskHandler,
     ThreadSafetyError,
 )
+from snr.prelude.abstract_errors import explain_abstract_error
 from snr.prelude.task import format_task
 
 __all__ = [

@@ -20,7 +20,6 @@ import builtins
 import re
 from typing import Any, Dict, List, Optional
 
-from snr.core.checks.student_code import describe_class, frame_location
 from snr.prelude.abstract import (
     AbstractComponent,
     AbstractEndpoint,
@@ -28,6 +27,7 @@ from snr.prelude.abstract import (
     AbstractLoop,
 )
 from snr.prelude.errors import ComponentError
+from snr.prelude.student_code import describe_class, frame_location
 
 __all__ = ["explain_abstract_error", "missing_methods_error"]
 
