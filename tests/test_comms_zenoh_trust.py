@@ -32,7 +32,12 @@ SYSTEM = "team7"
 
 if HAVE_ZENOH:
     from snr import ZenohCommsFactory
-    from snr.extras.zenoh.comms import _zenoh_module, zenoh_config, zenoh_credentials
+    from snr.extras.zenoh.comms import (
+        MEET_ENDPOINTS_S,
+        _zenoh_module,
+        zenoh_config,
+        zenoh_credentials,
+    )
 
 
 class Session:
@@ -98,6 +103,44 @@ class TestZenohSecret(CommsFaultTest):
         self.assertNotIn("horse", password)
         self.assertEqual(stat.S_IMODE(os.stat(path).st_mode), 0o600)
         self.assertEqual(stat.S_IMODE(os.stat(os.path.dirname(path)).st_mode), 0o700)
+
+
+@unittest.skipUnless(HAVE_ZENOH, reason("zenoh"))
+class TestZenohUnmetEndpoint(CommsFaultTest):
+    """Zenoh says nothing when it refuses a session: the node that connects says it instead."""
+
+    def connect_to_a_listener(self, listener_secret: bytes) -> Any:
+        """A node with SECRET, connecting to a session that listens with ``listener_secret``."""
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        listener = _zenoh_module().open(
+            zenoh_config(listen=[endpoint], scouting=False, secret=listener_secret)
+        )
+        self.addCleanup(listener.close)
+        comms = ZenohCommsFactory(
+            SYSTEM, publish="tick", connect=[endpoint], scouting=False, secret=SECRET
+        )
+        config = Config({"robot": [comms, TimeoutLoopFactory(seconds=15)]}, mode=Mode.TEST)
+        nodes = self.run_nodes(config, ["robot"])
+        return nodes, endpoint, listener
+
+    def test_another_secret_is_said_naming_the_role_the_endpoint_and_the_fix(self) -> None:
+        started = time.monotonic()
+        _, endpoint, _ = self.connect_to_a_listener(b"another team's secret")
+        said = f"has met no Zenoh node at {endpoint}"
+        self.assertTrue(wait_until(lambda: self.log.matching(said), 10.0), self.log.lines)
+        # Not before the bound: Zenoh takes a moment to link even when all is well.
+        self.assertGreaterEqual(self.log.first(said) or 0.0, started + MEET_ENDPOINTS_S)
+        (line,) = self.log.matching(said)
+        self.assertIn("'robot'", line)
+        self.assertIn("both sides need the same SNR_SECRET", line)
+        self.assertIn("nothing listens there", line)
+
+    def test_the_same_secret_links_and_says_nothing(self) -> None:
+        nodes, _, listener = self.connect_to_a_listener(SECRET.encode())
+        self.assertTrue(wait_until(lambda: list(listener.info.peers_zid()), 10.0), "linked")
+        time.sleep(MEET_ENDPOINTS_S + 0.5)  # past the bound: a warning would be out by now
+        self.assertEqual(self.log.matching("has met no Zenoh node"), [])
+        self.assertTrue(nodes.threads[0].is_alive())
 
 
 @unittest.skipUnless(HAVE_ZENOH, reason("zenoh"))

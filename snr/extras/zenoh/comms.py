@@ -32,9 +32,12 @@ from __future__ import annotations
 
 import atexit
 import collections
+import ipaddress
 import json
+import logging
 import os
 import shutil
+import socket
 import tempfile
 import threading
 import time
@@ -54,7 +57,7 @@ from typing import (
 
 from snr.core import EndpointFactory, tasks
 from snr.core.endpoint import Endpoint
-from snr.core.logs import LossReport
+from snr.core.logs import LossReport, RateLimitedLog
 from snr.core.node import Node
 from snr.core.task_queue import TaskQueue
 from snr.extras.zenoh.inbox import (
@@ -99,13 +102,16 @@ __all__ = [
     "BATCH_TIME_LIMIT_MS",
     "DEFAULT_ORIGIN",
     "KEY_PREFIX",
+    "MEET_ENDPOINTS_S",
     "ZENOH_USER",
     "IdleReader",
     "SampleChannel",
     "ZenohComms",
     "ZenohCommsFactory",
     "key_expr_of",
+    "meet_endpoints",
     "page_from_sample",
+    "unmet_endpoints",
     "wake_key",
     "zenoh_config",
     "zenoh_credentials",
@@ -319,6 +325,99 @@ def _dictionary_file(user: str, password: str) -> str:
                 file.write(f"{user}:{password}\n")
             _dictionaries[password] = path
         return path
+
+
+MEET_ENDPOINTS_S = 2.0
+"""How long a new session may take to meet a node at each of its ``connect`` endpoints.
+
+A console waits this long at most before its first command; a node warns
+(without waiting: in the background) about each endpoint it has not met by then.
+"""
+
+
+def _locators_of(endpoint: str) -> Set[str]:
+    """The locators a link to ``endpoint`` may show as its ``dst``: the endpoint, resolved.
+
+    Zenoh shows a link's far end by address (``tcp/127.0.0.1:7447``), so an
+    endpoint given by name (``tcp/robot.local:7447``) is matched by the
+    addresses its name has now.
+    """
+    locator = endpoint.split("#")[0].split("?")[0]  # no metadata, no configuration
+    found = {locator}
+    protocol, _, address = locator.partition("/")
+    host, _, port = address.rpartition(":")
+    host = host.strip("[]")
+    try:
+        ipaddress.ip_address(host)
+    except ValueError:  # a name: look it up (in the background, never on the node's thread)
+        try:
+            for *_, sockaddr in socket.getaddrinfo(host, port or None):
+                ip = str(sockaddr[0])
+                found.add(f"{protocol}/[{ip}]:{port}" if ":" in ip else f"{protocol}/{ip}:{port}")
+        except (OSError, UnicodeError):  # no such name: nothing else to match
+            pass
+    return found
+
+
+def meet_endpoints(
+    session: Any,
+    connect: Sequence[str],
+    mode: str = "peer",
+    bound_s: float = MEET_ENDPOINTS_S,
+    quiet_s: Optional[float] = None,
+    stop: Optional[threading.Event] = None,
+) -> bool:
+    """Wait until a Zenoh session has met a node at each ``connect`` endpoint; say if it did.
+
+    Zenoh opens a session at once and connects in the background, and it says
+    nothing when a link fails (nobody listening, or its authentication
+    refused the other side). So this counts the peers and routers the
+    session has met, every 5 ms, until there is one per endpoint (a
+    ``"client"`` needs one router in all), ``bound_s`` has passed, ``stop``
+    is set, or (with ``quiet_s``) that long has passed since the last one met,
+    if it met any. `unmet_endpoints` then says which endpoints were not met.
+
+    Example::
+
+        session = zenoh.open(zenoh_config(connect=["tcp/127.0.0.1:7447"], scouting=False))
+        meet_endpoints(session, ["tcp/127.0.0.1:7447"])   # True once a node is met there
+    """
+    if not connect:
+        return True  # scouting: there is no knowing how many nodes to meet
+    info = session.info
+    wanted = 1 if mode == "client" else len(connect)
+    started = time.monotonic()
+    deadline = started + bound_s
+    count, counted_at = 0, started
+    while True:
+        now = time.monotonic()
+        latest = len(list(info.peers_zid())) + len(list(info.routers_zid()))
+        if latest != count:
+            count, counted_at = latest, now
+        if count >= wanted:
+            return True
+        if now >= deadline or (stop is not None and stop.is_set()):
+            return False
+        # An endpoint nobody listens on would hold a console up for the whole bound.
+        if quiet_s is not None and count and now - counted_at >= quiet_s:
+            return False
+        time.sleep(0.005)
+
+
+def unmet_endpoints(session: Any, connect: Sequence[str], mode: str = "peer") -> List[str]:
+    """The ``connect`` endpoints a Zenoh session has no open link to (a client: all, or none).
+
+    A name in an endpoint is looked up, so call it off the node's thread.
+
+    Example::
+
+        unmet_endpoints(session, ["tcp/127.0.0.1:7447"])   # ['tcp/127.0.0.1:7447']: no link
+    """
+    info = session.info
+    if mode == "client" and (list(info.routers_zid()) or list(info.peers_zid())):
+        return []  # a client needs one router, whichever endpoint it came from
+    linked = {str(link.dst) for link in info.links()}
+    return [endpoint for endpoint in connect if not _locators_of(endpoint) & linked]
 
 
 def zenoh_config(
@@ -561,6 +660,10 @@ class ZenohComms(Endpoint):
             f"the node's thread took none for {factory.max_wait_s:g} s (a handler is stuck, "
             "or the node's queue stayed full)",
         )
+        # Endpoints met by no node within MEET_ENDPOINTS_S of opening: each is said
+        # once a session, and a node with many of them says a count after five.
+        self.unmet_endpoints = 0
+        self._unmet_news = RateLimitedLog(self.log, burst=5, window_s=60.0)
         self.task_handlers = {
             (TaskType.store_page, key): self.publish_page for key in factory.publish
         }
@@ -575,6 +678,7 @@ class ZenohComms(Endpoint):
     def begin(self) -> None:
         """Open the Zenoh session; declare the publishers, subscribers and this node's token."""
         zenoh, spec = self.zenoh, self.spec
+        secret = find_secret(spec.secret, f"ZenohCommsFactory of node {self.parent.role!r}")
         config = zenoh_config(
             spec.mode,
             spec.connect,
@@ -582,7 +686,7 @@ class ZenohComms(Endpoint):
             spec.scouting,
             spec.dead_after_s,
             spec.zenoh_settings,
-            find_secret(spec.secret, f"ZenohCommsFactory of node {self.parent.role!r}"),
+            secret,
         )
         try:
             self.session = zenoh.open(config)
@@ -650,6 +754,49 @@ class ZenohComms(Endpoint):
             list(spec.publish),
             list(spec.subscribe),
         )
+        if spec.connect:  # in the background: the node starts at once
+            checker = threading.Thread(
+                target=self._check_endpoints,
+                args=(session, secret is not None),
+                name=f"{self.name}-endpoints",
+                daemon=True,
+            )
+            self._watchers.append(checker)
+            checker.start()
+
+    def _check_endpoints(self, session: Any, has_secret: bool) -> None:
+        """Warn about each ``connect`` endpoint where no node was met, with its likely causes.
+
+        Zenoh refuses a session with another secret inside its own hello and
+        says nothing to SNR, on either side: an endpoint that stays unmet is
+        the only sign this side can give (docs/comms.md, "Who may connect").
+        """
+        spec = self.spec
+        try:
+            met = meet_endpoints(session, spec.connect, spec.mode, stop=self._closed)
+            unmet = [] if met else unmet_endpoints(session, spec.connect, spec.mode)
+        except Exception:  # zenoh.ZError: the session closed under us, as the node stopped
+            return
+        if self._closed.is_set():
+            return  # stopped meanwhile: not meeting anyone is no news
+        mine = "this node has one" if has_secret else "this node has none"
+        for endpoint in unmet:
+            self.unmet_endpoints += 1
+            self._unmet_news.report(
+                "Zenoh endpoints not met",
+                logging.WARNING,
+                "Node %r has met no Zenoh node at %s after %g s (Zenoh keeps trying). "
+                "Likely causes, most likely first: (1) nothing listens there: is the "
+                "other node (or zenohd) running, with this address in its listen "
+                "endpoints? (2) a different secret, or only one side has one (%s): both "
+                "sides need the same SNR_SECRET (docs/comms.md, 'Who may connect'); "
+                "(3) something else listens there: not a Zenoh node, or a Zenoh of a "
+                "different version.",
+                self.parent.role,
+                endpoint,
+                MEET_ENDPOINTS_S,
+                mine,
+            )
 
     def halt(self) -> None:
         """Close the session (the node is stopping or this component is reloaded)."""
@@ -728,6 +875,7 @@ class ZenohComms(Endpoint):
         for channel in self._channels:
             _empty_fifo(channel.handler)
         session.close()
+        self._unmet_news.flush()
         for watcher in self._watchers:
             watcher.join(1.0)
         self._watchers.clear()
@@ -1078,6 +1226,7 @@ class ZenohComms(Endpoint):
             "dropped": self.queue_report.total,
             "bad_samples": self.bad_samples,
             "peers": sorted(self.peers.values()),
+            "unmet_endpoints": self.unmet_endpoints,
         }
 
     def stats_text(self) -> str:

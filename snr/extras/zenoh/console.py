@@ -34,8 +34,10 @@ from typing import IO, Any, Dict, List, Optional, Sequence, Set
 from snr.core import LoopFactory
 from snr.extras.zenoh.comms import (
     KEY_PREFIX,
+    MEET_ENDPOINTS_S,
     _check_chunk_text,
     _zenoh_module,
+    meet_endpoints,
     zenoh_config,
 )
 from snr.prelude import AbstractNode, CommsError
@@ -74,8 +76,7 @@ node over time, so they need one node's role; the others (``exit``,
 would stop or change every robot of the system at once.
 """
 
-_MEET_ENDPOINTS_S = 2.0  # at most this long, a new console waits to meet its connect endpoints
-_MEET_QUIET_S = 0.25  # ... or this long after the last one it met, if it met any
+_MEET_QUIET_S = 0.25  # a new console waits this long after the last endpoint it met, if any
 _ONE_NODE_STREAMS = ("echo", "hz")  # read-only, but a stream of replies from one node
 
 
@@ -402,24 +403,15 @@ class ZenohConsole(ConsoleClient):
         The wait ends 0.25 s after the last node met if some endpoint has
         nobody listening, and after 2 s (or the console's timeout) at most.
         """
-        if not self._connect:
-            return  # scouting: there is no knowing how many nodes will answer
-        info = self.session.info
-        # A client connects to one router; a peer to every endpoint (peers or routers).
-        wanted = 1 if self._mode == "client" else len(self._connect)
-        started = time.monotonic()
-        deadline = started + min(self.timeout_s, _MEET_ENDPOINTS_S)
-        count, counted_at = 0, started
-        while True:
-            now = time.monotonic()
-            latest = len(list(info.peers_zid())) + len(list(info.routers_zid()))
-            if latest != count:
-                count, counted_at = latest, now
-            # Done once all are met; or when some are and no other came for a while
-            # (an endpoint nobody listens on would hold every console up otherwise).
-            if count >= wanted or now >= deadline or (count and now - counted_at >= _MEET_QUIET_S):
-                return
-            time.sleep(0.005)
+        # The node's comms wait the same way (in the background) to say which endpoint
+        # they did not meet; here the wait only holds the first command back.
+        meet_endpoints(
+            self.session,
+            self._connect,
+            self._mode,
+            min(self.timeout_s, MEET_ENDPOINTS_S),
+            quiet_s=_MEET_QUIET_S,
+        )
 
     def ask(self, line: str, timeout_s: float) -> Reply:
         """One query for ``line``: the node's reply, or every node's, labelled (``"*"``)."""
