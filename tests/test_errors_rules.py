@@ -8,6 +8,7 @@ each rule on fresh mistakes, written as a student would, that no entry shows.
 
 from __future__ import annotations
 
+import copy
 import re
 import textwrap
 import threading
@@ -30,13 +31,14 @@ from snr import (
     TaskId,
     TaskType,
     ThreadLoop,
+    TimeoutLoopFactory,
 )
 from snr.core.checks.error_text import closest_match, exception_text
 from snr.core.checks.explain import page_hint
-from snr.prelude import ComponentError
+from snr.prelude import ComponentError, DatastoreWriteError, SNRError
 from tests.quiet import captured_logs
 
-NEW_ENTRIES = ["15n", "15o", "15p", "15q", "16p", "16q", "16r"]
+NEW_ENTRIES = ["15n", "15o", "15p", "15q", "16p", "16q", "16r", "16s"]
 
 
 class TestNewEntriesLineByLine(unittest.TestCase):
@@ -409,6 +411,71 @@ class TestAPageUsedAsItsValue(unittest.TestCase):
         text = page_hint(error, exception_text(error))
         self.assertIn("read self.get_data(key)", text)
         self.assertNotIn("val_list", text)
+
+
+class TestADatastoreWrittenByAComponent(unittest.TestCase):
+    """Only the node writes its datastore; anything else is refused at its line."""
+
+    def test_a_loop_assigning_a_value_is_told_store_data_is_the_thread_safe_way(self) -> None:
+        source = program(
+            """
+            class Depth(ThreadLoop):
+                def __init__(self, factory: LoopFactory, parent: AbstractNode) -> None:
+                    super().__init__(factory, parent, "depth", max_tick_rate_hz=10)
+
+                def loop(self) -> None:
+                    self.parent.datastore["depth"] = 2.0
+
+
+            class DepthFactory(LoopFactory):
+                def get(self, parent: AbstractNode) -> Depth:
+                    return Depth(self, parent)
+
+
+            CliRunner({"robot": [DepthFactory(), TimeoutLoopFactory(seconds=5)]}).run()
+            """
+        )
+        lines, status = silence.run_program(source, ["LoopError"])
+        text = "\n".join(lines)
+        self.assertEqual(status, 1, text)
+        self.assertIn("datastore['depth'] = value at robot.py:8 in Depth.loop was refused", text)
+        self.assertIn("self.store_data('depth', value); from a loop's thread", text)
+        self.assertIn("thread-safe", text)
+        self.assertIn('self.parent.datastore["depth"] = 2.0', text)  # the student's line
+
+    def test_every_way_of_changing_it_is_refused_and_changes_nothing(self) -> None:
+        node = Node(
+            "robot", Config({"robot": [TimeoutLoopFactory(seconds=1)]}, mode=Mode.DEPLOYED)
+        )  # every mode
+        page = node.page("depth", 1.0)
+        node.write_page(page)  # the node's own way, before it runs
+        store: Any = node.datastore  # as a student writes it, untyped
+        tries: List[Tuple[str, Callable[[], object]]] = [
+            ("datastore['depth'] = value", lambda: store.__setitem__("depth", page)),
+            ("del datastore['depth']", lambda: store.__delitem__("depth")),
+            ("datastore.update()", lambda: store.update(depth=page)),
+            ("datastore.pop()", lambda: store.pop("depth")),
+            ("datastore.popitem()", store.popitem),
+            ("datastore.clear()", store.clear),
+            ("datastore.setdefault()", lambda: store.setdefault("speed", page)),
+            ("datastore |= other", lambda: store.__ior__({"speed": page})),
+        ]
+        for what, attempt in tries:
+            with self.subTest(what), self.assertRaises(DatastoreWriteError) as caught:
+                attempt()
+            self.assertIn(f"{what} at tests/test_errors_rules.py:", str(caught.exception))
+            self.assertIn("self.store_data(", str(caught.exception))
+        self.assertEqual(dict(store), {"depth": page})
+        self.assertIsInstance(caught.exception, SNRError)
+
+    def test_a_copy_is_a_plain_dict_the_copier_may_change(self) -> None:
+        node = Node("robot", Config({"robot": [TimeoutLoopFactory(seconds=1)]}))
+        node.write_page(node.page("depth", 1.0))
+        copies: List[Any] = [copy.copy(node.datastore), copy.deepcopy(node.datastore)]
+        for copied in copies:
+            copied["speed"] = node.page("speed", 0.5)
+            self.assertEqual(sorted(copied), ["depth", "speed"])
+        self.assertEqual(list(node.datastore), ["depth"])
 
 
 class TestUncaughtSNRErrors(unittest.TestCase):

@@ -373,7 +373,8 @@ class TestHandlerFailures(SNRTestCase):
                 raise MemoryError("no room for another page")
 
         node = Node("test", self.get_config([TimeoutLoopFactory(seconds=2)]))
-        node.datastore = Refusing()
+        core: Any = node.components["node_core"]
+        core.pages = Refusing()  # the dict the node's core writes pages into
         node.store_data("depth", 1.0)
         with self.assertRaises(HandlerError) as ctx, self.assertLogs("snr.test", "ERROR") as logs:
             node.loop()

@@ -315,7 +315,7 @@ class TestTheClassesOfTheDocs(SNRTestCase):
 
         def release(node: Node) -> None:
             # What only the node's thread could do while the handler blocks it.
-            node.datastore["gripper_closed"] = node.page("gripper_closed", True)
+            node.pages["gripper_closed"] = node.page("gripper_closed", True)
 
         flooder = LoopFactoryOf(Flooder)
         node, lines = self.run_watched(

@@ -23,8 +23,9 @@ import enum
 import logging
 import threading
 import time
-from typing import TYPE_CHECKING, Any, Callable, List, Optional
+from typing import TYPE_CHECKING, Any, Callable, List, Mapping, Optional
 
+from snr.core.checks.datastore_guard import NodeDatastore
 from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
 from snr.core.checks.step_mode import StepMode
 from snr.core.components import ComponentSet
@@ -94,7 +95,8 @@ class Node(AbstractNode):
         node.is_terminated()  # True
 
     Attributes:
-        datastore: the newest page for each data key (read it with get_page).
+        datastore: the newest page for each data key, read-only (get_page reads it).
+        pages: the dict behind it, which only the node writes.
         queue: the task queue (bounded: see `TaskQueue`).
         components: every endpoint and loop by name, in start order.
         state: the `NodeState`.
@@ -141,8 +143,9 @@ class Node(AbstractNode):
         self.timer = Timer() if clock is None else Timer(clock)
         self._page_time: Callable[[], float] = time.time if clock is None else clock.stamp
         self._clock_turn: Optional[NodeTurn] = None
-        self.datastore: DataDict = {}
         self.queue = TaskQueue(high_water=self.max_queued_tasks, log=self.log)
+        self.pages: DataDict = {}  # written by the node alone; components see it read-only:
+        self.datastore: Mapping[DataKey, Page] = NodeDatastore(self.pages, role, self.queue)
         self.state = NodeState.CREATED
         self.terminate_reason: Optional[str] = None
         self._stop_requested = False
@@ -171,6 +174,7 @@ class Node(AbstractNode):
         core = NodeCoreFactory().get(self)
         self.add_component(core, start=False)
         self._runner.store_page = core.store_page_handler  # pages are stored before handlers
+        core.pages = self.pages
         for factory in config.get(role):
             component = self.build_component(factory)
             if component is not None:
@@ -420,7 +424,7 @@ class Node(AbstractNode):
         In DEBUG mode, a key that stays missing gets one hint in the log (the
         keys that exist, the closest match); see `MissingKeyHints`.
         """
-        page = self.datastore.get(key)
+        page = self.pages.get(key)
         if page is None and self.key_hints is not None and self.state is NodeState.RUNNING:
             self.key_hints.missed(key, self.datastore)
         return page
@@ -442,7 +446,7 @@ class Node(AbstractNode):
         ``store_page``/``store_data``, which queue it.
         """
         self._check_owner_thread("write_page")
-        self.datastore[page.key] = page
+        self.pages[page.key] = page
 
     # ------------------------------------------------------------------
     # Components (the work is done by ComponentSet)

@@ -46,6 +46,7 @@ class NodeCoreEndpoint(Endpoint):
     def __init__(self, factory: AbstractFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, NODE_CORE_NAME)
         self.node = parent
+        self.pages: Dict[DataKey, Page] = {}  # the node's own dict (node.pages), set by the node
         self.task_handlers = {
             (TaskType.event, tasks.STORE_PAGES): self.store_pages_handler,
             (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
@@ -75,7 +76,7 @@ class NodeCoreEndpoint(Endpoint):
         if not page.origin:  # made by tasks.store_data(), which has no node
             page = dataclasses.replace(page, origin=self.node.role)
             task.val_list[0] = page
-        self.node.datastore[page.key] = page  # node.write_page, on the node's own thread
+        self.pages[page.key] = page  # node.write_page, on the node's own thread
         # The page's process_data task, only if some handler waits for it: a
         # page nobody processes (a sender's page, say) costs no task.
         if page.process and self.node.is_handled(_PROCESS_DATA, page.key):
@@ -92,19 +93,19 @@ class NodeCoreEndpoint(Endpoint):
         ones after it go back to the front of the queue as one ``store_page``
         task each, so every handler sees them in the usual order.
         """
-        node = self.node
+        node, pages = self.node, self.pages
         processed: List[Task] = []
         wanted: Dict[DataKey, bool] = {}  # per key, asked once a burst: is it processed?
-        pages = task.val_list
-        for index, page in enumerate(pages):
+        burst = task.val_list
+        for index, page in enumerate(burst):
             # Page by page from here when the usual handler must explain or fix
             # the page, or when a handler besides this core stores its key.
             if not (isinstance(page, Page) and page.origin) or (
                 page.key not in wanted and node.is_handled(_STORE_PAGE, page.key)
             ):
-                self._store_one_by_one(pages[index:])
+                self._store_one_by_one(burst[index:])
                 break
-            node.datastore[page.key] = page  # node.write_page, on the node's own thread
+            pages[page.key] = page  # node.write_page, on the node's own thread
             if page.key not in wanted:
                 wanted[page.key] = node.is_handled(_PROCESS_DATA, page.key)
             if page.process and wanted[page.key]:

@@ -24,7 +24,6 @@ from snr.prelude.errors import ComponentError
 from snr.prelude.names import (
     BurstHandler,
     ComponentName,
-    DataDict,
     DataKey,
     Mode,
     Role,
@@ -202,9 +201,9 @@ class AbstractNode(_FriendlyABC):
         components: every endpoint and loop, by name, in start order.
         log: the node's logger (``logging.Logger``).
         profiler: the profiler, or None when profiling is off.
-        datastore: the newest page for each data key. Only the node's
-            thread writes it (its run loop stores each ``store_page`` task's
-            page); read it with ``get_page``.
+        datastore: the newest page for each data key, read-only: only the
+            node writes it (its run loop stores each ``store_page`` task's
+            page); read it with ``get_page``, store with ``store_data``.
 
     Example::
 
@@ -218,7 +217,7 @@ class AbstractNode(_FriendlyABC):
     components: Dict[ComponentName, AbstractComponent]
     log: logging.Logger
     profiler: Optional[AbstractProfiler]
-    datastore: DataDict
+    datastore: Mapping[DataKey, Page]
 
     # -- control flow (listing 6.1) -------------------------------------
     @abstractmethod

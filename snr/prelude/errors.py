@@ -23,6 +23,7 @@ The tree::
      +-- LoopError            a loop's setup() or loop() raised
      +-- NodeStateError       a node was used in the wrong life-cycle state
      +-- ThreadSafetyError    node state was touched from the wrong thread
+     +-- DatastoreWriteError  a component wrote its node's datastore (use store_data)
      +-- CommsError           talking to another node failed
      |    +-- WireFormatError  a frame on the wire is malformed
      |    +-- NotSerializableError  data cannot be sent between nodes
@@ -40,6 +41,7 @@ __all__ = [
     "ComponentError",
     "ConfigError",
     "ConsoleConnectionError",
+    "DatastoreWriteError",
     "HandlerError",
     "LoopError",
     "MissingSuperInitError",
@@ -118,6 +120,14 @@ class ThreadSafetyError(SNRError):
 
     Example: a loop thread calling ``node.execute_task(...)`` directly instead of
     ``self.schedule(...)``.
+    """
+
+
+class DatastoreWriteError(SNRError):
+    """Something other than the node tried to change a node's datastore.
+
+    Example: ``self.parent.datastore["depth"] = 2.0`` in a handler or loop,
+    where ``self.store_data("depth", 2.0)`` stores it.
     """
 
 

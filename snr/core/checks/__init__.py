@@ -23,6 +23,8 @@ call as "check this" and come back here for the how:
 * ``key_hints.py``: a data key read but never stored (DEBUG);
 * ``wiring_checks.py``: an event nothing handles, a handler nothing reaches (DEBUG);
 * ``runner_checks.py``: a runner built and never run, said at exit (not in tests);
+* ``datastore_guard.py``: ``node.datastore`` as components see it, a read-only
+  view that names ``store_data`` when written (every mode);
 * ``top_level.py``: an SNR error nobody caught, printed with the student's frames
   only (``import snr`` sets it as ``sys.excepthook``);
 * ``watchdog.py``: a node stuck without a word, a loop flooding the queue (DEBUG);

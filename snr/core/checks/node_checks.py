@@ -30,7 +30,7 @@ Example (what `Node` does)::
 from __future__ import annotations
 
 import threading
-from typing import List, Optional, Protocol, Set, Tuple
+from typing import List, Mapping, Optional, Protocol, Set, Tuple
 
 from snr.core import tasks
 from snr.core.checks.class_checks import check_component
@@ -42,9 +42,9 @@ from snr.core.handler_runner import HandlerRunner
 from snr.core.timer import Timer
 from snr.prelude import (
     AbstractComponent,
-    DataDict,
     DataKey,
     Mode,
+    Page,
     SomeTasks,
     TaskHandler,
     TaskType,
@@ -67,7 +67,7 @@ class CheckedNode(WatchedNode, Protocol):
     """
 
     mode: Mode
-    datastore: DataDict
+    datastore: Mapping[DataKey, Page]
     timer: Timer
     wiring_checks: Optional[WiringChecks]
     watchdog: Optional[Watchdog]

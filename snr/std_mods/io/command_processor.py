@@ -20,7 +20,7 @@ import logging
 import reprlib
 import time
 from dataclasses import dataclass
-from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Callable, List, Mapping, Optional, Sequence, Tuple
 
 from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, plugins, tasks
 from snr.core.checks.error_text import closest_match, did_you_mean
@@ -646,7 +646,7 @@ def _preview(data: Any) -> str:
     return text if len(text) <= _PREVIEW_CHARS else text[: _PREVIEW_CHARS - 3] + "..."
 
 
-def _list_datastore(role: str, datastore: Dict[str, Page], prefix: str) -> str:
+def _list_datastore(role: str, datastore: Mapping[str, Page], prefix: str) -> str:
     """Every key (starting with ``prefix``) and a preview, within the reply's budgets."""
     started = time.perf_counter()
     keys = sorted(key for key in list(datastore) if key.startswith(prefix))

@@ -1,0 +1,130 @@
+"""A node's datastore as its components see it: read-only, and saying so.
+
+A component sees its node's datastore as ``self.parent.datastore``. Writing
+into it directly (``self.parent.datastore["depth"] = 2.0``) would store a bare
+value where every reader expects a Page, from a thread that may not be the
+node's, and skip the ``process_data`` tasks the handlers of the key wait for;
+the mistake would then show far away, as ``'float' object has no attribute
+'data'`` in some other handler. So ``node.datastore`` is a live, read-only
+view of the node's own dict (``node.pages``) that refuses every change
+(``[k] = v``, ``del``, ``update``, ``pop``, ``clear``, ``setdefault``,
+``popitem``, ``|=``) at the line that tries it, and names ``store_data``.
+
+The node writes ``node.pages`` itself, as a plain dict: the guard costs its
+hot path nothing (docs/design.md, "Only the node writes its datastore").
+
+Example::
+
+    pages = {}
+    store = NodeDatastore(pages, "robot")
+    pages["depth"] = page           # the node, on its own thread
+    store["depth"]                  # the same Page: reads see the node's dict
+    store["depth"] = 2.0            # DatastoreWriteError: ... use self.store_data(...)
+"""
+
+from __future__ import annotations
+
+import threading
+from typing import Any, Dict, Iterator, Mapping, NoReturn, Optional, Tuple
+
+from snr.core.task_queue import TaskQueue
+from snr.prelude import DataKey, DatastoreWriteError, Page
+from snr.prelude.student_code import caller_location
+
+__all__ = ["NodeDatastore"]
+
+
+class NodeDatastore(Mapping[DataKey, Page]):
+    """A live, read-only view of a node's pages that refuses every change, naming store_data.
+
+    Attributes:
+        role: the node's role, for the message.
+        queue: the node's task queue, whose ``owner_thread`` is the node's thread.
+
+    Example::
+
+        store = NodeDatastore({}, "robot")
+        store.get("depth")        # None: reads as a dict
+        store.pop("depth")        # DatastoreWriteError naming store_data
+    """
+
+    __slots__ = ("_pages", "queue", "role")
+
+    def __init__(
+        self, pages: Dict[DataKey, Page], role: str, queue: Optional[TaskQueue] = None
+    ) -> None:
+        self._pages = pages
+        self.role = role
+        self.queue = queue  # its owner_thread is the node's thread once the node runs
+
+    def __getitem__(self, key: DataKey) -> Page:
+        return self._pages[key]
+
+    def __contains__(self, key: object) -> bool:
+        return key in self._pages
+
+    def __iter__(self) -> Iterator[DataKey]:
+        return iter(self._pages)
+
+    def __len__(self) -> int:
+        return len(self._pages)
+
+    def __repr__(self) -> str:
+        return repr(self._pages)
+
+    def copy(self) -> Dict[DataKey, Page]:
+        """A plain dict of the pages now, the caller's own to change."""
+        return dict(self._pages)
+
+    def _refuse(self, what: str, key: Any = None) -> NoReturn:
+        """Raise the error for ``what``, said at the student's line."""
+        name = "key" if key is None else repr(key)
+        if self.queue is not None and threading.get_ident() == self.queue.owner_thread:
+            how = (
+                f"call self.store_data({name}, value), or return "
+                f"self.store_data_task({name}, value) from a handler"
+            )
+        else:  # a loop's thread, or before the node runs
+            how = (
+                f"call self.store_data({name}, value); from a loop's thread it is also the "
+                "thread-safe way, as it hands the page to the node's thread"
+            )
+        raise DatastoreWriteError(
+            f"Only node {self.role!r} writes its datastore, so {what} at "
+            f"{caller_location()} was refused: the node keeps a Page (data, time, origin) "
+            f"under each key and tells the key's handlers. To store a value, {how}. "
+            f"Read it back with self.get_data({name})."
+        )
+
+    def __setitem__(self, key: DataKey, value: Page) -> None:
+        self._refuse(f"datastore[{key!r}] = value", key)
+
+    def __delitem__(self, key: DataKey) -> None:
+        self._refuse(f"del datastore[{key!r}]", key)
+
+    def __ior__(self, other: Any) -> Any:
+        self._refuse("datastore |= other")
+
+    def update(self, *args: Any, **kwargs: Any) -> None:
+        """Refused: the node alone writes its datastore."""
+        self._refuse("datastore.update()")
+
+    def pop(self, *args: Any, **kwargs: Any) -> Any:
+        """Refused: the node alone writes its datastore."""
+        self._refuse("datastore.pop()", args[0] if args else None)
+
+    def popitem(self, *args: Any, **kwargs: Any) -> Any:
+        """Refused: the node alone writes its datastore."""
+        self._refuse("datastore.popitem()")
+
+    def clear(self, *args: Any, **kwargs: Any) -> None:
+        """Refused: the node alone writes its datastore."""
+        self._refuse("datastore.clear()")
+
+    def setdefault(self, *args: Any, **kwargs: Any) -> Any:
+        """Refused: the node alone writes its datastore."""
+        self._refuse("datastore.setdefault()", args[0] if args else None)
+
+    def __reduce__(self) -> Tuple[Any, ...]:
+        # copy.copy, deepcopy and pickle: a copy is a plain dict, the copier's own.
+        return (dict, (dict(self._pages),))
