@@ -7,6 +7,8 @@ import io
 import os
 import re
 import shutil
+import subprocess
+import sys
 import tempfile
 import textwrap
 import unittest
@@ -269,6 +271,31 @@ class ScriptTest(unittest.TestCase):
         """)
         config = config_from_script(path)
         self.assertEqual(config.roles(), ["robot"])
+
+    def test_a_drawn_runner_is_not_said_to_have_never_run(self) -> None:
+        # At exit SNR names a runner a program built and never ran (checks/runner_checks.py);
+        # a runner the graph tool stopped, or read from a name, did run as far as it matters.
+        for body in [
+            "import sys, snr\nsnr.CliRunner({'robot': [snr.TimeoutLoopFactory(seconds=60)]},"
+            " sys.argv).run()\n",
+            "import sys, snr\nrunner = snr.CliRunner({'robot': [snr.TimeoutLoopFactory()]},"
+            " sys.argv)\nconfig = runner.config\n",
+        ]:
+            with self.subTest(body=body):
+                path = self.script(body)
+                code = (
+                    "import sys\nfrom snr.extras.graph.script import config_from_script\n"
+                    "print(config_from_script(sys.argv[1]).roles())\n"
+                )
+                done = subprocess.run(
+                    [sys.executable, "-c", code, path],
+                    capture_output=True,
+                    text=True,
+                    timeout=30,
+                    check=False,
+                )
+                self.assertEqual((done.returncode, done.stdout), (0, "['robot']\n"), done.stderr)
+                self.assertNotIn("never ran", done.stderr)
 
     def test_keys_are_found_in_the_classes_of_the_script_itself(self) -> None:
         # The script runs as __main__, which is not the module Python would search.

@@ -26,6 +26,7 @@ import sys
 from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from snr.core import Config, Node
+from snr.core.checks.runner_checks import runner_ran
 from snr.core.runners import CliRunner, MultiProcRunner, SynchronousRunner, TestRunner
 from snr.prelude import AbstractConfig, AbstractFactory, ConfigError
 
@@ -47,6 +48,7 @@ class _Captured(BaseException):
 
 
 def _capture(self: Any) -> None:
+    runner_ran(self)  # it was asked to run: nothing to say about it at exit
     config = getattr(self, "config", None)
     if not isinstance(config, AbstractConfig):  # a Node keeps it too; runners always
         raise ConfigError("An SNR runner started without a config.")
@@ -74,6 +76,9 @@ def config_from_script(path: str, argv: Sequence[str] = ()) -> AbstractConfig:
         Node.loop = _capture  # type: ignore[method-assign]
         try:
             names = runpy.run_path(path, run_name="__main__")
+            for value in names.values():  # a runner built and left for us to read
+                if isinstance(value, _RUNNERS):
+                    runner_ran(value)
         except _Captured as captured:
             return captured.config
         except SystemExit as stop:
