@@ -3,10 +3,12 @@
 from __future__ import annotations
 
 import contextlib
+import gc
 import os
 import socket
 import sys
 import time
+import unittest
 from typing import Any, Callable, Dict, Iterator, List, Optional, Sequence, Tuple, TypeVar
 
 from snr import (
@@ -71,6 +73,24 @@ def catches_signal(pid: int, signum: int, timeout_s: float = 10.0) -> Optional[b
         if time.monotonic() > deadline:
             return False
         time.sleep(0.005)
+
+
+def settle_the_heap(test: unittest.TestCase) -> None:
+    """Collect, then keep what earlier tests left out of later collections, for ``test``.
+
+    In one long run (``python -m unittest discover``) earlier tests leave a big heap; a
+    full collection over it while a test measures CPU, or while a loop allocates a page
+    every pass, holds the GIL for many milliseconds. ``gc.freeze`` keeps those objects
+    out of collections until the test ends.
+
+    Example::
+
+        def setUp(self) -> None:
+            settle_the_heap(self)
+    """
+    gc.collect()
+    gc.freeze()
+    test.addCleanup(gc.unfreeze)
 
 
 def free_port() -> int:

@@ -32,6 +32,7 @@ from tests.helpers import (
     RecorderFactory,
     StopWhenDrainedFactory,
     StopWhenTrueFactory,
+    settle_the_heap,
 )
 from tests.quiet import capture_test_logs
 
@@ -313,6 +314,9 @@ class TestLifeCycle(SNRTestCase):
         self.assertIn("self.schedule", str(errors[0]))
 
     def test_idle_node_does_not_spin(self) -> None:
+        settle_the_heap(self)  # no collection of earlier tests' objects in the window
+        # The first node of a class reads its source once (DEBUG class checks): not idling.
+        Node("test", self.get_config([TickerFactory(rate=4)]))
         node = Node("test", self.get_config([TickerFactory(rate=4)]))
         thread = threading.Thread(target=node.loop)
         before = resource.getrusage(resource.RUSAGE_SELF)
@@ -323,7 +327,8 @@ class TestLifeCycle(SNRTestCase):
         thread.join(5)
         after = resource.getrusage(resource.RUSAGE_SELF)
         cpu = (after.ru_utime - before.ru_utime) + (after.ru_stime - before.ru_stime)
-        self.assertLess(cpu / (time.monotonic() - wall), 0.02, f"{cpu:.3f} s CPU")
+        # Catches a spin (a whole core); the process also holds other tests' threads.
+        self.assertLess(cpu / (time.monotonic() - wall), 0.10, f"{cpu:.3f} s CPU")
 
     def test_a_node_waits_on_one_idle_waiter_the_first_comms_to_ask(self) -> None:
         class Waiter:
