@@ -32,8 +32,22 @@ import threading
 import time
 import traceback
 import unittest
+import warnings
 from pathlib import Path
-from typing import Any, Callable, Dict, Iterable, List, NamedTuple, Optional, Sequence, Tuple
+from typing import (
+    Any,
+    Callable,
+    Dict,
+    Iterable,
+    List,
+    NamedTuple,
+    Optional,
+    Sequence,
+    TextIO,
+    Tuple,
+    Type,
+    Union,
+)
 from unittest import mock
 
 import snr
@@ -119,13 +133,14 @@ def run_program(
     argv: Sequence[str] = ("robot.py", "robot"),
     tune: Callable[[AbstractNode], None] = lambda node: None,
     done: Optional[Callable[[str], bool]] = None,
+    bound_s: float = BOUND_S,
 ) -> Tuple[List[str], int]:
     """Run ``source`` as ``python robot.py robot`` would; its output lines and exit status.
 
     ``argv`` is the command line (``python`` left out); ``tune(node)`` runs as
     the program's `TimeoutLoopFactory` builds its loop, to cut a node's hint
     times short; ``done(output)``, if given, tells that loop when to end the
-    node instead of ``wanted``.
+    node instead of ``wanted``; the node runs at most ``bound_s`` seconds.
     """
     folder = tempfile.mkdtemp(prefix="snr-student-")
     path = os.path.join(folder, "robot.py")
@@ -152,10 +167,15 @@ def run_program(
             stack.enter_context(contextlib.redirect_stdout(capture))
             stack.enter_context(contextlib.redirect_stderr(capture))
             stack.enter_context(mock.patch.object(sys, "argv", list(argv)))
+            # Warnings printed as `python robot.py` prints them, whichever runner runs the
+            # tests (pytest would otherwise collect them for its summary).
+            stack.enter_context(warnings.catch_warnings())
+            warnings.simplefilter("default")
+            warnings.showwarning = _print_warning
             # As `python robot.py`: sys.argv[0] stays as typed (runpy would make it the path).
             stack.enter_context(mock.patch.object(runpy, "_ModifiedArgv0", _ArgvAsTyped))
             stack.enter_context(
-                mock.patch.object(snr, "TimeoutLoopFactory", fast_timeout(seen_all, tune))
+                mock.patch.object(snr, "TimeoutLoopFactory", fast_timeout(seen_all, tune, bound_s))
             )
             try:
                 runpy.run_path(path, run_name="__main__")
@@ -220,14 +240,28 @@ class _ArgvAsTyped(contextlib.nullcontext):  # type: ignore[type-arg]
         super().__init__()
 
 
+def _print_warning(
+    message: Union[Warning, str],
+    category: Type[Warning],
+    filename: str,
+    lineno: int,
+    file: Optional[TextIO] = None,
+    line: Optional[str] = None,
+) -> None:
+    """What Python's own `warnings.showwarning` does: the warning on stderr."""
+    sys.stderr.write(warnings.formatwarning(message, category, filename, lineno, line))
+
+
 def fast_timeout(
-    done: Callable[[], bool], tune: Callable[[AbstractNode], None] = lambda node: None
+    done: Callable[[], bool],
+    tune: Callable[[AbstractNode], None] = lambda node: None,
+    bound_s: float = BOUND_S,
 ) -> type:
-    """A TimeoutLoopFactory whose loop ends the node once ``done()`` (at most BOUND_S)."""
+    """A TimeoutLoopFactory whose loop ends the node once ``done()`` (at most ``bound_s``)."""
 
     class ExpectingTimeoutLoop(TimeoutLoop):
         def loop(self) -> None:
-            deadline = time.monotonic() + BOUND_S
+            deadline = time.monotonic() + bound_s
             # The node's own wiring check runs 3 s after start, when pages have
             # been flowing: run it once the first page is in (programs that
             # store nothing wait 0.15 s).

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import math
 import time
+import warnings
 from dataclasses import dataclass
 from typing import Any
 
@@ -64,6 +65,35 @@ class Page(JsonDataclass):
             return self.to_json()
         except (TypeError, ValueError, OverflowError, RecursionError) as error:
             raise not_serializable_error(self.key, self.data) from error
+
+    def __bool__(self) -> bool:
+        """Always True (a page exists); warns, once per line, when its data is false.
+
+        ``if page:`` tests that there is a page, never its value, so with data
+        ``False``, ``0`` or ``[]`` it is still true: the robot acts on a value
+        it never read. Python warns the same way for an XML element. The
+        warning names both fixes; to test for a page, ``is not None`` is the
+        clear way, and it says nothing.
+
+        Example::
+
+            page = self.get_page("obstacle")
+            if page is not None and page.data:   # a page was stored, and it says True
+                ...
+        """
+        try:
+            false_data = not self.data
+        except Exception:  # data with no single truth value (an array): nothing to say
+            return True
+        if false_data:
+            warnings.warn(
+                f"'if page:' is true for the page {self.key!r} although its data is "
+                f"{preview(self.data)}: a Page is always true. To test its value, write "
+                "'if page.data:' (in a handler: 'if task.val_list[0].data:'); to test "
+                "whether get_page found one, write 'if page is not None:'.",
+                stacklevel=2,
+            )
+        return True
 
     @classmethod
     def deserialize(cls, text: str) -> Page:
