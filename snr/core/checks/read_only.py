@@ -1,0 +1,158 @@
+"""Read-only page data (DEBUG and TEST): a page's list or dict cannot be changed in place.
+
+A page's data is one object, shared by every handler of its key, the
+datastore and whoever stored it. A handler that appends to
+``task.val_list[0].data`` would change the page for all of them, in silence.
+So in DEBUG and TEST modes the node stores a read-only copy of the data:
+lists become `ReadOnlyList`, dicts `ReadOnlyDict`, nested ones too (tuples
+holding them are rebuilt). Both are subclasses, so they still equal, print,
+``isinstance``-check and serialise as the plain list or dict; only their
+changing methods refuse, at the student's line, with the fix: copy it first.
+
+Why once, at store, and not a copy per handler: ``docs/performance.md``,
+"Page data that cannot be changed in place". DEPLOYED passes data as it is: a
+program that ran in DEBUG without tripping this does not change page data.
+
+Other objects (a set, a NumPy array, a class of the student's) are passed as
+they are: JSON pages hold only lists and dicts.
+
+Example::
+
+    data = freeze([1.0, 2.0], "scan")
+    data == [1.0, 2.0]      # True
+    data.append(3.0)        # TypeError: The data of page 'scan' is read-only ...
+    mine = list(data)       # a copy of your own: change it, store it
+"""
+
+from __future__ import annotations
+
+import copy
+from typing import Any, Callable, Dict, Iterable, List, NoReturn, Tuple
+
+from snr.prelude import DataKey
+
+__all__ = ["ReadOnlyDict", "ReadOnlyList", "freeze"]
+
+# Types whose values cannot be changed in place: passed as they are.
+_IMMUTABLE = frozenset({int, float, str, bool, bytes, type(None), complex})
+
+
+def _refusing(kind: str, what: str, instead: str = "") -> Callable[..., NoReturn]:
+    """A method that refuses ``what`` on a read-only ``kind``, saying to copy."""
+    copy_call = "list" if kind == "list" else "dict"
+
+    def refuse(self: Any, *args: Any, **kwargs: Any) -> NoReturn:
+        key = self.key
+        raise TypeError(
+            f"The data of page {key!r} is read-only: {what} would change it for every "
+            f"handler of {key!r} and for the datastore, which all share this one {kind}. "
+            f"{instead}{'Otherwise c' if instead else 'C'}opy it and change the copy: "
+            f"mine = {copy_call}(task.val_list[0].data) in a handler, or "
+            f"mine = {copy_call}(self.get_data({key!r})); "
+            f"store_data({key!r}, mine) then shares it. (Page data is read-only in DEBUG "
+            "and TEST modes.)"
+        )
+
+    refuse.__doc__ = f"Refused: {what} would change shared page data."
+    return refuse
+
+
+class ReadOnlyList(List[Any]):
+    """A page's list, read-only: it equals and reads as a list; changing it raises.
+
+    Example::
+
+        data = ReadOnlyList([1.0, 2.0], "scan")
+        data[0], len(data), data == [1.0, 2.0]   # 1.0, 2, True
+        data.append(3.0)   # TypeError naming 'scan' and how to copy it
+    """
+
+    __slots__ = ("key",)
+
+    def __init__(self, items: Iterable[Any] = (), key: DataKey = "") -> None:
+        super().__init__(items)
+        self.key = key
+
+    append = _refusing("list", ".append()")
+    extend = _refusing("list", ".extend()")
+    insert = _refusing("list", ".insert()")
+    pop = _refusing("list", ".pop()")
+    remove = _refusing("list", ".remove()")
+    clear = _refusing("list", ".clear()")
+    sort = _refusing("list", ".sort()", "sorted(data) gives a sorted copy. ")
+    reverse = _refusing("list", ".reverse()", "data[::-1] gives a reversed copy. ")
+    __setitem__ = _refusing("list", "setting an item")
+    __delitem__ = _refusing("list", "del")
+    __iadd__ = _refusing("list", "+=")
+    __imul__ = _refusing("list", "*=")
+
+    def __reduce__(self) -> Tuple[Any, ...]:
+        """Pickled and copied as a plain list: a copy is the student's own to change."""
+        return (list, (list(self),))
+
+    def __deepcopy__(self, memo: Dict[int, Any]) -> List[Any]:
+        """``copy.deepcopy(data)``: a plain list, its items deep-copied."""
+        return [copy.deepcopy(item, memo) for item in self]
+
+
+class ReadOnlyDict(Dict[Any, Any]):
+    """A page's dict, read-only: it equals and reads as a dict; changing it raises.
+
+    Example::
+
+        data = ReadOnlyDict({"x": 1.0}, "pose")
+        data["x"], data == {"x": 1.0}    # 1.0, True
+        data["y"] = 2.0   # TypeError naming 'pose' and how to copy it
+    """
+
+    __slots__ = ("key",)
+
+    def __init__(self, items: Any = (), key: DataKey = "") -> None:
+        super().__init__(items)
+        self.key = key
+
+    update = _refusing("dict", ".update()")
+    pop = _refusing("dict", ".pop()")
+    popitem = _refusing("dict", ".popitem()")
+    clear = _refusing("dict", ".clear()")
+    setdefault = _refusing("dict", ".setdefault()")
+    __setitem__ = _refusing("dict", "setting an item")
+    __delitem__ = _refusing("dict", "del")
+    __ior__ = _refusing("dict", "|=")
+
+    def __reduce__(self) -> Tuple[Any, ...]:
+        """Pickled and copied as a plain dict: a copy is the student's own to change."""
+        return (dict, (dict(self),))
+
+    def __deepcopy__(self, memo: Dict[int, Any]) -> Dict[Any, Any]:
+        """``copy.deepcopy(data)``: a plain dict, its values deep-copied."""
+        return {key: copy.deepcopy(value, memo) for key, value in self.items()}
+
+
+def freeze(data: Any, key: DataKey) -> Any:
+    """``data`` with every list and dict in it read-only (a copy), for page ``key``.
+
+    Values that cannot change (numbers, strings, None) and objects that are not
+    lists, dicts or tuples come back as they are. Nested values' types are
+    checked in C first (``set(map(type, ...))``), so a flat list of numbers
+    costs one copy.
+
+    Example::
+
+        freeze({"pose": [1.0, 2.0]}, "robot")   # ReadOnlyDict({'pose': ReadOnlyList([1.0, 2.0])})
+        freeze(3.2, "depth")                    # 3.2
+    """
+    kind = type(data)
+    if kind in _IMMUTABLE:
+        return data
+    if kind is list or kind is ReadOnlyList:
+        if set(map(type, data)) <= _IMMUTABLE:
+            return ReadOnlyList(data, key)
+        return ReadOnlyList([freeze(item, key) for item in data], key)
+    if kind is dict or kind is ReadOnlyDict:
+        if set(map(type, data.values())) <= _IMMUTABLE:
+            return ReadOnlyDict(data, key)
+        return ReadOnlyDict({k: freeze(v, key) for k, v in data.items()}, key)
+    if kind is tuple and not set(map(type, data)) <= _IMMUTABLE:
+        return tuple(freeze(item, key) for item in data)
+    return data
