@@ -119,7 +119,7 @@ class RecorderEndpoint(Endpoint):
                 recording.pages_skipped,
             )
 
-    def _open(self) -> RecordingFile:
+    def _open(self) -> PageWriter:
         recording = self.recording
         if recording.file is None and not recording.started:
             recording.open_file()
@@ -164,10 +164,6 @@ class RecorderEndpoint(Endpoint):
             "Did not record a page: %s Recording goes on; later pages like this one are counted.",
             text,
         )
-
-
-RecordingFile = Union[_LinesFile, PageWriter]
-"""A recording open for writing: ``write(page, line)`` and ``close()``."""
 
 
 def _check_fields(page: Page) -> None:
@@ -266,20 +262,20 @@ class RecorderEndpointFactory(EndpointFactory):
         call = f"RecorderEndpointFactory({self.filename!r}"
         if not self.keys or not all(isinstance(k, str) and k for k in self.keys):
             raise ConfigError(
-                f"{call}, {keys!r}): keys must be a list "
-                "of data keys to record, e.g. ['depth_m', 'heading_deg']."
+                f"{call}, {keys!r}): keys must be a list of data keys to record, "
+                "e.g. ['depth_m', 'heading_deg']."
             )
         if overwrite and append:
             raise ConfigError(
-                f"{call}): choose overwrite=True (replace "
-                "the file) or append=True (add to it), not both."
+                f"{call}): choose overwrite=True (replace the file) or append=True "
+                "(add to it), not both."
             )
         if file_format is None:
             file_format = format_of_name(self.filename)
         elif file_format not in FILE_FORMATS:
             raise ConfigError(
-                f"{call}, file_format={file_format!r}): choose "
-                f"one of {FILE_FORMATS}, or leave it out to go by the file's extension."
+                f"{call}, file_format={file_format!r}): choose one of {FILE_FORMATS}, "
+                "or leave it out to go by the file's extension."
             )
         self.file_format = file_format
         self.compression = "none"
@@ -293,8 +289,8 @@ class RecorderEndpointFactory(EndpointFactory):
             self.compression = compression
         if append and file_format == "mcap":
             raise ConfigError(
-                f"{call}): append=True works for JSON "
-                "lines only (an MCAP file ends with an index written when it closes). "
+                f"{call}): append=True works for JSON lines only (an MCAP file ends "
+                "with an index written when it closes). "
                 "Record each run to its own .mcap file, or append to a .jsonl file."
             )
         self.sync = sync
@@ -307,10 +303,10 @@ class RecorderEndpointFactory(EndpointFactory):
         self.pages_skipped = 0
         self.repeats: Optional[RepeatFilter] = None
         self.started = False
-        self.file: Optional[RecordingFile] = None  # open while the node runs, across reloads
+        self.file: Optional[PageWriter] = None  # open while the node runs, across reloads
         self.endpoint: Optional[RecorderEndpoint] = None
 
-    def open_file(self) -> RecordingFile:
+    def open_file(self) -> PageWriter:
         """Open the recording (the first time as chosen above), or give the one already open.
 
         After a reload the new endpoint gets the file still open. A JSON-lines

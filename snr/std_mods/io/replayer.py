@@ -465,11 +465,10 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
         if self.options.fast:
             return 0.0
         now = time.monotonic()
-        if self._due is None:  # the first page (also after a reload): store it now
+        if self._due is None:  # the first page (also after a reload): stored now
             self._due = now
-            if item.timed:
-                self._offsets[item.page.origin] = now - item.page.created_at_s
-            return 0.0
+            if not item.timed:
+                return 0.0
         self._due = self._next_due(item, self._due)
         return self._due - now
 
@@ -481,14 +480,12 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
                 "no time",
                 "%s:%d: the page under %r has no created_at_s: stored right after the "
                 "previous page.",
-                item.line,
-                page.key,
+                item,
             )
             return previous
         offset = self._offsets.get(page.origin)
-        if offset is None:  # the first page from this origin: its clock starts here
-            due = previous
-        else:
+        due = previous  # the first page from this origin: its clock starts here
+        if offset is not None:
             gap = page.created_at_s + offset - previous
             if 0.0 <= gap <= max_gap:
                 return previous + gap
@@ -499,8 +496,7 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
                     "gap",
                     "%s:%d: the page under %r was created %s s after the one before it: "
                     "waiting %g s instead (max_gap_s).",
-                    item.line,
-                    page.key,
+                    item,
                     _seconds(gap),
                     max_gap,
                 )
@@ -510,23 +506,23 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
                     "back",
                     "%s:%d: the time of the page under %r goes back by %s s: stored right "
                     "after the previous page.",
-                    item.line,
-                    page.key,
+                    item,
                     _seconds(-gap) if gap == gap else "an unknown number of",
                 )
-                due = previous
         self._offsets[page.origin] = due - page.created_at_s  # follow the clock from here
         return due
 
-    def _retimed(self, kind: str, msg: str, line: int, *args: object) -> None:
+    def _retimed(self, kind: str, msg: str, item: RecordedPage, *args: object) -> None:
         self.options.retimed += 1
+        filename = self.options.filename
         self._timing.report(
             kind,
-            f"Replay timing of {self.options.filename} ({kind})",
+            f"Replay timing of {filename} ({kind})",
             logging.WARNING,
             msg,
-            self.options.filename,
-            line,
+            filename,
+            item.line,
+            item.page.key,
             *args,
         )
 
