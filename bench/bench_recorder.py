@@ -44,7 +44,7 @@ from snr import (
 )
 from snr.extras.viz.mcap_files import McapPageWriter
 from snr.prelude.install import install_hint
-from snr.std_mods.io.page_lines import page_from_line, page_to_line
+from snr.std_mods.codec import page_from_line, page_to_line
 
 SAMPLE = Page("imu", {"ax": 0.01, "ay": -9.81, "az": 0.2, "ok": True}, "urov", 1.7e9)
 

@@ -495,12 +495,6 @@ class TestChoosingTheBackend(BackendCase):
         default = codec.use_backend()
         self.assertEqual(default, "orjson" if "orjson" in BACKENDS else "json")
 
-    def test_old_import_paths_still_work(self) -> None:
-        from snr.std_mods.io import page_lines
-
-        for name in page_lines.__all__:
-            self.assertIs(getattr(page_lines, name), getattr(codec, name))
-
 
 if __name__ == "__main__":
     unittest.main()

@@ -1,13 +1,9 @@
 """Expectors: say which tasks a test expects, and fail when they don't happen.
 
-An expector counts the task ids it is told about (usually by an
-`ExpectorEndpoint` inside the node under test). Used as a context manager, it
-checks on exit that every expectation was met exactly, so a test fails with a
-precise message however the node stopped (thesis 5.2.3).
-
-Expectors are generic in the type of key they count: usually a task id, but
-any hashable key works, e.g. ``Expector[str]({"beep": 2})`` for a test that
-counts calls itself.
+An expector counts the keys it is told about (usually task ids, from an
+`ExpectorEndpoint` in the node under test; any hashable key works). Used as a
+context manager, it checks on exit that every expectation was met exactly,
+however the node stopped (thesis 5.2.3).
 """
 
 from __future__ import annotations
@@ -152,7 +148,7 @@ class Expector(Generic[K]):
         expectations: Mapping[K, int],
         testcase: Optional[unittest.TestCase] = None,
     ) -> None:
-        self.expectations: Dict[K, int] = {k: n for k, n in expectations.items()}
+        self.expectations: Dict[K, int] = dict(expectations)
         self.counts: Dict[K, int] = {key: 0 for key in self.expectations}
         self.others: Dict[K, int] = {}
         self.testcase = testcase
@@ -167,13 +163,8 @@ class Expector(Generic[K]):
         with self._lock:
             if key in self.counts:
                 self.counts[key] += 1
-            else:
-                self._count_other(key)
-
-    def _count_other(self, key: K) -> None:
-        """Count a key not expected (call with the lock held)."""
-        if key in self.others or len(self.others) < self.MAX_OTHERS:
-            self.others[key] = self.others.get(key, 0) + 1
+            elif key in self.others or len(self.others) < self.MAX_OTHERS:
+                self.others[key] = self.others.get(key, 0) + 1
 
     def is_satisfied(self) -> bool:
         """True once every expected count has been reached."""
@@ -268,12 +259,10 @@ class OrderedExpector(Expector[K]):
         self.seen: List[K] = []
 
     def call(self, key: K) -> None:
-        with self._lock:
-            if key in self.counts:
-                self.counts[key] += 1
+        super().call(key)
+        if key in self.counts:
+            with self._lock:
                 self.seen.append(key)
-            else:
-                self._count_other(key)
 
     def is_satisfied(self) -> bool:
         with self._lock:
@@ -289,12 +278,11 @@ class OrderedExpector(Expector[K]):
                         f"at position {i}: expected {format_key(want)}, saw {format_key(got)} "
                         f"(expected order: {_keys(self.order)}; seen order: {_keys(self.seen)})"
                     ]
-            if len(self.seen) < len(self.order):
-                missing = ", ".join(format_key(k) for k in self.order[len(self.seen) :])
-                closest = self._closest_seen(self.order[len(self.seen)])
-                return [f"missing at the end: {missing}{closest}"]
-            extra = ", ".join(format_key(k) for k in self.seen[len(self.order) :])
-            return [f"unexpected extra at the end: {extra}"]
+            n = len(self.seen)
+            if n < len(self.order):
+                closest = self._closest_seen(self.order[n])
+                return [f"missing at the end: {_keys(self.order[n:])}{closest}"]
+            return [f"unexpected extra at the end: {_keys(self.seen[len(self.order) :])}"]
 
 
 class MultiProcExpector(Expector[K]):
@@ -325,9 +313,8 @@ class MultiProcExpector(Expector[K]):
             # not the other way round; MultiProcRunner spawns when the test
             # process runs threads (a forked child could deadlock).
             context = multiprocessing.get_context("spawn")
-        ctx = context
         self._keys: List[K] = list(self.expectations)
-        self._shared: Any = ctx.Array("l", len(self._keys))
+        self._shared: Any = context.Array("l", len(self._keys))
 
     def call(self, key: K) -> None:
         if key in self.expectations:
@@ -335,8 +322,7 @@ class MultiProcExpector(Expector[K]):
             with self._shared.get_lock():
                 self._shared[index] += 1
         else:
-            with self._lock:  # seen only in this process, unlike the counts
-                self._count_other(key)
+            super().call(key)  # seen only in this process, unlike the counts
 
     def _sync(self) -> None:
         with self._shared.get_lock():

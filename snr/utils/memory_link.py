@@ -1,17 +1,10 @@
 """An in-memory connection pair: link two nodes of one process with no port and no process.
 
-Comms logic (forwarding by key, hellos, beats, back-pressure, a peer that goes
-away) is the same whatever carries the bytes. To test it, two nodes running
-on threads of the test's process can be linked by a `MemoryLinkPair` instead
-of a `SocketsPair`: no port to pick, nothing that another program can take,
-no child process to start, and `MemoryLinkPair.cut` loses the peer on demand.
-
-A pair is the pipe component (`PipeLoopFactory`) on both ends of one
-``multiprocessing.Pipe()``, a connected pair of local stream sockets that
-lives in the kernel's memory only (no address, no network). The node's I/O
-loop serves it exactly as it serves a TCP connection: the code under test is
-the real link code, not a stand-in. `memory_transport_pair` gives the two
-raw ends, for a `CommsLoop` of your own.
+A `MemoryLinkPair` is the pipe component (`PipeLoopFactory`) on both ends of
+one ``multiprocessing.Pipe()``, a pair of local stream sockets with no
+address: the node's I/O loop serves it as it serves a TCP connection, so a
+test runs the real link code, with no port to pick and no child process.
+`memory_transport_pair` gives the two raw ends, for a `CommsLoop` of your own.
 
 Example::
 
@@ -19,9 +12,6 @@ Example::
     config = Config({"a": [ticker, pair.first("tick")], "b": [pair.second(), counter]})
     # run Node("a", config) and Node("b", config) on two threads; pages under
     # "tick" stored on "a" are stored on "b" too. pair.cut() ends the link.
-
-Like a pipe, a memory link cannot reconnect: once cut or closed, each side
-logs it and its loop stops; the nodes keep running.
 """
 
 from __future__ import annotations
@@ -118,17 +108,7 @@ class MemoryLinkFactory(PipeLoopFactory):
         {"a": [pair.first("ping")], "b": [pair.second("pong")]}
     """
 
-    def __init__(
-        self,
-        connection: Connection,
-        keys: Keys,
-        name: str,
-        max_backlog_bytes: int,
-        dead_after_s: float,
-        peer: str,
-    ) -> None:
-        super().__init__(connection, keys, name, max_backlog_bytes, dead_after_s, peer)
-        self._taken = False
+    _taken = False
 
     def take_transport(self) -> Connection:
         """The end this factory holds, once.

@@ -167,9 +167,7 @@ class SNRTestCase(unittest.TestCase):
         import shutil  # here, not at the top: most tests need no files
         import tempfile
 
-        if isinstance(contents_or_overwrite, bool):
-            overwrite = overwrite or contents_or_overwrite
-        elif contents_or_overwrite is not None:
+        if isinstance(contents_or_overwrite, str):  # a bool is overwrite, which changes nothing
             if contents is not None:
                 raise TypeError("temp_file() got the contents twice, by position and keyword.")
             contents = contents_or_overwrite

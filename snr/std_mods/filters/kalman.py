@@ -1,12 +1,9 @@
 """A one-dimensional Kalman filter endpoint and factory.
 
-The filter estimates a single value (a depth, a temperature) that changes
-slowly, from noisy measurements of it. Each new measurement moves the
-estimate towards itself by the *Kalman gain*: a lot when the estimate is
-uncertain, a little when the sensor is known to be noisy.
-
-Like the moving average, the filter's state (estimate and variance) is kept
-on the factory, so it survives a hot reload of this module.
+The filter estimates a value that changes slowly (a depth, a temperature)
+from noisy measurements: each one moves the estimate towards itself by the
+*Kalman gain*, a lot when the estimate is uncertain, a little when the sensor
+is noisy. Its state is kept on the factory, so it survives a hot reload.
 """
 
 from __future__ import annotations

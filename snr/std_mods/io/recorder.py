@@ -1,17 +1,10 @@
 """`RecorderEndpointFactory`: write pages to disk as they are stored.
 
-The file is in the JSON-lines page format (``snr.std_mods.codec``): a header line,
-then one page per line; or, for a file named ``*.mcap``, in MCAP
-(``snr.extras.viz.mcap_files``, found through `recording_formats`), one JSON
-message per page. Each page is
-flushed as soon as it is written, so a process that is killed loses at most
-the page it was writing; replay the file with `ReplayerLoopFactory` or read
-it with `PageReader`.
-
-A recording is never replaced without being asked: when the file already
-holds a recording, the previous one is kept under a new name (its time in
-the name) and the new run is written to the file named. Pages the recorder
-cannot write are logged and skipped; the node goes on.
+JSON lines (``snr.std_mods.codec``: a header line, then a page per line), or
+MCAP for a ``*.mcap`` file (``snr.extras.viz``, found through
+`recording_formats`). Each page is flushed as it is written, so a killed
+process loses at most that page. Replay the file with `ReplayerLoopFactory`
+or read it with `PageReader`.
 """
 
 from __future__ import annotations
@@ -25,16 +18,7 @@ from typing import IO, Any, List, Optional, Sequence, Tuple, Union
 
 from snr.core import Endpoint, EndpointFactory
 from snr.core.logs import RepeatFilter
-from snr.prelude import (
-    AbstractNode,
-    ConfigError,
-    DataKey,
-    Page,
-    SomeTasks,
-    Task,
-    TaskId,
-    TaskType,
-)
+from snr.prelude import AbstractNode, ConfigError, DataKey, Page, SomeTasks, Task, TaskId, TaskType
 from snr.std_mods.codec import PathLike, decode_line, header_line, is_header, page_to_line
 from snr.std_mods.io import recording_formats
 from snr.std_mods.io.recording_formats import PageWriter, format_of_bytes, format_of_name
@@ -52,21 +36,16 @@ class _LinesFile:
     """A JSON-lines recording open for writing: a line per page, flushed at once."""
 
     def __init__(self, file: IO[str], sync: bool) -> None:
-        self.file = file
-        self.sync = sync
+        self.file, self.sync = file, sync
 
-    def write(self, page: Page, line: str) -> None:
-        self.file.write(line + "\n")  # one write per page, so a kill cuts one line at most
+    def write(self, page: Page, line: Optional[str] = None) -> None:
+        self.file.write(f"{line}\n")  # one write per page, so a kill cuts one line at most
         self.file.flush()
         if self.sync:
             os.fsync(self.file.fileno())
 
     def close(self) -> None:
         self.file.close()
-
-
-RecordingFile = Union[_LinesFile, PageWriter]
-"""A recording open for writing: ``write(page, line)`` and ``close()``."""
 
 
 class RecorderEndpoint(Endpoint):
@@ -83,10 +62,9 @@ class RecorderEndpoint(Endpoint):
     def __init__(self, factory: RecorderEndpointFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
         self.recording = factory
-        # The newest endpoint of this factory: a reload builds the new one before
-        # the old one terminates, so the old one knows to leave the file open.
+        # A reload builds the new endpoint before the old one terminates: the
+        # old one then knows to leave the file open.
         factory.endpoint = self
-        self._file: Optional[RecordingFile] = None
         self._write_failed = False
         if factory.repeats is None:  # on the factory: a reload does not repeat the messages
             factory.repeats = RepeatFilter(self.log, first=1)
@@ -104,7 +82,7 @@ class RecorderEndpoint(Endpoint):
         hold, nesting too deep, a time that is not a number) is logged with
         its key and skipped, whatever the error: recording goes on.
         """
-        page = task.page()
+        page, recording = task.page(), self.recording
         if page is None:
             self.warn("A store_page task for %r carries %r, not a Page", task.name, task.val_list)
             return None
@@ -114,77 +92,74 @@ class RecorderEndpoint(Endpoint):
         except Exception as error:  # never take the node down over one page
             self._skip(page, error)
             return None
-        self._write(page, line)
+        try:
+            self._open().write(page, line)
+            recording.pages_written += 1
+        except OSError as error:
+            recording.pages_skipped += 1
+            if not self._write_failed:  # a full disk would fail every page: say it once
+                self._write_failed = True
+                self.err(
+                    "Cannot write to recording %s: %s. Pages are not being recorded (free "
+                    "some disk space or choose another file); further failures are counted.",
+                    recording.path,
+                    error,
+                )
         return None
 
     def terminate(self) -> None:
         """Close the file (every page is already flushed), unless a reload goes on with it."""
         self._repeats.flush()  # the counts of skipped pages not yet logged
-        self._file = None
-        if self.recording.endpoint is not self:
-            return  # reloaded: the new endpoint writes on to the open file
-        if self.recording.close_file(self.log):
+        recording = self.recording
+        if recording.endpoint is self and recording.close_file(self.log):
             self.info(
                 "Recorded %d pages to %s (%d skipped)",
-                self.recording.pages_written,
-                self.recording.path,
-                self.recording.pages_skipped,
+                recording.pages_written,
+                recording.path,
+                recording.pages_skipped,
             )
 
-    # -- helpers ------------------------------------------------------------
-    def _open(self) -> RecordingFile:
-        if self._file is None:
-            first = not self.recording.started
-            self._file = self.recording.open_file()
-            if first:
-                self._say_where()
-        return self._file
+    def _open(self) -> PageWriter:
+        recording = self.recording
+        if recording.file is None and not recording.started:
+            recording.open_file()
+            self._say_where()
+        return recording.open_file()
 
     def _say_where(self) -> None:
-        recording = self.recording
+        recording, keys = self.recording, ", ".join(self.recording.keys)
         if recording.kept is not None:
             self.info(
                 "Recording %s to %s; the recording that was there is kept as %s",
-                ", ".join(recording.keys),
+                keys,
                 recording.path,
                 recording.kept,
             )
         elif recording.path != recording.filename:
             self.warn(
                 "Recording %s to %s: %s holds a recording that could not be renamed",
-                ", ".join(recording.keys),
+                keys,
                 recording.path,
                 recording.filename,
             )
         else:
             how = "appending" if recording.append else "writing"
-            if recording.file_format == "mcap":
-                how += " MCAP"
-            self.info("Recording %s to %s (%s)", ", ".join(recording.keys), recording.path, how)
-
-    def _write(self, page: Page, line: str) -> None:
-        try:
-            self._open().write(page, line)
-        except OSError as error:
-            self.recording.pages_skipped += 1
-            if not self._write_failed:  # a full disk would fail every page: say it once
-                self._write_failed = True
-                self.err(
-                    "Cannot write to recording %s: %s. Pages are not being recorded (free "
-                    "some disk space or choose another file); further failures are counted.",
-                    self.recording.path,
-                    error,
-                )
-            return
-        self.recording.pages_written += 1
+            how += " MCAP" if recording.file_format == "mcap" else ""
+            self.info("Recording %s to %s (%s)", keys, recording.path, how)
 
     def _skip(self, page: Page, error: Exception) -> None:
         self.recording.pages_skipped += 1
-        kind = (page.key, type(page.data).__name__, type(error).__name__)
-        text = str(error) if str(error).startswith("Cannot") else _describe(page, error)
+        data_type = type(page.data).__name__
+        if str(error).startswith("Cannot"):
+            text = str(error)
+        else:
+            why = (
+                str(error) if isinstance(error, ValueError) else f"{type(error).__name__}: {error}"
+            )
+            text = f"Cannot write the page stored under {page.key!r} to a recording: {why:.300}."
         self._repeats.report(
-            kind,
-            f"Pages under {page.key!r} not recorded ({type(page.data).__name__} data)",
+            (page.key, data_type, type(error).__name__),
+            f"Pages under {page.key!r} not recorded ({data_type} data)",
             logging.ERROR,
             "Did not record a page: %s Recording goes on; later pages like this one are counted.",
             text,
@@ -200,11 +175,6 @@ def _check_fields(page: Page) -> None:
         raise ValueError(f"its origin is {page.origin!r:.40}, not a string")
     if type(page.process) is not bool:
         raise ValueError(f"its process flag is {page.process!r:.40}, not True or False")
-
-
-def _describe(page: Page, error: Exception) -> str:
-    what = str(error) if isinstance(error, ValueError) else f"{type(error).__name__}: {error}"
-    return f"Cannot write the page stored under {page.key!r} to a recording: {what:.300}."
 
 
 def kept_name(filename: PathLike, when_s: float) -> str:
@@ -289,22 +259,38 @@ class RecorderEndpointFactory(EndpointFactory):
         super().__init__(sys.modules[__name__])
         self.filename = os.fspath(filename)
         self.keys: List[DataKey] = [keys] if isinstance(keys, str) else list(keys)
+        call = f"RecorderEndpointFactory({self.filename!r}"
         if not self.keys or not all(isinstance(k, str) and k for k in self.keys):
             raise ConfigError(
-                f"RecorderEndpointFactory({self.filename!r}, {keys!r}): keys must be a list "
-                "of data keys to record, e.g. ['depth_m', 'heading_deg']."
+                f"{call}, {keys!r}): keys must be a list of data keys to record, "
+                "e.g. ['depth_m', 'heading_deg']."
             )
         if overwrite and append:
             raise ConfigError(
-                f"RecorderEndpointFactory({self.filename!r}): choose overwrite=True (replace "
-                "the file) or append=True (add to it), not both."
+                f"{call}): choose overwrite=True (replace the file) or append=True "
+                "(add to it), not both."
             )
-        self.file_format = _choose_format(self.filename, file_format)
-        self.compression = _choose_compression(self.filename, self.file_format, compression)
-        if append and self.file_format == "mcap":
+        if file_format is None:
+            file_format = format_of_name(self.filename)
+        elif file_format not in FILE_FORMATS:
             raise ConfigError(
-                f"RecorderEndpointFactory({self.filename!r}): append=True works for JSON "
-                "lines only (an MCAP file ends with an index written when it closes). "
+                f"{call}, file_format={file_format!r}): choose one of {FILE_FORMATS}, "
+                "or leave it out to go by the file's extension."
+            )
+        self.file_format = file_format
+        self.compression = "none"
+        if compression is not None:
+            what = f"{call}, compression={compression!r})"
+            compressions = recording_formats.get("mcap", what).compressions
+            if file_format != "mcap" or compression not in compressions:
+                raise ConfigError(
+                    f"{what}: compression is for MCAP recordings, one of {compressions}."
+                )
+            self.compression = compression
+        if append and file_format == "mcap":
+            raise ConfigError(
+                f"{call}): append=True works for JSON lines only (an MCAP file ends "
+                "with an index written when it closes). "
                 "Record each run to its own .mcap file, or append to a .jsonl file."
             )
         self.sync = sync
@@ -317,10 +303,10 @@ class RecorderEndpointFactory(EndpointFactory):
         self.pages_skipped = 0
         self.repeats: Optional[RepeatFilter] = None
         self.started = False
-        self.file: Optional[RecordingFile] = None  # open while the node runs, across reloads
+        self.file: Optional[PageWriter] = None  # open while the node runs, across reloads
         self.endpoint: Optional[RecorderEndpoint] = None
 
-    def open_file(self) -> RecordingFile:
+    def open_file(self) -> PageWriter:
         """Open the recording (the first time as chosen above), or give the one already open.
 
         After a reload the new endpoint gets the file still open. A JSON-lines
@@ -333,8 +319,40 @@ class RecorderEndpointFactory(EndpointFactory):
                 needs a package that is not installed; the message names the
                 file and the fix.
         """
-        if self.file is None:
-            self.file = self._open_recording()
+        if self.file is not None:
+            return self.file
+        mcap = self.file_format == "mcap"
+        if mcap:  # before any file is made or renamed
+            what = f"{type(self).__name__}({self.filename!r})"
+            recording_format = recording_formats.get("mcap", what)
+            recording_format.require(what)
+            package = recording_format.compression_packages.get(self.compression)
+            if package is not None and not _installed(package):
+                raise ConfigError(
+                    f"{type(self).__name__}({self.filename!r}, compression="
+                    f"{self.compression!r}) needs the {package} package: "
+                    f"{recording_format.install_hint}, or leave compression out"
+                )
+        elif self.started:
+            self.file = _LinesFile(self._open("a"), self.sync)
+            return self.file
+        self.path, self.kept = self._choose_path()
+        file = self._open("wb" if mcap else "a" if self.append else "w")
+        try:
+            if mcap:
+                self.file = recording_format.writer(file, self.compression, sync=self.sync)
+            else:
+                if self.append and not _ends_with_newline(self.path):
+                    file.write("\n")  # a run cut short mid-line: keep its last line apart
+                file.write(header_line() + "\n")
+                file.flush()
+                self.file = _LinesFile(file, self.sync)
+        except Exception as error:
+            file.close()
+            if isinstance(error, OSError):
+                raise self._cannot_write(error) from error
+            raise
+        self.started = True
         return self.file
 
     def close_file(self, log: logging.Logger) -> bool:
@@ -351,60 +369,11 @@ class RecorderEndpointFactory(EndpointFactory):
             log.error("Could not finish the recording %s: %s", self.path, error)
         return True
 
-    def _open_recording(self) -> RecordingFile:
-        if self.started and self.file_format == "jsonl":
-            return _LinesFile(self._open(self.path, "a"), self.sync)
-        if self.file_format == "mcap":  # before any file is made or renamed
-            what = f"{type(self).__name__}({self.filename!r})"
-            recording_format = recording_formats.get(self.file_format, what)
-            recording_format.require(what)
-            package = recording_format.compression_packages.get(self.compression)
-            if package is not None and not _installed(package):
-                raise ConfigError(
-                    f"{type(self).__name__}({self.filename!r}, compression="
-                    f"{self.compression!r}) needs the {package} package: "
-                    f"{recording_format.install_hint}, or leave compression out"
-                )
-        self.path, self.kept = self._choose_path()
-        if self.file_format == "mcap":
-            recording: RecordingFile = self._open_mcap()
-        else:
-            recording = _LinesFile(self._open_lines(), self.sync)
-        self.started = True
-        return recording
-
-    def _open_mcap(self) -> PageWriter:
-        try:
-            file = open(self.path, "wb")  # noqa: SIM115 - closed by close_file
-        except OSError as error:
-            raise self._cannot_write(error) from error
-        try:
-            what = f"{type(self).__name__}({self.filename!r})"
-            recording_format = recording_formats.get(self.file_format, what)
-            return recording_format.writer(file, self.compression, sync=self.sync)
-        except ConfigError:
-            file.close()
-            raise
-        except OSError as error:
-            file.close()
-            raise self._cannot_write(error) from error
-
-    def _open_lines(self) -> IO[str]:
-        file = self._open(self.path, "a" if self.append else "w")
-        try:
-            if self.append and not _ends_with_newline(self.path):
-                file.write("\n")  # a run cut short mid-line: keep its last line apart
-            file.write(header_line() + "\n")
-            file.flush()
-        except OSError as error:
-            file.close()
-            raise self._cannot_write(error) from error
-        return file
-
-    def _open(self, path: str, mode: str) -> IO[str]:
-        try:
-            # Kept open between pages (closed in terminate), hence no `with`.
-            return open(path, mode, encoding="utf-8", newline="\n")
+    def _open(self, mode: str) -> IO[Any]:
+        try:  # kept open between pages (closed by close_file), hence no `with`
+            if "b" in mode:
+                return open(self.path, mode)
+            return open(self.path, mode, encoding="utf-8", newline="\n")
         except OSError as error:
             raise self._cannot_write(error) from error
 
@@ -451,31 +420,6 @@ def _installed(package: str) -> bool:
     return True
 
 
-def _choose_format(filename: str, file_format: Optional[str]) -> str:
-    """The format asked for, else the one the file's name says."""
-    if file_format is None:
-        return format_of_name(filename)
-    if file_format not in FILE_FORMATS:
-        raise ConfigError(
-            f"RecorderEndpointFactory({filename!r}, file_format={file_format!r}): choose "
-            f"one of {FILE_FORMATS}, or leave it out to go by the file's extension."
-        )
-    return file_format
-
-
-def _choose_compression(filename: str, file_format: str, compression: Optional[str]) -> str:
-    if compression is None:
-        return "none"
-    what = f"RecorderEndpointFactory({filename!r}, compression={compression!r})"
-    compressions = recording_formats.get("mcap", what).compressions
-    if file_format != "mcap" or compression not in compressions:
-        raise ConfigError(
-            f"RecorderEndpointFactory({filename!r}, compression={compression!r}): "
-            f"compression is for MCAP recordings, one of {compressions}."
-        )
-    return compression
-
-
 def _what_it_holds(path: str) -> str:
     """``"nothing"`` (no pages), ``"recording"`` or ``"other"``, from the file's start."""
     try:
@@ -488,11 +432,9 @@ def _what_it_holds(path: str) -> str:
     lines = [line for line in start.split(b"\n") if line.strip()]
     if not lines:
         return "nothing"
-    fields: Any
     try:
         fields = decode_line(lines[0])
-    except Exception:
-        # A first line cut short by the size limit, or not JSON at all.
+    except Exception:  # a first line cut short by the size limit, or not JSON at all
         return "recording" if len(lines) == 1 and len(start) == _PEEK_BYTES else "other"
     if not (is_header(fields) and fields.get("format") == "snr-pages") and "key" not in fields:
         return "other"
@@ -522,10 +464,8 @@ def _ends_with_newline(path: str) -> bool:
     """True for an empty file or one whose last byte is a newline."""
     try:
         with open(path, "rb") as file:
-            file.seek(0, os.SEEK_END)
-            if file.tell() == 0:
-                return True
-            file.seek(-1, os.SEEK_END)
-            return file.read(1) == b"\n"
+            return file.seek(0, os.SEEK_END) == 0 or (
+                file.seek(-1, os.SEEK_END) >= 0 and file.read(1) == b"\n"
+            )
     except OSError:
         return True

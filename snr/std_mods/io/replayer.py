@@ -1,15 +1,10 @@
 """Replay recordings: pages written by the recorder, or plain text lines.
 
-* `PageReader` reads a recording (format: ``snr.std_mods.codec``) back, page by page.
-* `ReplayerLoopFactory` stores those pages into a node again, with their
-  original spacing in time or as fast as possible.
-* `TextReader` / `TextReplayerFactory` do the same for a plain text file: one
-  page per line, e.g. a log of NMEA sentences from a GPS.
-
-Replay never stops on data: a malformed line is reported with its line
-number, counted and skipped, and the rest of the file is still replayed.
-Timestamps that make no sense (missing, far in the future, going back)
-are replaced by a bounded gap, with a warning naming the line.
+`PageReader` reads a recording back, page by page; `ReplayerLoopFactory`
+stores its pages into a node again, with their original spacing in time or
+as fast as possible. `TextReader` and `TextReplayerFactory` do the same for a
+text file, a page per line (e.g. a log of NMEA sentences from a GPS). A bad
+line is reported with its number and skipped; replay goes on.
 """
 
 from __future__ import annotations
@@ -50,13 +45,7 @@ from snr.prelude import (
     TaskType,
     WireFormatError,
 )
-from snr.std_mods.codec import (
-    PathLike,
-    check_header,
-    decode_line,
-    is_header,
-    page_from_fields,
-)
+from snr.std_mods.codec import PathLike, check_header, decode_line, is_header, page_from_fields
 from snr.std_mods.io import recording_formats
 
 __all__ = [
@@ -127,15 +116,6 @@ def _check_readable(filename: str, what: str) -> None:
         )
 
 
-def _format_of_file(filename: str) -> str:
-    """The format of a recording, from its first bytes: ``"jsonl"`` unless an extra's."""
-    try:
-        with open(filename, "rb") as file:
-            return recording_formats.format_of_bytes(file.read(16))
-    except OSError:
-        return "jsonl"
-
-
 class PageReader:
     """Reads the pages of a recording, JSON lines or MCAP, in order; iterate over it.
 
@@ -181,13 +161,22 @@ class PageReader:
         self._bad_line_numbers: List[int] = []
         # A corrupt file can hold thousands of bad lines: log the first few in full.
         self._repeats = RepeatFilter(_log, first=5)
-        self.is_mcap = _format_of_file(self.filename) == "mcap"
+        with open(self.filename, "rb") as file:
+            self.is_mcap = recording_formats.format_of_bytes(file.read(16)) == "mcap"
+            file.seek(0)
+            first = b"" if self.is_mcap else file.readline()
         if self.is_mcap:  # fail now if the mcap package is missing
             what = f"Reading the MCAP file {self.filename!r}"
             recording_formats.get("mcap", what).require(what, "stream_reader")
-            return
-        with open(self.filename, "rb") as file:
-            self._check_if_header(file.readline())  # fail now, not halfway through a replay
+        try:
+            fields = decode_line(first)
+        except Exception:  # not a header: reported as a bad line when read
+            fields = {}
+        if is_header(fields):
+            try:  # a newer format fails now, not halfway through a replay
+                check_header(fields)
+            except WireFormatError as error:
+                raise WireFormatError(f"Cannot replay {self.filename!r}: {error}.") from error
 
     def __iter__(self) -> Iterator[Page]:
         recorded_pages = self.recorded_pages()
@@ -213,14 +202,17 @@ class PageReader:
         try:
             if self.is_mcap:
                 mcap = recording_formats.get("mcap", f"Reading {self.filename!r}")
-                for number, page, timed in mcap.read_pages(self.filename, self._report_message):
+                for number, page, timed in mcap.read_pages(
+                    self.filename,
+                    lambda n, problem: self._report(n, f"{self.filename}: message {n}: {problem}"),
+                ):
                     yield RecordedPage(number, page, timed)
                 return
             with open(self.filename, "rb") as file:
                 for number, raw in enumerate(file, start=1):
                     parsed = self._parse(number, raw)
                     if parsed is not None:
-                        yield RecordedPage(number, parsed[0], parsed[1])
+                        yield RecordedPage(number, *parsed)
         finally:
             self._summarise()
 
@@ -244,17 +236,6 @@ class PageReader:
             unit,
         )
 
-    def _check_if_header(self, raw: bytes) -> None:
-        try:
-            fields = decode_line(raw)
-        except Exception:  # not a header: _parse reports the line when it comes to it
-            return
-        if is_header(fields):
-            try:
-                check_header(fields)
-            except WireFormatError as error:
-                raise WireFormatError(f"Cannot replay {self.filename!r}: {error}.") from error
-
     def _parse(self, number: int, raw: bytes) -> Optional[Tuple[Page, bool]]:
         try:
             if not raw.strip():
@@ -269,9 +250,6 @@ class PageReader:
             cut = "" if raw.endswith(b"\n") else " (cut short: the recorder stopped mid-line)"
             self._report(number, f"{self.filename}:{number}: skipped a bad line{cut}: {why}")
             return None
-
-    def _report_message(self, number: int, problem: str) -> None:
-        self._report(number, f"{self.filename}: message {number}: {problem}")
 
     def _report(self, number: int, problem: str) -> None:
         self.bad_lines += 1
@@ -305,19 +283,18 @@ class TextReader:
     def __iter__(self) -> Iterator[str]:
         with open(self.filename, "rb") as file:
             for number, raw in enumerate(file, start=1):
-                yield self._decode(number, raw.rstrip(b"\r\n"))
-
-    def _decode(self, number: int, raw: bytes) -> str:
-        try:
-            return raw.decode(self.encoding)
-        except UnicodeDecodeError as error:
-            problem = (
-                f"{self.filename}:{number}: not valid {self.encoding} ({error.reason}); "
-                "replayed with the bad bytes replaced"
-            )
-            self.problems.append(problem)
-            _log.warning("%s", problem)
-            return raw.decode(self.encoding, errors="replace")
+                raw = raw.rstrip(b"\r\n")
+                try:
+                    line = raw.decode(self.encoding)
+                except UnicodeDecodeError as error:
+                    problem = (
+                        f"{self.filename}:{number}: not valid {self.encoding} ({error.reason}); "
+                        "replayed with the bad bytes replaced"
+                    )
+                    self.problems.append(problem)
+                    _log.warning("%s", problem)
+                    line = raw.decode(self.encoding, errors="replace")
+                yield line
 
 
 Item = TypeVar("Item")
@@ -488,11 +465,10 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
         if self.options.fast:
             return 0.0
         now = time.monotonic()
-        if self._due is None:  # the first page (also after a reload): store it now
+        if self._due is None:  # the first page (also after a reload): stored now
             self._due = now
-            if item.timed:
-                self._offsets[item.page.origin] = now - item.page.created_at_s
-            return 0.0
+            if not item.timed:
+                return 0.0
         self._due = self._next_due(item, self._due)
         return self._due - now
 
@@ -504,52 +480,49 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
                 "no time",
                 "%s:%d: the page under %r has no created_at_s: stored right after the "
                 "previous page.",
-                item.line,
-                page.key,
+                item,
             )
             return previous
         offset = self._offsets.get(page.origin)
-        if offset is None:  # the first page from this origin: its clock starts here
-            self._offsets[page.origin] = previous - page.created_at_s
-            return previous
-        gap = page.created_at_s + offset - previous
-        if 0.0 <= gap <= max_gap:
-            return previous + gap
-        if gap > max_gap:
-            self._retimed(
-                "gap",
-                "%s:%d: the page under %r was created %s s after the one before it: "
-                "waiting %g s instead (max_gap_s).",
-                item.line,
-                page.key,
-                _seconds(gap),
-                max_gap,
-            )
-            due = previous + max_gap
-        elif gap >= -max_gap:  # a little back in time (clocks of two nodes): no wait
-            return previous
-        else:
-            self._retimed(
-                "back",
-                "%s:%d: the time of the page under %r goes back by %s s: stored right "
-                "after the previous page.",
-                item.line,
-                page.key,
-                _seconds(-gap) if gap == gap else "an unknown number of",
-            )
-            due = previous
+        due = previous  # the first page from this origin: its clock starts here
+        if offset is not None:
+            gap = page.created_at_s + offset - previous
+            if 0.0 <= gap <= max_gap:
+                return previous + gap
+            if -max_gap <= gap < 0.0:  # a little back in time (clocks of two nodes): no wait
+                return previous
+            if gap > max_gap:
+                self._retimed(
+                    "gap",
+                    "%s:%d: the page under %r was created %s s after the one before it: "
+                    "waiting %g s instead (max_gap_s).",
+                    item,
+                    _seconds(gap),
+                    max_gap,
+                )
+                due = previous + max_gap
+            else:
+                self._retimed(
+                    "back",
+                    "%s:%d: the time of the page under %r goes back by %s s: stored right "
+                    "after the previous page.",
+                    item,
+                    _seconds(-gap) if gap == gap else "an unknown number of",
+                )
         self._offsets[page.origin] = due - page.created_at_s  # follow the clock from here
         return due
 
-    def _retimed(self, kind: str, msg: str, line: int, *args: object) -> None:
+    def _retimed(self, kind: str, msg: str, item: RecordedPage, *args: object) -> None:
         self.options.retimed += 1
+        filename = self.options.filename
         self._timing.report(
             kind,
-            f"Replay timing of {self.options.filename} ({kind})",
+            f"Replay timing of {filename} ({kind})",
             logging.WARNING,
             msg,
-            self.options.filename,
-            line,
+            filename,
+            item.line,
+            item.page.key,
             *args,
         )
 
