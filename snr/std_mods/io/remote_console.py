@@ -26,7 +26,7 @@ from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequen
 from snr.core import plugins
 from snr.core.checks.os_errors import explain_os_error
 from snr.prelude import SNRError, WireFormatError
-from snr.std_mods.io.command_table import COMMANDS
+from snr.std_mods.io.command_processor import COMMANDS, HZ_DEFAULT_WINDOW_S
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
     MAX_LINE_BYTES,
@@ -38,7 +38,6 @@ from snr.std_mods.io.console_protocol import (
     default_token,
     parse_address,
 )
-from snr.std_mods.io.key_watch import HZ_DEFAULT_WINDOW_S
 
 if TYPE_CHECKING:
     import argparse
