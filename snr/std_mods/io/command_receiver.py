@@ -19,6 +19,7 @@ import logging
 import os
 import queue
 import select
+import selectors
 import socket
 import sys
 import threading
@@ -335,6 +336,7 @@ class CommandReceiverLoop(ConsoleLoop):
         self.auth_timeout_s = factory.auth_timeout_s
         self.idle_timeout_s = factory.idle_timeout_s
         self._listener: Optional[socket.socket] = None
+        self._selector: Optional[selectors.BaseSelector] = None  # the listener, the wake-up
         self._wake_in: Optional[socket.socket] = None  # with _wake_out: halt() ends a wait
         self._wake_out: Optional[socket.socket] = None
         self._sessions: List[_RemoteConsole] = []  # the oldest first
@@ -373,6 +375,9 @@ class CommandReceiverLoop(ConsoleLoop):
             self.set_terminate_flag("cannot listen")
             return
         self._wake_in, self._wake_out = socket.socketpair()
+        self._selector = selectors.DefaultSelector()  # not select(): any fd number works
+        self._selector.register(self._listener, selectors.EVENT_READ)
+        self._selector.register(self._wake_in, selectors.EVENT_READ)
         host, port = self._listener.getsockname()[:2]
         factory._now_listening(host, port)
         self.info("Console receiver listening on %s:%d", host, port)
@@ -380,12 +385,13 @@ class CommandReceiverLoop(ConsoleLoop):
 
     def loop(self) -> None:
         """Accept the next console and start its thread."""
-        if self._listener is None or self._wake_in is None:  # begin() could not listen
+        if self._listener is None or self._selector is None:  # begin() could not listen
             self.set_terminate_flag("not listening")
             return
-        waiting = [self._listener, self._wake_in]
-        ready = select.select(waiting, [], [], self._repeats.every_s)[0]
-        if self._listener in ready and not self.is_terminated():
+        ready = [key.fileobj for key, _ in self._selector.select(self._repeats.every_s)]
+        if self._wake_in in ready:
+            self._wake_in.recv(_READ_CHUNK)  # halt() woke it
+        elif self._listener in ready:
             try:
                 sock, address = self._listener.accept()
             except OSError:
@@ -425,7 +431,7 @@ class CommandReceiverLoop(ConsoleLoop):
         for _ in range(self._threads):
             self._accepted.put(None)  # each console thread ends
         self._repeats.flush()
-        for closable in (self._listener, self._wake_in, self._wake_out):
+        for closable in (self._selector, self._listener, self._wake_in, self._wake_out):
             if closable is not None:
                 closable.close()
 
