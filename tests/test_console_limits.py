@@ -21,12 +21,7 @@ from snr import CommandReceiverFactory, TimeoutLoopFactory
 from snr.prelude import ConfigError
 from snr.std_mods.io import RemoteConsole
 from snr.std_mods.io.command_processor import REPLY_BUDGET_CHARS
-from snr.std_mods.io.command_receiver import (
-    MAX_SEND_BUFFER_BYTES,
-    MAX_UNANSWERED,
-    CommandReceiverLoop,
-    _TokenThrottle,
-)
+from snr.std_mods.io.command_receiver import CommandReceiverLoop, _TokenThrottle
 from snr.std_mods.io.console_protocol import (
     TOKEN_ENV_VAR,
     ConsoleConnectionError,
@@ -206,12 +201,9 @@ class TestFloods(unittest.TestCase):
                 started = time.monotonic()
                 during: List[float] = []
                 receiver = receiver_of(run)
-                most_waiting = 0
                 while time.monotonic() - started < 10.0:
                     during.append(_timed(operator, "help"))
-                    sessions = list(receiver._sessions.values())
-                    most_waiting = max([most_waiting, *(len(s.out) for s in sessions)])
-                    if len(sessions) == 1 and time.monotonic() - started > 0.25:
+                    if len(receiver._sessions) == 1 and time.monotonic() - started > 0.25:
                         break  # the flooder is gone
                 dropped_after = time.monotonic() - started
             finally:
@@ -220,20 +212,17 @@ class TestFloods(unittest.TestCase):
             f"'help' while another console sent 1000 'dump datastore' and read nothing: "
             f"median {statistics.median(during) * 1000:.1f} ms, max {max(during) * 1000:.1f} ms "
             f"(before: median {statistics.median(before) * 1000:.1f} ms, max "
-            f"{max(before) * 1000:.1f} ms); flooder dropped after {dropped_after:.1f} s; "
-            f"at most {most_waiting:,} bytes waited for it"
+            f"{max(before) * 1000:.1f} ms); flooder dropped after {dropped_after:.1f} s"
         )
         self.assertLess(dropped_after, 8.0, figures)
-        self.assertLessEqual(most_waiting, MAX_SEND_BUFFER_BYTES, figures)
         self.assertLess(max(during), 1.0, figures)  # generous: measured tens of ms
         self.assertIn("did not read its replies", "\n".join(logs.output))
 
     def test_pipelined_commands_are_answered_in_order_a_few_at_a_time(self) -> None:
-        # Without the receiver's periodic wake-up, a line left waiting after
-        # its wake-up was read would wait for good: read_replies would time out.
-        with mock.patch("snr.std_mods.io.command_receiver._POLL_S", 60.0), NodeInThread([]) as run:
+        # The node runs one line of a console at a time; the others wait in the socket.
+        with NodeInThread([]) as run:
             with socket.create_connection((run.host, run.port), timeout=5) as sock:
-                lines = [f"task store_page k {i}" for i in range(5 * MAX_UNANSWERED)]
+                lines = [f"task store_page k {i}" for i in range(20)]
                 sock.sendall("".join(line + "\n" for line in lines).encode())
                 replies = read_replies(sock, len(lines) + 1)
             self.assertEqual(replies[0].status, Status.HELLO)

@@ -42,8 +42,8 @@ from snr.extras.zenoh.comms import (
 )
 from snr.prelude import AbstractNode, CommsError
 from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret
-from snr.std_mods.io.command_table import COMMANDS
-from snr.std_mods.io.console_loop import ConsoleLoop
+from snr.std_mods.io.command_processor import COMMANDS
+from snr.std_mods.io.command_receiver import ConsoleLoop
 from snr.std_mods.io.console_protocol import (
     MAX_LINE_BYTES,
     TOKEN_ENV_VAR,

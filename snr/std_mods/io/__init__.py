@@ -14,13 +14,11 @@ from snr.std_mods.io.command_processor import (
 from snr.std_mods.io.command_receiver import (
     CommandReceiverFactory,
     CommandReceiverLoop,
+    LocalConsole,
+    LocalConsoleFactory,
 )
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
-)
-from snr.std_mods.io.local_console import (
-    LocalConsole,
-    LocalConsoleFactory,
 )
 from snr.std_mods.io.recorder import (
     RecorderEndpoint,

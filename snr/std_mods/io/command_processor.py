@@ -1,30 +1,33 @@
-"""`CommandProcessorEndpoint`: runs console commands on the node's own thread.
+"""The console's commands: their table, `COMMANDS`, and `CommandProcessorEndpoint`, which runs them.
 
-A console (remote over TCP, or local on stdin) never touches the node itself:
-it turns each line the user typed into a command task, and this endpoint runs
-the command in a task handler, on the node's thread, then hands the reply to
-the console's `ConsoleSession`. The commands (thesis 6.4.3) and their help
-are listed in `COMMANDS` (``command_table.py``); each is run by the method
-``cmd_<word>`` here. Consoles are ``ConsoleLoop`` subclasses
-(``console_loop.py``), each of which adds its own processor when it begins,
-so several consoles never run one command twice.
+A console (remote over TCP, local on stdin, or over Zenoh) never touches the
+node itself: it turns each line the user typed into a command task, and this
+endpoint runs the command in a task handler, on the node's thread, then hands
+the reply to the console's `ConsoleSession`. ``help`` and ``list commands``
+print `COMMANDS`, `snr-console` completes command words from it, and the
+method ``cmd_<word>`` runs each (thesis 6.4.3). ``echo KEY`` and ``hz KEY``,
+like ``ros2 topic echo/hz``, are `KeyWatches`.
 
 Example::
 
-    config = Config({"robot": [MyFactory(), CommandReceiverFactory()]})
+    COMMANDS["dump"].usage                 # 'dump profiler|datastore [KEY|PREFIX*]'
+    processor.execute("task event beep")   # Reply(Status.OK, "Scheduled ...")
 """
 
 from __future__ import annotations
 
 import logging
+import math
 import reprlib
+import threading
 import time
-from dataclasses import dataclass
-from typing import Any, Callable, List, Mapping, Optional, Sequence, Tuple
+from collections import deque
+from dataclasses import dataclass, field
+from typing import Any, Callable, Deque, Dict, List, Mapping, Optional, Sequence, Tuple, Union
 
 from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, plugins, tasks
 from snr.core.checks.error_text import closest_match, did_you_mean
-from snr.core.checks.step_mode import MAX_STEPS, Step
+from snr.core.checks.step_mode import MAX_STEPS, Step, console_priority
 from snr.core.logs import RepeatFilter
 from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
@@ -41,27 +44,22 @@ from snr.prelude import (
 )
 from snr.prelude.task import format_task
 from snr.std_mods.comms.comms_loop import CommsLoop
-from snr.std_mods.io.command_table import COMMANDS, commands_table
-from snr.std_mods.io.console_protocol import (
-    ConsoleSession,
-    Reply,
-    Status,
-    parse_values,
-)
-from snr.std_mods.io.key_watch import (
-    ECHO_DEFAULT_PAGES,
-    ECHO_MAX_PAGES,
-    HZ_DEFAULT_WINDOW_S,
-    HZ_MAX_WINDOW_S,
-    KeyWatches,
-    WatchRefused,
-)
+from snr.std_mods.io.console_protocol import ConsoleSession, Reply, Status, parse_values
 
 __all__ = [
+    "COMMANDS",
+    "ECHO_DEFAULT_PAGES",
+    "ECHO_MAX_PAGES",
+    "HZ_DEFAULT_WINDOW_S",
+    "HZ_MAX_WINDOW_S",
+    "MAX_WATCHES",
     "REPLY_BUDGET_CHARS",
     "REPLY_BUDGET_S",
+    "CommandHelp",
     "CommandProcessorEndpoint",
     "CommandProcessorFactory",
+    "KeyWatches",
+    "commands_table",
 ]
 
 REPLY_BUDGET_CHARS = 64 * 1024
@@ -87,6 +85,22 @@ Example::
     REPLY_BUDGET_S * 1000   # 10.0 ms
 """
 
+ECHO_DEFAULT_PAGES = 20
+"""Pages one ``echo KEY`` reply carries at most, unless it asks for another number."""
+
+ECHO_MAX_PAGES = 100
+"""The most pages one ``echo`` reply carries, and waits between two ``echo`` of a console."""
+
+HZ_DEFAULT_WINDOW_S = 2.0
+"""How long ``hz KEY`` counts pages when no window is given."""
+
+HZ_MAX_WINDOW_S = 60.0
+"""The longest window ``hz`` accepts (a reply waits that long)."""
+
+MAX_WATCHES = 32
+"""How many ``echo``/``hz`` may be open on one node at once; more are refused."""
+
+_TICK_S = 0.05  # how often open watches check their time limits (a reply is at most this late)
 _MIN_LINES = 50  # a listing shows this many keys however slow the node is (each is cheap)
 _PREVIEW_CHARS = 120
 _previews = reprlib.Repr()  # a short preview of any value, cheap even for a huge one
@@ -100,23 +114,115 @@ _whole_values.maxlist = _whole_values.maxtuple = _whole_values.maxdict = 2000
 _whole_values.maxset = 2000
 
 
-@dataclass
-class _Outcome:
-    status: Status
-    text: str
-    tasks: SomeTasks = None
-    later: bool = False  # the reply is sent later (echo, hz, step), not now
+@dataclass(frozen=True)
+class CommandHelp:
+    """How to type one command, and what it does (for ``help``).
+
+    Example::
+
+        CommandHelp("exit", "Stop the node and close this console.")
+    """
+
+    usage: str
+    summary: str
+    details: str = ""
+
+
+COMMANDS: Dict[str, CommandHelp] = {
+    "exit": CommandHelp("exit", "Stop the node and close this console."),
+    "task": CommandHelp(
+        "task <type> <name> [values...]",
+        "Schedule a task on the node.",
+        "Types: event, store_page (alias store_data), process_data, reload, terminate.\n"
+        'Values are JSON where they parse (1, 2.5, true, null, "two words", [1, 2],\n'
+        '{"k": 1}), otherwise plain words (A, hello). Examples:\n'
+        "  task event button_pressed A\n"
+        "  task store_page depth_m 3.2\n"
+        "  task terminate done",
+    ),
+    "reload": CommandHelp(
+        "reload all|<component>",
+        "Reload a component's code from disk; its factory's state is kept.",
+        "`reload all` reloads every component whose factory names modules to reload\n"
+        "(super().__init__(my_module)). If the new code fails to load (a syntax error,\n"
+        "an exception), the old version keeps running and the reply says why.",
+    ),
+    "list": CommandHelp(
+        "list commands|endpoints", "List these commands, or the node's components."
+    ),
+    "dump": CommandHelp(
+        "dump profiler|datastore [KEY|PREFIX*]",
+        "Show handler timings, or the newest page of every key.",
+        "`dump datastore` shows every key with a short preview of its value, up to the\n"
+        "reply's limit. `dump datastore KEY` shows one key's value in full;\n"
+        "`dump datastore PREFIX*` shows the keys that start with PREFIX.",
+    ),
+    "stats": CommandHelp(
+        "stats",
+        "Show the node's queue and every comms link: pages sent, received, dropped.",
+        "Dropped pages are counted per link and per key (a slow peer whose backlog was\n"
+        "full); 'heard' is how long ago the peer last sent anything (a beat at least).",
+    ),
+    "graph": CommandHelp(
+        "graph [text|mermaid|dot]",
+        "Show the node's components, the data keys each stores and handles, and its links.",
+        "`text` (the default) is for reading here; `mermaid` can be pasted into a\n"
+        "Markdown file (GitHub draws it), `dot` into Graphviz. Keys read but never\n"
+        "stored, or stored but never read, are marked (!). `python -m snr graph main.py`\n"
+        "draws the whole system without running it.",
+    ),
+    "echo": CommandHelp(
+        "echo KEY [N]",
+        "Show the next pages stored under KEY (snr-console repeats it until Ctrl-C).",
+        f"One reply carries at most N pages (default {ECHO_DEFAULT_PAGES}, at most "
+        f"{ECHO_MAX_PAGES}): it comes\nwhen N pages have come, a quarter second after the "
+        "first, or after 1 s\nwithout one. Pages that come between two `echo KEY` wait "
+        "for the next one,\nso repeating it shows every page.",
+    ),
+    "hz": CommandHelp(
+        "hz KEY [WINDOW_S]",
+        "Measure how often KEY is stored, and the jitter of the time between pages.",
+        f"Counts pages for WINDOW_S seconds (default {HZ_DEFAULT_WINDOW_S:g}, at most "
+        f"{HZ_MAX_WINDOW_S:g}), then replies with\nthe rate and the period's mean, min, max "
+        "and standard deviation, timed when\nthis node stores each page.",
+    ),
+    "pause": CommandHelp(
+        "pause",
+        "Pause the node: it runs no task but the console's until `step` or `resume`.",
+        "The node finishes the task it is running, then holds every other task in its\n"
+        "queue, in order. dump, list, stats, graph and exit keep working. Loops keep\n"
+        "running: their pages wait in the queue (a full queue makes them wait, then\n"
+        "drops and counts their pages; the replies say how many).",
+    ),
+    "step": CommandHelp(
+        "step [N]",
+        "Run the next task (or N, at most 100) of a paused node and show what it did.",
+        "For each task: which task ran, the handlers it went to, what they returned;\n"
+        "then what waits next in the queue.",
+    ),
+    "resume": CommandHelp("resume", "Let a paused node run freely again."),
+    "help": CommandHelp("help [command]", "Show the commands, or one command in detail."),
+}
+"""Every console command, in the order ``help`` lists them."""
+
+
+def commands_table() -> str:
+    """Every command's usage and summary, one aligned line each (``help``, ``list commands``).
+
+    Example::
+
+        print(commands_table())   #   exit    Stop the node and close this console. ...
+    """
+    width = max(len(entry.usage) for entry in COMMANDS.values())
+    return "\n".join(f"  {e.usage:<{width}}  {e.summary}" for e in COMMANDS.values())
 
 
 class _CommandFailed(Exception):
     """A command cannot run as typed; the message is the reply."""
 
 
-def _ok(text: str, follow_up: SomeTasks = None) -> _Outcome:
-    return _Outcome(Status.OK, text, follow_up)
-
-
-_LATER = _Outcome(Status.OK, "", later=True)
+# What a command returns: the text of an OK reply, a reply, or None: it replies later.
+_Answer = Union[str, Reply, None]
 
 
 class CommandProcessorEndpoint(Endpoint):
@@ -141,15 +247,15 @@ class CommandProcessorEndpoint(Endpoint):
     ) -> None:
         super().__init__(factory, parent, factory.name)
         self.console_name = factory.console
-        self.watches = KeyWatches(self, f"{task_name}:tick", _preview)
+        self.watches = KeyWatches(self, f"{task_name}:tick")
         self.task_handlers = {
             (TaskType.event, task_name): self.on_command,
             (TaskType.event, self.watches.tick_name): self.watches.on_tick,
         }
         self._session: Optional[ConsoleSession] = None  # of the command being run
+        self._follow_up: SomeTasks = None  # the tasks the command asks for
         self._refusals = RepeatFilter(self.log)
 
-    # -- the task handler ---------------------------------------------------
     def on_command(self, task: Task, key: TaskId) -> SomeTasks:
         """Run the command line in the task and send the reply to its session."""
         if len(task.val_list) != 2 or not isinstance(task.val_list[1], ConsoleSession):
@@ -160,14 +266,15 @@ class CommandProcessorEndpoint(Endpoint):
                 task.val_list,
             )
             return None
-        line, self._session = task.val_list
+        line, session = task.val_list
+        self._session = session
         try:
-            outcome = self._run(str(line))
-            if not outcome.later:
-                self._session.send(Reply(outcome.status, _bounded(outcome.text)))
+            reply, follow_up = self._run(str(line))
         finally:
             self._session = None
-        return outcome.tasks
+        if reply is not None:
+            session.send(reply)
+        return follow_up
 
     def terminate(self) -> None:
         """Stop the timer of open ``echo``/``hz`` watches."""
@@ -178,44 +285,47 @@ class CommandProcessorEndpoint(Endpoint):
 
         Tasks the command asks for (e.g. ``task event go``) are scheduled.
         """
-        outcome = self._run(line)
-        self.schedule(outcome.tasks)
-        return Reply(outcome.status, _bounded(outcome.text))
+        reply, follow_up = self._run(line)
+        self.schedule(follow_up)
+        return reply or Reply(Status.OK, "")
 
-    def _run(self, line: str) -> _Outcome:
+    def _run(self, line: str) -> Tuple[Optional[Reply], SomeTasks]:
+        """The reply to ``line`` (None: it comes later), and the tasks it asks for."""
         words = line.split(None, 1)
         if not words:
-            return _ok("")
+            return Reply(Status.OK, ""), None
         word, args = words[0].lower(), words[1] if len(words) > 1 else ""
         if word not in COMMANDS:
             hint = did_you_mean(word, COMMANDS)
-            return _Outcome(
-                Status.ERROR, f"Unknown command {word!r}.{hint} Type 'help' to see the commands."
-            )
-        command: Callable[[str], _Outcome] = getattr(self, f"cmd_{word}")
+            text = f"Unknown command {word!r}.{hint} Type 'help' to see the commands."
+            return Reply(Status.ERROR, text), None
+        command: Callable[[str], _Answer] = getattr(self, f"cmd_{word}")
+        self._follow_up = None
         try:
-            return command(args)
-        except (_CommandFailed, WatchRefused) as refused:
-            return _Outcome(Status.ERROR, str(refused))
+            answer = command(args)
+        except _CommandFailed as refused:
+            answer = Reply(Status.ERROR, str(refused))
         except Exception as error:  # a broken command must not stop the robot
             self.log.exception("Console command %r failed", line)
-            return _Outcome(
+            answer = Reply(
                 Status.ERROR,
                 f"{word!r} failed inside the node: {type(error).__name__}: {error}. "
                 "The node keeps running; its log has the details.",
             )
+        if isinstance(answer, str):
+            answer = Reply(Status.OK, answer)
+        if answer is not None:
+            answer = Reply(answer.status, _bounded(answer.text))
+        return answer, self._follow_up
 
     # -- commands -------------------------------------------------------------
-    def cmd_exit(self, args: str) -> _Outcome:
+    def cmd_exit(self, args: str) -> _Answer:
         """``exit``: stop the node; the console is closed after the reply."""
         _no_arguments("exit", args)
-        return _Outcome(
-            Status.BYE,
-            f"Stopping node {self.parent.role!r}. Bye.",
-            tasks.terminate(f"exit command from {self._session or 'console'}"),
-        )
+        self._follow_up = tasks.terminate(f"exit command from {self._session or 'console'}")
+        return Reply(Status.BYE, f"Stopping node {self.parent.role!r}. Bye.")
 
-    def cmd_task(self, args: str) -> _Outcome:
+    def cmd_task(self, args: str) -> _Answer:
         """``task <type> <name> [values...]``: schedule a task."""
         words = args.split(None, 2)
         types = ", ".join(TaskType.__members__)
@@ -251,9 +361,10 @@ class CommandProcessorEndpoint(Endpoint):
             task = tasks.store_data(name, values[0])
         else:
             task = tasks.process_data(self.parent.page(name, values[0]))
-        return _ok(f"Scheduled {format_task(task, values='data')}", task)
+        self._follow_up = task
+        return f"Scheduled {format_task(task, values='data')}"
 
-    def cmd_reload(self, args: str) -> _Outcome:
+    def cmd_reload(self, args: str) -> _Answer:
         """``reload all|<component>``: hot-reload source code, keep factory state."""
         target = args.strip()
         if not target or len(target.split()) != 1:
@@ -269,7 +380,7 @@ class CommandProcessorEndpoint(Endpoint):
                 if component.factory.reload_targets and not _is_console_part(component, node)
             ]
             if not names:
-                return _ok(
+                return (
                     "Nothing to reload: no component's factory names modules to reload. "
                     "Pass the module to the factory, e.g. `super().__init__(my_module)`."
                 )
@@ -281,7 +392,7 @@ class CommandProcessorEndpoint(Endpoint):
         if len(results) > 1:
             text = f"Reloaded {len(results) - len(failed)} of {len(results)} components:\n"
             text += "\n".join("  " + message for _, message in results)
-        return _Outcome(Status.ERROR if failed else Status.OK, text)
+        return Reply(Status.ERROR if failed else Status.OK, text)
 
     def _check_protected(self, node: AbstractNode, name: ComponentName, action: str) -> None:
         """Refuse to ``action`` ("remove" or "reload") the node's core or a console part.
@@ -351,10 +462,10 @@ class CommandProcessorEndpoint(Endpoint):
             )
         return True, f"Reloaded {name!r}; its factory (and the state it keeps) is the same."
 
-    def cmd_list(self, args: str) -> _Outcome:
+    def cmd_list(self, args: str) -> _Answer:
         """``list commands|endpoints``."""
         if _one_choice("list", args, ["commands", "endpoints"]) == "commands":
-            return _ok(commands_table())
+            return commands_table()
         components = self.parent.components
         lines = [f"Components of node {self.parent.role!r} ({len(components)}):"]
         width = max((len(name) for name in components), default=0)
@@ -367,9 +478,9 @@ class CommandProcessorEndpoint(Endpoint):
             if modules:
                 line += f"  reloads: {', '.join(modules)}"
             lines.append(line)
-        return _ok("\n".join(lines))
+        return "\n".join(lines)
 
-    def cmd_dump(self, args: str) -> _Outcome:
+    def cmd_dump(self, args: str) -> _Answer:
         """``dump profiler|datastore [KEY|PREFIX*]``."""
         words = args.split()
         choice = _one_choice("dump", words[0] if words else "", ["profiler", "datastore"])
@@ -377,15 +488,15 @@ class CommandProcessorEndpoint(Endpoint):
             raise _CommandFailed(f"Usage: {COMMANDS['dump'].usage}.")
         if choice == "profiler":
             if self.parent.profiler is None:
-                return _ok(
+                return (
                     f"Profiling is off for node {self.parent.role!r}. Turn it on with "
                     "Config(..., profile=True); it is on by default in Mode.DEBUG."
                 )
-            return _ok(self.parent.profiler.dump())
+            return self.parent.profiler.dump()
         datastore = self._full_node("dump datastore").datastore
         if len(words) < 2 or words[1].endswith("*"):
             prefix = words[1][:-1] if len(words) == 2 else ""
-            return _ok(_list_datastore(self.parent.role, datastore, prefix))
+            return _list_datastore(self.parent.role, datastore, prefix)
         key = words[1]
         page = datastore.get(key)
         if page is None:
@@ -407,9 +518,9 @@ class CommandProcessorEndpoint(Endpoint):
                 f"{REPLY_BUDGET_CHARS:,} characters or {_whole_values.maxlist:,} items; "
                 f"read it in code with node.get_data({key!r}))"
             )
-        return _ok(head + text)
+        return head + text
 
-    def cmd_stats(self, args: str) -> _Outcome:
+    def cmd_stats(self, args: str) -> _Answer:
         """``stats``: the task queue's and every comms link's counters."""
         node = self._full_node("stats")
         queue = node.queue
@@ -422,16 +533,16 @@ class CommandProcessorEndpoint(Endpoint):
             lines.append(f"The node is paused. {_loss_while_paused(node)}")
         comms = [c for c in node.components.values() if isinstance(c, CommsLoop)]
         lines += [f"{loop.name}: {loop.stats_text()}" for loop in comms] or ["No comms links."]
-        return _ok("\n".join(lines))
+        return "\n".join(lines)
 
-    def cmd_graph(self, args: str) -> _Outcome:
+    def cmd_graph(self, args: str) -> _Answer:
         """``graph [text|mermaid|dot]``: this node's data-flow graph, as it runs now."""
         choice = _one_choice("graph", args or "text", ["text", "mermaid", "dot"])
         # The graph is an extra (it loads ast): found by its entry point, only when asked.
         draw = plugins.load("snr.console_commands", "graph", "The console's `graph` command")
-        return _ok(draw(self._full_node("graph"), choice))
+        return str(draw(self._full_node("graph"), choice))
 
-    def cmd_echo(self, args: str) -> _Outcome:
+    def cmd_echo(self, args: str) -> _Answer:
         """``echo KEY [N]``: the next pages of KEY (the reply waits for them)."""
         words = args.split()
         if not 1 <= len(words) <= 2:
@@ -439,10 +550,9 @@ class CommandProcessorEndpoint(Endpoint):
         wanted = ECHO_DEFAULT_PAGES
         if len(words) == 2:
             wanted = int(_number(words[1], "echo", "N", 1, ECHO_MAX_PAGES, int))
-        reply = self.watches.echo(words[0], wanted, self._console())
-        return _LATER if reply is None else _Outcome(reply.status, reply.text)
+        return self.watches.echo(words[0], wanted, self._console())
 
-    def cmd_hz(self, args: str) -> _Outcome:
+    def cmd_hz(self, args: str) -> _Answer:
         """``hz KEY [WINDOW_S]``: the rate and jitter of KEY (the reply comes after the window)."""
         words = args.split()
         if not 1 <= len(words) <= 2:
@@ -451,7 +561,7 @@ class CommandProcessorEndpoint(Endpoint):
         if len(words) == 2:
             window_s = _number(words[1], "hz", "WINDOW_S", 0.1, HZ_MAX_WINDOW_S, float)
         self.watches.hz(words[0], window_s, self._console())
-        return _LATER
+        return None
 
     def _console(self) -> ConsoleSession:
         """The session of the command being run, for a reply that comes later."""
@@ -462,21 +572,21 @@ class CommandProcessorEndpoint(Endpoint):
             )
         return self._session
 
-    def cmd_pause(self, args: str) -> _Outcome:
+    def cmd_pause(self, args: str) -> _Answer:
         """``pause``: hold the node's tasks (the console's own still run)."""
         _no_arguments("pause", args)
         node = self._full_node("pause")
         if node.step_mode.paused:
-            return _ok(f"Node {node.role!r} is already paused. {_loss_while_paused(node)}")
+            return f"Node {node.role!r} is already paused. {_loss_while_paused(node)}"
         node.step_mode.pause()
-        return _ok(
+        return (
             f"Paused node {node.role!r}: its tasks wait in its queue (high-water mark "
             f"{node.queue.high_water:,}) until you step or resume.\n"
             f"{_next_line(node.step_mode.next_tasks(), len(node.queue))}\n"
             "Type `step` to run the next task, `resume` to let the node run on."
         )
 
-    def cmd_step(self, args: str) -> _Outcome:
+    def cmd_step(self, args: str) -> _Answer:
         """``step [N]``: run the next task(s) of a paused node; the reply says what they did."""
         words = args.split()
         if len(words) > 1:
@@ -495,35 +605,33 @@ class CommandProcessorEndpoint(Endpoint):
             step_mode.step(count, lambda steps: session.send(Reply(Status.OK, _steps_text(steps))))
         except ValueError as refused:
             raise _CommandFailed(str(refused)) from None
-        return _LATER
+        return None
 
-    def cmd_resume(self, args: str) -> _Outcome:
+    def cmd_resume(self, args: str) -> _Answer:
         """``resume``: let a paused node run freely again."""
         _no_arguments("resume", args)
         node = self._full_node("resume")
         if not node.step_mode.paused:
-            return _ok(f"Node {node.role!r} is not paused.")
+            return f"Node {node.role!r} is not paused."
         waiting = len(node.queue)
         lost = _loss_while_paused(node)
         node.step_mode.resume()
         plural = "s" if waiting != 1 else ""
-        return _ok(f"Resumed node {node.role!r} with {waiting:,} task{plural} waiting. {lost}")
+        return f"Resumed node {node.role!r} with {waiting:,} task{plural} waiting. {lost}"
 
-    def cmd_help(self, args: str) -> _Outcome:
+    def cmd_help(self, args: str) -> _Answer:
         """``help [command]``."""
         topic = args.strip().lower()
         if not topic:
-            return _ok("Commands (type `help <command>` for details):\n" + commands_table())
+            return "Commands (type `help <command>` for details):\n" + commands_table()
         entry = COMMANDS.get(topic)
         if entry is None:
             hint = did_you_mean(topic, COMMANDS)
             raise _CommandFailed(
                 f"There is no command {topic!r}.{hint} Commands: {', '.join(COMMANDS)}."
             )
-        lines = [entry.usage, entry.summary, *entry.details.splitlines()]
-        return _ok("\n  ".join(lines))
+        return "\n  ".join([entry.usage, entry.summary, *entry.details.splitlines()])
 
-    # -- helpers ----------------------------------------------------------------
     def _full_node(self, command: str) -> Node:
         if not isinstance(self.parent, Node):
             raise _CommandFailed(
@@ -562,7 +670,225 @@ class CommandProcessorFactory(EndpointFactory):
         return CommandProcessorEndpoint(self, parent, self.task_name)
 
 
-# -- module helpers ---------------------------------------------------------------
+# -- echo KEY and hz KEY ---------------------------------------------------------
+@dataclass
+class _Echo:
+    key: DataKey
+    console: str
+    pages: Deque[Tuple[Page, float]] = field(default_factory=lambda: deque(maxlen=ECHO_MAX_PAGES))
+    skipped: int = 0
+    session: Optional[ConsoleSession] = None  # of the request waiting for pages
+    wanted: int = ECHO_DEFAULT_PAGES
+    asked_at: float = 0.0
+    first_at: Optional[float] = None
+    idle_since: float = 0.0
+
+
+@dataclass
+class _Rate:
+    key: DataKey
+    session: ConsoleSession
+    window_s: float
+    ends_at: float
+    count: int = 0
+    last_at: Optional[float] = None
+    periods: int = 0
+    mean: float = 0.0
+    m2: float = 0.0  # Welford's running sum of squared differences
+    low: float = math.inf
+    high: float = 0.0
+
+    def add(self, now: float) -> None:
+        self.count += 1
+        if self.last_at is not None:
+            period = now - self.last_at
+            self.periods += 1
+            delta = period - self.mean
+            self.mean += delta / self.periods
+            self.m2 += delta * (period - self.mean)
+            self.low, self.high = min(self.low, period), max(self.high, period)
+        self.last_at = now
+
+
+class KeyWatches:
+    """The open ``echo`` and ``hz`` watches of one command processor.
+
+    While a console watches a key, the processor handles ``(store_page,
+    KEY)``: it sees each page right after the node core stored it, and costs
+    the node nothing once the watch ends (the handler is removed). While any
+    watch is open a timer schedules a tick task every 50 ms, so a watch ends
+    on time even when no page comes. Pages that come between two ``echo KEY``
+    of one console (within 2 s) wait for the next one, up to `ECHO_MAX_PAGES`;
+    more are counted, and the reply says how many were skipped. ``hz`` keeps
+    constant memory however fast the key is. All of it runs on the node's
+    thread, but the timer, which only schedules the tick.
+
+    Example::
+
+        processor.watches.hz("depth", 2.0, session)   # the reply goes to session in 2 s
+    """
+
+    def __init__(self, owner: CommandProcessorEndpoint, tick_name: str) -> None:
+        self.owner = owner
+        self.tick_name = tick_name
+        #: When an echo reply goes out: this long after its first page, or with no
+        #: page after echo_wait_s; a console's echo is dropped after echo_keep_s unasked.
+        self.echo_batch_s, self.echo_wait_s, self.echo_keep_s = 0.25, 1.0, 2.0
+        self._echoes: Dict[Tuple[str, DataKey], _Echo] = {}
+        self._rates: List[_Rate] = []
+        self._timer: Optional[threading.Timer] = None
+        self._closed = False
+
+    def echo(self, key: DataKey, wanted: int, session: ConsoleSession) -> Optional[Reply]:
+        """Start (or continue) this console's echo of ``key``; a reply now, or None (later)."""
+        console = str(session)
+        echo = self._echoes.get((console, key))
+        if echo is None:
+            self._check_room()
+            echo = self._echoes[(console, key)] = _Echo(key, console)
+            self.owner.task_handlers[(TaskType.store_page, key)] = self.on_page
+        elif echo.session is not None:  # a second request while one waits: answer that one
+            echo.session.send(self._echo_reply(echo))
+        now = time.perf_counter()
+        echo.session, echo.wanted, echo.asked_at = session, wanted, now
+        echo.first_at = now if echo.pages else None
+        if len(echo.pages) >= wanted:
+            return self._echo_reply(echo)
+        self._arm()
+        return None
+
+    def hz(self, key: DataKey, window_s: float, session: ConsoleSession) -> None:
+        """Count the pages of ``key`` for ``window_s``; the reply goes to ``session`` then."""
+        self._check_room()
+        self._rates.append(_Rate(key, session, window_s, time.perf_counter() + window_s))
+        self.owner.task_handlers[(TaskType.store_page, key)] = self.on_page
+        self._arm()
+
+    def _check_room(self) -> None:
+        if len(self._echoes) + len(self._rates) >= MAX_WATCHES:
+            raise _CommandFailed(
+                f"Too many echo and hz at once on this node ({MAX_WATCHES}); wait for one "
+                "to finish, or stop an echo with Ctrl-C."
+            )
+
+    def on_page(self, task: Task, key: TaskId) -> SomeTasks:
+        """A page of a watched key was stored: note it for every watch of that key."""
+        page = task.page()
+        if page is None:
+            return None
+        now = time.perf_counter()
+        for rate in self._rates:
+            if rate.key == page.key:
+                rate.add(now)
+        for echo in list(self._echoes.values()):
+            if echo.key != page.key:
+                continue
+            if len(echo.pages) == echo.pages.maxlen:
+                echo.skipped += 1  # the oldest page falls out of the deque
+            echo.pages.append((page, time.time() - page.created_at_s))
+            if echo.session is not None:
+                if echo.first_at is None:
+                    echo.first_at = now
+                if len(echo.pages) >= echo.wanted:
+                    echo.session.send(self._echo_reply(echo))
+        return None
+
+    def on_tick(self, task: Task, key: TaskId) -> SomeTasks:
+        """Send the replies that are due; forget echoes nobody asks for any more."""
+        self._timer = None
+        now = time.perf_counter()
+        for rate in [r for r in self._rates if now >= r.ends_at]:
+            self._rates.remove(rate)
+            self._unwatch(rate.key)
+            rate.session.send(Reply(Status.OK, self._rate_text(rate)))
+        for echo in list(self._echoes.values()):
+            if echo.session is not None:
+                batch_due = echo.first_at is not None and now - echo.first_at >= self.echo_batch_s
+                if batch_due or now - echo.asked_at >= self.echo_wait_s:
+                    echo.session.send(self._echo_reply(echo))
+            elif now - echo.idle_since >= self.echo_keep_s:
+                del self._echoes[(echo.console, echo.key)]
+                self._unwatch(echo.key)
+        if self._echoes or self._rates:
+            self._arm()
+        return None
+
+    def close(self) -> None:
+        """Stop the timer (the node is stopping); open watches get no reply."""
+        self._closed = True
+        if self._timer is not None:
+            self._timer.cancel()
+            self._timer = None
+
+    def _unwatch(self, key: DataKey) -> None:
+        """Stop seeing the pages of ``key`` once no watch of it is left."""
+        keys = [rate.key for rate in self._rates] + [echo.key for echo in self._echoes.values()]
+        if key not in keys:
+            self.owner.task_handlers.pop((TaskType.store_page, key), None)
+
+    def _arm(self) -> None:
+        if self._timer is None and not self._closed:
+            self._timer = threading.Timer(_TICK_S, self._tick)
+            self._timer.daemon = True
+            self._timer.start()
+
+    def _tick(self) -> None:
+        """The timer's task; urgent while the node is paused, as the console's commands."""
+        priority = console_priority(self.owner.parent)
+        self.owner.schedule(Task(TaskType.event, self.tick_name, priority=priority))
+
+    def _echo_reply(self, echo: _Echo) -> Reply:
+        echo.session, echo.first_at = None, None
+        echo.idle_since = time.perf_counter()
+        lines = []
+        if echo.skipped:
+            lines.append(
+                f"... {echo.skipped} pages of {echo.key!r} not shown: they came faster than "
+                "this console asked for them."
+            )
+            echo.skipped = 0
+        for _ in range(min(echo.wanted, len(echo.pages))):
+            page, age_s = echo.pages.popleft()
+            lines.append(
+                f"{page.key} = {_preview(page.data)}  "
+                f"(from {page.origin!r}, {max(0.0, age_s) * 1000:.0f} ms old)"
+            )
+        if not lines:
+            lines.append(
+                f"No page under {echo.key!r} in the last {self.echo_wait_s:g} s."
+                f"{self._hint(echo.key)}"
+            )
+        return Reply(Status.OK, "\n".join(lines))
+
+    def _rate_text(self, rate: _Rate) -> str:
+        head = f"{rate.key}: "
+        if rate.count == 0:
+            return f"{head}no page in {rate.window_s:g} s.{self._hint(rate.key)}"
+        if rate.periods == 0:
+            return f"{head}1 page in {rate.window_s:g} s: too few to measure a period."
+        std = math.sqrt(rate.m2 / rate.periods)
+        return (
+            f"{head}{1.0 / rate.mean:.3g} Hz over {rate.window_s:g} s ({rate.count} pages); "
+            f"period mean {_ms(rate.mean)}, min {_ms(rate.low)}, max {_ms(rate.high)}, "
+            f"std {_ms(std)} (jitter)"
+        )
+
+    def _hint(self, key: DataKey) -> str:
+        datastore = getattr(self.owner.parent, "datastore", {})
+        if key in datastore:
+            return ""
+        maybe = did_you_mean(key, datastore) if isinstance(key, str) else ""
+        return (
+            f" The node has no data under {key!r} yet.{maybe} `dump datastore` lists the "
+            "keys; `graph` shows who stores what."
+        )
+
+
+# -- helpers ---------------------------------------------------------------------
+def _ms(seconds: float) -> str:
+    return f"{seconds * 1000:.1f} ms"
+
+
 def _is_console_part(component: AbstractComponent, node: AbstractNode) -> bool:
     """A command processor, or a console loop one of them serves."""
     return isinstance(component, CommandProcessorEndpoint) or any(

@@ -1,11 +1,12 @@
-"""`CommandReceiverFactory`: the node's end of the remote console, over TCP.
+"""The node's end of the console: `ConsoleLoop`, and its TCP and terminal transports.
 
-Add ``CommandReceiverFactory()`` to a role, run the node, and type commands
-into ``snr-console 127.0.0.1:9123`` from another terminal (thesis 6.4.3).
-The receiver only turns lines into tasks; a `CommandProcessorEndpoint` runs
-them on the node's thread. (`LocalConsoleFactory`, in ``local_console.py``,
-reads the same commands from the node's own terminal.) The commands and the
-protocol are in ``docs/console.md``.
+A console only turns the lines a user types into tasks; the command
+processor it adds to the node (``command_processor.py``) runs each command
+on the node's thread and sends the reply to the line's `ConsoleSession`.
+`CommandReceiverFactory` serves ``snr-console HOST:PORT`` over TCP, one
+thread per connected console (thesis 6.4.3); `LocalConsoleFactory` reads the
+same commands from the node's own terminal. The commands and the protocol
+are in ``docs/console.md``.
 
 Example::
 
@@ -15,18 +16,32 @@ Example::
 from __future__ import annotations
 
 import logging
+import os
+import queue
+import select
 import selectors
 import socket
+import sys
 import threading
 import time
-from collections import deque
-from typing import Any, Callable, Deque, Dict, List, Optional, Tuple
+from typing import IO, Any, Dict, List, Optional, Sequence, Tuple
 
-from snr.core import LoopFactory
+from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.core.checks.os_errors import explain_os_error
+from snr.core.checks.step_mode import console_priority
 from snr.core.logs import RepeatFilter
-from snr.prelude import AbstractNode, CommsError, ComponentName, ConfigError, Mode
-from snr.std_mods.io.console_loop import ConsoleLoop
+from snr.prelude import (
+    AbstractFactory,
+    AbstractNode,
+    CommsError,
+    ComponentName,
+    ConfigError,
+    DataKey,
+    Mode,
+    Task,
+    TaskType,
+)
+from snr.std_mods.io.command_processor import CommandProcessorFactory
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
     TOKEN_ENV_VAR,
@@ -43,11 +58,12 @@ __all__ = [
     "DEFAULT_AUTH_TIMEOUT_S",
     "DEFAULT_IDLE_TIMEOUT_S",
     "MAX_CONSOLES",
-    "MAX_SEND_BUFFER_BYTES",
-    "MAX_UNANSWERED",
     "MAX_WAITING_CONSOLES",
     "CommandReceiverFactory",
     "CommandReceiverLoop",
+    "ConsoleLoop",
+    "LocalConsole",
+    "LocalConsoleFactory",
 ]
 
 MAX_CONSOLES = 8
@@ -66,24 +82,6 @@ Example::
     MAX_WAITING_CONSOLES   # 32: idle sockets beyond that cannot lock anyone out
 """
 
-MAX_UNANSWERED = 4
-"""Requests of one console the node may hold at once; reading it pauses beyond that.
-
-Example::
-
-    sock.sendall(b"dump datastore\\n" * 1000)   # the node holds MAX_UNANSWERED at a time
-"""
-
-MAX_SEND_BUFFER_BYTES = 4 << 20
-"""Reply bytes kept for one console that is slow to read them; beyond that it is dropped.
-
-A console that takes none of its replies for 2 s is dropped as well.
-
-Example::
-
-    MAX_SEND_BUFFER_BYTES // (1 << 20)   # 4 (MiB)
-"""
-
 DEFAULT_AUTH_TIMEOUT_S = 5.0
 """Seconds a console may take to give its token before it is disconnected.
 
@@ -100,11 +98,67 @@ Example::
     CommandReceiverFactory(idle_timeout_s=None)   # never close an idle console
 """
 
-_SEND_TIMEOUT_S = 2.0  # a console that takes none of its replies for this long is dropped
-_PAUSE_OUT_BYTES = 64 * 1024  # stop taking a console's lines while this much waits to go
+_SEND_TIMEOUT_S = 2.0  # a console that takes none of a reply for this long is dropped
 _GOODBYE_TIMEOUT_S = 0.5  # for all consoles together, when the node stops
-_POLL_S = 0.5  # the selector wakes at least this often (halt() wakes it at once)
+_POLL_S = 0.5  # the local console's reader wakes at least this often
 _READ_CHUNK = 4096
+
+
+class ConsoleLoop(ThreadLoop):
+    """Base of the consoles: adds a processor at ``begin`` and submits lines to it.
+
+    Subclasses read lines (in ``loop()`` or threads of their own) and call
+    ``self.submit(line, session)``. Each console adds its own processor, so
+    several consoles never run one command twice.
+
+    Example::
+
+        class MyConsole(ConsoleLoop):
+            def loop(self) -> None:
+                self.submit(read_a_line(), self.session)
+    """
+
+    # For the graph: a console stores only what its user types (`task store_page ...`).
+    produces: Sequence[DataKey] = ()
+    reads: Sequence[DataKey] = ()
+
+    def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:
+        super().__init__(factory, parent, name)
+        self.processor_name = f"{name}_commands"
+        self.command_task_name = f"console_command:{name}"
+
+    def begin(self) -> None:
+        """Ask the node to add this console's processor (if it has none yet).
+
+        The add task is queued before any command this loop can submit, so
+        the processor exists by the time the first command runs.
+        """
+        if self.processor_name not in self.parent.components:
+            factory = CommandProcessorFactory(
+                self.processor_name, self.command_task_name, console=self.name
+            )
+            self.schedule(tasks.add_component(factory))
+
+    def submit(self, line: str, session: ConsoleSession) -> None:
+        """Queue a command line; the processor replies to ``session``.
+
+        While the node is paused (``pause``) the command is urgent, so it
+        runs although the node's other tasks wait.
+        """
+        priority = console_priority(self.parent)
+        self.schedule(Task(TaskType.event, self.command_task_name, [line, session], priority))
+
+    def greeting(self, how: str = "") -> str:
+        """The text of the ``hello`` a console gets; ``how`` says how it reached the node.
+
+        Example::
+
+            loop.greeting(" over Zenoh")   # "Connected to node 'urov' over Zenoh. Type 'help'..."
+        """
+        return (
+            f"Connected to node {self.parent.role!r}{how}. "
+            "Type 'help' for the commands, 'exit' to stop the node."
+        )
 
 
 class _TokenThrottle:
@@ -129,6 +183,7 @@ class _TokenThrottle:
         self.max_addresses = max_addresses
         # host -> (wrong tokens in a row, the last one's time), the longest-quiet host first
         self._failures: Dict[str, Tuple[int, float]] = {}
+        self._lock = threading.Lock()  # each console's thread checks its own tokens
 
     def _in_a_row(self, host: str, now: float) -> Tuple[int, float]:
         failures, last = self._failures.get(host, (0, 0.0))
@@ -145,128 +200,129 @@ class _TokenThrottle:
 
     def failed(self, host: str, now: float) -> Tuple[int, float]:
         """Count a wrong token; the failures in a row and the wait before the next try."""
-        failures = self._in_a_row(host, now)[0] + 1
-        self._failures.pop(host, None)
-        if len(self._failures) >= self.max_addresses:  # forget the longest-quiet address
-            del self._failures[next(iter(self._failures))]
-        self._failures[host] = (failures, now)
+        with self._lock:
+            failures = self._in_a_row(host, now)[0] + 1
+            self._failures.pop(host, None)
+            if len(self._failures) >= self.max_addresses:  # forget the longest-quiet address
+                del self._failures[next(iter(self._failures))]
+            self._failures[host] = (failures, now)
         return failures, self.delay_s(failures)
 
     def succeeded(self, host: str) -> None:
         """A right token: ``host`` starts afresh."""
-        self._failures.pop(host, None)
+        with self._lock:
+            self._failures.pop(host, None)
 
 
-class _RemoteSession:
-    """One TCP console, served by the receiver loop's thread.
+class _Gone(Exception):
+    """The console's connection ends; the message says how (for the log)."""
 
-    Every request line gets a `_ReplySlot` in `waiting`; whoever answers it
-    (the node's thread for commands, the loop's thread for a refused line)
-    fills the slot, and replies go out in request order, so a console always
-    knows which reply answers which line. At most `MAX_UNANSWERED` requests
-    wait for their replies; until some are sent, the console's lines wait in
-    the socket (so a flood of commands costs the node nothing). Replies are
-    sent without blocking from an output buffer that the loop thread drains.
+
+class _RemoteConsole(ConsoleSession):
+    """One TCP console, served by a thread of the receiver's while it is connected.
+
+    The thread reads a request line, has it answered, writes the reply, and
+    only then reads the next: lines sent ahead wait in the socket, so a flood
+    of commands costs the node nothing, and replies come in request order.
+    Every reply reaches the thread through `send`, from the node's thread or
+    from the receiver (a goodbye, which `interrupt` also wakes it for).
     """
 
-    def __init__(self, sock: socket.socket, address: Tuple[Any, ...], wake: socket.socket) -> None:
+    def __init__(
+        self, receiver: CommandReceiverLoop, sock: socket.socket, address: Tuple[Any, ...]
+    ) -> None:
+        self.receiver = receiver
         self.sock = sock
         self.host = str(address[0])
         self.peer = f"{address[0]}:{address[1]}"
-        self.wake = wake  # written to when a reply is filled in
         self.authenticated = False
-        self.closed = False
-        self.leaving = False  # a BYE is due: run no more of this console's lines
-        self.connected_at = self.last_request = self.last_sent = time.monotonic()
-        self.events = 0  # what the selector watches for (0: not registered)
-        self.waiting: Deque[_ReplySlot] = deque()  # requests not yet in `out`, in order
-        self.out = bytearray()  # encoded replies not yet taken by the socket
-        self.bye_queued = False  # the BYE is in `out`: close once it is sent
+        self.connected_at = time.monotonic()
+        self.replies: queue.Queue[Reply] = queue.Queue()
         self.lines = LineReader()
+        self.done = threading.Event()  # set once the connection is closed
 
-    def slot(self) -> _ReplySlot:
-        """A place for the reply to the next request, in order."""
-        slot = _ReplySlot(self)
-        self.waiting.append(slot)
-        return slot
+    def send(self, reply: Reply) -> None:
+        """Queue ``reply`` for the console's thread to write (any thread; never blocks)."""
+        self.replies.put(reply)
 
-    def takes_lines(self) -> bool:
-        """True while this console may have another line run."""
-        return (
-            not self.leaving
-            and len(self.waiting) < MAX_UNANSWERED
-            and len(self.out) < _PAUSE_OUT_BYTES
-        )
+    def interrupt(self, goodbye: Reply) -> None:
+        """Have the console's thread write ``goodbye`` (a BYE) at once, whatever it waits for."""
+        self.send(goodbye)
+        try:
+            self.sock.shutdown(socket.SHUT_RD)  # ends a wait in recv()
+        except OSError:
+            pass  # closed already
 
-    def wants_to_read(self) -> bool:
-        """True when the socket should be read: lines are taken, none is waiting."""
-        return self.takes_lines() and not self.lines.has_line()
+    def serve(self) -> None:
+        """The console's thread: greet, then answer line after line until a BYE or a hang-up."""
+        why = "closed"
+        try:
+            reply = self.receiver.greet(self)
+            while self.write(reply):
+                reply = self.next_reply()
+        except _Gone as gone:
+            why = str(gone)
+        except OSError:  # reset or broken pipe
+            why = "connection lost"
+        finally:
+            self.receiver.forget(self, why)
 
-    def collect(self) -> None:
-        """Move the replies that are ready, in order, to the output buffer."""
-        while self.waiting and not self.bye_queued:
-            reply = self.waiting[0].reply
-            if reply is None:
-                return
-            self.waiting.popleft()
-            if not self.out:
-                self.last_sent = time.monotonic()  # the send clock starts now
-            self.out += reply.encode()
-            self.bye_queued = reply.status is Status.BYE
+    def next_reply(self) -> Reply:
+        """The reply to the next request line (a goodbye from elsewhere goes first)."""
+        while self.replies.empty():
+            request = self.lines.next_request()
+            if isinstance(request, Reply):
+                return request  # a line that cannot be run
+            if request is not None:
+                return self.receiver.answer(self, request)
+            self.sock.settimeout(self.receiver.time_left_s(self))
+            try:
+                data = self.sock.recv(_READ_CHUNK)
+            except socket.timeout:
+                return self.receiver.timed_out(self)
+            if not data and self.replies.empty():
+                raise _Gone("disconnected")
+            self.lines.feed(data)
+        return self.replies.get()
 
-    def write(self) -> None:
-        """Send what the socket takes now, never waiting.
+    def write(self, reply: Reply) -> bool:
+        """Send ``reply``; False when it says bye.
 
         Raises:
-            OSError: the console hung up or reset the connection.
+            _Gone: the console took none of it for `_SEND_TIMEOUT_S`.
         """
-        while self.out:
+        data = memoryview(reply.encode())
+        self.sock.settimeout(_SEND_TIMEOUT_S)
+        while data:
             try:
-                sent = self.sock.send(self.out[:65536])
-            except (BlockingIOError, InterruptedError):
-                return
-            del self.out[:sent]
-            self.last_sent = time.monotonic()
+                data = data[self.sock.send(data) :]
+            except socket.timeout:
+                self.receiver.report(
+                    "slow reader",
+                    "Consoles dropped for not reading their replies",
+                    logging.WARNING,
+                    f"Dropped console {self.peer}: it did not read its replies ({len(data)} "
+                    f"bytes waiting, none taken for {_SEND_TIMEOUT_S:.1f} s).",
+                )
+                raise _Gone("dropped") from None
+        return reply.status is not Status.BYE
 
     def __repr__(self) -> str:
         return f"console {self.peer}"
 
 
-class _ReplySlot(ConsoleSession):
-    """Where the reply to one request of a remote console goes."""
-
-    def __init__(self, session: _RemoteSession) -> None:
-        self.session = session
-        self.reply: Optional[Reply] = None
-
-    def send(self, reply: Reply) -> None:
-        """Fill the slot (any thread; never blocks) and wake the receiver to send it."""
-        if self.session.closed:
-            return  # the console has gone; nobody waits for this reply
-        if reply.status is Status.BYE:
-            self.session.leaving = True
-        self.reply = reply
-        try:
-            self.session.wake.send(b"\0")
-        except OSError:
-            pass  # the receiver is shutting down, or already has wake-ups to read
-
-    def __repr__(self) -> str:
-        return repr(self.session)
-
-
 class CommandReceiverLoop(ConsoleLoop):
-    """Accepts console connections over TCP and submits their commands.
+    """Accepts console connections over TCP; each console's thread submits its commands.
 
     Built by `CommandReceiverFactory`. It listens from ``begin()`` (so a port
-    in use is reported at start-up) and serves its consoles with one
-    ``selectors`` loop on its own thread, never blocking on a socket. It
-    serves up to `MAX_CONSOLES` consoles that gave their token, plus up to
-    `MAX_WAITING_CONSOLES` that have yet to (they are disconnected after the
-    factory's ``auth_timeout_s``); a console idle for ``idle_timeout_s`` is
-    disconnected; wrong tokens make their address wait longer and longer; a
-    console that stops reading its replies is dropped. It says goodbye to
-    every console when the node stops. The node never notices any of it.
+    in use is reported at start-up). It serves up to `MAX_CONSOLES` consoles
+    that gave their token, plus up to `MAX_WAITING_CONSOLES` that have yet
+    to (they are disconnected after the factory's ``auth_timeout_s``); a
+    console idle for ``idle_timeout_s`` is disconnected; wrong tokens make
+    their address wait longer and longer; a console that stops reading its
+    replies is dropped. Each refusal is said to the console and logged
+    (repeats are counted). It says goodbye to every console when the node
+    stops. The node never notices any of it.
 
     Example::
 
@@ -279,16 +335,27 @@ class CommandReceiverLoop(ConsoleLoop):
         super().__init__(factory, parent, factory.name)
         self.auth_timeout_s = factory.auth_timeout_s
         self.idle_timeout_s = factory.idle_timeout_s
-        self._selector: Optional[selectors.BaseSelector] = None
         self._listener: Optional[socket.socket] = None
-        self._wake_in: Optional[socket.socket] = None
+        self._selector: Optional[selectors.BaseSelector] = None  # the listener, the wake-up
+        self._wake_in: Optional[socket.socket] = None  # with _wake_out: halt() ends a wait
         self._wake_out: Optional[socket.socket] = None
-        self._sessions: Dict[Any, _RemoteSession] = {}  # by socket, the oldest first
+        self._sessions: List[_RemoteConsole] = []  # the oldest first
+        self._lock = threading.Lock()
+        # Consoles accepted and not yet served, for the console threads. A thread that
+        # served a console takes the next, so a burst of connections starts few threads.
+        self._accepted: queue.Queue[Optional[_RemoteConsole]] = queue.Queue()
+        self._idle_threads = 0
+        self._threads = 0
         self._throttle = _TokenThrottle()
         self._repeats = RepeatFilter(self.log)
         self._last_summary = time.monotonic()
 
-    # -- life cycle (node thread) -------------------------------------------
+    def report(self, key: str, what: str, level: int, message: str) -> None:
+        """Log ``message`` (repeats of ``key`` are counted, then summed up)."""
+        with self._lock:
+            self._repeats.report(key, what, level, message)
+
+    # -- life cycle ---------------------------------------------------------
     def begin(self) -> None:
         """Listen on ``host:port`` and add the command processor."""
         factory = self.factory
@@ -307,16 +374,33 @@ class CommandReceiverLoop(ConsoleLoop):
             self.err("%s The node runs on without a console.", message)
             self.set_terminate_flag("cannot listen")
             return
-        self._listener.setblocking(False)
         self._wake_in, self._wake_out = socket.socketpair()
-        self._wake_out.setblocking(False)  # a wake-up must never block the node's thread
-        self._selector = selectors.DefaultSelector()
+        self._selector = selectors.DefaultSelector()  # not select(): any fd number works
         self._selector.register(self._listener, selectors.EVENT_READ)
         self._selector.register(self._wake_in, selectors.EVENT_READ)
         host, port = self._listener.getsockname()[:2]
         factory._now_listening(host, port)
         self.info("Console receiver listening on %s:%d", host, port)
         super().begin()
+
+    def loop(self) -> None:
+        """Accept the next console and start its thread."""
+        if self._listener is None or self._selector is None:  # begin() could not listen
+            self.set_terminate_flag("not listening")
+            return
+        ready = [key.fileobj for key, _ in self._selector.select(self._repeats.every_s)]
+        if self._wake_in in ready:
+            self._wake_in.recv(_READ_CHUNK)  # halt() woke it
+        elif self._listener in ready:
+            try:
+                sock, address = self._listener.accept()
+            except OSError:
+                return  # the client gave up before we accepted
+            self._start(_RemoteConsole(self, sock, address))
+        if time.monotonic() - self._last_summary >= self._repeats.every_s:
+            self._last_summary = time.monotonic()
+            with self._lock:
+                self._repeats.flush()  # counts of repeated warnings, even when they stopped
 
     def halt(self) -> None:
         """Wake the loop's thread so it sees it must stop."""
@@ -327,285 +411,191 @@ class CommandReceiverLoop(ConsoleLoop):
                 pass
 
     def terminate(self) -> None:
-        """Send what is queued and a goodbye to every console, then close all sockets.
+        """Say goodbye to every console, then close all sockets.
 
         The goodbyes share one short deadline, so consoles that do not read
         cannot hold up the node's shutdown.
         """
-        goodbye = Reply(Status.BYE, f"Node {self.parent.role!r} is stopping.").encode()
+        goodbye = Reply(Status.BYE, f"Node {self.parent.role!r} is stopping.")
+        with self._lock:
+            consoles = list(self._sessions)
+        for console in consoles:
+            console.interrupt(goodbye)
         deadline = time.monotonic() + _GOODBYE_TIMEOUT_S
-        for session in self._sessions.values():
-            session.collect()
-            if not session.bye_queued:
-                session.out += goodbye
-            try:
-                session.sock.settimeout(max(0.001, deadline - time.monotonic()))
-                session.sock.sendall(session.out)
-            except OSError:
-                pass  # gone already, or too slow to take its goodbye
-            session.closed = True
-            session.sock.close()
-        self._sessions.clear()
+        for console in consoles:
+            if not console.done.wait(max(0.0, deadline - time.monotonic())):
+                try:  # too slow to take its goodbye
+                    console.sock.shutdown(socket.SHUT_RDWR)
+                except OSError:
+                    pass
+        for _ in range(self._threads):
+            self._accepted.put(None)  # each console thread ends
         self._repeats.flush()
         for closable in (self._selector, self._listener, self._wake_in, self._wake_out):
             if closable is not None:
                 closable.close()
 
-    # -- the loop (its own thread) -------------------------------------------
-    def loop(self) -> None:
-        """Wait for connections, lines and replies; handle what arrived; enforce the limits."""
-        if self._selector is None or self._wake_in is None:  # begin() could not listen
-            self.set_terminate_flag("not listening")
-            return
-        now = time.monotonic()
-        deadlines = [when for s in self._sessions.values() for when, _ in self._limits(s)]
-        wait_s = max(0.005, min([now + _POLL_S, *deadlines]) - now)
-        for key, mask in self._selector.select(wait_s):
-            session = self._sessions.get(key.fileobj)
-            if key.fileobj is self._listener:
-                self._accept()
-            elif key.fileobj is self._wake_in:
-                self._wake_in.recv(_READ_CHUNK)  # the wake-ups: replies were filled in
-            elif session is not None:
-                if mask & selectors.EVENT_READ:
-                    self._read(session)
-                if mask & selectors.EVENT_WRITE and not session.closed:
-                    self._write(session)
-        now = time.monotonic()
-        for session in list(self._sessions.values()):
-            self._serve(session)
-        for session in list(self._sessions.values()):
-            for when, act in self._limits(session):
-                if now > when:
-                    act(session)
-                    break
-        if now - self._last_summary >= self._repeats.every_s:
-            self._last_summary = now
-            self._repeats.flush()  # counts of repeated warnings, even when they stopped
-
-    def _limits(self, session: _RemoteSession) -> List[Tuple[float, Callable[[Any], None]]]:
-        """The session's time limits: when each runs out, and what is done then."""
-        limits: List[Tuple[float, Callable[[Any], None]]] = []
-        if session.out:
-            limits.append((session.last_sent + _SEND_TIMEOUT_S, self._drop_slow_reader))
-        if not session.authenticated:
-            limits.append((session.connected_at + self.auth_timeout_s, self._no_token_in_time))
-        elif self.idle_timeout_s is not None and not session.waiting:
-            limits.append((session.last_request + self.idle_timeout_s, self._close_idle))
-        return limits
-
-    def _accept(self) -> None:
-        assert self._listener is not None and self._wake_out is not None
-        try:
-            sock, address = self._listener.accept()
-        except OSError:
-            return  # the client gave up before we accepted, or nothing is waiting
-        sock.setblocking(False)
-        session = _RemoteSession(sock, address, self._wake_out)
-        if self.factory.token is None:
-            self._sessions[sock] = session
-            self._let_in(session)
-            return
-        waiting = [s for s in self._sessions.values() if not s.authenticated]
-        if len(waiting) >= MAX_WAITING_CONSOLES:
-            self._repeats.report(
+    # -- the consoles (each on its own thread) --------------------------------
+    def _start(self, console: _RemoteConsole) -> None:
+        with self._lock:
+            waiting = [c for c in self._sessions if not c.authenticated]
+            full = self.factory.token is not None and len(waiting) >= MAX_WAITING_CONSOLES
+            pushed_out = waiting[0] if full else None
+            if pushed_out is not None:
+                self._sessions.remove(pushed_out)
+            self._sessions.append(console)
+        if pushed_out is not None:
+            self.report(
                 "waiting full",
                 "Consoles pushed out while waiting to give their token",
                 logging.WARNING,
                 f"{MAX_WAITING_CONSOLES} consoles are waiting to give their token, the most "
-                f"this receiver keeps; disconnected the oldest, {waiting[0].peer}, to make room.",
+                f"this receiver keeps; disconnected the oldest, {pushed_out.peer}, to make room.",
             )
             text = "Too many consoles are waiting to give their token."
-            self._close_with(waiting[0], Reply(Status.BYE, text))
-        self._sessions[sock] = session
-        self.dbg("Console %s connected", session.peer)
-        session.slot().send(
-            Reply(Status.AUTH, "This node needs a console token: send `auth <token>`.")
-        )
+            pushed_out.interrupt(Reply(Status.BYE, text))
+        with self._lock:  # an idle console thread takes it, else a new one
+            reuse = self._idle_threads > 0
+            self._idle_threads -= reuse
+            self._threads += not reuse
+        if reuse:
+            self._accepted.put(console)
+        else:
+            name = f"snr-{self.parent.role}-{self.name}-consoles"
+            threading.Thread(
+                target=self._serve_consoles, args=(console,), name=name, daemon=True
+            ).start()
 
-    def _let_in(self, session: _RemoteSession) -> None:
-        """Greet the console, or turn it away if `MAX_CONSOLES` are connected."""
-        if sum(s.authenticated for s in self._sessions.values()) >= MAX_CONSOLES:
-            self._repeats.report(
+    def _serve_consoles(self, console: Optional[_RemoteConsole]) -> None:
+        """A console thread: serves one console after another until the node stops."""
+        while console is not None:
+            console.serve()
+            with self._lock:
+                self._idle_threads += 1
+            console = self._accepted.get()
+
+    def greet(self, console: _RemoteConsole) -> Reply:
+        """The first reply: a request for the token, or the greeting."""
+        if self.factory.token is None:
+            return self._let_in(console)
+        self.dbg("Console %s connected", console.peer)
+        return Reply(Status.AUTH, "This node needs a console token: send `auth <token>`.")
+
+    def _let_in(self, console: _RemoteConsole) -> Reply:
+        """The greeting, or a BYE if `MAX_CONSOLES` are connected."""
+        with self._lock:
+            full = sum(c.authenticated for c in self._sessions) >= MAX_CONSOLES
+            console.authenticated = not full
+        if full:
+            self.report(
                 "full",
                 "Consoles turned away (too many connected)",
                 logging.WARNING,
-                f"Turned away console {session.peer}: {MAX_CONSOLES} are connected, the most "
+                f"Turned away console {console.peer}: {MAX_CONSOLES} are connected, the most "
                 "this receiver serves.",
             )
-            text = f"Too many consoles ({MAX_CONSOLES}) are open."
-            self._close_with(session, Reply(Status.BYE, text))
-            return
-        session.authenticated = True
-        session.last_request = time.monotonic()
-        session.slot().send(Reply(Status.HELLO, self.greeting()))
-        self.info("Console %s connected", session.peer)
+            return Reply(Status.BYE, f"Too many consoles ({MAX_CONSOLES}) are open.")
+        self.info("Console %s connected", console.peer)
+        return Reply(Status.HELLO, self.greeting())
 
-    def _read(self, session: _RemoteSession) -> None:
-        try:
-            data = session.sock.recv(_READ_CHUNK)
-        except (BlockingIOError, InterruptedError):
-            return
-        except OSError:
-            data = b""
-        if not data:
-            self._drop(session, "disconnected")
-        session.lines.feed(data)
+    def answer(self, console: _RemoteConsole, line: str) -> Reply:
+        """Check the token, or run the command and wait for its reply."""
+        if not console.authenticated:
+            return self._authenticate(console, line)
+        if not line:
+            return Reply(Status.OK, "")
+        self.submit(line, console)
+        return console.replies.get()
 
-    def _write(self, session: _RemoteSession) -> bool:
-        """Send what the socket takes now; False if the console has gone."""
-        try:
-            session.write()
-        except OSError:  # reset or broken pipe
-            self._drop(session, "connection lost")
-            return False
-        return True
+    def time_left_s(self, console: _RemoteConsole) -> Optional[float]:
+        """How long ``console`` may still send nothing (None: for ever)."""
+        if not console.authenticated:
+            return max(0.001, console.connected_at + self.auth_timeout_s - time.monotonic())
+        return self.idle_timeout_s
 
-    def _serve(self, session: _RemoteSession) -> None:
-        """Run the lines the console may have run, send its replies, watch its socket."""
-        session.collect()
-        while session.takes_lines():
-            request = session.lines.next_request()
-            if request is None:
-                break
-            if isinstance(request, Reply):
-                session.slot().send(request)
-            elif not session.authenticated:
-                self._authenticate(session, request)
-            else:
-                session.last_request = time.monotonic()
-                if request:
-                    self.submit(request, session.slot())
-                else:
-                    session.slot().send(Reply(Status.OK, ""))
-            if session.closed:
-                return
-            session.collect()
-        if len(session.out) > MAX_SEND_BUFFER_BYTES:
-            self._drop_slow_reader(session)
-            return
-        if not self._write(session):
-            return
-        if session.bye_queued and not session.out:
-            self._drop(session, "closed")
-            return
-        # Tell the selector what this session waits for now.
-        assert self._selector is not None
-        events = (selectors.EVENT_READ if session.wants_to_read() else 0) | (
-            selectors.EVENT_WRITE if session.out else 0
-        )
-        if events != session.events:
-            if session.events:
-                self._selector.unregister(session.sock)
-            if events:
-                self._selector.register(session.sock, events)
-            session.events = events
-
-    def _no_token_in_time(self, session: _RemoteSession) -> None:
-        self._repeats.report(
-            "no token",
-            "Consoles disconnected for giving no token in time",
-            logging.INFO,
-            f"Console {session.peer} gave no token within {self.auth_timeout_s:g} s; "
-            "disconnected it.",
-        )
-        text = f"No console token within {self.auth_timeout_s:g} s: disconnected."
-        self._close_with(session, Reply(Status.BYE, text))
-
-    def _close_idle(self, session: _RemoteSession) -> None:
-        self._repeats.report(
+    def timed_out(self, console: _RemoteConsole) -> Reply:
+        """The goodbye of a console that gave no token, or no command, in time."""
+        if not console.authenticated:
+            self.report(
+                "no token",
+                "Consoles disconnected for giving no token in time",
+                logging.INFO,
+                f"Console {console.peer} gave no token within {self.auth_timeout_s:g} s; "
+                "disconnected it.",
+            )
+            text = f"No console token within {self.auth_timeout_s:g} s: disconnected."
+            return Reply(Status.BYE, text)
+        self.report(
             "idle",
             "Idle consoles disconnected",
             logging.INFO,
-            f"Console {session.peer} sent no command for {self.idle_timeout_s:g} s; "
+            f"Console {console.peer} sent no command for {self.idle_timeout_s:g} s; "
             "disconnected it.",
         )
         text = (
             f"Closed this console after {self.idle_timeout_s:g} s without a command. "
             "Connect again to carry on."
         )
-        self._close_with(session, Reply(Status.BYE, text))
+        return Reply(Status.BYE, text)
 
-    def _drop_slow_reader(self, session: _RemoteSession) -> None:
-        self._repeats.report(
-            "slow reader",
-            "Consoles dropped for not reading their replies",
-            logging.WARNING,
-            f"Dropped console {session.peer}: it did not read its replies ({len(session.out)} "
-            f"bytes waiting, none taken for {time.monotonic() - session.last_sent:.1f} s).",
-        )
-        self._drop(session, "dropped")
-
-    def _authenticate(self, session: _RemoteSession, line: str) -> None:
+    def _authenticate(self, console: _RemoteConsole, line: str) -> Reply:
         token = self.factory.token
         assert token is not None
         word, _, given = line.partition(" ")
-        now = time.monotonic()
-        wait_s = self._throttle.wait_s(session.host, now) if word == "auth" else 0.0
+        host, peer, now = console.host, console.peer, time.monotonic()
+        wait_s = self._throttle.wait_s(host, now) if word == "auth" else 0.0
         if wait_s > 0:
-            self._repeats.report(
+            self.report(
                 "too early",
                 "Console tokens refused unchecked (too soon after wrong ones)",
                 logging.WARNING,
-                f"Console {session.peer} gave a token {wait_s:.1f} s too soon after wrong ones "
-                f"from {session.host}; refused it unchecked.",
+                f"Console {peer} gave a token {wait_s:.1f} s too soon after wrong ones "
+                f"from {host}; refused it unchecked.",
             )
             text = (
-                f"Too many wrong console tokens from {session.host}: the next one is checked "
+                f"Too many wrong console tokens from {host}: the next one is checked "
                 f"in {wait_s:.1f} s (each wrong token doubles the wait, up to "
                 f"{self._throttle.max_delay_s:g} s)."
             )
-            session.slot().send(Reply(Status.BYE, text))
-        elif word == "auth" and tokens_match(token, given.strip()):
-            self._throttle.succeeded(session.host)
-            self._let_in(session)
-        else:
-            if word == "auth":
-                failures, delay_s = self._throttle.failed(session.host, now)
-                self._repeats.report(
-                    "wrong token",
-                    "Consoles that gave a wrong token",
-                    logging.WARNING,
-                    f"Console {session.peer} gave a wrong token ({failures} in a row from "
-                    f"{session.host}); disconnected it. The next token from there is checked "
-                    f"after {delay_s:.2f} s.",
-                )
-            else:
-                self._repeats.report(
-                    "no auth",
-                    "Consoles that sent a command instead of their token",
-                    logging.WARNING,
-                    f"Console {session.peer} sent a command before its token; disconnected it.",
-                )
-            text = (
-                "Wrong or missing console token. Give the node's token with "
-                f"`snr-console HOST:PORT --token ...` or {TOKEN_ENV_VAR}, or, if the node "
-                "has a secret, run the console with the same secret ($SNR_SECRET or "
-                "the secret file; see docs/console.md)."
+            return Reply(Status.BYE, text)
+        if word == "auth" and tokens_match(token, given.strip()):
+            self._throttle.succeeded(host)
+            return self._let_in(console)
+        if word == "auth":
+            failures, delay_s = self._throttle.failed(host, now)
+            self.report(
+                "wrong token",
+                "Consoles that gave a wrong token",
+                logging.WARNING,
+                f"Console {peer} gave a wrong token ({failures} in a row from {host}); "
+                f"disconnected it. The next token from there is checked after {delay_s:.2f} s.",
             )
-            session.slot().send(Reply(Status.BYE, text))
-
-    def _close_with(self, session: _RemoteSession, reply: Reply) -> None:
-        """Queue what is ready and ``reply``, send what the socket takes now, and close."""
-        session.collect()
-        if not session.bye_queued:
-            session.out += reply.encode()
-        try:
-            session.write()
-        except OSError:
-            pass  # it had gone already
-        self._drop(session, "closed")
-
-    def _drop(self, session: _RemoteSession, why: str) -> None:
-        if self._sessions.pop(session.sock, None) is not None and session.events:
-            assert self._selector is not None
-            self._selector.unregister(session.sock)
-        if session.authenticated:
-            self.info("Console %s %s", session.peer, why)
         else:
-            self.dbg("Console %s %s before giving its token", session.peer, why)
-        session.closed = True
-        session.sock.close()
+            self.report(
+                "no auth",
+                "Consoles that sent a command instead of their token",
+                logging.WARNING,
+                f"Console {peer} sent a command before its token; disconnected it.",
+            )
+        text = (
+            "Wrong or missing console token. Give the node's token with "
+            f"`snr-console HOST:PORT --token ...` or {TOKEN_ENV_VAR}, or, if the node "
+            "has a secret, run the console with the same secret ($SNR_SECRET or "
+            "the secret file; see docs/console.md)."
+        )
+        return Reply(Status.BYE, text)
+
+    def forget(self, console: _RemoteConsole, why: str) -> None:
+        """``console``'s connection ended (``why``): close it and free its place."""
+        with self._lock:
+            if console in self._sessions:
+                self._sessions.remove(console)
+        if console.authenticated:
+            self.info("Console %s %s", console.peer, why)
+        else:
+            self.dbg("Console %s %s before giving its token", console.peer, why)
+        console.sock.close()
+        console.done.set()
 
 
 class CommandReceiverFactory(LoopFactory):
@@ -706,3 +696,149 @@ class CommandReceiverFactory(LoopFactory):
 
     def __repr__(self) -> str:
         return f"CommandReceiverFactory(host={self.host!r}, port={self.port})"
+
+
+class _LocalSession(ConsoleSession):
+    """Prints replies on the node's terminal; a BYE stops the local console."""
+
+    def __init__(self, console: LocalConsole, output: IO[str]) -> None:
+        self.console = console
+        self.output = output
+        self._lock = threading.Lock()
+
+    def send(self, reply: Reply) -> None:
+        if reply.text:
+            with self._lock:
+                try:
+                    self.output.write(reply.text + "\n")
+                    self.output.flush()
+                except (OSError, ValueError):
+                    pass  # the terminal is gone; the node carries on
+        if reply.status is Status.BYE:
+            self.console.set_terminate_flag("console closed")
+
+    def __repr__(self) -> str:
+        return "local console"
+
+
+class LocalConsole(ConsoleLoop):
+    """Reads console commands from the node's own terminal (stdin).
+
+    The same commands as `snr-console`; replies are printed on stdout. When
+    stdin ends (Ctrl-D, or the end of a file fed with ``<``) the console
+    stops and the node keeps running.
+
+    Example::
+
+        LocalConsoleFactory()     # in a role's factory list
+    """
+
+    def __init__(
+        self,
+        factory: LocalConsoleFactory,
+        parent: AbstractNode,
+        stream: IO[str],
+        output: IO[str],
+    ) -> None:
+        super().__init__(factory, parent, factory.name)
+        self.stream = stream
+        self.session = _LocalSession(self, output)
+        self._fd = _real_fd(stream)
+        self._lines = LineReader()
+        self._at_end = False  # stdin has ended: what is left is the last line
+        self._wake_pipe: Optional[Tuple[int, int]] = None  # lets halt() end a wait at once
+
+    def begin(self) -> None:
+        """Add the command processor; make the pipe that wakes the reader."""
+        if self._fd is not None:
+            self._wake_pipe = os.pipe()
+        super().begin()
+
+    def halt(self) -> None:
+        """Wake the reader if it is waiting for a line."""
+        if self._wake_pipe is not None:
+            try:
+                os.write(self._wake_pipe[1], b"\0")
+            except OSError:
+                pass
+
+    def terminate(self) -> None:
+        """Close the wake-up pipe (stdin itself belongs to the program)."""
+        if self._wake_pipe is not None:
+            for fd in self._wake_pipe:
+                os.close(fd)
+            self._wake_pipe = None
+
+    def setup(self) -> None:
+        self.session.send(Reply(Status.OK, f"Console for node {self.parent.role!r}: type 'help'."))
+
+    def loop(self) -> None:
+        """Submit the next line typed, waiting at most a moment for it."""
+        request = self._lines.next_request(self._at_end)
+        if request is None and self._at_end:
+            self.info("stdin closed: the local console stops; the node keeps running.")
+            self.set_terminate_flag("end of input")
+        elif request is None:
+            self._at_end = not self._read()
+        elif isinstance(request, Reply):
+            self.session.send(request)  # a line that cannot be run
+        elif request:
+            self.submit(request, self.session)
+
+    def _read(self) -> bool:
+        """Take what stdin has, waiting at most `_POLL_S` for it; False at its end."""
+        if self._fd is None:  # an in-memory stream (tests) never blocks
+            data = self.stream.readline().encode("utf-8")
+        else:
+            # select.select, unlike epoll, also accepts a plain file as stdin.
+            waiting = [self._fd] + ([self._wake_pipe[0]] if self._wake_pipe else [])
+            if self._fd not in select.select(waiting, [], [], _POLL_S)[0]:
+                return True
+            data = os.read(self._fd, _READ_CHUNK)
+        self._lines.feed(data)
+        return bool(data)
+
+
+def _real_fd(stream: IO[str]) -> Optional[int]:
+    """The stream's file descriptor if we can wait on it with a timeout."""
+    if sys.platform == "win32":  # select() works only on sockets there
+        return None
+    try:
+        return stream.fileno()
+    except (OSError, ValueError, AttributeError):  # io.UnsupportedOperation is an OSError
+        return None
+
+
+class LocalConsoleFactory(LoopFactory):
+    """Builds a `LocalConsole`: console commands typed in the node's terminal.
+
+    Args:
+        stream: where commands come from (default: ``sys.stdin``).
+        output: where replies go (default: ``sys.stdout``).
+        name: the loop's component name.
+
+    Example::
+
+        config = Config({"robot": [MotorFactory(), LocalConsoleFactory()]})
+    """
+
+    def __init__(
+        self,
+        stream: Optional[IO[str]] = None,
+        output: Optional[IO[str]] = None,
+        name: ComponentName = "local_console",
+    ) -> None:
+        super().__init__()
+        self.stream = stream
+        self.output = output
+        self.name = name
+
+    def get(self, parent: AbstractNode) -> LocalConsole:
+        stream = self.stream if self.stream is not None else sys.stdin
+        output = self.output if self.output is not None else sys.stdout
+        return LocalConsole(self, parent, stream, output)
+
+    def __getstate__(self) -> Dict[str, Any]:
+        state = super().__getstate__()
+        state["stream"] = state["output"] = None  # streams stay in their process
+        return state

@@ -260,10 +260,6 @@ class LineReader:
         """Keep ``data`` until its lines are taken."""
         self.inbox += data
 
-    def has_line(self) -> bool:
-        """True when a whole line waits to be taken."""
-        return b"\n" in self.inbox
-
     def next_request(self, at_end: bool = False) -> Union[str, Reply, None]:
         """The next line (stripped), the ``error`` reply refusing it, or None: no line yet.
 

@@ -1,12 +1,10 @@
 """The console's end: one client core, `ConsoleClient`, and its TCP transport, `RemoteConsole`.
 
 Run it as ``snr-console HOST:PORT`` (or ``python -m snr.console HOST:PORT``)
-against a node whose config has a `CommandReceiverFactory`. With readline
-(Linux, macOS) you get line editing, history and Tab completion of commands.
-``snr-console --zenoh SYSTEM [ROLE]`` reaches a node over Zenoh instead:
-that transport is an extra (``snr/extras/zenoh/console.py``), found through
-the entry point ``snr.console_transports``. How the parts fit:
-``docs/console.md``, "How the console is built".
+against a node with a `CommandReceiverFactory`; with readline you get line
+editing, history and Tab completion. ``--zenoh SYSTEM [ROLE]`` reaches a node
+over Zenoh instead, a transport found through the entry point
+``snr.console_transports`` (``docs/console.md``, "How the console is built").
 
 Example::
 
@@ -26,7 +24,7 @@ from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequen
 from snr.core import plugins
 from snr.core.checks.os_errors import explain_os_error
 from snr.prelude import SNRError, WireFormatError
-from snr.std_mods.io.command_table import COMMANDS
+from snr.std_mods.io.command_processor import COMMANDS, HZ_DEFAULT_WINDOW_S
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
     MAX_LINE_BYTES,
@@ -38,7 +36,6 @@ from snr.std_mods.io.console_protocol import (
     default_token,
     parse_address,
 )
-from snr.std_mods.io.key_watch import HZ_DEFAULT_WINDOW_S
 
 if TYPE_CHECKING:
     import argparse
@@ -107,16 +104,12 @@ class ConsoleClient(ABC):
         """Reach the node(s); returns the greeting.
 
         Raises:
-            ConsoleConnectionError: no node answered, or it turned the console
-                away. The message says what to try.
+            ConsoleConnectionError: no node answered, or it turned the console away.
         """
 
     @abstractmethod
     def ask(self, line: str, timeout_s: float) -> Reply:
-        """Send one checked request line, wait at most ``timeout_s``; its reply.
-
-        A transport that reaches several nodes returns one reply holding
-        each node's, under its role.
+        """Send one checked line, wait at most ``timeout_s``; its reply (several nodes': one).
 
         Raises:
             ConsoleConnectionError: the node went away, or no reply came in time.
@@ -167,7 +160,14 @@ class ConsoleClient(ABC):
             raise ValueError(f"A console command may be at most {MAX_LINE_BYTES} bytes long.")
         if not self.is_connected():
             raise self._not_connected()
-        reply = self.ask(line, self._reply_timeout_s(line))
+        timeout_s = self.timeout_s  # `hz KEY W` replies after W s
+        words = line.lower().split()
+        if words[:1] == ["hz"]:
+            try:
+                timeout_s += max(0.0, float(words[2]) if len(words) == 3 else HZ_DEFAULT_WINDOW_S)
+            except ValueError:  # the node refuses it at once
+                pass
+        reply = self.ask(line, timeout_s)
         if reply.status is Status.BYE:
             self.close()
         return reply
@@ -177,17 +177,6 @@ class ConsoleClient(ABC):
             f"The console is not connected to {self.where}: call connect() first "
             "(a node that said bye has closed the connection)."
         )
-
-    def _reply_timeout_s(self, line: str) -> float:
-        """How long to wait for the reply to ``line``: ``hz KEY W`` replies after W s."""
-        words = line.lower().split()
-        if words[:1] != ["hz"]:
-            return self.timeout_s
-        try:
-            window_s = float(words[2]) if len(words) == 3 else HZ_DEFAULT_WINDOW_S
-        except ValueError:  # the node refuses it at once
-            window_s = 0.0
-        return self.timeout_s + max(0.0, window_s)
 
     def stream(self, line: str, output: IO[str], replies: Optional[int] = None) -> int:
         """Send ``line`` (an ``echo KEY``) again and again, printing each reply, until Ctrl-C.
