@@ -19,6 +19,7 @@ import inspect
 from types import CodeType
 from typing import Any, Set
 
+from snr.core.checks.call_checks import param_text
 from snr.core.checks.error_text import closest_match
 from snr.core.checks.student_code import caller_block, def_block, describe_callable, describe_class
 from snr.prelude import AbstractComponent, ComponentError, TaskId, TaskType
@@ -94,14 +95,6 @@ def check_entry(key: Any, handler: Any, owner_class: type = object) -> None:
     check_handler(handler, key, owner_class)  # names the def to fix itself
 
 
-def _param_text(param: inspect.Parameter) -> str:
-    if param.kind is inspect.Parameter.VAR_POSITIONAL:
-        return "*" + param.name
-    if param.kind is inspect.Parameter.VAR_KEYWORD:
-        return "**" + param.name
-    return param.name
-
-
 def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None:
     """Raise a ComponentError unless ``handler`` can be called as ``f(task, key)``.
 
@@ -134,7 +127,7 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
     except TypeError:
         where = describe_callable(handler)
         name = getattr(handler, "__name__", "handler")
-        params = [_param_text(p) for p in signature.parameters.values()]
+        params = [param_text(p) for p in signature.parameters.values()]
         self_ = "self, " if hasattr(handler, "__self__") else ""
         if hasattr(handler, "__self__"):
             params.insert(0, "self")
