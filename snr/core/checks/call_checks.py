@@ -46,6 +46,7 @@ __all__ = [
     "check_schedule_args",
     "no_sim_clock_across_processes",
     "page_as_data",
+    "param_text",
     "plain_signature",
     "values_not_a_list",
     "wrong_call",
@@ -90,17 +91,24 @@ def plain_signature(name: str, function: Any) -> str:
     for parameter in signature.parameters.values():
         if parameter.name == "self":
             continue
-        text = parameter.name
-        if parameter.kind is parameter.VAR_POSITIONAL:
-            text = "*" + text
-        elif parameter.kind is parameter.VAR_KEYWORD:
-            text = "**" + text
-        elif isinstance(parameter.default, enum.Enum):
-            text += f"={type(parameter.default).__name__}.{parameter.default.name}"
-        elif parameter.default is not parameter.empty:
-            text += f"={parameter.default!r}"
+        text, default = param_text(parameter), parameter.default
+        if isinstance(default, enum.Enum):
+            text += f"={type(default).__name__}.{default.name}"
+        elif default is not parameter.empty:
+            text += f"={default!r}"
         parts.append(text)
     return f"{name}({', '.join(parts)})"
+
+
+def param_text(parameter: Any) -> str:
+    """``"*args"``: an ``inspect.Parameter`` as it is written in a ``def``, without its default.
+
+    Example::
+
+        [param_text(p) for p in inspect.signature(f).parameters.values()]   # ['task', '*args']
+    """
+    stars = {parameter.VAR_POSITIONAL: "*", parameter.VAR_KEYWORD: "**"}.get(parameter.kind, "")
+    return f"{stars}{parameter.name}"
 
 
 def wrong_call(name: str, function: Any, args: Iterable[Any], problem: str) -> str:
@@ -131,18 +139,14 @@ def values_not_a_list(name: str, values: Any) -> str:
         values_not_a_list("say", "hello")
         # tasks.event('say', 'hello') at robot.py:9 in Speaker.begin: ...
     """
-    got = f"{short_repr(values, 40)} is a {type(values).__name__}"
+    shown = short_repr(values, 40)
+    got = f"{shown} is a {type(values).__name__}"
     if isinstance(values, str) and values:
         got += f", so task.val_list[0] would be {values[0]!r}"
-    wrapped = (
-        f"list({short_repr(values, 40)})"
-        if isinstance(values, (tuple, set))
-        else (f"[{short_repr(values, 40)}]")
-    )
+    wrapped = f"list({shown})" if isinstance(values, (tuple, set)) else f"[{shown}]"
     return (
-        f"tasks.event({name!r}, {short_repr(values, 40)}) at {call_site()}: an event's "
-        f"values go in a list (its val_list), and {got}. Write "
-        f"tasks.event({name!r}, {wrapped})."
+        f"tasks.event({name!r}, {shown}) at {call_site()}: an event's values go in a list "
+        f"(its val_list), and {got}. Write tasks.event({name!r}, {wrapped})."
     )
 
 
@@ -154,16 +158,13 @@ def bad_data_key(key: Any, data: Any) -> str:
         bad_data_key(21.5, "temperature")
         # Data stored under the key 21.5 at robot.py:9 in Thermometer.loop: a data key ...
     """
+    shown = short_repr(key, 40)
+    fix = "Write store_data(key, data) with a key such as 'depth_m'."
     if isinstance(data, str):
-        fix = (
-            f"The key and the data look swapped: write store_data({data!r}, {short_repr(key, 40)})."
-        )
-    else:
-        fix = "Write store_data(key, data) with a key such as 'depth_m'."
+        fix = f"The key and the data look swapped: write store_data({data!r}, {shown})."
     return (
-        f"Data stored under the key {short_repr(key, 40)} at {call_site()}: a data key "
-        f"must be a str, and {short_repr(key, 40)} is a {type(key).__name__} (the data "
-        f"is {short_repr(data, 40)}). {fix}"
+        f"Data stored under the key {shown} at {call_site()}: a data key must be a str, and "
+        f"{shown} is a {type(key).__name__} (the data is {short_repr(data, 40)}). {fix}"
     )
 
 
@@ -219,14 +220,10 @@ def check_config_args(config_class: Any, factories: Any, mode: Any, clock: Any) 
             )
         for fac in facs:
             if not isinstance(fac, AbstractFactory):
-                hint = (
-                    " It looks like a class: add () to make a factory object."
-                    if isinstance(fac, type)
-                    else ""
-                )
+                hint = " It looks like a class: add () to make a factory object."
                 raise ConfigError(
-                    f"Role {role!r} lists {fac!r}, which is not a factory (an "
-                    f"EndpointFactory or LoopFactory object).{hint}"
+                    f"Role {role!r} lists {fac!r}, which is not a factory (an EndpointFactory "
+                    f"or LoopFactory object).{hint if isinstance(fac, type) else ''}"
                 )
     if clock is not None and not isinstance(clock, SimClock):
         raise ConfigError(

@@ -39,36 +39,35 @@ from __future__ import annotations
 import ast
 import inspect
 import textwrap
-from typing import Callable, Dict, Iterator, List, Optional, Set, Tuple
+from typing import Callable, Dict, Iterator, List, NamedTuple, Optional, Set, Tuple
 
 from snr.core.checks.error_text import closest_match
 from snr.core.checks.handler_checks import async_text
 from snr.core.checks.student_code import (
     describe_callable,
     describe_class,
+    is_snr,
     parse_source,
     source_block,
+    walk_own,
 )
 from snr.core.endpoint import Endpoint
 from snr.core.loop import LoopState, ThreadLoop
-from snr.prelude import (
-    AbstractComponent,
-    AbstractEndpoint,
-    AbstractLoop,
-    ComponentError,
-)
+from snr.prelude import AbstractComponent, AbstractEndpoint, AbstractLoop, ComponentError
 
 __all__ = ["NEAR_MISS", "check_component", "framework_names"]
 
-# Names a student is meant to set or define.
-_MAY_SET = {"name", "task_handlers", "max_tick_rate_hz", "terminate_reason"}
-_ENDPOINT_HOOKS = ("begin", "halt", "terminate")
-_LOOP_HOOKS = ("begin", "setup", "loop", "halt", "terminate")
-# Instance attributes SNR sets itself (not visible on the class).
-_INSTANCE_NAMES = {"parent": "the node it belongs to", "factory": "the factory that built it"}
-_LOOP_INSTANCE_NAMES = {
+_MAY_SET = {"name", "task_handlers", "max_tick_rate_hz", "terminate_reason"}  # the student's
+_HOOKS: Dict[type, Tuple[str, ...]] = {
+    Endpoint: ("begin", "halt", "terminate"),
+    ThreadLoop: ("begin", "setup", "loop", "halt", "terminate"),
+}
+# Instance attributes SNR sets itself (not visible on the class); "state" on a loop only.
+_SET_BY_SNR = {
+    "parent": "the node it belongs to",
+    "factory": "the factory that built it",
     "state": "the loop's state (LoopState.NEW, RUNNING or STOPPED), which SNR sets as the "
-    "loop starts and stops, so your value is overwritten"
+    "loop starts and stops, so your value is overwritten",
 }
 _TASK_BUILDERS = {
     "event",
@@ -80,11 +79,12 @@ _TASK_BUILDERS = {
     "add_component",
     "remove_component",
 }
+# task_store_data and task_store_page: the thesis's names (listing 6.3) for the two before.
 _SELF_BUILDERS = {
     "page",
     "store_data_task",
     "store_page_task",
-    "task_store_data",  # the thesis's names (listing 6.3) for the two above
+    "task_store_data",
     "task_store_page",
 }
 
@@ -116,7 +116,7 @@ def framework_names(kind: type) -> Dict[str, str]:
     """
     names: Dict[str, str] = {}
     for base in reversed(kind.__mro__):
-        if base.__module__.split(".", 1)[0] != "snr":
+        if not is_snr(base):
             continue
         for name, value in vars(base).items():
             if name.startswith("_") or name in _MAY_SET:
@@ -125,10 +125,8 @@ def framework_names(kind: type) -> Dict[str, str]:
                 names[name] = f"{kind.__name__}'s property {name}"
             elif callable(value) or isinstance(value, (staticmethod, classmethod)):
                 names[name] = f"{kind.__name__}'s method {name}()"
-    for name, what in _INSTANCE_NAMES.items():
-        names[name] = f"{kind.__name__}'s {name}, {what}"
-    if issubclass(kind, ThreadLoop):
-        for name, what in _LOOP_INSTANCE_NAMES.items():
+    for name, what in _SET_BY_SNR.items():
+        if name != "state" or issubclass(kind, ThreadLoop):
             names[name] = f"{kind.__name__}'s {name}, {what}"
     return names
 
@@ -147,11 +145,9 @@ def check_component(
         check_component(component, node.log.warning)
     """
     cls = type(component)
-    if cls.__module__.split(".", 1)[0] == "snr":
+    if is_snr(cls) or not isinstance(component, (AbstractLoop, AbstractEndpoint)):
         return
     kind: type = ThreadLoop if isinstance(component, AbstractLoop) else Endpoint
-    if not isinstance(component, (AbstractLoop, AbstractEndpoint)):
-        return
     first_time = cls not in _checked
     if first_time:
         if len(_checked) >= _MAX_CACHED:
@@ -170,17 +166,17 @@ def check_component(
 def _check_instance(component: AbstractComponent, kind: type) -> None:
     """Collisions seen in the built object (for classes whose source is unreadable)."""
     names = framework_names(kind)
-    owned = vars(component)
     _check_near_misses(component, names)
-    for hook in _LOOP_HOOKS if kind is ThreadLoop else _ENDPOINT_HOOKS:
+    for hook in _HOOKS[kind]:
         method = getattr(component, hook, None)
         if inspect.iscoroutinefunction(method):
-            raise ComponentError(async_text(f"{describe_callable(method)}", method))
-    for name in owned:
-        if name in names and name not in _INSTANCE_NAMES and name not in _LOOP_INSTANCE_NAMES:
+            raise ComponentError(async_text(describe_callable(method), method))
+    for name in vars(component):
+        if name in names and name not in _SET_BY_SNR:
             raise ComponentError(_collision(type(component), name, names[name], ""))
-    state = owned.get("state", LoopState.NEW)
-    if kind is ThreadLoop and not isinstance(state, LoopState):
+    if kind is ThreadLoop and not isinstance(
+        vars(component).get("state", LoopState.NEW), LoopState
+    ):
         raise ComponentError(_collision(type(component), "state", names["state"], ""))
 
 
@@ -205,136 +201,116 @@ def _check_near_misses(component: AbstractComponent, names: Dict[str, str]) -> N
 
 def _assignment(cls: type, attr: str) -> str:
     """The line of the student's class that assigns ``self.attr``, as a block, or ""."""
-    for own in cls.__mro__:
-        found = _class_tree(own) if own.__module__.split(".", 1)[0] != "snr" else None
-        if found is None:
+    for source in map(_read_source, cls.__mro__):
+        if source is None:
             continue
-        filename, tree = found
-        for method in _methods(tree):
-            for node in _walk_own(method):
-                for target in _targets(node):
-                    if isinstance(target, ast.Attribute) and target.attr == attr:
-                        return _block(filename, own, method.name, target.lineno)
+        for method in source.methods():
+            for node in walk_own(method):
+                for target in _attributes_set(node):
+                    if target.attr == attr:
+                        return source.at(method.name, target.lineno)
     return ""
 
 
 def _collision(cls: type, name: str, what: str, where: str) -> str:
     # The "Did you mean" comes with a name of the student's own, e.g. self.diver_state.
-    mine = f"self.{cls.__name__.lower()}_{name}"
     return (
         f"{describe_class(cls)} uses the name {name!r} for its own value, but {name!r} is "
         f"already {what}. Two things cannot share a name: SNR or your code would get the "
-        f"wrong one. Use another name, e.g. {mine}.{where}"
+        f"wrong one. Use another name, e.g. self.{cls.__name__.lower()}_{name}.{where}"
     )
 
 
 # -- reading the class ------------------------------------------------------------
-def _read_class(cls: type, kind: type) -> Iterator[Tuple[str, bool]]:
-    """(message, is_error) for every mistake in the student's classes of ``cls``."""
-    names = framework_names(kind)
-    hooks = _LOOP_HOOKS if kind is ThreadLoop else _ENDPOINT_HOOKS
-    for own in cls.__mro__:
-        if own.__module__.split(".", 1)[0] == "snr" or own is object:
-            continue
-        found = _class_tree(own)
-        if found is None:
-            continue
-        filename, tree = found
-        yield from _collisions(own, filename, tree, names, hooks)
-        yield from _dropped_work(own, filename, tree, kind)
-        yield from _ignored_returns(own, filename, tree, hooks)
-        yield from _uncalled_hooks(own, filename, tree, kind, hooks)
+class _Source(NamedTuple):
+    """One of the student's classes, with its file and its syntax tree (at the file's lines)."""
+
+    cls: type
+    filename: str
+    tree: ast.ClassDef
+
+    def methods(self) -> List[ast.FunctionDef]:
+        return [item for item in self.tree.body if isinstance(item, ast.FunctionDef)]
+
+    def at(self, method: str, line: int) -> str:
+        """A line of ``method`` as a `source_block`, on a line of its own."""
+        return "\n" + source_block(self.filename, line, f"{self.cls.__name__}.{method}")
 
 
-def _class_tree(cls: type) -> Optional[Tuple[str, ast.ClassDef]]:
-    """The file and syntax tree of ``cls``, with the file's line numbers, or None."""
+def _read_source(cls: type) -> Optional[_Source]:
+    """``cls`` as a `_Source`, or None: SNR's own, or its source cannot be read."""
+    if is_snr(cls) or cls is object:
+        return None
     try:
         filename = inspect.getsourcefile(cls)
         lines, first = inspect.getsourcelines(cls)
-    except (OSError, TypeError):
-        return None
-    if filename is None:
-        return None
-    try:
         tree = parse_source(textwrap.dedent("".join(lines)))
-    except SyntaxError:
+    except (OSError, TypeError, SyntaxError):
         return None
     ast.increment_lineno(tree, first - 1)
     node = tree.body[0] if tree.body else None
-    return (filename, node) if isinstance(node, ast.ClassDef) else None
+    if filename is None or not isinstance(node, ast.ClassDef):
+        return None
+    return _Source(cls, filename, node)
 
 
-def _methods(tree: ast.ClassDef) -> Iterator[ast.FunctionDef]:
-    for item in tree.body:
-        if isinstance(item, ast.FunctionDef):
-            yield item
+def _read_class(cls: type, kind: type) -> Iterator[Tuple[str, bool]]:
+    """(message, is_error) for every mistake in the student's classes of ``cls``."""
+    names = framework_names(kind)
+    for source in map(_read_source, cls.__mro__):
+        if source is not None:
+            yield from _collisions(source, names, _HOOKS[kind])
+            yield from _dropped_work(source, kind)
+            yield from _ignored_returns(source, _HOOKS[kind])
+            yield from _uncalled_hooks(source, kind)
 
 
-def _walk_own(function: ast.AST) -> Iterator[ast.AST]:
-    """The nodes of ``function``, not of functions or classes inside it."""
-    stack = list(ast.iter_child_nodes(function))
-    while stack:
-        node = stack.pop()
-        yield node
-        if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef)):
-            stack.extend(ast.iter_child_nodes(node))
+def _is_self(node: ast.AST) -> bool:
+    return isinstance(node, ast.Name) and node.id == "self"
 
 
-def _block(filename: str, cls: type, method: str, line: int) -> str:
-    return "\n" + source_block(filename, line, f"{cls.__name__}.{method}")
+def _attributes_set(node: ast.AST) -> List[ast.Attribute]:
+    """The ``x.name`` an assignment sets (``x.name = ...``, ``+=``, annotated)."""
+    targets: List[ast.expr] = list(node.targets) if isinstance(node, ast.Assign) else []
+    if isinstance(node, (ast.AugAssign, ast.AnnAssign)):
+        targets = [node.target]
+    return [target for target in targets if isinstance(target, ast.Attribute)]
 
 
 def _collisions(
-    cls: type, filename: str, tree: ast.ClassDef, names: Dict[str, str], hooks: Tuple[str, ...]
+    source: _Source, names: Dict[str, str], hooks: Tuple[str, ...]
 ) -> Iterator[Tuple[str, bool]]:
-    for method in _methods(tree):
+    for method in source.methods():
         if method.name in names and method.name not in hooks:
-            where = _block(filename, cls, method.name, method.lineno)
-            yield _collision(cls, method.name, names[method.name], where), True
-        for node in _walk_own(method):
-            for target in _targets(node):
-                if (
-                    isinstance(target, ast.Attribute)
-                    and isinstance(target.value, ast.Name)
-                    and target.value.id == "self"
-                    and target.attr in names
-                ):
-                    where = _block(filename, cls, method.name, target.lineno)
-                    yield _collision(cls, target.attr, names[target.attr], where), True
+            where = source.at(method.name, method.lineno)
+            yield _collision(source.cls, method.name, names[method.name], where), True
+        for node in walk_own(method):
+            for target in _attributes_set(node):
+                if target.attr in names and _is_self(target.value):
+                    where = source.at(method.name, target.lineno)
+                    yield _collision(source.cls, target.attr, names[target.attr], where), True
 
 
-def _targets(node: ast.AST) -> List[ast.expr]:
-    if isinstance(node, ast.Assign):
-        return list(node.targets)
-    if isinstance(node, (ast.AugAssign, ast.AnnAssign)):
-        return [node.target]
-    return []
-
-
-def _dropped_work(
-    cls: type, filename: str, tree: ast.ClassDef, kind: type
-) -> Iterator[Tuple[str, bool]]:
-    for method in _methods(tree):
-        for node in _walk_own(method):
+def _dropped_work(source: _Source, kind: type) -> Iterator[Tuple[str, bool]]:
+    for method in source.methods():
+        for node in walk_own(method):
             if not (isinstance(node, ast.Expr) and isinstance(node.value, ast.Call)):
                 continue
             built = _built(node.value.func)
-            if built is None:
-                continue
             code = ast.unparse(node.value)
-            is_page = built == "page"
-            if is_page:
-                use = f"`self.store_page({code})`"
-            elif kind is ThreadLoop:
-                use = f"`self.schedule({code})`"
+            if built == "page":
+                what, until, use = "a page", "stored", f"`self.store_page({code})`"
+            elif built is None:
+                continue
             else:
-                use = f"`return {code}` (from a handler) or `self.schedule({code})`"
-            what = "a page" if is_page else "a task"
+                what, until = "a task", "returned from a handler or scheduled"
+                use = f"`self.schedule({code})`"
+                if kind is not ThreadLoop:
+                    use = f"`return {code}` (from a handler) or {use}"
             yield (
-                f"{cls.__name__}.{method.name} builds {what}, `{code}`, and drops it: "
-                f"nothing happens until it is "
-                f"{'stored' if is_page else 'returned from a handler or scheduled'}. "
-                f"Write {use}.{_block(filename, cls, method.name, node.lineno)}",
+                f"{source.cls.__name__}.{method.name} builds {what}, `{code}`, and drops it: "
+                f"nothing happens until it is {until}. Write {use}."
+                f"{source.at(method.name, node.lineno)}",
                 False,
             )
 
@@ -348,60 +324,50 @@ def _built(func: ast.expr) -> Optional[str]:
     owner = func.value
     if isinstance(owner, ast.Name) and owner.id == "tasks" and func.attr in _TASK_BUILDERS:
         return "task"
-    is_self = isinstance(owner, ast.Name) and owner.id == "self"
-    is_parent = (
-        isinstance(owner, ast.Attribute)
-        and owner.attr == "parent"
-        and isinstance(owner.value, ast.Name)
-        and owner.value.id == "self"
+    on_self = _is_self(owner) or (
+        isinstance(owner, ast.Attribute) and owner.attr == "parent" and _is_self(owner.value)
     )
-    if (is_self or is_parent) and func.attr in _SELF_BUILDERS:
+    if on_self and func.attr in _SELF_BUILDERS:
         return "page" if func.attr == "page" else "task"
     return None
 
 
-def _ignored_returns(
-    cls: type, filename: str, tree: ast.ClassDef, hooks: Tuple[str, ...]
-) -> Iterator[Tuple[str, bool]]:
-    for method in _methods(tree):
+def _ignored_returns(source: _Source, hooks: Tuple[str, ...]) -> Iterator[Tuple[str, bool]]:
+    for method in source.methods():
         if method.name not in hooks:
             continue
-        for node in _walk_own(method):
+        for node in walk_own(method):
             if not isinstance(node, ast.Return) or node.value is None:
                 continue
             if isinstance(node.value, ast.Constant) and node.value.value is None:
                 continue
             code = ast.unparse(node.value)
             yield (
-                f"{cls.__name__}.{method.name}() returns `{code}`, but SNR does not use "
+                f"{source.cls.__name__}.{method.name}() returns `{code}`, but SNR does not use "
                 f"what {method.name}() returns: it is dropped. To run a task, schedule it: "
-                f"`self.schedule({code})`."
-                f"{_block(filename, cls, method.name, node.lineno)}",
+                f"`self.schedule({code})`.{source.at(method.name, node.lineno)}",
                 False,
             )
 
 
-def _uncalled_hooks(
-    cls: type, filename: str, tree: ast.ClassDef, kind: type, hooks: Tuple[str, ...]
-) -> Iterator[Tuple[str, bool]]:
-    used = _names_used(tree)
-    other_kind = {"setup": "begin", "loop": None} if kind is Endpoint else {}
-    for method in _methods(tree):
+def _uncalled_hooks(source: _Source, kind: type) -> Iterator[Tuple[str, bool]]:
+    hooks = _HOOKS[kind]
+    used = _names_used(source.tree)
+    cls = source.cls.__name__
+    for method in source.methods():
         name = method.name
         if name.startswith("_") or name in hooks or name in used:
             continue
-        where = _block(filename, cls, name, method.lineno)
-        if name in other_kind:
-            instead = other_kind[name]
+        where = source.at(name, method.lineno)
+        if kind is Endpoint and name in ("setup", "loop"):
             fix = (
                 "SNR calls begin() when the node starts: rename it to begin."
-                if instead
+                if name == "setup"
                 else "Only a ThreadLoop has a loop(): make the class a ThreadLoop (with a "
                 "LoopFactory) to run it again and again."
             )
             yield (
-                f"{cls.__name__}.{name}() is never called: an Endpoint has no {name}(). "
-                f"{fix}{where}",
+                f"{cls}.{name}() is never called: an Endpoint has no {name}(). {fix}{where}",
                 False,
             )
             continue
@@ -411,7 +377,7 @@ def _uncalled_hooks(
         )
         if guess is not None:
             yield (
-                f"{cls.__name__}.{name}() is never called: SNR calls {guess}(), and "
+                f"{cls}.{name}() is never called: SNR calls {guess}(), and "
                 f"nothing in the class calls {name}(). Did you mean {guess}?{where}",
                 False,
             )

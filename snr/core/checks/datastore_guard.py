@@ -25,13 +25,24 @@ Example::
 from __future__ import annotations
 
 import threading
-from typing import Any, Dict, Iterator, Mapping, NoReturn, Optional, Tuple
+from typing import Any, Callable, Dict, Iterator, Mapping, NoReturn, Optional, Tuple
 
 from snr.core.task_queue import TaskQueue
 from snr.prelude import DataKey, DatastoreWriteError, Page
 from snr.prelude.student_code import caller_location
 
 __all__ = ["NodeDatastore"]
+
+
+def _refused(what: str, names_key: bool = False) -> Callable[..., NoReturn]:
+    """A method that refuses ``what``, naming the key it was given when ``names_key``."""
+
+    def refuse(self: NodeDatastore, *args: Any, **kwargs: Any) -> NoReturn:
+        key = args[0] if names_key and args else None
+        self._refuse(what.format(key=repr(key)), key)
+
+    refuse.__doc__ = "Refused: the node alone writes its datastore."
+    return refuse
 
 
 class NodeDatastore(Mapping[DataKey, Page]):
@@ -96,34 +107,15 @@ class NodeDatastore(Mapping[DataKey, Page]):
             f"Read it back with self.get_data({name})."
         )
 
-    def __setitem__(self, key: DataKey, value: Page) -> None:
-        self._refuse(f"datastore[{key!r}] = value", key)
-
-    def __delitem__(self, key: DataKey) -> None:
-        self._refuse(f"del datastore[{key!r}]", key)
-
-    def __ior__(self, other: Any) -> Any:
-        self._refuse("datastore |= other")
-
-    def update(self, *args: Any, **kwargs: Any) -> None:
-        """Refused: the node alone writes its datastore."""
-        self._refuse("datastore.update()")
-
-    def pop(self, *args: Any, **kwargs: Any) -> Any:
-        """Refused: the node alone writes its datastore."""
-        self._refuse("datastore.pop()", args[0] if args else None)
-
-    def popitem(self, *args: Any, **kwargs: Any) -> Any:
-        """Refused: the node alone writes its datastore."""
-        self._refuse("datastore.popitem()")
-
-    def clear(self, *args: Any, **kwargs: Any) -> None:
-        """Refused: the node alone writes its datastore."""
-        self._refuse("datastore.clear()")
-
-    def setdefault(self, *args: Any, **kwargs: Any) -> Any:
-        """Refused: the node alone writes its datastore."""
-        self._refuse("datastore.setdefault()", args[0] if args else None)
+    # Every way to change a dict; "{key}": the key given, in the message.
+    __setitem__ = _refused("datastore[{key}] = value", names_key=True)
+    __delitem__ = _refused("del datastore[{key}]", names_key=True)
+    __ior__ = _refused("datastore |= other")
+    update = _refused("datastore.update()")
+    pop = _refused("datastore.pop()", names_key=True)
+    popitem = _refused("datastore.popitem()")
+    clear = _refused("datastore.clear()")
+    setdefault = _refused("datastore.setdefault()", names_key=True)
 
     def __reduce__(self) -> Tuple[Any, ...]:
         # copy.copy, deepcopy and pickle: a copy is a plain dict, the copier's own.

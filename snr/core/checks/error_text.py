@@ -31,7 +31,14 @@ from typing import Any, Iterable, List, Optional
 
 from snr.prelude.error_text import short_repr
 
-__all__ = ["PAGE_IN_A_HANDLER", "closest_match", "did_you_mean", "exception_text", "short_repr"]
+__all__ = [
+    "PAGE_IN_A_HANDLER",
+    "closest_key",
+    "closest_match",
+    "did_you_mean",
+    "exception_text",
+    "short_repr",
+]
 
 
 _SUGGESTION = "Did you mean"
@@ -131,6 +138,17 @@ def closest_match(word: str, choices: Iterable[str], cutoff: float = 0.6) -> Opt
     plain = {c.lower().replace("_", ""): c for c in reversed(list(choices))}
     found = difflib.get_close_matches(word.lower().replace("_", ""), list(plain), 1, cutoff)
     return plain[found[0]] if found else None
+
+
+def closest_key(word: str, choices: List[str]) -> Optional[str]:
+    """The choice that is ``word`` in other capitals, else `closest_match`'s: for keys and events.
+
+    Example::
+
+        closest_key("Depth", ["depth", "dept"])   # 'depth'
+    """
+    same_but_case = [c for c in choices if c.lower() == word.lower()]
+    return same_but_case[0] if same_but_case else closest_match(word, choices)
 
 
 def did_you_mean(word: str, choices: Iterable[str]) -> str:

@@ -20,7 +20,7 @@ import linecache
 import logging
 import threading
 from types import CodeType
-from typing import Any, Dict, Iterator, List, NoReturn, Optional, Set, Tuple, Union
+from typing import Any, Dict, List, NoReturn, Optional, Set, Tuple, Union
 
 from snr.core.checks.call_checks import bad_data_key, page_as_data, wrong_call
 from snr.core.checks.error_text import PAGE_IN_A_HANDLER, exception_text, short_repr
@@ -28,6 +28,7 @@ from snr.core.checks.student_code import (
     caller_block,
     caller_location,
     code_name,
+    code_of,
     def_block,
     describe_callable,
     describe_class,
@@ -37,6 +38,7 @@ from snr.core.checks.student_code import (
     source_block,
     student_frames,
     trim_runtime_frames,
+    walk_own,
 )
 from snr.prelude import (
     AbstractComponent,
@@ -59,20 +61,14 @@ from snr.prelude.abstract_errors import explain_abstract_error
 from snr.prelude.task import format_task
 
 __all__ = [
-    "BLOCKED_ADVICE",
     "CORE_REFUSED",
-    "PAGE_FROM_GET_PAGE",
-    "THREAD_SAFE_INSTEAD",
     "bad_result_error",
-    "bad_result_hint",
     "check_component_args",
     "check_loop_class",
     "check_node_args",
     "check_page_args",
     "component_without_init",
-    "describe_bad_result",
     "factory_without_init",
-    "failed_get_error",
     "handler_failure",
     "handlers_before_init",
     "log_name_taken",
@@ -80,22 +76,19 @@ __all__ = [
     "name_taken_error",
     "not_stopped_text",
     "raise_get_failure",
-    "only_returns_none",
     "page_hint",
     "reload_failure",
     "returning_lines",
     "slow_handler_text",
     "start_failure",
-    "task_values",
     "used_before_init",
     "warn_get_returned_none",
     "wrong_get_result_error",
-    "wrong_get_signature",
     "wrong_thread_error",
 ]
 
 
-def task_values(task: Task) -> str:
+def _task_values(task: Task) -> str:
     """What a task carries, shortened: its page's key and data, or its values."""
     values: object = task.val_list  # a task built by hand may hold anything
     if isinstance(values, list) and len(values) == 1 and isinstance(values[0], Page):
@@ -104,18 +97,7 @@ def task_values(task: Task) -> str:
     return f"with values {short_repr(values, 200)}"
 
 
-def describe_bad_result(result: Any) -> str:
-    """What a handler returned that is not a Task, a list of Tasks or None."""
-    if isinstance(result, list):
-        index, bad = next((i, t) for i, t in enumerate(result) if not isinstance(t, Task))
-        return (
-            f"returned a list whose item {index} is {short_repr(bad)} ({type(bad).__name__}),"
-            " not a Task,"
-        )
-    return f"returned {short_repr(result)} ({type(result).__name__})"
-
-
-def bad_result_hint(result: Any) -> str:
+def _bad_result_hint(result: Any) -> str:
     """A hint for the likely slip behind a bad return value (or "")."""
     items = result if isinstance(result, (list, tuple)) else []
     if isinstance(result, tuple) and all(isinstance(t, Task) for t in items):
@@ -133,12 +115,9 @@ def bad_result_hint(result: Any) -> str:
     return ""
 
 
-def only_returns_none(func: Any) -> bool:
-    """True if ``func``'s code has no ``return <value>``: it can only give None.
-
-    Read from the bytecode, not the source (which may not be on the robot).
-    """
-    code = getattr(getattr(func, "__func__", func), "__code__", None)
+def _only_returns_none(func: Any) -> bool:
+    """True if ``func`` has no ``return <value>``, read from its bytecode (not the source)."""
+    code = code_of(func)
     if code is None:
         return False
     previous: Optional[dis.Instruction] = None
@@ -155,21 +134,15 @@ def only_returns_none(func: Any) -> bool:
             ):
                 return False
         previous = instruction
-    # No return instruction we know: a newer Python's bytecode. Never accuse
-    # a student's factory on a guess.
+    # No return instruction we know (a newer Python's bytecode): never accuse on a guess.
     return saw_return
 
 
-# What a loop thread should call instead of a method that changes node state.
-THREAD_SAFE_INSTEAD = {
-    "execute_task": "self.schedule(task)",
-    "handle_task": "self.schedule(task)",
-    "add_component": "self.schedule(tasks.add_component(factory))",
-    "remove_component": "self.schedule(tasks.remove_component(name))",
-    "reload_component": "self.schedule(tasks.reload_component(name))",
-    "write_page": "self.store_page(page) or self.store_data(key, value)",
-    "terminate": "self.schedule(tasks.terminate(reason))",
-}
+def _where(error: BaseException) -> str:
+    """The student's frames of ``error`` under a heading; its traceback is then trimmed to them."""
+    frames = student_frames(error.__traceback__)
+    trim_runtime_frames(error)  # Python's own report of it then starts at the student's code
+    return f"\nWhere it happened (most recent call last):\n{frames}"
 
 
 def handler_failure(
@@ -194,41 +167,33 @@ def handler_failure(
     if component is not None:
         kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
         where = f" of {kind} {component.name!r}"
-    frames = student_frames(error.__traceback__)
+    what = page_hint(error, exception_text(error))
     handling = f"the task {format_task(task, values='none')}"
     if run_size > 1:
         handling = f"a run of {run_size} tasks given to it at once, the first being {handling}"
-    message = (
-        f"Task handler {describe_callable(handler)}{where} raised "
-        f"{page_hint(error, exception_text(error))}\nwhile handling {handling} "
-        f"{task_values(task)}.{_values_hint(task)}\n"
-        f"Where it happened (most recent call last):\n{frames}"
-    )
+    hint = ""
+    values: object = task.val_list
+    if not isinstance(values, list):  # the task was built by hand
+        hint = (
+            f" Its val_list is {short_repr(values, 60)} ({type(values).__name__}), not a list: "
+            "whoever built the task must pass the values in a list, e.g. "
+            f"Task(TaskType.{task.type.name}, {task.name!r}, [value])."
+        )
     if deployed:
-        failure = HandlerError(f"{message}\nThe node keeps running.")
+        fix = "The node keeps running."
+    elif isinstance(error, SNRError):
+        fix = "Fix the handler as the message above says."
     else:
         fix = (
-            "Fix the handler as the message above says."
-            if isinstance(error, SNRError)
-            else "Fix the handler, or catch the error in it if it can happen in normal use "
+            "Fix the handler, or catch the error in it if it can happen in normal use "
             "(in Mode.DEPLOYED the node logs it and keeps running)."
         )
-        failure = HandlerError(f"{message}\n{fix}")
-    trim_runtime_frames(error)
+    failure = HandlerError(
+        f"Task handler {describe_callable(handler)}{where} raised {what}\n"
+        f"while handling {handling} {_task_values(task)}.{hint}{_where(error)}\n{fix}"
+    )
     failure.__cause__ = error
     return failure
-
-
-def _values_hint(task: Task) -> str:
-    """A hint when the task's ``val_list`` is not a list (it was built by hand)."""
-    values: object = task.val_list
-    if isinstance(values, list):
-        return ""
-    return (
-        f" Its val_list is {short_repr(values, 60)} ({type(values).__name__}), not a list: "
-        "whoever built the task must pass the values in a list, e.g. "
-        f"Task(TaskType.{task.type.name}, {task.name!r}, [value])."
-    )
 
 
 def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerError:
@@ -245,17 +210,24 @@ def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerEr
         #     return task.val_list[0].data * 2
     """
     fix = (
-        f"A handler must return a Task, a list of Tasks, or None.{bad_result_hint(result)} "
+        f"A handler must return a Task, a list of Tasks, or None.{_bad_result_hint(result)} "
         "To store a value, return self.store_data_task(key, value); to announce "
         "something, return tasks.event('name', [value])."
     )
-    returned = describe_bad_result(result)
+    returned = f"returned {short_repr(result)} ({type(result).__name__})"
+    if isinstance(result, list):
+        index, bad = next((i, t) for i, t in enumerate(result) if not isinstance(t, Task))
+        returned = (
+            f"returned a list whose item {index} is {short_repr(bad)} ({type(bad).__name__}),"
+            " not a Task,"
+        )
     handling = f"while handling {format_task(task, values='none')}"
-    code = getattr(getattr(handler, "__func__", handler), "__code__", None)
-    lines = returning_lines(handler, result) if code is not None else []
+    code = code_of(handler)
+    lines = returning_lines(handler, result)
     if code is None or not lines:
-        where = describe_callable(handler)
-        return HandlerError(f"Task handler {where} {returned} {handling}. {fix}")
+        return HandlerError(
+            f"Task handler {describe_callable(handler)} {returned} {handling}. {fix}"
+        )
     name = code_name(code, getattr(handler, "__qualname__", code.co_name))
     short = short_path(code.co_filename)
     at = f"at {short}:{lines[0]}"
@@ -281,17 +253,15 @@ def returning_lines(handler: Any, result: Any) -> List[int]:
 
         returning_lines(doubler.double, 42)   # [12]
     """
-    func = getattr(handler, "__func__", handler)
-    code = getattr(func, "__code__", None)
+    code = code_of(handler)
     if code is None or code.co_flags & inspect.CO_GENERATOR:
         return []
     node = _function_node(code)
-    if node is None:
-        return []
     exact: List[int] = []
     same_kind: List[int] = []
     possible: List[int] = []
-    for statement in _own_returns(node):
+    returns = [n for n in walk_own(node) if isinstance(n, ast.Return)] if node else []
+    for statement in returns:
         value = statement.value
         if value is None or (isinstance(value, ast.Constant) and value.value is None):
             continue  # gives None, which is never the wrong value
@@ -339,21 +309,7 @@ def _function_node(code: CodeType) -> Optional[Union[ast.FunctionDef, ast.AsyncF
     return None
 
 
-_OWN_SCOPES = (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef)
-
-
-def _own_returns(function: ast.AST) -> Iterator[ast.Return]:
-    """The ``return`` statements of ``function`` itself, not of functions inside it."""
-    stack = list(ast.iter_child_nodes(function))
-    while stack:
-        node = stack.pop()
-        if isinstance(node, ast.Return):
-            yield node
-        elif not isinstance(node, _OWN_SCOPES):
-            stack.extend(ast.iter_child_nodes(node))
-
-
-PAGE_FROM_GET_PAGE = (
+_FROM_GET_PAGE = (
     ". get_page(key) gives the whole Page (its data, time and origin); for the value "
     "alone, read self.get_data(key), or use page.data."
 )
@@ -380,7 +336,7 @@ def page_hint(error: BaseException, text: str, in_a_loop: bool = False) -> str:
             names = tb.tb_frame.f_code.co_names  # the innermost frame of the student's
         tb = tb.tb_next
     if in_a_loop or ("get_page" in names and "val_list" not in names):
-        return text.replace(PAGE_IN_A_HANDLER, PAGE_FROM_GET_PAGE)
+        return text.replace(PAGE_IN_A_HANDLER, _FROM_GET_PAGE)
     return text
 
 
@@ -400,15 +356,9 @@ def loop_failure(loop: AbstractLoop, error: BaseException, deployed: bool) -> Lo
     ``error`` may be any BaseException: a ``sys.exit()`` or ``KeyboardInterrupt``
     raised in ``loop()`` is explained too, instead of vanishing with the thread.
     """
-    frames = student_frames(error.__traceback__)
     what = page_hint(error, exception_text(error), in_a_loop=True)
     if isinstance(error, SystemExit):
         what = f"sys.exit({'' if error.code is None else repr(error.code)})"
-    message = (
-        f"Loop {loop.name!r} ({describe_class(type(loop))}) stopped: it raised {what}"
-        f"\nWhere it happened (most recent call last):\n{frames}"
-    )
-    if isinstance(error, SystemExit):
         fix = (
             "sys.exit() in a loop ends only the loop's thread, not the program. To stop "
             "this loop, call self.set_terminate_flag('why'); to stop the node, "
@@ -425,34 +375,19 @@ def loop_failure(loop: AbstractLoop, error: BaseException, deployed: bool) -> Lo
             "Fix loop() (or setup()), or catch the error there if it can happen in "
             "normal use (in Mode.DEPLOYED the node keeps running without the loop)."
         )
-    failure = LoopError(f"{message}\n{fix}")
-    trim_runtime_frames(error)
+    failure = LoopError(
+        f"Loop {loop.name!r} ({describe_class(type(loop))}) stopped: it raised {what}"
+        f"{_where(error)}\n{fix}"
+    )
     failure.__cause__ = error
     return failure
 
 
-def failed_get_error(factory: AbstractFactory, error: Exception, role: str) -> ComponentError:
-    """The ComponentError for a factory's ``get()`` that raised ``error``."""
-    frames = student_frames(error.__traceback__)
-    what = exception_text(error)
-    trim_runtime_frames(error)
-    return ComponentError(
-        f"{describe_callable(type(factory).get)} raised {what}"
-        f"\nwhile building a component for node {role!r}.\n"
-        f"Where it happened (most recent call last):\n{frames}"
-    )
-
-
-def wrong_get_signature(factory: AbstractFactory, error: TypeError) -> Optional[ComponentError]:
-    """The ComponentError for a ``get()`` that cannot be called as ``get(parent)``, or None.
+def _wrong_get_signature(factory: AbstractFactory, error: TypeError) -> Optional[ComponentError]:
+    """The error for a ``get()`` that cannot be called as ``get(parent)``, or None.
 
     Python's own TypeError ("takes 1 positional argument but 2 were given")
     points at SNR's call; the mistake is the student's ``def``.
-
-    Example::
-
-        wrong_get_signature(factory, error)
-        # PingerFactory.get (robot.py:10) is written as `def get(self)`, but ...
     """
     tb = error.__traceback__
     if tb is None or tb.tb_next is not None:
@@ -496,13 +431,16 @@ def reload_failure(error: BaseException) -> str:
 
     A SyntaxError carries its own file and line (it has no frame of its own
     in the traceback); anything else is shown with the student's frames.
+
+    Example::
+
+        reload_failure(error)   # "robot.py:12: SyntaxError: invalid syntax\n    def f(:"
     """
     if isinstance(error, SyntaxError):
         line = (error.text or "").strip()
         shown = f"\n    {line}" if line else ""
         return f"{error.filename}:{error.lineno}: SyntaxError: {error.msg}{shown}"
-    frames = student_frames(error.__traceback__)
-    return f"{exception_text(error)}\nWhere it happened (most recent call last):\n{frames}"
+    return f"{exception_text(error)}{_where(error)}"
 
 
 def check_page_args(key: Any, data: Any) -> None:
@@ -539,37 +477,36 @@ def check_component_args(component_class: type, factory: Any, parent: Any, name:
     valid_name = isinstance(name, str) and bool(name)
     if isinstance(factory, AbstractFactory) and isinstance(parent, AbstractNode) and valid_name:
         return  # the common case: no need to look up the source file
-    me = describe_class(component_class)
     if isinstance(factory, AbstractNode) and isinstance(parent, AbstractFactory):
-        raise ComponentError(
-            f"{me} passed the node as its factory and the factory as its parent: the "
-            f"arguments are swapped. Write {expected}, in that order (check the "
-            "order in your __init__ and in the factory's get() call too)."
+        problem = (
+            f"passed the node as its factory and the factory as its parent: the arguments "
+            f"are swapped. Write {expected}, in that order (check the order in your "
+            "__init__ and in the factory's get() call too)."
         )
-    if isinstance(factory, str) or isinstance(parent, str):
-        raise ComponentError(
-            f"{me} passed its arguments in the wrong order: {short_repr(factory, 40)}, "
+    elif isinstance(factory, str) or isinstance(parent, str):
+        problem = (
+            f"passed its arguments in the wrong order: {short_repr(factory, 40)}, "
             f"{short_repr(parent, 40)}, {short_repr(name, 40)}. Write {expected}: "
             "the factory first, then the parent node, then the name."
         )
-    if not isinstance(factory, AbstractFactory):
-        raise ComponentError(
-            f"{me} passed {factory!r} as its factory. The first argument of {expected} "
-            "must be the factory that builds it (inside a factory's get(), pass "
-            "`self`). Check the order of the arguments."
+    elif not isinstance(factory, AbstractFactory):
+        problem = (
+            f"passed {factory!r} as its factory. The first argument of {expected} must be "
+            "the factory that builds it (inside a factory's get(), pass `self`). Check the "
+            "order of the arguments."
         )
-    if not isinstance(parent, AbstractNode):
-        raise ComponentError(
-            f"{me} passed {parent!r} as its parent node. The second argument of "
-            f"{expected} must be the node (the `parent` given to the factory's "
-            "get()). Check the order of the arguments."
+    elif not isinstance(parent, AbstractNode):
+        problem = (
+            f"passed {parent!r} as its parent node. The second argument of {expected} must "
+            "be the node (the `parent` given to the factory's get()). Check the order of "
+            "the arguments."
         )
-    if not isinstance(name, str) or not name:
-        raise ComponentError(
-            f"{me} passed {name!r} as its name. The third argument of {expected} "
-            "must be a non-empty string that is unique in the node, such as "
-            "'depth_filter'."
+    else:
+        problem = (
+            f"passed {name!r} as its name. The third argument of {expected} must be a "
+            "non-empty string that is unique in the node, such as 'depth_filter'."
         )
+    raise ComponentError(f"{describe_class(component_class)} {problem}")
 
 
 def check_node_args(node_class: Any, role: Any, config: Any) -> None:
@@ -594,6 +531,18 @@ def check_node_args(node_class: Any, role: Any, config: Any) -> None:
         )
 
 
+# What a loop thread should call instead of a method that changes node state.
+_INSTEAD = {
+    "execute_task": "self.schedule(task)",
+    "handle_task": "self.schedule(task)",
+    "add_component": "self.schedule(tasks.add_component(factory))",
+    "remove_component": "self.schedule(tasks.remove_component(name))",
+    "reload_component": "self.schedule(tasks.reload_component(name))",
+    "write_page": "self.store_page(page) or self.store_data(key, value)",
+    "terminate": "self.schedule(tasks.terminate(reason))",
+}
+
+
 def wrong_thread_error(role: str, method: str) -> ThreadSafetyError:
     """The error for ``method`` called on node ``role`` from a thread that is not the node's.
 
@@ -602,7 +551,7 @@ def wrong_thread_error(role: str, method: str) -> ThreadSafetyError:
         raise wrong_thread_error("robot", "write_page")
         # write_page() was called on node 'robot' from thread 'snr-robot-clock' ...
     """
-    instead = THREAD_SAFE_INSTEAD.get(method, "self.schedule(task)")
+    instead = _INSTEAD.get(method, "self.schedule(task)")
     return ThreadSafetyError(
         f"{method}() was called on node {role!r} from thread "
         f"{threading.current_thread().name!r} (at {caller_location()}), but only "
@@ -617,7 +566,7 @@ def raise_get_failure(factory: AbstractFactory, error: Exception, role: str) -> 
 
     A ``get()`` written with the wrong parameters, or a class that lacks
     abstract methods, is said as such, without Python's own text (which
-    blames SNR's call); anything else is `failed_get_error`.
+    blames SNR's call); anything else with Python's words and the student's frames.
 
     Example::
 
@@ -625,10 +574,14 @@ def raise_get_failure(factory: AbstractFactory, error: Exception, role: str) -> 
             raise_get_failure(factory, error, node.role)
     """
     if isinstance(error, TypeError):
-        explained = explain_abstract_error(error) or wrong_get_signature(factory, error)
+        explained = explain_abstract_error(error) or _wrong_get_signature(factory, error)
         if explained is not None:
             raise explained from None
-    raise failed_get_error(factory, error, role) from error
+    what = exception_text(error)
+    raise ComponentError(
+        f"{describe_callable(type(factory).get)} raised {what}"
+        f"\nwhile building a component for node {role!r}.{_where(error)}"
+    ) from error
 
 
 def factory_without_init(factory: AbstractFactory) -> ComponentError:
@@ -672,7 +625,7 @@ def warn_get_returned_none(
         ComponentError: ``get()`` has no ``return`` with a value.
     """
     get = type(factory).get
-    if only_returns_none(get):
+    if _only_returns_none(get):
         raise ComponentError(
             f"{describe_callable(get)} returned None: it has no `return` with a "
             f"value, so role {role!r} can never get a component from it. "
@@ -729,11 +682,10 @@ Example::
     log.error(CORE_REFUSED["reload"], "node_core", node.role)
 """
 
-BLOCKED_ADVICE = (
+_BLOCKED_ADVICE = (  # for a loop that does not stop when asked
     "Make loop() return often: give reads a timeout and wait with self.wait_s(seconds) "
     "instead of time.sleep(), so the loop notices when it should stop."
 )
-"""What to do about a loop that does not stop when asked."""
 
 
 def not_stopped_text(component: AbstractComponent, timeout_s: float, reload: bool) -> str:
@@ -743,30 +695,26 @@ def not_stopped_text(component: AbstractComponent, timeout_s: float, reload: boo
     else the node is stopping and terminates it anyway.
     """
     where = component.where_running() if isinstance(component, AbstractLoop) else ""
-    asked = f"Loop {component.name!r} did not stop within {timeout_s:.1f} s of being asked"
     if reload:
         return (
             f"Cannot reload loop {component.name!r}: it did not stop within "
             f"{timeout_s:.1f} s of being asked{f' (it is at {where})' if where else ''}, and "
             "a new copy would run beside it. Reload refused; the old version keeps "
-            f"running. {BLOCKED_ADVICE}"
+            f"running. {_BLOCKED_ADVICE}"
         )
     return (
-        f"{asked}{f': it is at {where}' if where else ''}. Its terminate() runs "
-        "now anyway, while its thread is still going (the thread ends with the "
-        f"program). {BLOCKED_ADVICE}"
+        f"Loop {component.name!r} did not stop within {timeout_s:.1f} s of being asked"
+        f"{f': it is at {where}' if where else ''}. Its terminate() runs now anyway, while "
+        f"its thread is still going (the thread ends with the program). {_BLOCKED_ADVICE}"
     )
 
 
 def start_failure(component: AbstractComponent, error: Exception) -> ComponentError:
     """The ComponentError for a component whose ``begin()`` (or thread start) raised ``error``."""
-    frames = student_frames(error.__traceback__)
     what = exception_text(error)
-    trim_runtime_frames(error)
     return ComponentError(
-        f"{describe_class(type(component))} {component.name!r} failed to start: "
-        f"{what}\n"
-        f"Where it happened (most recent call last):\n{frames}"
+        f"{describe_class(type(component))} {component.name!r} failed to start: {what}"
+        f"{_where(error)}"
     )
 
 

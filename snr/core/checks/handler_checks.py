@@ -19,8 +19,15 @@ import inspect
 from types import CodeType
 from typing import Any, Set
 
+from snr.core.checks.call_checks import param_text
 from snr.core.checks.error_text import closest_match
-from snr.core.checks.student_code import caller_block, def_block, describe_callable, describe_class
+from snr.core.checks.student_code import (
+    caller_block,
+    code_of,
+    def_block,
+    describe_callable,
+    describe_class,
+)
 from snr.prelude import AbstractComponent, ComponentError, TaskId, TaskType
 
 __all__ = ["async_text", "check_burst_handlers", "check_entry", "check_handler", "check_task_id"]
@@ -94,14 +101,6 @@ def check_entry(key: Any, handler: Any, owner_class: type = object) -> None:
     check_handler(handler, key, owner_class)  # names the def to fix itself
 
 
-def _param_text(param: inspect.Parameter) -> str:
-    if param.kind is inspect.Parameter.VAR_POSITIONAL:
-        return "*" + param.name
-    if param.kind is inspect.Parameter.VAR_KEYWORD:
-        return "**" + param.name
-    return param.name
-
-
 def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None:
     """Raise a ComponentError unless ``handler`` can be called as ``f(task, key)``.
 
@@ -120,7 +119,7 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
             "but a task handler must be a method, such as self.on_data. Did you "
             "call it (self.on_data()) instead of naming it (self.on_data)?"
         )
-    code = getattr(getattr(handler, "__func__", handler), "__code__", None)
+    code = code_of(handler)
     if code is not None and code in _checked_code:
         return
     if inspect.iscoroutinefunction(handler):
@@ -134,10 +133,9 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
     except TypeError:
         where = describe_callable(handler)
         name = getattr(handler, "__name__", "handler")
-        params = [_param_text(p) for p in signature.parameters.values()]
         self_ = "self, " if hasattr(handler, "__self__") else ""
-        if hasattr(handler, "__self__"):
-            params.insert(0, "self")
+        params = [param_text(p) for p in signature.parameters.values()]
+        params = ["self", *params] if self_ else params
         code_line = "\n" + def_block(handler) if code is not None else ""
         raise ComponentError(
             f"Task handler {where} for {key!r} is written as "

@@ -32,8 +32,8 @@ import logging
 import threading
 from typing import Callable, Dict, Iterable, List, Mapping, Optional, Set, Tuple
 
-from snr.core.checks.error_text import closest_match
-from snr.core.checks.student_code import caller_location, describe_callable
+from snr.core.checks.error_text import closest_key, closest_match
+from snr.core.checks.student_code import caller_location, describe_callable, is_snr
 from snr.prelude import DataKey, TaskHandler
 
 __all__ = ["MissingKeyHints"]
@@ -132,37 +132,22 @@ class MissingKeyHints:
                 return
             self._reported.add(key)
             del self._first_and_next_check[key]
-        self._report(key, guess, stored, waited_s)
-
-    def _report(
-        self, key: DataKey, guess: Optional[str], stored: List[str], waited_s: float
-    ) -> None:
-        shown = ", ".join(repr(k) for k in stored[:20]) or "none yet"
         where = caller_location()
+        shown = ", ".join(repr(k) for k in stored[:20]) or "none yet"
         footer = (
             "get_data/get_page return None until something stores the key. (This hint "
             "shows once per key, in DEBUG mode only.)"
         )
         if guess is not None:
             self.log.warning(
-                "Nothing is stored under data key %r (read at %s). Did you mean %r? "
-                "Stored keys: %s. %s",
-                key,
-                where,
-                guess,
-                shown,
-                footer,
+                f"Nothing is stored under data key {key!r} (read at {where}). Did you mean "
+                f"{guess!r}? Stored keys: {shown}. {footer}"
             )
         else:
             self.log.info(
-                "Data key %r has been read for %.1f s (at %s) but nothing has stored it. "
-                "Stored keys: %s. If a component should store it, check that it runs "
-                "and spells the key the same way. %s",
-                key,
-                waited_s,
-                where,
-                shown,
-                footer,
+                f"Data key {key!r} has been read for {waited_s:.1f} s (at {where}) but nothing "
+                f"has stored it. Stored keys: {shown}. If a component should store it, check "
+                f"that it runs and spells the key the same way. {footer}"
             )
 
     def check_handlers(
@@ -190,7 +175,7 @@ class MissingKeyHints:
                 continue
             if getattr(getattr(handler, "__self__", None), "checks_keys_per_link", False):
                 continue  # a comms component: check_link says where the pages should go
-            guess = _guess(key, stored)
+            guess = closest_key(key, stored)
             if guess is None:
                 continue
             self._reported.add(key)
@@ -198,17 +183,10 @@ class MissingKeyHints:
             origin = getattr(page, "origin", None)
             came = f" (it came from node {origin!r})" if origin and origin != self.role else ""
             self.log.warning(
-                "%s handles pages under %r, but nothing stored %r in the first %.1f s, "
-                "while %r was stored%s. Did you mean %r? Data keys must match exactly "
-                "(capitals too). %s",
-                _describe_handler(handler),
-                key,
-                key,
-                self.handlers_s,
-                guess,
-                came,
-                guess,
-                _SILENCE,
+                f"{_describe_handler(handler)} handles pages under {key!r}, but nothing stored "
+                f"{key!r} in the first {self.handlers_s:.1f} s, while {guess!r} was stored"
+                f"{came}. Did you mean {guess!r}? Data keys must match exactly (capitals too). "
+                f"{_SILENCE}"
             )
 
     def check_link(
@@ -254,10 +232,27 @@ class MissingKeyHints:
         received = sorted(k for k in list(received_keys) if isinstance(k, str))
         for key in forwarded:
             if self._is_news(key, stored):
-                self._report_unsent(comms, peer, key, stored)
+                guess = closest_key(key, stored)
+                say = self.log.warning if guess is not None else self.log.info
+                say(
+                    f"Comms component {comms} forwards pages under {key!r} to {peer}, but "
+                    f"nothing on this node has stored {key!r} in the {self.link_s:.1f} s since "
+                    f"that link came up, so none was sent. {_did_you_mean(guess)}Stored keys: "
+                    f"{_shown(stored)}. A comms component sends what is stored on its own node "
+                    f"under exactly the keys it lists. {_SILENCE}"
+                )
         for key, handler in handled:
             if self._is_news(key, stored):
-                self._report_unreceived(peer, key, handler, received, stored)
+                guess = closest_key(key, received) or closest_key(key, stored)
+                say = self.log.warning if guess is not None else self.log.info
+                say(
+                    f"{_describe_handler(handler)} handles pages under {key!r}, but nothing on "
+                    f"this node stores {key!r} and none has arrived from {peer} in the "
+                    f"{self.link_s:.1f} s since it linked. {_did_you_mean(guess)}Keys received "
+                    f"from it: {_shown(received)}. A page crosses only if the other node stores "
+                    f"it and its comms component lists exactly that key (e.g. "
+                    f"sockets.client([{key!r}])). {_SILENCE}"
+                )
 
     def _is_news(self, key: DataKey, stored: List[str]) -> bool:
         """True (and remembered) for a key not stored and not reported yet."""
@@ -265,45 +260,6 @@ class MissingKeyHints:
             return False
         self._reported.add(key)
         return True
-
-    def _report_unsent(self, comms: str, peer: str, key: str, stored: List[str]) -> None:
-        guess = _guess(key, stored)
-        say = self.log.warning if guess is not None else self.log.info
-        say(
-            "Comms component %s forwards pages under %r to %s, but nothing on this node "
-            "has stored %r in the %.1f s since that link came up, so none was sent. "
-            "%sStored keys: %s. A comms component sends what is stored on its own node "
-            "under exactly the keys it lists. %s",
-            comms,
-            key,
-            peer,
-            key,
-            self.link_s,
-            f"Did you mean {guess!r}? " if guess is not None else "",
-            _shown(stored),
-            _SILENCE,
-        )
-
-    def _report_unreceived(
-        self, peer: str, key: str, handler: TaskHandler, received: List[str], stored: List[str]
-    ) -> None:
-        guess = _guess(key, received) or _guess(key, stored)
-        say = self.log.warning if guess is not None else self.log.info
-        say(
-            "%s handles pages under %r, but nothing on this node stores %r and none has "
-            "arrived from %s in the %.1f s since it linked. %sKeys received from it: %s. "
-            "A page crosses only if the other node stores it and its comms component "
-            "lists exactly that key (e.g. sockets.client([%r])). %s",
-            _describe_handler(handler),
-            key,
-            key,
-            peer,
-            self.link_s,
-            f"Did you mean {guess!r}? " if guess is not None else "",
-            _shown(received),
-            key,
-            _SILENCE,
-        )
 
 
 _SILENCE = (
@@ -316,15 +272,13 @@ def _describe_handler(handler: TaskHandler) -> str:
     """The student's handler with its file and line; one of SNR's components by its name."""
     owner = getattr(handler, "__self__", None)
     name = getattr(owner, "name", None)
-    if isinstance(name, str) and type(owner).__module__.split(".", 1)[0] == "snr":
+    if isinstance(name, str) and is_snr(type(owner)):
         return f"{type(owner).__name__} {name!r}"
     return describe_callable(handler)
 
 
-def _guess(key: str, choices: List[str]) -> Optional[str]:
-    """The same key in other capitals, else the closest spelling, else None."""
-    same_but_case = [k for k in choices if k.lower() == key.lower()]
-    return same_but_case[0] if same_but_case else closest_match(key, choices)
+def _did_you_mean(guess: Optional[str]) -> str:
+    return f"Did you mean {guess!r}? " if guess is not None else ""
 
 
 def _shown(keys: List[str]) -> str:

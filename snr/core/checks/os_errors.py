@@ -24,7 +24,7 @@ from __future__ import annotations
 import errno
 import os
 import socket
-from typing import Literal, Optional, Sequence, Tuple
+from typing import List, Literal, Optional, Sequence, Set, Tuple
 
 __all__ = ["OsAction", "explain_os_error"]
 
@@ -32,16 +32,76 @@ OsAction = Literal["listen", "connect", "open"]
 """What failed: listening on a port, connecting to one, or opening a serial port."""
 
 _VERBS = {"listen": "listen on", "connect": "connect to", "open": "open serial port"}
-_IN_USE = {errno.EADDRINUSE, getattr(errno, "WSAEADDRINUSE", errno.EADDRINUSE)}
-_UNREACHABLE = {
-    errno.ETIMEDOUT,
-    errno.EHOSTUNREACH,
-    errno.ENETUNREACH,
-    getattr(errno, "EHOSTDOWN", errno.EHOSTUNREACH),
-}
-_CLOSED = {errno.ECONNRESET, errno.EPIPE, errno.ECONNABORTED}
 _NO_DEVICE = {errno.ENOENT, errno.ENODEV, errno.ENXIO}
 _DENIED = {errno.EACCES, errno.EPERM}
+# (the action it happens to, or None for any; the errnos; what is wrong and what to do),
+# the first that fits wins. {host}, {port}: of the target; {where}: the setting to change.
+_PROBLEMS: List[Tuple[Optional[str], Set[int], str]] = [
+    (
+        "listen",
+        {errno.EADDRINUSE, getattr(errno, "WSAEADDRINUSE", errno.EADDRINUSE)},
+        "port {port} is in use. Another program, or another SNR node still running (check "
+        "your other terminals), is listening there. Stop it (`lsof -i :{port}` on Linux and "
+        "macOS, `netstat -ano` on Windows, names it), or choose another port in {where}.",
+    ),
+    (
+        "listen",
+        {errno.EADDRNOTAVAIL},
+        "{host!r} is not an address of this machine. Listen on 'localhost', on '0.0.0.0' "
+        "(every network interface) or on this machine's own IP address; the side that "
+        "connects is the one that names the other machine.",
+    ),
+    (
+        "listen",
+        _DENIED,
+        "permission denied: ports below 1024 need administrator rights. Use a port from 1024 "
+        "to 65535 in {where}.",
+    ),
+    (
+        "connect",
+        {errno.ECONNREFUSED},
+        "the connection was refused: nothing is listening there. Start the node that listens "
+        "on port {port} first, and check that both sides use the same host and port in "
+        "{where}.",
+    ),
+    (
+        "connect",
+        {
+            errno.ETIMEDOUT,
+            errno.EHOSTUNREACH,
+            errno.ENETUNREACH,
+            getattr(errno, "EHOSTDOWN", errno.EHOSTUNREACH),
+        },
+        "the other machine did not answer. Check that it is switched on and on the same "
+        "network, and that its address is right (try `ping` with it).",
+    ),
+    (
+        None,
+        {errno.ECONNRESET, errno.EPIPE, errno.ECONNABORTED},
+        "the other side closed the connection. The other node probably stopped or crashed: "
+        "its terminal says why.",
+    ),
+    (
+        "open",
+        _NO_DEVICE,
+        "there is no such serial port. Check the cable and the name: Linux /dev/ttyUSB0 or "
+        "/dev/ttyACM0, macOS /dev/cu.usbmodem..., Windows COM3.",
+    ),
+    (
+        "open",
+        _DENIED,
+        "permission denied. On Linux, serial ports belong to the 'dialout' group: add "
+        "yourself with `sudo usermod -a -G dialout $USER`, then log out and back in "
+        "(`groups` should list dialout). On Windows, another program (a serial monitor?) "
+        "has the port open: close it.",
+    ),
+    (
+        "open",
+        {errno.EBUSY},
+        "another program has it open (a serial monitor, another SNR node?). Close that "
+        "program and try again.",
+    ),
+]
 
 
 def _errno_of(error: BaseException) -> Optional[int]:
@@ -57,75 +117,21 @@ def _errno_of(error: BaseException) -> Optional[int]:
     return None
 
 
-def _split(target: str) -> Tuple[str, str]:
-    host, _, port = target.rpartition(":")
-    return (host, port) if port.isdigit() else (target, "PORT")
-
-
 def _problem(error: BaseException, action: OsAction, target: str, setting: str) -> str:
     """What is wrong and what to do, in plain words: the part after ``cannot ... X:``."""
-    code = _errno_of(error)
-    host, port = _split(target)
-    where = setting or "the config"
+    host, _, port = target.rpartition(":")
+    if not port.isdigit():
+        host, port = target, "PORT"
     if isinstance(error, socket.gaierror):
         return (
             f"the host name {host!r} cannot be found. Check its spelling, or use the "
             "machine's IP address, e.g. '192.168.1.20' ('localhost' is this machine)."
         )
-    if action == "listen":
-        if code in _IN_USE:
-            return (
-                f"port {port} is in use. Another program, or another SNR node still running "
-                "(check your other terminals), is listening there. Stop it (`lsof -i "
-                f":{port}` on Linux and macOS, `netstat -ano` on Windows, names it), or "
-                f"choose another port in {where}."
-            )
-        if code == errno.EADDRNOTAVAIL:
-            return (
-                f"{host!r} is not an address of this machine. Listen on 'localhost', on "
-                "'0.0.0.0' (every network interface) or on this machine's own IP address; "
-                "the side that connects is the one that names the other machine."
-            )
-        if code in _DENIED:
-            return (
-                f"permission denied: ports below 1024 need administrator rights. Use a port "
-                f"from 1024 to 65535 in {where}."
-            )
-    if action == "connect":
-        if code == errno.ECONNREFUSED:
-            return (
-                "the connection was refused: nothing is listening there. Start the node that "
-                f"listens on port {port} first, and check that both sides use the same host "
-                f"and port in {where}."
-            )
-        if code in _UNREACHABLE:
-            return (
-                "the other machine did not answer. Check that it is switched on and on the "
-                "same network, and that its address is right (try `ping` with it)."
-            )
-    if code in _CLOSED:
-        return (
-            "the other side closed the connection. The other node probably stopped or "
-            "crashed: its terminal says why."
-        )
-    if action == "open":
-        if code in _NO_DEVICE:
-            return (
-                "there is no such serial port. Check the cable and the name: Linux "
-                "/dev/ttyUSB0 or /dev/ttyACM0, macOS /dev/cu.usbmodem..., Windows COM3."
-            )
-        if code in _DENIED:
-            return (
-                "permission denied. On Linux, serial ports belong to the 'dialout' group: add "
-                "yourself with `sudo usermod -a -G dialout $USER`, then log out and back in "
-                "(`groups` should list dialout). On Windows, another program (a serial "
-                "monitor?) has the port open: close it."
-            )
-        if code == errno.EBUSY:
-            return (
-                "another program has it open (a serial monitor, another SNR node?). Close "
-                "that program and try again."
-            )
+    code = _errno_of(error)
+    where = setting or "the config"
+    for happens_to, codes, text in _PROBLEMS:
+        if happens_to in (None, action) and code in codes:
+            return text.format(host=host, port=port, where=where)
     reason = os.strerror(code) if code is not None else str(error)
     return f"{reason[:1].lower()}{reason[1:]}. Check the host, port or device name in {where}."
 

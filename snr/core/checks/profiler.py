@@ -1,34 +1,18 @@
 """`Profiler`: how often each handler and loop ran and how long it took.
 
-The node times every handler in DEBUG and TEST mode (and with
-``Config(profile=True)``); ``dump()`` prints the table of thesis
-listing 5.2, one section per thread::
+The node times every handler in DEBUG and TEST mode (and with ``Config(profile=True)``);
+``dump()`` prints the table of thesis listing 5.2, one section per thread, each adding up
+to 100% (the 2021 table put them in one list, whose shares could add up to far more).
 
-    Times called,          Avg runtime, Task/Loop type,
-    (share: of the 0.526 s since the node was made; each thread's lines add up to 100%)
-    node thread:
-          200475 x      1.358 us ->  51.780%: (event, 'stress'):__main__
-           10475 x     13.823 us ->  27.538%: (event, 'add_component'):snr.core.node_core
-               1 x     43.164 us ->   0.008%: (terminate):snr.core.node_core
-                                 ->  20.673%: (outside handlers: the node's own work, ...)
-    loop thread timeout_loop:
-               1 x 504193.137 us ->  95.890%: Loop(timeout_loop)
-                                 ->   4.110%: (outside loop(): waiting between passes)
+Timing must be cheap enough to leave on while students develop, so the profiler hands out
+one *cell* per handler (and per loop) when it is registered: ``[times_called, total_s]``.
+The node adds to it after each run (two additions, no lock, no string); each cell has one
+writer (the node's thread, or the loop's own), so a reader may see a count one run behind,
+which a profile can live with.
 
-Handlers all run on the node's thread, one at a time, so their shares and the
-time outside them add up to 100% of the time since the node was made. Each
-loop runs on its own thread, beside the node's: its share is of the same
-time, but in a section of its own. (The 2021 table put them in one list,
-whose shares could add up to far more than 100%.)
+Example::
 
-Timing must be cheap enough to leave on while students develop, so the
-profiler hands out one *cell* per handler (and per loop) when the handler is
-registered: a two-item list ``[times_called, total_seconds]``. The node adds
-to the cell after each run — two additions, no lock, no string — and the
-profiler reads the cells when asked for a table. Each cell has one writer
-(the node's thread for handlers, the loop's own thread for a loop), so no
-lock is needed; a reader may see a count one run behind, which a profile
-can live with.
+    print(node.profiler.dump())
 """
 
 from __future__ import annotations
@@ -89,19 +73,15 @@ class Profiler(AbstractProfiler):
 
     def loop_cell(self, name: ComponentName) -> StatsCell:
         """The cell of the loop called ``name``."""
-        return self.cell(f"Loop({name})")
+        return self.cell(f"{_LOOP_PREFIX}{name})")
 
     def log_task(self, task_id: TaskId, where: str, runtime_s: float) -> None:
         """Record one handler run (the node's thread)."""
-        cell = self.task_cell(task_id, where)
-        cell[0] += 1
-        cell[1] += runtime_s
+        _add(self.task_cell(task_id, where), runtime_s)
 
     def log_loop(self, name: ComponentName, runtime_s: float) -> None:
         """Record one pass of a loop (the loop's own thread)."""
-        cell = self.loop_cell(name)
-        cell[0] += 1
-        cell[1] += runtime_s
+        _add(self.loop_cell(name), runtime_s)
 
     def add_report(self, name: str, report: Callable[[], str]) -> None:
         """Add a section to `dump`: ``report()``'s text under ``name`` (a newer one replaces it).
@@ -168,6 +148,11 @@ class Profiler(AbstractProfiler):
                 text = f"(could not be made: {type(error).__name__}: {error})"
             lines.append(f"\n{name}:\n{text}")
         return "\n".join(lines)
+
+
+def _add(cell: StatsCell, runtime_s: float) -> None:
+    cell[0] += 1
+    cell[1] += runtime_s
 
 
 def _section(rows: List[Row], elapsed_s: float, rest_label: str) -> List[str]:

@@ -28,8 +28,9 @@ from snr.prelude import AbstractConfig, Mode
 
 __all__ = ["runner_built", "runner_ran"]
 
-# id(runner) -> (runner, "robot.py:4 in <module>\n" + its line as a traceback shows it)
-_not_run: Dict[int, Tuple[object, str]] = {}
+# id(runner) -> (runner, "robot.py:4 in <module>", its line as a traceback shows it); the
+# runner is kept, so its id is not reused.
+_not_run: Dict[int, Tuple[object, str, str]] = {}
 _registered: List[bool] = []
 
 
@@ -49,10 +50,7 @@ def runner_built(runner: object, config: AbstractConfig) -> None:
     if unittest is not None and isinstance(frame.f_locals.get("self"), unittest.TestCase):
         return
     block = source_block(frame.f_code.co_filename, frame.f_lineno, frame.f_code.co_name)
-    _not_run[id(runner)] = (
-        runner,
-        f"{frame_location(frame)}\n{block}",
-    )  # the runner is kept, so its id is not reused
+    _not_run[id(runner)] = (runner, frame_location(frame), block)
     if not _registered:
         _registered.append(True)
         atexit.register(_say_not_run)
@@ -71,9 +69,8 @@ def runner_ran(runner: object) -> None:
 def _say_not_run() -> None:
     if getattr(sys, "last_value", None) is not None:  # the program died of an error
         return
-    for runner, where in _not_run.values():
+    for runner, place, block in _not_run.values():
         name = type(runner).__name__
-        place, block = where.split("\n", 1)
         print(
             f"{name} built at {place} never ran: the program ended without starting a "
             f"node. Call its run(): `{name}(...).run()`, or `runner.run()` on the name "

@@ -22,7 +22,7 @@ import sys
 import threading
 import traceback
 from types import CodeType, FrameType, TracebackType
-from typing import Any, Optional
+from typing import Any, Iterator, Optional
 
 from snr.prelude.student_code import (
     caller_location,
@@ -38,11 +38,13 @@ __all__ = [
     "caller_block",
     "caller_location",
     "code_name",
+    "code_of",
     "def_block",
     "describe_callable",
     "describe_class",
     "frame_location",
     "is_runtime_file",
+    "is_snr",
     "line_with_code",
     "outside_runtime",
     "parse_source",
@@ -51,7 +53,28 @@ __all__ = [
     "source_block",
     "student_frames",
     "trim_runtime_frames",
+    "walk_own",
 ]
+
+
+def is_snr(cls: type) -> bool:
+    """True for a class of SNR's own (any module under ``snr``), which checks skip.
+
+    Example::
+
+        is_snr(snr.Endpoint)   # True; is_snr(MyEndpoint) is False
+    """
+    return cls.__module__.split(".", 1)[0] == "snr"
+
+
+def code_of(func: Any) -> Optional[CodeType]:
+    """The code of a function or bound method, or None (a builtin, a callable object).
+
+    Example::
+
+        code_of(endpoint.on_depth).co_firstlineno   # the line of its def
+    """
+    return getattr(getattr(func, "__func__", func), "__code__", None)
 
 
 def code_name(code: CodeType, fallback: str) -> str:
@@ -71,12 +94,13 @@ def describe_callable(func: Any) -> str:
 
         describe_callable(endpoint.update_filter)
     """
-    target = getattr(func, "__func__", func)
-    name = getattr(target, "__qualname__", None) or repr(func)
-    code = getattr(target, "__code__", None)
-    if code is None:
-        return str(name)
-    return f"{name} ({short_path(code.co_filename)}:{code.co_firstlineno})"
+    name = getattr(getattr(func, "__func__", func), "__qualname__", None) or repr(func)
+    code = code_of(func)
+    return (
+        str(name)
+        if code is None
+        else f"{name} ({short_path(code.co_filename)}:{code.co_firstlineno})"
+    )
 
 
 def student_frames(tb: Optional[TracebackType]) -> str:
@@ -146,11 +170,10 @@ def def_block(func: Any) -> str:
         #   File "/home/student/rov/robot.py", line 8, in DepthPrinter.on_depth
         #     def on_depth(self, task: Task) -> SomeTasks:
     """
-    target = getattr(func, "__func__", func)
-    code = getattr(target, "__code__", None)
+    code = code_of(func)
     if code is None:
         return ""
-    name = code_name(code, getattr(target, "__qualname__", code.co_name))
+    name = code_name(code, getattr(getattr(func, "__func__", func), "__qualname__", code.co_name))
     return source_block(code.co_filename, code.co_firstlineno, name)
 
 
@@ -233,3 +256,18 @@ def parse_source(text: str) -> ast.Module:
     """
     with _PARSE_LOCK:
         return ast.parse(text)
+
+
+def walk_own(function: ast.AST) -> Iterator[ast.AST]:
+    """The nodes of ``function``'s body, not of the functions or classes defined inside it.
+
+    Example::
+
+        [n for n in walk_own(def_node) if isinstance(n, ast.Return)]   # its own returns
+    """
+    stack = list(ast.iter_child_nodes(function))
+    while stack:
+        node = stack.pop()
+        yield node
+        if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef, ast.Lambda, ast.ClassDef)):
+            stack.extend(ast.iter_child_nodes(node))

@@ -28,9 +28,9 @@ Example::
 from __future__ import annotations
 
 import logging
-from typing import Iterator, List, Mapping, Optional, Set, Tuple
+from typing import Iterator, Mapping, Set, Tuple
 
-from snr.core.checks.error_text import closest_match, short_repr
+from snr.core.checks.error_text import closest_key, short_repr
 from snr.core.checks.student_code import describe_callable
 from snr.core.dispatch import HandlerTable
 from snr.prelude import DataKey, Page, Task, TaskName, TaskType
@@ -101,13 +101,11 @@ class WiringChecks:
         ):
             return
         self._reported.add((TaskType.event, name))
+        values: object = task.val_list
+        shown = f"values {short_repr(values, 80)}" if values else "no values"
         self.log.warning(
-            "Nothing on node %r handles the event %r (%s), so it was dropped. %s %s",
-            self.role,
-            name,
-            _values(task),
-            self._why_unhandled(name),
-            _FOOTER,
+            f"Nothing on node {self.role!r} handles the event {name!r} ({shown}), so it was "
+            f"dropped. {self._why_unhandled(name)} {_FOOTER}"
         )
 
     def _why_unhandled(self, name: str) -> str:
@@ -126,7 +124,7 @@ class WiringChecks:
                 f"self.store_data({name!r}, value) in a loop, or return "
                 f"self.store_data_task({name!r}, value) from a handler."
             )
-        guess = _same_but_case(name, events) or closest_match(name, events)
+        guess = closest_key(name, events)
         listened = ", ".join(repr(e) for e in events) or "none"
         if guess is not None:
             return (
@@ -184,7 +182,7 @@ class WiringChecks:
             else:
                 continue
             self._reported.add(task_id)
-            self.log.warning("%s %s", text, _FOOTER)
+            self.log.warning(f"{text} {_FOOTER}")
 
     def _never_ran(self) -> Iterator[Tuple[object, object]]:
         seen: Set[object] = set()
@@ -198,13 +196,3 @@ class WiringChecks:
 
 # Events handled by the node core: not names a student would mean.
 _CORE_EVENTS = {"add_component", "remove_component"}
-
-
-def _same_but_case(name: str, choices: List[str]) -> Optional[str]:
-    same = [c for c in choices if c.lower() == name.lower()]
-    return same[0] if same else None
-
-
-def _values(task: Task) -> str:
-    values: object = task.val_list
-    return f"values {short_repr(values, 80)}" if values else "no values"
