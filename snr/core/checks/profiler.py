@@ -8,8 +8,8 @@ listing 5.2, one section per thread::
     (share: of the 0.526 s since the node was made; each thread's lines add up to 100%)
     node thread:
           200475 x      1.358 us ->  51.780%: (event, 'stress'):__main__
-           10475 x     13.823 us ->  27.538%: (event, 'add_component'):snr.core.node_core
-               1 x     43.164 us ->   0.008%: (terminate):snr.core.node_core
+           10475 x     13.823 us ->  27.538%: (event, 'add_component'):snr.core.node
+               1 x     43.164 us ->   0.008%: (terminate):snr.core.node
                                  ->  20.673%: (outside handlers: the node's own work, ...)
     loop thread timeout_loop:
                1 x 504193.137 us ->  95.890%: Loop(timeout_loop)
@@ -139,7 +139,7 @@ class Profiler(AbstractProfiler):
             # Times called,          Avg runtime, Task/Loop type,
             # (share: of the 0.501 s since the node was made; each thread's lines add up ...)
             # node thread:
-            #            1 x      8.383 us ->   0.002%: (store_page):snr.core.node_core
+            #            1 x      8.383 us ->   0.002%: (store_page):snr.core.node
             #                              ->  99.998%: (outside handlers: the node's own ...)
             # loop thread timeout_loop:
             #            1 x 499281.445 us ->  99.739%: Loop(timeout_loop)
