@@ -518,7 +518,6 @@ class NodeCoreEndpoint(Endpoint):
 
     def __init__(self, factory: AbstractFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, NODE_CORE_NAME)
-        self.node = parent
         self.pages: Dict[DataKey, Page] = {}  # the node's own dict (node.pages), set by the node
         self.task_handlers = {
             (TaskType.event, tasks.STORE_PAGES): self.store_pages_handler,
@@ -547,12 +546,12 @@ class NodeCoreEndpoint(Endpoint):
             )
             return None
         if not page.origin:  # made by tasks.store_data(), which has no node
-            page = dataclasses.replace(page, origin=self.node.role)
+            page = dataclasses.replace(page, origin=self.parent.role)
             task.val_list[0] = page
         self.pages[page.key] = page  # node.write_page, on the node's own thread
         # The page's process_data task, only if some handler waits for it: a
         # page nobody processes (a sender's page, say) costs no task.
-        if page.process and self.node.is_handled(_PROCESS_DATA, page.key):
+        if page.process and self.parent.is_handled(_PROCESS_DATA, page.key):
             return Task(_PROCESS_DATA, page.key, [page])
         return None
 
@@ -566,7 +565,7 @@ class NodeCoreEndpoint(Endpoint):
         ones after it go back to the front of the queue as one ``store_page``
         task each, so every handler sees them in the usual order.
         """
-        node, pages = self.node, self.pages
+        node, pages = self.parent, self.pages
         processed: List[Task] = []
         wanted: Dict[DataKey, bool] = {}  # per key, asked once a burst: is it processed?
         burst = task.val_list
@@ -576,7 +575,9 @@ class NodeCoreEndpoint(Endpoint):
             if not (isinstance(page, Page) and page.origin) or (
                 page.key not in wanted and node.is_handled(_STORE_PAGE, page.key)
             ):
-                self._store_one_by_one(burst[index:])
+                # One store_page task each, first in line, in order.
+                rest = [Task(_STORE_PAGE, str(getattr(p, "key", "")), [p]) for p in burst[index:]]
+                node.schedule_first(rest)
                 break
             pages[page.key] = page  # node.write_page, on the node's own thread
             if page.key not in wanted:
@@ -585,26 +586,21 @@ class NodeCoreEndpoint(Endpoint):
                 processed.append(Task(_PROCESS_DATA, page.key, [page]))
         return processed
 
-    def _store_one_by_one(self, pages: List[Any]) -> None:
-        """Queue one store_page task per page, first in line, in order."""
-        one_each = [Task(TaskType.store_page, str(getattr(p, "key", "")), [p]) for p in pages]
-        self.node.schedule_first(one_each)
-
     def add_component_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Build a component with the factory in the task and add it."""
         factory = task.val_list[0] if task.val_list else None
         if not isinstance(factory, AbstractFactory):
             self.err("add_component needs a factory, got %r", factory)
             return None
-        component = self.node.build_component(factory)
+        component = self.parent.build_component(factory)
         if component is not None:
-            self.node.add_component(component)
+            self.parent.add_component(component)
         return None
 
     def remove_component_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Remove the component named in the task."""
         for name in task.val_list:
-            self.node.remove_component(str(name))
+            self.parent.remove_component(str(name))
         return None
 
     def caught_up_handler(self, task: Task, key: TaskId) -> SomeTasks:
@@ -623,19 +619,19 @@ class NodeCoreEndpoint(Endpoint):
         """
         checks = [value for value in task.val_list if callable(value)]
         if not checks:
-            self.node.check_wiring()
+            self.parent.check_wiring()
         for check in checks:
             check()
         return None
 
     def reload_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Reload the component named by the task (or ``"all"``)."""
-        self.node.reload_component(task.name or "all")
+        self.parent.reload_component(task.name or "all")
         return None
 
     def terminate_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Stop the node once this task has been handled by everyone."""
-        self.node.set_terminate_flag(task.name)
+        self.parent.set_terminate_flag(task.name)
         return None
 
 
