@@ -801,7 +801,7 @@ class TestBlockingHandler(SNRTestCase):
         )
         node.slow_handler_s = 0.01
         # The same slow function, as if SNR's own module had defined it.
-        Sleepy.nap.__module__ = "snr.core.node_core"
+        Sleepy.nap.__module__ = "snr.core.node"
         try:
             with self.assertLogs("snr.test", "DEBUG") as logs:
                 node.loop()

@@ -40,7 +40,7 @@ class TestBenchmarkExample(unittest.TestCase):
         self.assertGreaterEqual(figures["total time"], figures["terminate handled"])
         self.assertIn("Times called,          Avg runtime, Task/Loop type,", printed)
         self.assertRegex(printed, r"\d+ x +[\d.]+ us -> +[\d.]+%: \(event, 'stress'\)")
-        self.assertRegex(printed, r"\(event, 'add_component'\):snr.core.node_core")
+        self.assertRegex(printed, r"\(event, 'add_component'\):snr.core.node")
         self.assertRegex(printed, r"ms: \S+BenchStressEndpointFac.test_stress_endpoint\n")
         self.assertRegex(printed, r"ms: \S+BenchStressEndpointFac.test_stress_endpoint_init\n")
 

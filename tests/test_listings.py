@@ -343,7 +343,7 @@ class TestBenchmarkListing(unittest.TestCase):
         self.assertRegex(out, r"[\d.]+ ms total time\n")
         self.assertIn("Times called,", out)
         self.assertRegex(out, r"\d+ x +[\d.]+ us -> +[\d.]+%: \(event, 'stress'\):bench_stress")
-        self.assertRegex(out, r"\(event, 'add_component'\):snr.core.node_core")
+        self.assertRegex(out, r"\(event, 'add_component'\):snr.core.node")
 
 
 class TestControllerListings(SNRTestCase):

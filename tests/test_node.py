@@ -439,7 +439,7 @@ class TestProfiler(SNRTestCase):
         assert node.profiler is not None
         dump = node.profiler.dump()
         self.assertTrue(dump.startswith("Times called,"))
-        self.assertIn("(terminate):snr.core.node_core", dump)
+        self.assertIn("(terminate):snr.core.node", dump)
         self.assertIn("Loop(ticker)", dump)
         self.assertRegex(dump, r"\n +1 x +[\d.]+ us -> +[\d.]+%: \(terminate\)")
         # Storing a page is the node's own work (before the handlers), not a handler.

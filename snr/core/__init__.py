@@ -23,7 +23,6 @@ from snr.core import (
     loop,
     moving_avg_filter,
     node,
-    node_core,
     runners,
     sim_clock,
     task_queue,
@@ -42,7 +41,6 @@ from snr.core.logs import *
 from snr.core.loop import *
 from snr.core.moving_avg_filter import *
 from snr.core.node import *
-from snr.core.node_core import *
 from snr.core.runners import *
 from snr.core.sim_clock import *
 from snr.core.task_queue import *
@@ -59,7 +57,6 @@ __all__ += logs.__all__
 __all__ += loop.__all__
 __all__ += moving_avg_filter.__all__
 __all__ += node.__all__
-__all__ += node_core.__all__
 __all__ += profiler.__all__
 __all__ += runners.__all__
 __all__ += sim_clock.__all__

@@ -42,7 +42,6 @@ from snr.core.checks.explain import (
 from snr.core.checks.handler_checks import check_burst_handlers
 from snr.core.checks.student_code import describe_callable
 from snr.core.dispatch import HandlerTable
-from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
     AbstractComponent,
     AbstractFactory,
@@ -52,7 +51,10 @@ from snr.prelude import (
     SNRError,
 )
 
-__all__ = ["ComponentSet"]
+__all__ = ["NODE_CORE_NAME", "ComponentSet"]
+
+NODE_CORE_NAME = "node_core"
+"""The component name of every node's core endpoint (`NodeCoreEndpoint`)."""
 
 
 class ComponentSet:

@@ -1,26 +1,56 @@
-"""The node's handler table: which handlers run for a task, found in O(1).
+"""The node's dispatch: which handlers run for a task, and running them.
 
-Thesis 4.4.1 matches a task against every endpoint in turn: first by
-``(type, name)``, then by ``type``. That costs time for every endpoint on every
-task. Here the same answer is computed ahead of time (thesis 8.1): for every
-task id that any component registered, the table holds the list of handlers
-that the two-phase match would find, in component order. A task then needs one
-or two dict look-ups, however many components the node has.
+`HandlerTable` finds the handlers for a task in O(1). Thesis 4.4.1 matches a
+task against every endpoint in turn: first by ``(type, name)``, then by
+``type``. That costs time for every endpoint on every task. Here the same
+answer is computed ahead of time (thesis 8.1): for every task id that any
+component registered, the table holds the list of handlers that the
+two-phase match would find, in component order. A task then needs one or two
+dict look-ups, however many components the node has.
 
 The table is rebuilt when a component is removed or reloaded or changes its
 ``task_handlers`` (the mapping is a :class:`HandlerMap` that reports changes),
 and extended in place when a component is added at the end.
+
+`HandlerRunner` is the one place where SNR calls a student's task handler.
+For every handler that matches a task it
+
+0. for a ``store_page`` task, first stores its page (the node core's
+   `store_page_handler`, called here directly: no table look-up, no timing)
+   and queues its ``process_data`` task, so every handler finds the page in
+   the datastore. When one component alone handles the task's key and has
+   a burst handler for it (``burst_handlers``), the ``store_page`` tasks
+   under that key right behind it are stored too and the burst handler is
+   called once for the run (`HandlerRunner.run_burst`);
+1. calls ``handler(task, key)``, timing it unless the node is DEPLOYED
+   without a profiler (the time goes to the handler's profiler cell, two
+   additions, and a handler slower than ``slow_handler_s`` is reported once);
+2. queues the tasks it returned, keeping their order (a high-priority task
+   goes to the urgent lane);
+3. turns a raised exception or a wrong return value into a `HandlerError`
+   that names the handler, the task and the student's lines. In DEBUG and
+   TEST mode the first one stops the node (``Node.loop()`` raises it); in
+   DEPLOYED mode it is logged and the node keeps running, and a handler that
+   fails over and over is logged in full three times, then counted in one
+   line every five seconds.
 
 Example::
 
     table = HandlerTable()
     table.rebuild(node.components.values())
     table.lookup(TaskType.event, "ping")   # [(handler, key, component, cell), ...]
+
+    runner = HandlerRunner(node.role, node.mode, node.log, node.queue, components, stop)
+    node.schedule(tasks.event("go"))
+    runner.run_queued()      # runs every handler of (event, 'go'), and what follows
 """
 
 from __future__ import annotations
 
+import logging
+import time
 from typing import (
+    TYPE_CHECKING,
     Any,
     Callable,
     Dict,
@@ -29,29 +59,47 @@ from typing import (
     List,
     Mapping,
     Optional,
+    Set,
     Tuple,
+    cast,
 )
 
+from snr.core.checks.explain import (
+    bad_result_error,
+    handler_failure,
+    loop_failure,
+    slow_handler_text,
+)
 from snr.core.checks.handler_checks import (
     check_burst_handlers,
     check_entry,
     check_handler,
     check_task_id,
 )
+from snr.core.logs import RepeatFilter
 from snr.prelude import (
     AbstractComponent,
+    AbstractLoop,
     AbstractProfiler,
     BurstHandler,
+    Mode,
+    SNRError,
     StatsCell,
+    Task,
     TaskHandler,
     TaskId,
     TaskType,
 )
 
+if TYPE_CHECKING:
+    from snr.core.components import ComponentSet
+    from snr.core.task_queue import TaskQueue
+
 __all__ = [
     "BurstEntry",
     "Entry",
     "HandlerMap",
+    "HandlerRunner",
     "HandlerTable",
     "check_burst_handlers",
     "check_handler",
@@ -67,6 +115,8 @@ BurstEntry = Tuple[BurstHandler, AbstractComponent, StatsCell]
 its component, and the profiler cell of the same component's task handler."""
 
 _STORE_PAGE = TaskType.store_page
+_EVENT = TaskType.event
+_MAX_BURST = 256  # store_page tasks a burst handler gets at most in one call
 
 
 class HandlerMap(Dict[TaskId, TaskHandler]):
@@ -218,3 +268,321 @@ class HandlerTable:
         if self.profiler is None:
             return [0, 0.0]  # timed for slow-handler reports only
         return self.profiler.task_cell(key, getattr(handler, "__module__", None) or "?")
+
+
+class HandlerRunner:
+    """Runs handlers, queues their tasks, and records the first failure.
+
+    Args:
+        role: the node's role, for messages.
+        mode: DEBUG/TEST stop the node on the first failure; DEPLOYED logs.
+        log: the node's logger.
+        queue: where tasks come from and returned tasks go.
+        components: the node's `snr.core.components.ComponentSet`, whose
+            handler table says who runs.
+        stop: called with a reason to stop the node (``Node.set_terminate_flag``).
+        timed: time every handler (DEBUG/TEST, or a profiler is on).
+
+    Example::
+
+        runner.run_queued()
+        runner.failure        # the HandlerError/LoopError that stopped the node, or None
+
+    Attributes:
+        running: False once the node is stopping, or pausing (``StepMode``):
+            `run_queued` returns after the current task.
+        failure: the first error that stopped the node (DEBUG/TEST), or None.
+        slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
+        on_unhandled: called with each event no handler matched, or None (the
+            default): a DEBUG node reports events nothing handles through it.
+            (A page nobody handles is normal: it was stored all the same.)
+        store_page: what stores a ``store_page`` task's page before its
+            handlers run (set by the node to its core's `store_page_handler`);
+            it returns the page's ``process_data`` task, or None.
+        repeats: the `RepeatFilter` that keeps repeated failures from flooding the log.
+    """
+
+    def __init__(
+        self,
+        role: str,
+        mode: Mode,
+        log: logging.Logger,
+        queue: TaskQueue,
+        components: ComponentSet,
+        stop: Callable[[str], None],
+        timed: bool = True,
+        slow_handler_s: float = 0.1,
+    ) -> None:
+        self.role = role
+        self.mode = mode
+        self.log = log
+        self.queue = queue
+        self.components = components
+        self.stop = stop
+        self.running = True
+        self.timed = timed
+        self.slow_handler_s = slow_handler_s
+        self.failure: Optional[SNRError] = None
+        self.repeats = RepeatFilter(log)
+        self._slow_reported: Set[Any] = set()
+        #: Called with an event that no handler matched (set by a DEBUG node).
+        self.on_unhandled: Optional[Callable[[Task], None]] = None
+        #: Stores a store_page task's page before its handlers (set by the node).
+        self.store_page: Optional[TaskHandler] = None
+
+    def run_queued(self, max_tasks: int = 100_000) -> None:
+        """Run queued tasks until the queue is empty, the node stops, or ``max_tasks`` ran.
+
+        For each task, oldest first (urgent ones first): find its handlers in
+        the table, run each in component order, and queue what each returns.
+        This is the node's hot path, the one place that runs handlers for
+        tasks, timed or not: every task passes here, so it keeps names in
+        locals, tests ``timed`` instead of having a second copy, and handles
+        the common result (one Task) inline.
+        """
+        queue = self.queue
+        normal, urgent = queue.normal, queue.urgent
+        components = self.components
+        lookup = components.table.table.get
+        timed = self.timed
+        clock = time.perf_counter
+        slow_s = self.slow_handler_s
+        on_unhandled = self.on_unhandled
+        store_first = self.store_first
+        bursts = components.table.bursts  # refilled in place when the table changes
+        for _ in range(max_tasks):
+            if urgent:
+                task = urgent.popleft()
+                from_normal_lane = False
+            elif normal:
+                task = normal.popleft()
+                from_normal_lane = True
+            else:
+                return
+            if components.table_stale:  # what the last task changed applies now
+                components.refresh_table()
+            if task.type is _STORE_PAGE:
+                # The node core's part, before any handler and without a handler
+                # call: no look-up, no timing, so a loop's page reaches its reader sooner.
+                store_first(task)
+                # A run starts only from the normal lane: a paused node runs
+                # urgent tasks one at a time, and `execute_task` runs one task.
+                if bursts and from_normal_lane and normal and normal[0].name == task.name:
+                    burst = bursts.get((_STORE_PAGE, task.name))
+                    if burst is not None and normal[0].type is _STORE_PAGE:
+                        self.run_burst(task, burst)
+                        if not self.running:
+                            return
+                        continue
+            entries = lookup((task.type, task.name))
+            if entries is None:
+                entries = lookup(task.type)
+                if entries is None:
+                    if on_unhandled is not None and task.type is _EVENT:
+                        on_unhandled(task)  # DEBUG: an event nobody handles
+                    continue
+            for handler, key, component, cell in entries:
+                if timed:
+                    started = clock()
+                try:
+                    result = handler(task, key)
+                except Exception as error:
+                    self.handler_failed(handler, task, component, error)
+                    continue
+                if timed:
+                    took = clock() - started
+                    cell[0] += 1
+                    cell[1] += took
+                    if took > slow_s:
+                        self.report_slow(handler, task, took)
+                if result is None:
+                    continue
+                if isinstance(result, Task):
+                    (urgent if result.priority else normal).append(result)
+                else:
+                    self.queue_all(self.check_result(result, handler, task))
+            if not self.running:
+                return
+
+    def run_burst(self, first: Task, burst: BurstEntry) -> None:
+        """Run ``burst``'s handler for ``first`` and the run of tasks like it behind it.
+
+        ``first`` (a ``store_page`` task, its page stored) and every
+        ``store_page`` task under the same key at the head of the queue, up
+        to `_MAX_BURST`, each stored first as usual, go to the burst handler
+        in one call; it is timed as one call per task. What it returns is
+        queued as a handler's result is.
+
+        Example (what `run_queued` does when the table has a burst handler)::
+
+            burst = components.table.bursts.get((TaskType.store_page, "depth"))
+            if burst is not None:
+                runner.run_burst(task, burst)   # task and the "depth" pages behind it
+        """
+        handler, component, cell = burst
+        normal = self.queue.normal
+        store_first = self.store_first
+        name = first.name
+        run = [first]
+        while self.running and normal and len(run) < _MAX_BURST:  # a failed store stops it
+            task = normal[0]
+            if task.type is not _STORE_PAGE or task.name != name:
+                break
+            normal.popleft()
+            store_first(task)
+            run.append(task)
+        named = cast(TaskHandler, handler)  # reported by its name, as a task handler is
+        started = time.perf_counter()
+        try:
+            result = handler(run)
+        except Exception as error:
+            self.handler_failed(named, first, component, error, run_size=len(run))
+            return
+        if self.timed:
+            self._count(named, first, cell, time.perf_counter() - started, len(run))
+        self.queue_all(self.check_result(result, named, first))
+
+    def run(
+        self,
+        handler: TaskHandler,
+        task: Task,
+        key: TaskId,
+        component: Optional[AbstractComponent],
+        cell: Optional[StatsCell] = None,
+    ) -> Optional[List[Task]]:
+        """Run one handler, timed and checked; return its tasks (not queued)."""
+        started = time.perf_counter()
+        try:
+            result = handler(task, key)
+        except Exception as error:
+            self.handler_failed(handler, task, component, error)
+            return None
+        self._count(
+            handler, task, [0, 0.0] if cell is None else cell, time.perf_counter() - started
+        )
+        return self.check_result(result, handler, task)
+
+    def _count(
+        self, handler: TaskHandler, task: Task, cell: StatsCell, took: float, calls: int = 1
+    ) -> None:
+        """Add a call that took ``took`` s to ``cell``; report it if it was slow."""
+        cell[0] += calls
+        cell[1] += took
+        if took > self.slow_handler_s:
+            self.report_slow(handler, task, took)
+
+    def store_first(self, task: Task) -> Optional[Task]:
+        """For a ``store_page`` task: store its page now, queue and return what follows.
+
+        What `run_queued` does before a ``store_page`` task's handlers, and
+        the console's ``step`` too. A page that cannot be stored (a key that
+        cannot be a dict key...) is a handler failure, in words, as any other.
+
+        Example::
+
+            runner.store_first(tasks.store_page(page))   # (process_data, key) or None
+        """
+        store_page = self.store_page
+        if task.type is not _STORE_PAGE or store_page is None:
+            return None
+        try:
+            follow_up = store_page(task, _STORE_PAGE)
+        except Exception as error:
+            self.handler_failed(store_page, task, getattr(store_page, "__self__", None), error)
+            return None
+        if not isinstance(follow_up, Task):
+            return None
+        self.queue.normal.append(follow_up)
+        return follow_up
+
+    def queue_all(self, tasks: Optional[List[Task]]) -> None:
+        """Queue tasks a handler returned, in order (urgent ones jump ahead)."""
+        if tasks:
+            normal, urgent = self.queue.normal, self.queue.urgent
+            for task in tasks:
+                (urgent if task.priority else normal).append(task)
+
+    def check_result(self, result: Any, handler: TaskHandler, task: Task) -> Optional[List[Task]]:
+        """``result`` as a list of tasks; a wrong value is reported and dropped."""
+        if result is None:
+            return None
+        if isinstance(result, Task):
+            return [result]
+        if isinstance(result, list) and all(isinstance(t, Task) for t in result):
+            return result
+        self.record(bad_result_error(result, handler, task), _func_of(handler))
+        return None
+
+    def handler_failed(
+        self,
+        handler: TaskHandler,
+        task: Task,
+        component: Optional[AbstractComponent],
+        error: Exception,
+        run_size: int = 1,
+    ) -> None:
+        """Report ``error`` raised by ``handler`` (and stop the node unless DEPLOYED).
+
+        ``run_size``: how many tasks a burst handler was given, ``task`` first.
+        """
+        deployed = self.mode is Mode.DEPLOYED
+        failure = handler_failure(handler, task, component, error, deployed, run_size)
+        self.record(failure, (_func_of(handler), type(error)))
+
+    def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
+        """Report a loop's thread ending with ``error`` (any BaseException).
+
+        ``sys.exit()`` or Ctrl-C in a loop stops the node in every mode, as
+        the student meant; other errors are failures like a handler's.
+        """
+        deployed = self.mode is Mode.DEPLOYED
+        failure = loop_failure(loop, error, deployed)
+        if isinstance(error, (SystemExit, KeyboardInterrupt)):
+            self.log.warning("%s The node stops.", failure)
+            what = "sys.exit()" if isinstance(error, SystemExit) else "Ctrl-C"
+            self.stop(f"{what} in loop {loop.name!r}")
+            return
+        self.record(failure, (id(loop), type(error)))
+
+    def record(self, error: SNRError, key: Hashable) -> None:
+        """Log ``error``; outside DEPLOYED mode the first one also stops the node."""
+        if self.mode is Mode.DEPLOYED:
+            text = str(error)
+            if "The node keeps running" not in text:
+                text += " The node keeps running."
+            first_line = text.split("\n", 1)[0]
+            self.repeats.report(key, first_line, logging.ERROR, "%s", text)
+            return
+        if self.failure is None:
+            # loop() raises this error once the node has stopped, so the log
+            # gets one line now (shutdown can take a moment), not a duplicate.
+            self.failure = error
+            first_sentence = str(error).split("\n", 1)[0].split(". ", 1)[0].rstrip(".")
+            self.log.error("Stopping node %r: %s.", self.role, first_sentence)
+        else:
+            self.log.error("%s", error)
+        self.stop(f"stopped by a {type(error).__name__}")
+
+    def report_slow(self, handler: TaskHandler, task: Task, took_s: float) -> None:
+        """Warn once per handler that it held the node's thread for ``took_s``.
+
+        Only a student's handler is warned about; SNR's own (in ``snr.*``
+        modules) is noted at DEBUG level, since the advice is not theirs to follow.
+        """
+        if self.mode is Mode.DEPLOYED:
+            return
+        func = _func_of(handler)
+        if func in self._slow_reported:
+            return
+        self._slow_reported.add(func)
+        if getattr(func, "__module__", "").startswith("snr."):
+            # SNR's own handler (a reload waiting for a link's goodbye, say): the
+            # advice to move work into a ThreadLoop is not the student's to follow.
+            self.log.debug("%s", slow_handler_text(handler, task, took_s))
+            return
+        self.log.warning("%s", slow_handler_text(handler, task, took_s))
+
+
+def _func_of(handler: TaskHandler) -> Any:
+    """The function behind a bound method: one key for every instance's handler."""
+    return getattr(handler, "__func__", handler)

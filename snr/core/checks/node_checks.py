@@ -38,7 +38,7 @@ from snr.core.checks.key_hints import MissingKeyHints
 from snr.core.checks.watchdog import Watchdog, WatchedNode, queued_page_keys
 from snr.core.checks.wiring_checks import WiringChecks
 from snr.core.components import ComponentSet
-from snr.core.handler_runner import HandlerRunner
+from snr.core.dispatch import HandlerRunner
 from snr.core.timer import Timer
 from snr.prelude import (
     AbstractComponent,

@@ -119,7 +119,7 @@ class Profiler(AbstractProfiler):
             # Times called,          Avg runtime, Task/Loop type,
             # (share: of the 0.501 s since the node was made; each thread's lines add up ...)
             # node thread:
-            #            1 x      8.383 us ->   0.002%: (store_page):snr.core.node_core
+            #            1 x      8.383 us ->   0.002%: (store_page):snr.core.node
             #                              ->  99.998%: (outside handlers: the node's own ...)
             # loop thread timeout_loop:
             #            1 x 499281.445 us ->  99.739%: Loop(timeout_loop)

@@ -31,7 +31,7 @@ import collections
 from dataclasses import dataclass, field
 from typing import Any, Callable, Deque, List, Optional, Tuple
 
-from snr.core.handler_runner import HandlerRunner
+from snr.core.dispatch import HandlerRunner
 from snr.core.task_queue import TaskQueue
 from snr.prelude import AbstractNode, Task, TaskPriority, TaskType
 

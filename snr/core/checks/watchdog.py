@@ -82,7 +82,7 @@ from snr.core.checks.student_code import (
     parse_source,
     running_line,
 )
-from snr.core.handler_runner import HandlerRunner
+from snr.core.dispatch import HandlerRunner
 from snr.core.loop import ThreadLoop
 from snr.core.task_queue import TaskQueue
 from snr.prelude import (

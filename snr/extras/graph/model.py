@@ -35,7 +35,7 @@ from typing import Dict, Iterable, List, Optional, Sequence, Set, Tuple
 
 from snr.core import Config, Node, ThreadLoop
 from snr.core.component import Component
-from snr.core.node_core import NODE_CORE_NAME
+from snr.core.node import NODE_CORE_NAME
 from snr.extras.graph.source_keys import key_uses, resolve
 from snr.prelude import AbstractComponent, AbstractConfig, DataKey, Role, TaskType
 from snr.std_mods.comms.comms_loop import CommsLoop
