@@ -41,7 +41,7 @@ from snr.prelude import ComponentError, DatastoreWriteError, SNRError
 from tests.helpers import settle_the_heap
 from tests.quiet import captured_logs
 
-NEW_ENTRIES = ["15n", "15o", "15p", "15q", "16p", "16q", "16r", "16s", "16t"]
+NEW_ENTRIES = ["15n", "15o", "15p", "15q", "16p", "16q", "16r", "16s", "16t", "16u"]
 
 
 class TestNewEntriesLineByLine(unittest.TestCase):

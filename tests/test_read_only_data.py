@@ -8,7 +8,9 @@ import pickle
 import unittest
 from typing import Any, Callable, List, Tuple
 
+from snr import Config, Mode, Node, Page, TimeoutLoopFactory, tasks
 from snr.core.checks.read_only import ReadOnlyDict, ReadOnlyList, freeze
+from tests.quiet import captured_logs
 
 
 class TestFreeze(unittest.TestCase):
@@ -116,3 +118,38 @@ class TestEveryChangeIsRefused(unittest.TestCase):
 
 if __name__ == "__main__":
     unittest.main()
+
+
+class TestTheNodeStoresReadOnlyData(unittest.TestCase):
+    """DEBUG and TEST store read-only data; DEPLOYED stores it as it is (each node runs 0.2 s)."""
+
+    def stored(self, mode: Mode, data: Any) -> Any:
+        node = Node("robot", Config({"robot": [TimeoutLoopFactory(seconds=0.2)]}, mode=mode))
+        node.store_data("scan", data)
+        with captured_logs("snr.robot"):
+            node.loop()
+        return node.get_data("scan")
+
+    def test_each_mode(self) -> None:
+        for mode, kind in (
+            (Mode.DEBUG, ReadOnlyList),
+            (Mode.TEST, ReadOnlyList),
+            (Mode.DEPLOYED, list),
+        ):
+            with self.subTest(mode):
+                mine = [1.0, [2.0]]
+                data = self.stored(mode, mine)
+                self.assertIs(type(data), kind)
+                self.assertEqual(data, [1.0, [2.0]])
+                if mode is not Mode.DEPLOYED:
+                    self.assertIsNot(data, mine)  # the loop's own list is not the page's
+                    self.assertIs(type(data[1]), ReadOnlyList)
+
+    def test_a_burst_of_pages_is_read_only_too(self) -> None:
+        node = Node("robot", Config({"robot": [TimeoutLoopFactory(seconds=0.2)]}))
+        pages = [Page("scan", [float(i)], "other", 0.0) for i in range(3)]
+        node.schedule(tasks.store_pages(pages))
+        with captured_logs("snr.robot"):
+            node.loop()
+        self.assertIs(type(node.get_data("scan")), ReadOnlyList)
+        self.assertEqual(node.get_data("scan"), [2.0])

@@ -177,10 +177,14 @@ class Node(AbstractNode):
             from snr.core.checks.node_checks import NodeChecks
 
             self._checks = NodeChecks(self, self._components, self._runner)
-        core = NodeCoreFactory().get(self)
+        core = self._core = NodeCoreFactory().get(self)
         self.add_component(core, start=False)
         self._runner.store_page = core.store_page_handler  # pages are stored before handlers
         core.pages = self.pages
+        if self.mode is not Mode.DEPLOYED:  # page data read-only: checks/read_only.py
+            from snr.core.checks.read_only import freeze
+
+            core.freeze = freeze
         for factory in config.get(role):
             component = self.build_component(factory)
             if component is not None:
@@ -452,7 +456,7 @@ class Node(AbstractNode):
         ``store_page``/``store_data``, which queue it.
         """
         self._check_owner_thread("write_page")
-        self.pages[page.key] = page
+        self.pages[page.key] = self._core.frozen(page)
 
     # ------------------------------------------------------------------
     # Components (the work is done by ComponentSet)
@@ -519,6 +523,9 @@ class NodeCoreEndpoint(Endpoint):
     def __init__(self, factory: AbstractFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, NODE_CORE_NAME)
         self.pages: Dict[DataKey, Page] = {}  # the node's own dict (node.pages), set by the node
+        # DEBUG and TEST: makes a page's lists and dicts read-only as it is stored, so
+        # that no handler changes what the others see (set by the node; None: DEPLOYED).
+        self.freeze: Optional[Callable[[Any, DataKey], Any]] = None
         self.task_handlers = {
             (TaskType.event, tasks.STORE_PAGES): self.store_pages_handler,
             (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
@@ -548,12 +555,18 @@ class NodeCoreEndpoint(Endpoint):
         if not page.origin:  # made by tasks.store_data(), which has no node
             page = dataclasses.replace(page, origin=self.parent.role)
             task.val_list[0] = page
-        self.pages[page.key] = page  # node.write_page, on the node's own thread
+        self.pages[page.key] = self.frozen(page)  # node.write_page, on the node's own thread
         # The page's process_data task, only if some handler waits for it: a
         # page nobody processes (a sender's page, say) costs no task.
         if page.process and self.parent.is_handled(_PROCESS_DATA, page.key):
             return Task(_PROCESS_DATA, page.key, [page])
         return None
+
+    def frozen(self, page: Page) -> Page:
+        """``page``, its data made read-only first in DEBUG and TEST modes (``freeze``)."""
+        if self.freeze is not None:
+            page.data = self.freeze(page.data, page.key)
+        return page
 
     def store_pages_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Store a burst of pages (`tasks.store_pages`) in order, in one handler call.
@@ -579,7 +592,7 @@ class NodeCoreEndpoint(Endpoint):
                 rest = [Task(_STORE_PAGE, str(getattr(p, "key", "")), [p]) for p in burst[index:]]
                 node.schedule_first(rest)
                 break
-            pages[page.key] = page  # node.write_page, on the node's own thread
+            pages[page.key] = self.frozen(page)  # node.write_page, on the node's own thread
             if page.key not in wanted:
                 wanted[page.key] = node.is_handled(_PROCESS_DATA, page.key)
             if page.process and wanted[page.key]:

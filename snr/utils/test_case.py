@@ -7,7 +7,7 @@ import unittest
 from typing import Any, List, Mapping, Optional, Sequence, Union
 
 from snr.core import Config, Node, TestRunner
-from snr.core.node_core import NODE_CORE_NAME
+from snr.core.components import NODE_CORE_NAME
 from snr.prelude import AbstractFactory, AbstractLoop, DataKey, Mode, Page
 from snr.utils.expector import Expector, K, OrderedExpector
 from snr.utils.expector_endpoint import ExpectorEndpoint

@@ -33,6 +33,9 @@ from snr.prelude import DataKey
 
 __all__ = ["ReadOnlyDict", "ReadOnlyList", "freeze"]
 
+MAX_DEPTH = 100
+"""Lists and dicts nested deeper than this are left as they are (JSON pages are shallower)."""
+
 # Types whose values cannot be changed in place: passed as they are.
 _IMMUTABLE = frozenset({int, float, str, bool, bytes, type(None), complex})
 
@@ -48,9 +51,9 @@ def _refusing(kind: str, what: str, instead: str = "") -> Callable[..., NoReturn
             f"handler of {key!r} and for the datastore, which all share this one {kind}. "
             f"{instead}{'Otherwise c' if instead else 'C'}opy it and change the copy: "
             f"mine = {copy_call}(task.val_list[0].data) in a handler, or "
-            f"mine = {copy_call}(self.get_data({key!r})); "
-            f"store_data({key!r}, mine) then shares it. (Page data is read-only in DEBUG "
-            "and TEST modes.)"
+            f"mine = {copy_call}(self.get_data({key!r})) elsewhere; "
+            f"store_data({key!r}, mine) then shares it. DEBUG and TEST modes keep page "
+            "data read-only; DEPLOYED does not check."
         )
 
     refuse.__doc__ = f"Refused: {what} would change shared page data."
@@ -129,13 +132,14 @@ class ReadOnlyDict(Dict[Any, Any]):
         return {key: copy.deepcopy(value, memo) for key, value in self.items()}
 
 
-def freeze(data: Any, key: DataKey) -> Any:
+def freeze(data: Any, key: DataKey, depth: int = 0) -> Any:
     """``data`` with every list and dict in it read-only (a copy), for page ``key``.
 
     Values that cannot change (numbers, strings, None) and objects that are not
-    lists, dicts or tuples come back as they are. Nested values' types are
-    checked in C first (``set(map(type, ...))``), so a flat list of numbers
-    costs one copy.
+    lists, dicts or tuples come back as they are, and so does whatever is nested
+    deeper than `MAX_DEPTH` (data that contains itself is endlessly deep). Nested
+    values' types are checked in C first (``set(map(type, ...))``), so a flat
+    list of numbers costs one copy.
 
     Example::
 
@@ -143,16 +147,16 @@ def freeze(data: Any, key: DataKey) -> Any:
         freeze(3.2, "depth")                    # 3.2
     """
     kind = type(data)
-    if kind in _IMMUTABLE:
+    if kind in _IMMUTABLE or depth > MAX_DEPTH:
         return data
     if kind is list or kind is ReadOnlyList:
         if set(map(type, data)) <= _IMMUTABLE:
             return ReadOnlyList(data, key)
-        return ReadOnlyList([freeze(item, key) for item in data], key)
+        return ReadOnlyList([freeze(item, key, depth + 1) for item in data], key)
     if kind is dict or kind is ReadOnlyDict:
         if set(map(type, data.values())) <= _IMMUTABLE:
             return ReadOnlyDict(data, key)
-        return ReadOnlyDict({k: freeze(v, key) for k, v in data.items()}, key)
+        return ReadOnlyDict({k: freeze(v, key, depth + 1) for k, v in data.items()}, key)
     if kind is tuple and not set(map(type, data)) <= _IMMUTABLE:
-        return tuple(freeze(item, key) for item in data)
+        return tuple(freeze(item, key, depth + 1) for item in data)
     return data

@@ -28,8 +28,8 @@ from typing import Any, Callable, Deque, Dict, List, Mapping, Optional, Sequence
 from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, plugins, tasks
 from snr.core.checks.error_text import closest_match, did_you_mean
 from snr.core.checks.step_mode import MAX_STEPS, Step, console_priority
+from snr.core.components import NODE_CORE_NAME
 from snr.core.logs import RepeatFilter
-from snr.core.node_core import NODE_CORE_NAME
 from snr.prelude import (
     AbstractComponent,
     AbstractNode,
@@ -103,11 +103,23 @@ MAX_WATCHES = 32
 _TICK_S = 0.05  # how often open watches check their time limits (a reply is at most this late)
 _MIN_LINES = 50  # a listing shows this many keys however slow the node is (each is cheap)
 _PREVIEW_CHARS = 120
-_previews = reprlib.Repr()  # a short preview of any value, cheap even for a huge one
+
+
+class _ValueRepr(reprlib.Repr):
+    """`reprlib.Repr` that shortens read-only page data (DEBUG, TEST) as the list or dict it is."""
+
+    def repr_ReadOnlyList(self, value: List[Any], level: int) -> str:  # reprlib names it so
+        return self.repr_list(value, level)
+
+    def repr_ReadOnlyDict(self, value: Dict[Any, Any], level: int) -> str:
+        return self.repr_dict(value, level)
+
+
+_previews = _ValueRepr()  # a short preview of any value, cheap even for a huge one
 _previews.maxstring = _previews.maxother = _PREVIEW_CHARS
 _previews.maxlevel = 3
 _previews.maxlist = _previews.maxtuple = _previews.maxdict = _previews.maxset = 12
-_whole_values = reprlib.Repr()  # one value in full, up to a reply's length
+_whole_values = _ValueRepr()  # one value in full, up to a reply's length
 _whole_values.maxstring = _whole_values.maxother = REPLY_BUDGET_CHARS
 _whole_values.maxlevel = 8
 _whole_values.maxlist = _whole_values.maxtuple = _whole_values.maxdict = 2000
