@@ -14,6 +14,7 @@ import textwrap
 import threading
 import time
 import unittest
+from pathlib import Path
 from typing import Any, Callable, Dict, List, Optional, Tuple
 
 import tests.test_errors_catalogue as catalogue_tests
@@ -41,7 +42,7 @@ from snr.prelude import ComponentError, DatastoreWriteError, SNRError
 from tests.helpers import settle_the_heap
 from tests.quiet import captured_logs
 
-NEW_ENTRIES = ["15n", "15o", "15p", "15q", "16p", "16q", "16r", "16s", "16t", "16u"]
+NEW_ENTRIES = ["15n", "15o", "15p", "15q", "16p", "16q", "16r", "16s", "16t", "16u", "16v"]
 
 
 class TestNewEntriesLineByLine(unittest.TestCase):
@@ -70,6 +71,42 @@ class TestNewEntriesLineByLine(unittest.TestCase):
 
 
 silence.add_entry_tests(TestNewEntriesLineByLine, NEW_ENTRIES)
+
+
+FRESH = Path(__file__).parent / "data" / "fresh_mistakes"
+"""Fresh mistakes, no catalogue entry's: each ``NAME.py`` is a whole program, run as
+``python robot.py robot``, and ``NAME.txt`` is what a student sees, as docs/errors.md shows it."""
+FRESH_AS_A_PROCESS = {"synchronous_runner_never_run"}  # said as the interpreter exits
+
+
+class TestFreshMistakesLineByLine(unittest.TestCase):
+    """Each fresh mistake prints exactly the lines of its ``.txt``, in order."""
+
+    def check(self, name: str) -> None:
+        program = (FRESH / f"{name}.py").read_text("utf-8")
+        shown_text = (FRESH / f"{name}.txt").read_text("utf-8").splitlines()
+        status = int(shown_text[-1])
+        output = shown_text[1:-2]  # between "$ python robot.py robot" and "$ echo $?"
+        if name in FRESH_AS_A_PROCESS:
+            lines, printed_status = silence.run_process(program)
+        else:
+            wanted = [c for c in map(silence.comparable, output) if c is not None]
+            lines, printed_status = silence.run_program(program, wanted)
+        shown = [c for c in map(catalogue_tests.as_shown, output) if c is not None]
+        printed = [c for c in map(catalogue_tests.as_on_the_page, lines) if c is not None]
+        self.assertTrue(
+            catalogue_tests.matches(shown, printed),
+            f"{name}: printed instead:\n" + "\n".join(lines),
+        )
+        self.assertEqual(printed_status, status, name)
+
+
+for _program in sorted(FRESH.glob("*.py")):
+
+    def _test(self: TestFreshMistakesLineByLine, name: str = _program.stem) -> None:
+        self.check(name)
+
+    setattr(TestFreshMistakesLineByLine, f"test_{_program.stem}", _test)
 
 
 # -- fresh mistakes -----------------------------------------------------------------

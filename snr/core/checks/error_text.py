@@ -30,6 +30,7 @@ import traceback
 from typing import Any, Iterable, List, Optional
 
 from snr.prelude.error_text import short_repr
+from snr.prelude.page import Page
 
 __all__ = [
     "PAGE_IN_A_HANDLER",
@@ -67,7 +68,24 @@ def exception_text(error: BaseException) -> str:
                 text = f"{text}. {_SUGGESTION}: {guess!r}?"
     if isinstance(error, TypeError) and re.search(r"\bPage\b", text):  # 'Page', Page object
         text += PAGE_IN_A_HANDLER  # checks/explain.py says it for get_page and loops
+    elif isinstance(error, AttributeError) and _value_has_it(error):
+        data = error.obj.data  # type: ignore[attr-defined]  # a Page: _value_has_it said so
+        # Read-only page data (checks/read_only.py) is a list or a dict, and said so.
+        plain = "list" if isinstance(data, list) else "dict" if isinstance(data, dict) else ""
+        text += f". Its data (a {plain or type(data).__name__}) has .{error.name}"
+        text += PAGE_IN_A_HANDLER
     return text
+
+
+def _value_has_it(error: AttributeError) -> bool:
+    """True when ``error`` is a Page's missing attribute that its data has (``page.items``)."""
+    page, name = getattr(error, "obj", None), getattr(error, "name", None)
+    if not isinstance(page, Page) or not isinstance(name, str):
+        return False
+    try:
+        return hasattr(page.data, name)
+    except Exception:  # a property of the student's data that fails: say nothing
+        return False
 
 
 PAGE_IN_A_HANDLER = (
