@@ -1,4 +1,8 @@
-"""`IOLoop`: one thread per node serves every comms socket, however many peers connect.
+"""The socket transport: `SocketTransport` over TCP, and the `IOLoop` that serves every link.
+
+A link talks over a `Transport`: a non-blocking byte stream (a TCP socket,
+`SocketTransport`; a pipe end, ``pipe.py``) that the node's one `IOLoop`
+thread watches, however many peers connect.
 
 A comms link used to cost two threads (a reader and a writer), so a server
 with hundreds of idle clients cost hundreds of threads, and once enough
@@ -45,6 +49,7 @@ import logging
 import select
 import selectors
 import socket
+import struct
 import threading
 import time
 from typing import Any, Callable, Deque, Dict, Iterator, List, Optional, Protocol, Tuple
@@ -53,7 +58,15 @@ from snr.core.node import Node
 from snr.core.task_queue import TaskQueue
 from snr.prelude import AbstractNode
 
-__all__ = ["IOHandler", "IOLoop", "IOTimer"]
+try:  # Linux and macOS say how many bytes wait unread; Windows has no fcntl
+    import fcntl
+    import termios
+
+    _FIONREAD: Optional[int] = termios.FIONREAD
+except ImportError:
+    _FIONREAD = None
+
+__all__ = ["IOHandler", "IOLoop", "IOTimer", "SocketTransport", "Transport", "unread_bytes"]
 
 RECV_BYTES = 256 * 1024
 """Size of the loop's one receive buffer, shared by all its links (only its thread reads)."""
@@ -91,7 +104,7 @@ class IOHandler(Protocol):
 
     The loop calls these on its own thread; they must not block.
 
-    Example: ``Link`` in ``link.py``.
+    Example: ``Link`` in ``comms_loop.py``.
     """
 
     def fileno(self) -> int:
@@ -682,3 +695,135 @@ def _drain(sock: socket.socket) -> None:
             pass
     except OSError:  # BlockingIOError: drained
         pass
+
+
+# -- transports: what a link reads and writes ------------------------------
+
+
+class Transport(Protocol):
+    """A byte stream to one peer that the node's `IOLoop` can watch: a TCP socket or a pipe.
+
+    Every method returns at once (the file descriptor is non-blocking): the
+    loop calls ``recv_into`` when ``fileno()`` is readable and ``send`` when
+    it is writable, and the node's thread may call ``send`` too (under the
+    outbox's lock) to write a frame straight away.
+
+    Example: `SocketTransport` below.
+    """
+
+    peer: str
+    """Where the peer is, for log messages, e.g. ``"127.0.0.1:9000"``."""
+
+    def fileno(self) -> int:
+        """The file descriptor the I/O loop watches."""
+
+    def send(self, data: bytes) -> int:
+        """Write what fits without blocking; how many bytes went.
+
+        Raises BlockingIOError if nothing fits, another OSError if the peer is gone.
+        """
+
+    def recv_into(self, buffer: bytearray) -> int:
+        """Read what has arrived into ``buffer``; 0 at end of stream.
+
+        Raises BlockingIOError if nothing has arrived, another OSError if the link broke.
+        """
+
+    def end_writing(self) -> None:
+        """Tell the peer nothing more will be sent (after a graceful flush)."""
+
+    def close(self) -> None:
+        """Release the socket or pipe."""
+
+
+def unread_bytes(fd: int) -> Optional[int]:
+    """How many received bytes wait unread in the OS for ``fd``; None where it cannot say.
+
+    A socket or pipe that is not read keeps what arrives; a link whose node is
+    behind uses this to tell a peer that still talks from one that fell silent.
+
+    Example::
+
+        unread_bytes(sock.fileno())   # 0 when nothing waits
+    """
+    if _FIONREAD is None:
+        return None
+    try:
+        answer = fcntl.ioctl(fd, _FIONREAD, b"\0\0\0\0")
+    except OSError:
+        return None
+    return int(struct.unpack("i", answer)[0])
+
+
+def _enable_keepalive(sock: socket.socket) -> None:
+    """Notice a peer that vanished without a word (cable pulled) in ~10 s, not hours."""
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
+    for option, value in (("TCP_KEEPIDLE", 5), ("TCP_KEEPINTVL", 2), ("TCP_KEEPCNT", 3)):
+        if hasattr(socket, option):  # Linux; other systems keep their defaults
+            try:
+                sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, option), value)
+            except OSError:
+                pass
+
+
+def _limit_unacknowledged(sock: socket.socket, seconds: float) -> None:
+    """Give up on data the peer has not acknowledged for ``seconds`` (Linux).
+
+    Without it, a sender on a path that vanished (Wi-Fi out of range: no FIN,
+    no RST) keeps retransmitting for about 15 minutes.
+    """
+    option = getattr(socket, "TCP_USER_TIMEOUT", None)
+    if option is not None:
+        try:
+            sock.setsockopt(socket.IPPROTO_TCP, option, int(seconds * 1000))
+        except OSError:
+            pass
+
+
+class SocketTransport:
+    """A connected TCP socket as a link ``Transport`` (non-blocking, ``TCP_NODELAY`` on).
+
+    The node's I/O loop watches it; nothing here ever blocks.
+
+    Example::
+
+        SocketTransport(socket.create_connection(("localhost", 9000)), "localhost:9000")
+    """
+
+    def __init__(
+        self,
+        sock: socket.socket,
+        peer: str,
+        dead_after_s: float,
+    ) -> None:
+        sock.setblocking(False)
+        # Every frame is written in one call; without this, Nagle's algorithm
+        # holds small frames back for up to ~40-200 ms.
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        _enable_keepalive(sock)
+        _limit_unacknowledged(sock, dead_after_s)
+        self.sock = sock
+        self.peer = peer
+
+    def fileno(self) -> int:
+        """The socket's file descriptor."""
+        return self.sock.fileno()
+
+    def send(self, data: bytes) -> int:
+        """Write what fits now; raises BlockingIOError if nothing does."""
+        return self.sock.send(data)
+
+    def recv_into(self, buffer: bytearray) -> int:
+        """Read what has arrived; 0 when the peer closed; BlockingIOError if nothing has."""
+        return self.sock.recv_into(buffer)
+
+    def end_writing(self) -> None:
+        """Half-close: the peer reads to the end, then sees end of stream."""
+        try:
+            self.sock.shutdown(socket.SHUT_WR)
+        except OSError:
+            pass
+
+    def close(self) -> None:
+        """Release the socket."""
+        self.sock.close()

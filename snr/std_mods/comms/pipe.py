@@ -25,12 +25,13 @@ from typing import TYPE_CHECKING, Any, List, Optional
 
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, ConfigError, WireFormatError
-from snr.std_mods.codec import load_object, page_from_fields
+from snr.std_mods.codec import Message, decode_body, load_object, page_from_fields
 from snr.std_mods.comms.comms_loop import (
     DEFAULT_DEAD_AFTER_S,
     DEFAULT_MAX_BACKLOG_BYTES,
     CommsLoop,
     Keys,
+    Link,
     normalize_keys,
 )
 from snr.std_mods.comms.handshake import (
@@ -38,8 +39,6 @@ from snr.std_mods.comms.handshake import (
     find_secret,
     resolve_system,
 )
-from snr.std_mods.comms.link import Link
-from snr.std_mods.comms.wire import Message, decode_body
 
 if TYPE_CHECKING:  # multiprocessing costs ~14 ms to import; the caller made the pipe
     from multiprocessing.connection import Connection

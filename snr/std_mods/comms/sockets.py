@@ -40,6 +40,8 @@ from snr.std_mods.comms.comms_loop import (
     DEFAULT_MAX_BACKLOG_BYTES,
     CommsLoop,
     Keys,
+    Link,
+    LinkState,
     normalize_keys,
 )
 from snr.std_mods.comms.handshake import (
@@ -48,7 +50,7 @@ from snr.std_mods.comms.handshake import (
     find_secret,
     resolve_system,
 )
-from snr.std_mods.comms.link import Link, LinkState
+from snr.std_mods.comms.io_loop import SocketTransport
 
 __all__ = [
     "DEFAULT_MAX_CONNECTIONS",
@@ -78,80 +80,6 @@ _STABLE_S = 1.0  # a link that lasted this long (after a hello) resets the backo
 
 def _describe(address: Address) -> str:
     return f"{address[0]}:{address[1]}"
-
-
-def _enable_keepalive(sock: socket.socket) -> None:
-    """Notice a peer that vanished without a word (cable pulled) in ~10 s, not hours."""
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
-    for option, value in (("TCP_KEEPIDLE", 5), ("TCP_KEEPINTVL", 2), ("TCP_KEEPCNT", 3)):
-        if hasattr(socket, option):  # Linux; other systems keep their defaults
-            try:
-                sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, option), value)
-            except OSError:
-                pass
-
-
-def _limit_unacknowledged(sock: socket.socket, seconds: float) -> None:
-    """Give up on data the peer has not acknowledged for ``seconds`` (Linux).
-
-    Without it, a sender on a path that vanished (Wi-Fi out of range: no FIN,
-    no RST) keeps retransmitting for about 15 minutes.
-    """
-    option = getattr(socket, "TCP_USER_TIMEOUT", None)
-    if option is not None:
-        try:
-            sock.setsockopt(socket.IPPROTO_TCP, option, int(seconds * 1000))
-        except OSError:
-            pass
-
-
-class SocketTransport:
-    """A connected TCP socket as a link ``Transport`` (non-blocking, ``TCP_NODELAY`` on).
-
-    The node's I/O loop watches it; nothing here ever blocks.
-
-    Example::
-
-        SocketTransport(socket.create_connection(("localhost", 9000)), "localhost:9000")
-    """
-
-    def __init__(
-        self,
-        sock: socket.socket,
-        peer: str,
-        dead_after_s: float = DEFAULT_DEAD_AFTER_S,
-    ) -> None:
-        sock.setblocking(False)
-        # Every frame is written in one call; without this, Nagle's algorithm
-        # holds small frames back for up to ~40-200 ms.
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        _enable_keepalive(sock)
-        _limit_unacknowledged(sock, dead_after_s)
-        self.sock = sock
-        self.peer = peer
-
-    def fileno(self) -> int:
-        """The socket's file descriptor."""
-        return self.sock.fileno()
-
-    def send(self, data: bytes) -> int:
-        """Write what fits now; raises BlockingIOError if nothing does."""
-        return self.sock.send(data)
-
-    def recv_into(self, buffer: bytearray) -> int:
-        """Read what has arrived; 0 when the peer closed; BlockingIOError if nothing has."""
-        return self.sock.recv_into(buffer)
-
-    def end_writing(self) -> None:
-        """Half-close: the peer reads to the end, then sees end of stream."""
-        try:
-            self.sock.shutdown(socket.SHUT_WR)
-        except OSError:
-            pass
-
-    def close(self) -> None:
-        """Release the socket."""
-        self.sock.close()
 
 
 def _listen(address: Address, role: str) -> socket.socket:
