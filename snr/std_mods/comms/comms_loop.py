@@ -224,9 +224,34 @@ class CommsLoop(ThreadLoop):
         self._unsent_reported = False
         self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
         self.task_handlers = {(TaskType.store_page, key): self.forward_page for key in self.keys}
-        self.burst_handlers = {(TaskType.store_page, key): self.forward_burst for key in self.keys}
         if parent.profiler is not None:  # the profile also tells what was sent and dropped
             parent.profiler.add_report(name, self.stats_text)
+        self.burst_handlers = {(TaskType.store_page, key): self.forward_burst for key in self.keys}
+
+    def forward_burst(self, run: List[Task]) -> SomeTasks:
+        """`forward_page` for a run of ``store_page`` tasks under one key that waited in line.
+
+        One open link and no page from a link to keep from echoing (the usual
+        pair): the frames are queued to leave together; else page by page.
+
+        Example (the node calls it; a test may too)::
+
+            comms.forward_burst([tasks.store_page(page) for page in pages])
+        """
+        links = self.links
+        if len(links) != 1 or self._arrived or links[0].state is not _OPEN:
+            for task in run:
+                self.forward_page(task, (TaskType.store_page, task.name))
+            return None
+        link, key = links[0], run[0].name
+        for task in run:
+            page = task.page()
+            if page is not None and page.origin != link.peer_role:
+                try:
+                    link.send(encode_page(page), False, key)
+                except NotSerializableError as error:
+                    self._report_unsendable(page, error)
+        return None
 
     # -- node thread: sending -------------------------------------------------
     def forward_page(self, task: Task, key: TaskId) -> SomeTasks:
@@ -264,39 +289,6 @@ class CommsLoop(ThreadLoop):
         page_key = page.key
         for link in targets:
             link.send(frame, True, page_key)  # a drop is counted and reported by the link
-        return None
-
-    def forward_burst(self, run: List[Task]) -> SomeTasks:
-        """`forward_page` for a run of pages under one key: encoded, then queued in one go.
-
-        The node calls it for ``store_page`` tasks that waited one behind the
-        other (a handler that stored many pages, a replayed recording), all
-        stored already. One link, open, and no page from a link to keep from
-        echoing (the usual pair sending its own pages): the frames go to the
-        link's outbox with one call. Anything else: page by page.
-
-        Example (the node calls it; a test may too)::
-
-            comms.forward_burst([tasks.store_page(page) for page in pages])
-        """
-        links = self.links
-        if len(links) != 1 or self._arrived or links[0].state is not _OPEN:
-            for task in run:
-                self.forward_page(task, (TaskType.store_page, task.name))
-            return None
-        link = links[0]
-        peer = link.peer_role
-        frames: List[bytes] = []
-        for task in run:
-            page = task.page()
-            if page is None or page.origin == peer:
-                continue  # a bad task (the node core said so), or the peer's own page
-            try:
-                frames.append(encode_page(page))
-            except NotSerializableError as error:
-                self._report_unsendable(page, error)
-        if frames:
-            link.send_burst(frames, run[0].name)
         return None
 
     def _report_unsent(self, page: Page) -> None:
@@ -485,12 +477,7 @@ class CommsLoop(ThreadLoop):
             if self._news_ticking or io is None:
                 return
             self._news_ticking = True
-        io.call_soon(self._tick_news_soon)
-
-    def _tick_news_soon(self) -> None:
-        io = self.io_loop
-        if io is not None:
-            io.call_later(_NEWS_TICK_S, self._tick_news_later)
+        io.call_soon(lambda: io.call_later(_NEWS_TICK_S, self._tick_news_later))
 
     def _tick_news_later(self) -> None:
         """I/O thread: say what a flood left counted; again soon while news may be pending."""
@@ -627,18 +614,19 @@ class _Entry:
 class Outbox:
     """Frames waiting to be written to one peer, oldest first; bounded, newest per key wins.
 
-    When a new frame does not fit, it pushes out the oldest frame waiting
-    under its own key, or, if its key has none waiting, the oldest of the key
-    with the most waiting: a flood under one key never pushes out the last
-    value of another. Frames with no key are never pushed out.
+    Every link that writes to a peer queues here: TCP, pipe and serial (the
+    policy and why: docs/design.md, "One outbox for every link"). When a new
+    frame does not fit, it pushes out the oldest frame waiting under its own
+    key, or, if its key has none waiting, the oldest of the key with the most
+    waiting: a flood under one key never pushes out the last value of
+    another. Frames with no key are never pushed out. ``put`` never blocks.
 
-    Safe from any thread: every change happens under one lock, and so does
-    every write (``put`` with ``write``, ``write_to``), so frames leave in
-    the order they were put and each whole.
+    Safe from any thread: every change and every write happens under one
+    lock, so frames leave in the order they were put and each whole.
 
     Example::
 
-        outbox = Outbox(1024, loss)
+        outbox = Outbox(1024, LossReport(log, "lines", "the board is not reading"))
         if outbox.put(frame, key="depth_m", write=sock.send) == FIRST:
             ...  # ask the writer to call outbox.write_to(sock.send)
 
@@ -656,15 +644,14 @@ class Outbox:
         self.dropped = 0
         self.dropped_by_key: Dict[DataKey, int] = {}
         self.last_sent_at = time.monotonic()
+        self.closed = False
         self._entries: Deque[_Entry] = collections.deque()  # pushed-out ones stay, data None
         self._by_key: Dict[DataKey, Deque[_Entry]] = {}  # waiting ones only, oldest first
         self._live = 0  # entries still waiting
         self._bytes = 0
-        self._closed = False
         self._lock = threading.Lock()
         self._ready = threading.Condition(self._lock)  # for a writer thread in ``take``
 
-    # -- putting (any thread, usually the node's) --------------------------------
     def put(
         self, frame: bytes, key: Optional[DataKey] = None, write: Optional[Write] = None
     ) -> str:
@@ -673,9 +660,13 @@ class Outbox:
         Returns `SENT`, `FIRST` (queued into an empty outbox: wake the
         writer), `QUEUED` or `CLOSED`. A frame written in part is queued for
         the rest, first in line and never pushed out.
+
+        Example::
+
+            outbox.put(b"speed 1\\n", key="speed")   # "first"
         """
         with self._lock:
-            if self._closed:
+            if self.closed:
                 return CLOSED
             if write is not None and not self._live:
                 try:
@@ -694,43 +685,15 @@ class Outbox:
             self._append(key, frame)
         return FIRST if first else QUEUED
 
-    def put_all(self, frames: List[bytes], key: DataKey) -> str:
-        """`put` for a run of frames under ``key``, in order, with one lock; nothing is written.
+    def put_first(self, frame: bytes) -> None:
+        """Queue ``frame`` before everything waiting, never to be pushed out (e.g. a header).
 
         Example::
 
-            outbox.put_all([encode_page(page) for page in pages], "depth")
+            outbox.put_first(b'{"format":"snr-pages","version":1}\\n')
         """
-        size = 0
-        for frame in frames:
-            size += len(frame)
         with self._lock:
-            if self._closed:
-                return CLOSED
-            first = not self._live
-            if self._bytes + size <= self.max_bytes:  # the usual case: all fit
-                run = [_Entry(key, frame) for frame in frames]
-                self._entries.extend(run)
-                waiting = self._by_key.get(key)
-                if waiting is None:
-                    self._by_key[key] = collections.deque(run)
-                else:
-                    waiting.extend(run)
-                self._live += len(run)
-                self._bytes += size
-            else:  # room is made frame by frame, so each drop is decided as in put
-                for frame in frames:
-                    if self._bytes + len(frame) > self.max_bytes:
-                        self._make_room(len(frame), key)
-                    self._append(key, frame)
-            if first:
-                self._ready.notify()
-        return FIRST if first else QUEUED
-
-    def put_first(self, frame: bytes) -> None:
-        """Queue ``frame`` before everything waiting, never to be pushed out (e.g. a header)."""
-        with self._lock:
-            if not self._closed:
+            if not self.closed:
                 self._entries.appendleft(_Entry(None, frame))
                 self._live += 1
                 self._bytes += len(frame)
@@ -740,11 +703,7 @@ class Outbox:
         entry = _Entry(key, frame)
         self._entries.append(entry)
         if key is not None:
-            waiting = self._by_key.get(key)
-            if waiting is None:
-                self._by_key[key] = collections.deque((entry,))
-            else:
-                waiting.append(entry)
+            self._by_key.setdefault(key, collections.deque()).append(entry)
         self._live += 1
         self._bytes += len(frame)
         if self._live == 1:
@@ -764,9 +723,8 @@ class Outbox:
             self.dropped_by_key[victim_key] = self.dropped_by_key.get(victim_key, 0) + 1
         if pushed_out:
             self.dropped += pushed_out
-            entries = self._entries
-            if len(entries) > 2 * self._live + 64:  # forget the pushed-out ones now and then
-                self._entries = collections.deque(e for e in entries if e.data is not None)
+            if len(self._entries) > 2 * self._live + 64:  # forget the pushed-out ones now and then
+                self._entries = collections.deque(e for e in self._entries if e.data is not None)
             self.loss.dropped(pushed_out)
 
     def _gone(self, entry: _Entry) -> None:
@@ -776,7 +734,6 @@ class Outbox:
             entry.data = None
             self._live -= 1
 
-    # -- writing (the link's writer) -------------------------------------------------
     def write_to(self, write: Write) -> bool:
         """Write what ``write`` takes now, many frames a call; True once nothing waits.
 
@@ -784,21 +741,23 @@ class Outbox:
 
         Raises:
             OSError: the peer is gone (not BlockingIOError: a full buffer means "later").
+
+        Example::
+
+            outbox.write_to(sock.send)   # True: all written
         """
         with self._lock:
-            entries = self._entries
             while self._live:
                 parts: List[bytes] = []
                 size = 0
-                for entry in entries:
+                for entry in self._entries:
                     if size >= MAX_CHUNK_BYTES:
                         break
                     if entry.data is not None:
                         parts.append(entry.data)
                         size += len(entry.data)
-                chunk = parts[0] if len(parts) == 1 else b"".join(parts)
                 try:
-                    sent = write(chunk)
+                    sent = write(parts[0] if len(parts) == 1 else b"".join(parts))
                 except BlockingIOError:
                     return False
                 if sent:
@@ -832,7 +791,7 @@ class Outbox:
         if key is not None:
             entry.key = None
             waiting = self._by_key.get(key)
-            if waiting is not None and waiting[0] is entry:
+            if waiting and waiting[0] is entry:
                 waiting.popleft()
                 if not waiting:
                     del self._by_key[key]
@@ -841,28 +800,34 @@ class Outbox:
         """For a writer thread: the oldest frame, waiting up to ``timeout_s`` for one.
 
         Returns None when ``timeout_s`` passed, or the outbox is closed and empty.
+
+        Example::
+
+            line = outbox.take(0.25)   # the serial link's writer thread
         """
         with self._lock:
-            if not self._live and not self._closed:
+            if not self._live and not self.closed:
                 self._ready.wait(timeout_s)
-            entries = self._entries
-            while entries:
-                entry = entries.popleft()
-                data = entry.data
-                if data is not None:
+            while self._entries:
+                entry = self._entries.popleft()
+                if entry.data is not None:
+                    data = entry.data
                     self._unkey(entry)
                     self._gone(entry)
                     return data
             return None
 
-    # -- closing ----------------------------------------------------------------------
     def close(self, discard: bool = False) -> int:
         """Take no more frames; with ``discard``, forget those waiting. How many were forgotten.
 
         A writer thread in ``take`` gets what is left, then None.
+
+        Example::
+
+            outbox.close(discard=True)   # 3
         """
         with self._lock:
-            self._closed = True
+            self.closed = True
             forgotten = 0
             if discard:
                 forgotten = self._live
@@ -871,11 +836,6 @@ class Outbox:
                 self._live = self._bytes = 0
             self._ready.notify_all()
             return forgotten
-
-    @property
-    def closed(self) -> bool:
-        """True once ``close`` was called."""
-        return self._closed
 
     @property
     def queued_bytes(self) -> int:
@@ -1022,11 +982,6 @@ class Link:
             )
         self.owner = owner
         self.io: IOLoop = io
-        self.log = owner.log
-        self.beat_s = owner.beat_s  # how often a quiet link sends a beat (its hello says so)
-        self.hello_timeout_s = owner.hello_timeout_s
-        self.dead_after_s = owner.dead_after_s
-        self.recovered_after_s = owner.recovered_after_s
         self.transport = transport
         self.peer_role: Optional[str] = None
         self.hello_at: Optional[float] = None  # when the peer's hello arrived
@@ -1068,7 +1023,7 @@ class Link:
         self.handshake = Handshake(owner.parent.role, owner.side, owner.system, owner.secret)
         if self.handshake.needed:  # no page passes either way until the peer is judged
             self.state = LinkState.HELLO
-        self.outbox.put(self.handshake.hello_frame(self.beat_s))
+        self.outbox.put(self.handshake.hello_frame(owner.beat_s))
 
     @property
     def label(self) -> str:
@@ -1123,28 +1078,6 @@ class Link:
             self.write_waiting()  # a long burst: do not wait for the node to go idle
         return True
 
-    def send_burst(self, frames: List[bytes], key: DataKey) -> None:
-        """`send` for the frames of a run of pages under ``key`` (node thread), with one lock.
-
-        They leave when the node's thread next goes idle, or at once once
-        64 KiB wait.
-
-        Example::
-
-            link.send_burst([encode_page(page) for page in pages], "depth")
-        """
-        if self.state is not _OPEN:
-            return
-        outbox = self.outbox
-        outcome = outbox.put_all(frames, key)
-        if outcome == CLOSED:
-            return
-        self.pages_sent += len(frames)
-        if outcome == FIRST:
-            self._wake_writer()
-        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self.io.events(self) & _WRITE:
-            self.write_waiting()
-
     def close(self) -> None:
         """Send what is queued and a goodbye, then end the connection (graceful)."""
         if self.state is _HELLO:  # no page was sent yet: nothing to flush
@@ -1198,7 +1131,7 @@ class Link:
         if self.state in _ENDED:  # aborted before the loop got to it
             return
         self.io.watch(self, _READ)
-        self._timer = self.io.call_later(self.hello_timeout_s + _LATE_S, self._tick)
+        self._timer = self.io.call_later(self.owner.hello_timeout_s + _LATE_S, self._tick)
         self.on_writable()  # the hello goes at once
 
     def _wake_writer(self) -> None:
@@ -1259,7 +1192,7 @@ class Link:
                 self.state is _OPEN
                 and self.peer_beat_s is not None
                 and not len(self.outbox)
-                and time.monotonic() - self.outbox.last_sent_at >= self.beat_s
+                and time.monotonic() - self.outbox.last_sent_at >= self.owner.beat_s
             ):
                 outcome = self.outbox.put(encode_beat(), None, self.transport.send)
                 if outcome == FIRST:  # quiet for beat_s: a sign of life, written later
@@ -1288,12 +1221,12 @@ class Link:
             return self._tick_s
         due = []
         if not self._heard_frame:
-            due.append(self._progress_at + self.hello_timeout_s)
+            due.append(self._progress_at + self.owner.hello_timeout_s)
         if self.state is _HELLO:
-            due.append(self.opened_at + self.hello_timeout_s)
+            due.append(self.opened_at + self.owner.hello_timeout_s)
         if self.peer_beat_s is not None:
-            due.append(self.outbox.last_sent_at + self.beat_s)
-            due.append(self.last_heard + max(self.dead_after_s, 3 * self.peer_beat_s))
+            due.append(self.outbox.last_sent_at + self.owner.beat_s)
+            due.append(self.last_heard + max(self.owner.dead_after_s, 3 * self.peer_beat_s))
         if not due:
             return self._tick_s
         wait_s = min(due) + _LATE_S - now
@@ -1303,7 +1236,7 @@ class Link:
         # The peer has caught up once everything queued went out and nothing
         # was dropped for a while (a second by default).
         if self.loss.dropping and not len(self.outbox):
-            self.loss.recovered(quiet_s=self.recovered_after_s)
+            self.loss.recovered(quiet_s=self.owner.recovered_after_s)
 
     def on_io_stop(self) -> None:
         """The I/O loop is stopping: end the link now."""
@@ -1366,7 +1299,7 @@ class Link:
             self._failed(error)
 
     def _failed(self, error: Exception) -> None:
-        self.log.exception("Link to %s failed", self.label)
+        self.owner.log.exception("Link to %s failed", self.label)
         self._end(f"unexpected {type(error).__name__}: {error}")
 
     def _write(self) -> None:
@@ -1456,7 +1389,7 @@ class Link:
                 self._bad_frame(error)
                 continue
             except Exception as error:  # a bug in decoding: say so, and lose no other frame
-                self.log.exception("Decoding a frame from %s failed", self.label)
+                self.owner.log.exception("Decoding a frame from %s failed", self.label)
                 self._bad_frame(WireFormatError(f"it could not be decoded ({error!r:.80})"))
                 continue
             if message.__class__ is Page and self.state is not _HELLO:
@@ -1530,7 +1463,7 @@ class Link:
     def _silence(self) -> Optional[str]:
         """Why the link is lost if the peer has been quiet too long, else None."""
         quiet_s = time.monotonic() - self.last_heard
-        limit_s = self.hello_timeout_s
+        limit_s = self.owner.hello_timeout_s
         if self.state is _HELLO and time.monotonic() - self.opened_at > limit_s:
             return f"it did not finish the hello (and proof) within {limit_s:g} s of connecting"
         # Nothing well-formed yet, and no big first frame still coming in steadily:
@@ -1541,7 +1474,7 @@ class Link:
             )
         if self.peer_beat_s is None:
             return None  # a peer that promised no beats may be quiet for ever
-        limit = max(self.dead_after_s, 3 * self.peer_beat_s)
+        limit = max(self.owner.dead_after_s, 3 * self.peer_beat_s)
         if quiet_s <= limit:
             return None
         at_risk = self.pages_sent - self._sent_when_heard

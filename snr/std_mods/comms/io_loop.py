@@ -190,7 +190,7 @@ class IOLoop:
         self._users = 0
         self._selector = selectors.DefaultSelector()
         self._handlers: Dict[IOHandler, int] = {}  # every watched handler: its events
-        self._calls: Deque[Callable[[], None]] = collections.deque()
+        self._calls: Deque[Callable[[], object]] = collections.deque()
         self._timers: List[Tuple[float, int, IOTimer]] = []
         self._order = itertools.count()  # ties in the timer heap never compare IOTimers
         self._waiting_for_room: List[Callable[[], None]] = []
@@ -318,7 +318,7 @@ class IOLoop:
         return threading.current_thread() is self._thread
 
     # -- any thread ---------------------------------------------------------
-    def call_soon(self, callback: Callable[[], None]) -> None:
+    def call_soon(self, callback: Callable[[], object]) -> None:
         """Run ``callback`` on the loop's thread, in the order of the calls (any thread).
 
         Example::
@@ -598,7 +598,7 @@ class IOLoop:
         for callback in waiting:
             self._safely(callback)
 
-    def _safely(self, callback: Callable[[], None]) -> None:
+    def _safely(self, callback: Callable[[], object]) -> None:
         try:
             callback()
         except Exception:  # a bug in one link must not stop every link of the node
