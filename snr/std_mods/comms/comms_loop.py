@@ -927,28 +927,21 @@ class Link:
     link is closed or aborted: it closes the transport and tells the
     `CommsLoop`.
 
-    Liveness: both sides promise a sign of life in their hello (``beat_s``)
-    and a link that has sent nothing for that long sends a beat frame. A sign
-    of life is a whole frame, or 16 KiB more of one still arriving (a big
-    page on slow Wi-Fi): a byte now and then does not keep a link open, and
-    a connection with no well-formed frame (not even a hello) within
-    ``hello_timeout_s`` is closed, unless its first frame is still arriving.
-    A peer that promised beats and is then not heard from for
-    ``max(dead_after_s, 3 * its beat_s)`` is declared lost — also while pages
-    flow the other way, which is when a Wi-Fi link usually dies — and the
-    log says how many pages may have been lost with it.
+    Liveness: both sides promise a sign of life in their hello (``beat_s``);
+    a link that has sent nothing for that long sends a beat. A sign of life
+    is a whole frame, or 16 KiB more of one still arriving (a big page on
+    slow Wi-Fi). A connection with no well-formed frame within
+    ``hello_timeout_s`` is closed; a peer that promised beats and is silent
+    for ``max(dead_after_s, 3 * its beat_s)`` is lost (also while pages flow
+    the other way), and the log says how many pages may have been lost.
 
-    Goodbye: a link closed in order (its node is stopping) sends a bye frame
-    last, to a peer whose hello said it understands one, so that peer logs
-    the end as news rather than as a lost link.
+    Goodbye: a link closed in order sends a bye frame last, to a peer whose
+    hello said it understands one, so that peer logs the end as news.
 
     Backpressure: while the node's queue is over its high-water mark the
-    link stops reading (the bytes wait in the OS and TCP slows the sender)
-    and reads on once there is room; the I/O thread never waits for it.
-    Meanwhile bytes piling up in the OS are the peer's sign of life, and a
-    peer that sends nothing at all while nothing waits is judged silent as
-    usual; bytes that wait without growing (its last words, or a buffer so
-    full it cannot send) are judged once they are read.
+    link stops reading (the bytes wait in the OS, TCP slows the sender) and
+    reads on once there is room. Meanwhile bytes piling up in the OS are the
+    peer's sign of life; bytes that wait without growing are judged once read.
 
     Example::
 
@@ -995,12 +988,10 @@ class Link:
         self._peer_takes_bye = False  # its hello said it understands a bye frame
         self.pages_sent = 0
         self.pages_received = 0
-        self.keys_received: Optional[Set[DataKey]] = None  # noted in DEBUG (link_hints.py)
-        self.opened_at = time.monotonic()
-        self.last_heard = self.opened_at
+        self.keys_received: Optional[Set[DataKey]] = None
+        self.opened_at = self.last_heard = self._progress_at = time.monotonic()
         self._heard_frame = False  # a well-formed frame has arrived (for the hello timeout)
         self._progress = 0  # bytes of a frame still arriving, since the peer was last heard
-        self._progress_at = self.opened_at  # when they last added up to _PROGRESS_BYTES (or opened)
         self._sent_when_heard = 0
         self.loss = LossReport(
             owner.log,
@@ -1010,12 +1001,9 @@ class Link:
             "under each key is kept)",
         )
         self._closed = threading.Event()
-        # These belong to the I/O loop's thread (set before the hello, which may wake it).
         self._decoder = FrameDecoder()
         self._unread_seen = 0  # while paused: bytes the OS held for us at the last look
-        # Decoded while the node was behind, delivered first; while any wait,
-        # the link reads no more.
-        self._held: List[Page] = []
+        self._held: List[Page] = []  # read while the node was behind: no more reads until sent
         self._timer: Optional[IOTimer] = None
         self._tick_s = min(_TICK_S, owner.beat_s / 4)
         self._answer_due = False  # the peer was heard since the last send: answer at once
@@ -1055,15 +1043,17 @@ class Link:
 
         If the backlog is full, older frames make room (see `Outbox`): they
         are counted and reported (at most once a second).
+
+        Example::
+
+            link.send(encode_page(page), key=page.key)
         """
         if self.state is not _OPEN:
             return False
         outbox = self.outbox
-        # A frame right behind another (a burst) waits for one joined send
-        # (a burst of pages then costs a few system calls instead of one
-        # each). A frame after a pause goes at once, and so does one sent
-        # after the peer was heard (a reply: a fast ping-pong would otherwise
-        # look like a burst and pay a trip through the I/O thread every time).
+        # A frame right behind another waits for one joined send; a frame after
+        # a pause goes at once, and so does a reply (a fast ping-pong would
+        # otherwise look like a burst and pay a trip through the I/O thread).
         write = None
         if now and (self._answer_due or time.monotonic() - outbox.last_sent_at >= _BURST_S):
             self._answer_due = False
@@ -1085,9 +1075,7 @@ class Link:
         elif self.state is _OPEN:
             self.state = _CLOSING
             if self._peer_takes_bye:  # older peers never get a frame they do not know
-                outcome = self.outbox.put(encode_bye(), None, self.transport.send)
-                if outcome == FIRST:
-                    self._wake_writer()
+                self._put_control(encode_bye())
             self.outbox.close()
             self.io.call_soon(self._flush_then_end)
 
@@ -1126,18 +1114,15 @@ class Link:
             "heard_s_ago": round(time.monotonic() - self.last_heard, 3),
         }
 
-    # -- I/O loop thread: life ------------------------------------------------
-    def _attach(self) -> None:
-        if self.state in _ENDED:  # aborted before the loop got to it
-            return
-        self.io.watch(self, _READ)
-        self._timer = self.io.call_later(self.owner.hello_timeout_s + _LATE_S, self._tick)
-        self.on_writable()  # the hello goes at once
+    # -- writing ---------------------------------------------------------------
+    def _put_control(self, frame: bytes) -> None:
+        """Queue a frame that is not a page (bye, beat, proof), never pushed out."""
+        if self.outbox.put(frame, None, self.transport.send) == FIRST:
+            self._wake_writer()
 
     def _wake_writer(self) -> None:
-        # Any thread, when the outbox stops being empty. Another thread than
-        # the loop's (the node's, storing a burst) writes it itself before it
-        # sleeps, or the loop's thread a moment later (IOLoop.write_soon).
+        # The outbox stopped being empty. The node's thread writes it itself
+        # before it sleeps, or the loop's thread a moment later (write_soon).
         if self.io.in_loop_thread():
             self._want_write()
         else:
@@ -1147,9 +1132,7 @@ class Link:
         """Write queued frames now without blocking (not on the loop's thread).
 
         What does not fit is left to the loop's thread, which writes it when
-        the transport has room. Frames leave in order either way (the
-        outbox's lock); after the link has ended the outbox is empty, so
-        nothing is written to a closed transport.
+        the transport has room; after the link has ended the outbox is empty.
         """
         if not len(self.outbox):
             return
@@ -1163,6 +1146,40 @@ class Link:
     def _want_write(self) -> None:
         if self.state not in _ENDED and len(self.outbox):
             self.io.watch(self, self.io.events(self) | _WRITE)
+
+    def on_writable(self) -> None:
+        """I/O thread: write what is queued; stop watching for room once it is all out."""
+        try:
+            self._write()
+        except Exception as error:  # a bug must not kill the node silently
+            self._failed(error)
+
+    def _write(self) -> None:
+        if self.state in _ENDED:
+            return
+        try:
+            done = self.outbox.write_to(self.transport.send)
+        except OSError as error:
+            self._finish(f"{type(error).__name__}: {error}")
+            return
+        events = self.io.events(self)
+        if not done:
+            if not events & _WRITE:
+                self.io.watch(self, events | _WRITE)
+            return
+        if events & _WRITE:
+            self.io.watch(self, events & ~_WRITE)
+        self._check_recovered()
+        if self.state is _CLOSING:
+            self._end_writing()
+
+    # -- life: deadlines, beats, the end (I/O thread) --------------------------
+    def _attach(self) -> None:
+        if self.state in _ENDED:  # aborted before the loop got to it
+            return
+        self.io.watch(self, _READ)
+        self._timer = self.io.call_later(self.owner.hello_timeout_s + _LATE_S, self._tick)
+        self.on_writable()  # the hello goes at once
 
     def _flush_then_end(self) -> None:
         if self.state is _CLOSING and not len(self.outbox):
@@ -1194,47 +1211,38 @@ class Link:
                 and not len(self.outbox)
                 and time.monotonic() - self.outbox.last_sent_at >= self.owner.beat_s
             ):
-                outcome = self.outbox.put(encode_beat(), None, self.transport.send)
-                if outcome == FIRST:  # quiet for beat_s: a sign of life, written later
-                    self._want_write()
+                self._put_control(encode_beat())  # quiet for beat_s: a sign of life
             self._check_recovered()
             self._timer = self.io.call_later(self._next_look_s(), self._tick)
 
     def _look_again(self) -> None:
-        """Loop thread: put the next look at the link's first deadline (they moved)."""
+        """Put the next look at the link's first deadline (they moved)."""
         if self._timer is not None and self.state in _LIVE:  # (else it is the drain's timer)
             self._timer.cancel()
             self._timer = self.io.call_later(self._next_look_s(), self._tick)
 
     def _next_look_s(self) -> float:
-        """Seconds until the link must be looked at again: its first deadline.
+        """Seconds until the link's first deadline: a beat owed, a silence or hello limit.
 
-        A quiet link wakes its I/O thread once a beat, not four times: the
-        deadlines are when a beat is owed, when the peer's silence (or the
-        wait for its first frame) passes the limit, and, every quarter beat,
-        while pages are held or dropped (their counts move without a frame).
-        A deadline already past (a beat held back by frames still waiting)
-        is looked at again a quarter beat later.
+        While pages are held or dropped, every quarter beat (their counts move
+        without a frame); a deadline already past, a quarter beat later.
         """
-        now = time.monotonic()
         if self._held or self.loss.dropping:
             return self._tick_s
+        owner = self.owner
         due = []
         if not self._heard_frame:
-            due.append(self._progress_at + self.owner.hello_timeout_s)
+            due.append(self._progress_at + owner.hello_timeout_s)
         if self.state is _HELLO:
-            due.append(self.opened_at + self.owner.hello_timeout_s)
+            due.append(self.opened_at + owner.hello_timeout_s)
         if self.peer_beat_s is not None:
-            due.append(self.outbox.last_sent_at + self.owner.beat_s)
-            due.append(self.last_heard + max(self.owner.dead_after_s, 3 * self.peer_beat_s))
-        if not due:
-            return self._tick_s
-        wait_s = min(due) + _LATE_S - now
+            due.append(self.outbox.last_sent_at + owner.beat_s)
+            due.append(self.last_heard + max(owner.dead_after_s, 3 * self.peer_beat_s))
+        wait_s = min(due) + _LATE_S - time.monotonic() if due else 0.0
         return wait_s if wait_s > 0 else self._tick_s
 
     def _check_recovered(self) -> None:
-        # The peer has caught up once everything queued went out and nothing
-        # was dropped for a while (a second by default).
+        # The peer has caught up: everything queued went out, nothing dropped for a while.
         if self.loss.dropping and not len(self.outbox):
             self.loss.recovered(quiet_s=self.owner.recovered_after_s)
 
@@ -1264,7 +1272,14 @@ class Link:
             if self._timer is not None:
                 self._timer.cancel()
             self.io.forget(self)
-            self._drain_unread()
+            # Closing a socket with unread bytes makes the OS reset the
+            # connection, and the peer may then lose what it has not read yet.
+            for _ in range(16):
+                try:
+                    if not self.transport.recv_into(self.io.buffer):
+                        break
+                except OSError:
+                    break
             try:
                 self.transport.close()
             except OSError:
@@ -1273,24 +1288,7 @@ class Link:
         self._closed.set()
         self.owner.link_closed(self, reason)
 
-    def _drain_unread(self) -> None:
-        # Closing a socket with unread bytes makes the OS reset the connection,
-        # and the peer may then lose what it has not read of ours yet.
-        for _ in range(16):
-            try:
-                if not self.transport.recv_into(self.io.buffer):
-                    return
-            except OSError:
-                return
-
-    # -- I/O loop thread: writing ---------------------------------------------
-    def on_writable(self) -> None:
-        """Write what is queued; stop watching for room once it is all out."""
-        try:
-            self._write()
-        except Exception as error:  # a bug must not kill the node silently
-            self._failed(error)
-
+    # -- reading (whoever holds the I/O loop's read role) ----------------------
     def on_readable(self) -> None:
         """Read what arrived, cut it into frames, hand the pages on."""
         try:
@@ -1302,30 +1300,9 @@ class Link:
         self.owner.log.exception("Link to %s failed", self.label)
         self._end(f"unexpected {type(error).__name__}: {error}")
 
-    def _write(self) -> None:
-        if self.state in _ENDED:
-            return
-        try:
-            done = self.outbox.write_to(self.transport.send)
-        except OSError as error:
-            self._finish(f"{type(error).__name__}: {error}")
-            return
-        if done:
-            events = self.io.events(self)
-            if events & _WRITE:
-                self.io.watch(self, events & ~_WRITE)
-            self._check_recovered()
-            if self.state is _CLOSING:
-                self._end_writing()
-        else:
-            if not self.io.events(self) & _WRITE:
-                self.io.watch(self, self.io.events(self) | _WRITE)
-
-    # -- I/O loop thread: reading ---------------------------------------------
     def _read(self) -> None:
-        # On the thread that holds the read role: the I/O loop's, or the
-        # node's while it is idle. Everything else (ending the link, pausing)
-        # is left to the loop's thread.
+        # The I/O loop's thread, or the node's while it is idle: anything
+        # else (ending the link, pausing) is left to the loop's thread.
         if self.state in _ENDED or self._held:
             return
         try:
@@ -1359,7 +1336,7 @@ class Link:
             return
         if bodies:  # a sign of life is a whole frame (wire format 3.3)...
             self._heard(time.monotonic())
-        else:  # ...or 16 KiB more of one still arriving (a big page on slow Wi-Fi)
+        else:  # ...or 16 KiB more of one still arriving; a trickle adds up too slowly
             self._progress += count
             if self._progress >= _PROGRESS_BYTES:
                 self._progress_at = now = time.monotonic()
@@ -1370,8 +1347,6 @@ class Link:
             self._deliver(pages)
 
     def _heard(self, now: float) -> None:
-        # A byte now and then (a peer that trickles) adds up to 16 KiB too
-        # slowly to keep a link open: the silence limit passes first.
         self.last_heard = now
         self._sent_when_heard = self.pages_sent
         self._progress = 0
@@ -1379,7 +1354,7 @@ class Link:
     def _decode_bodies(self, bodies: List[bytes], pages: List[Page]) -> None:
         """Decode each frame body: pages go to ``pages``, hellos and byes are acted on."""
         decode = self.owner.decode_message
-        for body in bodies:  # every frame received passes here: a page is the usual case
+        for body in bodies:
             try:
                 message = decode(body)
             except WireFormatError as error:
@@ -1406,13 +1381,9 @@ class Link:
         self.pages_received += len(pages)
         noted = self.keys_received
         if noted is not None and len(noted) < _MAX_KEYS_NOTED:
-            if len(pages) == 1:  # the usual read: one page
-                noted.add(pages[0].key)
-            else:
-                noted.update([page.key for page in pages])
+            noted.update([page.key for page in pages])
         if self._held or not self.owner.parent.wait_for_room(0):
-            # The node is behind: keep these, read no more until it has room
-            # (from now on, on either thread: _read sees them held).
+            # The node is behind: keep these, read no more until it has room.
             first = not self._held
             self._held.extend(pages)
             if first and self.io.in_loop_thread():
@@ -1442,19 +1413,13 @@ class Link:
         """Bytes waiting unread in the OS (None if it cannot say); more than last time is life."""
         unread = unread_bytes(self.transport.fileno())
         if unread is not None:
-            if unread > self._unread_seen:  # the peer sent something while we did not read
+            if unread > self._unread_seen:
                 self.last_heard = time.monotonic()
             self._unread_seen = unread
         return unread
 
     def _silence_while_paused(self) -> Optional[str]:
-        """`_silence` for a link that does not read (its node is behind).
-
-        Bytes that arrive meanwhile are life. Bytes that wait but do not
-        grow may be the peer's last words or a full buffer stopping it: the
-        silence is judged once they are read. Nothing waiting, and nothing
-        arriving for the silence limit, is a dead path as when reading.
-        """
+        """`_silence` for a link that does not read: judged only while nothing waits unread."""
         unread = self._note_unread()
         if unread is None or unread:
             return None
@@ -1462,20 +1427,20 @@ class Link:
 
     def _silence(self) -> Optional[str]:
         """Why the link is lost if the peer has been quiet too long, else None."""
-        quiet_s = time.monotonic() - self.last_heard
+        now = time.monotonic()
         limit_s = self.owner.hello_timeout_s
-        if self.state is _HELLO and time.monotonic() - self.opened_at > limit_s:
+        if self.state is _HELLO and now - self.opened_at > limit_s:
             return f"it did not finish the hello (and proof) within {limit_s:g} s of connecting"
         # Nothing well-formed yet, and no big first frame still coming in steadily:
-        if not self._heard_frame and time.monotonic() - self._progress_at > limit_s:
+        if not self._heard_frame and now - self._progress_at > limit_s:
             return (
                 f"it sent no well-formed frame, not even a hello, within {limit_s:g} s "
                 "of connecting"
             )
         if self.peer_beat_s is None:
             return None  # a peer that promised no beats may be quiet for ever
-        limit = max(self.owner.dead_after_s, 3 * self.peer_beat_s)
-        if quiet_s <= limit:
+        quiet_s = now - self.last_heard
+        if quiet_s <= max(self.owner.dead_after_s, 3 * self.peer_beat_s):
             return None
         at_risk = self.pages_sent - self._sent_when_heard
         self.went_silent = True
@@ -1485,14 +1450,14 @@ class Link:
             f"{at_risk} pages sent since it was last heard from may be lost"
         )
 
+    # -- the handshake, and frames that are not pages --------------------------
     def _on_message(self, message: Message) -> None:
         """A frame that is not a page (or a page before the handshake ended)."""
         self._heard_frame = True
         if self.state is _HELLO and not isinstance(message, (Hello, Proof, Beat, Bye)):
             what = "a page" if isinstance(message, Page) else "a frame"
             self._refuse(Refused("order", f"it sent {what} before the handshake ended"))
-            return
-        if isinstance(message, Proof):
+        elif isinstance(message, Proof):
             if self.state is not _HELLO:  # once open, a proof is a mistake, not a danger
                 self._bad_frame(WireFormatError("a proof frame after the handshake ended"))
                 return
@@ -1502,8 +1467,7 @@ class Link:
                 self._refuse(refusal)
                 return
             self._handshake_done()
-            return
-        if isinstance(message, Hello):
+        elif isinstance(message, Hello):
             if self.peer_role is not None:  # said once per connection; more is a mistake
                 if message.role != self.peer_role:
                     self._bad_frame(
@@ -1521,9 +1485,8 @@ class Link:
             except Refused as refusal:
                 self._refuse(refusal)
                 return
-            # our answer to its challenge, if it sent one; its answer comes next
-            if proof is not None and self.outbox.put(proof, None, self.transport.send) == FIRST:
-                self._want_write()
+            if proof is not None:  # our answer to its challenge; its answer comes next
+                self._put_control(proof)
             if self.handshake.done:
                 self._handshake_done()
         elif isinstance(message, Bye):
@@ -1551,18 +1514,16 @@ class Link:
         self.abort(f"refused: {refusal.reason}")
 
     def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
-        # Counted by the component, not per link: sixty hostile connections
-        # must not write five lines each (at most five a 5 s, then a count).
+        # Said by the component, not per link: sixty hostile connections must
+        # not write five lines each (at most five a 5 s, then a count).
         self.bad_frames += 1
-        what = "reset the connection" if resetting else "dropped the frame"
         count = self.bad_frames
-        more = f"; {count} bad frames from this peer so far" if count > 1 else ""
         self.owner.say_bad_frame(
             "Connections reset after a bad frame" if resetting else "Bad frames",
             logging.WARNING,
             "Bad frame from %s: %s (%s; the node keeps running%s; see docs/wire-format.md)",
             self.label,
             error,
-            what,
-            more,
+            "reset the connection" if resetting else "dropped the frame",
+            f"; {count} bad frames from this peer so far" if count > 1 else "",
         )
