@@ -1,35 +1,24 @@
 """The socket transport: `SocketTransport` over TCP, and the `IOLoop` that serves every link.
 
 A link talks over a `Transport`: a non-blocking byte stream (a TCP socket,
-`SocketTransport`; a pipe end, ``pipe.py``) that the node's one `IOLoop`
-thread watches, however many peers connect.
-
-A comms link used to cost two threads (a reader and a writer), so a server
-with hundreds of idle clients cost hundreds of threads, and once enough
-connections exhausted the process's threads the server could accept no more.
-Now every link of a node (each accepted or made TCP connection, each pipe)
-is a handler registered with the node's single `IOLoop`: a
-``selectors.DefaultSelector`` loop on one thread named ``snr-<role>-io``
-that reads when a socket has bytes, writes when one has room, and runs the
-links' timers (beats, silence checks, paused readers). The node's thread
-count stays the same whatever the number of peers.
+`SocketTransport`; a pipe end, ``pipe.py``). Every link of a node is a
+handler of the node's one `IOLoop`: a ``selectors`` loop on one thread,
+``snr-<role>-io``, that reads when a socket has bytes, writes when one has
+room, and runs the links' timers (beats, silence, paused readers). So a
+server with hundreds of idle clients costs no more threads than one with one.
 
 While the node's own thread has nothing to do, *it* reads the links (Linux,
-where sockets can be watched with ``epoll``): the loop is the node's
-`snr.core.task_queue.IdleWaiter` (installed with ``node.queue.use_waiter``), so the idle wait
-watches the links' sockets and a wake-up socket together, and a page that
-arrives is read, decoded and queued on the node's thread, with no hand-off
-between threads (what that saves on a round trip: docs/performance.md).
-While the node's thread runs handlers, the I/O thread reads, as before: a
-slow handler never stops a link from being read, beating or noticing a dead
-peer. One lock, the *read role*, decides which of the two reads; the links'
-sockets sit in one epoll set of their own, which the I/O thread watches only
-while the node's thread does not (see `IOLoop.wait`).
+with ``epoll``): the loop is the node's `snr.core.task_queue.IdleWaiter`, so
+a page that arrives is read, decoded and queued on the node's thread with no
+hand-off (docs/performance.md). While the node's thread runs handlers, the
+I/O thread reads, so a slow handler never stops a link from being read,
+beating or noticing a dead peer. One lock, the *read role*, decides which of
+the two reads (`IOLoop.wait`). Why and how: docs/design.md, "One I/O thread
+per node".
 
-The loop is shared: every comms component of a node gets the same one with
+The loop is shared: every comms component of a node gets it with
 `IOLoop.acquire` (the first starts its thread) and gives it back with
-`IOLoop.release` (the last stops and joins it, within a bound), so it never
-outlives its node.
+`IOLoop.release` (the last stops and joins it, within a bound).
 
 Example::
 
@@ -199,9 +188,7 @@ class IOLoop:
         self._to_write: Dict[IOHandler, None] = {}
         self._room_timer: Optional[IOTimer] = None
         self._stopping = False
-        self._wake_r, self._wake_w = socket.socketpair()
-        self._wake_r.setblocking(False)
-        self._wake_w.setblocking(False)
+        self._wake_r, self._wake_w = _wake_pair()
         self._woken = False
         self._selector.register(self._wake_r, _READ, None)
         self._thread = threading.Thread(target=self._run, name=f"snr-{node.role}-io", daemon=True)
@@ -234,9 +221,7 @@ class IOLoop:
             self._gate.register(self._reads.fileno(), select.EPOLLIN)
             self._gate_open = True  # until the node's thread first waits
             self._selector.register(self._gate.fileno(), _READ, _READS)
-            self._node_wake_r, self._node_wake_w = socket.socketpair()
-            self._node_wake_r.setblocking(False)
-            self._node_wake_w.setblocking(False)
+            self._node_wake_r, self._node_wake_w = _wake_pair()
             self._node_poll = select.epoll()
             self._node_poll.register(self._node_wake_r.fileno(), select.EPOLLIN)
             self._node_wake_only = select.epoll()  # while the loop's thread wants the role
@@ -259,9 +244,8 @@ class IOLoop:
                 loop = cls(node)
                 _registry[id(node)] = (node, loop)
                 loop._thread.start()
-                queue = _queue_of(node)
-                if loop._reads is not None and queue is not None:
-                    loop._waiter_installed = queue.use_waiter(loop)
+                if loop._reads is not None and loop._queue is not None:
+                    loop._waiter_installed = loop._queue.use_waiter(loop)
             loop._users += 1
             return loop
 
@@ -283,10 +267,9 @@ class IOLoop:
 
     def stop(self, timeout_s: float = JOIN_TIMEOUT_S) -> None:
         """End the thread (it closes what is still watched) and wait up to ``timeout_s``."""
-        queue = _queue_of(self.node)
-        if self._waiter_installed and queue is not None:
+        if self._waiter_installed and self._queue is not None:
             self._waiter_installed = False
-            queue.stop_waiter(self)  # the node waits on its bell again
+            self._queue.stop_waiter(self)  # the node waits on its bell again
         self._stopping = True
         self._wake()
         if self._thread.is_alive() and self._thread is not threading.current_thread():
@@ -344,10 +327,7 @@ class IOLoop:
             io.write_soon(link)   # link.write_waiting() or link.on_writable() will follow
         """
         self._to_write[handler] = None
-        self.call_soon(lambda: self._write_later(handler))
-
-    def _write_later(self, handler: IOHandler) -> None:
-        self.call_later(WRITE_DELAY_S, handler.on_writable)
+        self.call_soon(lambda: self.call_later(WRITE_DELAY_S, handler.on_writable))
 
     def write_waiting(self) -> None:
         """Not the loop's thread: let every handler given to `write_soon` write what waits."""
@@ -421,7 +401,7 @@ class IOLoop:
         """
         if not self._role.acquire(blocking=False):
             self._role_wanted = True  # the node's thread leaves it to us until we are done
-            self._wake_node()
+            self.wake()
             self._role.acquire()
         try:
             yield
@@ -538,9 +518,6 @@ class IOLoop:
 
     def wake(self) -> None:
         """End the node thread's idle wait (any thread; the queue rings it once per sleep)."""
-        self._wake_node()
-
-    def _wake_node(self) -> None:
         try:
             self._node_wake_w.send(b"\0")
         except OSError:  # full (a wake-up is already waiting) or closed
@@ -607,9 +584,8 @@ class IOLoop:
     def _run(self) -> None:
         # This thread serves every link and stops reading a link by itself
         # while the node is behind: the tasks it schedules must never wait.
-        queue = _queue_of(self.node)
-        if queue is not None:
-            queue.never_wait(threading.get_ident())
+        if self._queue is not None:
+            self._queue.never_wait(threading.get_ident())
         if self._reads is not None:
             self._looking = True
             self.call_later(BUSY_READS_S, self._check_busy)
@@ -677,6 +653,14 @@ class IOLoop:
 def _queue_of(node: AbstractNode) -> Optional[TaskQueue]:
     """A `Node`'s task queue; None for another `AbstractNode` (a mock), which has none."""
     return node.queue if isinstance(node, Node) else None
+
+
+def _wake_pair() -> Tuple[socket.socket, socket.socket]:
+    """A connected pair of non-blocking sockets: a byte written to one wakes a wait on the other."""
+    ends = socket.socketpair()
+    for end in ends:
+        end.setblocking(False)
+    return ends
 
 
 def _poll(epoll: Any, timeout_s: float) -> List[Tuple[int, int]]:
