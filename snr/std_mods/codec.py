@@ -930,12 +930,6 @@ def encode_bye() -> bytes:
     return _BYE_FRAME
 
 
-def _non_empty(value: str, name: str, what: str) -> str:
-    if not value:
-        raise WireFormatError(f"field {name!r} of a {what} frame must not be empty")
-    return value
-
-
 def decode_body(body: bytes) -> Message:
     """The `Page`, `Hello`, `Beat` or `Bye` in one frame's body (the bytes after the header).
 
@@ -1047,8 +1041,9 @@ def _too_long(length: int, limit: int) -> str:
 class FrameDecoder:
     """Cuts a byte stream into frame bodies, however the bytes arrive.
 
-    A ``recv`` may return half a frame or several frames; feed every chunk in
-    and take whole bodies out until ``next_frame()`` returns None.
+    A ``recv`` may return half a frame or several frames: give every chunk to
+    `cut_frames` (the links do), or `feed` it and take bodies with
+    `next_frame` until it returns None.
 
     Example::
 
@@ -1061,40 +1056,35 @@ class FrameDecoder:
 
     def __init__(self, max_frame_bytes: int = MAX_FRAME_BYTES) -> None:
         self.max_frame_bytes = max_frame_bytes
-        self._buffer = bytearray()
-        self._start = 0  # where the next frame begins in _buffer
+        self._buffer = bytearray()  # the beginning of a frame still arriving
+        self._bodies: List[bytes] = []  # fed, not yet taken by next_frame
+        self._error: Optional[WireFormatError] = None  # a bad header fed, raised after them
 
     def feed(self, data: bytes) -> None:
-        """Add bytes received from the peer."""
-        self._buffer += data
+        """Add bytes received from the peer (then take the bodies with `next_frame`)."""
+        try:
+            self.cut_frames(data, self._bodies)
+        except WireFormatError as error:
+            self._error = error
 
     def next_frame(self) -> Optional[bytes]:
-        """The next whole body, or None until more bytes arrive.
+        """The next whole body fed, or None until more bytes arrive.
 
         Raises:
             WireFormatError: the length header is over the maximum frame size.
                 The stream cannot be trusted after that: reset the connection.
         """
-        buffer, start = self._buffer, self._start
-        if len(buffer) - start >= HEADER_BYTES:
-            (length,) = _HEADER.unpack_from(buffer, start)
-            if length > self.max_frame_bytes:
-                raise WireFormatError(_too_long(length, self.max_frame_bytes))
-            end = start + HEADER_BYTES + length
-            if len(buffer) >= end:
-                self._start = end
-                return bytes(buffer[start + HEADER_BYTES : end])
-        if start:  # drop what has been consumed, once per chunk
-            del buffer[:start]
-            self._start = 0
+        if self._bodies:
+            return self._bodies.pop(0)
+        if self._error is not None:
+            raise self._error
         return None
 
     def cut_frames(self, data: bytes, bodies: List[bytes]) -> None:
         """Add ``data`` and append every whole body now available to ``bodies``, in order.
 
-        The same as `feed` followed by `next_frame` until it returns None, in
-        one call: a read of whole frames (the usual case) is cut straight from
-        ``data`` without going through the buffer.
+        Whole frames (the usual read) are cut straight from ``data``, not
+        through the buffer.
 
         Raises:
             WireFormatError: a length header is over the maximum frame size.
@@ -1107,14 +1097,8 @@ class FrameDecoder:
             decoder.cut_frames(frame + frame[:3], bodies)   # [body]; 3 bytes wait
         """
         limit = self.max_frame_bytes
-        if len(self._buffer) != self._start:
-            # Part of a frame waits (a big read usually ends mid-frame): complete
-            # that one frame from the head of ``data``, then cut the rest
-            # straight from ``data``, not through the buffer.
-            buffer = self._buffer
-            if self._start:
-                del buffer[: self._start]
-                self._start = 0
+        buffer = self._buffer
+        if buffer:  # complete the frame that waits from the head of ``data``
             if len(buffer) < HEADER_BYTES:
                 taken = HEADER_BYTES - len(buffer)
                 buffer += data[:taken]
@@ -1130,9 +1114,7 @@ class FrameDecoder:
                 return  # the frame is not all there yet
             data = data[taken:]
             bodies.append(bytes(buffer[HEADER_BYTES:]))
-        if self._start or self._buffer:  # everything buffered has been taken: start afresh
             self._buffer = bytearray()
-            self._start = 0
         start, size = 0, len(data)
         while size - start >= HEADER_BYTES:
             (length,) = _HEADER.unpack_from(data, start)
@@ -1145,11 +1127,10 @@ class FrameDecoder:
             start = end
         if start < size:  # the beginning of the next frame
             self._buffer = bytearray(data[start:])
-            self._start = 0
 
     def pending_bytes(self) -> int:
         """Bytes of an unfinished frame (non-zero at EOF means it was cut short)."""
-        return len(self._buffer) - self._start
+        return len(self._buffer)
 
 
 # -- the JSON-lines format of recordings and serial links ------------------------------
