@@ -310,10 +310,8 @@ class CommsLoop(ThreadLoop):
     def deliver(self, link: Link, pages: List[Page]) -> None:
         """Store pages a link received (called by the thread that read them).
 
-        The link calls it only while the node's queue has room: while the
-        queue is over its high-water mark the link stops reading instead (the
-        bytes stay in the OS, TCP slows the sender, and nothing is lost on
-        this side), so the I/O thread never waits here.
+        The link calls it only while the node's queue has room (else it
+        stops reading: the bytes wait in the OS), so no thread waits here.
         """
         forwarded = self._forwarded
         if forwarded:
@@ -322,10 +320,7 @@ class CommsLoop(ThreadLoop):
                     self._arrived[id(page)] = (page, link)
         if len(pages) == 1:  # the usual read when pages come one at a time
             self.parent.schedule(Task(_STORE_PAGE, pages[0].key, pages))
-        elif not link.io.in_loop_thread():
-            # The node's thread read these while its queue was empty: one task
-            # for the lot, which the node core stores without a dispatch per
-            # page. (At most one read's worth: the queue stays bounded.)
+        elif not link.io.in_loop_thread():  # the idle node's thread read them: one task
             self.schedule(tasks.store_pages(pages))
         else:  # the I/O thread: one task each, so the queue's high-water mark counts pages
             self.schedule([Task(_STORE_PAGE, page.key, [page]) for page in pages])
@@ -379,8 +374,7 @@ class CommsLoop(ThreadLoop):
         """A peer was refused (I/O thread): log it once per peer, count it every time.
 
         A peer is its host, its role and why: a client that retries every
-        second is one line, however long it tries; many peers at once are
-        at most five lines in 5 s, then a count (`RateLimitedLog`).
+        second is one line; many peers are at most five lines in 5 s, then a count.
 
         Example (what the log says)::
 
@@ -430,12 +424,11 @@ class CommsLoop(ThreadLoop):
     def say(self, what: str, level: int, msg: str, *args: Any) -> None:
         """Log news of links (connects, hellos, losses) in full, unless it comes in a flood.
 
-        ``what`` names the kind of news, e.g. ``"Clients connected"``: each
-        line is logged in full while no more than 20 of its kind came in the
-        last 10 s; past that they are counted, and the count is logged once
-        every 10 s (see `RateLimitedLog`; `tick_news` says the last count). A
-        class of robots connecting is logged robot by robot; a program that
-        connects a thousand times a second costs a line every 10 s.
+        ``what`` names the kind of news, e.g. ``"Clients connected"``: up to
+        20 lines of a kind in 10 s are logged in full, then they are counted
+        and the count is logged every 10 s (`RateLimitedLog`). A class of
+        robots connecting is logged robot by robot; a program that connects a
+        thousand times a second costs a line every 10 s.
 
         Example::
 
@@ -457,9 +450,8 @@ class CommsLoop(ThreadLoop):
     def tick_news(self) -> None:
         """Log the counts of news that came in a flood, once their window has passed.
 
-        The node's I/O thread calls it every half second for a while after
-        news was counted rather than logged (`say`), and never otherwise:
-        quiet comms wake no thread for it.
+        The I/O thread calls it every half second while counted news may be
+        pending, and never otherwise: quiet comms wake no thread for it.
 
         Example::
 
