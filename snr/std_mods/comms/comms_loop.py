@@ -216,7 +216,6 @@ class CommsLoop(ThreadLoop):
         self.refusal_news = RateLimitedLog(self.log, burst=5, window_s=5.0)
         self.io_loop: Optional[IOLoop] = None  # the node's, while this component runs
         self._links_lock = threading.Lock()
-        self._opened: List[Link] = []  # every link that may not have ended yet
         self._forwarded = frozenset(self.keys)
         # Pages a link delivered under a forwarded key, until forward_page sees
         # them: {id(page): (page, link)} so they are not sent back to that link.
@@ -357,7 +356,6 @@ class CommsLoop(ThreadLoop):
                 transport.close()
                 raise
             self.links = (*self.links, link)
-            self._opened = [old for old in self._opened if not old.is_closed()] + [link]
         self._unsent_reported = False
         link.start()
         if link.state is _OPEN:  # no handshake: pages may pass at once (else: announce)
@@ -562,9 +560,7 @@ class CommsLoop(ThreadLoop):
         for link in self.links:
             if not link.wait_closed(max(0.0, deadline - time.monotonic())):
                 link.abort()
-        with self._links_lock:
-            opened = list(self._opened)
-        for link in opened:  # aborted ones end on the I/O thread's next pass
+        for link in self.links:  # aborted ones end on the I/O thread's next pass
             link.wait_closed(max(0.1, deadline - time.monotonic()))
         self._release_io_loop()
         self.news.flush()  # what a flood of connections or bad frames left uncounted aloud

@@ -109,7 +109,27 @@ def _listen(address: Address, role: str) -> socket.socket:
     return listener
 
 
-class SocketsServerLoop(CommsLoop):
+class _SocketsLoop(CommsLoop):
+    """What the sockets server and client share: their factory's settings, system, secret."""
+
+    def __init__(self, factory: _SocketsFactory, parent: AbstractNode, where: str) -> None:
+        super().__init__(
+            factory,
+            parent,
+            factory.name,
+            factory.keys,
+            factory.max_backlog_bytes,
+            factory.dead_after_s,
+        )
+        self.address = factory.address
+        self.system = resolve_system(factory.system, parent.config, where)
+        self.secret = find_secret(factory.secret, where)
+
+    def _open(self, sock: socket.socket, peer: str) -> Link:
+        return self.open_link(SocketTransport(sock, peer, self.dead_after_s))
+
+
+class SocketsServerLoop(_SocketsLoop):
     """Accepts clients and links to each; built by ``SocketsPair.server()``.
 
     It listens as soon as the node starts (a port in use stops the node with
@@ -133,19 +153,9 @@ class SocketsServerLoop(CommsLoop):
     peer_noun = "client"
 
     def __init__(self, factory: SocketsServerFactory, parent: AbstractNode) -> None:
-        super().__init__(
-            factory,
-            parent,
-            factory.name,
-            factory.keys,
-            factory.max_backlog_bytes,
-            factory.dead_after_s,
-        )
-        self.address = factory.address
-        self.max_connections = factory.max_connections
         where = f"The sockets server of node {parent.role!r} ({_describe(factory.address)})"
-        self.system = resolve_system(factory.system, parent.config, where)
-        self.secret = find_secret(factory.secret, where)
+        super().__init__(factory, parent, where)
+        self.max_connections = factory.max_connections
         self.refused = LossReport(
             self.log,
             "connections",
@@ -203,7 +213,7 @@ class SocketsServerLoop(CommsLoop):
             return
         if self.refused.dropping:
             self.refused.recovered()
-        link = self.open_link(SocketTransport(sock, _describe(peer[:2]), self.dead_after_s))
+        link = self._open(sock, _describe(peer[:2]))
         self.dbg("Accepted a connection from %s", link.transport.peer)
 
     def _make_room(self) -> bool:
@@ -262,7 +272,7 @@ class SocketsServerLoop(CommsLoop):
                 end.close()
 
 
-class SocketsClientLoop(CommsLoop):
+class SocketsClientLoop(_SocketsLoop):
     """Connects to a sockets server and keeps connecting; built by ``client()``.
 
     Until the server is up, and after a link drops, it retries with backoff
@@ -282,18 +292,8 @@ class SocketsClientLoop(CommsLoop):
     peer_noun = "sockets server"
 
     def __init__(self, factory: SocketsClientFactory, parent: AbstractNode) -> None:
-        super().__init__(
-            factory,
-            parent,
-            factory.name,
-            factory.keys,
-            factory.max_backlog_bytes,
-            factory.dead_after_s,
-        )
-        self.address = factory.address
         where = f"The sockets client of node {parent.role!r} (to {_describe(factory.address)})"
-        self.system = resolve_system(factory.system, parent.config, where)
-        self.secret = find_secret(factory.secret, where)
+        super().__init__(factory, parent, where)
         self.link: Optional[Link] = None
         self._retry_s = _FIRST_RETRY_S
         self._waiting_reported = False
@@ -322,9 +322,7 @@ class SocketsClientLoop(CommsLoop):
             sock.close()
             return
         self._waiting_reported = False
-        self.link = self.open_link(
-            SocketTransport(sock, _describe(self.address), self.dead_after_s)
-        )
+        self.link = self._open(sock, _describe(self.address))
         self.dbg("TCP connection to %s made", _describe(self.address))
 
     def _back_off(self) -> None:
