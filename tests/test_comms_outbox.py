@@ -88,8 +88,7 @@ class TestWriting(unittest.TestCase):
         self.assertEqual(box.put(b"a", "k", peer.send), SENT)
         self.assertEqual(box.put(b"b", "k"), FIRST, "no write given: queued")
         self.assertEqual(box.put(b"c", "k", peer.send), QUEUED, "frames wait: behind them")
-        self.assertEqual(box.put(b"d", "k"), QUEUED)
-        box.put(b"e", "k")
+        self.assertEqual(box.put_all([b"d", b"e"], "k"), QUEUED)
         self.assertTrue(box.write_to(peer.send))
         self.assertEqual(peer.sends, [b"a", b"bcde"], "the waiting frames went in one call")
 
@@ -116,10 +115,10 @@ class TestWriting(unittest.TestCase):
         with self.assertRaises(ConnectionResetError):
             box.write_to(broken)
 
-    def test_frames_that_do_not_fit_make_room_one_by_one(self) -> None:
+    def test_a_run_that_does_not_fit_makes_room_frame_by_frame(self) -> None:
         box = outbox(6)
-        for frame in (b"ab", b"cd", b"ef", b"gh"):
-            box.put(frame, "k")
+        box.put(b"ab", "k")
+        box.put_all([b"cd", b"ef", b"gh"], "k")
         self.assertEqual((box.dropped, box.queued_bytes), (1, 6))
         self.assertEqual([box.take(0) for _ in range(3)], [b"cd", b"ef", b"gh"])
 
@@ -130,13 +129,13 @@ class TestClosing(unittest.TestCase):
         box.put(b"a", "k")
         box.close()
         self.assertEqual(box.put(b"b", "k"), CLOSED)
+        self.assertEqual(box.put_all([b"c"], "k"), CLOSED)
         self.assertEqual(box.take(), b"a")
         self.assertIsNone(box.take(), "closed and empty: does not wait")
 
     def test_discarding_says_how_many_were_forgotten(self) -> None:
         box = outbox(100)
-        box.put(b"a", "k")
-        box.put(b"b", "k")
+        box.put_all([b"a", b"b"], "k")
         self.assertEqual(box.close(discard=True), 2)
         self.assertEqual((len(box), box.queued_bytes), (0, 0))
 
