@@ -26,7 +26,7 @@ from typing import Any, Callable, Dict, List, NoReturn, Tuple
 
 from snr import Page
 from snr.std_mods import codec
-from snr.std_mods.comms.wire import HEADER_BYTES, decode_body, encode_page
+from snr.std_mods.codec import HEADER_BYTES, decode_body, encode_page
 
 random.seed(1)
 SHAPES: List[Tuple[str, Any]] = [

@@ -58,8 +58,7 @@ from typing import Any, Callable, Dict, List, Optional
 from bench_comms import SeqCheck, body, free_port, loads, small_data
 
 from snr import Page, Task, TaskType
-from snr.std_mods.codec import PageEncoder
-from snr.std_mods.comms.wire import FrameDecoder, decode_body, encode_page
+from snr.std_mods.codec import FrameDecoder, PageEncoder, decode_body, encode_page
 
 zmq: Any
 try:

@@ -20,7 +20,7 @@ from typing import Any, Callable, Iterator, List, Optional, Tuple
 from snr import Page
 from snr.prelude import NotSerializableError, WireFormatError
 from snr.std_mods import codec
-from snr.std_mods.comms.wire import HEADER_BYTES, decode_body, encode_hello, encode_page
+from snr.std_mods.codec import HEADER_BYTES, decode_body, encode_hello, encode_page
 from snr.std_mods.io import PageReader
 from tests.optional import example, given, reason, settings, st
 

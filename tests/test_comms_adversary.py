@@ -16,8 +16,8 @@ import unittest
 from typing import Any, List
 
 from snr import Config, Mode, Node, SocketsPair
-from snr.std_mods.comms.comms_loop import CommsLoop
-from snr.std_mods.comms.link import shown_role, unread_bytes
+from snr.std_mods.comms.comms_loop import CommsLoop, shown_role
+from snr.std_mods.comms.io_loop import unread_bytes
 from tests.helpers import wait_until
 from tests.test_comms_liveness import (
     CommsFaultTest,

@@ -13,8 +13,8 @@ from typing import List
 
 from snr import Config, Mode, SocketsPair
 from snr.prelude import WireFormatError
+from snr.std_mods.codec import HEADER_BYTES, Bye, Hello, decode_body, encode_bye
 from snr.std_mods.comms.comms_loop import CommsLoop
-from snr.std_mods.comms.wire import HEADER_BYTES, Bye, Hello, decode_body, encode_bye
 from tests.helpers import free_port, wait_until
 from tests.test_comms_local import LocalNodes, connect_when_listening
 

@@ -31,10 +31,10 @@ from snr import (
     tasks,
 )
 from snr.prelude import ConfigError
+from snr.std_mods.codec import encode_hello
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.comms.io_loop import IOLoop
 from snr.std_mods.comms.pipe import PipeTransport
-from snr.std_mods.comms.wire import encode_hello
 from tests.helpers import free_port, wait_until
 from tests.test_comms_local import LocalNodes, connect_when_listening
 

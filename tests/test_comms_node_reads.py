@@ -20,8 +20,8 @@ from snr import (
     TaskType,
     TimeoutLoopFactory,
 )
+from snr.std_mods.comms.comms_loop import Link
 from snr.std_mods.comms.io_loop import IOLoop
-from snr.std_mods.comms.link import Link
 from tests.helpers import free_port, wait_until
 from tests.quiet import capture_test_logs
 from tests.test_comms_local import LocalNodes

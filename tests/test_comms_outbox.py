@@ -9,7 +9,7 @@ from typing import List, Optional
 
 from snr.core.logs import LossReport
 from snr.std_mods.comms import Outbox
-from snr.std_mods.comms.outbox import CLOSED, FIRST, QUEUED, SENT
+from snr.std_mods.comms.comms_loop import CLOSED, FIRST, QUEUED, SENT
 
 
 class Peer:

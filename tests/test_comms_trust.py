@@ -19,9 +19,9 @@ from unittest import mock
 
 from snr import Config, Mode, SocketsPair
 from snr.prelude import ConfigError, WireFormatError
+from snr.std_mods.codec import HEADER_BYTES, Hello, Proof, decode_body, encode_hello
 from snr.std_mods.comms.comms_loop import CommsLoop
 from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret, proof_mac, resolve_system
-from snr.std_mods.comms.wire import HEADER_BYTES, Hello, Proof, decode_body, encode_hello
 from tests.helpers import free_port, wait_until
 from tests.test_comms_liveness import CommsFaultTest, CounterFactory, frame, read_until_closed
 from tests.test_comms_local import connect_when_listening

@@ -12,7 +12,7 @@ from typing import Any, List
 
 from snr import Page
 from snr.prelude import NotSerializableError, WireFormatError
-from snr.std_mods.comms.wire import (
+from snr.std_mods.codec import (
     HEADER_BYTES,
     MAX_FRAME_BYTES,
     WIRE_VERSION,

@@ -1,10 +1,11 @@
-"""The page codec: pages as strict JSON, the same for comms, recordings and serial links.
+"""The wire format: pages as strict JSON, in frames between nodes and in lines on disk.
 
-Every place where a page leaves or enters a node writes and reads it here:
-comms frames (``snr.std_mods.comms.wire`` adds the length header), and the
-JSON-lines format of recordings and serial links (defined below: a header
-line, then one page per line). So there is one set of rules, one error
-message for data JSON cannot hold, and one strict reader:
+Every place where a page leaves or enters a node writes and reads it here
+(docs/wire-format.md): comms *frames* (a 4-byte big-endian length, then a
+JSON object with ``"v"`` and a ``"kind"``: ``hello``, ``proof``, ``page``,
+``beat`` or ``bye``), and the JSON-lines format of recordings and serial
+links (a header line, then one page per line). One set of rules, one error
+message for data JSON cannot hold, one strict reader:
 
 * **Written:** compact JSON, ASCII only (other characters as ``\\uXXXX``), in
   a fixed field order, UTF-8 bytes.
@@ -14,24 +15,24 @@ message for data JSON cannot hold, and one strict reader:
 * **Rejected when reading** (`WireFormatError`, saying why): text that is not
   UTF-8 or not JSON, ``NaN``/``Infinity``, numbers too large for a double
   (``1e999``), lone surrogates (``"\\ud800"``), nesting deeper than
-  `MAX_DEPTH`, and pages with missing or wrongly typed fields.
+  `MAX_DEPTH`, and pages with missing or wrongly typed fields. Nothing is
+  unpickled or evaluated, so a bad frame can only be *wrong*, never harmful.
 
 Two JSON backends do the work, each through its public functions only: the
-standard library's ``json`` and, when it is installed (``pip install
-'snr-robotics[fast]'``), ``orjson``, several times faster. The backends differ (orjson
-writes NaN as ``null``, writes non-ASCII text as raw UTF-8, formats small
-floats differently, reads integers beyond 64 bits as floats), so orjson's
-result is used only where it is known to be json's; everything else goes
-through ``json``, which gives every verdict and message. Either way the bytes
-written and the inputs rejected are exactly those of ``docs/wire-format.md``.
-Set the environment variable ``SNR_JSON=json`` (or call ``use_backend("json")``)
-to use the standard library only.
+standard library's ``json`` and, when installed (``pip install
+'snr-robotics[fast]'``), ``orjson``, several times faster. orjson's result is
+used only where it is known to be json's (they differ on NaN, non-ASCII text,
+small floats, integers beyond 64 bits); json gives every verdict and message.
+``SNR_JSON=json`` (or ``use_backend("json")``) uses the standard library only.
 
 Example::
 
-    line = page_to_line(Page("depth_m", 3.2, "urov", 1700000000.25))
+    frame = encode_page(Page("depth_m", 3.2, origin="urov", created_at_s=1700000000.0))
+    decoder = FrameDecoder()
+    decoder.feed(frame)
+    decode_body(decoder.next_frame())   # Page('depth_m', 3.2, 'urov', 1700000000.0, True)
+    page_to_line(Page("depth_m", 3.2, "urov", 1700000000.25))
     # '{"key":"depth_m","data":3.2,"origin":"urov","created_at_s":1700000000.25,"process":true}'
-    page_from_line(line)   # Page('depth_m', 3.2, 'urov', 1700000000.25, True)
     page_from_line('{"key":"x","data":1e999}')   # WireFormatError: ... infinity ...
 """
 
@@ -41,7 +42,9 @@ import json
 import math
 import os
 import re
+import struct
 import time
+from dataclasses import dataclass
 from typing import (
     Any,
     Callable,
@@ -69,15 +72,31 @@ __all__ = [
     "BACKEND_ENV_VAR",
     "FORMAT_NAME",
     "FORMAT_VERSION",
+    "HEADER_BYTES",
+    "HELLO_VERSION",
     "MAX_DEPTH",
+    "MAX_FRAME_BYTES",
+    "WIRE_VERSION",
+    "Beat",
+    "Bye",
+    "FrameDecoder",
+    "Hello",
+    "Message",
     "PageEncoder",
     "PathLike",
+    "Proof",
     "available_backends",
     "backend",
     "check_header",
     "data_json",
+    "decode_body",
     "decode_line",
     "dump_json",
+    "encode_beat",
+    "encode_bye",
+    "encode_hello",
+    "encode_page",
+    "encode_proof",
     "header_line",
     "is_header",
     "load_json",
@@ -271,18 +290,20 @@ def _load_orjson(raw: Text) -> Any:
 def _plain(value: Any, depth: int = 1) -> bool:
     """True when ``value`` holds only exact JSON types, nested at most `MAX_DEPTH` deep.
 
-    That is str, int, float, bool, None, lists, tuples and dicts with str keys;
-    not their subclasses, enums, dataclasses, dates or UUIDs, which orjson
-    writes and json refuses or writes otherwise. Data that contains itself is
-    endlessly deep, so not plain either. ``depth`` is how deep ``value`` itself
-    is (2 for a page's data). Example: ``_plain({"a": [1, 2.5]})``.
+    That is str, int, float, bool, None, lists, tuples and dicts with str keys,
+    and lists and dicts of subclasses too (both write them as the plain ones:
+    read-only page data is such, in DEBUG and TEST); not other subclasses,
+    enums, dataclasses, dates or UUIDs, which orjson writes and json refuses
+    or writes otherwise. Data that contains itself is endlessly deep, so not
+    plain either. ``depth`` is how deep ``value`` itself is (2 for a page's
+    data). Example: ``_plain({"a": [1, 2.5]})``.
     """
     kind = type(value)
-    if kind is dict:
+    if kind is dict or (kind is not list and isinstance(value, dict)):
         if not _STR.issuperset(map(type, value)):  # all keys at once
             return False
         value = value.values()
-    elif kind is not list and kind is not tuple:
+    elif kind is not list and kind is not tuple and not isinstance(value, list):
         return kind in _JSON_SCALARS
     if depth > MAX_DEPTH:
         return False
@@ -378,10 +399,10 @@ def _alike(values: Iterable[Any], levels: int) -> bool:
                 return False
         elif kind is int or kind is bool or value is None:
             continue
-        elif kind is list or kind is tuple:
+        elif kind is list or kind is tuple or isinstance(value, list):
             if not (levels and len(value) <= _SMALL and _alike(value, levels - 1)):
                 return False
-        elif kind is dict:
+        elif isinstance(value, dict):  # (a list or dict subclass is written as one)
             if not (
                 levels
                 and len(value) <= _SMALL
@@ -721,6 +742,397 @@ def page_from_fields(
     if type(process) is not bool:
         raise _bad_type("process", process, "a JSON bool (true or false)")
     return Page(key, fields["data"], origin_value, created_s, process)
+
+
+# -- frames: a page (or a hello, beat, bye, proof) between two nodes ------------------
+
+WIRE_VERSION = 1
+"""The ``"v"`` field of page, beat and bye frames, and of the first hello (no system)."""
+
+HELLO_VERSION = 2
+"""The ``"v"`` of the hello that names a system and may carry a challenge, and of proofs.
+
+A node that names no system and has no secret still sends a version 1
+hello, so older nodes understand it (docs/wire-format.md, section 3.1).
+"""
+
+HEADER_BYTES = 4
+"""Length of the frame header: an unsigned 32-bit big-endian body length."""
+
+MAX_FRAME_BYTES = 16 * 1024 * 1024
+"""Largest body accepted or sent (16 MiB); a longer length header resets the link."""
+
+_HEADER = struct.Struct(">I")
+_page_body = PageEncoder({"v": WIRE_VERSION, "kind": "page"})
+
+
+@dataclass(frozen=True)
+class Hello:
+    """The first frame on a link: who is on the other end.
+
+    ``beat_s`` is how often the sender promises a sign of life while it has
+    nothing else to send (a `Beat`); None from a peer that makes no promise
+    (older SNR nodes, or a program that does not send beats). ``bye`` is
+    true when the sender understands a `Bye` frame (older nodes do not, so
+    they are never sent one). ``system`` is the system the sender belongs to
+    (None from a version 1 hello, or one that names none), and ``nonce`` its
+    challenge: 64 hex digits from a node with a secret, else None.
+
+    Example::
+
+        decode_body(encode_hello("receiver", 1.0)[HEADER_BYTES:])
+        # Hello(role='receiver', beat_s=1.0, bye=False, system=None, nonce=None)
+    """
+
+    role: str
+    beat_s: Optional[float] = None
+    bye: bool = False
+    system: Optional[str] = None
+    nonce: Optional[str] = None
+
+
+@dataclass(frozen=True)
+class Proof:
+    """The answer to the peer's challenge: ``mac`` proves the sender knows the secret.
+
+    64 lowercase hex digits of an HMAC-SHA256 (see ``handshake.proof_mac``).
+
+    Example::
+
+        decode_body(encode_proof("ab" * 32)[HEADER_BYTES:])   # Proof(mac='abab...')
+    """
+
+    mac: str
+
+
+@dataclass(frozen=True)
+class Beat:
+    """A sign of life: "I am still here", sent on an otherwise quiet link.
+
+    Example::
+
+        decode_body(encode_beat()[HEADER_BYTES:])   # Beat()
+    """
+
+
+@dataclass(frozen=True)
+class Bye:
+    """The last frame before an orderly close: "my node is stopping, not lost".
+
+    The peer then knows the end of the connection that follows is no fault.
+
+    Example::
+
+        decode_body(encode_bye()[HEADER_BYTES:])   # Bye()
+    """
+
+
+Message = Union[Page, Hello, Beat, Bye, Proof]
+"""What a frame carries: a `Page`, a `Hello`, a `Beat`, a `Bye` or a `Proof`."""
+
+
+def _frame(body: bytes, what: str) -> bytes:
+    if len(body) > MAX_FRAME_BYTES:
+        raise NotSerializableError(
+            f"Cannot send {what}: it is {len(body):,} bytes of JSON, over the "
+            f"{MAX_FRAME_BYTES:,}-byte frame limit. Send smaller pieces (for example "
+            "one page per sensor reading, or a file path instead of file contents)."
+        )
+    return _HEADER.pack(len(body)) + body
+
+
+def encode_page(page: Page) -> bytes:
+    """One frame carrying ``page``.
+
+    Raises:
+        NotSerializableError: the data is not JSON (a set, a custom object,
+            NaN, ...), naming the key and the type, or the frame is too big.
+
+    Example::
+
+        encode_page(Page("x", [1, 2], "robot", 1.5))
+        # b'\\x00\\x00\\x00a{"v":1,"kind":"page","key":"x","data":[1,2],...}'
+    """
+    body = _page_body(page)
+    if len(body) > MAX_FRAME_BYTES:  # the message is only built when it is needed
+        _frame(body, f"the page under key {page.key!r}")  # raises
+    return _HEADER.pack(len(body)) + body
+
+
+def encode_hello(
+    role: str,
+    beat_s: Optional[float] = None,
+    bye: bool = False,
+    system: Optional[str] = None,
+    nonce: Optional[str] = None,
+) -> bytes:
+    """The hello frame a node sends first on every link.
+
+    With ``beat_s`` the node promises a beat at least that often while it has
+    nothing else to send, so the peer can tell a silent link from a dead one.
+    With ``bye`` it says it understands a bye frame. With a ``system`` or a
+    ``nonce`` (a challenge, from a node with a secret) it is a version 2
+    hello; without either, the version 1 hello older nodes know.
+
+    Example::
+
+        encode_hello("receiver")   # b'\\x00\\x00\\x00,{"v":1,"kind":"hello","role":"receiver"}'
+        encode_hello("receiver", 1.0, bye=True)   # ...,"beat_s":1.0,"bye":true}
+        encode_hello("receiver", system="team7")  # {"v":2,...,"system":"team7"}
+    """
+    version = HELLO_VERSION if system is not None or nonce is not None else WIRE_VERSION
+    fields: Dict[str, Any] = {"v": version, "kind": "hello", "role": role}
+    if beat_s is not None:
+        fields["beat_s"] = beat_s
+    if bye:
+        fields["bye"] = True
+    if version == HELLO_VERSION:
+        fields["system"] = system
+        if nonce is not None:
+            fields["nonce"] = nonce
+    return _frame(dump_json(fields, "the hello frame"), "the hello frame")
+
+
+def encode_proof(mac: str) -> bytes:
+    """The proof frame: the answer to the peer's challenge (``{"v":2,"kind":"proof",...}``).
+
+    Example::
+
+        encode_proof("ab" * 32)   # b'...{"v":2,"kind":"proof","mac":"abab..."}'
+    """
+    fields = {"v": HELLO_VERSION, "kind": "proof", "mac": mac}
+    return _frame(dump_json(fields, "the proof frame"), "the proof frame")
+
+
+_BEAT_FRAME = _frame(b'{"v":1,"kind":"beat"}', "a beat")
+
+
+def encode_beat() -> bytes:
+    """The beat frame: a sign of life on a quiet link (``{"v":1,"kind":"beat"}``).
+
+    Example::
+
+        encode_beat()   # b'\\x00\\x00\\x00\\x15{"v":1,"kind":"beat"}'
+    """
+    return _BEAT_FRAME
+
+
+_BYE_FRAME = _frame(b'{"v":1,"kind":"bye"}', "a bye")
+
+
+def encode_bye() -> bytes:
+    """The bye frame: the last one before an orderly close (``{"v":1,"kind":"bye"}``).
+
+    Send it only to a peer whose hello said ``"bye": true``.
+
+    Example::
+
+        encode_bye()   # b'\\x00\\x00\\x00\\x14{"v":1,"kind":"bye"}'
+    """
+    return _BYE_FRAME
+
+
+def decode_body(body: bytes) -> Message:
+    """The `Page`, `Hello`, `Beat` or `Bye` in one frame's body (the bytes after the header).
+
+    Raises:
+        WireFormatError: the body is not UTF-8, not strict JSON (NaN,
+            ``1e999``, a lone surrogate, nesting too deep...), not an object,
+            has another version, an unknown kind, or a missing or mistyped
+            field. The message says which; the caller logs it and drops the frame.
+
+    Example::
+
+        decode_body(b'{"v":1,"kind":"hello","role":"urov"}')   # Hello(role='urov', ...)
+    """
+    try:
+        obj = load_object(body)
+    except WireFormatError as error:
+        raise WireFormatError(f"the body: {error}") from None
+    version = obj.get("v")
+    kind = obj.get("kind")
+    if type(version) is not int or not (
+        version == WIRE_VERSION or (version == HELLO_VERSION and kind in ("hello", "proof"))
+    ):
+        raise WireFormatError(
+            f"the frame has version {version!r:.40}; this SNR speaks version {WIRE_VERSION} "
+            f"(and {HELLO_VERSION} for hellos and proofs; the 'v' field, a whole number); "
+            "update the older side"
+        )
+    if kind == "proof":
+        return _decode_proof(obj, version)
+    if kind == "page":
+        return page_from_fields(obj, default_origin=None)
+    if kind == "beat":
+        return Beat()
+    if kind == "bye":
+        return Bye()
+    if kind == "hello":
+        role = obj.get("role")
+        if "role" not in obj:
+            raise WireFormatError("a hello frame has no 'role' field")
+        if type(role) is not str:
+            raise WireFormatError(
+                f"field 'role' of a hello frame must be a JSON string, not "
+                f"{type(role).__name__} {role!r:.40}"
+            )
+        if not role:
+            raise WireFormatError("field 'role' of a hello frame must not be empty")
+        beat_s = obj.get("beat_s")
+        if beat_s is not None and (
+            isinstance(beat_s, bool) or not isinstance(beat_s, (int, float)) or not beat_s > 0
+        ):
+            raise WireFormatError(
+                f"the hello's 'beat_s' is {beat_s!r:.40}; it must be a number of seconds above 0"
+            )
+        bye = obj.get("bye", False)
+        if type(bye) is not bool:
+            raise WireFormatError(f"the hello's 'bye' is {bye!r:.40}; it must be true or false")
+        if beat_s is not None:
+            try:
+                beat_s = float(beat_s)  # a whole number past a double's range cannot be
+            except OverflowError:
+                raise WireFormatError(
+                    "the hello's 'beat_s' is a whole number too large for a double; it must "
+                    "be a number of seconds above 0"
+                ) from None
+        if version == WIRE_VERSION:
+            return Hello(role, beat_s, bye)  # the first hello: no system, no challenge
+        system = obj.get("system")
+        if system is not None and (type(system) is not str or not system):
+            raise WireFormatError(
+                f"the hello's 'system' is {system!r:.40}; it must be a non-empty string or null"
+            )
+        nonce = obj.get("nonce")
+        if nonce is not None and not _is_hex(nonce):
+            raise WireFormatError(
+                f"the hello's 'nonce' is {nonce!r:.40}; it must be {_HEX_DIGITS} lowercase "
+                "hex digits"
+            )
+        return Hello(role, beat_s, bye, system, nonce)
+    raise WireFormatError(
+        f"unknown frame kind {kind!r:.40}; known kinds are 'page', 'hello', 'beat', 'bye' "
+        "and 'proof'"
+    )
+
+
+_HEX_DIGITS = 64  # a nonce (32 random bytes) and an HMAC-SHA256 are both this long in hex
+_HEX = frozenset("0123456789abcdef")
+
+
+def _is_hex(value: object) -> bool:
+    return type(value) is str and len(value) == _HEX_DIGITS and _HEX.issuperset(value)
+
+
+def _decode_proof(obj: Dict[str, Any], version: object) -> Proof:
+    if version != HELLO_VERSION:
+        raise WireFormatError(f"a proof frame must have version {HELLO_VERSION}")
+    mac = obj.get("mac")
+    if not _is_hex(mac):
+        raise WireFormatError(
+            f"the proof's 'mac' is {mac!r:.40}; it must be {_HEX_DIGITS} lowercase hex digits"
+        )
+    assert isinstance(mac, str)
+    return Proof(mac)
+
+
+def _too_long(length: int, limit: int) -> str:
+    return f"a length header says {length:,} bytes, over the {limit:,}-byte maximum frame size"
+
+
+class FrameDecoder:
+    """Cuts a byte stream into frame bodies, however the bytes arrive.
+
+    A ``recv`` may return half a frame or several frames: give every chunk to
+    `cut_frames` (the links do), or `feed` it and take bodies with
+    `next_frame` until it returns None.
+
+    Example::
+
+        decoder = FrameDecoder()
+        decoder.feed(frame[:3])
+        decoder.next_frame()        # None: not all there yet
+        decoder.feed(frame[3:])
+        decoder.next_frame()        # the body
+    """
+
+    def __init__(self, max_frame_bytes: int = MAX_FRAME_BYTES) -> None:
+        self.max_frame_bytes = max_frame_bytes
+        self._buffer = bytearray()  # the beginning of a frame still arriving
+        self._bodies: List[bytes] = []  # fed, not yet taken by next_frame
+        self._error: Optional[WireFormatError] = None  # a bad header fed, raised after them
+
+    def feed(self, data: bytes) -> None:
+        """Add bytes received from the peer (then take the bodies with `next_frame`)."""
+        try:
+            self.cut_frames(data, self._bodies)
+        except WireFormatError as error:
+            self._error = error
+
+    def next_frame(self) -> Optional[bytes]:
+        """The next whole body fed, or None until more bytes arrive.
+
+        Raises:
+            WireFormatError: the length header is over the maximum frame size.
+                The stream cannot be trusted after that: reset the connection.
+        """
+        if self._bodies:
+            return self._bodies.pop(0)
+        if self._error is not None:
+            raise self._error
+        return None
+
+    def cut_frames(self, data: bytes, bodies: List[bytes]) -> None:
+        """Add ``data`` and append every whole body now available to ``bodies``, in order.
+
+        Whole frames (the usual read) are cut straight from ``data``, not
+        through the buffer.
+
+        Raises:
+            WireFormatError: a length header is over the maximum frame size.
+                ``bodies`` then holds the whole frames before it; reset the
+                connection.
+
+        Example::
+
+            bodies: List[bytes] = []
+            decoder.cut_frames(frame + frame[:3], bodies)   # [body]; 3 bytes wait
+        """
+        limit = self.max_frame_bytes
+        buffer = self._buffer
+        if buffer:  # complete the frame that waits from the head of ``data``
+            if len(buffer) < HEADER_BYTES:
+                taken = HEADER_BYTES - len(buffer)
+                buffer += data[:taken]
+                data = data[taken:]
+                if len(buffer) < HEADER_BYTES:
+                    return
+            (length,) = _HEADER.unpack_from(buffer, 0)
+            if length > limit:
+                raise WireFormatError(_too_long(length, limit))
+            taken = HEADER_BYTES + length - len(buffer)
+            buffer += data[:taken]
+            if len(buffer) < HEADER_BYTES + length:
+                return  # the frame is not all there yet
+            data = data[taken:]
+            bodies.append(bytes(buffer[HEADER_BYTES:]))
+            self._buffer = bytearray()
+        start, size = 0, len(data)
+        while size - start >= HEADER_BYTES:
+            (length,) = _HEADER.unpack_from(data, start)
+            if length > limit:
+                raise WireFormatError(_too_long(length, limit))
+            end = start + HEADER_BYTES + length
+            if end > size:
+                break
+            bodies.append(data[start + HEADER_BYTES : end])
+            start = end
+        if start < size:  # the beginning of the next frame
+            self._buffer = bytearray(data[start:])
+
+    def pending_bytes(self) -> int:
+        """Bytes of an unfinished frame (non-zero at EOF means it was cut short)."""
+        return len(self._buffer)
 
 
 # -- the JSON-lines format of recordings and serial links ------------------------------

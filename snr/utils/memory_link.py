@@ -28,10 +28,10 @@ from snr.std_mods.comms.comms_loop import (
     DEFAULT_MAX_BACKLOG_BYTES,
     CommsLoop,
     Keys,
+    Link,
 )
-from snr.std_mods.comms.link import Link
+from snr.std_mods.comms.io_loop import SocketTransport
 from snr.std_mods.comms.pipe import PipeLoop, PipeLoopFactory
-from snr.std_mods.comms.sockets import SocketTransport
 
 __all__ = [
     "MemoryLinkFactory",

@@ -380,7 +380,7 @@ class SocketsWrapper(
         "was replaced by the loops of SocketsPair(server_tuple).client(keys) and "
         ".server(keys), which connect, frame, send and reconnect for you; the "
         "frames are specified in docs/wire-format.md, and another program can use "
-        "snr.std_mods.comms.wire (encode_page, FrameDecoder) to speak them."
+        "snr.std_mods.codec (encode_page, FrameDecoder) to speak them."
     ),
 ):
     """Removed: SocketsPair's loops frame pages for you. Raises `RemovedApiError`.

@@ -38,8 +38,7 @@ from snr.core.component import Component
 from snr.core.node import NODE_CORE_NAME
 from snr.extras.graph.source_keys import key_uses, resolve
 from snr.prelude import AbstractComponent, AbstractConfig, DataKey, Role, TaskType
-from snr.std_mods.comms.comms_loop import CommsLoop
-from snr.std_mods.comms.link import LinkState
+from snr.std_mods.comms.comms_loop import CommsLoop, LinkState
 from snr.std_mods.comms.sockets import SocketsClientLoop, SocketsServerLoop
 
 __all__ = [

@@ -84,7 +84,7 @@ from snr.prelude import (
     WireFormatError,
 )
 from snr.prelude.install import install_hint
-from snr.std_mods.codec import PageEncoder, load_object, page_from_fields
+from snr.std_mods.codec import WIRE_VERSION, PageEncoder, load_object, page_from_fields
 from snr.std_mods.comms.comms_loop import (
     COMMS_CONNECTED,
     COMMS_DISCONNECTED,
@@ -93,7 +93,6 @@ from snr.std_mods.comms.comms_loop import (
     normalize_keys,
 )
 from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, derived_word, find_secret
-from snr.std_mods.comms.wire import WIRE_VERSION
 
 if TYPE_CHECKING:  # imported when a node starts: the extra is optional
     import zenoh

@@ -1,7 +1,7 @@
 """Communication between nodes: pipes and TCP sockets.
 
 Serial links and Zenoh are extras: ``snr.extras.serial`` and ``snr.extras.zenoh``.
-Every link that writes to a peer queues in the one `Outbox` (``outbox.py``).
+Every link that writes to a peer queues in the one `Outbox` (``comms_loop.py``).
 
 Example::
 
@@ -12,8 +12,8 @@ from snr.std_mods.comms.comms_loop import (
     COMMS_CONNECTED,
     COMMS_DISCONNECTED,
     CommsLoop,
+    Outbox,
 )
-from snr.std_mods.comms.outbox import Outbox
 from snr.std_mods.comms.pipe import (
     PipeLoop,
     PipeLoopFactory,

@@ -1,17 +1,20 @@
-"""`CommsLoop`: the comms component a node gets, forwarding pages by key over its links.
+"""`CommsLoop`, `Link`, `Outbox`: how a node forwards pages by key to its peers.
 
-A `CommsLoop` (thesis 6.4.1) forwards every page stored under its keys to
-each open `Link` (``link.py``: one live connection to one peer), and stores
-every page a link receives, with the page's original origin and time.
-`SocketsServerLoop`, `SocketsClientLoop` and `PipeLoop` are comms loops; they
-differ only in how they open their links.
+A `CommsLoop` (thesis 6.4.1) is the comms component a node gets. It forwards
+every page stored under its keys to each open `Link` (one live connection to
+one peer, over a `Transport` of ``io_loop.py``), and stores every page a link
+receives, with the page's original origin and time. A link queues frames in
+its `Outbox` (bounded, newest per key wins, drops counted) and has no thread
+of its own: the node's one `IOLoop` reads its transport when bytes arrive and
+writes when it has room. `SocketsServerLoop`, `SocketsClientLoop` and
+`PipeLoop` are comms loops; they differ only in how they open their links.
 
 How a page travels::
 
     node thread                          peer's I/O thread         peer's node thread
     store_page → CommsLoop.forward_page  →  frame bytes  →  decode → schedule(store_page)
-                 (encodes the very page       (written at once, or     → datastore
-                  that was stored)             by the I/O thread)      → process_data
+                 → Link.send → Outbox     (written at once, or     → datastore
+                                           by the I/O thread)      → process_data
 
 Example (what `SocketsPair` and `PipeLoopFactory` build for you)::
 
@@ -25,13 +28,16 @@ Example (what `SocketsPair` and `PipeLoopFactory` build for you)::
 
 from __future__ import annotations
 
+import collections
+import enum
 import logging
+import selectors
 import threading
 import time
-from typing import Any, Dict, List, Optional, Sequence, Set, Tuple, Union
+from typing import Any, Callable, Deque, Dict, List, Optional, Sequence, Set, Tuple, Union
 
 from snr.core import ThreadLoop, tasks
-from snr.core.logs import RateLimitedLog
+from snr.core.logs import LossReport, RateLimitedLog
 from snr.prelude import (
     AbstractFactory,
     AbstractNode,
@@ -45,23 +51,41 @@ from snr.prelude import (
     Task,
     TaskId,
     TaskType,
+    WireFormatError,
 )
-from snr.std_mods.comms.handshake import Refused
-from snr.std_mods.comms.io_loop import IOLoop
-from snr.std_mods.comms.link import Link, LinkState, Transport
-from snr.std_mods.comms.wire import Message, decode_body, encode_page
-
-_OPEN = LinkState.OPEN
-_STORE_PAGE = TaskType.store_page
+from snr.std_mods.codec import (
+    Beat,
+    Bye,
+    FrameDecoder,
+    Hello,
+    Message,
+    Proof,
+    decode_body,
+    encode_beat,
+    encode_bye,
+    encode_page,
+)
+from snr.std_mods.comms.handshake import Handshake, Refused
+from snr.std_mods.comms.io_loop import IOLoop, IOTimer, Transport, unread_bytes
+from snr.std_mods.comms.link_hints import watch_link
 
 __all__ = [
+    "CLOSED",
     "COMMS_CONNECTED",
     "COMMS_DISCONNECTED",
     "DEFAULT_DEAD_AFTER_S",
     "DEFAULT_MAX_BACKLOG_BYTES",
+    "FIRST",
+    "QUEUED",
+    "SENT",
     "CommsLoop",
     "Keys",
+    "Link",
+    "LinkState",
+    "Outbox",
+    "Write",
     "normalize_keys",
+    "shown_role",
 ]
 
 COMMS_CONNECTED = "comms_connected"
@@ -79,10 +103,12 @@ DEFAULT_MAX_BACKLOG_BYTES = 8 * 1024 * 1024
 """How many bytes of frames may wait for one slow peer before pages are dropped (8 MiB)."""
 
 DEFAULT_DEAD_AFTER_S = 4.0
+"""Seconds of silence after which a peer that promised beats counts as lost."""
+
+_STORE_PAGE = TaskType.store_page
 _NEWS_TICK_S = 0.5  # while news may be counted, how often its counts are looked at
 _NEWS_WINDOW_S = 10.0  # the longest window of the news logs (RateLimitedLog)
 _MAX_REFUSED_NOTED = 10_000  # refused peers remembered (so each is logged once)
-"""Seconds of silence after which a peer that promised beats counts as lost."""
 
 Keys = Union[DataKey, Sequence[DataKey], None]
 """What a comms factory takes as ``keys``: one data key, a list of them, or None."""
@@ -190,7 +216,6 @@ class CommsLoop(ThreadLoop):
         self.refusal_news = RateLimitedLog(self.log, burst=5, window_s=5.0)
         self.io_loop: Optional[IOLoop] = None  # the node's, while this component runs
         self._links_lock = threading.Lock()
-        self._opened: List[Link] = []  # every link that may not have ended yet
         self._forwarded = frozenset(self.keys)
         # Pages a link delivered under a forwarded key, until forward_page sees
         # them: {id(page): (page, link)} so they are not sent back to that link.
@@ -198,9 +223,42 @@ class CommsLoop(ThreadLoop):
         self._unsent_reported = False
         self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
         self.task_handlers = {(TaskType.store_page, key): self.forward_page for key in self.keys}
-        self.burst_handlers = {(TaskType.store_page, key): self.forward_burst for key in self.keys}
         if parent.profiler is not None:  # the profile also tells what was sent and dropped
             parent.profiler.add_report(name, self.stats_text)
+        self.burst_handlers = {(TaskType.store_page, key): self.forward_burst for key in self.keys}
+
+    def forward_burst(self, run: List[Task]) -> SomeTasks:
+        """`forward_page` for a run of pages under one key: encoded, then queued in one go.
+
+        The node calls it for ``store_page`` tasks that waited one behind the
+        other (a handler that stored many pages, a replayed recording), all
+        stored already. One link, open, and no page from a link to keep from
+        echoing (the usual pair sending its own pages): the frames go to the
+        link's outbox with one call. Anything else: page by page.
+
+        Example (the node calls it; a test may too)::
+
+            comms.forward_burst([tasks.store_page(page) for page in pages])
+        """
+        links = self.links
+        if len(links) != 1 or self._arrived or links[0].state is not _OPEN:
+            for task in run:
+                self.forward_page(task, (TaskType.store_page, task.name))
+            return None
+        link = links[0]
+        peer = link.peer_role
+        frames: List[bytes] = []
+        for task in run:
+            page = task.page()
+            if page is None or page.origin == peer:
+                continue  # a bad task (the node core said so), or the peer's own page
+            try:
+                frames.append(encode_page(page))
+            except NotSerializableError as error:
+                self._report_unsendable(page, error)
+        if frames:
+            link.send_burst(frames, run[0].name)
+        return None
 
     # -- node thread: sending -------------------------------------------------
     def forward_page(self, task: Task, key: TaskId) -> SomeTasks:
@@ -240,39 +298,6 @@ class CommsLoop(ThreadLoop):
             link.send(frame, True, page_key)  # a drop is counted and reported by the link
         return None
 
-    def forward_burst(self, run: List[Task]) -> SomeTasks:
-        """`forward_page` for a run of pages under one key: encoded, then queued in one go.
-
-        The node calls it for ``store_page`` tasks that waited one behind the
-        other (a handler that stored many pages, a replayed recording), all
-        stored already. One link, open, and no page from a link to keep from
-        echoing (the usual pair sending its own pages): the frames go to the
-        link's outbox with one call. Anything else: page by page.
-
-        Example (the node calls it; a test may too)::
-
-            comms.forward_burst([tasks.store_page(page) for page in pages])
-        """
-        links = self.links
-        if len(links) != 1 or self._arrived or links[0].state is not _OPEN:
-            for task in run:
-                self.forward_page(task, (TaskType.store_page, task.name))
-            return None
-        link = links[0]
-        peer = link.peer_role
-        frames: List[bytes] = []
-        for task in run:
-            page = task.page()
-            if page is None or page.origin == peer:
-                continue  # a bad task (the node core said so), or the peer's own page
-            try:
-                frames.append(encode_page(page))
-            except NotSerializableError as error:
-                self._report_unsendable(page, error)
-        if frames:
-            link.send_burst(frames, run[0].name)
-        return None
-
     def _report_unsent(self, page: Page) -> None:
         if not self._unsent_reported:
             self._unsent_reported = True
@@ -292,10 +317,8 @@ class CommsLoop(ThreadLoop):
     def deliver(self, link: Link, pages: List[Page]) -> None:
         """Store pages a link received (called by the thread that read them).
 
-        The link calls it only while the node's queue has room: while the
-        queue is over its high-water mark the link stops reading instead (the
-        bytes stay in the OS, TCP slows the sender, and nothing is lost on
-        this side), so the I/O thread never waits here.
+        The link calls it only while the node's queue has room (else it
+        stops reading: the bytes wait in the OS), so no thread waits here.
         """
         forwarded = self._forwarded
         if forwarded:
@@ -304,10 +327,7 @@ class CommsLoop(ThreadLoop):
                     self._arrived[id(page)] = (page, link)
         if len(pages) == 1:  # the usual read when pages come one at a time
             self.parent.schedule(Task(_STORE_PAGE, pages[0].key, pages))
-        elif not link.io.in_loop_thread():
-            # The node's thread read these while its queue was empty: one task
-            # for the lot, which the node core stores without a dispatch per
-            # page. (At most one read's worth: the queue stays bounded.)
+        elif not link.io.in_loop_thread():  # the idle node's thread read them: one task
             self.schedule(tasks.store_pages(pages))
         else:  # the I/O thread: one task each, so the queue's high-water mark counts pages
             self.schedule([Task(_STORE_PAGE, page.key, [page]) for page in pages])
@@ -344,7 +364,6 @@ class CommsLoop(ThreadLoop):
                 transport.close()
                 raise
             self.links = (*self.links, link)
-            self._opened = [old for old in self._opened if not old.is_closed()] + [link]
         self._unsent_reported = False
         link.start()
         if link.state is _OPEN:  # no handshake: pages may pass at once (else: announce)
@@ -361,8 +380,7 @@ class CommsLoop(ThreadLoop):
         """A peer was refused (I/O thread): log it once per peer, count it every time.
 
         A peer is its host, its role and why: a client that retries every
-        second is one line, however long it tries; many peers at once are
-        at most five lines in 5 s, then a count (`RateLimitedLog`).
+        second is one line; many peers are at most five lines in 5 s, then a count.
 
         Example (what the log says)::
 
@@ -412,12 +430,11 @@ class CommsLoop(ThreadLoop):
     def say(self, what: str, level: int, msg: str, *args: Any) -> None:
         """Log news of links (connects, hellos, losses) in full, unless it comes in a flood.
 
-        ``what`` names the kind of news, e.g. ``"Clients connected"``: each
-        line is logged in full while no more than 20 of its kind came in the
-        last 10 s; past that they are counted, and the count is logged once
-        every 10 s (see `RateLimitedLog`; `tick_news` says the last count). A
-        class of robots connecting is logged robot by robot; a program that
-        connects a thousand times a second costs a line every 10 s.
+        ``what`` names the kind of news, e.g. ``"Clients connected"``: up to
+        20 lines of a kind in 10 s are logged in full, then they are counted
+        and the count is logged every 10 s (`RateLimitedLog`). A class of
+        robots connecting is logged robot by robot; a program that connects a
+        thousand times a second costs a line every 10 s.
 
         Example::
 
@@ -439,9 +456,8 @@ class CommsLoop(ThreadLoop):
     def tick_news(self) -> None:
         """Log the counts of news that came in a flood, once their window has passed.
 
-        The node's I/O thread calls it every half second for a while after
-        news was counted rather than logged (`say`), and never otherwise:
-        quiet comms wake no thread for it.
+        The I/O thread calls it every half second while counted news may be
+        pending, and never otherwise: quiet comms wake no thread for it.
 
         Example::
 
@@ -459,12 +475,7 @@ class CommsLoop(ThreadLoop):
             if self._news_ticking or io is None:
                 return
             self._news_ticking = True
-        io.call_soon(self._tick_news_soon)
-
-    def _tick_news_soon(self) -> None:
-        io = self.io_loop
-        if io is not None:
-            io.call_later(_NEWS_TICK_S, self._tick_news_later)
+        io.call_soon(lambda: io.call_later(_NEWS_TICK_S, self._tick_news_later))
 
     def _tick_news_later(self) -> None:
         """I/O thread: say what a flood left counted; again soon while news may be pending."""
@@ -557,11 +568,1017 @@ class CommsLoop(ThreadLoop):
         for link in self.links:
             if not link.wait_closed(max(0.0, deadline - time.monotonic())):
                 link.abort()
-        with self._links_lock:
-            opened = list(self._opened)
-        for link in opened:  # aborted ones end on the I/O thread's next pass
+        for link in self.links:  # aborted ones end on the I/O thread's next pass
             link.wait_closed(max(0.1, deadline - time.monotonic()))
         self._release_io_loop()
         self.news.flush()  # what a flood of connections or bad frames left uncounted aloud
         self.bad_frame_news.flush()
         self.refusal_news.flush()
+
+
+# -- the outbox: frames waiting for one peer ------------------------------
+
+SENT = "sent"
+"""`Outbox.put`: written to the peer at once."""
+
+FIRST = "first"
+"""`Outbox.put`: queued into an empty outbox (the caller wakes its writer)."""
+
+QUEUED = "queued"
+"""`Outbox.put`: queued behind other frames (a writer is on its way)."""
+
+CLOSED = "closed"
+"""`Outbox.put`: not taken, the outbox is closed."""
+
+Write = Callable[[bytes], int]
+"""Writes what fits now and says how many bytes went (``socket.send``); BlockingIOError if none."""
+
+MAX_CHUNK_BYTES = 1024 * 1024
+"""``write_to`` joins waiting frames into chunks up to this size: one system call for many."""
+
+
+class _Entry:
+    """One waiting frame: its key (None: never pushed out) and its bytes (None once gone)."""
+
+    __slots__ = ("data", "key")
+
+    def __init__(self, key: Optional[DataKey], data: Optional[bytes]) -> None:
+        self.key = key
+        self.data = data
+
+
+class Outbox:
+    """Frames waiting to be written to one peer, oldest first; bounded, newest per key wins.
+
+    Every link that writes to a peer queues here: TCP, pipe and serial (the
+    policy and why: docs/design.md, "One outbox for every link"). When a new
+    frame does not fit, it pushes out the oldest frame waiting under its own
+    key, or, if its key has none waiting, the oldest of the key with the most
+    waiting: a flood under one key never pushes out the last value of
+    another. Frames with no key are never pushed out. ``put`` never blocks.
+
+    Safe from any thread: every change and every write happens under one
+    lock, so frames leave in the order they were put and each whole.
+
+    Example::
+
+        outbox = Outbox(1024, LossReport(log, "lines", "the board is not reading"))
+        if outbox.put(frame, key="depth_m", write=sock.send) == FIRST:
+            ...  # ask the writer to call outbox.write_to(sock.send)
+
+    Attributes:
+        max_bytes: how many bytes of frames may wait.
+        loss: where drops are reported (the numbers, at most once a second).
+        dropped: frames pushed out so far.
+        dropped_by_key: the same, per data key.
+        last_sent_at: when bytes last went to the peer (``time.monotonic()``).
+    """
+
+    def __init__(self, max_bytes: int, loss: LossReport) -> None:
+        self.max_bytes = max_bytes
+        self.loss = loss
+        self.dropped = 0
+        self.dropped_by_key: Dict[DataKey, int] = {}
+        self.last_sent_at = time.monotonic()
+        self.closed = False
+        self._entries: Deque[_Entry] = collections.deque()  # pushed-out ones stay, data None
+        self._by_key: Dict[DataKey, Deque[_Entry]] = {}  # waiting ones only, oldest first
+        self._live = 0  # entries still waiting
+        self._bytes = 0
+        self._lock = threading.Lock()
+        self._ready = threading.Condition(self._lock)  # for a writer thread in ``take``
+
+    def put(
+        self, frame: bytes, key: Optional[DataKey] = None, write: Optional[Write] = None
+    ) -> str:
+        """Queue ``frame``, or with ``write`` and nothing waiting, write it at once.
+
+        Returns `SENT`, `FIRST` (queued into an empty outbox: wake the
+        writer), `QUEUED` or `CLOSED`. A frame written in part is queued for
+        the rest, first in line and never pushed out.
+
+        Example::
+
+            outbox.put(b"speed 1\\n", key="speed")   # "first"
+        """
+        with self._lock:
+            if self.closed:
+                return CLOSED
+            if write is not None and not self._live:
+                try:
+                    sent = write(frame)
+                except OSError:  # full (BlockingIOError) or broken: the writer finds out
+                    sent = 0
+                if sent:
+                    self.last_sent_at = time.monotonic()
+                    if sent == len(frame):
+                        return SENT
+                    self._append(None, frame[sent:])
+                    return FIRST
+            first = not self._live
+            if self._bytes + len(frame) > self.max_bytes:
+                self._make_room(len(frame), key)
+            self._append(key, frame)
+        return FIRST if first else QUEUED
+
+    def put_all(self, frames: List[bytes], key: DataKey) -> str:
+        """`put` for a run of frames under ``key``, in order, with one lock; nothing is written.
+
+        Example::
+
+            outbox.put_all([encode_page(page) for page in pages], "depth")
+        """
+        size = 0
+        for frame in frames:
+            size += len(frame)
+        with self._lock:
+            if self.closed:
+                return CLOSED
+            first = not self._live
+            if self._bytes + size <= self.max_bytes:  # the usual case: all fit
+                run = [_Entry(key, frame) for frame in frames]
+                self._entries.extend(run)
+                waiting = self._by_key.get(key)
+                if waiting is None:
+                    self._by_key[key] = collections.deque(run)
+                else:
+                    waiting.extend(run)
+                self._live += len(run)
+                self._bytes += size
+            else:  # room is made frame by frame, so each drop is decided as in put
+                for frame in frames:
+                    if self._bytes + len(frame) > self.max_bytes:
+                        self._make_room(len(frame), key)
+                    self._append(key, frame)
+            if first:
+                self._ready.notify()
+        return FIRST if first else QUEUED
+
+    def put_first(self, frame: bytes) -> None:
+        """Queue ``frame`` before everything waiting, never to be pushed out (e.g. a header).
+
+        Example::
+
+            outbox.put_first(b'{"format":"snr-pages","version":1}\\n')
+        """
+        with self._lock:
+            if not self.closed:
+                self._entries.appendleft(_Entry(None, frame))
+                self._live += 1
+                self._bytes += len(frame)
+                self._ready.notify()
+
+    def _append(self, key: Optional[DataKey], frame: bytes) -> None:
+        entry = _Entry(key, frame)
+        self._entries.append(entry)
+        if key is not None:
+            waiting = self._by_key.get(key)
+            if waiting is None:
+                self._by_key[key] = collections.deque((entry,))
+            else:
+                waiting.append(entry)
+        self._live += 1
+        self._bytes += len(frame)
+        if self._live == 1:
+            self._ready.notify()
+
+    def _make_room(self, size: int, key: Optional[DataKey]) -> None:
+        """Push out frames, oldest first, of ``key`` or else of the key with the most waiting."""
+        pushed_out = 0
+        by_key = self._by_key
+        while by_key and self._bytes + size > self.max_bytes:
+            victim_key = key if key in by_key else max(by_key, key=lambda k: len(by_key[k]))
+            victims = by_key[victim_key]
+            self._gone(victims.popleft())
+            if not victims:
+                del by_key[victim_key]
+            pushed_out += 1
+            self.dropped_by_key[victim_key] = self.dropped_by_key.get(victim_key, 0) + 1
+        if pushed_out:
+            self.dropped += pushed_out
+            if len(self._entries) > 2 * self._live + 64:  # forget the pushed-out ones now and then
+                self._entries = collections.deque(e for e in self._entries if e.data is not None)
+            self.loss.dropped(pushed_out)
+
+    def _gone(self, entry: _Entry) -> None:
+        """``entry`` leaves (written or pushed out); the deque forgets it when it reaches it."""
+        if entry.data is not None:
+            self._bytes -= len(entry.data)
+            entry.data = None
+            self._live -= 1
+
+    def write_to(self, write: Write) -> bool:
+        """Write what ``write`` takes now, many frames a call; True once nothing waits.
+
+        What does not fit stays first in line (its key can no longer push it out).
+
+        Raises:
+            OSError: the peer is gone (not BlockingIOError: a full buffer means "later").
+
+        Example::
+
+            outbox.write_to(sock.send)   # True: all written
+        """
+        with self._lock:
+            while self._live:
+                parts: List[bytes] = []
+                size = 0
+                for entry in self._entries:
+                    if size >= MAX_CHUNK_BYTES:
+                        break
+                    if entry.data is not None:
+                        parts.append(entry.data)
+                        size += len(entry.data)
+                try:
+                    sent = write(parts[0] if len(parts) == 1 else b"".join(parts))
+                except BlockingIOError:
+                    return False
+                if sent:
+                    self.last_sent_at = time.monotonic()
+                self._consume(sent)
+                if sent < size:
+                    return False
+            return True
+
+    def _consume(self, sent: int) -> None:
+        """Forget the first ``sent`` bytes of what waits (a frame written in part stays)."""
+        entries = self._entries
+        while entries:
+            entry = entries[0]
+            data = entry.data
+            if data is not None:
+                if sent < len(data):
+                    if sent:  # the rest goes first next time; its key no longer pushes it out
+                        entry.data = data[sent:]
+                        self._bytes -= sent
+                        self._unkey(entry)
+                    return
+                sent -= len(data)
+                self._unkey(entry)
+                self._gone(entry)
+            entries.popleft()
+
+    def _unkey(self, entry: _Entry) -> None:
+        """``entry``, the oldest waiting of its key, leaves its key's line."""
+        key = entry.key
+        if key is not None:
+            entry.key = None
+            waiting = self._by_key.get(key)
+            if waiting and waiting[0] is entry:
+                waiting.popleft()
+                if not waiting:
+                    del self._by_key[key]
+
+    def take(self, timeout_s: Optional[float] = None) -> Optional[bytes]:
+        """For a writer thread: the oldest frame, waiting up to ``timeout_s`` for one.
+
+        Returns None when ``timeout_s`` passed, or the outbox is closed and empty.
+
+        Example::
+
+            line = outbox.take(0.25)   # the serial link's writer thread
+        """
+        with self._lock:
+            if not self._live and not self.closed:
+                self._ready.wait(timeout_s)
+            while self._entries:
+                entry = self._entries.popleft()
+                if entry.data is not None:
+                    data = entry.data
+                    self._unkey(entry)
+                    self._gone(entry)
+                    return data
+            return None
+
+    def close(self, discard: bool = False) -> int:
+        """Take no more frames; with ``discard``, forget those waiting. How many were forgotten.
+
+        A writer thread in ``take`` gets what is left, then None.
+
+        Example::
+
+            outbox.close(discard=True)   # 3
+        """
+        with self._lock:
+            self.closed = True
+            forgotten = 0
+            if discard:
+                forgotten = self._live
+                self._entries.clear()
+                self._by_key.clear()
+                self._live = self._bytes = 0
+            self._ready.notify_all()
+            return forgotten
+
+    @property
+    def queued_bytes(self) -> int:
+        """Bytes of frames waiting to be written."""
+        return self._bytes
+
+    def __len__(self) -> int:
+        """How many frames wait to be written."""
+        return self._live
+
+
+# -- the link: one connection to one peer ------------------------------
+
+_WRITE_NOW_BYTES = 64 * 1024  # the node's thread writes a backlog this big before it goes idle
+_BURST_S = 0.0002  # a frame this soon after the last send joins a batch for the I/O thread
+_TICK_S = 0.25  # the shortest wait between two looks at a link's beat, silence and drops
+_LATE_S = 0.001  # a look at a deadline comes just after it, so the limit has passed
+_READ = selectors.EVENT_READ
+_WRITE = selectors.EVENT_WRITE
+_MAX_KEYS_NOTED = 1000  # DEBUG: how many received keys a link remembers for the hints
+_PROGRESS_BYTES = 16 * 1024  # this much of a frame still arriving is a sign of life (a big frame)
+_SHOWN_ROLE_CHARS = 60  # a peer's role in log lines is cut to this many characters
+
+
+def shown_role(role: str) -> str:
+    """A peer's role as log lines show it: quoted, and cut short if it is long.
+
+    A role is whatever the peer's hello said; a hostile or broken peer may
+    send megabytes of it, which must not be copied into every log line.
+
+    Example::
+
+        shown_role("urov")        # "'urov'"
+        shown_role("x" * 5000)    # "'xxx…xxx'… (5,000 characters)"
+    """
+    if len(role) <= _SHOWN_ROLE_CHARS:
+        return repr(role)
+    return f"{role[:_SHOWN_ROLE_CHARS]!r}… ({len(role):,} characters)"
+
+
+class LinkState(enum.Enum):
+    """Where a link is in its life: one value, moved by the methods named below.
+
+    ======== ================================================ ==========================
+    state    the link                                         moves on to
+    ======== ================================================ ==========================
+    HELLO    waits for the peer's hello (and proof, with a    OPEN, ENDING, CLOSED
+             secret): sends no page, takes none
+    OPEN     sends pages, reads, beats, judges silence        CLOSING, ENDING, CLOSED
+    CLOSING  ``close()``: writes what waits, then a bye       DRAINING, ENDING, CLOSED
+    DRAINING all written, half-closed: reads what still comes CLOSED (after ``drain_s``)
+    ENDING   ``abort()``, or the node's thread found the end: CLOSED (on the I/O thread)
+             no more reads; the I/O thread finishes it
+    CLOSED   transport closed, the `CommsLoop` told           (the end)
+    ======== ================================================ ==========================
+
+    Whether the link reads is the one other thing that changes: it stops
+    while pages it read wait for room in the node's queue (``Link._held``).
+
+    A link whose node names no system and has no secret starts OPEN (as
+    older SNR did); any other starts in HELLO (docs/comms.md, "Who may connect").
+
+    Example::
+
+        link.state is LinkState.OPEN
+    """
+
+    HELLO = "hello"
+    OPEN = "open"
+    CLOSING = "closing"
+    DRAINING = "draining"
+    ENDING = "ending"
+    CLOSED = "closed"
+
+
+_OPEN, _CLOSING, _DRAINING = LinkState.OPEN, LinkState.CLOSING, LinkState.DRAINING
+_HELLO = LinkState.HELLO
+_LIVE = (LinkState.HELLO, LinkState.OPEN)  # looked at on a clock (silence, beats, handshake)
+_ENDED = (LinkState.ENDING, LinkState.CLOSED)  # no more reading or writing
+
+
+class Link:
+    """One live connection to one peer, served by the node's `IOLoop` (no thread of its own).
+
+    The I/O loop reads the link's transport when bytes arrive, cuts them into
+    frames and hands pages to the `CommsLoop`; it writes queued frames when
+    the transport has room. The link ends on the loop's thread when the peer
+    goes away, a bad length header arrives, the peer falls silent, or the
+    link is closed or aborted: it closes the transport and tells the
+    `CommsLoop`.
+
+    Liveness: both sides promise a sign of life in their hello (``beat_s``);
+    a link that has sent nothing for that long sends a beat. A sign of life
+    is a whole frame, or 16 KiB more of one still arriving (a big page on
+    slow Wi-Fi). A connection with no well-formed frame within
+    ``hello_timeout_s`` is closed; a peer that promised beats and is silent
+    for ``max(dead_after_s, 3 * its beat_s)`` is lost (also while pages flow
+    the other way), and the log says how many pages may have been lost.
+
+    Goodbye: a link closed in order sends a bye frame last, to a peer whose
+    hello said it understands one, so that peer logs the end as news.
+
+    Backpressure: while the node's queue is over its high-water mark the
+    link stops reading (the bytes wait in the OS, TCP slows the sender) and
+    reads on once there is room. Meanwhile bytes piling up in the OS are the
+    peer's sign of life; bytes that wait without growing are judged once read.
+
+    Example::
+
+        link = Link(comms_loop, transport)
+        link.start()
+        link.send(encode_page(page), key=page.key)
+        link.close()              # flush, then end the connection
+
+    Attributes:
+        pages_sent: pages handed to the transport or queued for it.
+        pages_received: pages that arrived.
+        keys_received: in DEBUG mode, the keys of the pages that arrived (up to
+            1,000, for the hints of ``link_hints.py``); None otherwise.
+        went_silent: the link was closed because the peer fell silent.
+        refusal: why the peer was refused (another system, no or a wrong
+            secret, a page before the handshake ended), or None.
+        announced: the link reached OPEN and COMMS_CONNECTED was scheduled.
+        peer_said_bye: the peer sent a bye: the end that follows is orderly.
+        loss: the `LossReport` of pages dropped because the peer fell behind.
+    """
+
+    flush_timeout_s: float = 1.0
+    drain_s: float = 0.25  # after a graceful half-close, how long to read what still comes
+
+    def __init__(self, owner: CommsLoop, transport: Transport) -> None:
+        io = owner.io_loop
+        if io is None:
+            raise CommsError(
+                f"Cannot open a link for comms component {owner.name!r}: it is not running "
+                "(it was never started, or it has stopped)."
+            )
+        self.owner = owner
+        self.io: IOLoop = io
+        self.transport = transport
+        self.peer_role: Optional[str] = None
+        self.hello_at: Optional[float] = None  # when the peer's hello arrived
+        self.peer_beat_s: Optional[float] = None
+        self.state = LinkState.OPEN
+        self.bad_frames = 0
+        self.went_silent = False
+        self.refusal: Optional[Refused] = None
+        self.announced = False
+        self.peer_said_bye = False
+        self._peer_takes_bye = False  # its hello said it understands a bye frame
+        self.pages_sent = 0
+        self.pages_received = 0
+        self.keys_received: Optional[Set[DataKey]] = None
+        self.opened_at = self.last_heard = self._progress_at = time.monotonic()
+        self._heard_frame = False  # a well-formed frame has arrived (for the hello timeout)
+        self._progress = 0  # bytes of a frame still arriving, since the peer was last heard
+        self._sent_when_heard = 0
+        self.loss = LossReport(
+            owner.log,
+            f"pages for {transport.peer}",
+            "the peer is not taking them as fast as they are stored "
+            f"({owner.max_backlog_bytes // 1024:,} KiB wait to be sent; the newest page "
+            "under each key is kept)",
+        )
+        self._closed = threading.Event()
+        self._decoder = FrameDecoder()
+        self._unread_seen = 0  # while paused: bytes the OS held for us at the last look
+        self._held: List[Page] = []  # read while the node was behind: no more reads until sent
+        self._timer: Optional[IOTimer] = None
+        self._tick_s = min(_TICK_S, owner.beat_s / 4)
+        self._answer_due = False  # the peer was heard since the last send: answer at once
+        self.outbox = Outbox(owner.max_backlog_bytes, self.loss)
+        self.handshake = Handshake(owner.parent.role, owner.side, owner.system, owner.secret)
+        if self.handshake.needed:  # no page passes either way until the peer is judged
+            self.state = LinkState.HELLO
+        self.outbox.put(self.handshake.hello_frame(owner.beat_s))
+
+    @property
+    def label(self) -> str:
+        """The peer for log lines: ``"'receiver' at 127.0.0.1:9000"``."""
+        if self.peer_role:
+            return f"{shown_role(self.peer_role)} at {self.transport.peer}"
+        return self.transport.peer
+
+    @property
+    def peer_name(self) -> str:
+        """The peer's role for log lines (quoted, cut short), or ``"unknown"`` before its hello.
+
+        Example::
+
+            link.peer_name   # "'urov'"
+        """
+        return shown_role(self.peer_role) if self.peer_role else "unknown"
+
+    def fileno(self) -> int:
+        """The transport's file descriptor (what the I/O loop watches)."""
+        return self.transport.fileno()
+
+    def start(self) -> None:
+        """Hand the link to the node's I/O loop, which sends the hello and starts reading."""
+        self.io.call_soon(self._attach)
+
+    def send(self, frame: bytes, now: bool = True, key: Optional[DataKey] = None) -> bool:
+        """Send or queue a page's ``frame`` (node thread); False if the link is not open.
+
+        If the backlog is full, older frames make room (see `Outbox`): they
+        are counted and reported (at most once a second).
+
+        Example::
+
+            link.send(encode_page(page), key=page.key)
+        """
+        if self.state is not _OPEN:
+            return False
+        outbox = self.outbox
+        # A frame right behind another waits for one joined send; a frame after
+        # a pause goes at once, and so does a reply (a fast ping-pong would
+        # otherwise look like a burst and pay a trip through the I/O thread).
+        write = None
+        if now and (self._answer_due or time.monotonic() - outbox.last_sent_at >= _BURST_S):
+            self._answer_due = False
+            write = self.transport.send
+        outcome = outbox.put(frame, key, write)
+        if outcome == CLOSED:
+            return False
+        self.pages_sent += 1
+        if outcome == FIRST:
+            self._wake_writer()
+        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self.io.events(self) & _WRITE:
+            self.write_waiting()  # a long burst: do not wait for the node to go idle
+        return True
+
+    def send_burst(self, frames: List[bytes], key: DataKey) -> None:
+        """`send` for the frames of a run of pages under ``key`` (node thread), with one lock.
+
+        They leave when the node's thread next goes idle, or at once once
+        64 KiB wait.
+
+        Example::
+
+            link.send_burst([encode_page(page) for page in pages], "depth")
+        """
+        if self.state is not _OPEN:
+            return
+        outbox = self.outbox
+        outcome = outbox.put_all(frames, key)
+        if outcome == CLOSED:
+            return
+        self.pages_sent += len(frames)
+        if outcome == FIRST:
+            self._wake_writer()
+        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self.io.events(self) & _WRITE:
+            self.write_waiting()
+
+    def close(self) -> None:
+        """Send what is queued and a goodbye, then end the connection (graceful)."""
+        if self.state is _HELLO:  # no page was sent yet: nothing to flush
+            self.abort("the link was closed during its handshake")
+        elif self.state is _OPEN:
+            self.state = _CLOSING
+            if self._peer_takes_bye:  # older peers never get a frame they do not know
+                self._put_control(encode_bye())
+            self.outbox.close()
+            self.io.call_soon(self._flush_then_end)
+
+    def abort(self, reason: str = "the link was closed") -> None:
+        """End the connection now, dropping what is queued; ``reason`` goes in the log line."""
+        if self.state not in _ENDED:
+            self.state = LinkState.ENDING
+            self.outbox.close(discard=True)
+            self.io.call_soon(lambda: self._finish(reason))
+
+    def is_closed(self) -> bool:
+        """True once the link has ended and the transport is closed."""
+        return self._closed.is_set()
+
+    def wait_closed(self, timeout_s: Optional[float]) -> bool:
+        """Wait up to ``timeout_s`` for the link to close; True if it has."""
+        return self._closed.wait(timeout_s)
+
+    def stats(self) -> Dict[str, Any]:
+        """The link's counters, e.g. for the console's ``stats`` command.
+
+        Example::
+
+            link.stats()["dropped"]   # pages dropped because the peer fell behind
+        """
+        return {
+            "peer": self.label,
+            "state": self.state.value,
+            "pages_sent": self.pages_sent,
+            "pages_received": self.pages_received,
+            "dropped": self.outbox.dropped,
+            "dropped_by_key": dict(self.outbox.dropped_by_key),
+            "waiting_frames": len(self.outbox),
+            "waiting_bytes": self.outbox.queued_bytes,
+            "bad_frames": self.bad_frames,
+            "heard_s_ago": round(time.monotonic() - self.last_heard, 3),
+        }
+
+    # -- writing ---------------------------------------------------------------
+    def _put_control(self, frame: bytes) -> None:
+        """Queue a frame that is not a page (bye, beat, proof), never pushed out."""
+        if self.outbox.put(frame, None, self.transport.send) == FIRST:
+            self._wake_writer()
+
+    def _wake_writer(self) -> None:
+        # The outbox stopped being empty. The node's thread writes it itself
+        # before it sleeps, or the loop's thread a moment later (write_soon).
+        if self.io.in_loop_thread():
+            self._want_write()
+        else:
+            self.io.write_soon(self)
+
+    def write_waiting(self) -> None:
+        """Write queued frames now without blocking (not on the loop's thread).
+
+        What does not fit is left to the loop's thread, which writes it when
+        the transport has room; after the link has ended the outbox is empty.
+        """
+        if not len(self.outbox):
+            return
+        try:
+            done = self.outbox.write_to(self.transport.send)
+        except OSError:  # broken: the loop's thread finds out and ends the link
+            done = False
+        if not done:
+            self.io.call_soon(self._want_write)
+
+    def _want_write(self) -> None:
+        if self.state not in _ENDED and len(self.outbox):
+            self.io.watch(self, self.io.events(self) | _WRITE)
+
+    def on_writable(self) -> None:
+        """I/O thread: write what is queued; stop watching for room once it is all out."""
+        try:
+            self._write()
+        except Exception as error:  # a bug must not kill the node silently
+            self._failed(error)
+
+    def _write(self) -> None:
+        if self.state in _ENDED:
+            return
+        try:
+            done = self.outbox.write_to(self.transport.send)
+        except OSError as error:
+            self._finish(f"{type(error).__name__}: {error}")
+            return
+        events = self.io.events(self)
+        if not done:
+            if not events & _WRITE:
+                self.io.watch(self, events | _WRITE)
+            return
+        if events & _WRITE:
+            self.io.watch(self, events & ~_WRITE)
+        self._check_recovered()
+        if self.state is _CLOSING:
+            self._end_writing()
+
+    # -- life: deadlines, beats, the end (I/O thread) --------------------------
+    def _attach(self) -> None:
+        if self.state in _ENDED:  # aborted before the loop got to it
+            return
+        self.io.watch(self, _READ)
+        self._timer = self.io.call_later(self.owner.hello_timeout_s + _LATE_S, self._tick)
+        self.on_writable()  # the hello goes at once
+
+    def _flush_then_end(self) -> None:
+        if self.state is _CLOSING and not len(self.outbox):
+            self._end_writing()
+
+    def _end_writing(self) -> None:
+        """CLOSING, everything sent: half-close, then read what still comes for a moment."""
+        if self.state is not _CLOSING:
+            return
+        self.state = _DRAINING
+        self.transport.end_writing()
+        if self._timer is not None:
+            self._timer.cancel()
+        self._timer = self.io.call_later(self.drain_s, lambda: self._finish("the link was closed"))
+
+    def _tick(self) -> None:
+        """At the link's next deadline: is the peer still there, and do we owe it a beat?"""
+        self._timer = None
+        if self.state in _ENDED:
+            return
+        silence = self._silence_while_paused() if self._held else self._silence()
+        if silence is not None:
+            self._finish(silence)
+            return
+        if self.state in _LIVE:
+            if (
+                self.state is _OPEN
+                and self.peer_beat_s is not None
+                and not len(self.outbox)
+                and time.monotonic() - self.outbox.last_sent_at >= self.owner.beat_s
+            ):
+                self._put_control(encode_beat())  # quiet for beat_s: a sign of life
+            self._check_recovered()
+            self._timer = self.io.call_later(self._next_look_s(), self._tick)
+
+    def _look_again(self) -> None:
+        """Put the next look at the link's first deadline (they moved)."""
+        if self._timer is not None and self.state in _LIVE:  # (else it is the drain's timer)
+            self._timer.cancel()
+            self._timer = self.io.call_later(self._next_look_s(), self._tick)
+
+    def _next_look_s(self) -> float:
+        """Seconds until the link's first deadline: a beat owed, a silence or hello limit.
+
+        While pages are held or dropped, every quarter beat (their counts move
+        without a frame); a deadline already past, a quarter beat later.
+        """
+        if self._held or self.loss.dropping:
+            return self._tick_s
+        owner = self.owner
+        due = []
+        if not self._heard_frame:
+            due.append(self._progress_at + owner.hello_timeout_s)
+        if self.state is _HELLO:
+            due.append(self.opened_at + owner.hello_timeout_s)
+        if self.peer_beat_s is not None:
+            due.append(self.outbox.last_sent_at + owner.beat_s)
+            due.append(self.last_heard + max(owner.dead_after_s, 3 * self.peer_beat_s))
+        wait_s = min(due) + _LATE_S - time.monotonic() if due else 0.0
+        return wait_s if wait_s > 0 else self._tick_s
+
+    def _check_recovered(self) -> None:
+        # The peer has caught up: everything queued went out, nothing dropped for a while.
+        if self.loss.dropping and not len(self.outbox):
+            self.loss.recovered(quiet_s=self.owner.recovered_after_s)
+
+    def on_io_stop(self) -> None:
+        """The I/O loop is stopping: end the link now."""
+        self._finish("the node stopped")
+
+    def _end(self, reason: str) -> None:
+        """End the link: at once on the I/O loop's thread, else soon, by that thread."""
+        if self.io.in_loop_thread():
+            self._finish(reason)
+        else:  # the node's thread, reading while idle, leaves it to the loop's
+            self.state = LinkState.ENDING  # and reads it no more meanwhile
+            self.io.call_soon(lambda: self._finish(reason))
+
+    def _finish(self, reason: str) -> None:
+        """Any state → CLOSED, on the I/O thread: close the transport, tell the `CommsLoop`."""
+        if self.state is LinkState.CLOSED:
+            return
+        with self.io.read_role():  # nobody reads the socket while it closes
+            if self.peer_said_bye:
+                reason = "it said goodbye (its node is stopping)"
+            elif self.state in (_CLOSING, _DRAINING) and not self.went_silent:
+                reason = reason if reason.startswith("the peer") else "the link was closed"
+            self.state = LinkState.CLOSED
+            self.outbox.close(discard=True)
+            if self._timer is not None:
+                self._timer.cancel()
+            self.io.forget(self)
+            # Closing a socket with unread bytes makes the OS reset the
+            # connection, and the peer may then lose what it has not read yet.
+            for _ in range(16):
+                try:
+                    if not self.transport.recv_into(self.io.buffer):
+                        break
+                except OSError:
+                    break
+            try:
+                self.transport.close()
+            except OSError:
+                pass
+        self.loss.ended("the link ended")  # drops not yet in the log are said now
+        self._closed.set()
+        self.owner.link_closed(self, reason)
+
+    # -- reading (whoever holds the I/O loop's read role) ----------------------
+    def on_readable(self) -> None:
+        """Read what arrived, cut it into frames, hand the pages on."""
+        try:
+            self._read()
+        except Exception as error:  # a bug must not kill the node silently
+            self._failed(error)
+
+    def _failed(self, error: Exception) -> None:
+        self.owner.log.exception("Link to %s failed", self.label)
+        self._end(f"unexpected {type(error).__name__}: {error}")
+
+    def _read(self) -> None:
+        # The I/O loop's thread, or the node's while it is idle: anything
+        # else (ending the link, pausing) is left to the loop's thread.
+        if self.state in _ENDED or self._held:
+            return
+        try:
+            count = self.transport.recv_into(self.io.buffer)
+        except BlockingIOError:
+            return
+        except OSError as error:
+            self._end(f"{type(error).__name__}: {error}")
+            return
+        decoder = self._decoder
+        if not count:
+            if decoder.pending_bytes():
+                self._bad_frame(
+                    WireFormatError(
+                        "the connection ended in the middle of a frame "
+                        f"({decoder.pending_bytes()} bytes of it arrived)"
+                    )
+                )
+            self._end("the peer closed the connection")
+            return
+        self._answer_due = True
+        bodies: List[bytes] = []
+        pages: List[Page] = []
+        try:
+            decoder.cut_frames(self.io.view[:count].tobytes(), bodies)
+        except WireFormatError as error:  # a bad length: the stream is lost
+            self._decode_bodies(bodies, pages)
+            self._bad_frame(error, resetting=True)
+            self._deliver(pages)
+            self._end(f"reset after a bad frame ({error})")
+            return
+        if bodies:  # a sign of life is a whole frame (wire format 3.3)...
+            self._heard(time.monotonic())
+        else:  # ...or 16 KiB more of one still arriving; a trickle adds up too slowly
+            self._progress += count
+            if self._progress >= _PROGRESS_BYTES:
+                self._progress_at = now = time.monotonic()
+                self._heard(now)
+        self._decode_bodies(bodies, pages)
+        if pages and self.state not in _ENDED:  # (a refused peer's pages are not stored)
+            self._heard_frame = True
+            self._deliver(pages)
+
+    def _heard(self, now: float) -> None:
+        self.last_heard = now
+        self._sent_when_heard = self.pages_sent
+        self._progress = 0
+
+    def _decode_bodies(self, bodies: List[bytes], pages: List[Page]) -> None:
+        """Decode each frame body: pages go to ``pages``, hellos and byes are acted on."""
+        decode = self.owner.decode_message
+        for body in bodies:
+            try:
+                message = decode(body)
+            except WireFormatError as error:
+                if self.state is _HELLO:  # before the handshake ends, a bad frame ends it
+                    self._refuse(Refused("order", f"a bad frame before its hello: {error}"))
+                    return
+                self._bad_frame(error)
+                continue
+            except Exception as error:  # a bug in decoding: say so, and lose no other frame
+                self.owner.log.exception("Decoding a frame from %s failed", self.label)
+                self._bad_frame(WireFormatError(f"it could not be decoded ({error!r:.80})"))
+                continue
+            if message.__class__ is Page and self.state is not _HELLO:
+                pages.append(message)
+            else:
+                self._on_message(message)
+                if self.state in _ENDED:  # refused: nothing more it sent is looked at
+                    pages.clear()
+                    return
+
+    def _deliver(self, pages: List[Page]) -> None:
+        if not pages:
+            return
+        self.pages_received += len(pages)
+        noted = self.keys_received
+        if noted is not None and len(noted) < _MAX_KEYS_NOTED:
+            noted.update([page.key for page in pages])
+        if self._held or not self.owner.parent.wait_for_room(0):
+            # The node is behind: keep these, read no more until it has room.
+            first = not self._held
+            self._held.extend(pages)
+            if first and self.io.in_loop_thread():
+                self._stop_reading()
+            elif first:
+                self.io.call_soon(self._stop_reading)
+            return
+        self.owner.deliver(self, pages)
+
+    def _stop_reading(self) -> None:
+        if self.state not in _ENDED:
+            self.io.watch(self, self.io.events(self) & ~_READ)
+            self._unread_seen = 0
+            self.io.when_room(self._resume)
+
+    def _resume(self) -> None:
+        if self.state in _ENDED:
+            return
+        if self._note_unread() != 0:  # what waits is read next: news of the peer
+            self.last_heard = time.monotonic()
+        held, self._held = self._held, []
+        if held:
+            self.owner.deliver(self, held)
+        self.io.watch(self, self.io.events(self) | _READ)
+
+    def _note_unread(self) -> Optional[int]:
+        """Bytes waiting unread in the OS (None if it cannot say); more than last time is life."""
+        unread = unread_bytes(self.transport.fileno())
+        if unread is not None:
+            if unread > self._unread_seen:
+                self.last_heard = time.monotonic()
+            self._unread_seen = unread
+        return unread
+
+    def _silence_while_paused(self) -> Optional[str]:
+        """`_silence` for a link that does not read: judged only while nothing waits unread."""
+        unread = self._note_unread()
+        if unread is None or unread:
+            return None
+        return self._silence()
+
+    def _silence(self) -> Optional[str]:
+        """Why the link is lost if the peer has been quiet too long, else None."""
+        now = time.monotonic()
+        limit_s = self.owner.hello_timeout_s
+        if self.state is _HELLO and now - self.opened_at > limit_s:
+            return f"it did not finish the hello (and proof) within {limit_s:g} s of connecting"
+        # Nothing well-formed yet, and no big first frame still coming in steadily:
+        if not self._heard_frame and now - self._progress_at > limit_s:
+            return (
+                f"it sent no well-formed frame, not even a hello, within {limit_s:g} s "
+                "of connecting"
+            )
+        if self.peer_beat_s is None:
+            return None  # a peer that promised no beats may be quiet for ever
+        quiet_s = now - self.last_heard
+        if quiet_s <= max(self.owner.dead_after_s, 3 * self.peer_beat_s):
+            return None
+        at_risk = self.pages_sent - self._sent_when_heard
+        self.went_silent = True
+        return (
+            f"nothing heard from it for {quiet_s:.1f} s, though it promised a sign of life "
+            f"every {self.peer_beat_s:g} s (the network path is gone, or the peer froze); "
+            f"{at_risk} pages sent since it was last heard from may be lost"
+        )
+
+    # -- the handshake, and frames that are not pages --------------------------
+    def _on_message(self, message: Message) -> None:
+        """A frame that is not a page (or a page before the handshake ended)."""
+        self._heard_frame = True
+        if self.state is _HELLO and not isinstance(message, (Hello, Proof, Beat, Bye)):
+            what = "a page" if isinstance(message, Page) else "a frame"
+            self._refuse(Refused("order", f"it sent {what} before the handshake ended"))
+        elif isinstance(message, Proof):
+            if self.state is not _HELLO:  # once open, a proof is a mistake, not a danger
+                self._bad_frame(WireFormatError("a proof frame after the handshake ended"))
+                return
+            try:
+                self.handshake.on_proof(message)
+            except Refused as refusal:
+                self._refuse(refusal)
+                return
+            self._handshake_done()
+        elif isinstance(message, Hello):
+            if self.peer_role is not None:  # said once per connection; more is a mistake
+                if message.role != self.peer_role:
+                    self._bad_frame(
+                        WireFormatError(
+                            f"a second hello, from role {shown_role(message.role)}; this "
+                            f"connection is {shown_role(self.peer_role)}'s and stays so"
+                        )
+                    )
+                return
+            self.peer_role = message.role
+            self.peer_beat_s = message.beat_s
+            self._peer_takes_bye = message.bye
+            try:
+                proof = self.handshake.on_hello(message)
+            except Refused as refusal:
+                self._refuse(refusal)
+                return
+            if proof is not None:  # our answer to its challenge; its answer comes next
+                self._put_control(proof)
+            if self.handshake.done:
+                self._handshake_done()
+        elif isinstance(message, Bye):
+            self.peer_said_bye = True
+
+    def _handshake_done(self) -> None:
+        """The peer is one of ours: pages may pass (HELLO → OPEN), say so once."""
+        self.hello_at = time.monotonic()
+        if self.state is _HELLO:
+            self.state = _OPEN
+            self.owner.announce(self)
+        self.io.call_soon(self._look_again)  # beats are owed from now on
+        self.owner.on_hello(self)
+        watch_link(self.owner, self)
+
+    def _refuse(self, refusal: Refused) -> None:
+        """The peer may not link here: say why (once per peer), count it, close the connection.
+
+        Nothing it sent is stored: pages read with the refused frame are dropped.
+        """
+        if self.state in _ENDED:
+            return
+        self.refusal = refusal
+        self.owner.on_refused(self, refusal)
+        self.abort(f"refused: {refusal.reason}")
+
+    def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
+        # Said by the component, not per link: sixty hostile connections must
+        # not write five lines each (at most five a 5 s, then a count).
+        self.bad_frames += 1
+        count = self.bad_frames
+        self.owner.say_bad_frame(
+            "Connections reset after a bad frame" if resetting else "Bad frames",
+            logging.WARNING,
+            "Bad frame from %s: %s (%s; the node keeps running%s; see docs/wire-format.md)",
+            self.label,
+            error,
+            "reset the connection" if resetting else "dropped the frame",
+            f"; {count} bad frames from this peer so far" if count > 1 else "",
+        )

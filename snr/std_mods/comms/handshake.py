@@ -32,7 +32,7 @@ from pathlib import Path
 from typing import Any, Optional
 
 from snr.prelude import ConfigError
-from snr.std_mods.comms.wire import Hello, Proof, encode_hello, encode_proof
+from snr.std_mods.codec import Hello, Proof, encode_hello, encode_proof
 
 __all__ = [
     "FROM_ENVIRONMENT",

@@ -1,31 +1,24 @@
-"""`IOLoop`: one thread per node serves every comms socket, however many peers connect.
+"""The socket transport: `SocketTransport` over TCP, and the `IOLoop` that serves every link.
 
-A comms link used to cost two threads (a reader and a writer), so a server
-with hundreds of idle clients cost hundreds of threads, and once enough
-connections exhausted the process's threads the server could accept no more.
-Now every link of a node (each accepted or made TCP connection, each pipe)
-is a handler registered with the node's single `IOLoop`: a
-``selectors.DefaultSelector`` loop on one thread named ``snr-<role>-io``
-that reads when a socket has bytes, writes when one has room, and runs the
-links' timers (beats, silence checks, paused readers). The node's thread
-count stays the same whatever the number of peers.
+A link talks over a `Transport`: a non-blocking byte stream (a TCP socket,
+`SocketTransport`; a pipe end, ``pipe.py``). Every link of a node is a
+handler of the node's one `IOLoop`: a ``selectors`` loop on one thread,
+``snr-<role>-io``, that reads when a socket has bytes, writes when one has
+room, and runs the links' timers (beats, silence, paused readers). So a
+server with hundreds of idle clients costs no more threads than one with one.
 
 While the node's own thread has nothing to do, *it* reads the links (Linux,
-where sockets can be watched with ``epoll``): the loop is the node's
-`snr.core.task_queue.IdleWaiter` (installed with ``node.queue.use_waiter``), so the idle wait
-watches the links' sockets and a wake-up socket together, and a page that
-arrives is read, decoded and queued on the node's thread, with no hand-off
-between threads (what that saves on a round trip: docs/performance.md).
-While the node's thread runs handlers, the I/O thread reads, as before: a
-slow handler never stops a link from being read, beating or noticing a dead
-peer. One lock, the *read role*, decides which of the two reads; the links'
-sockets sit in one epoll set of their own, which the I/O thread watches only
-while the node's thread does not (see `IOLoop.wait`).
+with ``epoll``): the loop is the node's `snr.core.task_queue.IdleWaiter`, so
+a page that arrives is read, decoded and queued on the node's thread with no
+hand-off (docs/performance.md). While the node's thread runs handlers, the
+I/O thread reads, so a slow handler never stops a link from being read,
+beating or noticing a dead peer. One lock, the *read role*, decides which of
+the two reads (`IOLoop.wait`). Why and how: docs/design.md, "One I/O thread
+per node".
 
-The loop is shared: every comms component of a node gets the same one with
+The loop is shared: every comms component of a node gets it with
 `IOLoop.acquire` (the first starts its thread) and gives it back with
-`IOLoop.release` (the last stops and joins it, within a bound), so it never
-outlives its node.
+`IOLoop.release` (the last stops and joins it, within a bound).
 
 Example::
 
@@ -45,6 +38,7 @@ import logging
 import select
 import selectors
 import socket
+import struct
 import threading
 import time
 from typing import Any, Callable, Deque, Dict, Iterator, List, Optional, Protocol, Tuple
@@ -53,7 +47,15 @@ from snr.core.node import Node
 from snr.core.task_queue import TaskQueue
 from snr.prelude import AbstractNode
 
-__all__ = ["IOHandler", "IOLoop", "IOTimer"]
+try:  # Linux and macOS say how many bytes wait unread; Windows has no fcntl
+    import fcntl
+    import termios
+
+    _FIONREAD: Optional[int] = termios.FIONREAD
+except ImportError:
+    _FIONREAD = None
+
+__all__ = ["IOHandler", "IOLoop", "IOTimer", "SocketTransport", "Transport", "unread_bytes"]
 
 RECV_BYTES = 256 * 1024
 """Size of the loop's one receive buffer, shared by all its links (only its thread reads)."""
@@ -91,7 +93,7 @@ class IOHandler(Protocol):
 
     The loop calls these on its own thread; they must not block.
 
-    Example: ``Link`` in ``link.py``.
+    Example: ``Link`` in ``comms_loop.py``.
     """
 
     def fileno(self) -> int:
@@ -177,7 +179,7 @@ class IOLoop:
         self._users = 0
         self._selector = selectors.DefaultSelector()
         self._handlers: Dict[IOHandler, int] = {}  # every watched handler: its events
-        self._calls: Deque[Callable[[], None]] = collections.deque()
+        self._calls: Deque[Callable[[], object]] = collections.deque()
         self._timers: List[Tuple[float, int, IOTimer]] = []
         self._order = itertools.count()  # ties in the timer heap never compare IOTimers
         self._waiting_for_room: List[Callable[[], None]] = []
@@ -186,9 +188,7 @@ class IOLoop:
         self._to_write: Dict[IOHandler, None] = {}
         self._room_timer: Optional[IOTimer] = None
         self._stopping = False
-        self._wake_r, self._wake_w = socket.socketpair()
-        self._wake_r.setblocking(False)
-        self._wake_w.setblocking(False)
+        self._wake_r, self._wake_w = _wake_pair()
         self._woken = False
         self._selector.register(self._wake_r, _READ, None)
         self._thread = threading.Thread(target=self._run, name=f"snr-{node.role}-io", daemon=True)
@@ -221,9 +221,7 @@ class IOLoop:
             self._gate.register(self._reads.fileno(), select.EPOLLIN)
             self._gate_open = True  # until the node's thread first waits
             self._selector.register(self._gate.fileno(), _READ, _READS)
-            self._node_wake_r, self._node_wake_w = socket.socketpair()
-            self._node_wake_r.setblocking(False)
-            self._node_wake_w.setblocking(False)
+            self._node_wake_r, self._node_wake_w = _wake_pair()
             self._node_poll = select.epoll()
             self._node_poll.register(self._node_wake_r.fileno(), select.EPOLLIN)
             self._node_wake_only = select.epoll()  # while the loop's thread wants the role
@@ -246,9 +244,8 @@ class IOLoop:
                 loop = cls(node)
                 _registry[id(node)] = (node, loop)
                 loop._thread.start()
-                queue = _queue_of(node)
-                if loop._reads is not None and queue is not None:
-                    loop._waiter_installed = queue.use_waiter(loop)
+                if loop._reads is not None and loop._queue is not None:
+                    loop._waiter_installed = loop._queue.use_waiter(loop)
             loop._users += 1
             return loop
 
@@ -270,10 +267,9 @@ class IOLoop:
 
     def stop(self, timeout_s: float = JOIN_TIMEOUT_S) -> None:
         """End the thread (it closes what is still watched) and wait up to ``timeout_s``."""
-        queue = _queue_of(self.node)
-        if self._waiter_installed and queue is not None:
+        if self._waiter_installed and self._queue is not None:
             self._waiter_installed = False
-            queue.stop_waiter(self)  # the node waits on its bell again
+            self._queue.stop_waiter(self)  # the node waits on its bell again
         self._stopping = True
         self._wake()
         if self._thread.is_alive() and self._thread is not threading.current_thread():
@@ -305,7 +301,7 @@ class IOLoop:
         return threading.current_thread() is self._thread
 
     # -- any thread ---------------------------------------------------------
-    def call_soon(self, callback: Callable[[], None]) -> None:
+    def call_soon(self, callback: Callable[[], object]) -> None:
         """Run ``callback`` on the loop's thread, in the order of the calls (any thread).
 
         Example::
@@ -331,10 +327,7 @@ class IOLoop:
             io.write_soon(link)   # link.write_waiting() or link.on_writable() will follow
         """
         self._to_write[handler] = None
-        self.call_soon(lambda: self._write_later(handler))
-
-    def _write_later(self, handler: IOHandler) -> None:
-        self.call_later(WRITE_DELAY_S, handler.on_writable)
+        self.call_soon(lambda: self.call_later(WRITE_DELAY_S, handler.on_writable))
 
     def write_waiting(self) -> None:
         """Not the loop's thread: let every handler given to `write_soon` write what waits."""
@@ -408,7 +401,7 @@ class IOLoop:
         """
         if not self._role.acquire(blocking=False):
             self._role_wanted = True  # the node's thread leaves it to us until we are done
-            self._wake_node()
+            self.wake()
             self._role.acquire()
         try:
             yield
@@ -525,9 +518,6 @@ class IOLoop:
 
     def wake(self) -> None:
         """End the node thread's idle wait (any thread; the queue rings it once per sleep)."""
-        self._wake_node()
-
-    def _wake_node(self) -> None:
         try:
             self._node_wake_w.send(b"\0")
         except OSError:  # full (a wake-up is already waiting) or closed
@@ -585,7 +575,7 @@ class IOLoop:
         for callback in waiting:
             self._safely(callback)
 
-    def _safely(self, callback: Callable[[], None]) -> None:
+    def _safely(self, callback: Callable[[], object]) -> None:
         try:
             callback()
         except Exception:  # a bug in one link must not stop every link of the node
@@ -594,9 +584,8 @@ class IOLoop:
     def _run(self) -> None:
         # This thread serves every link and stops reading a link by itself
         # while the node is behind: the tasks it schedules must never wait.
-        queue = _queue_of(self.node)
-        if queue is not None:
-            queue.never_wait(threading.get_ident())
+        if self._queue is not None:
+            self._queue.never_wait(threading.get_ident())
         if self._reads is not None:
             self._looking = True
             self.call_later(BUSY_READS_S, self._check_busy)
@@ -666,6 +655,14 @@ def _queue_of(node: AbstractNode) -> Optional[TaskQueue]:
     return node.queue if isinstance(node, Node) else None
 
 
+def _wake_pair() -> Tuple[socket.socket, socket.socket]:
+    """A connected pair of non-blocking sockets: a byte written to one wakes a wait on the other."""
+    ends = socket.socketpair()
+    for end in ends:
+        end.setblocking(False)
+    return ends
+
+
 def _poll(epoll: Any, timeout_s: float) -> List[Tuple[int, int]]:
     """``epoll.poll(timeout_s)``; nothing if it is closed (the loop has stopped)."""
     try:
@@ -682,3 +679,135 @@ def _drain(sock: socket.socket) -> None:
             pass
     except OSError:  # BlockingIOError: drained
         pass
+
+
+# -- transports: what a link reads and writes ------------------------------
+
+
+class Transport(Protocol):
+    """A byte stream to one peer that the node's `IOLoop` can watch: a TCP socket or a pipe.
+
+    Every method returns at once (the file descriptor is non-blocking): the
+    loop calls ``recv_into`` when ``fileno()`` is readable and ``send`` when
+    it is writable, and the node's thread may call ``send`` too (under the
+    outbox's lock) to write a frame straight away.
+
+    Example: `SocketTransport` below.
+    """
+
+    peer: str
+    """Where the peer is, for log messages, e.g. ``"127.0.0.1:9000"``."""
+
+    def fileno(self) -> int:
+        """The file descriptor the I/O loop watches."""
+
+    def send(self, data: bytes) -> int:
+        """Write what fits without blocking; how many bytes went.
+
+        Raises BlockingIOError if nothing fits, another OSError if the peer is gone.
+        """
+
+    def recv_into(self, buffer: bytearray) -> int:
+        """Read what has arrived into ``buffer``; 0 at end of stream.
+
+        Raises BlockingIOError if nothing has arrived, another OSError if the link broke.
+        """
+
+    def end_writing(self) -> None:
+        """Tell the peer nothing more will be sent (after a graceful flush)."""
+
+    def close(self) -> None:
+        """Release the socket or pipe."""
+
+
+def unread_bytes(fd: int) -> Optional[int]:
+    """How many received bytes wait unread in the OS for ``fd``; None where it cannot say.
+
+    A socket or pipe that is not read keeps what arrives; a link whose node is
+    behind uses this to tell a peer that still talks from one that fell silent.
+
+    Example::
+
+        unread_bytes(sock.fileno())   # 0 when nothing waits
+    """
+    if _FIONREAD is None:
+        return None
+    try:
+        answer = fcntl.ioctl(fd, _FIONREAD, b"\0\0\0\0")
+    except OSError:
+        return None
+    return int(struct.unpack("i", answer)[0])
+
+
+def _enable_keepalive(sock: socket.socket) -> None:
+    """Notice a peer that vanished without a word (cable pulled) in ~10 s, not hours."""
+    sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
+    for option, value in (("TCP_KEEPIDLE", 5), ("TCP_KEEPINTVL", 2), ("TCP_KEEPCNT", 3)):
+        if hasattr(socket, option):  # Linux; other systems keep their defaults
+            try:
+                sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, option), value)
+            except OSError:
+                pass
+
+
+def _limit_unacknowledged(sock: socket.socket, seconds: float) -> None:
+    """Give up on data the peer has not acknowledged for ``seconds`` (Linux).
+
+    Without it, a sender on a path that vanished (Wi-Fi out of range: no FIN,
+    no RST) keeps retransmitting for about 15 minutes.
+    """
+    option = getattr(socket, "TCP_USER_TIMEOUT", None)
+    if option is not None:
+        try:
+            sock.setsockopt(socket.IPPROTO_TCP, option, int(seconds * 1000))
+        except OSError:
+            pass
+
+
+class SocketTransport:
+    """A connected TCP socket as a link ``Transport`` (non-blocking, ``TCP_NODELAY`` on).
+
+    The node's I/O loop watches it; nothing here ever blocks.
+
+    Example::
+
+        SocketTransport(socket.create_connection(("localhost", 9000)), "localhost:9000")
+    """
+
+    def __init__(
+        self,
+        sock: socket.socket,
+        peer: str,
+        dead_after_s: float,
+    ) -> None:
+        sock.setblocking(False)
+        # Every frame is written in one call; without this, Nagle's algorithm
+        # holds small frames back for up to ~40-200 ms.
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
+        _enable_keepalive(sock)
+        _limit_unacknowledged(sock, dead_after_s)
+        self.sock = sock
+        self.peer = peer
+
+    def fileno(self) -> int:
+        """The socket's file descriptor."""
+        return self.sock.fileno()
+
+    def send(self, data: bytes) -> int:
+        """Write what fits now; raises BlockingIOError if nothing does."""
+        return self.sock.send(data)
+
+    def recv_into(self, buffer: bytearray) -> int:
+        """Read what has arrived; 0 when the peer closed; BlockingIOError if nothing has."""
+        return self.sock.recv_into(buffer)
+
+    def end_writing(self) -> None:
+        """Half-close: the peer reads to the end, then sees end of stream."""
+        try:
+            self.sock.shutdown(socket.SHUT_WR)
+        except OSError:
+            pass
+
+    def close(self) -> None:
+        """Release the socket."""
+        self.sock.close()

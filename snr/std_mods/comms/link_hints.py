@@ -25,8 +25,7 @@ from snr.core import MissingKeyHints, Node, tasks
 from snr.prelude import DataKey, TaskHandler, TaskType
 
 if TYPE_CHECKING:
-    from snr.std_mods.comms.comms_loop import CommsLoop
-    from snr.std_mods.comms.link import Link
+    from snr.std_mods.comms.comms_loop import CommsLoop, Link
 
 __all__ = ["check_link", "watch_link"]
 

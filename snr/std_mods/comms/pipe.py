@@ -25,12 +25,13 @@ from typing import TYPE_CHECKING, Any, List, Optional
 
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, ConfigError, WireFormatError
-from snr.std_mods.codec import load_object, page_from_fields
+from snr.std_mods.codec import Message, decode_body, load_object, page_from_fields
 from snr.std_mods.comms.comms_loop import (
     DEFAULT_DEAD_AFTER_S,
     DEFAULT_MAX_BACKLOG_BYTES,
     CommsLoop,
     Keys,
+    Link,
     normalize_keys,
 )
 from snr.std_mods.comms.handshake import (
@@ -38,8 +39,7 @@ from snr.std_mods.comms.handshake import (
     find_secret,
     resolve_system,
 )
-from snr.std_mods.comms.link import Link
-from snr.std_mods.comms.wire import Message, decode_body
+from snr.std_mods.comms.io_loop import SocketTransport
 
 if TYPE_CHECKING:  # multiprocessing costs ~14 ms to import; the caller made the pipe
     from multiprocessing.connection import Connection
@@ -50,7 +50,7 @@ _POLL_S = 0.25  # how often a bridge thread waiting on the pipe checks whether t
 _BRIDGE_BYTES = 256 * 1024
 
 
-class PipeTransport:
+class PipeTransport(SocketTransport):
     """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``.
 
     On POSIX a two-way pipe is a socket pair, so its file descriptor is
@@ -84,18 +84,6 @@ class PipeTransport:
                 thread.start()
         sock.setblocking(False)
         self.sock = sock
-
-    def fileno(self) -> int:
-        """The socket's file descriptor."""
-        return self.sock.fileno()
-
-    def send(self, data: bytes) -> int:
-        """Write what fits now; raises BlockingIOError if nothing does."""
-        return self.sock.send(data)
-
-    def recv_into(self, buffer: bytearray) -> int:
-        """Read what has arrived; 0 once the other end is closed."""
-        return self.sock.recv_into(buffer)
 
     def end_writing(self) -> None:
         """Nothing: the other process may still use its end, so the pipe stays as it is."""

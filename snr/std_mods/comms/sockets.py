@@ -40,6 +40,8 @@ from snr.std_mods.comms.comms_loop import (
     DEFAULT_MAX_BACKLOG_BYTES,
     CommsLoop,
     Keys,
+    Link,
+    LinkState,
     normalize_keys,
 )
 from snr.std_mods.comms.handshake import (
@@ -48,7 +50,7 @@ from snr.std_mods.comms.handshake import (
     find_secret,
     resolve_system,
 )
-from snr.std_mods.comms.link import Link, LinkState
+from snr.std_mods.comms.io_loop import SocketTransport
 
 __all__ = [
     "DEFAULT_MAX_CONNECTIONS",
@@ -80,80 +82,6 @@ def _describe(address: Address) -> str:
     return f"{address[0]}:{address[1]}"
 
 
-def _enable_keepalive(sock: socket.socket) -> None:
-    """Notice a peer that vanished without a word (cable pulled) in ~10 s, not hours."""
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
-    for option, value in (("TCP_KEEPIDLE", 5), ("TCP_KEEPINTVL", 2), ("TCP_KEEPCNT", 3)):
-        if hasattr(socket, option):  # Linux; other systems keep their defaults
-            try:
-                sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, option), value)
-            except OSError:
-                pass
-
-
-def _limit_unacknowledged(sock: socket.socket, seconds: float) -> None:
-    """Give up on data the peer has not acknowledged for ``seconds`` (Linux).
-
-    Without it, a sender on a path that vanished (Wi-Fi out of range: no FIN,
-    no RST) keeps retransmitting for about 15 minutes.
-    """
-    option = getattr(socket, "TCP_USER_TIMEOUT", None)
-    if option is not None:
-        try:
-            sock.setsockopt(socket.IPPROTO_TCP, option, int(seconds * 1000))
-        except OSError:
-            pass
-
-
-class SocketTransport:
-    """A connected TCP socket as a link ``Transport`` (non-blocking, ``TCP_NODELAY`` on).
-
-    The node's I/O loop watches it; nothing here ever blocks.
-
-    Example::
-
-        SocketTransport(socket.create_connection(("localhost", 9000)), "localhost:9000")
-    """
-
-    def __init__(
-        self,
-        sock: socket.socket,
-        peer: str,
-        dead_after_s: float = DEFAULT_DEAD_AFTER_S,
-    ) -> None:
-        sock.setblocking(False)
-        # Every frame is written in one call; without this, Nagle's algorithm
-        # holds small frames back for up to ~40-200 ms.
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        _enable_keepalive(sock)
-        _limit_unacknowledged(sock, dead_after_s)
-        self.sock = sock
-        self.peer = peer
-
-    def fileno(self) -> int:
-        """The socket's file descriptor."""
-        return self.sock.fileno()
-
-    def send(self, data: bytes) -> int:
-        """Write what fits now; raises BlockingIOError if nothing does."""
-        return self.sock.send(data)
-
-    def recv_into(self, buffer: bytearray) -> int:
-        """Read what has arrived; 0 when the peer closed; BlockingIOError if nothing has."""
-        return self.sock.recv_into(buffer)
-
-    def end_writing(self) -> None:
-        """Half-close: the peer reads to the end, then sees end of stream."""
-        try:
-            self.sock.shutdown(socket.SHUT_WR)
-        except OSError:
-            pass
-
-    def close(self) -> None:
-        """Release the socket."""
-        self.sock.close()
-
-
 def _listen(address: Address, role: str) -> socket.socket:
     """A listening socket on ``address``, or a CommsError saying what to do."""
     listener: Optional[socket.socket] = None
@@ -181,7 +109,27 @@ def _listen(address: Address, role: str) -> socket.socket:
     return listener
 
 
-class SocketsServerLoop(CommsLoop):
+class _SocketsLoop(CommsLoop):
+    """What the sockets server and client share: their factory's settings, system, secret."""
+
+    def __init__(self, factory: _SocketsFactory, parent: AbstractNode, where: str) -> None:
+        super().__init__(
+            factory,
+            parent,
+            factory.name,
+            factory.keys,
+            factory.max_backlog_bytes,
+            factory.dead_after_s,
+        )
+        self.address = factory.address
+        self.system = resolve_system(factory.system, parent.config, where)
+        self.secret = find_secret(factory.secret, where)
+
+    def _open(self, sock: socket.socket, peer: str) -> Link:
+        return self.open_link(SocketTransport(sock, peer, self.dead_after_s))
+
+
+class SocketsServerLoop(_SocketsLoop):
     """Accepts clients and links to each; built by ``SocketsPair.server()``.
 
     It listens as soon as the node starts (a port in use stops the node with
@@ -205,19 +153,9 @@ class SocketsServerLoop(CommsLoop):
     peer_noun = "client"
 
     def __init__(self, factory: SocketsServerFactory, parent: AbstractNode) -> None:
-        super().__init__(
-            factory,
-            parent,
-            factory.name,
-            factory.keys,
-            factory.max_backlog_bytes,
-            factory.dead_after_s,
-        )
-        self.address = factory.address
-        self.max_connections = factory.max_connections
         where = f"The sockets server of node {parent.role!r} ({_describe(factory.address)})"
-        self.system = resolve_system(factory.system, parent.config, where)
-        self.secret = find_secret(factory.secret, where)
+        super().__init__(factory, parent, where)
+        self.max_connections = factory.max_connections
         self.refused = LossReport(
             self.log,
             "connections",
@@ -275,7 +213,7 @@ class SocketsServerLoop(CommsLoop):
             return
         if self.refused.dropping:
             self.refused.recovered()
-        link = self.open_link(SocketTransport(sock, _describe(peer[:2]), self.dead_after_s))
+        link = self._open(sock, _describe(peer[:2]))
         self.dbg("Accepted a connection from %s", link.transport.peer)
 
     def _make_room(self) -> bool:
@@ -334,7 +272,7 @@ class SocketsServerLoop(CommsLoop):
                 end.close()
 
 
-class SocketsClientLoop(CommsLoop):
+class SocketsClientLoop(_SocketsLoop):
     """Connects to a sockets server and keeps connecting; built by ``client()``.
 
     Until the server is up, and after a link drops, it retries with backoff
@@ -354,18 +292,8 @@ class SocketsClientLoop(CommsLoop):
     peer_noun = "sockets server"
 
     def __init__(self, factory: SocketsClientFactory, parent: AbstractNode) -> None:
-        super().__init__(
-            factory,
-            parent,
-            factory.name,
-            factory.keys,
-            factory.max_backlog_bytes,
-            factory.dead_after_s,
-        )
-        self.address = factory.address
         where = f"The sockets client of node {parent.role!r} (to {_describe(factory.address)})"
-        self.system = resolve_system(factory.system, parent.config, where)
-        self.secret = find_secret(factory.secret, where)
+        super().__init__(factory, parent, where)
         self.link: Optional[Link] = None
         self._retry_s = _FIRST_RETRY_S
         self._waiting_reported = False
@@ -394,9 +322,7 @@ class SocketsClientLoop(CommsLoop):
             sock.close()
             return
         self._waiting_reported = False
-        self.link = self.open_link(
-            SocketTransport(sock, _describe(self.address), self.dead_after_s)
-        )
+        self.link = self._open(sock, _describe(self.address))
         self.dbg("TCP connection to %s made", _describe(self.address))
 
     def _back_off(self) -> None:
