@@ -17,17 +17,10 @@ from snr.core.checks.explain import (
     used_before_init,
 )
 from snr.core.dispatch import HandlerMap
-from snr.prelude import (
-    AbstractComponent,
-    AbstractFactory,
-    AbstractNode,
-    ComponentName,
-    DataKey,
-    Page,
-    SomeTasks,
-    Task,
-    TaskHandlerMap,
-)
+from snr.prelude.abstract import AbstractComponent, AbstractFactory, AbstractNode
+from snr.prelude.names import ComponentName, DataKey, SomeTasks, TaskHandlerMap
+from snr.prelude.page import Page
+from snr.prelude.task import Task
 
 __all__ = ["Component"]
 

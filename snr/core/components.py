@@ -42,14 +42,9 @@ from snr.core.checks.explain import (
 from snr.core.checks.handler_checks import check_burst_handlers
 from snr.core.checks.student_code import describe_callable
 from snr.core.dispatch import HandlerTable
-from snr.prelude import (
-    AbstractComponent,
-    AbstractFactory,
-    AbstractLoop,
-    AbstractNode,
-    ComponentName,
-    SNRError,
-)
+from snr.prelude.abstract import AbstractComponent, AbstractFactory, AbstractLoop, AbstractNode
+from snr.prelude.errors import SNRError
+from snr.prelude.names import ComponentName
 
 __all__ = ["NODE_CORE_NAME", "ComponentSet"]
 

@@ -77,34 +77,17 @@ from snr.core.checks.handler_checks import (
     check_task_id,
 )
 from snr.core.logs import RepeatFilter
-from snr.prelude import (
-    AbstractComponent,
-    AbstractLoop,
-    AbstractProfiler,
-    BurstHandler,
-    Mode,
-    SNRError,
-    StatsCell,
-    Task,
-    TaskHandler,
-    TaskId,
-    TaskType,
-)
+from snr.prelude.abstract import AbstractComponent, AbstractLoop, AbstractProfiler
+from snr.prelude.errors import SNRError
+from snr.prelude.names import BurstHandler, Mode, StatsCell, TaskHandler, TaskId, TaskType
+from snr.prelude.task import Task
 
 if TYPE_CHECKING:
     from snr.core.components import ComponentSet
     from snr.core.task_queue import TaskQueue
 
-__all__ = [
-    "BurstEntry",
-    "Entry",
-    "HandlerMap",
-    "HandlerRunner",
-    "HandlerTable",
-    "check_burst_handlers",
-    "check_handler",
-    "check_task_id",
-]
+__all__ = ["BurstEntry", "Entry", "HandlerMap", "HandlerRunner", "HandlerTable"]
+__all__ += ["check_burst_handlers", "check_handler", "check_task_id"]
 
 Entry = Tuple[TaskHandler, TaskId, AbstractComponent, StatsCell]
 """One matched handler: the function, the id it matched under, its component,

@@ -12,15 +12,10 @@ from snr.core.checks.explain import check_loop_class
 from snr.core.checks.student_code import running_line
 from snr.core.component import Component
 from snr.core.sim_clock import LoopTurn, clock_of
-from snr.prelude import (
-    AbstractFactory,
-    AbstractLoop,
-    AbstractNode,
-    ComponentName,
-    NodeStateError,
-    Task,
-    TaskType,
-)
+from snr.prelude.abstract import AbstractFactory, AbstractLoop, AbstractNode
+from snr.prelude.errors import NodeStateError
+from snr.prelude.names import ComponentName, TaskType
+from snr.prelude.task import Task
 
 __all__ = ["LoopState", "ThreadLoop"]
 

@@ -41,25 +41,27 @@ from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.sim_clock import NodeTurn, clock_of
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Timer
-from snr.prelude import (
+from snr.prelude.abstract import (
     AbstractComponent,
     AbstractConfig,
     AbstractFactory,
     AbstractLoop,
     AbstractNode,
+)
+from snr.prelude.errors import NodeStateError
+from snr.prelude.names import (
     ComponentName,
     DataDict,
     DataKey,
     Mode,
-    NodeStateError,
-    Page,
     Role,
     SomeTasks,
-    Task,
     TaskHandler,
     TaskId,
     TaskType,
 )
+from snr.prelude.page import Page
+from snr.prelude.task import Task
 
 if TYPE_CHECKING:  # DEBUG helpers, imported when a node turns them on (see __init__)
     from snr.core.checks.key_hints import MissingKeyHints

@@ -14,16 +14,7 @@ import sys
 import threading
 import time
 from types import FrameType
-from typing import (
-    TYPE_CHECKING,
-    Any,
-    Callable,
-    List,
-    Mapping,
-    Optional,
-    Sequence,
-    Union,
-)
+from typing import TYPE_CHECKING, Any, Callable, List, Mapping, Optional, Sequence, Union
 
 from snr.core.checks.call_checks import (
     check_cli_args,
@@ -33,16 +24,14 @@ from snr.core.checks.call_checks import (
 from snr.core.checks.runner_checks import runner_built, runner_ran
 from snr.core.config import Config
 from snr.core.node import Node
-from snr.prelude import (
+from snr.prelude.abstract import (
     AbstractConfig,
     AbstractFactory,
     AbstractMultiRunner,
     AbstractRunner,
-    ConfigError,
-    Mode,
-    Role,
-    SNRError,
 )
+from snr.prelude.errors import ConfigError, SNRError
+from snr.prelude.names import Mode, Role
 
 if TYPE_CHECKING:
     import argparse
@@ -53,14 +42,8 @@ if TYPE_CHECKING:
 # mypy --strict would reject a plain {"robot": [TimeoutLoopFactory(...)]}.
 _System = Union[AbstractConfig, Mapping[Role, Sequence[AbstractFactory]]]
 
-__all__ = [
-    "INTERRUPTED_MESSAGE",
-    "CliRunner",
-    "MultiProcRunner",
-    "SynchronousRunner",
-    "TestRunner",
-    "report_error",
-]
+__all__ = ["INTERRUPTED_MESSAGE", "CliRunner", "MultiProcRunner", "SynchronousRunner", "TestRunner"]
+__all__ += ["report_error"]
 
 INTERRUPTED_MESSAGE = "Interrupted by user, exiting"
 """What a runner prints when Ctrl-C stops it (as in thesis figure 5.4)."""
