@@ -27,20 +27,17 @@ import functools
 import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
+from snr.core.checks.component_log import call_failed, not_found, reload_refused, still_running
 from snr.core.checks.explain import (
-    CORE_REFUSED,
     component_without_init,
     factory_without_init,
     name_taken_error,
-    not_stopped_text,
     raise_get_failure,
-    reload_failure,
     start_failure,
     warn_get_returned_none,
     wrong_get_result_error,
 )
 from snr.core.checks.handler_checks import check_burst_handlers
-from snr.core.checks.student_code import describe_callable
 from snr.core.dispatch import HandlerTable
 from snr.prelude.abstract import AbstractComponent, AbstractFactory, AbstractLoop, AbstractNode
 from snr.prelude.errors import SNRError
@@ -148,19 +145,9 @@ class ComponentSet:
 
     def _find(self, action: str, name: ComponentName) -> Optional[AbstractComponent]:
         """The component called ``name``; None, with the refusal logged, for node_core or none."""
-        log = self.node.log
-        if name == NODE_CORE_NAME:
-            log.error(CORE_REFUSED[action], name, self.node.role)
-            return None
-        component = self.by_name.get(name)
+        component = None if name == NODE_CORE_NAME else self.by_name.get(name)
         if component is None:
-            log.error(
-                "Cannot %s %r: node %r has no such component. It has: %s.",
-                action,
-                name,
-                self.node.role,
-                ", ".join(self.by_name),
-            )
+            not_found(self.node.log, action, name, self.node.role, self.by_name)
         return component
 
     # -- hot reload ---------------------------------------------------------
@@ -187,12 +174,7 @@ class ComponentSet:
         try:
             old.factory.reload()
         except Exception as error:
-            log.error(
-                "Reloading %r failed while reading its new source, so the old version "
-                "keeps running:\n%s",
-                old.name,
-                reload_failure(error),
-            )
+            reload_refused(log, "source", old, error)
             return False
         if self.running and not self._stop_for_reload(old):
             return False
@@ -212,7 +194,7 @@ class ComponentSet:
             try:
                 self.start(new)
             except SNRError as error:
-                log.error("Reloaded %r, but it failed to start: %s", new.name, error)
+                reload_refused(log, "start", old, error, new)
                 return False
         log.info("Reloaded %r", new.name)
         return True
@@ -222,37 +204,23 @@ class ComponentSet:
         self.stop(old)
         if not old.is_alive():
             return True
-        self.node.log.error("%s", not_stopped_text(old, self.join_timeout_s, reload=True))
+        still_running(self.node.log, old, self.join_timeout_s, reload=True)
         if isinstance(old, AbstractLoop):
             old.cancel_stop()
         return False
 
     def _build_replacement(self, old: AbstractComponent) -> Optional[AbstractComponent]:
         """A new component from ``old``'s factory, or None (logged) if that fails."""
-        log = self.node.log
         try:
             new = self.build(old.factory)
         except Exception as error:
-            log.error(
-                "Rebuilding %r after its reload failed, so the old version keeps running:\n%s",
-                old.name,
-                error if isinstance(error, SNRError) else reload_failure(error),
-            )
+            reload_refused(self.node.log, "build", old, error)
             return None
         if new is None:
-            log.error(
-                "%s returned None on reload, so the old version of %r keeps running.",
-                describe_callable(type(old.factory).get),
-                old.name,
-            )
+            reload_refused(self.node.log, "none", old)
             return None
         if new.name != old.name and new.name in self.by_name:
-            log.error(
-                "Reloaded %r came back named %r, which another component has; the old "
-                "version keeps running.",
-                old.name,
-                new.name,
-            )
+            reload_refused(self.node.log, "name", old, new=new)
             return None
         return new
 
@@ -263,12 +231,7 @@ class ComponentSet:
         try:
             _start(old)
         except Exception as error:
-            self.node.log.error(
-                "%r could not be restarted after the failed reload: %s: %s",
-                old.name,
-                type(error).__name__,
-                error,
-            )
+            reload_refused(self.node.log, "restart", old, error)
 
     # -- starting and stopping ----------------------------------------------
     def start_all(self, keep_going: Callable[[], bool]) -> None:
@@ -312,8 +275,7 @@ class ComponentSet:
 
     def _warn_if_alive(self, component: AbstractComponent) -> None:
         if component.is_alive():
-            text = not_stopped_text(component, self.join_timeout_s, reload=False)
-            self.node.log.warning("%s", text)
+            still_running(self.node.log, component, self.join_timeout_s, reload=False)
 
     def call_safely(
         self, method: Callable[[], None], component: AbstractComponent, what: str
@@ -322,12 +284,7 @@ class ComponentSet:
         try:
             method()
         except Exception:
-            self.node.log.exception(
-                "%s.%s() of component %r raised; carrying on",
-                type(component).__name__,
-                what,
-                component.name,
-            )
+            call_failed(self.node.log, component, what)
 
     # -- the handler table ----------------------------------------------------
     def handlers_changed(self, component: AbstractComponent) -> None:

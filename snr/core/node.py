@@ -15,7 +15,8 @@ Three helpers do the rest::
     Node ──► ComponentSet   build, add, remove, reload, start and stop components;
       │                     keep the HandlerTable in step with them
       ├────► HandlerRunner  run a task's handlers, time them, queue what they
-      │                     return, put failures into words
+      │                     return; its FailureReport (checks/failures.py) puts
+      │                     failures into words
       └────► NodeChecks     wire in the checks for silent mistakes (key hints,
                             wiring checks, watchdog: DEBUG mode)
 """
@@ -32,6 +33,7 @@ from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional
 from snr.core import tasks
 from snr.core.checks.datastore_guard import NodeDatastore
 from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
+from snr.core.checks.failures import FailureReport
 from snr.core.checks.step_mode import StepMode
 from snr.core.components import NODE_CORE_NAME, ComponentSet
 from snr.core.dispatch import HandlerRunner, HandlerTable
@@ -160,15 +162,9 @@ class Node(AbstractNode):
         self._thread_id: Optional[int] = None
         self._components = ComponentSet(self, HandlerTable(self.profiler), join_timeout_s=1.0)
         self.components = self._components.by_name
-        self._runner = HandlerRunner(
-            role,
-            self.mode,
-            self.log,
-            self.queue,
-            self._components,
-            self.set_terminate_flag,
-            timed=self.profiler is not None or self.mode is not Mode.DEPLOYED,
-        )
+        self._failures = FailureReport(role, self.mode, self.log, self.set_terminate_flag)
+        timed = self.profiler is not None or self.mode is not Mode.DEPLOYED
+        self._runner = HandlerRunner(self.queue, self._components, self._failures, timed)
         self.step_mode = StepMode(self.queue, self._runner, self._lookup, self.is_terminated)
         # The checks for silent mistakes (snr/core/checks/, read second): NodeChecks
         # sets key_hints, wiring_checks and watchdog in DEBUG mode, and reads each
@@ -250,8 +246,8 @@ class Node(AbstractNode):
             finally:
                 if self._clock_turn is not None:
                     self._clock_turn.end()
-        if self._runner.failure is not None:
-            raise self._runner.failure
+        if self._failures.failure is not None:
+            raise self._failures.failure
 
     def check_wiring(self) -> None:
         """In DEBUG mode, warn about handlers of data keys that look misspelled.
@@ -291,7 +287,7 @@ class Node(AbstractNode):
         if self._checks is not None:  # stopping loops and waiting for them is no mistake
             self._checks.stop()
         self._components.shutdown()
-        self._runner.repeats.flush()
+        self._failures.repeats.flush()
         dropped = self.queue.clear()
         if dropped:
             self.log.debug("Dropped %d queued tasks at shutdown", dropped)
@@ -362,7 +358,7 @@ class Node(AbstractNode):
         `LoopError`; DEPLOYED logs it. ``sys.exit()`` or Ctrl-C in a loop stop
         the node in every mode. Called by the loop's thread as it ends.
         """
-        self._runner.loop_failed(loop, error)
+        self._failures.loop_failed(loop, error)
 
     # ------------------------------------------------------------------
     # Scheduling (thesis listing 6.3)
