@@ -27,16 +27,7 @@ import functools
 import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
-from snr.core.checks.component_log import call_failed, not_found, reload_refused, still_running
-from snr.core.checks.explain import (
-    component_without_init,
-    factory_without_init,
-    name_taken_error,
-    raise_get_failure,
-    start_failure,
-    warn_get_returned_none,
-    wrong_get_result_error,
-)
+from snr.core.checks import component_log, explain
 from snr.core.checks.handler_checks import check_burst_handlers
 from snr.core.dispatch import HandlerTable
 from snr.prelude.abstract import AbstractComponent, AbstractFactory, AbstractLoop, AbstractNode
@@ -90,20 +81,22 @@ class ComponentSet:
                 component, or the factory skipped ``super().__init__()``.
         """
         if not hasattr(factory, "reload_targets"):
-            raise factory_without_init(factory)
+            raise explain.factory_without_init(factory)
         component: Any  # get() is typed, but a student's get() may return anything
         try:
             component = factory.get(self.node)
         except SNRError:
             raise
         except Exception as error:
-            raise_get_failure(factory, error, self.node.role)
+            explain.raise_get_failure(factory, error, self.node.role)
         if component is None:
             node = self.node
-            warn_get_returned_none(factory, node.role, self.running, self._none_told, node.log)
+            explain.warn_get_returned_none(
+                factory, node.role, self.running, self._none_told, node.log
+            )
             return None
         if not isinstance(component, AbstractComponent):
-            raise wrong_get_result_error(factory, component)
+            raise explain.wrong_get_result_error(factory, component)
         return component
 
     # -- adding and removing ------------------------------------------------
@@ -117,13 +110,13 @@ class ComponentSet:
         if not hasattr(component, "name") or (
             not hasattr(component, "_task_handlers") and not hasattr(component, "parent")
         ):
-            raise component_without_init(component)
+            raise explain.component_without_init(component)
         if self.check_added is not None:
             self.check_added(component)
         check_burst_handlers(component)
         other = self.by_name.get(component.name)
         if other is not None:
-            raise name_taken_error(self.node.role, component, other)
+            raise explain.name_taken_error(self.node.role, component, other)
         self.by_name[component.name] = component
         self.table_stale = True  # the table is rebuilt before the next task
         if start and self.running:
@@ -147,7 +140,7 @@ class ComponentSet:
         """The component called ``name``; None, with the refusal logged, for node_core or none."""
         component = None if name == NODE_CORE_NAME else self.by_name.get(name)
         if component is None:
-            not_found(self.node.log, action, name, self.node.role, self.by_name)
+            component_log.not_found(self.node.log, action, name, self.node.role, self.by_name)
         return component
 
     # -- hot reload ---------------------------------------------------------
@@ -174,7 +167,7 @@ class ComponentSet:
         try:
             old.factory.reload()
         except Exception as error:
-            reload_refused(log, "source", old, error)
+            component_log.reload_refused(log, "source", old, error)
             return False
         if self.running and not self._stop_for_reload(old):
             return False
@@ -194,7 +187,7 @@ class ComponentSet:
             try:
                 self.start(new)
             except SNRError as error:
-                reload_refused(log, "start", old, error, new)
+                component_log.reload_refused(log, "start", old, error, new)
                 return False
         log.info("Reloaded %r", new.name)
         return True
@@ -204,7 +197,7 @@ class ComponentSet:
         self.stop(old)
         if not old.is_alive():
             return True
-        still_running(self.node.log, old, self.join_timeout_s, reload=True)
+        component_log.still_running(self.node.log, old, self.join_timeout_s, reload=True)
         if isinstance(old, AbstractLoop):
             old.cancel_stop()
         return False
@@ -214,13 +207,13 @@ class ComponentSet:
         try:
             new = self.build(old.factory)
         except Exception as error:
-            reload_refused(self.node.log, "build", old, error)
+            component_log.reload_refused(self.node.log, "build", old, error)
             return None
         if new is None:
-            reload_refused(self.node.log, "none", old)
+            component_log.reload_refused(self.node.log, "none", old)
             return None
         if new.name != old.name and new.name in self.by_name:
-            reload_refused(self.node.log, "name", old, new=new)
+            component_log.reload_refused(self.node.log, "name", old, new=new)
             return None
         return new
 
@@ -231,7 +224,7 @@ class ComponentSet:
         try:
             _start(old)
         except Exception as error:
-            reload_refused(self.node.log, "restart", old, error)
+            component_log.reload_refused(self.node.log, "restart", old, error)
 
     # -- starting and stopping ----------------------------------------------
     def start_all(self, keep_going: Callable[[], bool]) -> None:
@@ -253,7 +246,7 @@ class ComponentSet:
         except SNRError:
             raise
         except Exception as error:
-            raise start_failure(component, error) from error
+            raise explain.start_failure(component, error) from error
 
     def stop(self, component: AbstractComponent) -> None:
         """Halt ``component`` and wait (up to ``join_timeout_s``) for its thread."""
@@ -275,7 +268,7 @@ class ComponentSet:
 
     def _warn_if_alive(self, component: AbstractComponent) -> None:
         if component.is_alive():
-            still_running(self.node.log, component, self.join_timeout_s, reload=False)
+            component_log.still_running(self.node.log, component, self.join_timeout_s, reload=False)
 
     def call_safely(
         self, method: Callable[[], None], component: AbstractComponent, what: str
@@ -284,7 +277,7 @@ class ComponentSet:
         try:
             method()
         except Exception:
-            call_failed(self.node.log, component, what)
+            component_log.call_failed(self.node.log, component, what)
 
     # -- the handler table ----------------------------------------------------
     def handlers_changed(self, component: AbstractComponent) -> None:

@@ -31,6 +31,7 @@ import time
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional
 
 from snr.core import tasks
+from snr.core.checks import life_cycle
 from snr.core.checks.datastore_guard import NodeDatastore
 from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
 from snr.core.checks.failures import FailureReport
@@ -50,7 +51,6 @@ from snr.prelude.abstract import (
     AbstractLoop,
     AbstractNode,
 )
-from snr.prelude.errors import NodeStateError
 from snr.prelude.names import (
     ComponentName,
     DataDict,
@@ -221,10 +221,7 @@ class Node(AbstractNode):
                 shutdown, when a handler or loop failed.
         """
         if self.state is not NodeState.CREATED:
-            raise NodeStateError(
-                f"Cannot run node {self.role!r}: it is {self.state.value}. A node runs "
-                "once; build a new Node to run again."
-            )
+            raise life_cycle.ran_twice_error(self.role, self.state.value)
         self.state = NodeState.RUNNING
         self._thread_id = self.queue.owner_thread = threading.get_ident()
         if self._checks is not None:
@@ -543,12 +540,7 @@ class NodeCoreEndpoint(Endpoint):
         """
         page = task.page()
         if page is None:
-            self.err(
-                "A store_page task for %r carries %r instead of a Page; dropped it. "
-                "Make these tasks with tasks.store_page(page) or self.store_data_task().",
-                task.name,
-                task.val_list,
-            )
+            self.err(life_cycle.NOT_A_PAGE, task.name, task.val_list)
             return None
         if not page.origin:  # made by tasks.store_data(), which has no node
             page = dataclasses.replace(page, origin=self.parent.role)
