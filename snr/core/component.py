@@ -10,24 +10,12 @@ from __future__ import annotations
 import logging
 from typing import TYPE_CHECKING, Any, Optional, Sequence
 
-from snr.core.checks.explain import (
-    check_component_args,
-    handlers_before_init,
-    log_name_taken,
-    used_before_init,
-)
+from snr.core.checks import explain
 from snr.core.dispatch import HandlerMap
-from snr.prelude import (
-    AbstractComponent,
-    AbstractFactory,
-    AbstractNode,
-    ComponentName,
-    DataKey,
-    Page,
-    SomeTasks,
-    Task,
-    TaskHandlerMap,
-)
+from snr.prelude.abstract import AbstractComponent, AbstractFactory, AbstractNode
+from snr.prelude.names import ComponentName, DataKey, SomeTasks, TaskHandlerMap
+from snr.prelude.page import Page
+from snr.prelude.task import Task
 
 __all__ = ["Component"]
 
@@ -69,7 +57,9 @@ class Component(AbstractComponent):
     """
 
     def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:
-        check_component_args(type(self), factory, parent, name)  # which one is wrong, if any
+        explain.check_component_args(
+            type(self), factory, parent, name
+        )  # which one is wrong, if any
         self.factory = factory
         self.parent = parent
         self.name = name
@@ -89,7 +79,7 @@ class Component(AbstractComponent):
 
     @log.setter
     def log(self, value: Any) -> None:
-        raise log_name_taken(type(self))  # a clearer word than "property has no setter"
+        raise explain.log_name_taken(type(self))  # a clearer word than "property has no setter"
 
     # -- handlers ---------------------------------------------------------
     @property
@@ -105,7 +95,7 @@ class Component(AbstractComponent):
     @task_handlers.setter
     def task_handlers(self, handlers: TaskHandlerMap) -> None:
         if "_task_handlers" not in self.__dict__:
-            raise handlers_before_init(type(self))
+            raise explain.handlers_before_init(type(self))
         self._task_handlers = HandlerMap(
             handlers, owner_class=type(self), on_change=self._handlers_changed
         )
@@ -207,7 +197,7 @@ class Component(AbstractComponent):
             # Only reached when normal lookup fails. Before Component.__init__ has
             # run, every missing attribute means "super().__init__ was forgotten":
             # say so instead of a bare AttributeError deep inside SNR.
-            raise used_before_init(self, attribute)
+            raise explain.used_before_init(self, attribute)
 
     def __repr__(self) -> str:
         return f"<{type(self).__name__} {self.__dict__.get('name', '?')!r}>"

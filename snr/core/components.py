@@ -27,29 +27,12 @@ import functools
 import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
-from snr.core.checks.explain import (
-    CORE_REFUSED,
-    component_without_init,
-    factory_without_init,
-    name_taken_error,
-    not_stopped_text,
-    raise_get_failure,
-    reload_failure,
-    start_failure,
-    warn_get_returned_none,
-    wrong_get_result_error,
-)
+from snr.core.checks import component_log, explain
 from snr.core.checks.handler_checks import check_burst_handlers
-from snr.core.checks.student_code import describe_callable
 from snr.core.dispatch import HandlerTable
-from snr.prelude import (
-    AbstractComponent,
-    AbstractFactory,
-    AbstractLoop,
-    AbstractNode,
-    ComponentName,
-    SNRError,
-)
+from snr.prelude.abstract import AbstractComponent, AbstractFactory, AbstractLoop, AbstractNode
+from snr.prelude.errors import SNRError
+from snr.prelude.names import ComponentName
 
 __all__ = ["NODE_CORE_NAME", "ComponentSet"]
 
@@ -98,20 +81,22 @@ class ComponentSet:
                 component, or the factory skipped ``super().__init__()``.
         """
         if not hasattr(factory, "reload_targets"):
-            raise factory_without_init(factory)
+            raise explain.factory_without_init(factory)
         component: Any  # get() is typed, but a student's get() may return anything
         try:
             component = factory.get(self.node)
         except SNRError:
             raise
         except Exception as error:
-            raise_get_failure(factory, error, self.node.role)
+            explain.raise_get_failure(factory, error, self.node.role)
         if component is None:
             node = self.node
-            warn_get_returned_none(factory, node.role, self.running, self._none_told, node.log)
+            explain.warn_get_returned_none(
+                factory, node.role, self.running, self._none_told, node.log
+            )
             return None
         if not isinstance(component, AbstractComponent):
-            raise wrong_get_result_error(factory, component)
+            raise explain.wrong_get_result_error(factory, component)
         return component
 
     # -- adding and removing ------------------------------------------------
@@ -125,13 +110,13 @@ class ComponentSet:
         if not hasattr(component, "name") or (
             not hasattr(component, "_task_handlers") and not hasattr(component, "parent")
         ):
-            raise component_without_init(component)
+            raise explain.component_without_init(component)
         if self.check_added is not None:
             self.check_added(component)
         check_burst_handlers(component)
         other = self.by_name.get(component.name)
         if other is not None:
-            raise name_taken_error(self.node.role, component, other)
+            raise explain.name_taken_error(self.node.role, component, other)
         self.by_name[component.name] = component
         self.table_stale = True  # the table is rebuilt before the next task
         if start and self.running:
@@ -153,19 +138,9 @@ class ComponentSet:
 
     def _find(self, action: str, name: ComponentName) -> Optional[AbstractComponent]:
         """The component called ``name``; None, with the refusal logged, for node_core or none."""
-        log = self.node.log
-        if name == NODE_CORE_NAME:
-            log.error(CORE_REFUSED[action], name, self.node.role)
-            return None
-        component = self.by_name.get(name)
+        component = None if name == NODE_CORE_NAME else self.by_name.get(name)
         if component is None:
-            log.error(
-                "Cannot %s %r: node %r has no such component. It has: %s.",
-                action,
-                name,
-                self.node.role,
-                ", ".join(self.by_name),
-            )
+            component_log.not_found(self.node.log, action, name, self.node.role, self.by_name)
         return component
 
     # -- hot reload ---------------------------------------------------------
@@ -192,12 +167,7 @@ class ComponentSet:
         try:
             old.factory.reload()
         except Exception as error:
-            log.error(
-                "Reloading %r failed while reading its new source, so the old version "
-                "keeps running:\n%s",
-                old.name,
-                reload_failure(error),
-            )
+            component_log.reload_refused(log, "source", old, error)
             return False
         if self.running and not self._stop_for_reload(old):
             return False
@@ -217,7 +187,7 @@ class ComponentSet:
             try:
                 self.start(new)
             except SNRError as error:
-                log.error("Reloaded %r, but it failed to start: %s", new.name, error)
+                component_log.reload_refused(log, "start", old, error, new)
                 return False
         log.info("Reloaded %r", new.name)
         return True
@@ -227,37 +197,23 @@ class ComponentSet:
         self.stop(old)
         if not old.is_alive():
             return True
-        self.node.log.error("%s", not_stopped_text(old, self.join_timeout_s, reload=True))
+        component_log.still_running(self.node.log, old, self.join_timeout_s, reload=True)
         if isinstance(old, AbstractLoop):
             old.cancel_stop()
         return False
 
     def _build_replacement(self, old: AbstractComponent) -> Optional[AbstractComponent]:
         """A new component from ``old``'s factory, or None (logged) if that fails."""
-        log = self.node.log
         try:
             new = self.build(old.factory)
         except Exception as error:
-            log.error(
-                "Rebuilding %r after its reload failed, so the old version keeps running:\n%s",
-                old.name,
-                error if isinstance(error, SNRError) else reload_failure(error),
-            )
+            component_log.reload_refused(self.node.log, "build", old, error)
             return None
         if new is None:
-            log.error(
-                "%s returned None on reload, so the old version of %r keeps running.",
-                describe_callable(type(old.factory).get),
-                old.name,
-            )
+            component_log.reload_refused(self.node.log, "none", old)
             return None
         if new.name != old.name and new.name in self.by_name:
-            log.error(
-                "Reloaded %r came back named %r, which another component has; the old "
-                "version keeps running.",
-                old.name,
-                new.name,
-            )
+            component_log.reload_refused(self.node.log, "name", old, new=new)
             return None
         return new
 
@@ -268,12 +224,7 @@ class ComponentSet:
         try:
             _start(old)
         except Exception as error:
-            self.node.log.error(
-                "%r could not be restarted after the failed reload: %s: %s",
-                old.name,
-                type(error).__name__,
-                error,
-            )
+            component_log.reload_refused(self.node.log, "restart", old, error)
 
     # -- starting and stopping ----------------------------------------------
     def start_all(self, keep_going: Callable[[], bool]) -> None:
@@ -295,7 +246,7 @@ class ComponentSet:
         except SNRError:
             raise
         except Exception as error:
-            raise start_failure(component, error) from error
+            raise explain.start_failure(component, error) from error
 
     def stop(self, component: AbstractComponent) -> None:
         """Halt ``component`` and wait (up to ``join_timeout_s``) for its thread."""
@@ -317,8 +268,7 @@ class ComponentSet:
 
     def _warn_if_alive(self, component: AbstractComponent) -> None:
         if component.is_alive():
-            text = not_stopped_text(component, self.join_timeout_s, reload=False)
-            self.node.log.warning("%s", text)
+            component_log.still_running(self.node.log, component, self.join_timeout_s, reload=False)
 
     def call_safely(
         self, method: Callable[[], None], component: AbstractComponent, what: str
@@ -327,12 +277,7 @@ class ComponentSet:
         try:
             method()
         except Exception:
-            self.node.log.exception(
-                "%s.%s() of component %r raised; carrying on",
-                type(component).__name__,
-                what,
-                component.name,
-            )
+            component_log.call_failed(self.node.log, component, what)
 
     # -- the handler table ----------------------------------------------------
     def handlers_changed(self, component: AbstractComponent) -> None:

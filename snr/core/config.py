@@ -7,13 +7,8 @@ from typing import Dict, List, Mapping, Optional, Sequence
 from snr.core.checks.call_checks import check_config_args, check_role
 from snr.core.checks.profiler import Profiler
 from snr.core.sim_clock import SimClock
-from snr.prelude import (
-    AbstractConfig,
-    AbstractFactory,
-    AbstractProfiler,
-    Mode,
-    Role,
-)
+from snr.prelude.abstract import AbstractConfig, AbstractFactory, AbstractProfiler
+from snr.prelude.names import Mode, Role
 
 __all__ = ["Config"]
 

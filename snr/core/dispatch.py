@@ -27,12 +27,11 @@ For every handler that matches a task it
    additions, and a handler slower than ``slow_handler_s`` is reported once);
 2. queues the tasks it returned, keeping their order (a high-priority task
    goes to the urgent lane);
-3. turns a raised exception or a wrong return value into a `HandlerError`
-   that names the handler, the task and the student's lines. In DEBUG and
-   TEST mode the first one stops the node (``Node.loop()`` raises it); in
-   DEPLOYED mode it is logged and the node keeps running, and a handler that
-   fails over and over is logged in full three times, then counted in one
-   line every five seconds.
+3. hands a raised exception or a wrong return value to the node's
+   `snr.core.checks.failures.FailureReport`, which puts it into words (a
+   `HandlerError` that names the handler, the task and the student's lines).
+   In DEBUG and TEST mode the first one stops the node (``Node.loop()``
+   raises it); in DEPLOYED mode it is logged and the node keeps running.
 
 Example::
 
@@ -40,71 +39,33 @@ Example::
     table.rebuild(node.components.values())
     table.lookup(TaskType.event, "ping")   # [(handler, key, component, cell), ...]
 
-    runner = HandlerRunner(node.role, node.mode, node.log, node.queue, components, stop)
+    runner = HandlerRunner(node.queue, components, FailureReport(role, mode, log, stop))
     node.schedule(tasks.event("go"))
     runner.run_queued()      # runs every handler of (event, 'go'), and what follows
 """
 
 from __future__ import annotations
 
-import logging
 import time
-from typing import (
-    TYPE_CHECKING,
-    Any,
-    Callable,
-    Dict,
-    Hashable,
-    Iterable,
-    List,
-    Mapping,
-    Optional,
-    Set,
-    Tuple,
-    cast,
-)
+from typing import TYPE_CHECKING, Any, Callable, Dict, Iterable, List, Optional, Tuple, cast
 
-from snr.core.checks.explain import (
-    bad_result_error,
-    handler_failure,
-    loop_failure,
-    slow_handler_text,
-)
 from snr.core.checks.handler_checks import (
     check_burst_handlers,
     check_entry,
     check_handler,
     check_task_id,
 )
-from snr.core.logs import RepeatFilter
-from snr.prelude import (
-    AbstractComponent,
-    AbstractLoop,
-    AbstractProfiler,
-    BurstHandler,
-    Mode,
-    SNRError,
-    StatsCell,
-    Task,
-    TaskHandler,
-    TaskId,
-    TaskType,
-)
+from snr.prelude.abstract import AbstractComponent, AbstractProfiler
+from snr.prelude.names import BurstHandler, StatsCell, TaskHandler, TaskHandlerMap, TaskId, TaskType
+from snr.prelude.task import Task
 
 if TYPE_CHECKING:
+    from snr.core.checks.failures import FailureReport
     from snr.core.components import ComponentSet
     from snr.core.task_queue import TaskQueue
 
-__all__ = [
-    "BurstEntry",
-    "Entry",
-    "HandlerMap",
-    "HandlerRunner",
-    "HandlerTable",
-    "check_burst_handlers",
-    "check_handler",
-    "check_task_id",
-]
+__all__ = ["BurstEntry", "Entry", "HandlerMap", "HandlerRunner", "HandlerTable"]
+__all__ += ["check_burst_handlers", "check_handler", "check_task_id"]
 
 Entry = Tuple[TaskHandler, TaskId, AbstractComponent, StatsCell]
 """One matched handler: the function, the id it matched under, its component,
@@ -134,7 +95,7 @@ class HandlerMap(Dict[TaskId, TaskHandler]):
 
     def __init__(
         self,
-        items: Optional[Mapping[TaskId, TaskHandler]] = None,
+        items: Optional[TaskHandlerMap] = None,
         *,
         owner_class: type = object,
         on_change: Optional[Callable[[], None]] = None,
@@ -198,11 +159,11 @@ class HandlerTable:
     """
 
     def __init__(self, profiler: Optional[AbstractProfiler] = None) -> None:
-        self.table: Dict[Hashable, List[Entry]] = {}
+        self.table: Dict[TaskId, List[Entry]] = {}
         #: ``(TaskType.store_page, key)`` -> the burst handler for a run of those
         #: tasks, where one component alone handles them and declares one
         #: (`AbstractComponent.burst_handlers`). Refilled in place, as ``table``.
-        self.bursts: Dict[Hashable, BurstEntry] = {}
+        self.bursts: Dict[TaskId, BurstEntry] = {}
         self.profiler = profiler
 
     def lookup(self, task_type: TaskType, name: str) -> List[Entry]:
@@ -249,7 +210,7 @@ class HandlerTable:
         # store_page handler joins every specific id of that type).
         self._find_bursts(table if _STORE_PAGE in handlers else handlers)
 
-    def _find_bursts(self, keys: Iterable[Hashable]) -> None:
+    def _find_bursts(self, keys: Iterable[TaskId]) -> None:
         """Say again, for each of ``keys``, whether a burst handler serves it."""
         bursts, table = self.bursts, self.table
         for key in keys:
@@ -271,27 +232,24 @@ class HandlerTable:
 
 
 class HandlerRunner:
-    """Runs handlers, queues their tasks, and records the first failure.
+    """Runs handlers, queues their tasks, and hands failures to the node's failure report.
 
     Args:
-        role: the node's role, for messages.
-        mode: DEBUG/TEST stop the node on the first failure; DEPLOYED logs.
-        log: the node's logger.
         queue: where tasks come from and returned tasks go.
         components: the node's `snr.core.components.ComponentSet`, whose
             handler table says who runs.
-        stop: called with a reason to stop the node (``Node.set_terminate_flag``).
+        failures: what reports a failed or slow handler (and stops the node
+            outside DEPLOYED mode): `snr.core.checks.failures.FailureReport`.
         timed: time every handler (DEBUG/TEST, or a profiler is on).
 
     Example::
 
         runner.run_queued()
-        runner.failure        # the HandlerError/LoopError that stopped the node, or None
+        runner.failures.failure   # the HandlerError/LoopError that stopped the node, or None
 
     Attributes:
         running: False once the node is stopping, or pausing (``StepMode``):
             `run_queued` returns after the current task.
-        failure: the first error that stopped the node (DEBUG/TEST), or None.
         slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
         on_unhandled: called with each event no handler matched, or None (the
             default): a DEBUG node reports events nothing handles through it.
@@ -299,32 +257,22 @@ class HandlerRunner:
         store_page: what stores a ``store_page`` task's page before its
             handlers run (set by the node to its core's `store_page_handler`);
             it returns the page's ``process_data`` task, or None.
-        repeats: the `RepeatFilter` that keeps repeated failures from flooding the log.
     """
 
     def __init__(
         self,
-        role: str,
-        mode: Mode,
-        log: logging.Logger,
         queue: TaskQueue,
         components: ComponentSet,
-        stop: Callable[[str], None],
+        failures: FailureReport,
         timed: bool = True,
         slow_handler_s: float = 0.1,
     ) -> None:
-        self.role = role
-        self.mode = mode
-        self.log = log
         self.queue = queue
         self.components = components
-        self.stop = stop
+        self.failures = failures
         self.running = True
         self.timed = timed
         self.slow_handler_s = slow_handler_s
-        self.failure: Optional[SNRError] = None
-        self.repeats = RepeatFilter(log)
-        self._slow_reported: Set[Any] = set()
         #: Called with an event that no handler matched (set by a DEBUG node).
         self.on_unhandled: Optional[Callable[[Task], None]] = None
         #: Stores a store_page task's page before its handlers (set by the node).
@@ -387,14 +335,14 @@ class HandlerRunner:
                 try:
                     result = handler(task, key)
                 except Exception as error:
-                    self.handler_failed(handler, task, component, error)
+                    self.failures.handler_failed(handler, task, component, error)
                     continue
                 if timed:
                     took = clock() - started
                     cell[0] += 1
                     cell[1] += took
                     if took > slow_s:
-                        self.report_slow(handler, task, took)
+                        self.failures.report_slow(handler, task, took)
                 if result is None:
                     continue
                 if isinstance(result, Task):
@@ -436,7 +384,7 @@ class HandlerRunner:
         try:
             result = handler(run)
         except Exception as error:
-            self.handler_failed(named, first, component, error, run_size=len(run))
+            self.failures.handler_failed(named, first, component, error, run_size=len(run))
             return
         if self.timed:
             self._count(named, first, cell, time.perf_counter() - started, len(run))
@@ -455,7 +403,7 @@ class HandlerRunner:
         try:
             result = handler(task, key)
         except Exception as error:
-            self.handler_failed(handler, task, component, error)
+            self.failures.handler_failed(handler, task, component, error)
             return None
         self._count(
             handler, task, [0, 0.0] if cell is None else cell, time.perf_counter() - started
@@ -469,7 +417,7 @@ class HandlerRunner:
         cell[0] += calls
         cell[1] += took
         if took > self.slow_handler_s:
-            self.report_slow(handler, task, took)
+            self.failures.report_slow(handler, task, took)
 
     def store_first(self, task: Task) -> Optional[Task]:
         """For a ``store_page`` task: store its page now, queue and return what follows.
@@ -488,7 +436,9 @@ class HandlerRunner:
         try:
             follow_up = store_page(task, _STORE_PAGE)
         except Exception as error:
-            self.handler_failed(store_page, task, getattr(store_page, "__self__", None), error)
+            self.failures.handler_failed(
+                store_page, task, getattr(store_page, "__self__", None), error
+            )
             return None
         if not isinstance(follow_up, Task):
             return None
@@ -510,79 +460,5 @@ class HandlerRunner:
             return [result]
         if isinstance(result, list) and all(isinstance(t, Task) for t in result):
             return result
-        self.record(bad_result_error(result, handler, task), _func_of(handler))
+        self.failures.bad_result(result, handler, task)
         return None
-
-    def handler_failed(
-        self,
-        handler: TaskHandler,
-        task: Task,
-        component: Optional[AbstractComponent],
-        error: Exception,
-        run_size: int = 1,
-    ) -> None:
-        """Report ``error`` raised by ``handler`` (and stop the node unless DEPLOYED).
-
-        ``run_size``: how many tasks a burst handler was given, ``task`` first.
-        """
-        deployed = self.mode is Mode.DEPLOYED
-        failure = handler_failure(handler, task, component, error, deployed, run_size)
-        self.record(failure, (_func_of(handler), type(error)))
-
-    def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
-        """Report a loop's thread ending with ``error`` (any BaseException).
-
-        ``sys.exit()`` or Ctrl-C in a loop stops the node in every mode, as
-        the student meant; other errors are failures like a handler's.
-        """
-        deployed = self.mode is Mode.DEPLOYED
-        failure = loop_failure(loop, error, deployed)
-        if isinstance(error, (SystemExit, KeyboardInterrupt)):
-            self.log.warning("%s The node stops.", failure)
-            what = "sys.exit()" if isinstance(error, SystemExit) else "Ctrl-C"
-            self.stop(f"{what} in loop {loop.name!r}")
-            return
-        self.record(failure, (id(loop), type(error)))
-
-    def record(self, error: SNRError, key: Hashable) -> None:
-        """Log ``error``; outside DEPLOYED mode the first one also stops the node."""
-        if self.mode is Mode.DEPLOYED:
-            text = str(error)
-            if "The node keeps running" not in text:
-                text += " The node keeps running."
-            first_line = text.split("\n", 1)[0]
-            self.repeats.report(key, first_line, logging.ERROR, "%s", text)
-            return
-        if self.failure is None:
-            # loop() raises this error once the node has stopped, so the log
-            # gets one line now (shutdown can take a moment), not a duplicate.
-            self.failure = error
-            first_sentence = str(error).split("\n", 1)[0].split(". ", 1)[0].rstrip(".")
-            self.log.error("Stopping node %r: %s.", self.role, first_sentence)
-        else:
-            self.log.error("%s", error)
-        self.stop(f"stopped by a {type(error).__name__}")
-
-    def report_slow(self, handler: TaskHandler, task: Task, took_s: float) -> None:
-        """Warn once per handler that it held the node's thread for ``took_s``.
-
-        Only a student's handler is warned about; SNR's own (in ``snr.*``
-        modules) is noted at DEBUG level, since the advice is not theirs to follow.
-        """
-        if self.mode is Mode.DEPLOYED:
-            return
-        func = _func_of(handler)
-        if func in self._slow_reported:
-            return
-        self._slow_reported.add(func)
-        if getattr(func, "__module__", "").startswith("snr."):
-            # SNR's own handler (a reload waiting for a link's goodbye, say): the
-            # advice to move work into a ThreadLoop is not the student's to follow.
-            self.log.debug("%s", slow_handler_text(handler, task, took_s))
-            return
-        self.log.warning("%s", slow_handler_text(handler, task, took_s))
-
-
-def _func_of(handler: TaskHandler) -> Any:
-    """The function behind a bound method: one key for every instance's handler."""
-    return getattr(handler, "__func__", handler)

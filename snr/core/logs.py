@@ -17,14 +17,8 @@ from typing import Any, Callable, Deque, Dict, Hashable, List, Optional
 
 from snr.prelude import Mode
 
-__all__ = [
-    "LOG_FORMAT",
-    "LossReport",
-    "RateLimitedLog",
-    "RepeatFilter",
-    "ensure_log_handler",
-    "level_for_mode",
-]
+__all__ = ["LOG_FORMAT", "LossReport", "RateLimitedLog", "RepeatFilter", "ensure_log_handler"]
+__all__ += ["level_for_mode"]
 
 LOG_FORMAT = "%(asctime)s %(name)s %(levelname)s: %(message)s"
 """How SNR's own handler formats a line."""

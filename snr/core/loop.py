@@ -8,19 +8,14 @@ import time
 from typing import ClassVar, Optional
 
 from snr.core import tasks
+from snr.core.checks import life_cycle
 from snr.core.checks.explain import check_loop_class
 from snr.core.checks.student_code import running_line
 from snr.core.component import Component
 from snr.core.sim_clock import LoopTurn, clock_of
-from snr.prelude import (
-    AbstractFactory,
-    AbstractLoop,
-    AbstractNode,
-    ComponentName,
-    NodeStateError,
-    Task,
-    TaskType,
-)
+from snr.prelude.abstract import AbstractFactory, AbstractLoop, AbstractNode
+from snr.prelude.names import ComponentName, TaskType
+from snr.prelude.task import Task
 
 __all__ = ["LoopState", "ThreadLoop"]
 
@@ -157,10 +152,7 @@ class ThreadLoop(Component, AbstractLoop):
             NodeStateError: the loop is running already.
         """
         if self.state is LoopState.RUNNING:
-            raise NodeStateError(
-                f"Cannot start loop {self.name!r} twice: it is {self.state.value}. "
-                "Reloading builds a new loop from its factory instead."
-            )
+            raise life_cycle.started_twice_error(self.name, self.state.value)
         if self.state is LoopState.STOPPED:  # after a reload that failed: run again
             self._resume_running()
         self.begin()

@@ -15,7 +15,8 @@ Three helpers do the rest::
     Node ──► ComponentSet   build, add, remove, reload, start and stop components;
       │                     keep the HandlerTable in step with them
       ├────► HandlerRunner  run a task's handlers, time them, queue what they
-      │                     return, put failures into words
+      │                     return; its FailureReport (checks/failures.py) puts
+      │                     failures into words
       └────► NodeChecks     wire in the checks for silent mistakes (key hints,
                             wiring checks, watchdog: DEBUG mode)
 """
@@ -30,8 +31,10 @@ import time
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional
 
 from snr.core import tasks
+from snr.core.checks import life_cycle
 from snr.core.checks.datastore_guard import NodeDatastore
 from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
+from snr.core.checks.failures import FailureReport
 from snr.core.checks.step_mode import StepMode
 from snr.core.components import NODE_CORE_NAME, ComponentSet
 from snr.core.dispatch import HandlerRunner, HandlerTable
@@ -41,25 +44,26 @@ from snr.core.logs import ensure_log_handler, level_for_mode
 from snr.core.sim_clock import NodeTurn, clock_of
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Timer
-from snr.prelude import (
+from snr.prelude.abstract import (
     AbstractComponent,
     AbstractConfig,
     AbstractFactory,
     AbstractLoop,
     AbstractNode,
+)
+from snr.prelude.names import (
     ComponentName,
     DataDict,
     DataKey,
     Mode,
-    NodeStateError,
-    Page,
     Role,
     SomeTasks,
-    Task,
     TaskHandler,
     TaskId,
     TaskType,
 )
+from snr.prelude.page import Page
+from snr.prelude.task import Task
 
 if TYPE_CHECKING:  # DEBUG helpers, imported when a node turns them on (see __init__)
     from snr.core.checks.key_hints import MissingKeyHints
@@ -158,15 +162,9 @@ class Node(AbstractNode):
         self._thread_id: Optional[int] = None
         self._components = ComponentSet(self, HandlerTable(self.profiler), join_timeout_s=1.0)
         self.components = self._components.by_name
-        self._runner = HandlerRunner(
-            role,
-            self.mode,
-            self.log,
-            self.queue,
-            self._components,
-            self.set_terminate_flag,
-            timed=self.profiler is not None or self.mode is not Mode.DEPLOYED,
-        )
+        self._failures = FailureReport(role, self.mode, self.log, self.set_terminate_flag)
+        timed = self.profiler is not None or self.mode is not Mode.DEPLOYED
+        self._runner = HandlerRunner(self.queue, self._components, self._failures, timed)
         self.step_mode = StepMode(self.queue, self._runner, self._lookup, self.is_terminated)
         # The checks for silent mistakes (snr/core/checks/, read second): NodeChecks
         # sets key_hints, wiring_checks and watchdog in DEBUG mode, and reads each
@@ -223,10 +221,7 @@ class Node(AbstractNode):
                 shutdown, when a handler or loop failed.
         """
         if self.state is not NodeState.CREATED:
-            raise NodeStateError(
-                f"Cannot run node {self.role!r}: it is {self.state.value}. A node runs "
-                "once; build a new Node to run again."
-            )
+            raise life_cycle.ran_twice_error(self.role, self.state.value)
         self.state = NodeState.RUNNING
         self._thread_id = self.queue.owner_thread = threading.get_ident()
         if self._checks is not None:
@@ -248,8 +243,8 @@ class Node(AbstractNode):
             finally:
                 if self._clock_turn is not None:
                     self._clock_turn.end()
-        if self._runner.failure is not None:
-            raise self._runner.failure
+        if self._failures.failure is not None:
+            raise self._failures.failure
 
     def check_wiring(self) -> None:
         """In DEBUG mode, warn about handlers of data keys that look misspelled.
@@ -289,7 +284,7 @@ class Node(AbstractNode):
         if self._checks is not None:  # stopping loops and waiting for them is no mistake
             self._checks.stop()
         self._components.shutdown()
-        self._runner.repeats.flush()
+        self._failures.repeats.flush()
         dropped = self.queue.clear()
         if dropped:
             self.log.debug("Dropped %d queued tasks at shutdown", dropped)
@@ -360,7 +355,7 @@ class Node(AbstractNode):
         `LoopError`; DEPLOYED logs it. ``sys.exit()`` or Ctrl-C in a loop stop
         the node in every mode. Called by the loop's thread as it ends.
         """
-        self._runner.loop_failed(loop, error)
+        self._failures.loop_failed(loop, error)
 
     # ------------------------------------------------------------------
     # Scheduling (thesis listing 6.3)
@@ -545,12 +540,7 @@ class NodeCoreEndpoint(Endpoint):
         """
         page = task.page()
         if page is None:
-            self.err(
-                "A store_page task for %r carries %r instead of a Page; dropped it. "
-                "Make these tasks with tasks.store_page(page) or self.store_data_task().",
-                task.name,
-                task.val_list,
-            )
+            self.err(life_cycle.NOT_A_PAGE, task.name, task.val_list)
             return None
         if not page.origin:  # made by tasks.store_data(), which has no node
             page = dataclasses.replace(page, origin=self.parent.role)

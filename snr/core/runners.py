@@ -14,35 +14,20 @@ import sys
 import threading
 import time
 from types import FrameType
-from typing import (
-    TYPE_CHECKING,
-    Any,
-    Callable,
-    List,
-    Mapping,
-    Optional,
-    Sequence,
-    Union,
-)
+from typing import TYPE_CHECKING, Any, Callable, List, Mapping, Optional, Sequence, Union
 
-from snr.core.checks.call_checks import (
-    check_cli_args,
-    check_runner_args,
-    no_sim_clock_across_processes,
-)
+from snr.core.checks import call_checks
 from snr.core.checks.runner_checks import runner_built, runner_ran
 from snr.core.config import Config
 from snr.core.node import Node
-from snr.prelude import (
+from snr.prelude.abstract import (
     AbstractConfig,
     AbstractFactory,
     AbstractMultiRunner,
     AbstractRunner,
-    ConfigError,
-    Mode,
-    Role,
-    SNRError,
 )
+from snr.prelude.errors import ConfigError, SNRError
+from snr.prelude.names import Mode, Role
 
 if TYPE_CHECKING:
     import argparse
@@ -53,14 +38,8 @@ if TYPE_CHECKING:
 # mypy --strict would reject a plain {"robot": [TimeoutLoopFactory(...)]}.
 _System = Union[AbstractConfig, Mapping[Role, Sequence[AbstractFactory]]]
 
-__all__ = [
-    "INTERRUPTED_MESSAGE",
-    "CliRunner",
-    "MultiProcRunner",
-    "SynchronousRunner",
-    "TestRunner",
-    "report_error",
-]
+__all__ = ["INTERRUPTED_MESSAGE", "CliRunner", "MultiProcRunner", "SynchronousRunner", "TestRunner"]
+__all__ += ["report_error"]
 
 INTERRUPTED_MESSAGE = "Interrupted by user, exiting"
 """What a runner prints when Ctrl-C stops it (as in thesis figure 5.4)."""
@@ -136,7 +115,9 @@ class SynchronousRunner(AbstractRunner):
     ) -> None:
         self.role = role
         self.config = _config_or_exit(
-            lambda: check_runner_args(SynchronousRunner, role, config), config, exit_on_error
+            lambda: call_checks.check_runner_args(SynchronousRunner, role, config),
+            config,
+            exit_on_error,
         )
         self.exit_on_error = exit_on_error
         self.announce_interrupt = announce_interrupt
@@ -315,7 +296,7 @@ class MultiProcRunner(AbstractMultiRunner):
         join_timeout_s: float = 5.0,
     ) -> None:
         self.config = _as_config(config)
-        no_sim_clock_across_processes(self.config)
+        call_checks.no_sim_clock_across_processes(self.config)
         known = self.config.roles()
         for role in roles:
             if role not in known:
@@ -441,7 +422,7 @@ class CliRunner(AbstractRunner):
         argv: Optional[Sequence[str]] = None,
     ) -> None:
         self.config = _config_or_exit(
-            lambda: check_cli_args(CliRunner, components_or_config, argv),
+            lambda: call_checks.check_cli_args(CliRunner, components_or_config, argv),
             components_or_config,
             exit_on_error=True,
         )

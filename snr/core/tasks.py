@@ -15,34 +15,15 @@ from typing import Any, List, Optional
 
 from snr.core.checks.call_checks import values_not_a_list
 from snr.core.checks.explain import check_page_args
-from snr.prelude import (
-    AbstractFactory,
-    ComponentError,
-    ComponentName,
-    DataKey,
-    Page,
-    Task,
-    TaskName,
-    TaskPriority,
-    TaskType,
-)
+from snr.prelude.abstract import AbstractFactory
+from snr.prelude.errors import ComponentError
+from snr.prelude.names import ComponentName, DataKey, TaskName, TaskPriority, TaskType
+from snr.prelude.page import Page
+from snr.prelude.task import Task
 
-__all__ = [
-    "ADD_COMPONENT",
-    "CAUGHT_UP",
-    "CHECK_WIRING",
-    "REMOVE_COMPONENT",
-    "STORE_PAGES",
-    "add_component",
-    "event",
-    "process_data",
-    "reload_component",
-    "remove_component",
-    "store_data",
-    "store_page",
-    "store_pages",
-    "terminate",
-]
+__all__ = ["ADD_COMPONENT", "CAUGHT_UP", "CHECK_WIRING", "REMOVE_COMPONENT", "STORE_PAGES"]
+__all__ += ["add_component", "event", "process_data", "reload_component", "remove_component"]
+__all__ += ["store_data", "store_page", "store_pages", "terminate"]
 
 ADD_COMPONENT: TaskName = "add_component"
 """Name of the event task that adds a component built by a factory."""

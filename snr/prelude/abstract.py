@@ -38,20 +38,10 @@ from snr.prelude.page import Page
 from snr.prelude.student_code import caller_location
 from snr.prelude.task import Task
 
-__all__ = [
-    "AbstractComponent",
-    "AbstractConfig",
-    "AbstractEndpoint",
-    "AbstractFactory",
-    "AbstractLoop",
-    "AbstractMultiRunner",
-    "AbstractNode",
-    "AbstractProfiler",
-    "AbstractRunner",
-    "AbstractTaskQueue",
-    "explain_abstract_error",
-    "missing_methods_error",
-]
+__all__ = ["AbstractComponent", "AbstractConfig", "AbstractEndpoint", "AbstractFactory"]
+__all__ += ["AbstractLoop", "AbstractMultiRunner", "AbstractNode", "AbstractProfiler"]
+__all__ += ["AbstractRunner", "AbstractTaskQueue", "explain_abstract_error"]
+__all__ += ["missing_methods_error"]
 
 
 class _FriendlyABCMeta(ABCMeta):

@@ -20,12 +20,7 @@ import builtins
 import re
 from typing import Any, Dict, List, Optional
 
-from snr.prelude.abstract import (
-    AbstractComponent,
-    AbstractEndpoint,
-    AbstractFactory,
-    AbstractLoop,
-)
+from snr.prelude.abstract import AbstractComponent, AbstractEndpoint, AbstractFactory, AbstractLoop
 from snr.prelude.errors import ComponentError
 from snr.prelude.student_code import describe_class, frame_location
 

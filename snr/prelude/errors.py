@@ -36,22 +36,10 @@ The tree::
 
 from __future__ import annotations
 
-__all__ = [
-    "CommsError",
-    "ComponentError",
-    "ConfigError",
-    "ConsoleConnectionError",
-    "DatastoreWriteError",
-    "HandlerError",
-    "LoopError",
-    "MissingSuperInitError",
-    "NodeStateError",
-    "NotSerializableError",
-    "RemovedApiError",
-    "SNRError",
-    "ThreadSafetyError",
-    "WireFormatError",
-]
+__all__ = ["CommsError", "ComponentError", "ConfigError", "ConsoleConnectionError"]
+__all__ += ["DatastoreWriteError", "HandlerError", "LoopError", "MissingSuperInitError"]
+__all__ += ["NodeStateError", "NotSerializableError", "RemovedApiError", "SNRError"]
+__all__ += ["ThreadSafetyError", "WireFormatError"]
 
 
 class SNRError(Exception):

@@ -23,24 +23,9 @@ if TYPE_CHECKING:  # pragma: no cover - only for the type checker
     import snr.prelude.page
     import snr.prelude.task
 
-__all__ = [
-    "BurstHandler",
-    "ComponentName",
-    "ComponentsByRole",
-    "DataDict",
-    "DataKey",
-    "Mode",
-    "Role",
-    "SomeTasks",
-    "StatsCell",
-    "TaskHandler",
-    "TaskHandlerMap",
-    "TaskId",
-    "TaskName",
-    "TaskPriority",
-    "TaskScheduler",
-    "TaskType",
-]
+__all__ = ["BurstHandler", "ComponentName", "ComponentsByRole", "DataDict", "DataKey", "Mode"]
+__all__ += ["Role", "SomeTasks", "StatsCell", "TaskHandler", "TaskHandlerMap", "TaskId", "TaskName"]
+__all__ += ["TaskPriority", "TaskScheduler", "TaskType"]
 
 DataKey = str
 """The name a page is stored under in a node's datastore, e.g. ``"depth_m"``."""

@@ -21,15 +21,8 @@ import sys
 from types import FrameType
 from typing import Optional
 
-__all__ = [
-    "caller_location",
-    "describe_class",
-    "frame_location",
-    "frame_name",
-    "is_runtime_file",
-    "outside_runtime",
-    "short_path",
-]
+__all__ = ["caller_location", "describe_class", "frame_location", "frame_name", "is_runtime_file"]
+__all__ += ["outside_runtime", "short_path"]
 
 _SNR_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 _RUNTIME_DIRS = tuple(os.path.join(_SNR_DIR, sub) + os.sep for sub in ("core", "prelude"))

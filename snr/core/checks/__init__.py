@@ -9,6 +9,12 @@ call as "check this" and come back here for the how:
 * ``explain.py``: the words of the errors a node raises or logs, e.g. a handler
   that returns something that is not a Task, swapped arguments, or a loop
   thread that calls a method only the node's thread may call (every mode);
+* ``failures.py``: a handler or loop that failed, or a slow handler, logged in
+  words; outside DEPLOYED mode the first failure stops the node (every mode);
+* ``component_log.py``: a reload that keeps the old component running, a removal
+  refused, a component's ``halt()`` that raised, each logged in words (every mode);
+* ``life_cycle.py``: a node run twice, a loop started twice, a ``store_page``
+  task without its page (every mode);
 * ``call_checks.py``: a constructor or task builder called with the wrong
   arguments (``Config``, the runners, ``tasks.event``, ``store_data``), shown
   as written, with where and the signature to follow (every mode);

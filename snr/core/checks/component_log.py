@@ -1,0 +1,142 @@
+"""What a node logs when a reload, a removal or a component's life-cycle call goes wrong.
+
+`snr.core.components.ComponentSet` never lets such a mistake stop the
+node: a reload that fails keeps the old component running, a name that is not
+there is refused, a ``halt()`` that raises is logged and the node carries on.
+The words for each case are here; each names the component, what failed and
+what happens now.
+
+Example::
+
+    reload_refused(node.log, "source", old, error)
+    # Reloading 'depth_filter' failed while reading its new source, so the old
+    # version keeps running:
+    # filters.py:12: SyntaxError: invalid syntax
+"""
+
+from __future__ import annotations
+
+import logging
+from typing import Iterable, Literal, Optional
+
+from snr.core.checks.explain import CORE_REFUSED, not_stopped_text, reload_failure
+from snr.core.checks.student_code import describe_callable
+from snr.prelude.abstract import AbstractComponent
+from snr.prelude.errors import SNRError
+
+__all__ = ["ReloadStage", "call_failed", "not_found", "reload_refused", "still_running"]
+
+ReloadStage = Literal["source", "build", "none", "name", "restart", "start"]
+"""Where a reload went wrong: reading the new ``source``, building the new
+component (``build``; ``none``: its factory's ``get()`` returned None; ``name``:
+it came back with another component's name), restarting the old one after any of
+these (``restart``), or starting the new one (``start``)."""
+
+
+def reload_refused(
+    log: logging.Logger,
+    stage: ReloadStage,
+    old: AbstractComponent,
+    error: Optional[BaseException] = None,
+    new: Optional[AbstractComponent] = None,
+) -> None:
+    """Log why reloading ``old`` went wrong at ``stage``, and what runs now.
+
+    ``new`` is the new component, for ``name`` and ``start``.
+
+    Example::
+
+        reload_refused(node.log, "none", old)
+        # "DepthFactory.get (robot.py:20) returned None on reload, so the old
+        #  version of 'depth' keeps running."
+    """
+    if stage == "source" and error is not None:
+        log.error(
+            "Reloading %r failed while reading its new source, so the old version "
+            "keeps running:\n%s",
+            old.name,
+            reload_failure(error),
+        )
+    elif stage == "build" and error is not None:
+        log.error(
+            "Rebuilding %r after its reload failed, so the old version keeps running:\n%s",
+            old.name,
+            error if isinstance(error, SNRError) else reload_failure(error),
+        )
+    elif stage == "none":
+        log.error(
+            "%s returned None on reload, so the old version of %r keeps running.",
+            describe_callable(type(old.factory).get),
+            old.name,
+        )
+    elif stage == "name" and new is not None:
+        log.error(
+            "Reloaded %r came back named %r, which another component has; the old "
+            "version keeps running.",
+            old.name,
+            new.name,
+        )
+    elif stage == "restart" and error is not None:
+        log.error(
+            "%r could not be restarted after the failed reload: %s: %s",
+            old.name,
+            type(error).__name__,
+            error,
+        )
+    elif stage == "start" and new is not None:
+        log.error("Reloaded %r, but it failed to start: %s", new.name, error)
+
+
+def not_found(log: logging.Logger, action: str, name: str, role: str, names: Iterable[str]) -> None:
+    """Log that node ``role`` cannot ``action`` the component ``name``: its core, or none.
+
+    Example::
+
+        not_found(node.log, "reload", "depht", "robot", ["depth"])
+        # "Cannot reload 'depht': node 'robot' has no such component. It has: depth."
+    """
+    if action in CORE_REFUSED and name == "node_core":
+        log.error(CORE_REFUSED[action], name, role)
+        return
+    log.error(
+        "Cannot %s %r: node %r has no such component. It has: %s.",
+        action,
+        name,
+        role,
+        ", ".join(names),
+    )
+
+
+def still_running(
+    log: logging.Logger, component: AbstractComponent, timeout_s: float, reload: bool
+) -> None:
+    """Log that ``component``'s thread did not stop within ``timeout_s`` (see `not_stopped_text`).
+
+    Example::
+
+        still_running(node.log, sonar_loop, 1.0, reload=False)
+    """
+    if reload:
+        log.error("%s", not_stopped_text(component, timeout_s, reload=True))
+    else:
+        log.warning("%s", not_stopped_text(component, timeout_s, reload=False))
+
+
+def call_failed(log: logging.Logger, component: AbstractComponent, what: str) -> None:
+    """Log, with its traceback, that ``component``'s ``what()`` raised; the node carries on.
+
+    Call it in the ``except`` block, where the error is being handled.
+
+    Example::
+
+        try:
+            component.halt()
+        except Exception:
+            call_failed(node.log, component, "halt")
+    """
+    log.exception(
+        "%s.%s() of component %r raised; carrying on",
+        type(component).__name__,
+        what,
+        component.name,
+    )
