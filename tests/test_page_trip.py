@@ -31,6 +31,7 @@ from snr import (
     TaskId,
     TaskType,
 )
+from snr.std_mods.comms.comms_loop import LinkState
 from tests.helpers import free_port
 from tests.quiet import captured_logs
 
@@ -71,26 +72,31 @@ class ArrivedFactory(EndpointFactory):
         return Arrived(self, parent, self.done)
 
 
-def files_on_the_trip(mode: Mode) -> Set[str]:
-    """The kernel files whose functions ran between store_data and the other node's handler."""
-    done = threading.Event()
+def files_on_the_trip(mode: Mode, trips: int = 3) -> Set[str]:
+    """The kernel files whose functions ran between store_data and the other node's handler.
+
+    The page makes ``trips`` trips, each traced on its own, and a file counts if
+    every trip crossed it: a timer of either node (a beat, a DEBUG check) that
+    fires during one trip is not the page's path.
+    """
+    arrived = threading.Event()
     pair = SocketsPair(("127.0.0.1", free_port()), system=None, secret=None)
     roles: Dict[str, List[AbstractFactory]] = {
-        "topside": [pair.server(), ArrivedFactory(done)],
+        "topside": [pair.server(), ArrivedFactory(arrived)],
         "rov": [pair.client("depth")],
     }
-    config = Config(roles, mode=mode)
-    topside, rov = Node("topside", config), Node("rov", config)
+    topside, rov = Node("topside", Config(roles, mode=mode)), Node("rov", Config(roles, mode=mode))
     files: Set[str] = set()
     tracing = threading.Event()
 
     def profile(frame: FrameType, event: str, arg: Any) -> Optional[Any]:
-        if event == "call" and tracing.is_set() and not done.is_set():
+        if event == "call" and tracing.is_set() and not arrived.is_set():
             name = frame.f_code.co_filename
             if name.startswith(SNR_ROOT) and os.sep + "extras" + os.sep not in name:
                 files.add(os.path.relpath(name, SNR_ROOT).replace(os.sep, "/"))
         return None
 
+    crossed: List[Set[str]] = []
     threads = [threading.Thread(target=node.loop, daemon=True) for node in (topside, rov)]
     with captured_logs("snr"):
         threading.setprofile(profile)
@@ -98,13 +104,19 @@ def files_on_the_trip(mode: Mode) -> Set[str]:
         try:
             for thread in threads:
                 thread.start()
-            for _ in range(200):  # until both ends have an open link (at most 2 s)
-                if _linked(rov) and _linked(topside):
+            for _ in range(300):  # until both ends have said hello (at most 3 s)
+                if _open(rov) and _open(topside):
                     break
-                done.wait(0.01)
-            tracing.set()
-            rov.store_data("depth", 3.2)
-            arrived = done.wait(5.0)
+                arrived.wait(0.01)
+            for trip in range(trips):
+                arrived.clear()
+                files.clear()
+                tracing.set()
+                rov.store_data("depth", 3.2 + trip)
+                got_there = arrived.wait(5.0)
+                tracing.clear()
+                assert got_there, f"page {trip + 1} never arrived"
+                crossed.append(set(files))
         finally:
             sys.setprofile(None)
             threading.setprofile(None)
@@ -112,16 +124,15 @@ def files_on_the_trip(mode: Mode) -> Set[str]:
                 node.set_terminate_flag("done")
             for thread in threads:
                 thread.join(5.0)
-    assert arrived, "the page never arrived"
-    return files
+    return set.intersection(*crossed)
 
 
-def _linked(node: Node) -> bool:
-    """True once the node's comms component has an open link."""
+def _open(node: Node) -> bool:
+    """True once the node's comms component has an open link (its hello done)."""
     for component in node.components.values():
-        links = getattr(component, "links", None)
-        if links:
-            return True
+        for link in getattr(component, "links", ()):
+            if link.state is LinkState.OPEN:
+                return True
     return False
 
 
