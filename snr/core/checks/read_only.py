@@ -27,7 +27,7 @@ Example::
 from __future__ import annotations
 
 import copy
-from typing import Any, Callable, Dict, Iterable, List, NoReturn, Tuple
+from typing import Any, Callable, Dict, List, NoReturn, Tuple
 
 from snr.prelude import DataKey
 
@@ -45,7 +45,7 @@ def _refusing(kind: str, what: str, instead: str = "") -> Callable[..., NoReturn
     copy_call = "list" if kind == "list" else "dict"
 
     def refuse(self: Any, *args: Any, **kwargs: Any) -> NoReturn:
-        key = self.key
+        key = getattr(self, "key", "?")  # '?' for one made by hand, not by freeze
         raise TypeError(
             f"The data of page {key!r} is read-only: {what} would change it for every "
             f"handler of {key!r} and for the datastore, which all share this one {kind}. "
@@ -65,16 +65,12 @@ class ReadOnlyList(List[Any]):
 
     Example::
 
-        data = ReadOnlyList([1.0, 2.0], "scan")
+        data = freeze([1.0, 2.0], "scan")       # a ReadOnlyList
         data[0], len(data), data == [1.0, 2.0]   # 1.0, 2, True
         data.append(3.0)   # TypeError naming 'scan' and how to copy it
     """
 
-    __slots__ = ("key",)
-
-    def __init__(self, items: Iterable[Any] = (), key: DataKey = "") -> None:
-        super().__init__(items)
-        self.key = key
+    __slots__ = ("key",)  # the page's key, for the message (set by `freeze`)
 
     append = _refusing("list", ".append()")
     extend = _refusing("list", ".extend()")
@@ -103,16 +99,12 @@ class ReadOnlyDict(Dict[Any, Any]):
 
     Example::
 
-        data = ReadOnlyDict({"x": 1.0}, "pose")
+        data = freeze({"x": 1.0}, "pose")       # a ReadOnlyDict
         data["x"], data == {"x": 1.0}    # 1.0, True
         data["y"] = 2.0   # TypeError naming 'pose' and how to copy it
     """
 
-    __slots__ = ("key",)
-
-    def __init__(self, items: Any = (), key: DataKey = "") -> None:
-        super().__init__(items)
-        self.key = key
+    __slots__ = ("key",)  # the page's key, for the message (set by `freeze`)
 
     update = _refusing("dict", ".update()")
     pop = _refusing("dict", ".pop()")
@@ -138,7 +130,7 @@ def freeze(data: Any, key: DataKey, depth: int = 0) -> Any:
     Values that cannot change (numbers, strings, None) and objects that are not
     lists, dicts or tuples come back as they are, and so does whatever is nested
     deeper than `MAX_DEPTH` (data that contains itself is endlessly deep). Nested
-    values' types are checked in C first (``set(map(type, ...))``), so a flat
+    values' types are checked in C first (``issuperset(map(type, ...))``), so a flat
     list of numbers costs one copy.
 
     Example::
@@ -149,14 +141,20 @@ def freeze(data: Any, key: DataKey, depth: int = 0) -> Any:
     kind = type(data)
     if kind in _IMMUTABLE or depth > MAX_DEPTH:
         return data
+    frozen: Any
     if kind is list or kind is ReadOnlyList:
-        if set(map(type, data)) <= _IMMUTABLE:
-            return ReadOnlyList(data, key)
-        return ReadOnlyList([freeze(item, key, depth + 1) for item in data], key)
-    if kind is dict or kind is ReadOnlyDict:
-        if set(map(type, data.values())) <= _IMMUTABLE:
-            return ReadOnlyDict(data, key)
-        return ReadOnlyDict({k: freeze(v, key, depth + 1) for k, v in data.items()}, key)
-    if kind is tuple and not set(map(type, data)) <= _IMMUTABLE:
+        if _IMMUTABLE.issuperset(map(type, data)):  # (a flat list: one C copy)
+            frozen = ReadOnlyList(data)
+        else:
+            frozen = ReadOnlyList([freeze(item, key, depth + 1) for item in data])
+    elif kind is dict or kind is ReadOnlyDict:
+        if _IMMUTABLE.issuperset(map(type, data.values())):
+            frozen = ReadOnlyDict(data)
+        else:
+            frozen = ReadOnlyDict({k: freeze(v, key, depth + 1) for k, v in data.items()})
+    elif kind is tuple and not _IMMUTABLE.issuperset(map(type, data)):
         return tuple(freeze(item, key, depth + 1) for item in data)
-    return data
+    else:
+        return data
+    frozen.key = key
+    return frozen
