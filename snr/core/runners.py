@@ -236,10 +236,8 @@ def _run_role(
 
     def watch(node: Node) -> None:
         # Daemon: a child whose node stopped on its own must not wait for it.
-        args = (role, link, node)
-        threading.Thread(
-            target=_watch_parent, args=args, name="snr-parent-watch", daemon=True
-        ).start()
+        name, args = "snr-parent-watch", (role, link, node)
+        threading.Thread(target=_watch_parent, args=args, name=name, daemon=True).start()
 
     # Ctrl-C reaches every process of the group; only the parent says so.
     SynchronousRunner(role, config, announce_interrupt=False, on_node=watch).run()
