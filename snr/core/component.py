@@ -57,9 +57,7 @@ class Component(AbstractComponent):
     """
 
     def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:
-        explain.check_component_args(
-            type(self), factory, parent, name
-        )  # which one is wrong, if any
+        explain.check_component_args(type(self), factory, parent, name)  # which is wrong, if any
         self.factory = factory
         self.parent = parent
         self.name = name

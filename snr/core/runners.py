@@ -17,7 +17,7 @@ from types import FrameType
 from typing import TYPE_CHECKING, Any, Callable, List, Mapping, Optional, Sequence, Union
 
 from snr.core.checks import call_checks
-from snr.core.checks.runner_checks import runner_built, runner_ran
+from snr.core.checks.runner_checks import no_role_given, runner_built, runner_ran
 from snr.core.config import Config
 from snr.core.node import Node
 from snr.prelude.abstract import (
@@ -236,10 +236,8 @@ def _run_role(
 
     def watch(node: Node) -> None:
         # Daemon: a child whose node stopped on its own must not wait for it.
-        args = (role, link, node)
-        threading.Thread(
-            target=_watch_parent, args=args, name="snr-parent-watch", daemon=True
-        ).start()
+        name, args = "snr-parent-watch", (role, link, node)
+        threading.Thread(target=_watch_parent, args=args, name=name, daemon=True).start()
 
     # Ctrl-C reaches every process of the group; only the parent says so.
     SynchronousRunner(role, config, announce_interrupt=False, on_node=watch).run()
@@ -434,33 +432,19 @@ class CliRunner(AbstractRunner):
         import argparse  # only a command line needs it: kept out of `import snr`
 
         roles = self.config.roles()
+        known = ", ".join(roles)
         prog = self.argv[0] if self.argv else "snr"
         parser = argparse.ArgumentParser(
             prog=prog,
             description="Run one or more nodes of this SNR system.",
-            epilog=f"roles in this config: {', '.join(roles) or '(none)'}",
+            epilog=f"roles in this config: {known or '(none)'}",
         )
-        parser.add_argument(
-            "roles",
-            nargs="+",
-            metavar="ROLE",
-            help="the role(s) to run: " + ", ".join(roles),
-        )
-        parser.add_argument(
-            "--mode",
-            choices=[m.value for m in Mode],
-            default=None,
-            help="override the config's mode",
-        )
+        parser.add_argument("roles", nargs="+", metavar="ROLE", help=f"the role(s) to run: {known}")
+        modes = [m.value for m in Mode]
+        parser.add_argument("--mode", choices=modes, help="override the config's mode")
         parser.add_argument("--verbose", action="store_true", help=argparse.SUPPRESS)  # top_level
         if len(self.argv) < 2:
-            parser.print_usage(sys.stderr)
-            print(
-                f"{prog}: error: no role given. Choose one of: {', '.join(roles)}. "
-                f"For example: python {prog} {roles[0] if roles else 'ROLE'}",
-                file=sys.stderr,
-            )
-            raise SystemExit(2)
+            no_role_given(parser, prog, roles)  # usage, the roles and an example; exit status 2
         args = parser.parse_args(self.argv[1:])
         for role in args.roles:
             try:

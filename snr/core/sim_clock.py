@@ -35,8 +35,6 @@ import threading
 import time
 from typing import Callable, List, Optional, Sized, Tuple
 
-from snr.prelude import ConfigError
-
 __all__ = ["LoopTurn", "NodeTurn", "SimClock", "Turn", "clock_of"]
 
 _POLL_S = 0.25
@@ -202,11 +200,9 @@ class SimClock:
 
     def __init__(self, speed: Optional[float] = None, epoch_s: float = 0.0) -> None:
         if speed is not None and not (isinstance(speed, (int, float)) and speed > 0):
-            raise ConfigError(
-                f"SimClock(speed={speed!r}): the speed is simulated seconds per real "
-                "second, a number above 0 (1.0 is real time), or None to run as fast as "
-                "possible."
-            )
+            from snr.core.checks.call_checks import wrong_speed_error  # read second
+
+            raise wrong_speed_error(speed)
         self.speed = None if speed is None else float(speed)
         self.epoch_s = float(epoch_s)
         self.turns = 0
@@ -243,10 +239,8 @@ class SimClock:
         """
         turn = NodeTurn(self, role, tasks, stopping)
         with self._lock:
-            self._nodes.append(turn)
-            self._nodes.sort(key=lambda t: t.key)
-            if self._holder is None:
-                self._pick_next()
+            self._nodes = sorted([*self._nodes, turn], key=lambda t: t.key)
+            self._release(None)
         return turn
 
     def loop_turn(self, role: str, name: str, stop: threading.Event) -> LoopTurn:
@@ -262,10 +256,8 @@ class SimClock:
         turn = LoopTurn(self, role, name, stop)
         with self._lock:
             turn.deadline_ns = self._now_ns
-            self._loops.append(turn)
-            self._loops.sort(key=lambda t: t.key)
-            if self._holder is None:
-                self._pick_next()
+            self._loops = sorted([*self._loops, turn], key=lambda t: t.key)
+            self._release(None)
         return turn
 
     # -- the lockstep (every method below holds or takes the lock) -------------
@@ -280,8 +272,7 @@ class SimClock:
                     turn.waiting = False  # no longer in line
                     if self._pacer is turn:
                         self._pacer = None
-                    if self._holder is None:
-                        self._pick_next()
+                    self._release(None)
                     return False
                 pacing = self._pacer is turn and turn.deadline_ns is not None
                 if pacing:
@@ -303,15 +294,11 @@ class SimClock:
         with self._lock:
             turn.waiting = True
             turn.deadline_ns = deadline_ns
-            if self._holder is turn:
-                self._holder = None
-            if self._holder is None:
-                self._pick_next()
+            self._release(turn)
 
     def _work_arrived(self) -> None:
         with self._lock:
-            if self._holder is None:  # everyone waits: the node with work goes now
-                self._pick_next()
+            self._release(None)  # if everyone waits, the node with work goes now
 
     def _leave(self, turn: Turn) -> None:
         with self._lock:
@@ -320,10 +307,14 @@ class SimClock:
             self._loops = [loop for loop in self._loops if loop is not turn]
             if self._pacer is turn:
                 self._pacer = None
-            if self._holder is turn:
-                self._holder = None
-            if self._holder is None:
-                self._pick_next()
+            self._release(turn)
+
+    def _release(self, turn: Optional[Turn]) -> None:
+        """``turn`` lets go of the clock if it holds it; a free clock goes to the next to act."""
+        if self._holder is turn:
+            self._holder = None
+        if self._holder is None:
+            self._pick_next()
 
     def _pick_next(self) -> None:
         """Hand the clock to whoever acts next (the lock held, the clock free)."""

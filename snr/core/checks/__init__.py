@@ -11,6 +11,9 @@ call as "check this" and come back here for the how:
   thread that calls a method only the node's thread may call (every mode);
 * ``failures.py``: a handler or loop that failed, or a slow handler, logged in
   words; outside DEPLOYED mode the first failure stops the node (every mode);
+* ``repeats.py``: log lines that come too often, counted: a failure repeated
+  (`RepeatFilter`), news in a flood (`RateLimitedLog`, for the comms);
+  components import both from ``snr.core.logs``;
 * ``component_log.py``: a reload that keeps the old component running, a removal
   refused, a component's ``halt()`` that raised, each logged in words (every mode);
 * ``life_cycle.py``: a node run twice, a loop started twice, a ``store_page``
@@ -29,6 +32,7 @@ call as "check this" and come back here for the how:
 * ``key_hints.py``: a data key read but never stored (DEBUG);
 * ``wiring_checks.py``: an event nothing handles, a handler nothing reaches (DEBUG);
 * ``runner_checks.py``: a runner built and never run, said at exit (not in tests);
+  a command line that names no role, answered with the roles;
 * ``datastore_guard.py``: ``node.datastore`` as components see it, a read-only
   view that names ``store_data`` when written (every mode);
 * ``top_level.py``: an SNR error nobody caught, printed with the student's frames

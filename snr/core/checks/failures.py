@@ -27,7 +27,7 @@ from snr.core.checks.explain import (
     loop_failure,
     slow_handler_text,
 )
-from snr.core.logs import RepeatFilter
+from snr.core.checks.repeats import RepeatFilter
 from snr.prelude.abstract import AbstractComponent, AbstractLoop
 from snr.prelude.errors import SNRError
 from snr.prelude.names import Mode, TaskHandler

@@ -1,5 +1,7 @@
 """`runner_built` and `runner_ran`: a runner built and never run is said at exit.
 
+And `no_role_given`: ``python robot.py`` without a role, answered with the roles.
+
 ``CliRunner({...})`` without ``.run()`` builds the runner and stops there: the
 program ends at once, with status 0 and not a word. The runners tell this
 module when they are built and when they run; at interpreter exit, a runner
@@ -21,12 +23,12 @@ from __future__ import annotations
 
 import atexit
 import sys
-from typing import Dict, List, Tuple
+from typing import Any, Dict, List, NoReturn, Sequence, Tuple
 
 from snr.core.checks.student_code import frame_location, outside_runtime, source_block
 from snr.prelude import AbstractConfig, Mode
 
-__all__ = ["runner_built", "runner_ran"]
+__all__ = ["no_role_given", "runner_built", "runner_ran"]
 
 # id(runner) -> (runner, "robot.py:4 in <module>", its line as a traceback shows it); the
 # runner is kept, so its id is not reused.
@@ -79,3 +81,20 @@ def _say_not_run() -> None:
             flush=True,
         )
     _not_run.clear()
+
+
+def no_role_given(parser: Any, prog: str, roles: Sequence[str]) -> NoReturn:
+    """Exit (status 2) with ``parser``'s usage, the roles to choose from and an example.
+
+    Example::
+
+        no_role_given(parser, "robot.py", ["urov", "topside"])
+        # robot.py: error: no role given. Choose one of: urov, topside. For example: ...
+    """
+    parser.print_usage(sys.stderr)
+    print(
+        f"{prog}: error: no role given. Choose one of: {', '.join(roles)}. "
+        f"For example: python {prog} {roles[0] if roles else 'ROLE'}",
+        file=sys.stderr,
+    )
+    raise SystemExit(2)
