@@ -11,9 +11,8 @@ call as "check this" and come back here for the how:
   thread that calls a method only the node's thread may call (every mode);
 * ``failures.py``: a handler or loop that failed, or a slow handler, logged in
   words; outside DEPLOYED mode the first failure stops the node (every mode);
-* ``repeats.py``: log lines that come too often, counted: a failure repeated
-  (`RepeatFilter`), news in a flood (`RateLimitedLog`, for the comms);
-  components import both from ``snr.core.logs``;
+* ``repeats.py``: a failure repeated over and over, logged in full three times,
+  then counted (`RepeatFilter`; components use it too, from ``snr.core.logs``);
 * ``component_log.py``: a reload that keeps the old component running, a removal
   refused, a component's ``halt()`` that raised, each logged in words (every mode);
 * ``life_cycle.py``: a node run twice, a loop started twice, a ``store_page``
