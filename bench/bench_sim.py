@@ -51,7 +51,7 @@ from snr import (
     TimeoutLoopFactory,
     World,
 )
-from snr.extras.demo import wall_follower
+from snr.extras.lessons.l01_wall_follower import solution as wall_follower
 from snr.extras.sim import DiffDriveRobot, Odometry, Pose, RangeSensor, RobotSpec, sensor_pages
 from snr.extras.sim.draw import WorldView, import_pygame, render_scene
 from snr.prelude.install import install_hint

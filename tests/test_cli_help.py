@@ -16,7 +16,7 @@ from typing import Callable, Dict, List, Sequence, Tuple
 import snr.console
 from snr.__main__ import main as snr_main
 
-COMMANDS = ["demo", "console", "docs", "graph", "convert", "secret", "version"]
+COMMANDS = ["demo", "console", "docs", "graph", "convert", "lesson", "secret", "version"]
 """The commands of ``snr``, as ``snr --help`` lists them."""
 
 
@@ -119,6 +119,15 @@ class TestEveryCommandSaysWhatItDoes(unittest.TestCase):
         self.assertIn("--serve", docs)
         convert = description(snr_help("convert"))
         self.assertIn("JSON lines to MCAP", convert)
+
+    def test_lesson_describes_itself_and_its_actions(self) -> None:
+        text = snr_help("lesson")
+        self.assertIn("'start N' writes lesson N's starter file", description(text))
+        for action in ("list", "start", "grade"):
+            self.assertIn(f"    {action} ", text)
+        grade = snr_help("lesson", "grade")
+        self.assertIn("--solution", grade)
+        self.assertIn("One file: each check, passed or failed", description(grade))
 
 
 if __name__ == "__main__":

@@ -26,11 +26,13 @@ SNR = ROOT / "snr"
 EXTRAS = SNR / "extras"
 
 BUILDS_ON: Dict[str, Set[str]] = {
-    "demo": {"controller", "sim", "viz"},
+    "demo": {"controller", "lessons", "sim", "viz"},
+    "lessons": {"sim"},
     "sim": {"controller"},
 }
-"""The other extras an extra may import: the demo runs the simulator and the live view;
-the simulator's window is driven by the keyboard joystick."""
+"""The other extras an extra may import: the demo runs the simulator, the live view and
+lesson 1's solution; the lessons run in the simulator, whose window is driven by the
+keyboard joystick."""
 
 Import = Tuple[int, str, List[str]]
 """An import: its line, the module, and the names taken from it (empty for ``import m``)."""

@@ -131,12 +131,13 @@ class TestWallFollower(unittest.TestCase):
         self.assertEqual(run.clock.jumps, 3000)
         self.assertEqual((run.clock.wall_waits, run.clock.paced_waits), (0, 0))
 
-    def test_the_demo_runs_this_file(self) -> None:
-        """``python -m snr demo --sim`` and the lesson run the one controller."""
-        import snr.extras.demo.wall_follower as shipped
+    def test_the_example_runs_the_shipped_solution(self) -> None:
+        """``examples/lessons/`` runs the lessons' solutions, as ``demo --sim`` does lesson 1's."""
+        from snr.extras.lessons.l01_wall_follower import solution as first
+        from snr.extras.lessons.l02_go_to_goal import solution as second
 
-        self.assertIs(wall_follower.WallFollowerEndpoint, shipped.WallFollowerEndpoint)
-        self.assertIs(wall_follower.main, shipped.main)
+        self.assertIs(wall_follower.main, first.main)
+        self.assertIs(go_to_goal.main, second.main)
 
 
 class TestGoToGoal(unittest.TestCase):

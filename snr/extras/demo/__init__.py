@@ -10,8 +10,8 @@ pseudo-terminal, and noisy depth and heading sensors). It ships inside the
 * `snr.extras.demo.urov`: the components and the simulated hardware;
 * `snr.extras.demo.system`: which components each node runs (thesis listing 5.1);
 * `snr.extras.demo.run`: the demo itself: ports, the banner, quiet or verbose logs;
-* `snr.extras.demo.wall_follower`: ``--sim``'s rover, a copy of the first lesson
-  (``examples/lessons/wall_follower.py``).
+* ``--sim``'s rover is the first lesson's solution,
+  `snr.extras.lessons.l01_wall_follower.solution`.
 
 Example::
 

@@ -145,7 +145,8 @@ def run_sim_demo(
     """Lesson 1's wall follower drives the simulated rover: ``python -m snr demo --sim``.
 
     One node in this process: the simulator, its view and the brain of
-    ``examples/lessons/wall_follower.py`` (shipped as `snr.extras.demo.wall_follower`).
+    ``examples/lessons/wall_follower.py``, lesson 1's solution (shipped as
+    `snr.extras.lessons.l01_wall_follower.solution`).
     With a screen the rover drives in a window (closing it stops the demo);
     without one, or with ``frames_dir``, the pictures are PNG frames and the
     folder is printed. The default demo stays the UROV: it shows what SNR is
@@ -157,7 +158,7 @@ def run_sim_demo(
         run_sim_demo(seconds=5)                       # a window, or frames in sim_frames/
         run_sim_demo(seconds=5, frames_dir="frames")  # PNG frames in frames/
     """
-    from snr.extras.demo import wall_follower  # only this demo needs it
+    from snr.extras.lessons.l01_wall_follower import solution as wall_follower  # only --sim
 
     if not verbose:  # the node keeps a level set before it starts: warnings only
         logging.getLogger("snr.sim").setLevel(logging.WARNING)

@@ -1,4 +1,4 @@
-"""Lesson 1: a wall follower (docs/lessons.md).
+"""Lesson 1: a wall follower (docs/lessons.md), the reference solution.
 
 The robot keeps a wall on its right, a fixed distance away, and drives along
 it all the way round the room. Its brain, `WallFollowerEndpoint`, is a
@@ -14,9 +14,9 @@ without pygame it runs undrawn, and says so)::
 
 This file ships inside the package, so ``python -m snr demo --sim`` runs it
 from an installed SNR too; ``examples/lessons/wall_follower.py`` runs it from
-the lessons' folder. To change the controller, copy this file next to your
-own code (``python -c "import snr.extras.demo.wall_follower as m; print(m.__file__)"``
-says where it is) and edit the copy.
+the lessons' folder. To write the controller yourself, ``python -m snr lesson
+start 1`` writes the lesson's starter file into your folder, and ``python -m
+snr lesson grade 1`` grades it; a copy of this file passes too, renamed or not.
 """
 
 from __future__ import annotations
@@ -135,6 +135,7 @@ def run(
     frames_dir: Optional[str] = None,
     seed: int = 1,
     speed: Optional[float] = 1.0,
+    brain: Optional[snr.AbstractFactory] = None,
 ) -> snr.SimRobotFactory:
     """Run the lesson in one node for ``seconds``; returns the simulated robot.
 
@@ -146,7 +147,9 @@ def run(
 
     The node runs on a `SimClock`, ``speed`` simulated seconds per real
     second (1.0: real time; None: as fast as the computer can), so ``seconds``
-    is simulated time and the same ``seed`` gives the same run.
+    is simulated time and the same ``seed`` gives the same run. ``brain``
+    drives the robot: this file's `WallFollowerFactory` unless given (the
+    starter file passes its own).
 
     Example::
 
@@ -159,17 +162,21 @@ def run(
         view = snr.SimViewFactory(world)
     else:
         view = snr.SimViewFactory(world, frames_dir=frames_dir, window=False)
-    brain = [WallFollowerFactory(), snr.TimeoutLoopFactory(seconds=seconds)]
+    brain_and_timer = [brain or WallFollowerFactory(), snr.TimeoutLoopFactory(seconds=seconds)]
     clock = snr.SimClock(speed=speed)
     if not pygame_installed():  # said once, here; no view, so no folder and no warning
         print(NO_PICTURES, flush=True)
-        snr.SynchronousRunner("sim", snr.Config({"sim": [sim, *brain]}, clock=clock)).run()
+        snr.SynchronousRunner(
+            "sim", snr.Config({"sim": [sim, *brain_and_timer]}, clock=clock)
+        ).run()
     elif view.window:
         # The window on this (the main) thread, as macOS requires; the node beside it.
-        run_in_window("sim", snr.Config({"sim": [sim, *brain]}, clock=clock), view)
+        run_in_window("sim", snr.Config({"sim": [sim, *brain_and_timer]}, clock=clock), view)
     else:
         print(f"Pictures: PNG frames in {Path(view.frames_dir).resolve()}", flush=True)
-        snr.SynchronousRunner("sim", snr.Config({"sim": [sim, view, *brain]}, clock=clock)).run()
+        snr.SynchronousRunner(
+            "sim", snr.Config({"sim": [sim, view, *brain_and_timer]}, clock=clock)
+        ).run()
     pose = sim.robot.pose
     print(
         f"After {sim.steps / sim.rate_hz:.1f} s the robot is at ({pose.x:.2f}, {pose.y:.2f})"
@@ -178,8 +185,11 @@ def run(
     return sim
 
 
-def main(argv: List[str]) -> None:
-    """``python wall_follower.py [--seconds S] [--frames DIR] [--seed N] [--speed X]``."""
+def main(argv: List[str], brain: Optional[snr.AbstractFactory] = None) -> None:
+    """``python wall_follower.py [--seconds S] [--frames DIR] [--seed N] [--speed X]``.
+
+    ``brain``: the endpoint's factory that drives the robot (this file's by default).
+    """
     parser = argparse.ArgumentParser(prog=argv[0], description="Lesson 1: a wall follower.")
     parser.add_argument("--seconds", type=float, default=30.0, help="how long to run")
     parser.add_argument("--frames", default=None, help="write PNG frames to this folder")
@@ -194,7 +204,7 @@ def main(argv: List[str]) -> None:
     options = parser.parse_args(argv[1:])
     if options.speed < 0:
         parser.error(f"--speed {options.speed:g}: use 0 (as fast as possible) or more")
-    run(options.seconds, options.frames, options.seed, options.speed or None)
+    run(options.seconds, options.frames, options.seed, options.speed or None, brain)
 
 
 if __name__ == "__main__":
