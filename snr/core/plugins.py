@@ -15,7 +15,7 @@ editing them in a checkout run ``pip install -e .`` again.
 The groups (``docs/design.md``, "Extras and extension points"):
 
 * ``snr.commands``: the ``python -m snr`` commands kept in extras (``demo``,
-  ``graph``, ``docs``, ``convert``): a module with ``add_arguments(parser)``
+  ``graph``, ``docs``, ``convert``, ``lesson``): a module with ``add_arguments(parser)``
   and ``run(args) -> int``;
 * ``snr.console_transports``: other ways for ``snr-console`` to reach a node
   (``zenoh``): a `snr.std_mods.io.remote_console.ConsoleClient` subclass;
