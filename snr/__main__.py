@@ -12,6 +12,8 @@ Commands::
                                        draw the system FILE runs, without running it
     python -m snr docs [--serve]       build (if needed) and open the docs, offline
     python -m snr convert IN OUT       convert a recording: JSON lines <-> MCAP (by OUT's name)
+    python -m snr plot FILE KEY... [-o OUT.png]
+                                       draw keys of a recording over time, to a PNG file
     python -m snr secret new [--force] write a fresh secret for this computer's nodes
                                        (docs/comms.md, "Who may connect")
     python -m snr version              print the installed version (also: --version)
@@ -111,6 +113,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "lines. The source's format is read from its first bytes, the target's from its "
         "name (*.mcap: MCAP, anything else: JSON lines).",
     )
+    plot_parser = sub.add_parser(
+        "plot",
+        help="draw keys of a recording over time, to a PNG file (pictures of a run)",
+        description="Draw the pages of each KEY in a recording (JSON lines or MCAP) "
+        "over time: one subplot per key, each number in its data a line. Writes a PNG "
+        f"file, no screen needed (needs {install_hint('plot')}).",
+    )
     secret_parser = sub.add_parser(
         "secret",
         help="make the secret that only your team's nodes know (docs/comms.md)",
@@ -135,7 +144,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         file_args = words[words.index("--") + 1 :]
         words = words[: words.index("--")]
     command: Any = None
-    if words[:1] in (["demo"], ["graph"], ["docs"], ["convert"]):
+    if words[:1] in (["demo"], ["graph"], ["docs"], ["convert"], ["plot"]):
         # These commands live in extras, found by their entry points (docs/design.md,
         # "Extras and extension points"), loaded only when asked for.
         try:
@@ -144,7 +153,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(f"snr {words[0]}: {error}", file=sys.stderr)
             return 1
         if hasattr(command, "add_arguments"):  # its own options, e.g. convert's
-            command.add_arguments({"docs": docs_parser, "convert": convert_parser}[words[0]])
+            parsers = {"docs": docs_parser, "convert": convert_parser, "plot": plot_parser}
+            command.add_arguments(parsers[words[0]])
     args = parser.parse_args(words)
     if args.command == "demo":
         if args.sim and args.view:
