@@ -20,7 +20,7 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, Dict, Iterable, List, Optional, Tuple
 
-from snr.core.checks.error_text import closest_match
+from snr.core.checks.error_text import did_you_mean
 from snr.prelude import ConfigError, DataKey
 from snr.std_mods.codec import PathLike, decode_line, is_header, page_from_fields
 from snr.std_mods.io.replayer import PageReader
@@ -96,10 +96,9 @@ def _not_recorded(filename: str, key: str, keys: List[str]) -> ConfigError:
     if not keys:
         return ConfigError(f"{filename!r} holds no pages at all, so no page of key {key!r}.")
     known = ", ".join(map(repr, keys))
-    guess = closest_match(key, keys)
     return ConfigError(
         f"{filename!r} holds no page of key {key!r}; its keys are {known}."
-        + (f" Did you mean {guess!r}?" if guess else "")
+        + did_you_mean(key, keys)
     )
 
 
