@@ -121,6 +121,7 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         LocalConsoleFactory,
         RecorderEndpointFactory,
         ReplayerLoopFactory,
+        read_recording,
     )
     from snr.std_mods.utils import (
         PrinterEndpointFactory,
@@ -174,6 +175,7 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
         "LocalConsoleFactory",
         "RecorderEndpointFactory",
         "ReplayerLoopFactory",
+        "read_recording",
     ),
     "snr.std_mods.utils": (
         "PrinterEndpointFactory",
@@ -274,6 +276,7 @@ __all__ = [
     "Timer",
     "World",
     "ZenohCommsFactory",
+    "read_recording",
     "tasks",
 ]
 

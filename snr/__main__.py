@@ -14,6 +14,8 @@ Commands::
     python -m snr convert IN OUT       convert a recording: JSON lines <-> MCAP (by OUT's name)
     python -m snr lesson list|start N|grade N [FILE...]
                                        the course's lessons: start one, grade your file
+    python -m snr plot FILE KEY... [-o OUT.png]
+                                       draw keys of a recording over time, to a PNG file
     python -m snr secret new [--force] write a fresh secret for this computer's nodes
                                        (docs/comms.md, "Who may connect")
     python -m snr version              print the installed version (also: --version)
@@ -117,6 +119,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "lesson",
         help="the course's lessons: list them, start one, grade your file in the simulator",
     )
+    plot_parser = sub.add_parser(
+        "plot",
+        help="draw keys of a recording over time, to a PNG file (pictures of a run)",
+        description="Draw the pages of each KEY in a recording (JSON lines or MCAP) "
+        "over time: one subplot per key, each number in its data a line. Writes a PNG "
+        f"file, no screen needed (needs {install_hint('plot')}).",
+    )
     secret_parser = sub.add_parser(
         "secret",
         help="make the secret that only your team's nodes know (docs/comms.md)",
@@ -141,7 +150,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         file_args = words[words.index("--") + 1 :]
         words = words[: words.index("--")]
     command: Any = None
-    if words[:1] in (["demo"], ["graph"], ["docs"], ["convert"], ["lesson"]):
+    if words[:1] in (["demo"], ["graph"], ["docs"], ["convert"], ["lesson"], ["plot"]):
         # These commands live in extras, found by their entry points (docs/design.md,
         # "Extras and extension points"), loaded only when asked for.
         try:
@@ -150,7 +159,12 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(f"snr {words[0]}: {error}", file=sys.stderr)
             return 1
         if hasattr(command, "add_arguments"):  # its own options, e.g. convert's
-            parsers = {"docs": docs_parser, "convert": convert_parser, "lesson": lesson_parser}
+            parsers = {
+                "docs": docs_parser,
+                "convert": convert_parser,
+                "lesson": lesson_parser,
+                "plot": plot_parser,
+            }
             command.add_arguments(parsers[words[0]])
     args = parser.parse_args(words)
     if args.command == "demo":

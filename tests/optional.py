@@ -43,6 +43,7 @@ Decorated = TypeVar("Decorated", bound=Callable[..., Any])  # a test function or
 
 
 EXTRA_FOR: Dict[str, str] = {
+    "matplotlib": "plot",
     "mcap": "mcap",
     "orjson": "fast",
     "pdoc": "docs",

@@ -31,6 +31,7 @@ DEBIAN_PACKAGES: Dict[str, str] = {
     "pygame": "python3-pygame",
     "lz4": "python3-lz4",
     "zstandard": "python3-zstandard",
+    "matplotlib": "python3-matplotlib",
 }
 """The one list of the PyPI packages that SNR's Pi lines take from Debian 12 (each new
 enough): SNR's requirements, and what the ``mcap`` package requires."""

@@ -15,8 +15,8 @@ editing them in a checkout run ``pip install -e .`` again.
 The groups (``docs/design.md``, "Extras and extension points"):
 
 * ``snr.commands``: the ``python -m snr`` commands kept in extras (``demo``,
-  ``graph``, ``docs``, ``convert``, ``lesson``): a module with ``add_arguments(parser)``
-  and ``run(args) -> int``;
+  ``graph``, ``docs``, ``convert``, ``lesson``, ``plot``): a module with
+  ``add_arguments(parser)`` and ``run(args) -> int``;
 * ``snr.console_transports``: other ways for ``snr-console`` to reach a node
   (``zenoh``): a `snr.std_mods.io.remote_console.ConsoleClient` subclass;
 * ``snr.console_commands``: console commands kept in extras (``graph``): a

@@ -89,9 +89,9 @@ TOPICS: Tuple[Topic, ...] = (
     ),
     Topic(
         "Recording and replaying",
-        "Record pages to a file and play them back later (text files and their "
-        "readers are in snr.std_mods.io, MCAP in snr.extras.viz).",
-        _names("RecorderEndpointFactory ReplayerLoopFactory"),
+        "Record pages to a file, play them back later, or read them as columns to plot "
+        "(text files and their readers are in snr.std_mods.io, MCAP in snr.extras.viz).",
+        _names("RecorderEndpointFactory ReplayerLoopFactory read_recording"),
         _names("recording"),
     ),
     Topic(

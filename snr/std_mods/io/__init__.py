@@ -1,4 +1,4 @@
-"""Input and output: console, recorder, replayer.
+"""Input and output: console, recorder, replayer, and recordings as columns.
 
 The controller, the live view and MCAP files are extras: ``snr.extras.controller``
 and ``snr.extras.viz``.
@@ -8,6 +8,11 @@ Example::
     from snr.std_mods.io import RecorderEndpointFactory, ReplayerLoopFactory
 """
 
+from snr.std_mods.io.columns import (
+    Column,
+    Recording,
+    read_recording,
+)
 from snr.std_mods.io.command_processor import (
     CommandProcessorEndpoint,
 )
@@ -37,6 +42,7 @@ from snr.std_mods.io.replayer import (
 )
 
 __all__ = [
+    "Column",
     "CommandProcessorEndpoint",
     "CommandReceiverFactory",
     "CommandReceiverLoop",
@@ -45,6 +51,7 @@ __all__ = [
     "LocalConsoleFactory",
     "PageReader",
     "RecorderEndpoint",
+    "Recording",
     "RecorderEndpointFactory",
     "RemoteConsole",
     "ReplayerLoop",
@@ -52,4 +59,5 @@ __all__ = [
     "TextReader",
     "TextReplayerFactory",
     "TextReplayerLoop",
+    "read_recording",
 ]
