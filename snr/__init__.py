@@ -105,6 +105,7 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         Joystick,
         SimulatedJoystick,
     )
+    from snr.extras.plot import read_recording
     from snr.extras.serial import SerialLinkFactory
     from snr.extras.sim import SimRobotFactory, SimViewFactory, World
     from snr.extras.viz import FoxgloveBridgeFactory
@@ -121,7 +122,6 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         LocalConsoleFactory,
         RecorderEndpointFactory,
         ReplayerLoopFactory,
-        read_recording,
     )
     from snr.std_mods.utils import (
         PrinterEndpointFactory,
@@ -159,6 +159,7 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
         "Joystick",
         "SimulatedJoystick",
     ),
+    "snr.extras.plot": ("read_recording",),
     "snr.extras.serial": ("SerialLinkFactory",),
     "snr.extras.sim": ("SimRobotFactory", "SimViewFactory", "World"),
     "snr.extras.viz": ("FoxgloveBridgeFactory",),
@@ -175,7 +176,6 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
         "LocalConsoleFactory",
         "RecorderEndpointFactory",
         "ReplayerLoopFactory",
-        "read_recording",
     ),
     "snr.std_mods.utils": (
         "PrinterEndpointFactory",

@@ -16,10 +16,10 @@ from unittest import mock
 
 import snr
 from snr.__main__ import main as snr_main
+from snr.extras.plot import read_recording
 from snr.prelude import ConfigError, Page
 from snr.prelude.install import install_hint
 from snr.std_mods.codec import header_line, page_to_line
-from snr.std_mods.io import read_recording
 from tests.optional import needs
 
 PNG_SIGNATURE = b"\x89PNG\r\n\x1a\n"

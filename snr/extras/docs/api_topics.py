@@ -184,6 +184,7 @@ PAGE_MODULES: Tuple[str, ...] = (
     "snr.extras.controller",
     "snr.extras.sim",
     "snr.extras.graph",
+    "snr.extras.plot",
     "snr.extras.compat2021",
 )
 """The modules documented in full, one page each, in the order a name is looked up."""

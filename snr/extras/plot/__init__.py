@@ -12,6 +12,7 @@ Example::
     plot_recording("dive.jsonl", ["depth_m", "heading_deg"], "dive.png")
 """
 
+from snr.extras.plot.columns import Column, Recording, read_recording
 from snr.extras.plot.command import add_arguments, plot_recording, run
 
-__all__ = ["add_arguments", "plot_recording", "run"]
+__all__ = ["Column", "Recording", "add_arguments", "plot_recording", "read_recording", "run"]

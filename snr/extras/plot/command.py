@@ -18,10 +18,10 @@ import os
 import sys
 from typing import IO, Any, Optional, Sequence
 
+from snr.extras.plot.columns import read_recording
 from snr.prelude import ConfigError, SNRError
 from snr.prelude.install import install_hint
 from snr.std_mods.codec import PathLike
-from snr.std_mods.io.columns import read_recording
 
 __all__ = ["add_arguments", "plot_recording", "run"]
 

@@ -1,4 +1,4 @@
-"""Input and output: console, recorder, replayer, and recordings as columns.
+"""Input and output: console, recorder, replayer.
 
 The controller, the live view and MCAP files are extras: ``snr.extras.controller``
 and ``snr.extras.viz``.
@@ -8,11 +8,6 @@ Example::
     from snr.std_mods.io import RecorderEndpointFactory, ReplayerLoopFactory
 """
 
-from snr.std_mods.io.columns import (
-    Column,
-    Recording,
-    read_recording,
-)
 from snr.std_mods.io.command_processor import (
     CommandProcessorEndpoint,
 )
@@ -42,7 +37,6 @@ from snr.std_mods.io.replayer import (
 )
 
 __all__ = [
-    "Column",
     "CommandProcessorEndpoint",
     "CommandReceiverFactory",
     "CommandReceiverLoop",
@@ -51,7 +45,6 @@ __all__ = [
     "LocalConsoleFactory",
     "PageReader",
     "RecorderEndpoint",
-    "Recording",
     "RecorderEndpointFactory",
     "RemoteConsole",
     "ReplayerLoop",
@@ -59,5 +52,4 @@ __all__ = [
     "TextReader",
     "TextReplayerFactory",
     "TextReplayerLoop",
-    "read_recording",
 ]
