@@ -35,6 +35,8 @@ import threading
 import time
 from typing import Callable, List, Optional, Sized, Tuple
 
+from snr.prelude.errors import ConfigError
+
 __all__ = ["LoopTurn", "NodeTurn", "SimClock", "Turn", "clock_of"]
 
 _POLL_S = 0.25
@@ -200,9 +202,11 @@ class SimClock:
 
     def __init__(self, speed: Optional[float] = None, epoch_s: float = 0.0) -> None:
         if speed is not None and not (isinstance(speed, (int, float)) and speed > 0):
-            from snr.core.checks.call_checks import wrong_speed_error  # read second
-
-            raise wrong_speed_error(speed)
+            raise ConfigError(
+                f"SimClock(speed={speed!r}): the speed is simulated seconds per real "
+                "second, a number above 0 (1.0 is real time), or None to run as fast as "
+                "possible."
+            )
         self.speed = None if speed is None else float(speed)
         self.epoch_s = float(epoch_s)
         self.turns = 0

@@ -50,7 +50,6 @@ __all__ = [
     "plain_signature",
     "values_not_a_list",
     "wrong_call",
-    "wrong_speed_error",
 ]
 
 _SNR_PACKAGE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))) + os.sep
@@ -291,20 +290,6 @@ def check_cli_args(runner_class: Any, components_or_config: Any, argv: Any) -> N
                 f"{components_or_config}`.",
             )
         )
-
-
-def wrong_speed_error(speed: Any) -> ConfigError:
-    """The `ConfigError` for ``SimClock(speed=...)`` with a speed that is not a number above 0.
-
-    Example::
-
-        wrong_speed_error(0)   # ConfigError: SimClock(speed=0): the speed is simulated ...
-    """
-    return ConfigError(
-        f"SimClock(speed={speed!r}): the speed is simulated seconds per real "
-        "second, a number above 0 (1.0 is real time), or None to run as fast as "
-        "possible."
-    )
 
 
 def no_sim_clock_across_processes(config: AbstractConfig) -> None:
