@@ -5,7 +5,8 @@ lesson's starter file into your folder and grades your file by what the robot
 does in the simulator. The lessons' text is docs/lessons.md.
 
 * ``l01_wall_follower``: lesson 1, a proportional wall follower;
-* ``l02_go_to_goal``: lesson 2, go to a goal round a crate.
+* ``l02_go_to_goal``: lesson 2, go to a goal round a crate;
+* ``l04_depth_filter``: lesson 4, a filter for a noisy depth sensor.
 
 Example::
 
@@ -67,6 +68,13 @@ LESSONS: Tuple[Lesson, ...] = (
         "l02_go_to_goal",
         "go_to_goal.py",
         "lesson-2-go-to-a-goal",
+    ),
+    Lesson(
+        4,
+        "a filter: smooth a noisy depth sensor, without lagging behind",
+        "l04_depth_filter",
+        "depth_filter.py",
+        "lesson-4-a-filter",
     ),
 )
 """Every lesson, in order."""

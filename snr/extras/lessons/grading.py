@@ -8,7 +8,8 @@ what to check; this module does the rest, the same way for every lesson:
    meet; a syntax error or an exception is reported with the file's line;
 2. `find_endpoint` picks the file's `Endpoint` subclass by what it does (it
    handles the lesson's sensor pages), not by its name;
-3. `drive` runs that endpoint and the simulated robot as one node, on a
+3. `drive` runs that endpoint and the simulated robot as one node (`replay`
+   stores recorded values into it instead), on a
    `SimClock` as fast as it goes with a fixed seed, and keeps the robot's
    true path: the same file gets the same grade on any machine;
 4. the grader turns the `Drive` into `Check` rows, each with what was
@@ -32,7 +33,7 @@ from dataclasses import dataclass, field
 from importlib.util import module_from_spec, spec_from_file_location
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Type
+from typing import Any, Dict, List, Optional, Sequence, Tuple, Type, Union
 
 import snr
 from snr import (
@@ -40,6 +41,7 @@ from snr import (
     Config,
     Endpoint,
     EndpointFactory,
+    ListReplayerFactory,
     Mode,
     SimClock,
     SomeTasks,
@@ -54,12 +56,14 @@ from snr.core import TestRunner
 __all__ = [
     "Check",
     "Drive",
+    "Replay",
     "SubmissionError",
     "drive",
     "endpoint_check",
     "find_endpoint",
     "handler_line",
     "load_submission",
+    "replay",
 ]
 
 SEED = 1
@@ -118,6 +122,24 @@ class Drive:
     def length_m(self) -> float:
         """How far the robot drove, in metres."""
         return sum(math.dist(a, b) for a, b in zip(self.path, self.path[1:]))
+
+
+@dataclass
+class Replay:
+    """What happened when recorded values were replayed into the student's endpoint.
+
+    Example::
+
+        run, endpoint = replay(DepthFilterEndpoint, Path("mine.py"), raw, "depth_raw", "depth")
+        run.outputs[0]    # (1, 1.93): the first 'depth' page, stored after 1 input
+    """
+
+    inputs: int = 0
+    """How many input pages were stored."""
+    outputs: List[Tuple[int, Any]] = field(default_factory=list)
+    """Each output page's data, with how many input pages had been stored before it."""
+    error: Optional[Check] = None
+    """Set when the endpoint raised an exception: the run stopped there."""
 
 
 def load_submission(path: Path) -> ModuleType:
@@ -247,7 +269,13 @@ class _Adopter(EndpointFactory):
     set on this factory, where the endpoint's ``__init__`` reads them.
     """
 
-    def __init__(self, cls: Type[Endpoint], path: Path, run: Drive, attributes: Dict[str, Any]):
+    def __init__(
+        self,
+        cls: Type[Endpoint],
+        path: Path,
+        run: Union[Drive, Replay],
+        attributes: Dict[str, Any],
+    ):
         super().__init__()
         self.cls = cls
         self.path = path
@@ -358,6 +386,70 @@ def drive(
         brain,
         TimeoutLoopFactory(seconds=seconds),
         _RecorderFactory(run),
+    ]
+    config = Config({"grade": components}, mode=Mode.TEST, clock=SimClock())
+    TestRunner("grade", config, timeout_s=60.0).run()
+    return run, brain.endpoint
+
+
+class _PageKeeper(Endpoint):
+    """Counts the input pages and keeps each output page's data, in order."""
+
+    def __init__(self, factory: _PageKeeperFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "grader")
+        self.run = factory.run
+        self.task_handlers = {
+            (snr.TaskType.store_page, factory.input): self.count,
+            (snr.TaskType.store_page, factory.output): self.keep,
+        }
+
+    def count(self, task: Task, key: TaskId) -> SomeTasks:
+        self.run.inputs += 1
+        return None
+
+    def keep(self, task: Task, key: TaskId) -> SomeTasks:
+        self.run.outputs.append((self.run.inputs, task.val_list[0].data))
+        return None
+
+
+class _PageKeeperFactory(EndpointFactory):
+    def __init__(self, run: Replay, input: str, output: str) -> None:
+        super().__init__()
+        self.run = run
+        self.input = input
+        self.output = output
+
+    def get(self, parent: AbstractNode) -> _PageKeeper:
+        return _PageKeeper(self, parent)
+
+
+def replay(
+    cls: Type[Endpoint],
+    path: Path,
+    values: Sequence[Any],
+    input: str,
+    output: str,
+    period_s: float = 0.02,
+) -> Tuple[Replay, Optional[Endpoint]]:
+    """Store ``values`` one by one under ``input`` in a node with ``cls``; keep its ``output``.
+
+    One node: a `ListReplayerFactory`, the student's endpoint and a keeper of
+    the pages, on a `SimClock` as fast as it goes. In simulated time each
+    value is handled, and what the endpoint stores in answer kept, before the
+    next value is stored: ``outputs`` pairs each answer with its input. Returns
+    what happened and the endpoint (None if it could not be built).
+
+    Example::
+
+        run, endpoint = replay(DepthFilterEndpoint, Path("mine.py"), raw, "depth_raw", "depth")
+    """
+    run = Replay()
+    brain = _Adopter(cls, path, run, {})
+    components = [
+        ListReplayerFactory(values, input, period_s=period_s, exit_when_done=True),
+        brain,
+        TimeoutLoopFactory(seconds=(len(values) + 50) * period_s),  # a bound, in any case
+        _PageKeeperFactory(run, input, output),
     ]
     config = Config({"grade": components}, mode=Mode.TEST, clock=SimClock())
     TestRunner("grade", config, timeout_s=60.0).run()
