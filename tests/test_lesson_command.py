@@ -4,8 +4,9 @@ Each lesson's grader runs a student's file in the simulator (simulated time,
 seed 1) and checks what the robot did. Here: the starter fails its grader
 with checks that say why, the solution passes, a copied and renamed solution
 passes too (a grade never depends on a class's name or module), several files
-make one row each, ``start`` never overwrites, and every ``$`` line of
-docs/lessons.md prints what the page shows.
+make one row each, ``start`` never overwrites, ``--png`` draws the graded
+run's path (and says how to get pygame when it is missing), and every ``$``
+line of docs/lessons.md prints what the page shows.
 """
 
 from __future__ import annotations
@@ -24,7 +25,10 @@ from typing import Iterator, List, Tuple
 from snr.__main__ import main
 from snr.extras.lessons import LESSONS, lesson
 from snr.extras.lessons.command import grade_file
+from snr.prelude.install import install_hint
 from tests.examples_support import ROOT as CHECKOUT
+from tests.helpers import no_pygame
+from tests.optional import needs
 from tests.tutorial_transcripts import compare, transcripts
 
 LESSONS_PAGE = Path(CHECKOUT, "docs", "lessons.md")
@@ -168,6 +172,77 @@ class TestAClassTable(unittest.TestCase):
             code, out = snr("lesson", "grade", "2", "a.py", "b.py")
         self.assertEqual(code, 0, out)
         self.assertEqual(out.count("5/5     passed"), 2, out)
+
+
+def count_pixels(path: Path, color: Tuple[int, int, int]) -> int:
+    """How many pixels of the PNG picture at ``path`` are ``color``."""
+    from snr.extras.sim.draw import import_pygame  # quietly: no banner
+
+    image = import_pygame().image.load(str(path))
+    width, height = image.get_size()
+    return sum(
+        tuple(image.get_at((x, y)))[:3] == color for x in range(width) for y in range(height)
+    )
+
+
+class TestPathPicture(unittest.TestCase):
+    @needs("pygame")
+    def test_png_draws_the_room_and_the_graded_path(self) -> None:
+        from snr.extras.sim import draw
+
+        one = lesson(2)
+        with in_temp_folder() as folder:
+            code, out = snr("lesson", "grade", "2", "--solution", "--png", "pics/path.png")
+            picture = folder / "pics" / "path.png"
+            self.assertEqual(code, 0, out)
+            self.assertIn("All 5 checks passed.", out)
+            self.assertIn(f"Wrote {Path('pics', 'path.png')}: the room and the robot's path", out)
+            data = picture.read_bytes()
+            self.assertEqual(data[:8], b"\x89PNG\r\n\x1a\n")
+            self.assertGreater(len(data), 1000)
+            path_pixels = count_pixels(picture, draw.TRAIL)
+            goal_pixels = count_pixels(picture, draw.GOAL)
+            pygame = draw.import_pygame()
+            world = one.module("solution").make_world()
+            empty = draw.render_scene(pygame, draw.WorldView(world), world, {})
+            draw.save_png(pygame, empty, folder / "empty.png")
+            empty_path_pixels = count_pixels(folder / "empty.png", draw.TRAIL)
+        # The path is several metres long: hundreds of pixels drawn 2 wide.
+        self.assertGreater(path_pixels, 500)
+        self.assertEqual(empty_path_pixels, 0)
+        self.assertGreater(goal_pixels, 0)
+
+    def test_without_pygame_png_says_how_to_install_it_and_grading_still_works(self) -> None:
+        with in_temp_folder() as folder, no_pygame():
+            code, out = snr("lesson", "grade", "2", "--solution", "--png", "path.png")
+            self.assertEqual(code, 1, out)
+            self.assertIn("--png draws with pygame, which is not installed", out)
+            self.assertIn(install_hint("controller"), out)
+            self.assertIn("Grading works without it: leave out --png.", out)
+            self.assertFalse((folder / "path.png").exists())
+            code, out = snr("lesson", "grade", "2", "--solution")
+        self.assertEqual(code, 0, out)
+        self.assertIn("All 5 checks passed.", out)
+
+    def test_png_with_several_files_is_refused_with_the_command_for_one(self) -> None:
+        with in_temp_folder() as folder:
+            code, out = snr("lesson", "grade", "1", "a.py", "b.py", "--png", "path.png")
+            self.assertFalse((folder / "path.png").exists())
+        self.assertEqual(code, 2)
+        self.assertEqual(
+            out.strip(),
+            "snr lesson grade: --png draws one run, and 2 files were given. Grade one "
+            "file with --png: `python -m snr lesson grade 1 a.py --png path.png`.",
+        )
+
+    @needs("pygame")
+    def test_no_picture_when_no_robot_was_driven(self) -> None:
+        with in_temp_folder() as folder:
+            code, out = snr("lesson", "grade", "4", "--solution", "--png", "path.png")
+            self.assertFalse((folder / "path.png").exists())
+        self.assertEqual(code, 1, "asked for a picture, got none")
+        self.assertIn("All 5 checks passed.", out)
+        self.assertIn("No picture: lesson 4's grade drives no robot in the simulator", out)
 
 
 class TestStart(unittest.TestCase):

@@ -8,6 +8,7 @@ the ``lesson`` parser and this module adds its options and runs it::
     python -m snr lesson grade 1           # grades it: each check, in words
     python -m snr lesson grade 1 a.py b.py # a class's files: one row each
     python -m snr lesson grade 1 --solution
+    python -m snr lesson grade 1 --png path.png  # and a picture of the robot's path
 
 A grade runs the file's endpoint in the simulator, in simulated time with a
 fixed seed, and checks what the robot did (``grading``); the exit status is 0
@@ -21,14 +22,16 @@ Example::
 from __future__ import annotations
 
 import argparse
+import math
 import shutil
 from pathlib import Path
-from typing import List, Sequence, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
+from snr import World
 from snr.extras.lessons import LESSONS, Lesson, lesson
-from snr.extras.lessons.grading import Check, SubmissionError
+from snr.extras.lessons.grading import Check, Drive, SubmissionError, kept_drives
 
-__all__ = ["add_arguments", "grade_file", "run"]
+__all__ = ["add_arguments", "grade_file", "run", "save_path_png"]
 
 DESCRIPTION = (
     "The course's lessons, each a robot to program in the simulator: 'list' shows them, "
@@ -74,6 +77,12 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
     grade.add_argument(
         "--solution", action="store_true", help="grade the lesson's reference solution"
     )
+    grade.add_argument(
+        "--png",
+        metavar="PATH",
+        help="also draw the room and the robot's path in the graded run into PATH "
+        "(one file only; needs pygame)",
+    )
 
 
 def run(args: argparse.Namespace) -> int:
@@ -94,7 +103,7 @@ def run(args: argparse.Namespace) -> int:
         return 2
     if args.action == "start":
         return _start(chosen, Path.cwd())
-    return _grade(chosen, args.files, args.solution)
+    return _grade(chosen, args.files, args.solution, getattr(args, "png", None))
 
 
 def grade_file(chosen: Lesson, path: Path) -> List[Check]:
@@ -133,7 +142,42 @@ def _start(chosen: Lesson, folder: Path) -> int:
     return 0
 
 
-def _grade(chosen: Lesson, files: Sequence[str], solution: bool) -> int:
+def save_path_png(world: World, run: Drive, target: Path) -> Path:
+    """Draw ``world`` and the path of ``run`` into the PNG file ``target``; returns it.
+
+    Walls in black, the goal (if any) as a green ring, the path in blue, a red
+    dot wherever the bumper was pressed, and the robot where the run ended
+    (red if pressed there).
+    Drawn off-screen: no window, no display needed.
+
+    Raises:
+        snr.ComponentError: pygame is not installed (the message says how to get it).
+
+    Example::
+
+        with kept_drives() as drives:
+            grade_file(lesson(1), Path("wall_follower.py"))
+        save_path_png(*drives[-1], Path("path.png"))
+    """
+    from snr.extras.sim import draw  # pygame, only when a picture is asked for
+    from snr.extras.sim.sensors import BUMP, TRUE_POSE
+
+    pygame = draw.import_pygame()
+    view = draw.WorldView(world)
+    pages: Dict[str, Any] = {}
+    if run.path:
+        (x0, y0), (x, y) = run.path[max(0, len(run.path) - 5)], run.path[-1]
+        pages[TRUE_POSE] = {"x": x, "y": y, "theta": math.atan2(y - y0, x - x0)}
+        # Red, as in the simulator's window, if it ended pressed against something.
+        pages[BUMP] = bool(run.bumps) and run.bumps[-1] >= len(run.path) - 1
+    surface = draw.render_scene(pygame, view, world, pages, trail=run.path, trail_px=2)
+    for step in run.bumps:
+        pressed_at = view.to_px(*run.path[max(0, step - 1)])
+        pygame.draw.circle(surface, draw.BUMPED, pressed_at, 3)
+    return draw.save_png(pygame, surface, target)
+
+
+def _grade(chosen: Lesson, files: Sequence[str], solution: bool, png: Optional[str]) -> int:
     paths = [Path(name) for name in files]
     if solution:
         paths.append(chosen.folder / "solution.py")
@@ -147,12 +191,53 @@ def _grade(chosen: Lesson, files: Sequence[str], solution: bool) -> int:
             )
             return 2
         paths = [default]
-    results = [(path, grade_file(chosen, path)) for path in paths]
+    if png is not None and len(paths) > 1:
+        print(
+            f"snr lesson grade: --png draws one run, and {len(paths)} files were given. "
+            f"Grade one file with --png: `python -m snr lesson grade {chosen.number} "
+            f"{paths[0]} --png {png}`."
+        )
+        return 2
+    if png is not None:
+        from snr.extras.sim.draw import INSTALL_HINT, pygame_installed
+
+        if not pygame_installed():
+            print(
+                f"snr lesson grade: --png draws with pygame, which is not installed. "
+                f"{INSTALL_HINT}. Grading works without it: leave out --png."
+            )
+            return 1
+    with kept_drives() as drives:
+        results = [(path, grade_file(chosen, path)) for path in paths]
     if len(results) == 1:
         _print_checks(chosen, *results[0])
     else:
         _print_table(chosen, results)
-    return 0 if all(check.passed for _, checks in results for check in checks) else 1
+    passed = all(check.passed for _, checks in results for check in checks)
+    if png is not None:
+        drew = _save_png(chosen, results[0][1], drives, Path(png))
+        return 0 if passed and drew else 1
+    return 0 if passed else 1
+
+
+def _save_png(
+    chosen: Lesson, checks: List[Check], drives: List[Tuple[World, Drive]], target: Path
+) -> bool:
+    """Draw the graded run's path into ``target``, saying where; False if there was no run."""
+    if not drives:
+        if checks and checks[0].name == "loads, with an endpoint":
+            why = "the file did not run (see the check above)"
+        else:
+            why = f"lesson {chosen.number}'s grade drives no robot in the simulator"
+        print(f"No picture: {why}, so there is no path to draw; {target} was not written.")
+        return False
+    world, run = drives[-1]
+    written = save_path_png(world, run, target)
+    print(
+        f"Wrote {written}: the room and the robot's path over the graded run "
+        "(blue; red dots where the bumper was pressed)."
+    )
+    return True
 
 
 def _print_checks(chosen: Lesson, path: Path, checks: List[Check]) -> None:

@@ -11,7 +11,8 @@ what to check; this module does the rest, the same way for every lesson:
 3. `drive` runs that endpoint and the simulated robot as one node (`replay`
    stores recorded values into it instead), on a
    `SimClock` as fast as it goes with a fixed seed, and keeps the robot's
-   true path: the same file gets the same grade on any machine;
+   true path: the same file gets the same grade on any machine
+   (`kept_drives` hands each run to whoever asks, e.g. to draw its path);
 4. the grader turns the `Drive` into `Check` rows, each with what was
    expected, what happened and a hint.
 
@@ -23,6 +24,7 @@ Example::
 
 from __future__ import annotations
 
+import contextlib
 import functools
 import inspect
 import itertools
@@ -33,7 +35,7 @@ from dataclasses import dataclass, field
 from importlib.util import module_from_spec, spec_from_file_location
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Dict, List, Optional, Sequence, Tuple, Type, Union
+from typing import Any, Dict, Iterator, List, Optional, Sequence, Tuple, Type, Union
 
 import snr
 from snr import (
@@ -62,6 +64,7 @@ __all__ = [
     "endpoint_check",
     "find_endpoint",
     "handler_line",
+    "kept_drives",
     "load_submission",
     "replay",
 ]
@@ -70,6 +73,8 @@ SEED = 1
 """The simulator's seed for every grade: the same file, the same run."""
 
 _numbers = itertools.count(1)
+_keepers: List[List[Tuple[World, Drive]]] = []
+"""The lists `kept_drives` yielded, still open: `drive` adds each run to them."""
 
 
 class SubmissionError(Exception):
@@ -389,7 +394,30 @@ def drive(
     ]
     config = Config({"grade": components}, mode=Mode.TEST, clock=SimClock())
     TestRunner("grade", config, timeout_s=60.0).run()
+    for kept in _keepers:
+        kept.append((world, run))
     return run, brain.endpoint
+
+
+@contextlib.contextmanager
+def kept_drives() -> Iterator[List[Tuple[World, Drive]]]:
+    """Within the block, each `drive` adds its world and what happened to the list yielded.
+
+    A grader returns only its checks; this is how ``lesson grade --png`` gets
+    the room and the path of the run it graded, without running it again.
+
+    Example::
+
+        with kept_drives() as drives:
+            checks = grade(Path("wall_follower.py"))
+        world, run = drives[-1]    # the room, and run.path: where the robot went
+    """
+    kept: List[Tuple[World, Drive]] = []
+    _keepers.append(kept)
+    try:
+        yield kept
+    finally:
+        _keepers.remove(kept)
 
 
 class _PageKeeper(Endpoint):

@@ -146,6 +146,7 @@ def render_scene(
     radius_m: float = 0.1,
     surface: Optional[Any] = None,
     trail: Sequence[Tuple[float, float]] = (),
+    trail_px: int = 1,
 ) -> Any:
     """Draw ``world`` and the robot its ``pages`` describe; returns the surface.
 
@@ -153,7 +154,7 @@ def render_scene(
     node's datastore holds (``true_pose``, ``odometry``, ``range``, ``bump``;
     missing keys are simply not drawn). Draws on ``surface`` (a window's)
     or on a new off-screen one. ``trail``: (x, y) points the robot passed,
-    drawn as a thin line.
+    drawn as a line ``trail_px`` wide (thin, under a moving robot).
 
     Example::
 
@@ -167,7 +168,7 @@ def render_scene(
             surface, WALL, view.to_px(wall.x1, wall.y1), view.to_px(wall.x2, wall.y2), 3
         )
     if len(trail) >= 2:
-        pygame.draw.lines(surface, TRAIL, False, [view.to_px(x, y) for x, y in trail], 1)
+        pygame.draw.lines(surface, TRAIL, False, [view.to_px(x, y) for x, y in trail], trail_px)
     if world.goal is not None:
         pygame.draw.circle(surface, GOAL, view.to_px(*world.goal), view.length_px(0.08), 3)
     pose = _pose(pages.get(TRUE_POSE))
