@@ -63,14 +63,18 @@ __all__ = [
     "drive",
     "endpoint_check",
     "find_endpoint",
+    "first_checks",
     "handler_line",
     "kept_drives",
     "load_submission",
     "replay",
+    "touch_check",
 ]
 
 SEED = 1
 """The simulator's seed for every grade: the same file, the same run."""
+STEP_HZ = 50
+"""The simulated robot's steps a second: `Drive.path` has one point a step."""
 
 _numbers = itertools.count(1)
 _keepers: List[List[Tuple[World, Drive]]] = []
@@ -118,7 +122,7 @@ class Drive:
     seconds: float
     path: List[Tuple[float, float]] = field(default_factory=list)
     bumps: List[int] = field(default_factory=list)
-    """The steps (50 a second) at which the bumper was pressed."""
+    """The steps (`STEP_HZ` a second) at which the bumper was pressed."""
     commands: int = 0
     last_command: Optional[Dict[str, float]] = None
     error: Optional[Check] = None
@@ -262,6 +266,51 @@ def endpoint_check(cls: Type[Endpoint], endpoint: Optional[Endpoint], key: str) 
         expected=f"an Endpoint that handles '{key}' pages",
         happened=f"{cls.__name__} handles {', '.join(keys) or 'no pages'}",
         hint=f'put (TaskType.store_page, "{key}"): self.HANDLER in its task_handlers',
+        line=line,
+    )
+
+
+def first_checks(
+    cls: Type[Endpoint], endpoint: Optional[Endpoint], key: str, error: Optional[Check]
+) -> List[Check]:
+    """Every lesson's first two checks: the endpoint handles ``key``; its run raised nothing.
+
+    ``error`` is the run's ``error``: the check that names what the endpoint
+    raised and where, or None. A grader stops after these when it is set.
+
+    Example::
+
+        checks = first_checks(cls, endpoint, "range", run.error)
+        if run.error is not None:
+            return checks
+    """
+    return [endpoint_check(cls, endpoint, key), error or Check("runs without an exception", True)]
+
+
+def touch_check(run: Drive, name: str, hint: str, line: Optional[int]) -> Check:
+    """The check ``name`` ("never touches a wall"): the bumper was never pressed in ``run``.
+
+    When it was, it says when and where first, and for how many steps in all.
+
+    Example::
+
+        touch_check(run, "never touches a wall", "turn before the wall (step 4)", line=64)
+    """
+    if run.bumps:
+        first = run.bumps[0]
+        x, y = run.path[max(0, first - 1)]
+        happened = (
+            f"the bumper was pressed at {first / STEP_HZ:.1f} s, at ({x:.2f}, {y:.2f}); "
+            f"{len(run.bumps)} steps touching in all"
+        )
+    else:
+        happened = "never touched"
+    return Check(
+        name,
+        not run.bumps,
+        expected=f"the bumper never pressed in {run.seconds:g} s",
+        happened=happened,
+        hint=hint,
         line=line,
     )
 

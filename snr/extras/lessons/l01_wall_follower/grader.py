@@ -21,12 +21,14 @@ from pathlib import Path
 from typing import List
 
 from snr.extras.lessons.grading import (
+    STEP_HZ,
     Check,
     drive,
-    endpoint_check,
     find_endpoint,
+    first_checks,
     handler_line,
     load_submission,
+    touch_check,
 )
 from snr.extras.lessons.l01_wall_follower.solution import make_world
 
@@ -56,10 +58,9 @@ def grade(path: Path) -> List[Check]:
     world = make_world()
     run, endpoint = drive(cls, world, SECONDS, path)
     steer = handler_line(endpoint, "range")
-    checks = [endpoint_check(cls, endpoint, "range")]
+    checks = first_checks(cls, endpoint, "range", run.error)
     if run.error is not None:
-        return [*checks, run.error]
-    checks.append(Check("runs without an exception", True))
+        return checks
     steps = len(run.path)
     checks.append(
         Check(
@@ -71,31 +72,20 @@ def grade(path: Path) -> List[Check]:
             line=steer,
         )
     )
-    if run.bumps:
-        first = run.bumps[0]
-        x, y = run.path[max(0, first - 1)]
-        happened = (
-            f"the bumper was pressed at {first / 50:.1f} s, at ({x:.2f}, {y:.2f}); "
-            f"{len(run.bumps)} steps touching in all"
-        )
-    else:
-        happened = "never touched"
     checks.append(
-        Check(
+        touch_check(
+            run,
             "never touches a wall",
-            not run.bumps,
-            expected=f"the bumper never pressed in {SECONDS:g} s",
-            happened=happened,
-            hint="turn left on the spot when the wall ahead is closer than FRONT_CLEAR_M (step 4)",
-            line=steer,
+            "turn left on the spot when the wall ahead is closer than FRONT_CLEAR_M (step 4)",
+            steer,
         )
     )
-    clearances = [world.clearance_m(x, y) for x, y in run.path[50:]]
+    clearances = [world.clearance_m(x, y) for x, y in run.path[STEP_HZ:]]  # after 1 s
     low, high = TARGET_M - MARGIN_M, TARGET_M + MARGIN_M
     if clearances:
         nearest, farthest = min(clearances), max(clearances)
         worst = max(clearances, key=lambda c: abs(c - TARGET_M))
-        at = run.path[50 + clearances.index(worst)]
+        at = run.path[STEP_HZ + clearances.index(worst)]
         happened = (
             f"from {nearest:.2f} m to {farthest:.2f} m; the worst, {worst:.2f} m, "
             f"at ({at[0]:.2f}, {at[1]:.2f})"

@@ -21,12 +21,14 @@ from pathlib import Path
 from typing import List
 
 from snr.extras.lessons.grading import (
+    STEP_HZ,
     Check,
     drive,
-    endpoint_check,
     find_endpoint,
+    first_checks,
     handler_line,
     load_submission,
+    touch_check,
 )
 from snr.extras.lessons.l02_go_to_goal.solution import make_world
 
@@ -58,24 +60,15 @@ def grade(path: Path) -> List[Check]:
     assert goal is not None  # the lesson's room has one
     run, endpoint = drive(cls, world, SECONDS, path, {"goal": goal})
     steer = handler_line(endpoint, "range")
-    checks = [endpoint_check(cls, endpoint, "range")]
+    checks = first_checks(cls, endpoint, "range", run.error)
     if run.error is not None:
-        return [*checks, run.error]
-    checks.append(Check("runs without an exception", True))
-    if run.bumps:
-        first = run.bumps[0]
-        x, y = run.path[max(0, first - 1)]
-        happened = f"the bumper was pressed at {first / 50:.1f} s, at ({x:.2f}, {y:.2f})"
-    else:
-        happened = "never touched"
+        return checks
     checks.append(
-        Check(
+        touch_check(
+            run,
             "never touches the crate or a wall",
-            not run.bumps,
-            expected=f"the bumper never pressed in {SECONDS:g} s",
-            happened=happened,
-            hint="when something is closer than BLOCKED_M ahead, go round its edge (step 4)",
-            line=steer,
+            "when something is closer than BLOCKED_M ahead, go round its edge (step 4)",
+            steer,
         )
     )
     distances = [math.dist(p, goal) for p in run.path]
@@ -84,9 +77,9 @@ def grade(path: Path) -> List[Check]:
     checks.append(
         Check(
             "reaches the goal in time",
-            reached is not None and reached / 50 < IN_TIME_S,
+            reached is not None and reached / STEP_HZ < IN_TIME_S,
             expected=f"within {REACHED_M} m of the goal {goal} in under {IN_TIME_S:g} s",
-            happened=f"there at {reached / 50:.1f} s"
+            happened=f"there at {reached / STEP_HZ:.1f} s"
             if reached is not None
             else f"never; {nearest:.2f} m at the nearest",
             hint="steer by HEADING_GAIN * the heading error, wrapped (steps 2 and 3)",

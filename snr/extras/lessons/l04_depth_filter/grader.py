@@ -25,8 +25,8 @@ from typing import Dict, List
 
 from snr.extras.lessons.grading import (
     Check,
-    endpoint_check,
     find_endpoint,
+    first_checks,
     handler_line,
     load_submission,
     replay,
@@ -77,10 +77,9 @@ def grade(path: Path) -> List[Check]:
     clean, raw = make_signal(SAMPLES)
     run, endpoint = replay(cls, path, raw, "depth_raw", "depth")
     smooth = handler_line(endpoint, "depth_raw")
-    checks = [endpoint_check(cls, endpoint, "depth_raw")]
+    checks = first_checks(cls, endpoint, "depth_raw", run.error)
     if run.error is not None:
-        return [*checks, run.error]
-    checks.append(Check("runs without an exception", True))
+        return checks
     # Each answer, by the reading it answers (the last, if several).
     depth: Dict[int, float] = {}
     not_numbers = []

@@ -30,10 +30,11 @@ from snr.extras.lessons.grading import (
     Check,
     SubmissionError,
     drive,
-    endpoint_check,
     find_endpoint,
+    first_checks,
     handler_line,
     load_submission,
+    touch_check,
 )
 from snr.extras.lessons.template.solution import STOP_M, make_world
 
@@ -65,24 +66,16 @@ def grade(path: Path) -> List[Check]:
     world = make_world()
     run, endpoint = drive(cls, world, SECONDS, path)
     steer = handler_line(endpoint, "range")  # the line every failed check points at
-    checks = [endpoint_check(cls, endpoint, "range")]
+    checks = first_checks(cls, endpoint, "range", run.error)
     if run.error is not None:
-        return [*checks, run.error]
-    checks.append(Check("runs without an exception", True))
+        return checks
     # 3. Turn what happened into checks: expected, happened, a hint, a line.
-    if run.bumps:
-        x, y = run.path[max(0, run.bumps[0] - 1)]
-        happened = f"the bumper was pressed at {run.bumps[0] / 50:.1f} s, at ({x:.2f}, {y:.2f})"
-    else:
-        happened = "never touched"
     checks.append(
-        Check(
+        touch_check(
+            run,
             "never touches the wall",
-            not run.bumps,
-            expected=f"the bumper never pressed in {SECONDS:g} s",
-            happened=happened,
-            hint="slow down as the wall comes closer: speed GAIN * (ahead - STOP_M) (step 2)",
-            line=steer,
+            "slow down as the wall comes closer: speed GAIN * (ahead - STOP_M) (step 2)",
+            steer,
         )
     )
     x, y = run.path[-1] if run.path else world.start[:2]
