@@ -110,22 +110,7 @@ for _program in sorted(FRESH.glob("*.py")):
 
 
 # -- fresh mistakes -----------------------------------------------------------------
-class Builds(EndpointFactory):
-    def __init__(self, cls: type) -> None:
-        super().__init__()
-        self.cls = cls
-
-    def get(self, parent: AbstractNode) -> Any:
-        return self.cls(self, parent)
-
-
-class LoopBuilds(LoopFactory):
-    def __init__(self, cls: type) -> None:
-        super().__init__()
-        self.cls = cls
-
-    def get(self, parent: AbstractNode) -> Any:
-        return self.cls(self, parent)
+Builds, LoopBuilds = silence.Builds, silence.LoopBuilds  # cls(factory, parent), either kind
 
 
 class CamelCase(Endpoint):
