@@ -545,7 +545,9 @@ class NodeCoreEndpoint(Endpoint):
         if not page.origin:  # made by tasks.store_data(), which has no node
             page = dataclasses.replace(page, origin=self.parent.role)
             task.val_list[0] = page
-        self.pages[page.key] = self.frozen(page)  # node.write_page, on the node's own thread
+        if self.freeze is not None:  # DEBUG, TEST (DEPLOYED pays only this test)
+            page.data = self.freeze(page.data, page.key)
+        self.pages[page.key] = page  # node.write_page, on the node's own thread
         # The page's process_data task, only if some handler waits for it: a
         # page nobody processes (a sender's page, say) costs no task.
         if page.process and self.parent.is_handled(_PROCESS_DATA, page.key):
@@ -568,7 +570,7 @@ class NodeCoreEndpoint(Endpoint):
         ones after it go back to the front of the queue as one ``store_page``
         task each, so every handler sees them in the usual order.
         """
-        node, pages = self.parent, self.pages
+        node, pages, freeze = self.parent, self.pages, self.freeze
         processed: List[Task] = []
         wanted: Dict[DataKey, bool] = {}  # per key, asked once a burst: is it processed?
         burst = task.val_list
@@ -582,7 +584,9 @@ class NodeCoreEndpoint(Endpoint):
                 rest = [Task(_STORE_PAGE, str(getattr(p, "key", "")), [p]) for p in burst[index:]]
                 node.schedule_first(rest)
                 break
-            pages[page.key] = self.frozen(page)  # node.write_page, on the node's own thread
+            if freeze is not None:
+                page.data = freeze(page.data, page.key)
+            pages[page.key] = page  # node.write_page, on the node's own thread
             if page.key not in wanted:
                 wanted[page.key] = node.is_handled(_PROCESS_DATA, page.key)
             if page.process and wanted[page.key]:
