@@ -119,11 +119,11 @@ class RecorderEndpoint(Endpoint):
             )
 
     def _open(self) -> PageWriter:
-        recording = self.recording
-        if recording.file is None and not recording.started:
-            recording.open_file()
+        first = self.recording.file is None and not self.recording.started
+        file = self.recording.open_file()
+        if first:
             self._say_where()
-        return recording.open_file()
+        return file
 
     def _say_where(self) -> None:
         recording, keys = self.recording, ", ".join(self.recording.keys)
