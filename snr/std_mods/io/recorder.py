@@ -208,14 +208,13 @@ class RecorderEndpointFactory(EndpointFactory):
             one page (slower: every page waits for the disk).
         name: the endpoint's name (default ``"recorder"``).
         overwrite: replace whatever ``filename`` holds instead of keeping it.
-        append: add this run's pages to the end of ``filename`` (after a
-            header line, so the file stays one valid recording). JSON lines only.
+        append: add this run's pages to the end of ``filename``, after a
+            header line. JSON lines only.
         file_format: ``"jsonl"`` or ``"mcap"``; by default ``"mcap"`` when
-            ``filename`` ends in ``.mcap``, else ``"jsonl"`` (the thesis's format).
-            MCAP needs ``pip install 'snr-robotics[mcap]'``; see ``docs/recording.md``.
+            ``filename`` ends in ``.mcap`` (``pip install 'snr-robotics[mcap]'``),
+            else ``"jsonl"`` (the thesis's format).
         compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress the file in
-            chunks of about 1 MiB (a killed process loses the unfinished
-            chunk); ``None`` (default) writes and flushes each page on its own.
+            chunks of about 1 MiB; ``None`` (default) flushes each page.
 
     Raises:
         ConfigError: no keys, both ``overwrite`` and ``append``, an unknown

@@ -197,22 +197,28 @@ class PageReader:
         self.problems, self.bad_lines, self._bad_line_numbers = [], 0, []
         # A corrupt file can hold thousands of bad lines: log the first few in full.
         self._repeats = RepeatFilter(_log, first=5)
+        if self._format is None:
+            pages = self._read_lines()
+        else:
+            unit, name = self._format.unit, self.filename
+            pages = self._format.read_pages(
+                name, lambda n, why: self._report(n, f"{name}: {unit} {n}: {why}")
+            )
         try:
-            if self._format is not None:
-                unit = self._format.unit
-                for number, page, timed in self._format.read_pages(
-                    self.filename,
-                    lambda n, problem: self._report(n, f"{self.filename}: {unit} {n}: {problem}"),
-                ):
-                    yield RecordedPage(number, page, timed)
-                return
-            with open(self.filename, "rb") as file:
-                for number, raw in enumerate(file, start=1):
-                    parsed = self._parse(number, raw)
-                    if parsed is not None:
-                        yield RecordedPage(number, *parsed)
+            for number, page, timed in pages:
+                yield RecordedPage(number, page, timed)
         finally:
+            close = getattr(pages, "close", None)
+            if close is not None:
+                close()  # the file, now, even if reading stopped early
             self._summarise()
+
+    def _read_lines(self) -> Iterator[Tuple[int, Page, bool]]:
+        with open(self.filename, "rb") as file:
+            for number, raw in enumerate(file, start=1):
+                parsed = self._parse(number, raw)
+                if parsed is not None:
+                    yield number, *parsed
 
     def _summarise(self) -> None:
         if not self.bad_lines:
