@@ -40,6 +40,7 @@ __all__ = [
     "MultiProcExpector",
     "OrderedExpector",
     "closest_key",
+    "fail",
     "format_key",
 ]
 
@@ -114,7 +115,13 @@ def closest_key(missing: K, seen: Sequence[K]) -> Optional[K]:
     return next((k for k in seen if _name_of(k) == name), None)
 
 
-def _fail(testcase: Optional[unittest.TestCase], message: str) -> None:
+def fail(testcase: Optional[unittest.TestCase], message: str) -> None:
+    """Fail ``testcase`` with ``message`` (an AssertionError without one).
+
+    Example::
+
+        fail(self, "The temp file 'out.txt' does not exist; nothing wrote it.")
+    """
     if testcase is not None:
         testcase.fail(message)
     raise AssertionError(message)
@@ -211,7 +218,7 @@ class Expector(Generic[K]):
         problems = self.problems()
         if problems:
             seen = self.seen_instead()
-            _fail(
+            fail(
                 self.testcase,
                 "Expectations not met:\n  " + "\n  ".join(problems) + (f"\n{seen}" if seen else ""),
             )

@@ -13,6 +13,8 @@ import os
 from types import TracebackType
 from typing import IO, TYPE_CHECKING, Any, Optional, Tuple, Type
 
+from snr.utils.expector import fail
+
 if TYPE_CHECKING:  # unittest costs ~10 ms to import
     import unittest
 
@@ -83,12 +85,12 @@ class TempFile(str):
     def assertExists(self) -> None:
         """Fail the test unless the file exists."""
         if not self.exists():
-            self._fail(f"The temp file {self.path!r} does not exist; nothing wrote it.")
+            fail(self.testcase, f"The temp file {self.path!r} does not exist; nothing wrote it.")
 
     def assertDoesNotExist(self) -> None:
         """Fail the test if the file exists."""
         if self.exists():
-            self._fail(f"The temp file {self.path!r} exists, but should not.")
+            fail(self.testcase, f"The temp file {self.path!r} exists, but should not.")
 
     def remove(self) -> None:
         """Delete the file now, if it exists."""
@@ -110,8 +112,3 @@ class TempFile(str):
             self.assertExists()
         if self.cleanup:
             self.remove()
-
-    def _fail(self, message: str) -> None:
-        if self.testcase is not None:
-            self.testcase.fail(message)
-        raise AssertionError(message)

@@ -69,14 +69,11 @@ class SNRTestCase(unittest.TestCase):
     ) -> Node:
         """Build a node from ``factories``, run it until it stops, and return it.
 
-        The node must stop by itself, when the test's work is done: usually an
-        ``ExpectorEndpointFactory(expector, exit_when_satisfied=True)`` stops
-        it once every expectation is met, or a handler returns
-        ``tasks.terminate("done")``. A node still running after ``timeout_s``
-        (default: `SNRTestCase.timeout_s`, 2 s) is stopped and the
-        test fails, naming the components the node held, so a test cannot
-        pass only because its node was cut off. A handler that raises fails
-        the test too, naming the handler and task.
+        The node must stop by itself when the test's work is done (e.g.
+        ``ExpectorEndpointFactory(expector, exit_when_satisfied=True)``); one
+        still running after ``timeout_s`` is stopped and the test fails,
+        naming its components. See ``docs/utilities.md``, "Ending a node
+        under test".
 
         Args:
             factories: the components of the node (its role is ``self.role``).
@@ -131,30 +128,18 @@ class SNRTestCase(unittest.TestCase):
     ) -> TempFile:
         """A file's path in a fresh temp folder, removed after the test.
 
-        Two ways to call it work, today's and the 2021 release's:
-
-        * ``temp_file(suffix="", contents=None)``: the file is named
-          ``file`` + ``suffix``, and ``contents`` (if given) is written to it.
-        * ``temp_file(filename=None, overwrite=False, cleanup=True)``: the
-          file is named ``filename``.
-
-        A first argument given by position is a suffix when it starts with
-        ``.`` or ``_`` (``temp_file(".jsonl")``, ``temp_file("_main.py", src)``)
-        and a whole file name otherwise (``temp_file("log.txt")``); the
-        keywords ``suffix=`` and ``filename=`` say which it is outright. A
-        second argument given by position is the contents when it is a str and
-        ``overwrite`` when it is a bool.
-
-        The folder is new, so there is never an old file to overwrite:
-        ``overwrite`` is accepted for 2021 code and changes nothing. With
-        ``cleanup=False`` the file and its folder are kept after the test,
-        e.g. to look at them.
+        Today's call, ``temp_file(suffix="", contents=None)``, names the file
+        ``file`` + ``suffix`` and writes ``contents`` to it; the 2021 call,
+        ``temp_file(filename=None, overwrite=False, cleanup=True)``, names it
+        ``filename`` (``overwrite`` changes nothing: the folder is new). A
+        first argument by position is a suffix when it starts with ``.`` or
+        ``_``, a file name otherwise; a second is the contents when a str.
+        ``cleanup=False`` keeps the file and folder (``docs/utilities.md``).
 
         Returns:
-            A `TempFile`: a ``str`` (the path, usable wherever a path is),
-            with ``.path``, ``.open()``, ``.assertExists()``, and use as a
-            context manager that fails unless the file exists at the end of
-            the block and then removes it (unless ``cleanup=False``).
+            A `TempFile`: a ``str`` path with ``.path``, ``.open()``,
+            ``.assertExists()``, and a context manager that fails unless the
+            file exists at the end of the block, then removes it.
 
         Example::
 

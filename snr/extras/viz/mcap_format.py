@@ -15,7 +15,8 @@ Example::
 
 from __future__ import annotations
 
-from typing import IO, Any, Callable, Dict, Iterator, Tuple
+import importlib
+from typing import IO, Any, Callable, Dict, Iterator, Optional, Tuple
 
 from snr.extras.viz.mcap_files import (
     COMPRESSION_PACKAGES,
@@ -27,7 +28,7 @@ from snr.extras.viz.mcap_files import (
     read_mcap_pages,
     require_mcap,
 )
-from snr.prelude import Page
+from snr.prelude import ConfigError, Page
 from snr.std_mods.codec import PathLike
 
 __all__ = ["MCAP", "McapFormat"]
@@ -42,13 +43,47 @@ class McapFormat:
     """
 
     magic: bytes = MCAP_MAGIC
+    unit: str = "message"
     compressions: Tuple[str, ...] = COMPRESSIONS
     compression_packages: Dict[str, str] = COMPRESSION_PACKAGES
     install_hint: str = f"{INSTALL_HINT} ({DEBIAN_HINT})"
 
-    def require(self, what: str, part: str = "writer") -> Any:
-        """The ``mcap.<part>`` module, or a `ConfigError` naming the install command."""
-        return require_mcap(what, part)
+    def check(self, call: str, compression: Optional[str], append: bool) -> None:
+        """Refuse an unknown ``compression``, and ``append`` (an MCAP file ends with its index).
+
+        Example::
+
+            MCAP.check("RecorderEndpointFactory('run.mcap'", "gzip", False)   # ConfigError
+        """
+        if compression is not None and compression not in self.compressions:
+            raise ConfigError(
+                f"{call}, compression={compression!r}): compression is for MCAP recordings, "
+                f"one of {self.compressions}."
+            )
+        if append:
+            raise ConfigError(
+                f"{call}): append=True works for JSON lines only (an MCAP file ends "
+                "with an index written when it closes). "
+                "Record each run to its own .mcap file, or append to a .jsonl file."
+            )
+
+    def require(self, what: str, part: str = "writer", compression: str = "none") -> Any:
+        """The ``mcap.<part>`` module, or a `ConfigError` naming the install command.
+
+        ``what`` names the call that needs it, e.g. ``"RecorderEndpointFactory('dive.mcap')"``;
+        a ``compression`` whose package is missing is named after it.
+        """
+        module = require_mcap(what, part)
+        package = self.compression_packages.get(compression)
+        if package is not None:
+            try:
+                importlib.import_module(package)
+            except ImportError:
+                raise ConfigError(
+                    f"{what[:-1]}, compression={compression!r}) needs the {package} package: "
+                    f"{self.install_hint}, or leave compression out"
+                ) from None
+        return module
 
     def writer(
         self, file: IO[bytes], compression: str = "none", flush: bool = True, sync: bool = False

@@ -1,32 +1,31 @@
 """`RecorderEndpointFactory`: write pages to disk as they are stored.
 
 JSON lines (``snr.std_mods.codec``: a header line, then a page per line), or
-MCAP for a ``*.mcap`` file (``snr.extras.viz``, found through
-`recording_formats`). Each page is flushed as it is written, so a killed
-process loses at most that page. Replay the file with `ReplayerLoopFactory`
-or read it with `PageReader`.
+a format an extra provides, chosen by the file's extension (MCAP for
+``*.mcap``: see `recording_formats`). Each page is flushed as it is written,
+so a killed process loses at most that page. Replay the file with
+`ReplayerLoopFactory` or read it with `PageReader`.
 """
 
 from __future__ import annotations
 
-import importlib
 import logging
 import os
 import sys
 import time
-from typing import IO, Any, List, Optional, Sequence, Tuple, Union
+from typing import IO, Any, Dict, List, Optional, Sequence, Tuple, Union
 
 from snr.core import Endpoint, EndpointFactory
 from snr.core.logs import RepeatFilter
 from snr.prelude import AbstractNode, ConfigError, DataKey, Page, SomeTasks, Task, TaskId, TaskType
 from snr.std_mods.codec import PathLike, decode_line, header_line, is_header, page_to_line
 from snr.std_mods.io import recording_formats
-from snr.std_mods.io.recording_formats import PageWriter, format_of_bytes, format_of_name
+from snr.std_mods.io.recording_formats import PageWriter
 
 __all__ = ["FILE_FORMATS", "RecorderEndpoint", "RecorderEndpointFactory", "kept_name"]
 
 FILE_FORMATS = ("jsonl", "mcap")
-"""The formats a recorder writes: JSON lines (the default) and MCAP."""
+"""The formats a recorder writes: JSON lines (the default) and MCAP (with ``snr.extras.viz``)."""
 
 _PEEK_BYTES = 65536  # enough for the first line of any recording (its header)
 _MAX_TIME = sys.float_info.max  # NaN, infinity and larger integers fail the comparison
@@ -120,11 +119,11 @@ class RecorderEndpoint(Endpoint):
             )
 
     def _open(self) -> PageWriter:
-        recording = self.recording
-        if recording.file is None and not recording.started:
-            recording.open_file()
+        first = self.recording.file is None and not self.recording.started
+        file = self.recording.open_file()
+        if first:
             self._say_where()
-        return recording.open_file()
+        return file
 
     def _say_where(self) -> None:
         recording, keys = self.recording, ", ".join(self.recording.keys)
@@ -144,7 +143,7 @@ class RecorderEndpoint(Endpoint):
             )
         else:
             how = "appending" if recording.append else "writing"
-            how += " MCAP" if recording.file_format == "mcap" else ""
+            how += "" if recording.file_format == "jsonl" else f" {recording.file_format.upper()}"
             self.info("Recording %s to %s (%s)", keys, recording.path, how)
 
     def _skip(self, page: Page, error: Exception) -> None:
@@ -196,13 +195,11 @@ def kept_name(filename: PathLike, when_s: float) -> str:
 class RecorderEndpointFactory(EndpointFactory):
     """Builds a `RecorderEndpoint` that records ``keys`` into ``filename``.
 
-    When ``filename`` already holds a recording, the new run is still
-    written to ``filename`` (so a replayer naming it replays the latest run)
-    and the previous recording is kept, renamed with the time it was last
-    written: ``dive.jsonl`` becomes ``dive-2026-11-24T23-59-01.jsonl``. The
-    log says so. A file that holds no pages (empty, or only a header) is
-    simply reused; a file that is not a recording at all is left alone and
-    the node does not start (``ConfigError``).
+    A recording already at ``filename`` is kept, renamed with the time it
+    was last written (``dive-2026-11-24T23-59-01.jsonl``), and the new run
+    goes to ``filename``; a file that is not a recording is left alone and
+    the node does not start (``ConfigError``). Data JSON cannot hold is
+    logged, naming its key and type, and skipped. See ``docs/recording.md``.
 
     Args:
         filename: the file to write.
@@ -211,23 +208,18 @@ class RecorderEndpointFactory(EndpointFactory):
             one page (slower: every page waits for the disk).
         name: the endpoint's name (default ``"recorder"``).
         overwrite: replace whatever ``filename`` holds instead of keeping it.
-        append: add this run's pages to the end of ``filename`` (after a
-            header line, so the file stays one valid recording). JSON lines only.
+        append: add this run's pages to the end of ``filename``, after a
+            header line. JSON lines only.
         file_format: ``"jsonl"`` or ``"mcap"``; by default ``"mcap"`` when
-            ``filename`` ends in ``.mcap``, else ``"jsonl"`` (the thesis's format).
-            MCAP needs ``pip install 'snr-robotics[mcap]'``; see ``docs/recording.md``.
+            ``filename`` ends in ``.mcap`` (``pip install 'snr-robotics[mcap]'``),
+            else ``"jsonl"`` (the thesis's format).
         compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress the file in
-            chunks of about 1 MiB (a killed process loses the unfinished
-            chunk); ``None`` (default) writes and flushes each page on its own.
+            chunks of about 1 MiB; ``None`` (default) flushes each page.
 
     Raises:
         ConfigError: no keys, both ``overwrite`` and ``append``, an unknown
             ``file_format`` or ``compression``, or ``append`` or ``compression``
             where the format does not allow it.
-
-    Data that JSON cannot hold (a set, an object, NaN, nesting deeper than
-    the codec allows) is logged, naming its key and type, and skipped;
-    recording goes on.
 
     Example::
 
@@ -271,28 +263,22 @@ class RecorderEndpointFactory(EndpointFactory):
                 "(add to it), not both."
             )
         if file_format is None:
-            file_format = format_of_name(self.filename)
+            file_format = recording_formats.format_of_name(self.filename)
         elif file_format not in FILE_FORMATS:
             raise ConfigError(
                 f"{call}, file_format={file_format!r}): choose one of {FILE_FORMATS}, "
                 "or leave it out to go by the file's extension."
             )
         self.file_format = file_format
-        self.compression = "none"
-        if compression is not None:
-            what = f"{call}, compression={compression!r})"
-            compressions = recording_formats.get("mcap", what).compressions
-            if file_format != "mcap" or compression not in compressions:
-                raise ConfigError(
-                    f"{what}: compression is for MCAP recordings, one of {compressions}."
-                )
-            self.compression = compression
-        if append and file_format == "mcap":
+        if file_format != "jsonl":  # the format's own options, checked by its extra
+            recording_formats.get(file_format, f"{call})").check(call, compression, append)
+        elif compression is not None:
+            compressions = recording_formats.get("mcap", f"{call})").compressions
             raise ConfigError(
-                f"{call}): append=True works for JSON lines only (an MCAP file ends "
-                "with an index written when it closes). "
-                "Record each run to its own .mcap file, or append to a .jsonl file."
+                f"{call}, compression={compression!r}): compression is for MCAP recordings, "
+                f"one of {compressions}."
             )
+        self.compression = compression or "none"
         self.sync = sync
         self.name = name or "recorder"
         self.overwrite = overwrite
@@ -311,36 +297,30 @@ class RecorderEndpointFactory(EndpointFactory):
 
         After a reload the new endpoint gets the file still open. A JSON-lines
         file closed earlier (the recorder removed and added again) is appended
-        to; an MCAP file cannot be, so a new one starts and the closed one is kept.
+        to; another format's file (MCAP) cannot be, so a new one starts and the
+        closed one is kept.
 
         Raises:
             ConfigError: the file cannot be created (no such folder, no
-                permission), or it exists and is not a recording, or MCAP
-                needs a package that is not installed; the message names the
-                file and the fix.
+                permission), or it exists and is not a recording, or its
+                format needs a package that is not installed; the message
+                names the file and the fix.
         """
         if self.file is not None:
             return self.file
-        mcap = self.file_format == "mcap"
-        if mcap:  # before any file is made or renamed
+        other = None
+        if self.file_format != "jsonl":  # before any file is made or renamed
             what = f"{type(self).__name__}({self.filename!r})"
-            recording_format = recording_formats.get("mcap", what)
-            recording_format.require(what)
-            package = recording_format.compression_packages.get(self.compression)
-            if package is not None and not _installed(package):
-                raise ConfigError(
-                    f"{type(self).__name__}({self.filename!r}, compression="
-                    f"{self.compression!r}) needs the {package} package: "
-                    f"{recording_format.install_hint}, or leave compression out"
-                )
+            other = recording_formats.get(self.file_format, what)
+            other.require(what, compression=self.compression)
         elif self.started:
             self.file = _LinesFile(self._open("a"), self.sync)
             return self.file
         self.path, self.kept = self._choose_path()
-        file = self._open("wb" if mcap else "a" if self.append else "w")
+        file = self._open("wb" if other else "a" if self.append else "w")
         try:
-            if mcap:
-                self.file = recording_format.writer(file, self.compression, sync=self.sync)
+            if other is not None:
+                self.file = other.writer(file, self.compression, sync=self.sync)
             else:
                 if self.append and not _ends_with_newline(self.path):
                     file.write("\n")  # a run cut short mid-line: keep its last line apart
@@ -412,14 +392,6 @@ class RecorderEndpointFactory(EndpointFactory):
         return f"RecorderEndpointFactory({self.filename!r}, {self.keys!r})"
 
 
-def _installed(package: str) -> bool:
-    try:
-        importlib.import_module(package)
-    except ImportError:
-        return False
-    return True
-
-
 def _what_it_holds(path: str) -> str:
     """``"nothing"`` (no pages), ``"recording"`` or ``"other"``, from the file's start."""
     try:
@@ -427,27 +399,27 @@ def _what_it_holds(path: str) -> str:
             start = file.read(_PEEK_BYTES)
     except OSError:
         return "recording"  # unreadable: do not write over it; renaming keeps it safe
-    if format_of_bytes(start) != "jsonl":
+    if recording_formats.format_of_bytes(start) != "jsonl":
         return "recording"
-    lines = [line for line in start.split(b"\n") if line.strip()]
+    lines = [_fields(line) for line in start.split(b"\n") if line.strip()]
     if not lines:
         return "nothing"
-    try:
-        fields = decode_line(lines[0])
-    except Exception:  # a first line cut short by the size limit, or not JSON at all
+    first = lines[0]
+    if first is None:  # a first line cut short by the size limit, or not JSON at all
         return "recording" if len(lines) == 1 and len(start) == _PEEK_BYTES else "other"
-    if not (is_header(fields) and fields.get("format") == "snr-pages") and "key" not in fields:
+    if not (is_header(first) and first.get("format") == "snr-pages") and "key" not in first:
         return "other"
-    if len(start) < _PEEK_BYTES and all(_is_header_line(line) for line in lines):
+    if len(start) < _PEEK_BYTES and all(f is not None and is_header(f) for f in lines):
         return "nothing"
     return "recording"
 
 
-def _is_header_line(line: bytes) -> bool:
+def _fields(line: bytes) -> Optional[Dict[str, Any]]:
+    """The JSON object on ``line``, or None when it is not one."""
     try:
-        return is_header(decode_line(line))
+        return decode_line(line)
     except Exception:
-        return False
+        return None
 
 
 def _free_name(path: str) -> str:

@@ -1,9 +1,11 @@
-"""Recording formats besides JSON lines: what an extra provides to the recorder and replayer.
+"""The extension point of the recorder and replayer: recording formats besides JSON lines.
 
-JSON lines (``snr.std_mods.codec``) is the kernel's own format. Another
-format (MCAP, in ``snr.extras.viz``) is found by its file extension in the
-entry point group ``snr.recording_formats`` (`snr.core.plugins`): the name
-of the entry point is the extension, its object a `RecordingFormat`.
+JSON lines (``snr.std_mods.codec``) is the kernel's own format. An extra adds
+another as an entry point of the group ``snr.recording_formats``
+(`snr.core.plugins`): its name is the file extension that chooses it, its
+object a `RecordingFormat`, a writer and a reader. MCAP
+(``snr.extras.viz.mcap_format``) is one. The recorder asks for a format by
+the file's name, the reader by the file's first bytes.
 
 Example::
 
@@ -14,7 +16,7 @@ Example::
 from __future__ import annotations
 
 import os
-from typing import IO, Any, Callable, Iterator, Mapping, Optional, Protocol, Tuple
+from typing import IO, Any, Callable, Iterator, Optional, Protocol, Tuple
 
 from snr.core import plugins
 from snr.prelude import Page
@@ -37,21 +39,22 @@ class PageWriter(Protocol):
 
 
 class RecordingFormat(Protocol):
-    """What a recording format provides: see ``snr.extras.viz.mcap_format`` for one.
+    """A recording format: a writer and a reader (see ``snr.extras.viz.mcap_format``).
 
     Attributes:
         magic: the bytes every file of this format starts with.
+        unit: what the reader calls one record in messages, e.g. ``"message"``.
         compressions: the ``compression`` choices, ``"none"`` first.
-        compression_packages: the package each compression needs.
-        install_hint: how to install those packages, e.g. "pip install 'snr-robotics[mcap]'".
     """
 
     magic: bytes
+    unit: str
     compressions: Tuple[str, ...]
-    compression_packages: Mapping[str, str]
-    install_hint: str
 
-    def require(self, what: str, part: str = "writer") -> Any:
+    def check(self, call: str, compression: Optional[str], append: bool) -> None:
+        """Refuse a recorder's options the format cannot honour, with a `ConfigError`."""
+
+    def require(self, what: str, part: str = "writer", compression: str = "none") -> Any:
         """Fail with a `ConfigError` naming the install command if a package is missing."""
 
     def writer(

@@ -4,7 +4,8 @@
 stores its pages into a node again, with their original spacing in time or
 as fast as possible. `TextReader` and `TextReplayerFactory` do the same for a
 text file, a page per line (e.g. a log of NMEA sentences from a GPS). A bad
-line is reported with its number and skipped; replay goes on.
+line is reported with its number and skipped; replay goes on. See
+``docs/recording.md``.
 """
 
 from __future__ import annotations
@@ -71,11 +72,9 @@ DRAIN_ROUNDS = 100
 MAX_GAP_S = 10.0
 """Default longest wait between two replayed pages with original timing, in seconds.
 
-A longer gap in a recording is far more often a clock that jumped (a board
-without a battery-backed clock setting its time from the network) or a
-corrupt timestamp than a real pause, so the replayer waits this long instead
-and logs a warning naming the line. ``ReplayerLoopFactory(max_gap_s=...)``
-changes it.
+A longer gap is far more often a clock that jumped or a corrupt timestamp
+than a real pause, so the replayer waits this long instead and logs a
+warning naming the line. ``ReplayerLoopFactory(max_gap_s=...)`` changes it.
 """
 
 REORDER_WINDOW = 1000
@@ -117,20 +116,15 @@ def _check_readable(filename: str, what: str) -> None:
 
 
 class PageReader:
-    """Reads the pages of a recording, JSON lines or MCAP, in order; iterate over it.
+    """Reads the pages of a recording in order; iterate over it.
 
-    An MCAP file (known by its first bytes, whatever its name) is read with
-    the ``mcap`` package (``pip install 'snr-robotics[mcap]'``); its messages are taken
-    as lines are, so what follows holds for both, with "message N" for "line N"
-    (see `read_mcap_pages`).
-
-    Bad lines are logged with their line number, listed in ``problems`` and
-    skipped: any line that is not a valid page, whatever is wrong with it
-    (not UTF-8, not strict JSON, nested too deep, numbers out of range,
-    fields missing or of the wrong type). A last line cut short (the
-    recorder was killed mid-write) is reported the same way. The first five
-    are logged in full, then a count every 5 s, and a summary with the
-    total when the file has been read.
+    A file in another format an extra provides (MCAP: known by its first
+    bytes, whatever its name; ``pip install 'snr-robotics[mcap]'``) is read by
+    that extra, its messages taken as lines are ("message N" for "line N").
+    Any line that is not a valid page is logged with its line number, listed
+    in ``problems`` and skipped, a last line cut short included: the first
+    five in full, then a count every 5 s, and a summary with the total at the
+    end (``docs/recording.md``, "Reading").
 
     Args:
         filename: a file written by `RecorderEndpointFactory`.
@@ -145,6 +139,7 @@ class PageReader:
         problems: the first `MAX_PROBLEMS` bad lines, each as
             ``"file:line: reason"`` (MCAP: ``"file: message N: reason"``).
         bad_lines: how many bad lines (or MCAP messages) were skipped in all.
+        file_format: ``"jsonl"``, or the format an extra reads (``"mcap"``).
         is_mcap: True when the file is MCAP.
 
     Example::
@@ -159,19 +154,21 @@ class PageReader:
         self.problems: List[str] = []
         self.bad_lines = 0
         self._bad_line_numbers: List[int] = []
-        # A corrupt file can hold thousands of bad lines: log the first few in full.
         self._repeats = RepeatFilter(_log, first=5)
         with open(self.filename, "rb") as file:
-            self.is_mcap = recording_formats.format_of_bytes(file.read(16)) == "mcap"
-            file.seek(0)
-            first = b"" if self.is_mcap else file.readline()
-        if self.is_mcap:  # fail now if the mcap package is missing
-            what = f"Reading the MCAP file {self.filename!r}"
-            recording_formats.get("mcap", what).require(what, "stream_reader")
+            first = file.readline()  # MCAP's magic ends with a newline too
+        self.file_format = recording_formats.format_of_bytes(first)
+        self.is_mcap = self.file_format == "mcap"
+        self._format: Optional[recording_formats.RecordingFormat] = None
+        if self.file_format != "jsonl":  # fail now if its package is missing
+            what = f"Reading the {self.file_format.upper()} file {self.filename!r}"
+            self._format = recording_formats.get(self.file_format, what)
+            self._format.require(what, "stream_reader")
+            return
         try:
             fields = decode_line(first)
         except Exception:  # not a header: reported as a bad line when read
-            fields = {}
+            return
         if is_header(fields):
             try:  # a newer format fails now, not halfway through a replay
                 check_header(fields)
@@ -198,23 +195,30 @@ class PageReader:
                 print(f"line {recorded.line}: {recorded.page.data}")
         """
         self.problems, self.bad_lines, self._bad_line_numbers = [], 0, []
+        # A corrupt file can hold thousands of bad lines: log the first few in full.
         self._repeats = RepeatFilter(_log, first=5)
+        if self._format is None:
+            pages = self._read_lines()
+        else:
+            unit, name = self._format.unit, self.filename
+            pages = self._format.read_pages(
+                name, lambda n, why: self._report(n, f"{name}: {unit} {n}: {why}")
+            )
         try:
-            if self.is_mcap:
-                mcap = recording_formats.get("mcap", f"Reading {self.filename!r}")
-                for number, page, timed in mcap.read_pages(
-                    self.filename,
-                    lambda n, problem: self._report(n, f"{self.filename}: message {n}: {problem}"),
-                ):
-                    yield RecordedPage(number, page, timed)
-                return
-            with open(self.filename, "rb") as file:
-                for number, raw in enumerate(file, start=1):
-                    parsed = self._parse(number, raw)
-                    if parsed is not None:
-                        yield RecordedPage(number, *parsed)
+            for number, page, timed in pages:
+                yield RecordedPage(number, page, timed)
         finally:
+            close = getattr(pages, "close", None)
+            if close is not None:
+                close()  # the file, now, even if reading stopped early
             self._summarise()
+
+    def _read_lines(self) -> Iterator[Tuple[int, Page, bool]]:
+        with open(self.filename, "rb") as file:
+            for number, raw in enumerate(file, start=1):
+                parsed = self._parse(number, raw)
+                if parsed is not None:
+                    yield number, *parsed
 
     def _summarise(self) -> None:
         if not self.bad_lines:
@@ -223,7 +227,7 @@ class PageReader:
         if self.bad_lines > len(self._bad_line_numbers):
             shown += ", ..."
         unlogged = self.bad_lines - min(self.bad_lines, self._repeats.first)
-        unit = "message" if self.is_mcap else "line"
+        unit = "line" if self._format is None else self._format.unit
         units = unit if self.bad_lines == 1 else unit + "s"
         _log.warning(
             "%s: skipped %d bad %s in all (%s %s)%s; every other %s was read.",
@@ -321,7 +325,6 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         if factory.exit_when_done:
             self.task_handlers = {(TaskType.event, self._done_event): self.finish_node}
 
-    # -- what subclasses fill in ---------------------------------------------
     def items(self) -> Iterator[Item]:
         """The items of the file, in order."""
         raise NotImplementedError
@@ -338,7 +341,6 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         """What went wrong with the file, for the last log line ("" if nothing)."""
         return ""
 
-    # -- the loop -------------------------------------------------------------
     def setup(self) -> None:
         try:
             self._items = self.items()
@@ -428,15 +430,11 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
     """Stores the pages of a recording, each with its key, data, origin and time.
 
     Each origin's pages are stored in the order they were made, even where
-    the file's lines are out of order (see `in_created_order`).
-
-    With original timing, each page is stored as long after the previous one
-    as it was created after it (``created_at_s``), but never more than
-    ``max_gap_s`` later. Each origin's clock is followed on its own, so pages
-    from nodes whose clocks disagree still replay with their own spacing. A
-    page with no time, or whose time goes back by more than ``max_gap_s``,
-    is stored right after the previous page; a longer gap is cut to
-    ``max_gap_s``. Each of these is logged with its line number.
+    the file's lines are out of order (see `in_created_order`). With original
+    timing each page waits as long after the previous one as it was created
+    after it, following each origin's clock on its own; a page with no time,
+    a gap over ``max_gap_s`` or a time going back is stored right away (or
+    after ``max_gap_s``) and logged with its line number.
 
     Example::
 
@@ -446,7 +444,7 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
     def __init__(self, factory: ReplayerLoopFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent)
         self.options = factory
-        self.reader = PageReader(factory.filename)
+        self.reader = PageReader(factory.filename)  # now: a missing file fails the build
         self._due: Optional[float] = None  # when the previous page was due (monotonic)
         # origin -> replay time minus created_at_s, so due = created_at_s + offset
         self._offsets: Dict[str, float] = {}
@@ -530,10 +528,8 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
         self.store_page(item.page)  # the page as recorded: origin and created_at_s kept
 
     def summary(self) -> str:
-        self.options.bad_lines = self.reader.bad_lines
-        parts = []
-        if self.reader.bad_lines:
-            parts.append(f"{self.reader.bad_lines} bad lines skipped")
+        self.options.bad_lines = bad = self.reader.bad_lines
+        parts = [f"{bad} bad lines skipped"] if bad else []
         if self.options.retimed:
             parts.append(f"{self.options.retimed} pages not stored at their recorded time")
         return f" ({'; '.join(parts)}; see the warnings above)" if parts else ""
@@ -599,9 +595,6 @@ class ReplayerLoopFactory(_ReplayFactory):
     Raises:
         ConfigError: ``max_gap_s`` is negative, not finite or too large.
 
-    Bad lines in the file are skipped and logged with their line numbers;
-    the replay goes on.
-
     Example::
 
         config = Config({"sim": [
@@ -649,7 +642,7 @@ class ReplayerLoopFactory(_ReplayFactory):
 
 
 class TextReplayerLoop(ReplayLoop[str]):
-    """Stores each line of a text file as data under one key.
+    """Stores each line of a text file as data under one key, ``period_s`` apart.
 
     Example::
 
