@@ -25,9 +25,10 @@ Example::
 from __future__ import annotations
 
 import os
+import random
 import sys
 from pathlib import Path
-from typing import Any, Optional, Union
+from typing import Any, Literal, Optional, Union
 
 from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.extras.controller.keyboard import KeyboardJoystick
@@ -41,9 +42,11 @@ from snr.extras.sim.draw import (
 )
 from snr.extras.sim.robot import DiffDriveRobot, Pose, RobotSpec
 from snr.extras.sim.sensors import (
+    SCAN,
     WHEEL_CMD,
     Odometry,
     RangeSensor,
+    ScanSensor,
     sensor_pages,
     wheel_command,
 )
@@ -93,6 +96,10 @@ class SimRobotLoop(ThreadLoop):
             factory.robot, factory.world, factory.range_sensor, factory.odometry
         ).items():
             self.store_data(key, value)
+        scanner = factory.scan_sensor
+        if scanner is not None and (factory.steps - 1) % factory.steps_per_scan == 0:
+            robot = factory.robot  # a scan on the first step, then every steps_per_scan
+            self.store_data(SCAN, scanner.read(factory.world, robot.pose, factory.scan_rng))
 
 
 class SimRobotFactory(LoopFactory):
@@ -104,7 +111,9 @@ class SimRobotFactory(LoopFactory):
     Args:
         world: the walls, and the robot's start pose (``world.start``).
         spec: the robot's size, limits and noise (`RobotSpec`).
-        range_sensor: its distance sensors (`RangeSensor`).
+        range_sensor: its distance sensors (`RangeSensor`; the default's five
+            rays if None); False for none: no ``range`` page at all.
+        scan_sensor: a lidar (`ScanSensor`), stored under ``scan``; none if None.
         seed: seeds every random number of the run: same seed, same run.
         rate_hz: physics steps per second of simulated time (default 50).
         name: the loop's name (default ``"sim_robot"``).
@@ -116,21 +125,28 @@ class SimRobotFactory(LoopFactory):
     Example::
 
         SimRobotFactory(World.box(4, 3), seed=1)
+        SimRobotFactory(world, range_sensor=False, scan_sensor=ScanSensor(), seed=1)
     """
 
     def __init__(
         self,
         world: World,
         spec: Optional[RobotSpec] = None,
-        range_sensor: Optional[RangeSensor] = None,
+        range_sensor: Union[RangeSensor, Literal[False], None] = None,
         seed: int = 0,
         rate_hz: float = 50.0,
         name: Optional[str] = None,
+        scan_sensor: Optional[ScanSensor] = None,
     ) -> None:
         super().__init__(sys.modules[__name__])
         self.world = world
         self.spec = spec or RobotSpec()
-        self.range_sensor = range_sensor or RangeSensor()
+        self.range_sensor: Optional[RangeSensor] = (
+            None if range_sensor is False else range_sensor or RangeSensor()
+        )
+        self.scan_sensor = scan_sensor
+        # Its own random numbers, so that adding a lidar changes nothing else in a run.
+        self.scan_rng = random.Random(f"scan {seed}")
         if not rate_hz > 0 or self.spec.max_wheel_speed_m_s / rate_hz > self.spec.radius_m / 2:
             raise ComponentError(
                 f"SimRobotFactory(rate_hz={rate_hz!r}): at {self.spec.max_wheel_speed_m_s} "
@@ -138,6 +154,7 @@ class SimRobotFactory(LoopFactory):
                 "pass through a wall. Use a higher rate_hz (50 is the default)."
             )
         self.rate_hz = float(rate_hz)
+        self.steps_per_scan = max(1, round(rate_hz / scan_sensor.rate_hz)) if scan_sensor else 1
         x, y, theta = world.start
         if world.clearance_m(x, y) < self.spec.radius_m:
             raise ComponentError(
