@@ -10,20 +10,28 @@ others: the renamed copy, the page's ``$`` lines.)
 
 from __future__ import annotations
 
+import contextlib
+import io
 import math
 import random
+import tempfile
 import time
 import unittest
+from pathlib import Path
 from typing import Any, Dict, List
 
 from snr import Config, Mode, SimClock, SimRobotFactory, TimeoutLoopFactory, World
 from snr.core import TestRunner
 from snr.extras.lessons import lesson
 from snr.extras.lessons.command import grade_file
+from snr.extras.lessons.l03_scan_follower import solution
 from snr.extras.lessons.l03_scan_follower.solution import nearest_echo
-from snr.extras.sim import Pose, ScanSensor
+from snr.extras.sim import Pose, ScanSensor, SimViewFactory
+from snr.extras.sim.draw import Scene
 from snr.prelude import ComponentError
+from tests.optional import needs
 from tests.page_collector import PageCollectorFactory
+from tests.quiet import captured_logs
 
 PERFECT = ScanSensor(noise_m=0.0, dropout=0.0)
 
@@ -102,6 +110,34 @@ class TestScanSensor(unittest.TestCase):
         self.assertEqual(plain["range"], with_scan["range"])  # its own random numbers
         self.assertEqual(plain["true_pose"], with_scan["true_pose"])
         self.assertEqual(with_scan["scan"], node_pages(0.5, scan_sensor=ScanSensor())["scan"])
+
+
+class TestTheView(unittest.TestCase):
+    def test_it_reads_the_distance_pages_the_robot_stores_and_no_other(self) -> None:
+        world = World.box(4.0, 3.0)
+        world.start = (1.0, 1.0, 0.0)
+        lidar_only = SimRobotFactory(world, range_sensor=False, scan_sensor=ScanSensor())
+        self.assertEqual(lidar_only.sensor_keys, ["scan"])
+        self.assertEqual(SimRobotFactory(world).sensor_keys, ["range"])
+        view = SimViewFactory(world, sensor_keys=lidar_only.sensor_keys)
+        scene = Scene(None, world, sensor_keys=view.sensor_keys)
+        self.assertEqual(scene.keys, ("true_pose", "odometry", "scan", "bump"))
+        self.assertEqual(Scene(None, world).keys, ("true_pose", "odometry", "range", "bump"))
+
+    @needs("pygame")
+    def test_the_lesson_drawn_for_6_s_hints_at_no_missing_key(self) -> None:
+        # A view reading 'range' from a robot with none would log, after 5 s in
+        # DEBUG mode, that nothing stores it: noise in a student's terminal.
+        frames = Path(tempfile.mkdtemp(prefix="snr-lesson3-"))
+        argv = ["scan_follower.py", "--seconds", "6", "--speed", "0", "--frames", str(frames)]
+        with captured_logs("snr") as lines, contextlib.redirect_stdout(io.StringIO()) as out:
+            solution.main(argv, solution.ScanFollowerFactory(), solution.ROBOT)
+        self.assertIn("After 6.0 s the robot is at", out.getvalue())
+        self.assertEqual([line for line in lines if "has been read" in line], [])
+        self.assertGreater(len(list(frames.glob("frame_*.png"))), 50, "it drew the scan")
+        for frame in frames.iterdir():
+            frame.unlink()
+        frames.rmdir()
 
 
 class TestLesson3(unittest.TestCase):

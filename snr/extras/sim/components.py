@@ -28,7 +28,7 @@ import os
 import random
 import sys
 from pathlib import Path
-from typing import Any, Literal, Optional, Union
+from typing import Any, List, Literal, Optional, Sequence, Union
 
 from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.extras.controller.keyboard import KeyboardJoystick
@@ -42,6 +42,7 @@ from snr.extras.sim.draw import (
 )
 from snr.extras.sim.robot import DiffDriveRobot, Pose, RobotSpec
 from snr.extras.sim.sensors import (
+    RANGE,
     SCAN,
     WHEEL_CMD,
     Odometry,
@@ -51,7 +52,7 @@ from snr.extras.sim.sensors import (
     wheel_command,
 )
 from snr.extras.sim.world import World
-from snr.prelude import AbstractNode, ComponentError
+from snr.prelude import AbstractNode, ComponentError, DataKey
 
 __all__ = ["SimRobotFactory", "SimRobotLoop", "SimViewFactory", "SimViewLoop", "has_display"]
 
@@ -145,6 +146,12 @@ class SimRobotFactory(LoopFactory):
             None if range_sensor is False else range_sensor or RangeSensor()
         )
         self.scan_sensor = scan_sensor
+        self.sensor_keys: List[DataKey] = []
+        """The keys of its distance sensors' pages: for ``SimViewFactory(sensor_keys=...)``."""
+        if self.range_sensor is not None:
+            self.sensor_keys.append(RANGE)
+        if scan_sensor is not None:
+            self.sensor_keys.append(SCAN)
         # Its own random numbers, so that adding a lidar changes nothing else in a run.
         self.scan_rng = random.Random(f"scan {seed}")
         if not rate_hz > 0 or self.spec.max_wheel_speed_m_s / rate_hz > self.spec.radius_m / 2:
@@ -265,6 +272,9 @@ class SimViewFactory(LoopFactory):
         width_px: the picture's width; its height follows the world's shape.
         radius_m: the robot's radius, as drawn.
         trail_points: how many of its past positions are drawn as its path.
+        sensor_keys: the distance sensors' pages to draw: ``range`` rays, a
+            lidar's ``scan`` (a robot's own: its ``sensor_keys``).
+            A key nothing stores would be read for nothing (DEBUG mode says so).
 
     Attributes:
         keyboard: the window's arrow keys / WASD as a `KeyboardJoystick`:
@@ -276,6 +286,7 @@ class SimViewFactory(LoopFactory):
 
         SimViewFactory(world)                                   # window if possible
         SimViewFactory(world, frames_dir="frames", window=False)   # PNG frames
+        SimViewFactory(world, sensor_keys=sim.sensor_keys)      # what robot `sim` has
     """
 
     def __init__(
@@ -289,6 +300,7 @@ class SimViewFactory(LoopFactory):
         radius_m: float = RobotSpec().radius_m,
         trail_points: int = 1000,
         name: Optional[str] = None,
+        sensor_keys: Sequence[DataKey] = (RANGE,),
     ) -> None:
         super().__init__(sys.modules[__name__])
         if not rate_hz > 0 or max_frames < 0 or width_px < 100:
@@ -306,6 +318,7 @@ class SimViewFactory(LoopFactory):
         self.radius_m = radius_m
         self.trail_points = max(0, trail_points)
         self.name = name or "sim_view"
+        self.sensor_keys = list(sensor_keys)
         self.keyboard = KeyboardJoystick()
         # Counted here, on the factory, so they can be read after the run.
         self.frames_written = 0
@@ -320,7 +333,9 @@ class SimViewFactory(LoopFactory):
 
     def scene(self, pygame: Any) -> Scene:
         """A `Scene` drawn as these settings say (for a loop, or a window on the main thread)."""
-        return Scene(pygame, self.world, self.width_px, self.radius_m, self.trail_points)
+        return Scene(
+            pygame, self.world, self.width_px, self.radius_m, self.trail_points, self.sensor_keys
+        )
 
     def get(self, parent: AbstractNode) -> SimViewLoop:
         return SimViewLoop(self, parent)

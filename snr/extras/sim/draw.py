@@ -202,6 +202,7 @@ class Scene:
         width_px: the picture's width.
         radius_m: the robot's radius, as drawn.
         trail_points: how many past positions are kept and drawn as its path.
+        sensor_keys: the distance sensors' pages it reads: ``range``, ``scan``.
 
     Example::
 
@@ -216,8 +217,10 @@ class Scene:
         width_px: int = 640,
         radius_m: float = 0.1,
         trail_points: int = 1000,
+        sensor_keys: Sequence[DataKey] = (RANGE,),
     ) -> None:
         self.pygame = pygame
+        self.keys = (TRUE_POSE, ODOMETRY, *sensor_keys, BUMP)
         self.world = world
         self.view = WorldView(world, width_px)
         self.radius_m = radius_m
@@ -227,7 +230,7 @@ class Scene:
     def draw(self, get_data: Callable[[DataKey], Any], surface: Optional[Any] = None) -> Any:
         """Draw the pages ``get_data`` returns on ``surface`` (or a new one); returns it."""
         pages: Dict[DataKey, Any] = {}
-        for key in (TRUE_POSE, ODOMETRY, RANGE, SCAN, BUMP):
+        for key in self.keys:
             data = get_data(key)
             if data is not None:
                 pages[key] = data

@@ -161,9 +161,11 @@ def run(
     world = make_world()
     sim = snr.SimRobotFactory(world, seed=seed, **(robot or {}))
     if frames_dir is None:
-        view = snr.SimViewFactory(world)
+        view = snr.SimViewFactory(world, sensor_keys=sim.sensor_keys)
     else:
-        view = snr.SimViewFactory(world, frames_dir=frames_dir, window=False)
+        view = snr.SimViewFactory(
+            world, frames_dir=frames_dir, window=False, sensor_keys=sim.sensor_keys
+        )
     brain_and_timer = [brain or WallFollowerFactory(), snr.TimeoutLoopFactory(seconds=seconds)]
     clock = snr.SimClock(speed=speed)
     if not pygame_installed():  # said once, here; no view, so no folder and no warning
