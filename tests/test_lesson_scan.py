@@ -29,6 +29,7 @@ from snr.extras.lessons.l03_scan_follower.solution import nearest_echo
 from snr.extras.sim import Pose, ScanSensor, SimViewFactory
 from snr.extras.sim.draw import Scene
 from snr.prelude import ComponentError
+from tests.examples_support import example_path, load_module
 from tests.optional import needs
 from tests.page_collector import PageCollectorFactory
 from tests.quiet import captured_logs
@@ -131,7 +132,7 @@ class TestTheView(unittest.TestCase):
         frames = Path(tempfile.mkdtemp(prefix="snr-lesson3-"))
         argv = ["scan_follower.py", "--seconds", "6", "--speed", "0", "--frames", str(frames)]
         with captured_logs("snr") as lines, contextlib.redirect_stdout(io.StringIO()) as out:
-            solution.main(argv, solution.ScanFollowerFactory(), solution.ROBOT)
+            solution.main(argv)
         self.assertIn("After 6.0 s the robot is at", out.getvalue())
         self.assertEqual([line for line in lines if "has been read" in line], [])
         self.assertGreater(len(list(frames.glob("frame_*.png"))), 50, "it drew the scan")
@@ -180,6 +181,10 @@ class TestLesson3(unittest.TestCase):
         self.assertIn("handle 'scan' instead of 'range'", drop_in.hint)
         source = (lesson(1).folder / "solution.py").read_text("utf-8").splitlines()
         self.assertIn("def steer(", source[(drop_in.line or 0) - 1])
+
+    def test_the_example_runs_the_shipped_solution(self) -> None:
+        example = load_module(example_path("lessons", "scan_follower.py"), "lesson_scan_follower")
+        self.assertIs(example.main, solution.main)
 
     def test_nearest_echo_skips_no_echo_and_other_angles(self) -> None:
         scan = {"angles_deg": [-97.5, -92.5, -87.5, 2.5], "ranges_m": [0.36, 0.0, 0.351, 0.2]}

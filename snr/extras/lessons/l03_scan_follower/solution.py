@@ -22,10 +22,12 @@ from __future__ import annotations
 
 import math
 import sys
-from typing import Any, Dict, Optional, Tuple
+from typing import Any, Dict, List, Optional, Tuple
 
+import snr
 from snr import AbstractNode, Endpoint, EndpointFactory, SomeTasks, Task, TaskId, TaskType
-from snr.extras.lessons.l01_wall_follower.solution import main, make_world
+from snr.extras.lessons.l01_wall_follower import solution as lesson_1
+from snr.extras.lessons.l01_wall_follower.solution import make_world
 from snr.extras.sim import ScanSensor
 
 __all__ = [
@@ -148,5 +150,20 @@ class ScanFollowerFactory(EndpointFactory):
         return ScanFollowerEndpoint(self, parent)
 
 
+def main(argv: List[str], brain: Optional[snr.AbstractFactory] = None) -> None:
+    """``python scan_follower.py [--seconds S] [--frames DIR] [--seed N] [--speed X]``.
+
+    Lesson 1's runner (its room, its view, its options), with `ROBOT`, the
+    robot with a lidar. ``brain``: the endpoint's factory that drives it
+    (this file's by default; the starter file passes its own).
+
+    Example::
+
+        main(["scan_follower.py", "--seconds", "60", "--speed", "0"])
+    """
+    title = "Lesson 3: lesson 1's wall follower, seeing by lidar."
+    lesson_1.main(argv, brain or ScanFollowerFactory(), ROBOT, title)
+
+
 if __name__ == "__main__":
-    main(sys.argv, ScanFollowerFactory(), ROBOT, "Lesson 3: a wall follower that sees by lidar.")
+    main(sys.argv)

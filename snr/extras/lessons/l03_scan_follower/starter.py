@@ -13,8 +13,8 @@ Run it, and grade it::
     python scan_follower.py --seconds 30 --speed 0     # as fast as it goes
     python -m snr lesson grade 3
 
-The room, the robot and the runner are the lesson's (``make_world``,
-``ROBOT`` and ``main``); your part is the perception below.
+The room, the robot and the runner are the lesson's (``make_world`` and
+``main``); your part is the perception below.
 """
 
 from __future__ import annotations
@@ -24,7 +24,7 @@ import sys
 from typing import Any, Dict, Tuple
 
 from snr import AbstractNode, Endpoint, EndpointFactory, SomeTasks, Task, TaskId, TaskType
-from snr.extras.lessons.l03_scan_follower.solution import ROBOT, main, make_world
+from snr.extras.lessons.l03_scan_follower.solution import main, make_world
 
 __all__ = ["ScanFollowerEndpoint", "ScanFollowerFactory", "make_world", "nearest_echo"]
 
@@ -124,4 +124,4 @@ class ScanFollowerFactory(EndpointFactory):
 
 
 if __name__ == "__main__":
-    main(sys.argv, ScanFollowerFactory(), ROBOT, "Lesson 3: a wall follower that sees by lidar.")
+    main(sys.argv, ScanFollowerFactory())
