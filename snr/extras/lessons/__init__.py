@@ -6,6 +6,7 @@ does in the simulator. The lessons' text is docs/lessons.md.
 
 * ``l01_wall_follower``: lesson 1, a proportional wall follower;
 * ``l02_go_to_goal``: lesson 2, go to a goal round a crate;
+* ``l03_scan_follower``: lesson 3, lesson 1's wall follower seeing by lidar;
 * ``l04_depth_filter``: lesson 4, a filter for a noisy depth sensor.
 
 Example::
@@ -68,6 +69,13 @@ LESSONS: Tuple[Lesson, ...] = (
         "l02_go_to_goal",
         "go_to_goal.py",
         "lesson-2-go-to-a-goal",
+    ),
+    Lesson(
+        3,
+        "a perception-based controller: lesson 1's wall follower, seeing by lidar",
+        "l03_scan_follower",
+        "scan_follower.py",
+        "lesson-3-a-perception-based-controller",
     ),
     Lesson(
         4,

@@ -422,21 +422,24 @@ def drive(
     seconds: float,
     path: Path,
     attributes: Optional[Dict[str, Any]] = None,
+    robot: Optional[Dict[str, Any]] = None,
 ) -> Tuple[Drive, Optional[Endpoint]]:
     """Run ``cls`` and the simulated robot in ``world`` for ``seconds`` of simulated time.
 
     One node, as the lesson's ``main`` builds it without the view, on a
-    `SimClock` as fast as it goes, seed `SEED`. Returns what happened and the
+    `SimClock` as fast as it goes, seed `SEED`. ``robot``: more arguments for
+    its `SimRobotFactory` (lesson 3's sensors). Returns what happened and the
     endpoint (None if it could not be built).
 
     Example::
 
         run, endpoint = drive(WallFollowerEndpoint, make_world(), 60.0, Path("mine.py"))
+        drive(ScanFollowerEndpoint, world, 60.0, path, robot={"scan_sensor": ScanSensor()})
     """
     run = Drive(seconds)
     brain = _Adopter(cls, path, run, attributes or {})
     components = [
-        snr.SimRobotFactory(world, seed=SEED),
+        snr.SimRobotFactory(world, seed=SEED, **(robot or {})),
         brain,
         TimeoutLoopFactory(seconds=seconds),
         _RecorderFactory(run),

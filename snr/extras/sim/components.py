@@ -25,9 +25,10 @@ Example::
 from __future__ import annotations
 
 import os
+import random
 import sys
 from pathlib import Path
-from typing import Any, Optional, Union
+from typing import Any, List, Literal, Optional, Sequence, Union
 
 from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.extras.controller.keyboard import KeyboardJoystick
@@ -41,14 +42,17 @@ from snr.extras.sim.draw import (
 )
 from snr.extras.sim.robot import DiffDriveRobot, Pose, RobotSpec
 from snr.extras.sim.sensors import (
+    RANGE,
+    SCAN,
     WHEEL_CMD,
     Odometry,
     RangeSensor,
+    ScanSensor,
     sensor_pages,
     wheel_command,
 )
 from snr.extras.sim.world import World
-from snr.prelude import AbstractNode, ComponentError
+from snr.prelude import AbstractNode, ComponentError, DataKey
 
 __all__ = ["SimRobotFactory", "SimRobotLoop", "SimViewFactory", "SimViewLoop", "has_display"]
 
@@ -93,6 +97,10 @@ class SimRobotLoop(ThreadLoop):
             factory.robot, factory.world, factory.range_sensor, factory.odometry
         ).items():
             self.store_data(key, value)
+        scanner = factory.scan_sensor
+        if scanner is not None and (factory.steps - 1) % factory.steps_per_scan == 0:
+            robot = factory.robot  # a scan on the first step, then every steps_per_scan
+            self.store_data(SCAN, scanner.read(factory.world, robot.pose, factory.scan_rng))
 
 
 class SimRobotFactory(LoopFactory):
@@ -104,7 +112,9 @@ class SimRobotFactory(LoopFactory):
     Args:
         world: the walls, and the robot's start pose (``world.start``).
         spec: the robot's size, limits and noise (`RobotSpec`).
-        range_sensor: its distance sensors (`RangeSensor`).
+        range_sensor: its distance sensors (`RangeSensor`; the default's five
+            rays if None); False for none: no ``range`` page at all.
+        scan_sensor: a lidar (`ScanSensor`), stored under ``scan``; none if None.
         seed: seeds every random number of the run: same seed, same run.
         rate_hz: physics steps per second of simulated time (default 50).
         name: the loop's name (default ``"sim_robot"``).
@@ -116,21 +126,34 @@ class SimRobotFactory(LoopFactory):
     Example::
 
         SimRobotFactory(World.box(4, 3), seed=1)
+        SimRobotFactory(world, range_sensor=False, scan_sensor=ScanSensor(), seed=1)
     """
 
     def __init__(
         self,
         world: World,
         spec: Optional[RobotSpec] = None,
-        range_sensor: Optional[RangeSensor] = None,
+        range_sensor: Union[RangeSensor, Literal[False], None] = None,
         seed: int = 0,
         rate_hz: float = 50.0,
         name: Optional[str] = None,
+        scan_sensor: Optional[ScanSensor] = None,
     ) -> None:
         super().__init__(sys.modules[__name__])
         self.world = world
         self.spec = spec or RobotSpec()
-        self.range_sensor = range_sensor or RangeSensor()
+        self.range_sensor: Optional[RangeSensor] = (
+            None if range_sensor is False else range_sensor or RangeSensor()
+        )
+        self.scan_sensor = scan_sensor
+        self.sensor_keys: List[DataKey] = []
+        """The keys of its distance sensors' pages: for ``SimViewFactory(sensor_keys=...)``."""
+        if self.range_sensor is not None:
+            self.sensor_keys.append(RANGE)
+        if scan_sensor is not None:
+            self.sensor_keys.append(SCAN)
+        # Its own random numbers, so that adding a lidar changes nothing else in a run.
+        self.scan_rng = random.Random(f"scan {seed}")
         if not rate_hz > 0 or self.spec.max_wheel_speed_m_s / rate_hz > self.spec.radius_m / 2:
             raise ComponentError(
                 f"SimRobotFactory(rate_hz={rate_hz!r}): at {self.spec.max_wheel_speed_m_s} "
@@ -138,6 +161,7 @@ class SimRobotFactory(LoopFactory):
                 "pass through a wall. Use a higher rate_hz (50 is the default)."
             )
         self.rate_hz = float(rate_hz)
+        self.steps_per_scan = max(1, round(rate_hz / scan_sensor.rate_hz)) if scan_sensor else 1
         x, y, theta = world.start
         if world.clearance_m(x, y) < self.spec.radius_m:
             raise ComponentError(
@@ -248,6 +272,9 @@ class SimViewFactory(LoopFactory):
         width_px: the picture's width; its height follows the world's shape.
         radius_m: the robot's radius, as drawn.
         trail_points: how many of its past positions are drawn as its path.
+        sensor_keys: the distance sensors' pages to draw: ``range`` rays, a
+            lidar's ``scan`` (a robot's own: its ``sensor_keys``).
+            A key nothing stores would be read for nothing (DEBUG mode says so).
 
     Attributes:
         keyboard: the window's arrow keys / WASD as a `KeyboardJoystick`:
@@ -259,6 +286,7 @@ class SimViewFactory(LoopFactory):
 
         SimViewFactory(world)                                   # window if possible
         SimViewFactory(world, frames_dir="frames", window=False)   # PNG frames
+        SimViewFactory(world, sensor_keys=sim.sensor_keys)      # what robot `sim` has
     """
 
     def __init__(
@@ -272,6 +300,7 @@ class SimViewFactory(LoopFactory):
         radius_m: float = RobotSpec().radius_m,
         trail_points: int = 1000,
         name: Optional[str] = None,
+        sensor_keys: Sequence[DataKey] = (RANGE,),
     ) -> None:
         super().__init__(sys.modules[__name__])
         if not rate_hz > 0 or max_frames < 0 or width_px < 100:
@@ -289,6 +318,7 @@ class SimViewFactory(LoopFactory):
         self.radius_m = radius_m
         self.trail_points = max(0, trail_points)
         self.name = name or "sim_view"
+        self.sensor_keys = list(sensor_keys)
         self.keyboard = KeyboardJoystick()
         # Counted here, on the factory, so they can be read after the run.
         self.frames_written = 0
@@ -303,7 +333,9 @@ class SimViewFactory(LoopFactory):
 
     def scene(self, pygame: Any) -> Scene:
         """A `Scene` drawn as these settings say (for a loop, or a window on the main thread)."""
-        return Scene(pygame, self.world, self.width_px, self.radius_m, self.trail_points)
+        return Scene(
+            pygame, self.world, self.width_px, self.radius_m, self.trail_points, self.sensor_keys
+        )
 
     def get(self, parent: AbstractNode) -> SimViewLoop:
         return SimViewLoop(self, parent)

@@ -8,9 +8,9 @@ so pictures can be made on a robot reached over ssh or in CI (set
 ``SDL_VIDEODRIVER=dummy`` there if a window is asked for anyway).
 
 What a picture shows: walls in black, the goal as a green ring, the range
-rays in red, the path taken in light blue, the robot where it really is
-(blue, red while bumped, with a line for its heading) and, as a grey ring,
-where its odometry thinks it is.
+rays in red (a lidar's ``scan``: a red dot at each echo), the path taken in
+light blue, the robot where it really is (blue, red while bumped, with a
+line for its heading) and, as a grey ring, where its odometry thinks it is.
 
 Example::
 
@@ -30,7 +30,7 @@ from types import ModuleType
 from typing import Any, Callable, Deque, Dict, Mapping, Optional, Sequence, Tuple, Union
 
 from snr.extras.controller.keyboard import KeyboardJoystick
-from snr.extras.sim.sensors import BUMP, ODOMETRY, RANGE, TRUE_POSE
+from snr.extras.sim.sensors import BUMP, ODOMETRY, RANGE, SCAN, TRUE_POSE
 from snr.extras.sim.world import World
 from snr.prelude import ComponentError, DataKey
 from snr.prelude.install import install_hint
@@ -151,7 +151,7 @@ def render_scene(
     """Draw ``world`` and the robot its ``pages`` describe; returns the surface.
 
     ``pages`` maps data keys to page data, as `sensor_pages` returns or a
-    node's datastore holds (``true_pose``, ``odometry``, ``range``, ``bump``;
+    node's datastore holds (``true_pose``, ``odometry``, ``range``, ``scan``, ``bump``;
     missing keys are simply not drawn). Draws on ``surface`` (a window's)
     or on a new off-screen one. ``trail``: (x, y) points the robot passed,
     drawn as a line ``trail_px`` wide (thin, under a moving robot).
@@ -184,6 +184,7 @@ def render_scene(
     if pose is not None:
         x, y, theta = pose
         _draw_rays(pygame, surface, view, pose, pages.get(RANGE))
+        _draw_echoes(pygame, surface, view, pose, pages.get(SCAN))
         color = BUMPED if pages.get(BUMP) else ROBOT
         centre = view.to_px(x, y)
         pygame.draw.circle(surface, color, centre, view.length_px(radius_m))
@@ -201,6 +202,7 @@ class Scene:
         width_px: the picture's width.
         radius_m: the robot's radius, as drawn.
         trail_points: how many past positions are kept and drawn as its path.
+        sensor_keys: the distance sensors' pages it reads: ``range``, ``scan``.
 
     Example::
 
@@ -215,8 +217,10 @@ class Scene:
         width_px: int = 640,
         radius_m: float = 0.1,
         trail_points: int = 1000,
+        sensor_keys: Sequence[DataKey] = (RANGE,),
     ) -> None:
         self.pygame = pygame
+        self.keys = (TRUE_POSE, ODOMETRY, *sensor_keys, BUMP)
         self.world = world
         self.view = WorldView(world, width_px)
         self.radius_m = radius_m
@@ -226,7 +230,7 @@ class Scene:
     def draw(self, get_data: Callable[[DataKey], Any], surface: Optional[Any] = None) -> Any:
         """Draw the pages ``get_data`` returns on ``surface`` (or a new one); returns it."""
         pages: Dict[DataKey, Any] = {}
-        for key in (TRUE_POSE, ODOMETRY, RANGE, BUMP):
+        for key in self.keys:
             data = get_data(key)
             if data is not None:
                 pages[key] = data
@@ -281,6 +285,20 @@ def _draw_rays(
         heading = theta + math.radians(angle)
         end = (x + distance * math.cos(heading), y + distance * math.sin(heading))
         pygame.draw.line(surface, RAY, view.to_px(x, y), view.to_px(*end), 1)
+
+
+def _draw_echoes(
+    pygame: Any, surface: Any, view: WorldView, pose: Tuple[float, float, float], scan: Any
+) -> None:
+    """A dot where each ray of a lidar's scan saw something (0.0: no echo, no dot)."""
+    if not isinstance(scan, dict):
+        return
+    x, y, theta = pose
+    for angle, distance in zip(scan.get("angles_deg", []), scan.get("ranges_m", [])):
+        if distance > 0:
+            heading = theta + math.radians(angle)
+            end = (x + distance * math.cos(heading), y + distance * math.sin(heading))
+            pygame.draw.circle(surface, RAY, view.to_px(*end), 2)
 
 
 def _pose(data: Any) -> Optional[Tuple[float, float, float]]:

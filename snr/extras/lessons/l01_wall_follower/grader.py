@@ -18,11 +18,12 @@ Example::
 from __future__ import annotations
 
 from pathlib import Path
-from typing import List
+from typing import Dict, List, Optional
 
 from snr.extras.lessons.grading import (
     STEP_HZ,
     Check,
+    Drive,
     drive,
     find_endpoint,
     first_checks,
@@ -31,8 +32,9 @@ from snr.extras.lessons.grading import (
     touch_check,
 )
 from snr.extras.lessons.l01_wall_follower.solution import make_world
+from snr.extras.sim import World
 
-__all__ = ["KEYS", "MARGIN_M", "SECONDS", "TARGET_M", "grade"]
+__all__ = ["HINTS", "KEYS", "MARGIN_M", "SECONDS", "TARGET_M", "course_checks", "grade"]
 
 KEYS = ["range", "bump"]
 """The sensor pages the endpoint handles."""
@@ -42,6 +44,13 @@ TARGET_M = 0.35
 """Where the wall should be, from the robot's centre."""
 MARGIN_M = 0.16
 """How far from `TARGET_M` the wall may be, after the first second (0.19 m to 0.51 m)."""
+HINTS = {
+    "touch": "turn left on the spot when the wall ahead is closer than FRONT_CLEAR_M (step 4)",
+    "wall": "steer by GAIN * (TARGET_M - wall distance), the distance from the rays "
+    "at -90 and -45 degrees (steps 2 and 3)",
+    "round": "where the wall ends the side ray sees far: the turn is the limit, right",
+}
+"""Lesson 1's hints for `course_checks`, by check."""
 
 
 def grade(path: Path) -> List[Check]:
@@ -72,14 +81,23 @@ def grade(path: Path) -> List[Check]:
             line=steer,
         )
     )
-    checks.append(
-        touch_check(
-            run,
-            "never touches a wall",
-            "turn left on the spot when the wall ahead is closer than FRONT_CLEAR_M (step 4)",
-            steer,
-        )
-    )
+    return checks + course_checks(world, run, steer, HINTS)
+
+
+def course_checks(
+    world: World, run: Drive, line: Optional[int], hints: Dict[str, str]
+) -> List[Check]:
+    """The checks of the course itself: never touches, keeps the wall, goes round the room.
+
+    Lesson 3's perception-based follower is graded on the same course by
+    these same checks; ``hints`` (keys ``touch``, ``wall``, ``round``) point
+    at the steps of the lesson at hand, ``line`` at the student's handler.
+
+    Example::
+
+        checks += course_checks(world, run, steer_line, HINTS)
+    """
+    checks = [touch_check(run, "never touches a wall", hints["touch"], line)]
     clearances = [world.clearance_m(x, y) for x, y in run.path[STEP_HZ:]]  # after 1 s
     low, high = TARGET_M - MARGIN_M, TARGET_M + MARGIN_M
     if clearances:
@@ -98,9 +116,8 @@ def grade(path: Path) -> List[Check]:
             bool(clearances) and low <= nearest and farthest <= high,
             expected=f"the nearest wall {low:.2f} m to {high:.2f} m from the robot, after 1 s",
             happened=happened,
-            hint="steer by GAIN * (TARGET_M - wall distance), the distance from the rays "
-            "at -90 and -45 degrees (steps 2 and 3)",
-            line=steer,
+            hint=hints["wall"],
+            line=line,
         )
     )
     length = run.length_m()
@@ -111,8 +128,8 @@ def grade(path: Path) -> List[Check]:
             length > 12.0 and east > 3.4,
             expected="more than 12 m, round the divider's end (x beyond 3.4 m)",
             happened=f"{length:.1f} m, as far east as x = {east:.2f} m",
-            hint="where the wall ends the side ray sees far: the turn is the limit, right",
-            line=steer,
+            hint=hints["round"],
+            line=line,
         )
     )
     return checks

@@ -136,6 +136,7 @@ def run(
     seed: int = 1,
     speed: Optional[float] = 1.0,
     brain: Optional[snr.AbstractFactory] = None,
+    robot: Optional[Dict[str, Any]] = None,
 ) -> snr.SimRobotFactory:
     """Run the lesson in one node for ``seconds``; returns the simulated robot.
 
@@ -149,7 +150,8 @@ def run(
     second (1.0: real time; None: as fast as the computer can), so ``seconds``
     is simulated time and the same ``seed`` gives the same run. ``brain``
     drives the robot: this file's `WallFollowerFactory` unless given (the
-    starter file passes its own).
+    starter file passes its own); ``robot``, more arguments for its
+    `SimRobotFactory` (lesson 3 gives it a lidar instead of its range sensor).
 
     Example::
 
@@ -157,11 +159,13 @@ def run(
         sim.robot.pose        # where the robot got to
     """
     world = make_world()
-    sim = snr.SimRobotFactory(world, seed=seed)
+    sim = snr.SimRobotFactory(world, seed=seed, **(robot or {}))
     if frames_dir is None:
-        view = snr.SimViewFactory(world)
+        view = snr.SimViewFactory(world, sensor_keys=sim.sensor_keys)
     else:
-        view = snr.SimViewFactory(world, frames_dir=frames_dir, window=False)
+        view = snr.SimViewFactory(
+            world, frames_dir=frames_dir, window=False, sensor_keys=sim.sensor_keys
+        )
     brain_and_timer = [brain or WallFollowerFactory(), snr.TimeoutLoopFactory(seconds=seconds)]
     clock = snr.SimClock(speed=speed)
     if not pygame_installed():  # said once, here; no view, so no folder and no warning
@@ -185,12 +189,18 @@ def run(
     return sim
 
 
-def main(argv: List[str], brain: Optional[snr.AbstractFactory] = None) -> None:
+def main(
+    argv: List[str],
+    brain: Optional[snr.AbstractFactory] = None,
+    robot: Optional[Dict[str, Any]] = None,
+    title: str = "Lesson 1: a wall follower.",
+) -> None:
     """``python wall_follower.py [--seconds S] [--frames DIR] [--seed N] [--speed X]``.
 
-    ``brain``: the endpoint's factory that drives the robot (this file's by default).
+    ``brain``: the endpoint's factory that drives the robot (this file's by
+    default); ``robot`` and ``title``: lesson 3's lidar and name, for its file.
     """
-    parser = argparse.ArgumentParser(prog=argv[0], description="Lesson 1: a wall follower.")
+    parser = argparse.ArgumentParser(prog=argv[0], description=title)
     parser.add_argument("--seconds", type=float, default=30.0, help="how long to run")
     parser.add_argument("--frames", default=None, help="write PNG frames to this folder")
     parser.add_argument("--seed", type=int, default=1, help="the simulator's random seed")
@@ -204,7 +214,7 @@ def main(argv: List[str], brain: Optional[snr.AbstractFactory] = None) -> None:
     options = parser.parse_args(argv[1:])
     if options.speed < 0:
         parser.error(f"--speed {options.speed:g}: use 0 (as fast as possible) or more")
-    run(options.seconds, options.frames, options.seed, options.speed or None, brain)
+    run(options.seconds, options.frames, options.seed, options.speed or None, brain, robot)
 
 
 if __name__ == "__main__":
