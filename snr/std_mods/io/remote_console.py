@@ -24,7 +24,7 @@ from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequen
 from snr.core import plugins
 from snr.core.checks.os_errors import explain_os_error
 from snr.prelude import SNRError, WireFormatError
-from snr.std_mods.io.command_processor import COMMANDS, HZ_DEFAULT_WINDOW_S
+from snr.std_mods.io.command_processor import COMMANDS, load_extra_commands
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
     MAX_LINE_BYTES,
@@ -64,6 +64,7 @@ EXIT_INTERRUPTED = 130
 """Exit code: Ctrl-C while waiting for the node (the shell's convention)."""
 
 _LEAVE_WORDS = ("quit", "q")
+_HZ_DEFAULT_WINDOW_S = 2.0  # `hz KEY` replies after this long (snr.extras.console_tools)
 _Client = TypeVar("_Client", bound="ConsoleClient")
 
 
@@ -164,7 +165,7 @@ class ConsoleClient(ABC):
         words = line.lower().split()
         if words[:1] == ["hz"]:
             try:
-                timeout_s += max(0.0, float(words[2]) if len(words) == 3 else HZ_DEFAULT_WINDOW_S)
+                timeout_s += max(0.0, float(words[2]) if len(words) == 3 else _HZ_DEFAULT_WINDOW_S)
             except ValueError:  # the node refuses it at once
                 pass
         reply = self.ask(line, timeout_s)
@@ -504,6 +505,7 @@ def _enable_line_editing() -> None:
         import readline  # optional: absent on Windows
     except ImportError:
         return
+    load_extra_commands()
     words = [*COMMANDS, *_LEAVE_WORDS]
 
     def complete(text: str, state: int) -> Optional[str]:
