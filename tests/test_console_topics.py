@@ -24,7 +24,7 @@ from snr import (
     TaskType,
     ThreadLoop,
 )
-from snr.extras.console_tools import watches_of
+from snr.extras.console_tools.watches import watches_of
 from snr.std_mods.io.command_processor import CommandProcessorEndpoint, CommandProcessorFactory
 from snr.std_mods.io.console_protocol import Status
 from snr.utils.mock_node import MockNode
