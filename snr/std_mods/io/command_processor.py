@@ -28,7 +28,6 @@ from typing import Any, Callable, Dict, List, Mapping, Optional, Sequence, Tuple
 
 from snr.core import Endpoint, EndpointFactory, Node, ThreadLoop, plugins, tasks
 from snr.core.checks.error_text import closest_match, did_you_mean
-from snr.core.checks.step_mode import MAX_STEPS, Step
 from snr.core.components import NODE_CORE_NAME
 from snr.core.logs import RepeatFilter
 from snr.prelude import (
@@ -60,6 +59,7 @@ __all__ = [
     "command",
     "commands_table",
     "load_extra_commands",
+    "no_arguments",
     "number_argument",
     "one_choice",
     "preview",
@@ -400,7 +400,7 @@ class CommandProcessorFactory(EndpointFactory):
 # -- the kernel's commands, in the order `help` lists them -------------------------
 @command("exit", "Stop the node and close this console.")
 def _exit(p: CommandProcessorEndpoint, args: str) -> Answer:
-    _no_arguments("exit", args)
+    no_arguments("exit", args)
     p.follow_up = tasks.terminate(f"exit command from {p.session or 'console'}")
     return Reply(Status.BYE, f"Stopping node {p.parent.role!r}. Bye.")
 
@@ -591,71 +591,14 @@ def _stats(p: CommandProcessorEndpoint, args: str) -> Answer:
         f"{queue.loss.total} tasks dropped."
     ]
     if node.step_mode.paused:
-        lines.append(f"The node is paused. {_loss_while_paused(node)}")
+        waits, dropped = node.step_mode.since_pause()
+        lines.append(
+            f"The node is paused. Since the pause, loops waited for room in the queue "
+            f"{waits:,} times and {dropped:,} of their tasks were dropped."
+        )
     comms = [c for c in node.components.values() if isinstance(c, CommsLoop)]
     lines += [f"{loop.name}: {loop.stats_text()}" for loop in comms] or ["No comms links."]
     return "\n".join(lines)
-
-
-@command(
-    "pause",
-    "Pause the node: it runs no task but the console's until `step` or `resume`.",
-    "The node finishes the task it is running, then holds every other task in its\n"
-    "queue, in order. dump, list, stats, graph and exit keep working. Loops keep\n"
-    "running: their pages wait in the queue (a full queue makes them wait, then\n"
-    "drops and counts their pages; the replies say how many).",
-)
-def _pause(p: CommandProcessorEndpoint, args: str) -> Answer:
-    _no_arguments("pause", args)
-    node = p.full_node("pause")
-    if node.step_mode.paused:
-        return f"Node {node.role!r} is already paused. {_loss_while_paused(node)}"
-    node.step_mode.pause()
-    return (
-        f"Paused node {node.role!r}: its tasks wait in its queue (high-water mark "
-        f"{node.queue.high_water:,}) until you step or resume.\n"
-        f"{_next_line(node.step_mode.next_tasks(), len(node.queue))}\n"
-        "Type `step` to run the next task, `resume` to let the node run on."
-    )
-
-
-@command(
-    "step [N]",
-    "Run the next task (or N, at most 100) of a paused node and show what it did.",
-    "For each task: which task ran, the handlers it went to, what they returned;\n"
-    "then what waits next in the queue.",
-)
-def _step(p: CommandProcessorEndpoint, args: str) -> Answer:
-    words = args.split()
-    if len(words) > 1:
-        raise CommandFailed(f"Usage: {COMMANDS['step'].usage}, e.g. `step` or `step 5`.")
-    count = int(number_argument(words[0], "step", "N", 1, MAX_STEPS, int)) if words else 1
-    step_mode = p.full_node("step").step_mode
-    if not step_mode.paused:
-        raise CommandFailed(
-            f"Node {p.parent.role!r} is running, so there is nothing to step: type `pause` first."
-        )
-    session = p.session
-    if session is None:
-        raise CommandFailed("`step` replies once its tasks ran: type it in a console.")
-    try:
-        step_mode.step(count, lambda steps: session.send(Reply(Status.OK, _steps_text(steps))))
-    except ValueError as refused:
-        raise CommandFailed(str(refused)) from None
-    return None
-
-
-@command("resume", "Let a paused node run freely again.")
-def _resume(p: CommandProcessorEndpoint, args: str) -> Answer:
-    _no_arguments("resume", args)
-    node = p.full_node("resume")
-    if not node.step_mode.paused:
-        return f"Node {node.role!r} is not paused."
-    waiting = len(node.queue)
-    lost = _loss_while_paused(node)
-    node.step_mode.resume()
-    plural = "s" if waiting != 1 else ""
-    return f"Resumed node {node.role!r} with {waiting:,} task{plural} waiting. {lost}"
 
 
 @command("help [command]", "Show the commands, or one command in detail.")
@@ -681,7 +624,16 @@ def _is_console_part(component: AbstractComponent, node: AbstractNode) -> bool:
     )
 
 
-def _no_arguments(command: str, args: str) -> None:
+def no_arguments(command: str, args: str) -> None:
+    """Refuse a command typed with words after it.
+
+    Raises:
+        CommandFailed: ``args`` is not blank.
+
+    Example::
+
+        no_arguments("pause", "")   # fine; no_arguments("pause", "now") raises
+    """
     if args.strip():
         raise CommandFailed(f"{command!r} takes no arguments; got {args.strip()!r}.")
 
@@ -729,42 +681,6 @@ def number_argument(
             f"Usage: {COMMANDS[command].usage}."
         )
     return value
-
-
-def _steps_text(steps: List[Step]) -> str:
-    """What ``step`` did, task by task, and what waits next."""
-    lines: List[str] = []
-    for step in steps:
-        if step.task is None:
-            lines.append(
-                "Nothing to step: no task waits. Tasks you schedule (`task ...`) and the "
-                "pages of loops wait here while the node is paused."
-            )
-            continue
-        lines.append(f"Ran {format_task(step.task, values='data')}")
-        went_to = ", ".join(step.handlers) or "no handler (nothing handles this task)"
-        lines.append(f"  went to: {went_to}")
-        if step.returned:
-            returned = ", ".join(format_task(t, values="data") for t in step.returned)
-            lines.append(f"  returned: {returned}")
-    if steps and steps[-1].task is not None:
-        lines.append(_next_line(steps[-1].next_tasks, steps[-1].waiting))
-    return "\n".join(lines)
-
-
-def _loss_while_paused(node: Node) -> str:
-    waits, dropped = node.step_mode.since_pause()
-    return (
-        f"Since the pause, loops waited for room in the queue {waits:,} times and "
-        f"{dropped:,} of their tasks were dropped."
-    )
-
-
-def _next_line(next_tasks: List[Task], waiting: int) -> str:
-    if not next_tasks:
-        return "Next: nothing waits."
-    plural = "s" if waiting != 1 else ""
-    return f"Next: {format_task(next_tasks[0], values='data')} ({waiting:,} task{plural} waiting)"
 
 
 def preview(data: Any) -> str:

@@ -335,6 +335,11 @@ class CommandReceiverLoop(ConsoleLoop):
         self._wake_out: Optional[socket.socket] = None
         self._sessions: List[_RemoteConsole] = []  # the oldest first
         self._lock = threading.Lock()
+        # Consoles accepted and not yet served, for the console threads. A thread that
+        # served a console takes the next, so a burst of connections starts few threads.
+        self._accepted: queue.Queue[Optional[_RemoteConsole]] = queue.Queue()
+        self._idle_threads = 0
+        self._threads = 0
         self._throttle = _TokenThrottle()
         self._repeats = RepeatFilter(self.log)
         self._last_summary = time.monotonic()
@@ -417,6 +422,8 @@ class CommandReceiverLoop(ConsoleLoop):
                     console.sock.shutdown(socket.SHUT_RDWR)
                 except OSError:
                     pass
+        for _ in range(self._threads):
+            self._accepted.put(None)  # each console thread ends
         self._repeats.flush()
         for closable in (self._selector, self._listener, self._wake_in, self._wake_out):
             if closable is not None:
@@ -441,8 +448,25 @@ class CommandReceiverLoop(ConsoleLoop):
             )
             text = "Too many consoles are waiting to give their token."
             pushed_out.interrupt(Reply(Status.BYE, text))
-        name = f"snr-{self.parent.role}-{self.name}-console"
-        threading.Thread(target=console.serve, name=name, daemon=True).start()
+        with self._lock:  # an idle console thread takes it, else a new one
+            reuse = self._idle_threads > 0
+            self._idle_threads -= reuse
+            self._threads += not reuse
+        if reuse:
+            self._accepted.put(console)
+        else:
+            name = f"snr-{self.parent.role}-{self.name}-consoles"
+            threading.Thread(
+                target=self._serve_consoles, args=(console,), name=name, daemon=True
+            ).start()
+
+    def _serve_consoles(self, console: Optional[_RemoteConsole]) -> None:
+        """A console thread: serves one console after another until the node stops."""
+        while console is not None:
+            console.serve()
+            with self._lock:
+                self._idle_threads += 1
+            console = self._accepted.get()
 
     def greet(self, console: _RemoteConsole) -> Reply:
         """The first reply: a request for the token, or the greeting."""

@@ -71,11 +71,9 @@ _Client = TypeVar("_Client", bound="ConsoleClient")
 class ConsoleClient(ABC):
     """The console's core: sends command lines, prints replies, runs the program.
 
-    It reaches nodes through a transport's five methods (`where`, `connect`,
-    `ask`, `close`, `is_connected`) and, for ``snr-console``'s command line,
-    its two class methods (`add_arguments`, `from_arguments`). `RemoteConsole`
-    is the TCP transport; ``ZenohConsole`` (``snr.extras.zenoh.console``)
-    reaches nodes over Zenoh.
+    It reaches nodes through a transport's methods (docs/console.md, "How the
+    console is built"): `RemoteConsole` over TCP, ``ZenohConsole``
+    (``snr.extras.zenoh.console``) over Zenoh.
 
     Example::
 
@@ -141,7 +139,7 @@ class ConsoleClient(ABC):
 
     # -- the core -------------------------------------------------------------------
     def _accept(self, greeting: Reply, node: str) -> Reply:
-        """Keep ``greeting`` if it says hello; else close and say why the node refused."""
+        """``greeting`` if it says hello; else close and say why the node refused."""
         if greeting.status is not Status.HELLO:
             self.close()
             raise ConsoleConnectionError(f"{node} turned the console away: {greeting.text}")
@@ -221,8 +219,7 @@ class ConsoleClient(ABC):
         """Read commands until ``quit``, end of input, or the node says bye.
 
         ``read_line(prompt)`` defaults to ``input`` (with readline if there is
-        one). Returns an exit code: `EXIT_OK`, or `EXIT_CONNECTION` when the
-        node went away unasked.
+        one). Returns an exit code.
         """
         out = output if output is not None else sys.stdout
         if read_line is None:
