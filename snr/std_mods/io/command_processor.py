@@ -7,10 +7,9 @@ the reply to the console's `ConsoleSession` (thesis 6.4.3).
 
 A command is a name, a help line and a function: `command` registers one in
 `COMMANDS`. The kernel's commands are registered here; extras register theirs
-the same way, in a module named by the entry point group
-``snr.console_commands`` (``echo``, ``hz`` and ``graph`` come so from
-``snr.extras.console_tools``), loaded by `load_extra_commands` when a console
-is used.
+the same way, in the modules the entry point group ``snr.console_commands``
+names (step mode's, ``echo``, ``hz``, ``graph``), which `load_extra_commands`
+loads when a console starts.
 
 Example::
 

@@ -215,11 +215,9 @@ class _Gone(Exception):
 class _RemoteConsole(ConsoleSession):
     """One TCP console, served by a thread of the receiver's while it is connected.
 
-    The thread reads a request line, has it answered, writes the reply, and
-    only then reads the next: lines sent ahead wait in the socket, so a flood
-    of commands costs the node nothing, and replies come in request order.
-    Every reply reaches the thread through `send`, from the node's thread or
-    from the receiver (a goodbye, which `interrupt` also wakes it for).
+    The thread reads a line, has it answered, writes the reply, and only then
+    reads the next: lines sent ahead wait in the socket, so a flood of
+    commands costs the node nothing. Replies reach the thread through `send`.
     """
 
     def __init__(
@@ -308,15 +306,11 @@ class _RemoteConsole(ConsoleSession):
 class CommandReceiverLoop(ConsoleLoop):
     """Accepts console connections over TCP; each console's thread submits its commands.
 
-    Built by `CommandReceiverFactory`. It listens from ``begin()`` (so a port
-    in use is reported at start-up). It serves up to `MAX_CONSOLES` consoles
-    that gave their token, plus up to `MAX_WAITING_CONSOLES` that have yet
-    to (they are disconnected after the factory's ``auth_timeout_s``); a
-    console idle for ``idle_timeout_s`` is disconnected; wrong tokens make
-    their address wait longer and longer; a console that stops reading its
-    replies is dropped. Each refusal is said to the console and logged
-    (repeats are counted). It says goodbye to every console when the node
-    stops. The node never notices any of it.
+    Built by `CommandReceiverFactory`; it listens from ``begin()`` (so a port
+    in use is reported at start-up). Its limits (`MAX_CONSOLES`,
+    `MAX_WAITING_CONSOLES`, the time limits, wrong tokens, consoles that do
+    not read) are in docs/console.md, "Several consoles"; each refusal is
+    said to the console and logged (repeats are counted).
 
     Example::
 

@@ -89,6 +89,7 @@ class ConsoleClient(ABC):
 
     def __init__(self, token: Optional[str] = None, timeout_s: float = 10.0) -> None:
         self.token = default_token(token, "The console")
+        load_extra_commands()  # COMMANDS names every command: for Tab and the Zenoh console
         self.timeout_s = timeout_s
         self.greeting: Optional[Reply] = None
 
@@ -502,7 +503,6 @@ def _enable_line_editing() -> None:
         import readline  # optional: absent on Windows
     except ImportError:
         return
-    load_extra_commands()
     words = [*COMMANDS, *_LEAVE_WORDS]
 
     def complete(text: str, state: int) -> Optional[str]:
