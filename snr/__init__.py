@@ -98,6 +98,7 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         TextReader,
         TextReplayerFactory,
     )
+    from snr.extras.console_tools import LocalConsoleFactory
     from snr.extras.controller import (
         ControllerLoopFactory,
         ControlProcessorFactory,
@@ -119,7 +120,6 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
     from snr.std_mods.filters import KalmanFilterFactory, MovingAvgFilterFactory
     from snr.std_mods.io import (
         CommandReceiverFactory,
-        LocalConsoleFactory,
         RecorderEndpointFactory,
         ReplayerLoopFactory,
     )
@@ -152,6 +152,7 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
         "TextReader",
         "TextReplayerFactory",
     ),
+    "snr.extras.console_tools": ("LocalConsoleFactory",),
     "snr.extras.controller": (
         "ControllerLoopFactory",
         "ControlProcessorFactory",
@@ -173,7 +174,6 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
     "snr.std_mods.filters": ("KalmanFilterFactory", "MovingAvgFilterFactory"),
     "snr.std_mods.io": (
         "CommandReceiverFactory",
-        "LocalConsoleFactory",
         "RecorderEndpointFactory",
         "ReplayerLoopFactory",
     ),

@@ -24,6 +24,7 @@ from snr import (
     TaskType,
     ThreadLoop,
 )
+from snr.extras.console_tools.watches import watches_of
 from snr.std_mods.io.command_processor import CommandProcessorEndpoint, CommandProcessorFactory
 from snr.std_mods.io.console_protocol import Status
 from snr.utils.mock_node import MockNode
@@ -111,7 +112,8 @@ class ConsoleTopicsTest(unittest.TestCase):
     def test_echo_of_a_missing_key_says_so_and_guesses(self) -> None:
         with NodeInThread([CounterFactory()]) as running:
             processor = self.processor(running.node)
-            processor.watches.echo_wait_s = processor.watches.echo_keep_s = 0.05
+            watches = watches_of(processor)
+            watches.echo_wait_s = watches.echo_keep_s = 0.05
             with running.console() as console:
                 wait_until(lambda: "depth" in running.node.datastore)
                 reply = console.send("echo dept")

@@ -13,7 +13,7 @@ __all__ = ["PluginsTest"]
 DECLARED = {
     "snr.commands": ("convert", "demo", "docs", "graph", "lesson", "plot"),
     "snr.console_transports": ("zenoh",),
-    "snr.console_commands": ("graph",),
+    "snr.console_commands": ("console_tools", "graph"),
     "snr.recording_formats": ("mcap",),
 }
 """What SNR's pyproject.toml declares, group by group."""

@@ -19,8 +19,9 @@ The groups (``docs/design.md``, "Extras and extension points"):
   ``add_arguments(parser)`` and ``run(args) -> int``;
 * ``snr.console_transports``: other ways for ``snr-console`` to reach a node
   (``zenoh``): a `snr.std_mods.io.remote_console.ConsoleClient` subclass;
-* ``snr.console_commands``: console commands kept in extras (``graph``): a
-  ``command(node, args) -> str``;
+* ``snr.console_commands``: console commands kept in extras (``console_tools``:
+  ``pause``, ``step``, ``resume``, ``echo``, ``hz``; ``graph``): a module that registers them with
+  `snr.std_mods.io.command_processor.command`;
 * ``snr.recording_formats``: recording formats besides JSON lines
   (``mcap``): a `snr.std_mods.io.recording_formats.RecordingFormat`.
 

@@ -8,7 +8,7 @@ host, ``LocalConsole(port)`` this one. Both are today's client,
 
 Today's ``snr-console HOST:PORT`` is the same program from the shell. (A
 console in the node's own terminal is `LocalConsoleFactory`, whose loop
-class is ``snr.std_mods.io.LocalConsole``.)
+class is ``snr.extras.console_tools.LocalConsole``.)
 
 Example::
 

@@ -184,6 +184,7 @@ PAGE_MODULES: Tuple[str, ...] = (
     "snr.extras.controller",
     "snr.extras.sim",
     "snr.extras.graph",
+    "snr.extras.console_tools",
     "snr.extras.plot",
     "snr.extras.compat2021",
 )

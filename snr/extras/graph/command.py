@@ -2,8 +2,8 @@
 
 The kernel never imports this package: ``python -m snr graph`` loads `run`
 through the ``snr.commands`` entry point ``graph``, and the console's
-``graph`` command loads `console_graph` through ``snr.console_commands``
-(``pyproject.toml``).
+``graph`` command (``snr.extras.graph.console``, found through
+``snr.console_commands``) calls `console_graph` (``pyproject.toml``).
 
 Example::
 

@@ -14,8 +14,6 @@ from snr.std_mods.io.command_processor import (
 from snr.std_mods.io.command_receiver import (
     CommandReceiverFactory,
     CommandReceiverLoop,
-    LocalConsole,
-    LocalConsoleFactory,
 )
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
@@ -41,8 +39,6 @@ __all__ = [
     "CommandReceiverFactory",
     "CommandReceiverLoop",
     "DEFAULT_CONSOLE_PORT",
-    "LocalConsole",
-    "LocalConsoleFactory",
     "PageReader",
     "RecorderEndpoint",
     "RecorderEndpointFactory",

@@ -1,12 +1,13 @@
-"""The node's end of the console: `ConsoleLoop`, and its TCP and terminal transports.
+"""The node's end of the console: `ConsoleLoop`, the one core of its transports, and TCP's.
 
 A console only turns the lines a user types into tasks; the command
 processor it adds to the node (``command_processor.py``) runs each command
 on the node's thread and sends the reply to the line's `ConsoleSession`.
 `CommandReceiverFactory` serves ``snr-console HOST:PORT`` over TCP, one
-thread per connected console (thesis 6.4.3); `LocalConsoleFactory` reads the
-same commands from the node's own terminal. The commands and the protocol
-are in ``docs/console.md``.
+thread per connected console (thesis 6.4.3). The local console
+(``snr.extras.console_tools.local``) and the Zenoh one
+(``snr.extras.zenoh.console``) are `ConsoleLoop` s too. The commands and the
+protocol are in ``docs/console.md``.
 
 Example::
 
@@ -16,15 +17,12 @@ Example::
 from __future__ import annotations
 
 import logging
-import os
 import queue
-import select
 import selectors
 import socket
-import sys
 import threading
 import time
-from typing import IO, Any, Dict, List, Optional, Sequence, Tuple
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 from snr.core import LoopFactory, ThreadLoop, tasks
 from snr.core.checks.os_errors import explain_os_error
@@ -62,8 +60,6 @@ __all__ = [
     "CommandReceiverFactory",
     "CommandReceiverLoop",
     "ConsoleLoop",
-    "LocalConsole",
-    "LocalConsoleFactory",
 ]
 
 MAX_CONSOLES = 8
@@ -100,7 +96,6 @@ Example::
 
 _SEND_TIMEOUT_S = 2.0  # a console that takes none of a reply for this long is dropped
 _GOODBYE_TIMEOUT_S = 0.5  # for all consoles together, when the node stops
-_POLL_S = 0.5  # the local console's reader wakes at least this often
 _READ_CHUNK = 4096
 
 
@@ -167,7 +162,9 @@ class _TokenThrottle:
     After the n-th wrong token in a row, the address's next token is checked
     only after ``first_delay_s * 2 ** (n - 1)`` seconds (at most
     ``max_delay_s``); earlier tries are refused unchecked. A right token, or
-    ``forget_after_s`` without a wrong one, starts the address afresh.
+    ``forget_after_s`` without a wrong one, starts the address afresh. At
+    most ``max_addresses`` are remembered (the longest-quiet is forgotten),
+    so a flood from many addresses costs bounded memory.
     """
 
     def __init__(
@@ -177,33 +174,30 @@ class _TokenThrottle:
         forget_after_s: float = 600.0,
         max_addresses: int = 1024,
     ) -> None:
-        self.first_delay_s = first_delay_s
-        self.max_delay_s = max_delay_s
-        self.forget_after_s = forget_after_s
-        self.max_addresses = max_addresses
-        # host -> (wrong tokens in a row, the last one's time), the longest-quiet host first
-        self._failures: Dict[str, Tuple[int, float]] = {}
+        self.first_delay_s, self.max_delay_s = first_delay_s, max_delay_s
+        self.forget_after_s, self.max_addresses = forget_after_s, max_addresses
+        self._failures: Dict[str, Tuple[int, float]] = {}  # host -> (in a row, last time)
         self._lock = threading.Lock()  # each console's thread checks its own tokens
 
     def _in_a_row(self, host: str, now: float) -> Tuple[int, float]:
         failures, last = self._failures.get(host, (0, 0.0))
         return (failures, last) if now - last <= self.forget_after_s else (0, 0.0)
 
+    def delay_s(self, failures: int) -> float:
+        """The wait after ``failures`` wrong tokens in a row."""
+        return min(self.max_delay_s, self.first_delay_s * 2.0 ** min(failures - 1, 30))
+
     def wait_s(self, host: str, now: float) -> float:
         """How long ``host`` must still wait before its next token is checked."""
         failures, last = self._in_a_row(host, now)
         return max(0.0, last + self.delay_s(failures) - now) if failures else 0.0
 
-    def delay_s(self, failures: int) -> float:
-        """The wait after ``failures`` wrong tokens in a row."""
-        return min(self.max_delay_s, self.first_delay_s * 2.0 ** min(failures - 1, 30))
-
     def failed(self, host: str, now: float) -> Tuple[int, float]:
         """Count a wrong token; the failures in a row and the wait before the next try."""
         with self._lock:
             failures = self._in_a_row(host, now)[0] + 1
-            self._failures.pop(host, None)
-            if len(self._failures) >= self.max_addresses:  # forget the longest-quiet address
+            self._failures.pop(host, None)  # re-added last: the dict is oldest first
+            if len(self._failures) >= self.max_addresses:
                 del self._failures[next(iter(self._failures))]
             self._failures[host] = (failures, now)
         return failures, self.delay_s(failures)
@@ -221,11 +215,9 @@ class _Gone(Exception):
 class _RemoteConsole(ConsoleSession):
     """One TCP console, served by a thread of the receiver's while it is connected.
 
-    The thread reads a request line, has it answered, writes the reply, and
-    only then reads the next: lines sent ahead wait in the socket, so a flood
-    of commands costs the node nothing, and replies come in request order.
-    Every reply reaches the thread through `send`, from the node's thread or
-    from the receiver (a goodbye, which `interrupt` also wakes it for).
+    The thread reads a line, has it answered, writes the reply, and only then
+    reads the next: lines sent ahead wait in the socket, so a flood of
+    commands costs the node nothing. Replies reach the thread through `send`.
     """
 
     def __init__(
@@ -314,15 +306,11 @@ class _RemoteConsole(ConsoleSession):
 class CommandReceiverLoop(ConsoleLoop):
     """Accepts console connections over TCP; each console's thread submits its commands.
 
-    Built by `CommandReceiverFactory`. It listens from ``begin()`` (so a port
-    in use is reported at start-up). It serves up to `MAX_CONSOLES` consoles
-    that gave their token, plus up to `MAX_WAITING_CONSOLES` that have yet
-    to (they are disconnected after the factory's ``auth_timeout_s``); a
-    console idle for ``idle_timeout_s`` is disconnected; wrong tokens make
-    their address wait longer and longer; a console that stops reading its
-    replies is dropped. Each refusal is said to the console and logged
-    (repeats are counted). It says goodbye to every console when the node
-    stops. The node never notices any of it.
+    Built by `CommandReceiverFactory`; it listens from ``begin()`` (so a port
+    in use is reported at start-up). Its limits (`MAX_CONSOLES`,
+    `MAX_WAITING_CONSOLES`, the time limits, wrong tokens, consoles that do
+    not read) are in docs/console.md, "Several consoles"; each refusal is
+    said to the console and logged (repeats are counted).
 
     Example::
 
@@ -696,149 +684,3 @@ class CommandReceiverFactory(LoopFactory):
 
     def __repr__(self) -> str:
         return f"CommandReceiverFactory(host={self.host!r}, port={self.port})"
-
-
-class _LocalSession(ConsoleSession):
-    """Prints replies on the node's terminal; a BYE stops the local console."""
-
-    def __init__(self, console: LocalConsole, output: IO[str]) -> None:
-        self.console = console
-        self.output = output
-        self._lock = threading.Lock()
-
-    def send(self, reply: Reply) -> None:
-        if reply.text:
-            with self._lock:
-                try:
-                    self.output.write(reply.text + "\n")
-                    self.output.flush()
-                except (OSError, ValueError):
-                    pass  # the terminal is gone; the node carries on
-        if reply.status is Status.BYE:
-            self.console.set_terminate_flag("console closed")
-
-    def __repr__(self) -> str:
-        return "local console"
-
-
-class LocalConsole(ConsoleLoop):
-    """Reads console commands from the node's own terminal (stdin).
-
-    The same commands as `snr-console`; replies are printed on stdout. When
-    stdin ends (Ctrl-D, or the end of a file fed with ``<``) the console
-    stops and the node keeps running.
-
-    Example::
-
-        LocalConsoleFactory()     # in a role's factory list
-    """
-
-    def __init__(
-        self,
-        factory: LocalConsoleFactory,
-        parent: AbstractNode,
-        stream: IO[str],
-        output: IO[str],
-    ) -> None:
-        super().__init__(factory, parent, factory.name)
-        self.stream = stream
-        self.session = _LocalSession(self, output)
-        self._fd = _real_fd(stream)
-        self._lines = LineReader()
-        self._at_end = False  # stdin has ended: what is left is the last line
-        self._wake_pipe: Optional[Tuple[int, int]] = None  # lets halt() end a wait at once
-
-    def begin(self) -> None:
-        """Add the command processor; make the pipe that wakes the reader."""
-        if self._fd is not None:
-            self._wake_pipe = os.pipe()
-        super().begin()
-
-    def halt(self) -> None:
-        """Wake the reader if it is waiting for a line."""
-        if self._wake_pipe is not None:
-            try:
-                os.write(self._wake_pipe[1], b"\0")
-            except OSError:
-                pass
-
-    def terminate(self) -> None:
-        """Close the wake-up pipe (stdin itself belongs to the program)."""
-        if self._wake_pipe is not None:
-            for fd in self._wake_pipe:
-                os.close(fd)
-            self._wake_pipe = None
-
-    def setup(self) -> None:
-        self.session.send(Reply(Status.OK, f"Console for node {self.parent.role!r}: type 'help'."))
-
-    def loop(self) -> None:
-        """Submit the next line typed, waiting at most a moment for it."""
-        request = self._lines.next_request(self._at_end)
-        if request is None and self._at_end:
-            self.info("stdin closed: the local console stops; the node keeps running.")
-            self.set_terminate_flag("end of input")
-        elif request is None:
-            self._at_end = not self._read()
-        elif isinstance(request, Reply):
-            self.session.send(request)  # a line that cannot be run
-        elif request:
-            self.submit(request, self.session)
-
-    def _read(self) -> bool:
-        """Take what stdin has, waiting at most `_POLL_S` for it; False at its end."""
-        if self._fd is None:  # an in-memory stream (tests) never blocks
-            data = self.stream.readline().encode("utf-8")
-        else:
-            # select.select, unlike epoll, also accepts a plain file as stdin.
-            waiting = [self._fd] + ([self._wake_pipe[0]] if self._wake_pipe else [])
-            if self._fd not in select.select(waiting, [], [], _POLL_S)[0]:
-                return True
-            data = os.read(self._fd, _READ_CHUNK)
-        self._lines.feed(data)
-        return bool(data)
-
-
-def _real_fd(stream: IO[str]) -> Optional[int]:
-    """The stream's file descriptor if we can wait on it with a timeout."""
-    if sys.platform == "win32":  # select() works only on sockets there
-        return None
-    try:
-        return stream.fileno()
-    except (OSError, ValueError, AttributeError):  # io.UnsupportedOperation is an OSError
-        return None
-
-
-class LocalConsoleFactory(LoopFactory):
-    """Builds a `LocalConsole`: console commands typed in the node's terminal.
-
-    Args:
-        stream: where commands come from (default: ``sys.stdin``).
-        output: where replies go (default: ``sys.stdout``).
-        name: the loop's component name.
-
-    Example::
-
-        config = Config({"robot": [MotorFactory(), LocalConsoleFactory()]})
-    """
-
-    def __init__(
-        self,
-        stream: Optional[IO[str]] = None,
-        output: Optional[IO[str]] = None,
-        name: ComponentName = "local_console",
-    ) -> None:
-        super().__init__()
-        self.stream = stream
-        self.output = output
-        self.name = name
-
-    def get(self, parent: AbstractNode) -> LocalConsole:
-        stream = self.stream if self.stream is not None else sys.stdin
-        output = self.output if self.output is not None else sys.stdout
-        return LocalConsole(self, parent, stream, output)
-
-    def __getstate__(self) -> Dict[str, Any]:
-        state = super().__getstate__()
-        state["stream"] = state["output"] = None  # streams stay in their process
-        return state

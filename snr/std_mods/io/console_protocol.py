@@ -1,15 +1,8 @@
-"""The console protocol: how a console and a node talk, and who may talk.
+"""The console protocol (``snr-console/1``, ``docs/console.md``): how a console and a node talk.
 
-Shared by the node side (`CommandReceiverFactory`, and `ConsoleSession`,
-where a node sends a reply) and the client (`RemoteConsole`); the full
-description is in ``docs/console.md``.
-
-* Console → node: one request per line of UTF-8 text ending in ``\\n``, at
-  most `MAX_LINE_BYTES` bytes.
-* Node → console: a *reply frame*: a header line
-  ``snr-console/1 <status> <length>\\n`` and then exactly ``<length>`` bytes of
-  UTF-8 text. The status is one of `Status`; ``bye`` means the node closes
-  the connection after this frame.
+Console → node: lines of UTF-8 text (`LineReader`); node → console: reply
+frames, a header ``snr-console/1 <status> <length>\\n`` and ``<length>`` bytes
+of text (`Reply`, `ReplyDecoder`). Also who may talk: the token policy.
 
 Example::
 
@@ -77,11 +70,8 @@ def default_token(token: Optional[str], where: str) -> Optional[str]:
     """The console token of a node or console that was given ``token`` (None: the default).
 
     ``token`` if given, else ``$SNR_CONSOLE_TOKEN`` if set, else a word made
-    from the node's secret (``$SNR_SECRET`` or the secret file, as the comms
-    find it: docs/comms.md, "Who may connect"), else None: no token. So one
-    secret guards the links and the console alike, and a console that has
-    the secret gets in with no ``--token``. The word, not the secret, is
-    sent: it lets a console in, but does not let a program link to the node.
+    from the node's secret (``$SNR_SECRET`` or the secret file), else None:
+    no token (docs/console.md, "Security").
 
     Raises:
         ConfigError: the secret is empty or its file cannot be read.
@@ -150,10 +140,10 @@ class Reply:
 class ConsoleSession(ABC):
     """One console the node is talking to: where a command's reply goes.
 
-    A console loop (`CommandReceiverLoop`, `LocalConsole`) hands each command
-    line to the node with its session; the `CommandProcessorEndpoint` runs the
-    command on the node's thread and calls ``session.send(reply)``, so ``send``
-    must be quick and must never block or raise, even when the console has gone.
+    A console loop hands each command line to the node with its session; the
+    `CommandProcessorEndpoint` runs the command on the node's thread and calls
+    ``session.send(reply)``, so ``send`` must be quick and never block or
+    raise, even when the console has gone.
 
     Example::
 

@@ -24,7 +24,7 @@ from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequen
 from snr.core import plugins
 from snr.core.checks.os_errors import explain_os_error
 from snr.prelude import SNRError, WireFormatError
-from snr.std_mods.io.command_processor import COMMANDS, HZ_DEFAULT_WINDOW_S
+from snr.std_mods.io.command_processor import COMMANDS, load_extra_commands
 from snr.std_mods.io.console_protocol import (
     DEFAULT_CONSOLE_PORT,
     MAX_LINE_BYTES,
@@ -64,17 +64,16 @@ EXIT_INTERRUPTED = 130
 """Exit code: Ctrl-C while waiting for the node (the shell's convention)."""
 
 _LEAVE_WORDS = ("quit", "q")
+_HZ_DEFAULT_WINDOW_S = 2.0  # `hz KEY` replies after this long (snr.extras.console_tools)
 _Client = TypeVar("_Client", bound="ConsoleClient")
 
 
 class ConsoleClient(ABC):
     """The console's core: sends command lines, prints replies, runs the program.
 
-    It reaches nodes through a transport's five methods (`where`, `connect`,
-    `ask`, `close`, `is_connected`) and, for ``snr-console``'s command line,
-    its two class methods (`add_arguments`, `from_arguments`). `RemoteConsole`
-    is the TCP transport; ``ZenohConsole`` (``snr.extras.zenoh.console``)
-    reaches nodes over Zenoh.
+    It reaches nodes through a transport's methods (docs/console.md, "How the
+    console is built"): `RemoteConsole` over TCP, ``ZenohConsole``
+    (``snr.extras.zenoh.console``) over Zenoh.
 
     Example::
 
@@ -90,6 +89,7 @@ class ConsoleClient(ABC):
 
     def __init__(self, token: Optional[str] = None, timeout_s: float = 10.0) -> None:
         self.token = default_token(token, "The console")
+        load_extra_commands()  # COMMANDS names every command: for Tab and the Zenoh console
         self.timeout_s = timeout_s
         self.greeting: Optional[Reply] = None
 
@@ -140,7 +140,7 @@ class ConsoleClient(ABC):
 
     # -- the core -------------------------------------------------------------------
     def _accept(self, greeting: Reply, node: str) -> Reply:
-        """Keep ``greeting`` if it says hello; else close and say why the node refused."""
+        """``greeting`` if it says hello; else close and say why the node refused."""
         if greeting.status is not Status.HELLO:
             self.close()
             raise ConsoleConnectionError(f"{node} turned the console away: {greeting.text}")
@@ -164,7 +164,7 @@ class ConsoleClient(ABC):
         words = line.lower().split()
         if words[:1] == ["hz"]:
             try:
-                timeout_s += max(0.0, float(words[2]) if len(words) == 3 else HZ_DEFAULT_WINDOW_S)
+                timeout_s += max(0.0, float(words[2]) if len(words) == 3 else _HZ_DEFAULT_WINDOW_S)
             except ValueError:  # the node refuses it at once
                 pass
         reply = self.ask(line, timeout_s)
@@ -220,8 +220,7 @@ class ConsoleClient(ABC):
         """Read commands until ``quit``, end of input, or the node says bye.
 
         ``read_line(prompt)`` defaults to ``input`` (with readline if there is
-        one). Returns an exit code: `EXIT_OK`, or `EXIT_CONNECTION` when the
-        node went away unasked.
+        one). Returns an exit code.
         """
         out = output if output is not None else sys.stdout
         if read_line is None:
