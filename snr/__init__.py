@@ -40,7 +40,6 @@ from snr.core import (
     MovingAvgFilter,
     MultiProcRunner,
     Node,
-    SimClock,
     SynchronousRunner,
     ThreadLoop,
     Timer,
@@ -74,6 +73,7 @@ from snr.utils import (
     ListReplayerFactory,
     MultiProcExpector,
     OrderedExpector,
+    SimClock,
 )
 
 if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers see them
