@@ -38,7 +38,6 @@ from snr.core import (
     EndpointFactory,
     LoopFactory,
     MovingAvgFilter,
-    MultiProcRunner,
     Node,
     SynchronousRunner,
     ThreadLoop,
@@ -123,6 +122,7 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         RecorderEndpointFactory,
         ReplayerLoopFactory,
     )
+    from snr.std_mods.multiproc import MultiProcRunner
     from snr.std_mods.utils import (
         PrinterEndpointFactory,
         StopwatchEndpointFactory,
@@ -171,6 +171,7 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
         "SocketsPair",
     ),
     "snr.std_mods.filters": ("KalmanFilterFactory", "MovingAvgFilterFactory"),
+    "snr.std_mods.multiproc": ("MultiProcRunner",),
     "snr.std_mods.io": (
         "CommandReceiverFactory",
         "LocalConsoleFactory",
