@@ -182,9 +182,8 @@ class TestRunner(AbstractRunner):
         def stop() -> None:
             if node.is_terminated():
                 return  # it stopped by itself just before the limit
-            for component in list(node.components.values()):
-                if component.is_alive():
-                    self.alive_at_timeout.append(component.name)
+            components = list(node.components.values())
+            self.alive_at_timeout = [c.name for c in components if c.is_alive()]
             self.timed_out = True
             node.set_terminate_flag(f"test time limit of {self.timeout_s} s reached")
 
