@@ -38,9 +38,7 @@ from snr.core import (
     EndpointFactory,
     LoopFactory,
     MovingAvgFilter,
-    MultiProcRunner,
     Node,
-    SimClock,
     SynchronousRunner,
     ThreadLoop,
     Timer,
@@ -74,6 +72,7 @@ from snr.utils import (
     ListReplayerFactory,
     MultiProcExpector,
     OrderedExpector,
+    SimClock,
 )
 
 if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers see them
@@ -123,6 +122,7 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         RecorderEndpointFactory,
         ReplayerLoopFactory,
     )
+    from snr.std_mods.multiproc import MultiProcRunner
     from snr.std_mods.utils import (
         PrinterEndpointFactory,
         StopwatchEndpointFactory,
@@ -172,6 +172,7 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
         "SocketsPair",
     ),
     "snr.std_mods.filters": ("KalmanFilterFactory", "MovingAvgFilterFactory"),
+    "snr.std_mods.multiproc": ("MultiProcRunner",),
     "snr.std_mods.io": (
         "CommandReceiverFactory",
         "RecorderEndpointFactory",

@@ -11,7 +11,8 @@ import sys
 import unittest
 from typing import List
 
-from snr.core.logs import LossReport, RateLimitedLog
+from snr.core.logs import LossReport
+from snr.std_mods.comms.rate_limited_log import RateLimitedLog
 from tests.examples_support import ROOT, script_env
 
 

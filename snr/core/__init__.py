@@ -14,6 +14,7 @@ Example::
 from typing import List
 
 from snr.core import (
+    clock,
     component,
     config,
     dispatch,
@@ -24,7 +25,6 @@ from snr.core import (
     moving_avg_filter,
     node,
     runners,
-    sim_clock,
     task_queue,
     tasks,
     timer,
@@ -32,6 +32,7 @@ from snr.core import (
 from snr.core.checks import key_hints, profiler
 from snr.core.checks.key_hints import *
 from snr.core.checks.profiler import *
+from snr.core.clock import *
 from snr.core.component import *
 from snr.core.config import *
 from snr.core.dispatch import *
@@ -42,11 +43,11 @@ from snr.core.loop import *
 from snr.core.moving_avg_filter import *
 from snr.core.node import *
 from snr.core.runners import *
-from snr.core.sim_clock import *
 from snr.core.task_queue import *
 from snr.core.timer import *
 
 __all__: List[str] = ["tasks"]
+__all__ += clock.__all__
 __all__ += component.__all__
 __all__ += config.__all__
 __all__ += dispatch.__all__
@@ -59,6 +60,5 @@ __all__ += moving_avg_filter.__all__
 __all__ += node.__all__
 __all__ += profiler.__all__
 __all__ += runners.__all__
-__all__ += sim_clock.__all__
 __all__ += task_queue.__all__
 __all__ += timer.__all__

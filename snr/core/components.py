@@ -90,10 +90,8 @@ class ComponentSet:
         except Exception as error:
             explain.raise_get_failure(factory, error, self.node.role)
         if component is None:
-            node = self.node
-            explain.warn_get_returned_none(
-                factory, node.role, self.running, self._none_told, node.log
-            )
+            role, log = self.node.role, self.node.log
+            explain.warn_get_returned_none(factory, role, self.running, self._none_told, log)
             return None
         if not isinstance(component, AbstractComponent):
             raise explain.wrong_get_result_error(factory, component)
@@ -152,11 +150,8 @@ class ComponentSet:
         (``node_core``) is refused by name and skipped by ``"all"``.
         """
         if name == "all":
-            targets = [
-                c
-                for n, c in self.by_name.items()
-                if c.factory.reload_targets and n != NODE_CORE_NAME
-            ]
+            named = self.by_name.items()
+            targets = [c for n, c in named if c.factory.reload_targets and n != NODE_CORE_NAME]
         else:
             component = self._find("reload", name)
             targets = [] if component is None else [component]

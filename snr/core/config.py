@@ -6,7 +6,7 @@ from typing import Dict, List, Mapping, Optional, Sequence
 
 from snr.core.checks.call_checks import check_config_args, check_role
 from snr.core.checks.profiler import Profiler
-from snr.core.sim_clock import SimClock
+from snr.core.clock import NodeClock
 from snr.prelude.abstract import AbstractConfig, AbstractFactory, AbstractProfiler
 from snr.prelude.names import Mode, Role
 
@@ -38,7 +38,7 @@ class Config(AbstractConfig):
         factories: Optional[Mapping[Role, Sequence[AbstractFactory]]] = None,
         mode: Mode = Mode.DEBUG,
         profile: Optional[bool] = None,
-        clock: Optional[SimClock] = None,
+        clock: Optional[NodeClock] = None,
     ) -> None:
         if factories is None:
             factories = {}

@@ -102,11 +102,9 @@ class HandlerMap(Dict[TaskId, TaskHandler]):
     ) -> None:
         super().__init__()
         self._owner_class = owner_class
+        self._on_change = None  # filling it is no change
+        self.update(items or {})
         self._on_change = on_change
-        if items:
-            for key, handler in items.items():
-                check_entry(key, handler, owner_class)
-                super().__setitem__(key, handler)
 
     def _changed(self) -> None:
         if self._on_change is not None:
@@ -285,50 +283,40 @@ class HandlerRunner:
         the table, run each in component order, and queue what each returns.
         This is the node's hot path, the one place that runs handlers for
         tasks, timed or not: every task passes here, so it keeps names in
-        locals, tests ``timed`` instead of having a second copy, and handles
-        the common result (one Task) inline.
+        locals, tests ``timed`` instead of having a second copy, and queues
+        the common result (one Task) itself.
         """
-        queue = self.queue
-        normal, urgent = queue.normal, queue.urgent
+        normal, urgent = self.queue.normal, self.queue.urgent
         components = self.components
         lookup = components.table.table.get
-        timed = self.timed
-        clock = time.perf_counter
-        slow_s = self.slow_handler_s
-        on_unhandled = self.on_unhandled
-        store_first = self.store_first
         bursts = components.table.bursts  # refilled in place when the table changes
+        timed, clock, slow_s = self.timed, time.perf_counter, self.slow_handler_s
         for _ in range(max_tasks):
-            if urgent:
-                task = urgent.popleft()
-                from_normal_lane = False
-            elif normal:
-                task = normal.popleft()
-                from_normal_lane = True
-            else:
+            lane = urgent or normal  # urgent tasks first
+            if not lane:
                 return
+            task = lane.popleft()
             if components.table_stale:  # what the last task changed applies now
                 components.refresh_table()
             if task.type is _STORE_PAGE:
                 # The node core's part, before any handler and without a handler
                 # call: no look-up, no timing, so a loop's page reaches its reader sooner.
-                store_first(task)
-                # A run starts only from the normal lane: a paused node runs
-                # urgent tasks one at a time, and `execute_task` runs one task.
-                if bursts and from_normal_lane and normal and normal[0].name == task.name:
+                self.store_first(task)
+                # A run for a burst handler starts only from the normal lane: a
+                # paused node runs urgent tasks one at a time, `execute_task` one task.
+                if bursts and lane is normal and normal and normal[0].name == task.name:
                     burst = bursts.get((_STORE_PAGE, task.name))
                     if burst is not None and normal[0].type is _STORE_PAGE:
                         self.run_burst(task, burst)
                         if not self.running:
                             return
                         continue
-            entries = lookup((task.type, task.name))
+            # Two-phase match: the task's (type, name), else its type (entries are never []).
+            entries = lookup((task.type, task.name)) or lookup(task.type)
             if entries is None:
-                entries = lookup(task.type)
-                if entries is None:
-                    if on_unhandled is not None and task.type is _EVENT:
-                        on_unhandled(task)  # DEBUG: an event nobody handles
-                    continue
+                if self.on_unhandled is not None and task.type is _EVENT:
+                    self.on_unhandled(task)  # DEBUG: an event nobody handles
+                continue
             for handler, key, component, cell in entries:
                 if timed:
                     started = clock()
@@ -343,11 +331,9 @@ class HandlerRunner:
                     cell[1] += took
                     if took > slow_s:
                         self.failures.report_slow(handler, task, took)
-                if result is None:
-                    continue
                 if isinstance(result, Task):
                     (urgent if result.priority else normal).append(result)
-                else:
+                elif result is not None:
                     self.queue_all(self.check_result(result, handler, task))
             if not self.running:
                 return
@@ -405,9 +391,7 @@ class HandlerRunner:
         except Exception as error:
             self.failures.handler_failed(handler, task, component, error)
             return None
-        self._count(
-            handler, task, [0, 0.0] if cell is None else cell, time.perf_counter() - started
-        )
+        self._count(handler, task, cell or [0, 0.0], time.perf_counter() - started)
         return self.check_result(result, handler, task)
 
     def _count(
@@ -436,14 +420,13 @@ class HandlerRunner:
         try:
             follow_up = store_page(task, _STORE_PAGE)
         except Exception as error:
-            self.failures.handler_failed(
-                store_page, task, getattr(store_page, "__self__", None), error
-            )
+            owner = getattr(store_page, "__self__", None)
+            self.failures.handler_failed(store_page, task, owner, error)
             return None
-        if not isinstance(follow_up, Task):
-            return None
-        self.queue.normal.append(follow_up)
-        return follow_up
+        if isinstance(follow_up, Task):
+            self.queue.normal.append(follow_up)
+            return follow_up
+        return None
 
     def queue_all(self, tasks: Optional[List[Task]]) -> None:
         """Queue tasks a handler returned, in order (urgent ones jump ahead)."""

@@ -11,8 +11,8 @@ from snr.core import tasks
 from snr.core.checks import life_cycle
 from snr.core.checks.explain import check_loop_class
 from snr.core.checks.student_code import running_line
+from snr.core.clock import LoopTurn, clock_of
 from snr.core.component import Component
-from snr.core.sim_clock import LoopTurn, clock_of
 from snr.prelude.abstract import AbstractFactory, AbstractLoop, AbstractNode
 from snr.prelude.names import ComponentName, TaskType
 from snr.prelude.task import Task
@@ -79,7 +79,7 @@ class ThreadLoop(Component, AbstractLoop):
         check_loop_class(type(self), ThreadLoop.loop, max_tick_rate_hz)
         self.max_tick_rate_hz = max_tick_rate_hz
         self.state = LoopState.NEW
-        self._clock_turn: Optional[LoopTurn] = None  # its place on a SimClock, if any
+        self._clock_turn: Optional[LoopTurn] = None  # its place on a clock with turns, if any
         self.terminate_reason = ""
         self._stop_event = threading.Event()
         # Held while the loop may run; released to stop it. Waiting between
@@ -157,10 +157,10 @@ class ThreadLoop(Component, AbstractLoop):
             self._resume_running()
         self.begin()
         self.state = LoopState.RUNNING
-        clock = clock_of(self.parent.config)
-        if clock is not None and (self.max_tick_rate_hz > 0 or self.follows_clock):
-            # Registered here, on the node's thread, so the clock cannot move
-            # on before the new thread is in line: the run stays the same.
+        if self.max_tick_rate_hz > 0 or self.follows_clock:
+            # Registered here, on the node's thread, so a clock with turns cannot
+            # move on before the new thread is in line: the run stays the same.
+            clock = clock_of(self.parent.config)
             self._clock_turn = clock.loop_turn(self.parent.role, self.name, self._stop_event)
         self._thread = threading.Thread(
             target=self._run, name=f"snr-{self.parent.role}-{self.name}", daemon=True

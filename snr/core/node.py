@@ -27,7 +27,6 @@ import dataclasses
 import enum
 import logging
 import threading
-import time
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional
 
 from snr.core import tasks
@@ -36,12 +35,12 @@ from snr.core.checks.datastore_guard import NodeDatastore
 from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
 from snr.core.checks.failures import FailureReport
 from snr.core.checks.step_mode import StepMode
+from snr.core.clock import clock_of
 from snr.core.components import NODE_CORE_NAME, ComponentSet
 from snr.core.dispatch import HandlerRunner, HandlerTable
 from snr.core.endpoint import Endpoint
 from snr.core.factory import EndpointFactory
 from snr.core.logs import ensure_log_handler, level_for_mode
-from snr.core.sim_clock import NodeTurn, clock_of
 from snr.core.task_queue import TaskQueue
 from snr.core.timer import Timer
 from snr.prelude.abstract import (
@@ -148,11 +147,10 @@ class Node(AbstractNode):
         if self.log.level == logging.NOTSET:
             self.log.setLevel(level_for_mode(self.mode))
         self.profiler = config.get_profiler()
-        # The node's clock: the wall, or a SimClock (sim_clock.py) it takes turns on.
+        # The node's clock (clock.py): the wall's, or one it takes turns on (a SimClock).
         clock = clock_of(config)
-        self.timer = Timer() if clock is None else Timer(clock)
-        self._page_time: Callable[[], float] = time.time if clock is None else clock.stamp
-        self._clock_turn: Optional[NodeTurn] = None
+        self.timer = Timer(clock)
+        self._page_time: Callable[[], float] = clock.stamp
         self.queue = TaskQueue(high_water=self.max_queued_tasks, log=self.log)
         self.pages: DataDict = {}  # written by the node alone; components see it read-only:
         self.datastore: Mapping[DataKey, Page] = NodeDatastore(self.pages, role, self.queue)
@@ -187,8 +185,9 @@ class Node(AbstractNode):
             component = self.build_component(factory)
             if component is not None:
                 self.add_component(component, start=False)
-        if clock is not None:  # built: in line for its first turn
-            self._clock_turn = clock.node_turn(role, self.queue, self.is_terminated)
+        # Built: in line for its first turn, if its clock hands out turns.
+        self._clock_turn = clock.node_turn(role, self.queue, self.is_terminated)
+        if self._clock_turn is not None:
             self.queue.use_waiter(self._clock_turn)
 
     @property

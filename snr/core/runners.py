@@ -2,19 +2,17 @@
 
 * `SynchronousRunner` runs one role in this process.
 * `CliRunner` reads the role(s) from the command line: ``python main.py urov``.
-* `MultiProcRunner` runs several roles at once, one process each.
 * `TestRunner` runs one node under a time limit, for tests.
+
+`MultiProcRunner`, several roles at once, one process each, is in
+``snr/std_mods/multiproc.py``: `CliRunner` loads it for two roles or more.
 """
 
 from __future__ import annotations
 
-import logging
-import signal
 import sys
 import threading
-import time
-from types import FrameType
-from typing import TYPE_CHECKING, Any, Callable, List, Mapping, Optional, Sequence, Union
+from typing import TYPE_CHECKING, Callable, List, Mapping, Optional, Sequence, Union
 
 from snr.core.checks import call_checks
 from snr.core.checks.runner_checks import no_role_given, runner_built, runner_ran
@@ -23,7 +21,6 @@ from snr.core.node import Node
 from snr.prelude.abstract import (
     AbstractConfig,
     AbstractFactory,
-    AbstractMultiRunner,
     AbstractRunner,
 )
 from snr.prelude.errors import ConfigError, SNRError
@@ -31,15 +28,13 @@ from snr.prelude.names import Mode, Role
 
 if TYPE_CHECKING:
     import argparse
-    from multiprocessing.connection import Connection
 
 # What a runner runs: a Config, or each role's factories. A Mapping (not the Dict
 # of ComponentsByRole), like Config's own argument: dicts are invariant, so
 # mypy --strict would reject a plain {"robot": [TimeoutLoopFactory(...)]}.
 _System = Union[AbstractConfig, Mapping[Role, Sequence[AbstractFactory]]]
 
-__all__ = ["INTERRUPTED_MESSAGE", "CliRunner", "MultiProcRunner", "SynchronousRunner", "TestRunner"]
-__all__ += ["report_error"]
+__all__ = ["INTERRUPTED_MESSAGE", "CliRunner", "SynchronousRunner", "TestRunner", "report_error"]
 
 INTERRUPTED_MESSAGE = "Interrupted by user, exiting"
 """What a runner prints when Ctrl-C stops it (as in thesis figure 5.4)."""
@@ -187,9 +182,8 @@ class TestRunner(AbstractRunner):
         def stop() -> None:
             if node.is_terminated():
                 return  # it stopped by itself just before the limit
-            for component in list(node.components.values()):
-                if component.is_alive():
-                    self.alive_at_timeout.append(component.name)
+            components = list(node.components.values())
+            self.alive_at_timeout = [c.name for c in components if c.is_alive()]
             self.timed_out = True
             node.set_terminate_flag(f"test time limit of {self.timeout_s} s reached")
 
@@ -200,203 +194,6 @@ class TestRunner(AbstractRunner):
             node.loop()
         finally:
             watchdog.cancel()
-
-
-def _watch_parent(role: Role, link: Connection, node: Node) -> None:
-    """Stop ``node`` when its parent asks to, or when the parent dies (a thread's target).
-
-    The parent holds the write end of a pipe to each child. It writes a reason
-    to ask the child to stop; if the parent dies in any way (even SIGKILL) the
-    OS closes the write end and the child reads EOF. A pipe works with every
-    start method and OS, unlike ``prctl(PR_SET_PDEATHSIG)`` (Linux only) or
-    polling the parent's pid (slow, and pids are reused). A stop asked for
-    while the node was being built waits in the pipe until it is read here.
-    """
-    try:
-        reason = link.recv_bytes().decode("utf-8", "replace")
-    except (EOFError, OSError):
-        reason = "parent process died"
-        # Nobody is left to report this for the child, so say it here.
-        logging.getLogger(f"snr.{role}").warning(
-            "Node %r: its parent process died, stopping it.", role
-        )
-    # Thread-safe, unlike a signal handler, which could interrupt the node's
-    # thread while it holds the task queue's lock.
-    node.set_terminate_flag(reason)
-
-
-def _run_role(
-    role: Role, config: AbstractConfig, link: Connection, inherited: Sequence[Connection]
-) -> None:
-    """Entry point of each MultiProcRunner child process."""
-    # A forked child inherits the write end of every child's pipe; while it
-    # holds them, no child could see its parent die.
-    for writer in inherited:
-        writer.close()
-
-    def watch(node: Node) -> None:
-        # Daemon: a child whose node stopped on its own must not wait for it.
-        name, args = "snr-parent-watch", (role, link, node)
-        threading.Thread(target=_watch_parent, args=args, name=name, daemon=True).start()
-
-    # Ctrl-C reaches every process of the group; only the parent says so.
-    SynchronousRunner(role, config, announce_interrupt=False, on_node=watch).run()
-
-
-def _start_method(requested: Optional[str]) -> str:
-    import multiprocessing  # lazily: it is slow to import and most programs run one node
-
-    if requested is not None:
-        return requested
-    # fork is fast and needs nothing picklable, but forking a process that
-    # runs threads can deadlock; fall back to spawn then.
-    methods = multiprocessing.get_all_start_methods()
-    if "fork" in methods and threading.active_count() == 1:
-        return "fork"
-    return "spawn"
-
-
-def _set_handlers(sigint: Any, sigterm: Any) -> None:
-    """Set SIGINT's and SIGTERM's handlers (main thread only)."""
-    for signum, handler in ((signal.SIGINT, sigint), (signal.SIGTERM, sigterm)):
-        if handler is not None:  # None: set outside Python, cannot be restored
-            signal.signal(signum, handler)
-
-
-class MultiProcRunner(AbstractMultiRunner):
-    """Runs several roles at once, each node in its own process.
-
-    Handy for trying a whole system on one machine, e.g. with pipe comms.
-    Stopping the parent stops every child in order: Ctrl-C (SIGINT) or SIGTERM
-    to the parent asks each child's node to terminate (``join_timeout_s``
-    bounds the wait; then the child is terminated, and killed if need be), and
-    if the parent dies (even by SIGKILL), each child notices and stops its
-    node, so no child is left running on its own.
-
-    Example::
-
-        runner = snr.MultiProcRunner(["topside", "urov"], config)
-        runner.run()
-        runner.exitcodes   # [0, 0]
-        runner.stopped_by  # "SIGINT" after Ctrl-C, "SIGTERM" after kill, else None
-
-    Attributes:
-        exitcodes: each role's process exit code, after ``run()``.
-        stopped_by: the signal that stopped ``run()`` early ("SIGINT" or
-            "SIGTERM"), or None when every node stopped on its own.
-    """
-
-    def __init__(
-        self,
-        roles: Sequence[Role],
-        config: _System,
-        start_method: Optional[str] = None,
-        join_timeout_s: float = 5.0,
-    ) -> None:
-        self.config = _as_config(config)
-        call_checks.no_sim_clock_across_processes(self.config)
-        known = self.config.roles()
-        for role in roles:
-            if role not in known:
-                self.config.get(role)  # raises the friendly unknown-role error
-        self.roles = list(roles)
-        self.start_method = start_method
-        self.join_timeout_s = join_timeout_s
-        self.exitcodes: List[Optional[int]] = []
-        self.stopped_by: Optional[str] = None
-
-    def run(self) -> None:
-        """Start every role's process and wait for all of them to end.
-
-        Ctrl-C prints `INTERRUPTED_MESSAGE`; Ctrl-C and SIGTERM then stop every
-        child and return normally (see `stopped_by`).
-        """
-        import multiprocessing  # lazily: see _start_method
-
-        method = _start_method(self.start_method)
-        ctx: Any = multiprocessing.get_context(method)
-        self.stopped_by = None
-        pipes = [ctx.Pipe(duplex=False) for _ in self.roles]
-        writers: List[Connection] = [writer for _, writer in pipes]
-        # Only a forked child shares the parent's memory and open files; other
-        # start methods pickle the arguments, and the writers must stay here.
-        inherited = writers if method == "fork" else []
-        procs = [
-            ctx.Process(
-                target=_run_role, args=(role, self.config, reader, inherited), name=f"snr-{role}"
-            )
-            for role, (reader, _) in zip(self.roles, pipes)
-        ]
-        # Only the main thread may set signal handlers; elsewhere they stay as they are.
-        main = threading.current_thread() is threading.main_thread()
-        previous = [signal.getsignal(signal.SIGINT), signal.getsignal(signal.SIGTERM)]
-        requested: List[str] = []
-
-        def note(signum: int, frame: Optional[FrameType]) -> None:
-            requested.append(signal.Signals(signum).name)
-
-        try:
-            try:
-                for proc in procs:
-                    proc.start()
-                if main:  # after forking, so children keep the default actions
-                    _set_handlers(note if previous[0] is signal.default_int_handler else None, note)
-                self._wait(procs, requested)
-            except KeyboardInterrupt:  # Ctrl-C while the children were starting
-                requested.append("SIGINT")
-            if requested:
-                self.stopped_by = requested[0]
-                if self.stopped_by == "SIGINT":
-                    print(INTERRUPTED_MESSAGE, flush=True)
-                if main:
-                    # One request is enough: a second Ctrl-C must not break off
-                    # the (bounded) wait for the children with a traceback.
-                    _set_handlers(signal.SIG_IGN, signal.SIG_IGN)
-                self._stop_children(procs, writers, f"parent asked to stop ({self.stopped_by})")
-        finally:
-            self._reap(procs)
-            for reader, writer in pipes:  # the children had their own copies
-                reader.close()
-                writer.close()
-            if main:
-                _set_handlers(*previous)
-        self.exitcodes = [proc.exitcode for proc in procs]
-
-    @staticmethod
-    def _wait(procs: Sequence[Any], requested: List[str]) -> None:
-        """Wait until every child has ended or a signal asked the parent to stop.
-
-        The signal handlers only note the signal: an exception raised inside
-        a wait for a child could lose that child's exit status.
-        """
-        from multiprocessing.connection import wait
-
-        while not requested:
-            running = [proc.sentinel for proc in procs if proc.exitcode is None]
-            if not running:
-                return
-            wait(running, timeout=0.1)  # a noted signal is seen within 0.1 s
-
-    def _stop_children(self, procs: Sequence[Any], writers: Sequence[Connection], why: str) -> None:
-        for writer in writers:
-            try:
-                writer.send_bytes(why.encode("utf-8"))
-            except OSError:
-                pass  # that child has already gone
-        deadline = time.monotonic() + self.join_timeout_s
-        for proc in procs:
-            if proc.pid is not None:  # started
-                proc.join(max(0.0, deadline - time.monotonic()))
-
-    def _reap(self, procs: Sequence[Any]) -> None:
-        """Terminate, then kill, any child still running; never leave one behind."""
-        for proc in procs:
-            if proc.is_alive():
-                proc.terminate()
-                proc.join(self.join_timeout_s)
-            if proc.is_alive():
-                proc.kill()
-                proc.join(self.join_timeout_s)
 
 
 class CliRunner(AbstractRunner):
@@ -466,7 +263,9 @@ class CliRunner(AbstractRunner):
             if len(args.roles) == 1:
                 SynchronousRunner(args.roles[0], config).run()
             else:
-                MultiProcRunner(args.roles, config).run()
+                from snr.std_mods import multiproc  # only several roles need processes
+
+                multiproc.MultiProcRunner(args.roles, config).run()
         except SNRError as error:
             report_error(error)
             raise SystemExit(1) from None

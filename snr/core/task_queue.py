@@ -270,11 +270,8 @@ class TaskQueue(AbstractTaskQueue):
 
     def pop(self) -> Optional[Task]:
         """The next task without waiting, or None."""
-        if self.urgent:
-            return self.urgent.popleft()
-        if self.normal:
-            return self.normal.popleft()
-        return None
+        lane = self.urgent or self.normal  # urgent tasks first
+        return lane.popleft() if lane else None
 
     @property
     def waiter(self) -> Optional[IdleWaiter]:

@@ -23,7 +23,7 @@ from typing import Any, Iterable, List, Mapping
 
 from snr.core.checks.error_text import did_you_mean, short_repr
 from snr.core.checks.student_code import describe_class, frame_location
-from snr.core.sim_clock import SimClock
+from snr.core.clock import NodeClock
 from snr.prelude import (
     AbstractConfig,
     AbstractFactory,
@@ -225,7 +225,7 @@ def check_config_args(config_class: Any, factories: Any, mode: Any, clock: Any) 
                     f"Role {role!r} lists {fac!r}, which is not a factory (an EndpointFactory "
                     f"or LoopFactory object).{hint if isinstance(fac, type) else ''}"
                 )
-    if clock is not None and not isinstance(clock, SimClock):
+    if clock is not None and not isinstance(clock, NodeClock):
         raise ConfigError(
             f"Config(clock=...) got {clock!r}; it takes a snr.SimClock (simulated "
             "time) or None (the wall clock)."
@@ -299,7 +299,7 @@ def no_sim_clock_across_processes(config: AbstractConfig) -> None:
 
         no_sim_clock_across_processes(Config({"a": [...]}, clock=SimClock()))   # ConfigError
     """
-    if isinstance(getattr(config, "clock", None), SimClock):
+    if isinstance(getattr(config, "clock", None), NodeClock):
         raise ConfigError(
             "MultiProcRunner runs each node in a process of its own, but a SimClock "
             "keeps the time of one process. Run the nodes in one process (each "

@@ -57,7 +57,7 @@ from typing import (
 
 from snr.core import EndpointFactory, tasks
 from snr.core.endpoint import Endpoint
-from snr.core.logs import LossReport, RateLimitedLog
+from snr.core.logs import LossReport
 from snr.core.node import Node
 from snr.core.task_queue import TaskQueue
 from snr.extras.zenoh.inbox import (
@@ -93,6 +93,7 @@ from snr.std_mods.comms.comms_loop import (
     normalize_keys,
 )
 from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, derived_word, find_secret
+from snr.std_mods.comms.rate_limited_log import RateLimitedLog
 
 if TYPE_CHECKING:  # imported when a node starts: the extra is optional
     import zenoh

@@ -37,7 +37,7 @@ import time
 from typing import Any, Callable, Deque, Dict, List, Optional, Sequence, Set, Tuple, Union
 
 from snr.core import ThreadLoop, tasks
-from snr.core.logs import LossReport, RateLimitedLog
+from snr.core.logs import LossReport
 from snr.prelude import (
     AbstractFactory,
     AbstractNode,
@@ -68,6 +68,7 @@ from snr.std_mods.codec import (
 from snr.std_mods.comms.handshake import Handshake, Refused
 from snr.std_mods.comms.io_loop import IOLoop, IOTimer, Transport, unread_bytes
 from snr.std_mods.comms.link_hints import watch_link
+from snr.std_mods.comms.rate_limited_log import RateLimitedLog
 
 __all__ = [
     "CLOSED",

@@ -1,5 +1,8 @@
 """`SimClock`: simulated time for nodes, advanced in lockstep (docs/sim-time.md).
 
+A `snr.core.clock.NodeClock` whose nodes and loops take turns: the kernel
+knows it only through that interface.
+
 A node built from ``Config(..., clock=SimClock())`` reads its time from the
 clock instead of the wall: ``get_time_s()``, the ``created_at_s`` of its
 pages, the ticks of its loops, ``wait_s`` and ``TimeoutLoop``. The clock jumps
@@ -35,9 +38,10 @@ import threading
 import time
 from typing import Callable, List, Optional, Sized, Tuple
 
+from snr.core.clock import NodeClock
 from snr.prelude.errors import ConfigError
 
-__all__ = ["LoopTurn", "NodeTurn", "SimClock", "Turn", "clock_of"]
+__all__ = ["LoopTurn", "NodeTurn", "SimClock", "Turn"]
 
 _POLL_S = 0.25
 """How long a waiting thread sleeps before it looks again (only if no one wakes it)."""
@@ -71,7 +75,7 @@ class Turn:
 
 
 class NodeTurn(Turn):
-    """A node's turn; also the node's ``IdleWaiter``, so an idle node gives the clock back.
+    """A node's turn (a `snr.core.clock.NodeTurn`): an idle node gives the clock back.
 
     Example (what `Node` does with a simulated clock)::
 
@@ -123,7 +127,7 @@ class NodeTurn(Turn):
 
 
 class LoopTurn(Turn):
-    """A loop's turn: it runs a pass of ``loop()`` in it, then sleeps until its next tick.
+    """A loop's turn (a `snr.core.clock.LoopTurn`): a pass of ``loop()``, then a sleep.
 
     Example (what `ThreadLoop` does on its thread)::
 
@@ -164,7 +168,7 @@ class LoopTurn(Turn):
         self.clock._leave(self)
 
 
-class SimClock:
+class SimClock(NodeClock):
     """Simulated time for every node built from a `Config` with it.
 
     Args:
@@ -174,8 +178,8 @@ class SimClock:
             is fixed (0 by default) so that a recording does not depend on
             the day it was made.
 
-    Calling the clock gives the simulated seconds since it was made, so it
-    is a `Clock`: ``Timer(clock)`` works. The loops of a node with a tick rate
+    Calling the clock gives the simulated seconds since it was made, so
+    ``Timer(clock)`` works. The loops of a node with a tick rate
     tick exactly at multiples of their period, ``TimeoutLoop`` ends the node at
     its simulated time, and the same seed gives the same pages, run after run.
 
@@ -372,15 +376,3 @@ class SimClock:
     def __repr__(self) -> str:
         speed = "as fast as possible" if self.speed is None else f"speed={self.speed:g}"
         return f"<SimClock t={self():.3f} s, {speed}, {self.turns} turns>"
-
-
-def clock_of(config: object) -> Optional[SimClock]:
-    """The `SimClock` a config hands its nodes, or None (they use the wall clock).
-
-    Example::
-
-        clock_of(Config({"sim": [...]}, clock=SimClock()))   # the SimClock
-        clock_of(Config({"sim": [...]}))                     # None
-    """
-    clock = getattr(config, "clock", None)
-    return clock if isinstance(clock, SimClock) else None
