@@ -1,22 +1,15 @@
 """One explanation for every OSError a student meets: a port, a connection, a serial port.
 
-Every component that listens, connects or opens a serial port words its
-failure with `explain_os_error`, so a port in use reads the same from the
-sockets server, the console receiver and the live view, and the catalogue in
-docs/errors.md section 12 shows what students really get. Callers wrap the
-text in the error they raise (`CommsError`, or the console's own) ``from``
-the OSError, or log it.
+Every component that listens, connects or opens a serial port words its failure
+with `explain_os_error` (docs/errors.md, 12).
 
 Example::
 
-    try:
-        listener.bind((host, port))
-    except OSError as error:
-        raise CommsError(explain_os_error(
-            error, action="listen", target=f"{host}:{port}",
-            who=f"The sockets server of node {role!r}",
-            setting="SocketsPair(server_tuple=(host, port))",
-        )) from error
+    raise CommsError(explain_os_error(
+        error, action="listen", target=f"{host}:{port}",
+        who=f"The sockets server of node {role!r}",
+        setting="SocketsPair(server_tuple=(host, port))",
+    )) from error
 """
 
 from __future__ import annotations
@@ -34,8 +27,7 @@ OsAction = Literal["listen", "connect", "open"]
 _VERBS = {"listen": "listen on", "connect": "connect to", "open": "open serial port"}
 _NO_DEVICE = {errno.ENOENT, errno.ENODEV, errno.ENXIO}
 _DENIED = {errno.EACCES, errno.EPERM}
-# (the action it happens to, or None for any; the errnos; what is wrong and what to do),
-# the first that fits wins. {host}, {port}: of the target; {where}: the setting to change.
+# (action or None for any, errnos, what is wrong and what to do): the first that fits.
 _PROBLEMS: List[Tuple[Optional[str], Set[int], str]] = [
     (
         "listen",
@@ -146,9 +138,6 @@ def explain_os_error(
     ports: Optional[Sequence[str]] = None,
 ) -> str:
     """The message for an OSError of listening, connecting or opening a serial port.
-
-    The one wording of these failures in SNR: what failed (``who`` and
-    ``target``), what is wrong in plain words, and what to do.
 
     Args:
         error: what ``bind``/``listen``, ``connect`` or opening the port raised
