@@ -3,7 +3,7 @@
 Python adds the "Did you mean" of an ``AttributeError`` or ``NameError`` only
 when it prints the traceback; `exception_text` keeps it (and works it out where
 Python 3.11 does not, ``TaskType.evnt``), and hints at a `Page` used as its value.
-`short_repr` is `snr.prelude.error_text`'s, named here too.
+`short_repr` is `snr.prelude.student_code`'s, named here too.
 
 Example::
 
@@ -20,8 +20,8 @@ import traceback
 from typing import Iterable, List, Optional
 
 from snr.core.checks.student_code import innermost_frame
-from snr.prelude.error_text import short_repr
 from snr.prelude.page import Page
+from snr.prelude.student_code import short_repr
 
 __all__ = [
     "PAGE_IN_A_HANDLER",

@@ -124,9 +124,6 @@ class Watchdog:
 
     def __init__(self, node: WatchedNode) -> None:
         self.node = node
-        self.every_s = type(self).every_s
-        self.stuck_s = type(self).stuck_s
-        self.idle_s = type(self).idle_s
         self.handler_stuck = False
         self.said: List[str] = []
         self._said_about: Set[object] = set()
@@ -203,7 +200,7 @@ class Watchdog:
         self.said.append(label)
         self.node.log.warning("%s %s", text, _FOOTER)
 
-    # -- 1. a handler that does not return ----------------------------------
+    # 1. a handler that does not return
     def _check_handler(self, handler: Optional[FrameType], now: float) -> None:
         if handler is None or handler is not self._handler:
             self._handler, self._handler_since = handler, now
@@ -256,7 +253,7 @@ class Watchdog:
             return key
         return None
 
-    # -- 2. a loop() that never returns -------------------------------------
+    # 2. a loop() that never returns
     def _check_loops(
         self, loops: List[ThreadLoop], frames: Dict[int, FrameType], now: float
     ) -> None:
@@ -289,7 +286,7 @@ class Watchdog:
             "max_tick_rate_hz=10 for ten passes a second."
         )
 
-    # -- 3. a loop flooding the queue ---------------------------------------
+    # 3. a loop flooding the queue
     def _check_flood(self, loops: List[ThreadLoop], now: float) -> None:
         queue = self.node.queue
         by_thread = queue.waits_by_thread
@@ -327,11 +324,8 @@ class Watchdog:
                 "faster (node.profiler.dump() shows the slow ones)."
             )
         else:
-            fix = (
-                "It has no max_tick_rate_hz, so loop() runs again the moment it returns. "
-                "Give it a rate: super().__init__(factory, parent, "
-                f"{loop.name!r}, max_tick_rate_hz=50) runs loop() at most 50 times a second."
-            )
+            fix = "It has no max_tick_rate_hz, so loop() runs again the moment it returns. "
+            fix += _rate(loop)
         return (
             f"Loop {loop.name!r} ({describe_class(type(loop))}) stores data faster than the "
             f"node can handle it: for {self.stuck_s:g} s the node's queue kept filling up "
@@ -339,7 +333,7 @@ class Watchdog:
             f"for room{f' (at {where})' if where else ''}. {fix}"
         )
 
-    # -- 3b. a loop with no rate that spins -------------------------------
+    # 3b. a loop with no rate that spins
     def _check_spin(self, loops: List[ThreadLoop], now: float) -> None:
         profiler = getattr(self.node, "profiler", None)
         if not isinstance(profiler, Profiler):
@@ -366,12 +360,11 @@ class Watchdog:
             f"loop() runs again the moment it returns: for {2 * self.stuck_s:g} s "
             f"{describe_callable(type(loop).loop)} ran {_about(rate)} times a second, "
             "storing or scheduling each time. That is far faster than any sensor "
-            "needs, keeps a core busy, and makes every other task wait behind its own. Give "
-            f"it a rate: super().__init__(factory, parent, {loop.name!r}, max_tick_rate_hz=50) "
-            "runs loop() at most 50 times a second."
+            "needs, keeps a core busy, and makes every other task wait behind its own. "
+            f"{_rate(loop)}"
         )
 
-    # -- 4. a node nothing will ever stop -----------------------------------
+    # 4. a node nothing will ever stop
     def _check_idle(self, no_handler: bool, loops: List[ThreadLoop], now: float) -> None:
         idle = (
             no_handler
@@ -464,6 +457,13 @@ def _stores(loop: ThreadLoop) -> bool:
     """True if the loop's own loop() names a way to store or schedule (no source needed)."""
     code = getattr(type(loop).loop, "__code__", None)
     return code is not None and not _STORES.isdisjoint(code.co_names)
+
+
+def _rate(loop: ThreadLoop) -> str:
+    return (
+        f"Give it a rate: super().__init__(factory, parent, {loop.name!r}, max_tick_rate_hz=50) "
+        "runs loop() at most 50 times a second."
+    )
 
 
 def _about(rate: float) -> str:
