@@ -182,13 +182,9 @@ class MissingKeyHints:
         that nothing here stores and none arrived. With a close match it is a
         warning with "Did you mean", else info.
 
-        Args:
-            comms: the comms component, e.g. ``"'sockets_server_9001'"``.
-            peer: the other node, e.g. ``"node 'urov' at 127.0.0.1:9001"``.
-            forwarded: the keys the comms component sends to it.
-            handled: ``(key, handler)`` for the other handlers of page keys.
-            stored_keys: every key in the datastore.
-            received_keys: the keys of pages that arrived from the peer.
+        ``forwarded``: the keys the comms component sends; ``handled``: ``(key,
+        handler)`` for the other handlers of page keys; ``received_keys``: the
+        keys of pages that arrived from ``peer``.
 
         Example::
 

@@ -139,17 +139,9 @@ def explain_os_error(
 ) -> str:
     """The message for an OSError of listening, connecting or opening a serial port.
 
-    Args:
-        error: what ``bind``/``listen``, ``connect`` or opening the port raised
-            (pyserial's ``SerialException`` too).
-        action: ``"listen"``, ``"connect"`` or ``"open"`` (a serial port).
-        target: ``"127.0.0.1:9000"``, or the serial port's name.
-        who: the component that failed, as the sentence's subject, e.g.
-            ``"The sockets server of node 'urov'"``.
-        setting: where the port or address is set, e.g.
-            ``"SocketsPair(server_tuple=(host, port))"``; "the config" if empty.
-        ports: for a serial port, the ports this computer has (listed in the
-            message when the port is missing); None when unknown.
+    ``target`` is ``"host:port"`` or a serial port, ``who`` the sentence's subject
+    (``"The sockets server of node 'urov'"``), ``setting`` where to change it
+    ("the config" if empty), ``ports`` the serial ports there are (None: unknown).
 
     Example::
 
