@@ -1,11 +1,7 @@
 """Why a class cannot be built: the methods it lacks, in words (thesis 7.3).
 
-Python's own message, "Can't instantiate abstract class X with abstract
-methods halt", talks about abstract classes to a student who wrote a
-concrete one. SNR's interfaces (`snr.prelude.abstract`) raise the
-ComponentError made here instead: it names the class, its file and line, the
-missing methods and the easy fix. `snr.prelude.abstract` loads this module
-only when such a mistake happens.
+Instead of Python's "Can't instantiate abstract class X with abstract methods
+halt", SNR's interfaces raise the ComponentError made here (loaded only then).
 
 Example::
 
@@ -106,10 +102,7 @@ _ABSTRACT_TEXT = re.compile(r"Can't instantiate abstract class (\w+)")
 
 
 def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
-    """Re-word Python's "Can't instantiate abstract class" TypeError, or None.
-
-    Used where SNR builds things (a factory's ``get()``) for abstract classes
-    that are not SNR's own, e.g. a student's ``Sensor(ABC)`` base class.
+    """Re-word Python's "Can't instantiate abstract class" TypeError (any class), or None.
 
     Example::
 

@@ -1,9 +1,7 @@
 """Data that cannot cross between nodes, named by its key, its path and its type.
 
-Pages cross between nodes as JSON. Every way out of a node (comms, recordings,
-serial links, the live view, `Page.serialize`) words data JSON cannot hold
-with `not_serializable_error`, so the same mistake reads the same wherever it
-is found (docs/errors.md section 13).
+Every way out of a node words data JSON cannot hold with `not_serializable_error`
+(docs/errors.md, 13).
 
 Example::
 
@@ -19,8 +17,8 @@ import enum
 import math
 from typing import Any, Optional, Set, Tuple
 
-from snr.prelude.error_text import short_repr
 from snr.prelude.errors import NotSerializableError
+from snr.prelude.student_code import short_repr
 
 __all__ = ["check_serializable", "not_serializable_error"]
 
@@ -103,19 +101,12 @@ def not_serializable_error(
 ) -> NotSerializableError:
     """A NotSerializableError naming the key, the path inside the data and the type.
 
-    Args:
-        key: the data key of the page.
-        data: the page's data.
-        where: extra context, e.g. ``" by component 'sockets_client'"``.
-        to: where the page was going, e.g. ``"to a recording"``.
-        reason: what went wrong when no single part of the data is to blame
-            (e.g. it nests too deep or is too big).
+    ``where`` adds context (``" by component 'x'"``), ``to`` where the page was
+    going; ``reason`` says what is wrong when no single part is to blame.
 
     Example::
 
-        not_serializable_error("pose", {"pose": [1, 2, {3}]})
-        # "Cannot send the page stored under 'pose' to another node: data['pose'][2]
-        #  is a set ({3}), which JSON cannot hold. Send a list instead: ..."
+        not_serializable_error("pose", {"pose": [1, 2, {3}]})   # "... data['pose'][2] is a set"
     """
     found = _find(data, "data", set(), 0)
     head = f"Cannot send the page stored under {key!r}{where} {to}"
@@ -133,10 +124,7 @@ def not_serializable_error(
 
 
 def check_serializable(key: str, data: Any, to: str = "to another node") -> None:
-    """Raise `not_serializable_error`'s error unless ``data`` is plain JSON.
-
-    For writers that would otherwise quietly change the data (a set written
-    as a list, NaN written as ``NaN``), such as `Page.serialize`.
+    """Raise `not_serializable_error`'s error unless ``data`` is plain JSON (no set, no NaN).
 
     Example::
 

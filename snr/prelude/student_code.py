@@ -1,11 +1,8 @@
-"""Pointing at the student's code, not SNR's: where a class or a call is.
+"""Pointing at the student's code, not SNR's: where a class or a call is; a value cut short.
 
-Every SNR message names the student's file and line. This module has what the
-prelude itself needs for that (`describe_class`, `caller_location`,
-`frame_location`); the rest (source lines, tracebacks, other threads) is in
-`snr.core.checks.student_code`, read second. Frames of SNR's runtime
-(``snr/core``, ``snr/prelude``) are plumbing the student did not write, so
-they are skipped.
+What the prelude's own messages need; the rest is `snr.core.checks.student_code`
+and `snr.core.checks.error_text`, read second. Frames of SNR's runtime
+(``snr/core``, ``snr/prelude``) are skipped.
 
 Example::
 
@@ -19,10 +16,10 @@ import inspect
 import os
 import sys
 from types import FrameType
-from typing import Optional
+from typing import Any, Optional
 
 __all__ = ["caller_location", "describe_class", "frame_location", "frame_name", "is_runtime_file"]
-__all__ += ["outside_runtime", "short_path"]
+__all__ += ["outside_runtime", "short_path", "short_repr"]
 
 _SNR_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 _RUNTIME_DIRS = tuple(os.path.join(_SNR_DIR, sub) + os.sep for sub in ("core", "prelude"))
@@ -62,10 +59,7 @@ def describe_class(cls: type) -> str:
 
 
 def is_runtime_file(filename: str) -> bool:
-    """True for files of SNR's runtime (``snr/core``, ``snr/prelude``).
-
-    Frames from these files are framework plumbing: the student did not write
-    them, so reports skip them. ``snr/std_mods`` is component code and stays.
+    """True for files of SNR's runtime (``snr/core``, ``snr/prelude``), which reports skip.
 
     Example::
 
@@ -107,8 +101,7 @@ def frame_name(frame: FrameType) -> str:
     code = frame.f_code
     name: Optional[str] = getattr(code, "co_qualname", None)  # Python 3.11+
     if name is None:
-        # Older Pythons know only the function's name: add the class of
-        # `self` (or `cls`) when the frame has one, as co_qualname would.
+        # Before 3.11: add the class of `self` (or `cls`), as co_qualname would.
         owner = frame.f_locals.get("self", frame.f_locals.get("cls"))
         owner_class = owner if isinstance(owner, type) else type(owner)
         name = code.co_name
@@ -126,3 +119,17 @@ def caller_location(skip: int = 1) -> str:
     """
     frame = outside_runtime(sys._getframe(skip))
     return "<unknown place>" if frame is None else frame_location(frame)
+
+
+def short_repr(value: Any, limit: int = 120) -> str:
+    """``repr(value)``, cut to ``limit`` characters so messages stay readable.
+
+    Example::
+
+        short_repr(list(range(1000)), 20)   # '[0, 1, 2, 3, 4, 5, …'
+    """
+    try:
+        text = repr(value)
+    except Exception as error:  # a broken __repr__ must not hide the real error
+        return f"<{type(value).__name__} whose repr() raised {type(error).__name__}>"
+    return text if len(text) <= limit else text[: limit - 1] + "…"

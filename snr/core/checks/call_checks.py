@@ -1,11 +1,8 @@
 """Calls to SNR's constructors and task builders with the wrong arguments, in words.
 
-A student's first mistakes are often in a call: the role and the config
-swapped, a class where a factory goes, an event's values not in a list. The
-runtime calls one ``check_*`` function here with the arguments it was given;
-the common, right call returns at once, and a wrong one raises an error that
-shows the call as the student wrote it, where (`call_site`), and the
-signature to follow (`wrong_call`).
+The runtime calls a ``check_*`` function with the arguments it was given: the
+right call returns at once; a wrong one raises an error that shows the call as
+written, where, and the signature to follow (`wrong_call`).
 
 Example::
 
@@ -37,7 +34,6 @@ from snr.prelude import (
 __all__ = [
     "bad_data_key",
     "bad_reload_target",
-    "call_site",
     "check_cli_args",
     "check_config_args",
     "check_factory_class",
@@ -47,7 +43,6 @@ __all__ = [
     "no_sim_clock_across_processes",
     "page_as_data",
     "param_text",
-    "plain_signature",
     "values_not_a_list",
     "wrong_call",
 ]
@@ -55,32 +50,16 @@ __all__ = [
 _SNR_PACKAGE = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))) + os.sep
 
 
-def call_site() -> str:
-    """``"robot.py:12 in Sonar.loop"``: the nearest caller outside the whole ``snr`` package.
-
-    Unlike `caller_location`, SNR's ready-made components (``snr/std_mods``,
-    ``snr/utils``) are skipped too: a wrong call to one of their constructors
-    is the student's call.
-
-    Example::
-
-        raise ConfigError(f"... at {call_site()} ...")
-    """
+def _call_site() -> str:
+    """``"robot.py:12 in Sonar.loop"``: the nearest caller outside the whole ``snr`` package."""
     frame = sys._getframe(1)
     while frame.f_back is not None and frame.f_code.co_filename.startswith(_SNR_PACKAGE):
         frame = frame.f_back
     return frame_location(frame)
 
 
-def plain_signature(name: str, function: Any) -> str:
-    """``"CliRunner(components_or_config, argv=None)"``: a call as a student writes it.
-
-    ``function`` is the class or function; ``self`` and annotations are left out.
-
-    Example::
-
-        plain_signature("Node", Node)   # 'Node(role, config)'
-    """
+def _plain_signature(name: str, function: Any) -> str:
+    """``"Node(role, config)"``: a call as a student writes it (no ``self``, no annotations)."""
     import inspect  # only while an error is being explained
 
     try:
@@ -114,9 +93,6 @@ def param_text(parameter: Any) -> str:
 def wrong_call(name: str, function: Any, args: Iterable[Any], problem: str) -> str:
     """The message for a public constructor or runner called with the wrong arguments.
 
-    It names the call as the student wrote it (shortened), where, what is
-    wrong, and the signature to follow.
-
     Example::
 
         raise ConfigError(wrong_call("Node", Node, (config, "robot"),
@@ -126,8 +102,8 @@ def wrong_call(name: str, function: Any, args: Iterable[Any], problem: str) -> s
     """
     shown = ", ".join(short_repr(a, 40) for a in args)
     return (
-        f"{name}({shown}) at {call_site()}: {problem} "
-        f"Write it as {plain_signature(name, function)}."
+        f"{name}({shown}) at {_call_site()}: {problem} "
+        f"Write it as {_plain_signature(name, function)}."
     )
 
 
@@ -145,7 +121,7 @@ def values_not_a_list(name: str, values: Any) -> str:
         got += f", so task.val_list[0] would be {values[0]!r}"
     wrapped = f"list({shown})" if isinstance(values, (tuple, set)) else f"[{shown}]"
     return (
-        f"tasks.event({name!r}, {shown}) at {call_site()}: an event's values go in a list "
+        f"tasks.event({name!r}, {shown}) at {_call_site()}: an event's values go in a list "
         f"(its val_list), and {got}. Write tasks.event({name!r}, {wrapped})."
     )
 
@@ -163,7 +139,7 @@ def bad_data_key(key: Any, data: Any) -> str:
     if isinstance(data, str):
         fix = f"The key and the data look swapped: write store_data({data!r}, {shown})."
     return (
-        f"Data stored under the key {shown} at {call_site()}: a data key must be a str, and "
+        f"Data stored under the key {shown} at {_call_site()}: a data key must be a str, and "
         f"{shown} is a {type(key).__name__} (the data is {short_repr(data, 40)}). {fix}"
     )
 
@@ -177,7 +153,7 @@ def page_as_data(key: Any) -> str:
         # Data stored under 'depth' at robot.py:9 in Smoother.smooth is a whole Page ...
     """
     return (
-        f"Data stored under {key!r} at {call_site()} is a whole Page (as a handler "
+        f"Data stored under {key!r} at {_call_site()} is a whole Page (as a handler "
         "gets it in task.val_list), so readers of "
         f"{key!r} would get a Page inside a Page. Store its value, page.data "
         "(e.g. task.val_list[0].data), or pass the page on as it is with "
@@ -331,9 +307,7 @@ def check_schedule_args(tasks: Any) -> None:
 
 
 def check_factory_class(factory_class: type, base_get: Any) -> None:
-    """Raise a `ComponentError` when a factory class has no ``get()`` of its own.
-
-    ``base_get`` is `Factory.get`, which every factory must replace.
+    """Raise a `ComponentError` when a factory class has no ``get()`` of its own (``base_get``).
 
     Example::
 

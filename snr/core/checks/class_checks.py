@@ -1,44 +1,22 @@
 """`check_component`: read a student's component class once for silent mistakes.
 
-Some mistakes in an endpoint or loop raise nothing; the program runs and
-does the wrong thing, or waits for its timeout. They can be seen in the
-class itself, so the node reads each student class once, when its first
-component is added (SNR's own classes are skipped):
-
-* **a name SNR uses** (errors, DEBUG and TEST modes): ``self.state = "diving"``
-  in a `ThreadLoop` is overwritten when the loop starts; ``self.wait_s = 0.5``
-  or ``self.schedule = [...]`` hides the method SNR calls; ``def log(self)``
-  replaces the component's logger. Named at the assignment, with the fix.
-* **work built and dropped** (warnings, DEBUG): a statement that only builds
-  a task or page, ``tasks.event("surface")`` with no ``return`` or
-  ``self.schedule(...)``;
-* **a return nobody reads** (warnings, DEBUG): ``begin()``, ``setup()``,
-  ``loop()``, ``halt()`` or ``terminate()`` returning a task;
-* **a hook SNR never calls** (warnings, DEBUG): ``def setup`` in an
-  `Endpoint` (endpoints have ``begin``), ``def terminte`` (misspelt);
-* **a near miss of a name SNR reads** (errors, DEBUG and TEST):
-  ``self.task_handler = {...}`` or ``self.taskHandlers`` while
-  ``task_handlers`` stays empty, ``self.max_tick_rate = 10`` while
-  ``max_tick_rate_hz`` stays 0. "Near" is `closest_match` with ``cutoff=0.8``,
-  the rule of every "did you mean" hint, made stricter;
-* **an ``async def`` hook or loop()** (errors, DEBUG and TEST): SNR calls them
-  and never awaits them (an ``async def`` handler is refused in every mode,
-  by `check_handler`).
-
-The source is read with `inspect`; a class whose source cannot be read
-(typed in a console, shipped as ``.pyc``) is checked only for attributes
-set in ``__init__``. Nothing here runs per task.
+The node reads each student class once, when its first component is added
+(docs/errors.md, 15): a name SNR uses (``self.state`` in a loop, ``self.wait_s =
+0.5``), a near miss of a name SNR reads (``self.task_handler``) and an ``async
+def`` hook are errors in DEBUG and TEST; work built and dropped, a hook's
+return nobody reads and a hook SNR never calls (``def terminte``) are DEBUG
+warnings. A class whose source cannot be read is checked only for what its
+``__init__`` set.
 
 Example::
 
-    problems = check_component(diver, warn=node.log.warning)   # may raise ComponentError
+    check_component(diver, warn=node.log.warning)   # may raise ComponentError
 """
 
 from __future__ import annotations
 
 import ast
 import inspect
-import textwrap
 from typing import Callable, Dict, Iterator, List, NamedTuple, Optional, Set, Tuple
 
 from snr.core.checks.error_text import closest_match
@@ -47,17 +25,17 @@ from snr.core.checks.student_code import (
     describe_callable,
     describe_class,
     is_snr,
-    parse_source,
     source_block,
+    source_node,
     walk_own,
 )
 from snr.core.endpoint import Endpoint
 from snr.core.loop import LoopState, ThreadLoop
 from snr.prelude import AbstractComponent, AbstractEndpoint, AbstractLoop, ComponentError
 
-__all__ = ["NEAR_MISS", "check_component", "framework_names"]
+__all__ = ["check_component"]
 
-_MAY_SET = {"name", "task_handlers", "max_tick_rate_hz", "terminate_reason"}  # the student's
+_MAY_SET = {"name", "task_handlers", "max_tick_rate_hz", "terminate_reason"}
 _HOOKS: Dict[type, Tuple[str, ...]] = {
     Endpoint: ("begin", "halt", "terminate"),
     ThreadLoop: ("begin", "setup", "loop", "halt", "terminate"),
@@ -79,7 +57,7 @@ _TASK_BUILDERS = {
     "add_component",
     "remove_component",
 }
-# task_store_data and task_store_page: the thesis's names (listing 6.3) for the two before.
+# task_store_data and task_store_page: the thesis's names (listing 6.3).
 _SELF_BUILDERS = {
     "page",
     "store_data_task",
@@ -88,8 +66,8 @@ _SELF_BUILDERS = {
     "task_store_page",
 }
 
-NEAR_MISS = 0.8  # closest_match's cutoff for a slip of the keys in a name SNR uses
-# Names SNR reads: when SNR's stays unset, and what a value meant for it looks like.
+_NEAR_MISS = 0.8  # closest_match's cutoff for a name SNR uses
+# Names SNR reads: when SNR's stays unset, a value meant for it, what happens.
 _READ_BY_SNR: Dict[str, Tuple[Callable[[AbstractComponent], bool], Tuple[type, ...], str]] = {
     "task_handlers": (
         lambda component: not component.task_handlers,
@@ -107,13 +85,8 @@ _checked: Dict[type, List[Tuple[str, bool]]] = {}  # class -> [(message, is_erro
 _MAX_CACHED = 1000
 
 
-def framework_names(kind: type) -> Dict[str, str]:
-    """What each name SNR uses on an `Endpoint` or `ThreadLoop` is, for messages.
-
-    Example::
-
-        framework_names(ThreadLoop)["wait_s"]   # "ThreadLoop's method wait_s()"
-    """
+def _framework_names(kind: type) -> Dict[str, str]:
+    """Each name SNR uses on ``kind``, said: "ThreadLoop's method wait_s()"."""
     names: Dict[str, str] = {}
     for base in reversed(kind.__mro__):
         if not is_snr(base):
@@ -135,10 +108,7 @@ def check_component(
     component: AbstractComponent,
     warn: Optional[Callable[[str], None]] = None,
 ) -> None:
-    """Raise a ComponentError for a name collision; pass silent mistakes to ``warn``.
-
-    ``warn`` is None outside DEBUG mode: then only collisions are checked.
-    Each class is read once; its warnings are given once.
+    """Raise a ComponentError for a name collision; pass silent mistakes to ``warn`` (DEBUG).
 
     Example::
 
@@ -164,8 +134,8 @@ def check_component(
 
 
 def _check_instance(component: AbstractComponent, kind: type) -> None:
-    """Collisions seen in the built object (for classes whose source is unreadable)."""
-    names = framework_names(kind)
+    """Collisions seen in the built object (a class's source may be unreadable)."""
+    names = _framework_names(kind)
     _check_near_misses(component, names)
     for hook in _HOOKS[kind]:
         method = getattr(component, hook, None)
@@ -188,7 +158,7 @@ def _check_near_misses(component: AbstractComponent, names: Dict[str, str]) -> N
     for attr, value in vars(component).items():
         if attr.startswith("_") or attr in names or attr in _MAY_SET:
             continue
-        guess = closest_match(attr, unset, cutoff=NEAR_MISS)
+        guess = closest_match(attr, unset, cutoff=_NEAR_MISS)
         if guess is None or not isinstance(value, _READ_BY_SNR[guess][1]):
             continue
         cls = type(component)
@@ -213,7 +183,6 @@ def _assignment(cls: type, attr: str) -> str:
 
 
 def _collision(cls: type, name: str, what: str, where: str) -> str:
-    # The "Did you mean" comes with a name of the student's own, e.g. self.diver_state.
     return (
         f"{describe_class(cls)} uses the name {name!r} for its own value, but {name!r} is "
         f"already {what}. Two things cannot share a name: SNR or your code would get the "
@@ -221,9 +190,8 @@ def _collision(cls: type, name: str, what: str, where: str) -> str:
     )
 
 
-# -- reading the class ------------------------------------------------------------
 class _Source(NamedTuple):
-    """One of the student's classes, with its file and its syntax tree (at the file's lines)."""
+    """One of the student's classes, with its file and its syntax tree."""
 
     cls: type
     filename: str
@@ -243,12 +211,9 @@ def _read_source(cls: type) -> Optional[_Source]:
         return None
     try:
         filename = inspect.getsourcefile(cls)
-        lines, first = inspect.getsourcelines(cls)
-        tree = parse_source(textwrap.dedent("".join(lines)))
-    except (OSError, TypeError, SyntaxError):
+    except (OSError, TypeError):
         return None
-    ast.increment_lineno(tree, first - 1)
-    node = tree.body[0] if tree.body else None
+    node = source_node(cls)
     if filename is None or not isinstance(node, ast.ClassDef):
         return None
     return _Source(cls, filename, node)
@@ -256,7 +221,7 @@ def _read_source(cls: type) -> Optional[_Source]:
 
 def _read_class(cls: type, kind: type) -> Iterator[Tuple[str, bool]]:
     """(message, is_error) for every mistake in the student's classes of ``cls``."""
-    names = framework_names(kind)
+    names = _framework_names(kind)
     for source in map(_read_source, cls.__mro__):
         if source is not None:
             yield from _collisions(source, names, _HOOKS[kind])
@@ -371,9 +336,9 @@ def _uncalled_hooks(source: _Source, kind: type) -> Iterator[Tuple[str, bool]]:
                 False,
             )
             continue
-        # "begining", "halting": a hook's name with "ing" is still that hook.
-        guess = closest_match(name, hooks, NEAR_MISS) or closest_match(
-            name.removesuffix("ing"), hooks, NEAR_MISS
+        # "begining", "halting": still that hook.
+        guess = closest_match(name, hooks, _NEAR_MISS) or closest_match(
+            name.removesuffix("ing"), hooks, _NEAR_MISS
         )
         if guess is not None:
             yield (

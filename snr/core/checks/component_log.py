@@ -1,10 +1,7 @@
 """What a node logs when a reload, a removal or a component's life-cycle call goes wrong.
 
-`snr.core.components.ComponentSet` never lets such a mistake stop the
-node: a reload that fails keeps the old component running, a name that is not
-there is refused, a ``halt()`` that raises is logged and the node carries on.
-The words for each case are here; each names the component, what failed and
-what happens now.
+`snr.core.components.ComponentSet` never lets such a mistake stop the node; each message names the
+component, what failed and what happens now.
 
 Example::
 
@@ -27,10 +24,8 @@ from snr.prelude.errors import SNRError
 __all__ = ["ReloadStage", "call_failed", "not_found", "reload_refused", "still_running"]
 
 ReloadStage = Literal["source", "build", "none", "name", "restart", "start"]
-"""Where a reload went wrong: reading the new ``source``, building the new
-component (``build``; ``none``: its factory's ``get()`` returned None; ``name``:
-it came back with another component's name), restarting the old one after any of
-these (``restart``), or starting the new one (``start``)."""
+"""Where a reload went wrong: the new ``source``, ``build`` (``none``: ``get()`` gave None;
+``name``: a taken name), ``restart`` of the old one, ``start`` of the new one."""
 
 
 def reload_refused(

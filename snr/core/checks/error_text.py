@@ -1,24 +1,14 @@
-"""What Python said about an error, kept whole when SNR wraps it, plus a hint.
+"""What Python said about an error, kept whole when SNR wraps it, plus a hint; "did you mean".
 
-SNR puts a student's exception inside its own message (a `HandlerError`
-names the handler and the task). ``f"{type(error).__name__}: {error}"``
-would lose part of what Python says: the "Did you mean" of an
-``AttributeError`` or ``NameError`` is not in ``str(error)``, it is added
-when Python prints the traceback. `exception_text` keeps it, works it out
-where Python 3.11 does not (a misspelt enum member, ``TaskType.evnt``), and
-adds a hint for the commonest mix-up with SNR's own types (a `Page` used as
-its value).
+Python adds the "Did you mean" of an ``AttributeError`` or ``NameError`` only
+when it prints the traceback; `exception_text` keeps it (and works it out where
+Python 3.11 does not, ``TaskType.evnt``), and hints at a `Page` used as its value.
+`short_repr` is `snr.prelude.student_code`'s, named here too.
 
 Example::
 
-    try:
-        TaskType.evnt
-    except AttributeError as error:
-        exception_text(error)
-        # "AttributeError: type object 'TaskType' has no attribute 'evnt'. Did you mean: 'event'?"
-
-`short_repr` (a value cut to fit a message) is in `snr.prelude.error_text`,
-which the prelude's own messages use; it is named here too.
+    exception_text(error)
+    # "AttributeError: type object 'TaskType' has no attribute 'evnt'. Did you mean: 'event'?"
 """
 
 from __future__ import annotations
@@ -27,10 +17,11 @@ import builtins
 import enum
 import re
 import traceback
-from typing import Any, Iterable, List, Optional
+from typing import Iterable, List, Optional
 
-from snr.prelude.error_text import short_repr
+from snr.core.checks.student_code import innermost_frame
 from snr.prelude.page import Page
+from snr.prelude.student_code import short_repr
 
 __all__ = [
     "PAGE_IN_A_HANDLER",
@@ -39,6 +30,7 @@ __all__ = [
     "did_you_mean",
     "exception_text",
     "short_repr",
+    "suggestion",
 ]
 
 
@@ -48,8 +40,7 @@ _SUGGESTION = "Did you mean"
 def exception_text(error: BaseException) -> str:
     """``"Type: message"`` as Python prints it, with its "Did you mean" and SNR's hint.
 
-    Call it before trimming the traceback: a misspelt name is looked up in
-    the frame where it was used.
+    Call it before trimming the traceback: a misspelt name is looked up where it was used.
 
     Example::
 
@@ -67,10 +58,10 @@ def exception_text(error: BaseException) -> str:
             if guess is not None:
                 text = f"{text}. {_SUGGESTION}: {guess!r}?"
     if isinstance(error, TypeError) and re.search(r"\bPage\b", text):  # 'Page', Page object
-        text += PAGE_IN_A_HANDLER  # checks/explain.py says it for get_page and loops
+        text += PAGE_IN_A_HANDLER  # explain.page_hint: get_page, loops
     elif isinstance(error, AttributeError) and _value_has_it(error):
         data = error.obj.data  # type: ignore[attr-defined]  # a Page: _value_has_it said so
-        # Read-only page data (checks/read_only.py) is a list or a dict, and said so.
+        # Read-only page data (checks/read_only.py) is said as the list or dict it is.
         plain = "list" if isinstance(data, list) else "dict" if isinstance(data, dict) else ""
         text += f". Its data (a {plain or type(data).__name__}) has .{error.name}"
         text += PAGE_IN_A_HANDLER
@@ -84,7 +75,7 @@ def _value_has_it(error: AttributeError) -> bool:
         return False
     try:
         return hasattr(page.data, name)
-    except Exception:  # a property of the student's data that fails: say nothing
+    except Exception:  # the student's property failed: say nothing
         return False
 
 
@@ -94,20 +85,11 @@ PAGE_IN_A_HANDLER = (
 )
 
 
-def _innermost_locals(error: BaseException) -> Optional[dict[str, Any]]:
-    tb = error.__traceback__
-    if tb is None:
-        return None
-    while tb.tb_next is not None:
-        tb = tb.tb_next
-    return tb.tb_frame.f_locals
-
-
 def _enum_text(error: BaseException) -> Optional[str]:
     """Python 3.11's ``AttributeError: evnt`` for ``TaskType.evnt``, said as 3.12 says it."""
-    found = _innermost_locals(error)
-    cls = found.get("cls") if found else None
-    name = found.get("name") if found else None
+    frame = innermost_frame(error)
+    found = frame.f_locals if frame is not None else {}
+    cls, name = found.get("cls"), found.get("name")
     if not (isinstance(cls, type) and issubclass(cls, enum.Enum) and isinstance(name, str)):
         return None
     text = f"AttributeError: type object {cls.__name__!r} has no attribute {name!r}"
@@ -130,22 +112,17 @@ def _guess_name(error: BaseException) -> Optional[str]:
         except Exception:  # a broken __dir__ must not hide the student's error
             return None
     else:
-        tb = error.__traceback__
-        while tb is not None and tb.tb_next is not None:
-            tb = tb.tb_next
-        if tb is None:
+        frame = innermost_frame(error)
+        if frame is None:
             return None
-        frame = tb.tb_frame
-        names: List[str] = [*frame.f_locals, *frame.f_globals, *dir(builtins)]
-        choices = names
+        choices = [*frame.f_locals, *frame.f_globals, *dir(builtins)]
     return closest_match(name, choices)
 
 
 def closest_match(word: str, choices: Iterable[str], cutoff: float = 0.6) -> Optional[str]:
     """The choice most like ``word``, or None: the one rule of every "did you mean" hint.
 
-    Capitals and underscores do not count (``taskHandlers`` is ``task_handlers``);
-    a near miss of SNR's own names (`class_checks`) asks for ``cutoff=0.8``.
+    Capitals and underscores do not count (``taskHandlers`` is ``task_handlers``).
 
     Example::
 
@@ -177,5 +154,14 @@ def did_you_mean(word: str, choices: Iterable[str]) -> str:
         f"There is no role 'urv'.{did_you_mean('urv', ['urov', 'topside'])}"
         # "There is no role 'urv'. Did you mean 'urov'?"
     """
-    guess = closest_match(word, choices)
+    return suggestion(closest_match(word, choices))
+
+
+def suggestion(guess: Optional[str]) -> str:
+    """`` Did you mean 'x'?`` for a guess, or "" for None.
+
+    Example::
+
+        f"Unknown key.{suggestion(closest_key(key, stored))}"
+    """
     return f" {_SUGGESTION} {guess!r}?" if guess else ""

@@ -1,8 +1,4 @@
-"""How the node puts a student's mistakes into words.
-
-Small helpers used by `Node` when a handler returns something odd, a factory
-forgets to return, or a loop thread calls a method it must not. Kept apart so
-`node.py` reads as the runtime it is.
+"""How the node puts a student's mistakes into words (docs/errors.md shows each).
 
 Example::
 
@@ -14,13 +10,10 @@ from __future__ import annotations
 
 import ast
 import dis
-import functools
 import inspect
-import linecache
 import logging
 import threading
-from types import CodeType
-from typing import Any, Dict, List, NoReturn, Optional, Set, Tuple, Union
+from typing import Any, Dict, List, NoReturn, Optional, Set, Tuple
 
 from snr.core.checks.call_checks import bad_data_key, page_as_data, wrong_call
 from snr.core.checks.error_text import PAGE_IN_A_HANDLER, exception_text, short_repr
@@ -33,9 +26,9 @@ from snr.core.checks.student_code import (
     describe_callable,
     describe_class,
     is_runtime_file,
-    parse_source,
     short_path,
     source_block,
+    source_node,
     student_frames,
     trim_runtime_frames,
     walk_own,
@@ -116,7 +109,7 @@ def _bad_result_hint(result: Any) -> str:
 
 
 def _only_returns_none(func: Any) -> bool:
-    """True if ``func`` has no ``return <value>``, read from its bytecode (not the source)."""
+    """True if ``func``'s bytecode has no ``return <value>``."""
     code = code_of(func)
     if code is None:
         return False
@@ -141,7 +134,7 @@ def _only_returns_none(func: Any) -> bool:
 def _where(error: BaseException) -> str:
     """The student's frames of ``error`` under a heading; its traceback is then trimmed to them."""
     frames = student_frames(error.__traceback__)
-    trim_runtime_frames(error)  # Python's own report of it then starts at the student's code
+    trim_runtime_frames(error)
     return f"\nWhere it happened (most recent call last):\n{frames}"
 
 
@@ -153,10 +146,7 @@ def handler_failure(
     deployed: bool,
     run_size: int = 1,
 ) -> HandlerError:
-    """The HandlerError for ``handler`` raising ``error`` on ``task``, with the fix.
-
-    ``run_size`` above 1: a burst handler was given a run of that many tasks,
-    ``task`` first.
+    """The HandlerError for ``handler`` raising ``error`` on ``task`` (first of ``run_size``).
 
     Example::
 
@@ -197,10 +187,7 @@ def handler_failure(
 
 
 def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerError:
-    """The HandlerError for a handler that returned something other than tasks.
-
-    It points at the ``return`` line(s) that can give ``result`` (see
-    `returning_lines`), with the ``def`` as context; without the source, at the def.
+    """The HandlerError for a handler that returned something other than tasks, at its return.
 
     Example::
 
@@ -241,13 +228,8 @@ def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerEr
 def returning_lines(handler: Any, result: Any) -> List[int]:
     """The lines of ``handler``'s ``return`` statements that can have given ``result``.
 
-    Read from the source (only while an error is being explained): a
-    ``return`` of a constant counts only if it is that very constant, a bare
-    ``return`` or ``return None`` never does, nor does one that builds
-    another kind of value (a tuple when a list came back). If some returns
-    build the very kind of value (a list for a list), only those count.
-    ``[]`` when the source cannot be read or has no such return (e.g. a
-    generator, a lambda): the message then names the ``def``.
+    That very constant, else a return building that kind of value (a list for
+    a list), else any that may; ``[]`` without a source or a ``def`` (a lambda).
 
     Example::
 
@@ -256,15 +238,18 @@ def returning_lines(handler: Any, result: Any) -> List[int]:
     code = code_of(handler)
     if code is None or code.co_flags & inspect.CO_GENERATOR:
         return []
-    node = _function_node(code)
+    node = source_node(code)
+    if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+        return []
     exact: List[int] = []
     same_kind: List[int] = []
     possible: List[int] = []
-    returns = [n for n in walk_own(node) if isinstance(n, ast.Return)] if node else []
-    for statement in returns:
+    for statement in walk_own(node):
+        if not isinstance(statement, ast.Return):
+            continue
         value = statement.value
         if value is None or (isinstance(value, ast.Constant) and value.value is None):
-            continue  # gives None, which is never the wrong value
+            continue  # None is never the wrong value
         if isinstance(value, ast.Constant):
             if type(value.value) is type(result) and value.value == result:
                 exact.append(statement.lineno)
@@ -277,7 +262,6 @@ def returning_lines(handler: Any, result: Any) -> List[int]:
     return sorted(exact or same_kind or possible)
 
 
-# The expressions whose value is always of one type: to tell returns apart.
 _BUILDS: Dict[type, type] = {
     ast.Tuple: tuple,
     ast.List: list,
@@ -290,25 +274,6 @@ _BUILDS: Dict[type, type] = {
 }
 
 
-@functools.lru_cache(maxsize=32)  # DEPLOYED nodes may explain one mistake many times
-def _function_node(code: CodeType) -> Optional[Union[ast.FunctionDef, ast.AsyncFunctionDef]]:
-    """The ``def`` of ``code`` in its file's syntax tree, or None."""
-    linecache.checkcache(code.co_filename)  # the file may have been edited and reloaded
-    lines = linecache.getlines(code.co_filename)
-    if not lines:
-        return None
-    try:
-        tree = parse_source("".join(lines))
-    except (SyntaxError, ValueError):  # the file changed since it was loaded
-        return None
-    for node in ast.walk(tree):
-        if isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)) and node.name == code.co_name:
-            first = min([node.lineno, *(d.lineno for d in node.decorator_list)])
-            if code.co_firstlineno in (first, node.lineno):
-                return node
-    return None
-
-
 _FROM_GET_PAGE = (
     ". get_page(key) gives the whole Page (its data, time and origin); for the value "
     "alone, read self.get_data(key), or use page.data."
@@ -316,11 +281,7 @@ _FROM_GET_PAGE = (
 
 
 def page_hint(error: BaseException, text: str, in_a_loop: bool = False) -> str:
-    """``text`` with the fix for a Page used as its value, for where the page came from.
-
-    `exception_text` gives a handler's fix (``task.val_list[0].data``); a page
-    that came from ``get_page`` (always, in a loop) is read with ``get_data``.
-    Where it came from is told by the names the failing function uses.
+    """``text`` with the fix for a Page used as its value, ``get_data`` if from ``get_page``.
 
     Example::
 
@@ -351,11 +312,7 @@ def slow_handler_text(handler: TaskHandler, task: Task, took_s: float) -> str:
 
 
 def loop_failure(loop: AbstractLoop, error: BaseException, deployed: bool) -> LoopError:
-    """The LoopError for ``loop``'s thread ending with ``error``, in plain words.
-
-    ``error`` may be any BaseException: a ``sys.exit()`` or ``KeyboardInterrupt``
-    raised in ``loop()`` is explained too, instead of vanishing with the thread.
-    """
+    """The LoopError for ``loop``'s thread ending with ``error`` (``sys.exit()`` and Ctrl-C too)."""
     what = page_hint(error, exception_text(error), in_a_loop=True)
     if isinstance(error, SystemExit):
         what = f"sys.exit({'' if error.code is None else repr(error.code)})"
@@ -384,11 +341,7 @@ def loop_failure(loop: AbstractLoop, error: BaseException, deployed: bool) -> Lo
 
 
 def _wrong_get_signature(factory: AbstractFactory, error: TypeError) -> Optional[ComponentError]:
-    """The error for a ``get()`` that cannot be called as ``get(parent)``, or None.
-
-    Python's own TypeError ("takes 1 positional argument but 2 were given")
-    points at SNR's call; the mistake is the student's ``def``.
-    """
+    """The error for a ``get()`` that cannot be called as ``get(parent)``, or None."""
     tb = error.__traceback__
     if tb is None or tb.tb_next is not None:
         return None  # raised inside get(): not a call that failed to bind
@@ -427,10 +380,7 @@ def wrong_get_result_error(factory: AbstractFactory, component: Any) -> Componen
 
 
 def reload_failure(error: BaseException) -> str:
-    """Where a reload went wrong: ``robot.py:12: invalid syntax`` plus the student's frames.
-
-    A SyntaxError carries its own file and line (it has no frame of its own
-    in the traceback); anything else is shown with the student's frames.
+    """Where a reload went wrong: a SyntaxError's file and line, else the student's frames.
 
     Example::
 
@@ -444,13 +394,7 @@ def reload_failure(error: BaseException) -> str:
 
 
 def check_page_args(key: Any, data: Any) -> None:
-    """Refuse a data key that is not a str, or a whole `Page` given as data.
-
-    The one check behind ``store_data``, ``store_data_task``, ``tasks.store_data``
-    and ``Node.page``, worded by `bad_data_key` and `page_as_data`.
-
-    Raises:
-        ComponentError: saying where it was stored, and what to write instead.
+    """Raise a `ComponentError` for a data key that is not a str, or a whole `Page` as data.
 
     Example::
 
@@ -465,8 +409,6 @@ def check_page_args(key: Any, data: Any) -> None:
 
 def check_component_args(component_class: type, factory: Any, parent: Any, name: Any) -> None:
     """Raise a `ComponentError` that says what is wrong with ``super().__init__``'s arguments.
-
-    `Component.__init__` calls it with the arguments it was given.
 
     Example::
 
@@ -531,7 +473,6 @@ def check_node_args(node_class: Any, role: Any, config: Any) -> None:
         )
 
 
-# What a loop thread should call instead of a method that changes node state.
 _INSTEAD = {
     "execute_task": "self.schedule(task)",
     "handle_task": "self.schedule(task)",
@@ -564,10 +505,6 @@ def wrong_thread_error(role: str, method: str) -> ThreadSafetyError:
 def raise_get_failure(factory: AbstractFactory, error: Exception, role: str) -> NoReturn:
     """Raise the ComponentError for a factory's ``get()`` that raised ``error``.
 
-    A ``get()`` written with the wrong parameters, or a class that lacks
-    abstract methods, is said as such, without Python's own text (which
-    blames SNR's call); anything else with Python's words and the student's frames.
-
     Example::
 
         except Exception as error:
@@ -595,11 +532,7 @@ def factory_without_init(factory: AbstractFactory) -> ComponentError:
 
 
 def component_without_init(component: Any) -> ComponentError:
-    """The ComponentError for a component whose ``__init__`` skipped ``super().__init__``.
-
-    It shows the ``def __init__`` line (where the call is missing) when it
-    is the student's.
-    """
+    """The ComponentError for a component whose ``__init__`` skipped ``super().__init__``."""
     cls = type(component)
     init = next((vars(k)["__init__"] for k in cls.__mro__ if "__init__" in vars(k)), None)
     code = getattr(init, "__code__", None)
@@ -615,14 +548,9 @@ def component_without_init(component: Any) -> ComponentError:
 def warn_get_returned_none(
     factory: AbstractFactory, role: str, running: bool, told: Set[Any], log: logging.Logger
 ) -> None:
-    """A ``get()`` returned None: refuse one that never returns a value, warn once otherwise.
+    """A ``get()`` returned None: refuse one that never returns a value, else warn once.
 
-    At run time None is the documented "add nothing" (thesis listing A.5),
-    so nothing is said then; before, it is said once per factory class
-    (``told`` holds the ``get`` functions already named).
-
-    Raises:
-        ComponentError: ``get()`` has no ``return`` with a value.
+    At run time None is the documented "add nothing"; ``told`` holds the ``get``s named.
     """
     get = type(factory).get
     if _only_returns_none(get):
@@ -632,7 +560,7 @@ def warn_get_returned_none(
             "Return what it builds: `return MyEndpoint(self, parent)`."
         )
     if running or get in told:
-        return  # the same factory listed twice says the same thing once
+        return
     told.add(get)
     log.warning(
         "%s returned None this time, so role %r gets no component from it. If you "
@@ -675,25 +603,21 @@ CORE_REFUSED = {
         "is not reloaded while the node runs. Restart the node to load a new SNR."
     ),
 }
-"""The log messages (``%r`` the name, ``%r`` the role) for removing or reloading ``node_core``.
+"""The log messages (name, role) for removing or reloading ``node_core``.
 
 Example::
 
     log.error(CORE_REFUSED["reload"], "node_core", node.role)
 """
 
-_BLOCKED_ADVICE = (  # for a loop that does not stop when asked
+_BLOCKED_ADVICE = (
     "Make loop() return often: give reads a timeout and wait with self.wait_s(seconds) "
     "instead of time.sleep(), so the loop notices when it should stop."
 )
 
 
 def not_stopped_text(component: AbstractComponent, timeout_s: float, reload: bool) -> str:
-    """The log message for a loop still running ``timeout_s`` after it was asked to stop.
-
-    ``reload``: it was stopped to be reloaded (refused: the old one runs on);
-    else the node is stopping and terminates it anyway.
-    """
+    """The log message for a loop still running ``timeout_s`` after it was asked to stop."""
     where = component.where_running() if isinstance(component, AbstractLoop) else ""
     if reload:
         return (
@@ -719,11 +643,7 @@ def start_failure(component: AbstractComponent, error: Exception) -> ComponentEr
 
 
 def log_name_taken(component_class: type) -> ComponentError:
-    """The ComponentError for ``self.log = ...`` in a component: ``log`` is its logger.
-
-    Without it Python says "property 'log' of 'X' object has no setter", which
-    names neither the clash nor the fix.
-    """
+    """The ComponentError for ``self.log = ...`` in a component: ``log`` is its logger."""
     return ComponentError(
         f"{describe_class(component_class)} uses the name 'log' for its own value, but 'log' "
         "is already the component's logger (self.info(...), self.warn(...) write to it). "
@@ -742,12 +662,7 @@ def handlers_before_init(component_class: type) -> MissingSuperInitError:
 
 
 def used_before_init(component: Any, attribute: str) -> AttributeError:
-    """The error for a component attribute that is missing (from its ``__getattr__``).
-
-    After ``Component.__init__`` it is Python's own AttributeError, with what
-    its "Did you mean" needs; before it, every missing attribute means
-    ``super().__init__`` was forgotten (or came too late), and says so.
-    """
+    """The error for a missing component attribute: Python's own once initialised, else why not."""
     if "_task_handlers" in component.__dict__ or attribute.startswith("__"):
         error = AttributeError(
             f"{type(component).__name__!r} object has no attribute {attribute!r}"
@@ -763,16 +678,11 @@ def used_before_init(component: Any, attribute: str) -> AttributeError:
 
 
 def check_loop_class(loop_class: type, base_loop: Any, max_tick_rate_hz: float) -> None:
-    """Refuse a ThreadLoop without its own ``loop()``, or with a negative tick rate.
-
-    ``base_loop`` is ``ThreadLoop.loop``, which a loop must override.
+    """Raise a ComponentError for a ThreadLoop without its own ``loop()``, or a negative rate.
 
     Example::
 
         check_loop_class(type(self), ThreadLoop.loop, max_tick_rate_hz)
-
-    Raises:
-        ComponentError: saying which, and what to write instead.
     """
     if getattr(loop_class, "loop", None) is base_loop:
         raise ComponentError(

@@ -1,13 +1,8 @@
 """What a node does with a failed handler or loop: says it, and stops (unless DEPLOYED).
 
-`snr.core.dispatch.HandlerRunner` runs the handlers; when one raises,
-returns something that is not a task, or holds the node's thread too long, and
-when a loop's thread ends with an error, it hands the case to the node's
-`FailureReport`. In DEBUG and TEST mode the first failure stops the node
-(``Node.loop()`` raises it once the node has stopped); in DEPLOYED mode it is
-logged and the node keeps running, and a handler that fails over and over is
-logged in full three times, then counted in one line every five seconds. The
-words of each failure are made in `snr.core.checks.explain`.
+`snr.core.dispatch.HandlerRunner` hands each failure to the node's `FailureReport`; in DEPLOYED
+mode it is logged (repeats counted) and the node runs on. The words are
+`snr.core.checks.explain`'s.
 
 Example::
 
@@ -74,9 +69,7 @@ class FailureReport:
         error: Exception,
         run_size: int = 1,
     ) -> None:
-        """Report ``error`` raised by ``handler`` (and stop the node unless DEPLOYED).
-
-        ``run_size``: how many tasks a burst handler was given, ``task`` first.
+        """Report ``error`` raised by ``handler`` (``run_size``: a burst's tasks, ``task`` first).
 
         Example::
 
@@ -96,10 +89,7 @@ class FailureReport:
         self.record(bad_result_error(result, handler, task), _func_of(handler))
 
     def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
-        """Report a loop's thread ending with ``error`` (any BaseException).
-
-        ``sys.exit()`` or Ctrl-C in a loop stops the node in every mode, as
-        the student meant; other errors are failures like a handler's.
+        """Report a loop's thread ending with ``error``; ``sys.exit()`` or Ctrl-C stops the node.
 
         Example::
 
@@ -129,8 +119,7 @@ class FailureReport:
             self.repeats.report(key, first_line, logging.ERROR, "%s", text)
             return
         if self.failure is None:
-            # loop() raises this error once the node has stopped, so the log
-            # gets one line now (shutdown can take a moment), not a duplicate.
+            # loop() raises it once the node has stopped: one line now, not a copy.
             self.failure = error
             first_sentence = str(error).split("\n", 1)[0].split(". ", 1)[0].rstrip(".")
             self.log.error("Stopping node %r: %s.", self.role, first_sentence)
@@ -139,10 +128,7 @@ class FailureReport:
         self.stop(f"stopped by a {type(error).__name__}")
 
     def report_slow(self, handler: TaskHandler, task: Task, took_s: float) -> None:
-        """Warn once per handler that it held the node's thread for ``took_s``.
-
-        Only a student's handler is warned about; SNR's own (in ``snr.*``
-        modules) is noted at DEBUG level, since the advice is not theirs to follow.
+        """Warn once per handler that it held the node's thread for ``took_s`` (SNR's: debug).
 
         Example::
 
@@ -155,8 +141,7 @@ class FailureReport:
             return
         self._slow_reported.add(func)
         if getattr(func, "__module__", "").startswith("snr."):
-            # SNR's own handler (a reload waiting for a link's goodbye, say): the
-            # advice to move work into a ThreadLoop is not the student's to follow.
+            # SNR's own (a reload waiting for a goodbye): the advice is not the student's.
             self.log.debug("%s", slow_handler_text(handler, task, took_s))
             return
         self.log.warning("%s", slow_handler_text(handler, task, took_s))

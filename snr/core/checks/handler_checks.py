@@ -1,11 +1,8 @@
 """Checks of what a component registers as task handlers, with the fix in words.
 
-`HandlerMap` (``snr/core/dispatch.py``) calls `check_entry` (`check_task_id`
-and `check_handler`) on every entry of a ``task_handlers`` mapping as it is set, and
-the node calls `check_burst_handlers` when a component is added or changes its
-handlers. So a handler registered under a wrong id, written with the wrong
-parameters, or written as an ``async def`` (`async_text`), is refused at
-start-up, before the robot moves, in every mode.
+`snr.core.dispatch.HandlerMap` calls `check_entry` on every ``task_handlers`` entry as it is set,
+and the node calls `check_burst_handlers`: a wrong id, wrong parameters or an
+``async def`` is refused at start-up, in every mode.
 
 Example::
 
@@ -79,10 +76,7 @@ _checked_code: Set[CodeType] = set()
 
 
 def check_entry(key: Any, handler: Any, owner_class: type = object) -> None:
-    """Raise a ComponentError unless ``key: handler`` is a valid ``task_handlers`` entry.
-
-    A wrong id, or something that is not a function, is a mistake in the line
-    that registered it, so the message points there too (not only at the class).
+    """Raise a ComponentError, at the line that registered it, unless ``key: handler`` is valid.
 
     Example::
 
@@ -94,7 +88,7 @@ def check_entry(key: Any, handler: Any, owner_class: type = object) -> None:
         if not callable(handler):
             check_handler(handler, key, owner_class)
     except ComponentError as error:
-        where = caller_block()  # the student's line, found only now, while explaining
+        where = caller_block()
         if not where:
             raise
         raise ComponentError(f"{error}\n{where}") from None
@@ -102,10 +96,7 @@ def check_entry(key: Any, handler: Any, owner_class: type = object) -> None:
 
 
 def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None:
-    """Raise a ComponentError unless ``handler`` can be called as ``f(task, key)``.
-
-    Checked once per function, when it is registered (at start-up), so a wrong
-    signature is found before the robot moves rather than mid-run.
+    """Raise a ComponentError unless ``handler`` can be called as ``f(task, key)`` (once per def).
 
     Example::
 
@@ -172,16 +163,7 @@ def async_text(what: str, function: Any) -> str:
 
 
 def check_burst_handlers(component: AbstractComponent) -> None:
-    """Refuse burst handlers the handler table could not use, saying what to write.
-
-    Each id in ``component.burst_handlers`` must be ``(TaskType.store_page,
-    key)`` and must be in its ``task_handlers`` too (that handler runs for a
-    page that comes alone). The node checks when a component is added and
-    when a running component changes its ``task_handlers``; a burst handler
-    left without its task handler would otherwise be unused without a word.
-
-    Raises:
-        ComponentError: naming the component, the id and the fix.
+    """Raise a ComponentError for a burst handler the handler table could not use.
 
     Example::
 

@@ -1,29 +1,17 @@
 """`MissingKeyHints`: one log hint per data key that is read but never stored.
 
-``get_data``/``get_page`` return None for a key nothing has stored: that is
-the thesis API, and reading a key before its first page arrives is normal
-(listing A.7 does). A misspelled key looks exactly the same, though, so in
-DEBUG mode the node asks this helper to watch the misses and say something
-when one looks like a mistake:
+``get_data`` returns None for a key nothing has stored, both before its first
+page and when the key is misspelt; in DEBUG mode the node tells this helper of
+each miss (docs/errors.md, 9). After ``typo_s`` a key spelled almost like a
+stored one gets a warning, after ``missing_s`` any key still missing an info
+line; once per key, and the search runs at most every ``CHECK_EVERY_S``. A key
+some handler on the node waits for is expected, not misspelt, and a key whose
+page is late (``on_its_way``: queued, or behind a stuck handler) waits.
 
-* after ``typo_s`` a missing key spelled almost like a stored one (warning,
-  with the closest match), or
-* after ``missing_s`` any key still missing (info).
+Example::
 
-Each key is reported at most once, and the closest-match search runs at most
-every ``CHECK_EVERY_S`` per key, so a loop polling a missing key stays cheap.
-
-A key that some handler on the node is registered for (``(TaskType.store_page,
-key)`` or ``(TaskType.process_data, key)``) is *expected*: the node's own wiring
-says its pages will come, e.g. once a peer connects, so reading it early is not
-a mistake and gets no hint. (If that handler's key is the misspelt one,
-``check_handlers`` says so.)
-
-A key whose page is only late is not missing: while ``on_its_way(key)`` says
-so (the node's answer: a page for it waits in the queue, or the node's thread
-is stuck in a handler and stores nothing) the hint waits. Telling a student to
-check the spelling of a key that is merely queued behind a blocked handler
-would send them looking in the wrong place.
+    hints = MissingKeyHints(node.log, node.timer.current_s)
+    hints.missed("depht", node.datastore)   # may log "Did you mean 'depth'?"
 """
 
 from __future__ import annotations
@@ -32,7 +20,7 @@ import logging
 import threading
 from typing import Callable, Dict, Iterable, List, Mapping, Optional, Set, Tuple
 
-from snr.core.checks.error_text import closest_key, closest_match
+from snr.core.checks.error_text import closest_key, closest_match, suggestion
 from snr.core.checks.student_code import caller_location, describe_callable, is_snr
 from snr.prelude import DataKey, TaskHandler
 
@@ -45,14 +33,11 @@ class MissingKeyHints:
     Args:
         log: where hints go (the node's logger).
         clock: seconds, e.g. ``node.timer.current_s``.
-        typo_s, missing_s: how long a missing key is read before a hint (see `missed`).
-        handlers_s: how long after the node starts its handlers' keys are checked
-            (see `check_handlers`).
+        typo_s, missing_s: how long a missing key is read before a hint.
+        handlers_s: when, after the node starts, `check_handlers` runs.
         role: the node's role: a hint says when a key came from another node.
-        link_s: how long after a link to another node comes up the keys that
-            should cross it are checked (see `check_link`).
-        on_its_way: called with a key just before its hint would be logged;
-            True holds the hint back (the page is late, not missing).
+        link_s: when, after a link comes up, `check_link` runs.
+        on_its_way: True for a key whose page is late, not missing: no hint yet.
 
     Example::
 
@@ -91,8 +76,7 @@ class MissingKeyHints:
         self.last_missed: Dict[int, DataKey] = {}
         self._first_and_next_check: Dict[DataKey, List[float]] = {}
         self._reported: Set[DataKey] = set()
-        # Keys read early that a handler waits for: no read hint, but the wiring
-        # and link checks may still report them (so not in _reported).
+        # Keys read early that a handler waits for (the wiring checks may still report them).
         self._expected_reads: Set[DataKey] = set()
         self._lock = threading.Lock()  # loops read keys from their own threads
         #: Returns the keys the node's handlers are registered for (set by the node).
@@ -102,7 +86,7 @@ class MissingKeyHints:
         """Note a read of ``key`` that found nothing; maybe log a hint."""
         readers = self.last_missed
         if len(readers) >= self.MAX_READERS:
-            readers.clear()  # threads come and go; the live ones are back at once
+            readers.clear()  # the live threads are back at once
         readers[threading.get_ident()] = key
         if key in self._reported or key in self._expected_reads:
             return
@@ -118,8 +102,7 @@ class MissingKeyHints:
                 return
             times[1] = min(now + self.CHECK_EVERY_S, first_read_s + self.missing_s)
             waited_s = now - first_read_s
-            if key in self.expected_keys():
-                # A handler waits for this key: its pages are planned, not misspelt.
+            if key in self.expected_keys():  # its pages are planned, not misspelt
                 self._expected_reads.add(key)
                 del self._first_and_next_check[key]
                 return
@@ -128,7 +111,7 @@ class MissingKeyHints:
             if guess is None and waited_s < self.missing_s:
                 return
             if self.on_its_way is not None and self.on_its_way(key):
-                times[1] = now + self.CHECK_EVERY_S  # late, not missing: look again later
+                times[1] = now + self.CHECK_EVERY_S
                 return
             self._reported.add(key)
             del self._first_and_next_check[key]
@@ -153,16 +136,10 @@ class MissingKeyHints:
     def check_handlers(
         self, handled: Iterable[Tuple[DataKey, TaskHandler]], stored_keys: Iterable[DataKey]
     ) -> None:
-        """Warn, once per key, about a handler for a data key that looks misspelled.
+        """Warn, once per key, about a handler for a key not stored while a close one was.
 
-        Called once, ``handlers_s`` after the node started. A handler registered
-        for ``(TaskType.store_page, key)`` when nothing has stored ``key`` but a
-        key spelled almost the same was stored is the commonest silent wiring
-        mistake: the handler simply never runs. A key with no close match stays
-        quiet (its pages may come later, e.g. from a node not yet connected;
-        `check_link` looks again once a link has been up for a while). The
-        keys of a component with ``checks_keys_per_link`` set (the comms
-        components) are left to `check_link`, which names the other node.
+        A key with no close match stays quiet (its pages may come later); the
+        keys of comms components (``checks_keys_per_link``) are `check_link`'s.
 
         Example::
 
@@ -174,7 +151,7 @@ class MissingKeyHints:
             if key in stored or key in self._reported or not isinstance(key, str):
                 continue
             if getattr(getattr(handler, "__self__", None), "checks_keys_per_link", False):
-                continue  # a comms component: check_link says where the pages should go
+                continue
             guess = closest_key(key, stored)
             if guess is None:
                 continue
@@ -200,27 +177,14 @@ class MissingKeyHints:
     ) -> None:
         """Warn, once per key, about keys that should cross a link but have not.
 
-        Called by a comms component ``link_s`` after a link to another
-        node came up (its hello arrived), on the node's thread. Two silent
-        mistakes of a two-node system (thesis listing 5.1) show up here:
+        A comms component calls it ``link_s`` after a link came up: a key it
+        forwards that nothing here stored, and a key a handler here waits for
+        that nothing here stores and none arrived. With a close match it is a
+        warning with "Did you mean", else info.
 
-        * a key the comms component forwards that nothing on this node has
-          stored: nothing is sent (the other node's display stays empty);
-        * a key a handler here waits for that nothing here stores and that
-          has not arrived over the link: the other node does not send it, or
-          sends it under another name.
-
-        With a close match (among the keys that did arrive, or were stored)
-        the hint is a warning with "Did you mean"; without one it is info:
-        the key may simply be rare. Keys stored or received since are quiet.
-
-        Args:
-            comms: the comms component, e.g. ``"'sockets_server_9001'"``.
-            peer: the other node, e.g. ``"node 'urov' at 127.0.0.1:9001"``.
-            forwarded: the keys the comms component sends to it.
-            handled: ``(key, handler)`` for the other handlers of page keys.
-            stored_keys: every key in the datastore.
-            received_keys: the keys of pages that arrived from the peer.
+        ``forwarded``: the keys the comms component sends; ``handled``: ``(key,
+        handler)`` for the other handlers of page keys; ``received_keys``: the
+        keys of pages that arrived from ``peer``.
 
         Example::
 
@@ -237,7 +201,7 @@ class MissingKeyHints:
                 say(
                     f"Comms component {comms} forwards pages under {key!r} to {peer}, but "
                     f"nothing on this node has stored {key!r} in the {self.link_s:.1f} s since "
-                    f"that link came up, so none was sent. {_did_you_mean(guess)}Stored keys: "
+                    f"that link came up, so none was sent.{suggestion(guess)} Stored keys: "
                     f"{_shown(stored)}. A comms component sends what is stored on its own node "
                     f"under exactly the keys it lists. {_SILENCE}"
                 )
@@ -248,7 +212,7 @@ class MissingKeyHints:
                 say(
                     f"{_describe_handler(handler)} handles pages under {key!r}, but nothing on "
                     f"this node stores {key!r} and none has arrived from {peer} in the "
-                    f"{self.link_s:.1f} s since it linked. {_did_you_mean(guess)}Keys received "
+                    f"{self.link_s:.1f} s since it linked.{suggestion(guess)} Keys received "
                     f"from it: {_shown(received)}. A page crosses only if the other node stores "
                     f"it and its comms component lists exactly that key (e.g. "
                     f"sockets.client([{key!r}])). {_SILENCE}"
@@ -275,10 +239,6 @@ def _describe_handler(handler: TaskHandler) -> str:
     if isinstance(name, str) and is_snr(type(owner)):
         return f"{type(owner).__name__} {name!r}"
     return describe_callable(handler)
-
-
-def _did_you_mean(guess: Optional[str]) -> str:
-    return f"Did you mean {guess!r}? " if guess is not None else ""
 
 
 def _shown(keys: List[str]) -> str:

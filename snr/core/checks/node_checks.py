@@ -1,24 +1,10 @@
-"""`NodeChecks`: wires the checks for silent mistakes into a node.
+"""`NodeChecks`: wires the checks for silent mistakes into a node (not DEPLOYED).
 
-A node runs its tasks the same way in every mode; what DEBUG (and partly
-TEST) mode adds is helpers that watch it for mistakes that raise nothing.
-This module builds them and connects them to the node, so that ``node.py``
-keeps only its life cycle, its run loop and its datastore:
-
-* `check_component` (DEBUG and TEST) reads each student class once, when its
-  first component is added (``ComponentSet.check_added``);
-* `MissingKeyHints` (DEBUG, ``node.key_hints``) hints at a data key that is
-  read but never stored: the node's ``get_page`` tells it of each miss;
-* `WiringChecks` (DEBUG, ``node.wiring_checks``) hears of every task no
-  handler matched (``HandlerRunner.on_unhandled``);
-* the wiring check: ``key_hints.handlers_s`` after the node starts, a timer
-  queues a ``CHECK_WIRING`` event and the node core calls
-  ``node.check_wiring()`` on the node's thread;
-* `Watchdog` (DEBUG, ``node.watchdog``) samples the node's and its loops'
-  stacks from a thread of its own.
-
-Outside DEBUG mode those attributes are None. The node's attributes are the
-switches: set one to None before ``node.loop()`` and that helper stays off.
+`check_component` (DEBUG and TEST) reads each student class when its first
+component is added; in DEBUG, `MissingKeyHints` (``node.key_hints``),
+`WiringChecks` (``node.wiring_checks``), the wiring check ``handlers_s`` after
+the start, and the `Watchdog` (``node.watchdog``). Setting one of those
+attributes to None before ``node.loop()`` turns it off.
 
 Example (what `Node` does)::
 
@@ -57,9 +43,6 @@ _PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
 
 class CheckedNode(WatchedNode, Protocol):
     """What `NodeChecks` reads and sets of its node: a `Node` has all of it.
-
-    (A Protocol rather than `Node` itself, so that this module need not import
-    ``node.py``, which imports it.)
 
     Example::
 
@@ -149,7 +132,6 @@ class NodeChecks:
         handled: List[Tuple[DataKey, TaskHandler]] = []
         for entries in list(self.components.table.table.values()):
             for handler, task_id, _, _ in entries:
-                # Only handlers registered for this very key (not type-level ones).
                 if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
                     handled.append((task_id[1], handler))
         return handled
@@ -159,12 +141,7 @@ class NodeChecks:
         return {key for key, _ in self.page_handlers()}
 
     def page_on_its_way(self, key: DataKey) -> bool:
-        """True if ``key``'s page may be late rather than missing (for the key hints).
-
-        It is late when a page for it waits in the queue, or when the node's
-        thread has been stuck in one handler since the watchdog's last look:
-        the node stores no page until that handler returns.
-        """
+        """True if ``key``'s page is queued, or the node's thread is stuck in a handler."""
         watchdog = self._watching
         if watchdog is not None and watchdog.handler_stuck:
             return True

@@ -1,22 +1,15 @@
 """One explanation for every OSError a student meets: a port, a connection, a serial port.
 
-Every component that listens, connects or opens a serial port words its
-failure with `explain_os_error`, so a port in use reads the same from the
-sockets server, the console receiver and the live view, and the catalogue in
-docs/errors.md section 12 shows what students really get. Callers wrap the
-text in the error they raise (`CommsError`, or the console's own) ``from``
-the OSError, or log it.
+Every component that listens, connects or opens a serial port words its failure
+with `explain_os_error` (docs/errors.md, 12).
 
 Example::
 
-    try:
-        listener.bind((host, port))
-    except OSError as error:
-        raise CommsError(explain_os_error(
-            error, action="listen", target=f"{host}:{port}",
-            who=f"The sockets server of node {role!r}",
-            setting="SocketsPair(server_tuple=(host, port))",
-        )) from error
+    raise CommsError(explain_os_error(
+        error, action="listen", target=f"{host}:{port}",
+        who=f"The sockets server of node {role!r}",
+        setting="SocketsPair(server_tuple=(host, port))",
+    )) from error
 """
 
 from __future__ import annotations
@@ -34,8 +27,7 @@ OsAction = Literal["listen", "connect", "open"]
 _VERBS = {"listen": "listen on", "connect": "connect to", "open": "open serial port"}
 _NO_DEVICE = {errno.ENOENT, errno.ENODEV, errno.ENXIO}
 _DENIED = {errno.EACCES, errno.EPERM}
-# (the action it happens to, or None for any; the errnos; what is wrong and what to do),
-# the first that fits wins. {host}, {port}: of the target; {where}: the setting to change.
+# (action or None for any, errnos, what is wrong and what to do): the first that fits.
 _PROBLEMS: List[Tuple[Optional[str], Set[int], str]] = [
     (
         "listen",
@@ -147,20 +139,9 @@ def explain_os_error(
 ) -> str:
     """The message for an OSError of listening, connecting or opening a serial port.
 
-    The one wording of these failures in SNR: what failed (``who`` and
-    ``target``), what is wrong in plain words, and what to do.
-
-    Args:
-        error: what ``bind``/``listen``, ``connect`` or opening the port raised
-            (pyserial's ``SerialException`` too).
-        action: ``"listen"``, ``"connect"`` or ``"open"`` (a serial port).
-        target: ``"127.0.0.1:9000"``, or the serial port's name.
-        who: the component that failed, as the sentence's subject, e.g.
-            ``"The sockets server of node 'urov'"``.
-        setting: where the port or address is set, e.g.
-            ``"SocketsPair(server_tuple=(host, port))"``; "the config" if empty.
-        ports: for a serial port, the ports this computer has (listed in the
-            message when the port is missing); None when unknown.
+    ``target`` is ``"host:port"`` or a serial port, ``who`` the sentence's subject
+    (``"The sockets server of node 'urov'"``), ``setting`` where to change it
+    ("the config" if empty), ``ports`` the serial ports there are (None: unknown).
 
     Example::
 

@@ -1,14 +1,8 @@
 """`Profiler`: how often each handler and loop ran and how long it took.
 
-The node times every handler in DEBUG and TEST mode (and with ``Config(profile=True)``);
-``dump()`` prints the table of thesis listing 5.2, one section per thread, each adding up
-to 100% (the 2021 table put them in one list, whose shares could add up to far more).
-
-Timing must be cheap enough to leave on while students develop, so the profiler hands out
-one *cell* per handler (and per loop) when it is registered: ``[times_called, total_s]``.
-The node adds to it after each run (two additions, no lock, no string); each cell has one
-writer (the node's thread, or the loop's own), so a reader may see a count one run behind,
-which a profile can live with.
+On in DEBUG and TEST mode (and with ``Config(profile=True)``). Each handler
+and loop gets one *cell*, ``[times_called, total_s]``, when it is registered;
+its one writer adds to it after each run, without a lock (docs/performance.md).
 
 Example::
 
@@ -49,8 +43,7 @@ class Profiler(AbstractProfiler):
         self._start_s = time.perf_counter()
         self._cells: Dict[str, StatsCell] = {}
         self._reports: Dict[str, Callable[[], str]] = {}
-        # Only creating a cell takes the lock: loops ask for theirs from
-        # their own threads. Adding to a cell needs none (one writer each).
+        # Only creating a cell takes the lock (loops ask from their own threads).
         self._lock = threading.Lock()
 
     def cell(self, label: str) -> StatsCell:
@@ -86,9 +79,6 @@ class Profiler(AbstractProfiler):
     def add_report(self, name: str, report: Callable[[], str]) -> None:
         """Add a section to `dump`: ``report()``'s text under ``name`` (a newer one replaces it).
 
-        Comms components add their links' counters this way, so the profile
-        also says what was sent, received and dropped.
-
         Example::
 
             profiler.add_report("sockets_client_9000", lambda: "1 link: sent 120, dropped 0")
@@ -104,14 +94,8 @@ class Profiler(AbstractProfiler):
         return sorted(rows, key=lambda row: row[2], reverse=True)
 
     def dump(self) -> str:
-        """The profile as text: one section per thread, each adding up to 100%.
-
-        Every share is of the wall time since the node was made. The node's
-        thread runs the handlers one at a time, so its section is a partition:
-        the handlers' shares plus the time outside them make 100%. Each loop
-        has a section of its own (its thread runs beside the node's): its
-        ``loop()`` passes plus the time between them make 100%. Sections are
-        not added together. Comms components add their link counters below.
+        """The profile as text: one section per thread, each adding up to 100% of the time since
+        the node was made (thesis listing 5.2's table, per thread), then the added reports.
 
         Example::
 
@@ -156,12 +140,7 @@ def _add(cell: StatsCell, runtime_s: float) -> None:
 
 
 def _section(rows: List[Row], elapsed_s: float, rest_label: str) -> List[str]:
-    """One thread's rows, then the time outside them: shares adding up to 100%.
-
-    The rows of one thread cannot overlap in time unless a handler ran
-    others inside itself (``node.execute_task`` from a handler): then their
-    sum can pass 100%, and a last line says why.
-    """
+    """One thread's rows, then the time outside them: shares adding up to 100% (unless nested)."""
     lines: List[str] = []
     busy_s = 0.0
     for label, count, total in rows:

@@ -1,11 +1,5 @@
 """`RepeatFilter`: a failure repeated over and over, logged in full a few times, then counted.
 
-A DEPLOYED node keeps running when a handler fails, so a handler that raises
-on every task would write thousands of identical lines a second; the node's
-`snr.core.checks.failures.FailureReport` logs each kind of failure in full three
-times, then counts it. Components that read bad input again and again (a
-recorder, a replayer, a console) use it too, from ``snr.core.logs``.
-
 Example::
 
     repeats = RepeatFilter(log)
@@ -25,11 +19,8 @@ __all__ = ["RepeatFilter"]
 class RepeatFilter:
     """Logs the first few of a repeated message in full, then a count every few seconds.
 
-    A handler that raises on every task would otherwise write thousands of
-    identical lines a second and bury everything else in the log. Messages
-    are grouped by a key (e.g. the handler and the error's type): the first
-    ``first`` of each group are logged in full, then at most one summary line
-    every ``every_s`` seconds says how many more there were.
+    Messages are grouped by a key (e.g. the handler and the error's type):
+    the first ``first`` of each are logged in full, then one count every ``every_s``.
 
     Example::
 

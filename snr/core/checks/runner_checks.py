@@ -1,17 +1,9 @@
 """`runner_built` and `runner_ran`: a runner built and never run is said at exit.
 
 And `no_role_given`: ``python robot.py`` without a role, answered with the roles.
-
-``CliRunner({...})`` without ``.run()`` builds the runner and stops there: the
-program ends at once, with status 0 and not a word. The runners tell this
-module when they are built and when they run; at interpreter exit, a runner
-that was built and never run is named, with the line that built it.
-
-The rule, so that a runner built to be looked at in a test is never named:
-only a runner built by the program being run (its ``__main__`` module, as in
-``python robot.py``), not inside a ``unittest.TestCase`` method, not while
-pytest is loaded, not in DEPLOYED mode, and not when the program ended with an
-uncaught error (that error is the news). Nothing is done per task.
+Only a runner built by ``__main__``'s own code is named: not in a
+``unittest.TestCase`` method, with pytest loaded, in DEPLOYED mode, or after an
+uncaught error (docs/errors.md, 15q).
 
 Example::
 
@@ -30,8 +22,7 @@ from snr.prelude import AbstractConfig, Mode
 
 __all__ = ["no_role_given", "runner_built", "runner_ran"]
 
-# id(runner) -> (runner, "robot.py:4 in <module>", its line as a traceback shows it); the
-# runner is kept, so its id is not reused.
+# id(runner) -> (runner, kept so its id is not reused; "robot.py:4 in <module>"; its line).
 _not_run: Dict[int, Tuple[object, str, str]] = {}
 _registered: List[bool] = []
 
@@ -69,7 +60,7 @@ def runner_ran(runner: object) -> None:
 
 
 def _say_not_run() -> None:
-    if getattr(sys, "last_value", None) is not None:  # the program died of an error
+    if getattr(sys, "last_value", None) is not None:
         return
     for runner, place, block in _not_run.values():
         name = type(runner).__name__

@@ -1,22 +1,12 @@
 """`StepMode`: pause a node, run its tasks one at a time, look around, resume.
 
-The debugger for event-driven code. A console types ``pause``; the node
-finishes the task it is running and then runs only *urgent* tasks: a
-terminate, and the console's own commands (a console marks its tasks urgent
-while the node is paused, see `console_priority`), so ``dump datastore``,
-``list endpoints`` and ``exit`` keep working. Every other task waits in the
-queue, in order. ``step`` runs the oldest one through its handlers and says
-which task it was, which handlers it went to, what they returned and what
-comes next; ``resume`` lets the node run on.
-
-Loops keep running while the node is paused (they have threads of their
-own), so their pages pile up in the queue. The queue's usual bound applies:
-above its high-water mark a loop waits for room, and after ``max_wait_s``
-its task is dropped, counted and logged, the log line saying the node is
-paused. The replies to ``pause``, ``step`` and ``resume`` give the numbers.
-
-The node's run loop asks ``paused`` once per batch of tasks and calls
-`run_paused` while it is true; nothing else of the node changes.
+The debugger for event-driven code. After a console's ``pause`` the node runs
+only urgent tasks (a terminate, and the console's own commands: see
+`console_priority`); every other task waits, in order, and ``step`` runs the
+oldest through its handlers and says what they returned and what comes next.
+Loops keep running: their pages pile up under the queue's usual bound (the
+drop log then says the node is paused). The run loop asks ``paused`` once per
+batch and calls `run_paused` while it is true.
 
 Example::
 
@@ -57,8 +47,7 @@ class Step:
 
     Attributes:
         task: the task that ran, or None if the queue had none.
-        handlers: ``component.method`` of each handler it went to, in order
-            (empty: no handler matched, and the task was dropped as usual).
+        handlers: ``component.method`` of each handler it went to, in order.
         returned: the tasks those handlers returned (now at the back of the queue).
         next_tasks: the first few tasks waiting after it, urgent ones first.
         waiting: how many tasks wait in the queue after it.
@@ -84,16 +73,12 @@ class _StepRequest:
 
 
 class StepMode:
-    """Pauses its node's run loop; runs held tasks one at a time on request.
-
-    Every method is for the node's own thread (a console command's handler
-    calls them), except reading ``paused``.
+    """Pauses its node's run loop; runs held tasks one at a time on request (node's thread).
 
     Args:
         queue: the node's task queue.
         runner: the node's `HandlerRunner`.
-        lookup: the node's handler look-up: a task's ``(handler, key,
-            component, cell)`` entries.
+        lookup: a task's ``(handler, key, component, cell)`` entries.
         stopping: True once the node is stopping.
 
     Example::
@@ -137,21 +122,17 @@ class StepMode:
             return
         self.paused = False
         self.queue.loss.why = self._running_why
-        # A node stopping meanwhile keeps running=False (set by set_terminate_flag).
+        # A node stopping meanwhile keeps running=False.
         self.runner.running = not self.stopping()
         while self._requests:
             request = self._requests.popleft()
             request.report(request.done)
 
     def step(self, count: int, report: Callable[[List[Step]], None]) -> None:
-        """Run the next ``count`` held tasks, one per turn of the paused loop, then ``report``.
-
-        ``report`` gets one `Step` per task run (fewer if the queue ran dry;
-        a `Step` with no task says so), on the node's thread.
+        """Run the next ``count`` held tasks, one per turn, then ``report`` what each did.
 
         Raises:
-            ValueError: not paused, ``count`` not from 1 to `MAX_STEPS`, or
-                `MAX_STEPS` requests already wait.
+            ValueError: not paused, ``count`` not from 1 to `MAX_STEPS`, or too many waiting.
         """
         if not self.paused:
             raise ValueError("The node is running: pause it first.")
@@ -188,14 +169,13 @@ class StepMode:
         if task is not None:
             store = self.runner.store_page
             if task.type is TaskType.store_page and store is not None:
-                # The page goes into the datastore first, as when running.
                 step.handlers.append(_handler_name(store, getattr(store, "__self__", None)))
                 stored = self.runner.store_first(task)
                 if stored is not None:
                     step.returned.append(stored)
             entries = self.lookup(task)
             if not entries and task.type is TaskType.event and self.runner.on_unhandled:
-                self.runner.on_unhandled(task)  # DEBUG: an event nobody handles, as usual
+                self.runner.on_unhandled(task)  # DEBUG: as when running
             for handler, key, component, cell in entries:
                 step.handlers.append(_handler_name(handler, component))
                 returned = self.runner.run(handler, task, key, component, cell)
@@ -217,7 +197,7 @@ class StepMode:
 
             node.step_mode.next_tasks(1)   # [the task `step` would run], or []
         """
-        # By index, not by iterating: other threads may append meanwhile.
+        # By index: other threads may append meanwhile.
         found: List[Task] = []
         for lane in (self.queue.urgent, self.queue.normal):
             for index in range(count - len(found)):
@@ -229,7 +209,7 @@ class StepMode:
 
 
 def _handler_name(handler: Any, component: Any) -> str:
-    """``wanderer.steer``: the handler's component and method, as the console shows it."""
+    """``wanderer.steer``: the handler's component and method."""
     name = getattr(handler, "__name__", repr(handler))
     owner = getattr(component, "name", None)
     return f"{owner}.{name}" if owner else name

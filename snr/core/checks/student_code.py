@@ -1,11 +1,7 @@
 """Source lines and tracebacks for messages: the rest of `snr.prelude.student_code`.
 
-Where a function is (`describe_callable`, `def_block`), a traceback without
-SNR's runtime (`student_frames`, `trim_runtime_frames`), the call in progress
-as a traceback shows it (`caller_block`) and where another thread is
-(`running_line`). The helpers the prelude needs itself (`describe_class`,
-`caller_location`, `frame_location`...) are in `snr.prelude.student_code` and
-named here too, so a check imports all of them from one place.
+The helpers the prelude needs itself (`describe_class`, `caller_location`,
+`frame_location`...) are named here too, so a check imports all of them from one place.
 
 Example::
 
@@ -17,6 +13,8 @@ Example::
 from __future__ import annotations
 
 import ast
+import functools
+import inspect
 import linecache
 import sys
 import threading
@@ -43,6 +41,7 @@ __all__ = [
     "describe_callable",
     "describe_class",
     "frame_location",
+    "innermost_frame",
     "is_runtime_file",
     "is_snr",
     "line_with_code",
@@ -51,6 +50,7 @@ __all__ = [
     "running_line",
     "short_path",
     "source_block",
+    "source_node",
     "student_frames",
     "trim_runtime_frames",
     "walk_own",
@@ -103,34 +103,41 @@ def describe_callable(func: Any) -> str:
     )
 
 
+def innermost_frame(error: BaseException) -> Optional[FrameType]:
+    """The frame where ``error`` was raised (the last of its traceback), or None.
+
+    Example::
+
+        innermost_frame(error).f_locals   # the names where it went wrong
+    """
+    tb = error.__traceback__
+    while tb is not None and tb.tb_next is not None:
+        tb = tb.tb_next
+    return None if tb is None else tb.tb_frame
+
+
 def student_frames(tb: Optional[TracebackType]) -> str:
     """A traceback as text, with the frames of SNR's runtime left out.
 
     Example::
 
-        except Exception as error:
-            print(student_frames(error.__traceback__))
-            #   File "robot.py", line 30, in on_depth
-            #     return 1 / 0
+        print(student_frames(error.__traceback__))
+        #   File "robot.py", line 30, in on_depth
+        #     return 1 / 0
     """
     frames = traceback.extract_tb(tb)
     theirs = traceback.StackSummary.from_list(
         [f for f in frames if not is_runtime_file(f.filename)]
     )
-    if not theirs:  # nothing but SNR: show it all (a bug in SNR itself)
-        theirs = frames
-    return "".join(theirs.format()).rstrip()
+    return "".join((theirs or frames).format()).rstrip()  # only SNR: a bug in SNR itself
 
 
 def trim_runtime_frames(error: BaseException) -> None:
     """Drop SNR's leading frames from ``error``'s traceback, in place.
 
-    Python's own report of the error (e.g. as the cause of a HandlerError)
-    then starts at the student's code.
-
     Example::
 
-        trim_runtime_frames(error)
+        trim_runtime_frames(error)   # Python's report of it starts at the student's code
         raise HandlerError("...") from error
     """
     tb = error.__traceback__
@@ -141,11 +148,7 @@ def trim_runtime_frames(error: BaseException) -> None:
 
 
 def source_block(filename: str, line: int, name: str, context: str = "") -> str:
-    """One line of code as a traceback shows it: where, then the code itself.
-
-    Editors and terminals make the ``File "...", line N`` part clickable, so
-    it takes the student straight to the line to fix. ``context`` follows the
-    name, e.g. ``" (defined at line 11)"``.
+    """One line of code as a traceback shows it (editors open it with a click).
 
     Example::
 
@@ -160,9 +163,6 @@ def source_block(filename: str, line: int, name: str, context: str = "") -> str:
 
 def def_block(func: Any) -> str:
     """The ``def`` line of ``func`` as a `source_block`, or "" when it has no code.
-
-    For mistakes in how a function is written (its parameters, a missing
-    ``super().__init__``): the ``def`` is the line to change.
 
     Example::
 
@@ -180,9 +180,6 @@ def def_block(func: Any) -> str:
 def caller_block(skip: int = 1) -> str:
     """The nearest caller outside SNR's runtime as a `source_block`, or "".
 
-    For errors found inside SNR on behalf of the line that called it, such
-    as a ``self.task_handlers = ...`` that runs before ``super().__init__``.
-
     Example::
 
         raise ComponentError(f"... set too early.\n{caller_block()}")
@@ -194,11 +191,7 @@ def caller_block(skip: int = 1) -> str:
 
 
 def running_line(thread_id: Optional[int]) -> str:
-    """``sensor.py:12 in Sonar.loop: `reading = port.read()```: where a thread is now.
-
-    The innermost frame outside SNR and the standard library is shown (a
-    loop blocked in ``socket.recv`` is shown at the student's line that
-    called it); "" when the thread is not running.
+    """Where a thread is now, outside SNR and the standard library; "" when not running.
 
     Example::
 
@@ -217,10 +210,7 @@ def running_line(thread_id: Optional[int]) -> str:
 
 
 def line_with_code(frame: FrameType, line: Optional[int] = None) -> str:
-    """``sensor.py:12 in Sonar.loop: `reading = port.read()```: a frame's place and code.
-
-    At ``line``, or where the frame is now; the code is left out when the
-    source cannot be read.
+    """A frame's place and code, at ``line`` or where it is now (no code if unreadable).
 
     Example::
 
@@ -244,11 +234,9 @@ _PARSE_LOCK = threading.Lock()
 def parse_source(text: str) -> ast.Module:
     """``ast.parse(text)``, one thread at a time.
 
-    SNR reads a student's source to explain a mistake (a class's checks, a
-    failure, the watchdog, the graph), and two nodes in one process may do it
-    at the same moment. On CPython 3.11.7 two parses at once can fail with
-    ``SystemError: AST constructor recursion depth mismatch`` (the AST
-    constructor's recursion count is not kept per thread there).
+    Two nodes in one process may read a student's source at once, and on
+    CPython 3.11.7 two parses at once can fail with ``SystemError: AST
+    constructor recursion depth mismatch``.
 
     Example::
 
@@ -256,6 +244,27 @@ def parse_source(text: str) -> ast.Module:
     """
     with _PARSE_LOCK:
         return ast.parse(text)
+
+
+@functools.lru_cache(maxsize=64)  # DEPLOYED nodes may explain one mistake many times
+def source_node(obj: Any) -> Optional[ast.stmt]:
+    """The ``def`` or ``class`` statement of a function, code object or class, or None.
+
+    Its line numbers are the file's; None when the source cannot be read.
+
+    Example::
+
+        source_node(Doubler.double.__code__).lineno   # 11, the line of the def
+    """
+    import textwrap  # here, not at the top: only needed once something is wrong
+
+    try:
+        lines, first = inspect.getsourcelines(obj)
+        tree = parse_source(textwrap.dedent("".join(lines)))
+    except (OSError, TypeError, SyntaxError, ValueError):
+        return None
+    ast.increment_lineno(tree, first - 1)
+    return tree.body[0] if tree.body else None
 
 
 def walk_own(function: ast.AST) -> Iterator[ast.AST]:

@@ -1,19 +1,10 @@
 """`snr_excepthook`: an SNR error nobody caught, printed as the runners print one.
 
-A runner catches the errors of the node it runs and prints their message,
-which already names the student's line (``HandlerError`` shows their frames).
-An error raised by a call the student made before any runner, such as
-``Config(mode="deployed")`` or ``Node(config, "robot")``, reaches Python's own
-report instead: a traceback through SNR's internals (``prelude/abstract.py``,
-``core/config.py``) above a message that is already good. ``import snr``
-therefore sets `snr_excepthook` as ``sys.excepthook``, unless a program or
-tool (IPython, a debugger) has set one of its own. For an `SNRError` it
-prints the student's frames and the message, and a line saying how to see
-the rest; any other error gets Python's report, unchanged.
-
-SNR's frames are shown (Python's report, whole) when the environment variable
-``SNR_VERBOSE`` is set to anything but ``0`` or "", or the command line has
-``--verbose`` (which `CliRunner` accepts).
+An error raised before any runner (``Config(mode="deployed")``) would reach
+Python's report, a traceback through SNR's internals. ``import snr`` sets
+`snr_excepthook` as ``sys.excepthook`` (unless a tool set its own): an
+`SNRError` is printed with the student's frames only, unless ``--verbose`` or
+``SNR_VERBOSE=1`` asks for SNR's (docs/errors.md, 16p).
 
 Example::
 

@@ -1,59 +1,22 @@
 """`Watchdog`: in DEBUG mode, says why a node is stuck when nothing else would.
 
-Some mistakes hang a node without a word: no exception, no log line, just a
-robot that does nothing. The watchdog notices four of them within a few
-seconds and says which handler or loop it is, the line it is on now, and the
-rule it breaks:
+Some mistakes hang a node without a word. A daemon thread samples the stacks of
+the node's thread and its loops' threads every ``every_s`` and says, once each,
+as a warning, with the line it is on and the rule it breaks (docs/design.md,
+"The watchdog"; docs/errors.md, 17):
 
-1. **A handler that does not return** (a ``while`` waiting for data, a
-   blocking read): after ``stuck_s`` in one handler call. *A handler must
-   return quickly*: while it runs the node runs no other task and stores no
-   page, so data it waits for can never arrive. When the handler read a data
-   key whose page waits in the queue, the warning names that key.
-2. **A loop() that never returns** to SNR: after ``stuck_s`` inside one call
-   of a student's ``loop()``, when that call is inside a ``while`` written in
-   ``loop()`` itself. *loop() does one pass and returns.* (A ``loop()``
-   blocked in one call for long, e.g. ``accept()`` or ``input()``, is not
-   reported: it is waiting for input.)
-3. **A loop flooding the queue**: for ``stuck_s`` the node was behind while
-   its thread kept working (not stuck in one handler: that is rule 1), and a
-   student's loop had to wait for room in the queue meanwhile. *Set
-   max_tick_rate_hz.* The node is behind at a look when its queue holds a
-   tenth of its high-water mark or a producer had to wait for room since the
-   last look; the queue swings from full to nearly empty while a loop floods
-   it, so a look that finds it shallow counts as behind for ``FLOOD_GRACE_S``.
-3b. **A loop with no rate that spins**: a student's loop with no
-   ``max_tick_rate_hz`` whose ``loop()`` stores or schedules (it names
-   ``store_data``, ``store_page`` or ``schedule``) ran more than ``spin_hz``
-   (1,000) passes a second for twice ``stuck_s`` (4 s) and was not reported
-   by rule 3 (which has ``stuck_s`` to speak for a loop that had to wait for
-   room). *Set max_tick_rate_hz*: no sensor needs more.
-   The passes are the profiler's count (on in DEBUG unless
-   ``Config(profile=False)``; without it this rule is off).
-4. **A node nothing will ever stop**: for ``idle_s`` its queue was empty, no
-   handler ran, no loop of it was alive, and no other thread was running in
-   the program (the main thread when the node runs on another, a comms I/O
-   thread, a timer, a thread of the student's): nothing can ever give it a
-   task again, so only Ctrl+C ends it. *Something must schedule
-   tasks.terminate.* A server waiting for clients or a console waiting for a
-   command is a loop that is alive, so it is never reported.
+1. a handler that has not returned after ``stuck_s``;
+2. a student's ``loop()`` inside a ``while`` of its own for ``stuck_s``
+   (one long blocking call, e.g. ``accept()``, is not reported);
+3. a student's loop that had to wait for room while the node was behind for
+   ``stuck_s`` (a queue a tenth full, or a wait since the last look, counts as
+   behind for ``FLOOD_GRACE_S``); 3b. a loop with no ``max_tick_rate_hz`` whose
+   ``loop()`` stores or schedules, running ``spin_hz`` passes a second for
+   ``2 * stuck_s`` (the profiler's counts);
+4. a node with an empty queue, no handler running, no loop alive and no other
+   thread for ``idle_s``: only Ctrl+C can end it.
 
-Each is said once (per handler, per loop, per node), as a warning. While the
-node's thread is stuck in a handler, `MissingKeyHints` holds back its "nothing
-has stored it" hints (the node asks ``handler_stuck``): the page is late, not
-missing.
-
-**What it costs the node: nothing on the hot path.** A daemon thread wakes
-every ``every_s`` (0.5 s), or every ``stuck_s`` (2 s) after a look that found
-nothing to watch (the node's thread in no handler, no loop of the student's
-inside its ``loop()``, no flood, no idle countdown: a quiet robot then costs
-its watchdog one look in 2 s, and a handler that hangs is said within
-``2 * stuck_s``), and samples the stacks of the node's thread and its
-loops' threads with ``sys._current_frames()``. A handler call is the frame
-that `HandlerRunner` called; as long as the very same frame object is there
-look after look, the same call is still running (a new call is a new frame
-object, even at the same line). The node's thread counts and records nothing
-for it; the queue counts each producer's waits only when it is full.
+A look that finds nothing to watch makes the next one wait ``stuck_s``.
 
 Example::
 
@@ -64,6 +27,7 @@ Example::
 
 from __future__ import annotations
 
+import ast
 import linecache
 import sys
 import threading
@@ -79,8 +43,9 @@ from snr.core.checks.student_code import (
     describe_class,
     frame_location,
     line_with_code,
-    parse_source,
     running_line,
+    source_node,
+    walk_own,
 )
 from snr.core.dispatch import HandlerRunner
 from snr.core.loop import ThreadLoop
@@ -109,16 +74,13 @@ _HANDLER_CALLERS: FrozenSet[CodeType] = frozenset(
     {HandlerRunner.run_queued.__code__, HandlerRunner.run.__code__}
 )
 _LOOP_CALLER: FrozenSet[CodeType] = frozenset({ThreadLoop._run.__code__})
-_MAX_DEPTH = 200  # frames looked at per stack: enough for any student's call chain
+_MAX_DEPTH = 200  # frames looked at per stack
 _PARENT_WATCH = "snr-parent-watch"  # MultiProcRunner's: it stops the node only on Ctrl+C
 _FOOTER = "(This shows once, in DEBUG mode only; node.watchdog = None turns the watchdog off.)"
 
 
 class WatchedNode(Protocol):
-    """What the watchdog reads of the node it watches: a `Node` has all of it.
-
-    (A Protocol rather than `Node` itself, so that this module need not import
-    ``node.py``, which imports it.)
+    """What the watchdog reads of its node: a `Node` (not imported: ``node.py`` imports this).
 
     Example::
 
@@ -145,11 +107,10 @@ class Watchdog:
 
     Attributes:
         every_s: seconds between two looks at the node (0.5).
-        stuck_s: how long a handler may run, a ``loop()`` stay inside its
-            ``while``, or the queue keep overflowing, before it is reported (2 s).
-        idle_s: how long a node nothing can stop may wait before it is reported (3 s).
+        stuck_s: how long before a stuck handler, loop or flood is reported (2 s).
+        idle_s: how long before a node nothing can stop is reported (3 s).
         handler_stuck: True while the node's thread has been in one handler
-            call for at least one look (``every_s``).
+            call for at least one look.
         said: one line per report made so far, e.g. ``"handler Waiter.on_go"``.
     """
 
@@ -159,14 +120,10 @@ class Watchdog:
     spin_hz: float = 1000.0
     """Passes a second of a rate-less, storing loop that are reported (rule 3b)."""
     FLOOD_GRACE_S = 1.0
-    """A node that was behind less than this long ago still counts as behind
-    (its queue swings from full to empty and back while a loop floods it)."""
+    """A node that was behind less than this long ago still counts as behind."""
 
     def __init__(self, node: WatchedNode) -> None:
         self.node = node
-        self.every_s = type(self).every_s
-        self.stuck_s = type(self).stuck_s
-        self.idle_s = type(self).idle_s
         self.handler_stuck = False
         self.said: List[str] = []
         self._said_about: Set[object] = set()
@@ -174,8 +131,7 @@ class Watchdog:
         self._thread: Optional[threading.Thread] = None
         self._node_thread: Optional[int] = None
         self._ignored: Set[Optional[int]] = set()
-        # The frame of the handler call (or each loop's loop() call) seen at
-        # the last look, and when it was first seen.
+        # The handler call's frame (each loop()'s) at the last look, and since when.
         self._handler: Optional[FrameType] = None
         self._handler_since = 0.0
         self._loop_calls: Dict[ThreadLoop, Tuple[FrameType, float]] = {}
@@ -188,7 +144,6 @@ class Watchdog:
         self._quiet = False  # the last look found nothing to watch: the next comes later
         self._passes: Dict[ThreadLoop, Tuple[float, float]] = {}  # (passes, when) at a look
 
-    # -- life cycle ---------------------------------------------------------
     def start(self, node_thread: int, ignore: Iterable[threading.Thread] = ()) -> None:
         """Start watching; ``node_thread`` runs the node, ``ignore`` can give it no task."""
         self._node_thread = node_thread
@@ -215,11 +170,10 @@ class Watchdog:
         while not self._stop.wait(self.stuck_s if self._quiet else self.every_s):
             try:
                 self.check()
-            except Exception:  # a bug here must not take the node down with it
+            except Exception:
                 self.node.log.exception("The watchdog failed and stops; the node runs on.")
                 return
 
-    # -- one look -----------------------------------------------------------
     def check(self) -> None:
         """Look at the node once: sample its threads' stacks and apply the four rules."""
         now = time.monotonic()
@@ -246,7 +200,7 @@ class Watchdog:
         self.said.append(label)
         self.node.log.warning("%s %s", text, _FOOTER)
 
-    # -- 1. a handler that does not return ----------------------------------
+    # 1. a handler that does not return
     def _check_handler(self, handler: Optional[FrameType], now: float) -> None:
         if handler is None or handler is not self._handler:
             self._handler, self._handler_since = handler, now
@@ -290,7 +244,7 @@ class Watchdog:
         )
 
     def _awaited_key(self) -> Optional[DataKey]:
-        """A data key the node's thread read and found missing while its page waits in the queue."""
+        """A key the node's thread found missing while its page waits in the queue."""
         hints = self.node.key_hints
         if hints is None or self._node_thread is None:
             return None
@@ -299,7 +253,7 @@ class Watchdog:
             return key
         return None
 
-    # -- 2. a loop() that never returns -------------------------------------
+    # 2. a loop() that never returns
     def _check_loops(
         self, loops: List[ThreadLoop], frames: Dict[int, FrameType], now: float
     ) -> None:
@@ -332,7 +286,7 @@ class Watchdog:
             "max_tick_rate_hz=10 for ten passes a second."
         )
 
-    # -- 3. a loop flooding the queue ---------------------------------------
+    # 3. a loop flooding the queue
     def _check_flood(self, loops: List[ThreadLoop], now: float) -> None:
         queue = self.node.queue
         by_thread = queue.waits_by_thread
@@ -346,8 +300,7 @@ class Watchdog:
         self._loop_waits, self._waits = counts, queue.waits
         held = self.handler_stuck or self.node.step_mode.paused
         if held or (not behind and now - self._behind_s > self.FLOOD_GRACE_S):
-            # Keeping up; or the node's thread is held by one handler (rule
-            # 1) or paused by a console: the loops wait for it, not it for them.
+            # Keeping up, or held by a handler (rule 1) or a console: loops wait for it.
             self._flood_since = None
             self._flooders = []
             return
@@ -362,7 +315,6 @@ class Watchdog:
 
     def _flood_text(self, loop: ThreadLoop) -> str:
         place = self.node.queue.waited_at.get(loop.thread_id or -1)
-        # The line that had to wait (the loop may have moved on since), else where it is.
         where = running_line(loop.thread_id) if place is None else line_with_code(*place)
         rate = loop.max_tick_rate_hz
         if rate > 0:
@@ -372,11 +324,8 @@ class Watchdog:
                 "faster (node.profiler.dump() shows the slow ones)."
             )
         else:
-            fix = (
-                "It has no max_tick_rate_hz, so loop() runs again the moment it returns. "
-                "Give it a rate: super().__init__(factory, parent, "
-                f"{loop.name!r}, max_tick_rate_hz=50) runs loop() at most 50 times a second."
-            )
+            fix = "It has no max_tick_rate_hz, so loop() runs again the moment it returns. "
+            fix += _rate(loop)
         return (
             f"Loop {loop.name!r} ({describe_class(type(loop))}) stores data faster than the "
             f"node can handle it: for {self.stuck_s:g} s the node's queue kept filling up "
@@ -384,7 +333,7 @@ class Watchdog:
             f"for room{f' (at {where})' if where else ''}. {fix}"
         )
 
-    # -- 3b. a loop with no rate that spins -------------------------------
+    # 3b. a loop with no rate that spins
     def _check_spin(self, loops: List[ThreadLoop], now: float) -> None:
         profiler = getattr(self.node, "profiler", None)
         if not isinstance(profiler, Profiler):
@@ -411,12 +360,11 @@ class Watchdog:
             f"loop() runs again the moment it returns: for {2 * self.stuck_s:g} s "
             f"{describe_callable(type(loop).loop)} ran {_about(rate)} times a second, "
             "storing or scheduling each time. That is far faster than any sensor "
-            "needs, keeps a core busy, and makes every other task wait behind its own. Give "
-            f"it a rate: super().__init__(factory, parent, {loop.name!r}, max_tick_rate_hz=50) "
-            "runs loop() at most 50 times a second."
+            "needs, keeps a core busy, and makes every other task wait behind its own. "
+            f"{_rate(loop)}"
         )
 
-    # -- 4. a node nothing will ever stop -----------------------------------
+    # 4. a node nothing will ever stop
     def _check_idle(self, no_handler: bool, loops: List[ThreadLoop], now: float) -> None:
         idle = (
             no_handler
@@ -463,8 +411,7 @@ def queued_page_keys(queue: TaskQueue) -> Set[DataKey]:
 
         "depth" in queued_page_keys(node.queue)   # a page for 'depth' is on its way
     """
-    # deque.copy() runs in C without letting go of the GIL: a consistent snapshot
-    # even while loops append.
+    # deque.copy() runs in C holding the GIL: a snapshot even while loops append.
     keys: Set[DataKey] = set()
     for task in queue.normal.copy():
         if task.type is TaskType.store_page:
@@ -475,47 +422,20 @@ def queued_page_keys(queue: TaskQueue) -> Set[DataKey]:
 
 
 def enclosing_while(frame: FrameType) -> Optional[int]:
-    """The first line of the outermost ``while`` around ``frame``'s current line.
-
-    Only ``while`` statements written in ``frame``'s own function count. None
-    when there is none (or the source cannot be read).
+    """The first line of the outermost ``while`` of ``frame``'s own function around its line.
 
     Example::
 
         enclosing_while(loop_frame)   # 12: loop() is inside `while True:` on line 12
     """
-    spans = _while_spans(frame.f_code)
+    node = source_node(frame.f_code)
     line = frame.f_lineno
-    starts = [start for start, end in spans if start <= line <= end]
+    starts = [
+        n.lineno
+        for n in (walk_own(node) if node is not None else ())
+        if isinstance(n, ast.While) and n.lineno <= line <= (n.end_lineno or n.lineno)
+    ]
     return min(starts) if starts else None
-
-
-_SPANS: Dict[CodeType, List[Tuple[int, int]]] = {}
-
-
-def _while_spans(code: CodeType) -> List[Tuple[int, int]]:
-    """(first, last) line of every ``while`` statement in ``code``'s function."""
-    spans = _SPANS.get(code)
-    if spans is not None:
-        return spans
-    import ast  # here, not at the top: only needed once something looks stuck
-    import inspect
-    import textwrap
-
-    spans = []
-    try:
-        lines, first = inspect.getsourcelines(code)
-        tree = parse_source(textwrap.dedent("".join(lines)))
-    except (OSError, TypeError, SyntaxError):
-        pass
-    else:
-        for node in ast.walk(tree):
-            if isinstance(node, ast.While):
-                end = node.end_lineno or node.lineno
-                spans.append((node.lineno + first - 1, end + first - 1))
-    if len(_SPANS) < 1000:
-        _SPANS[code] = spans
-    return spans
 
 
 def _called_by(frame: Optional[FrameType], callers: FrozenSet[CodeType]) -> Optional[FrameType]:
@@ -537,6 +457,13 @@ def _stores(loop: ThreadLoop) -> bool:
     """True if the loop's own loop() names a way to store or schedule (no source needed)."""
     code = getattr(type(loop).loop, "__code__", None)
     return code is not None and not _STORES.isdisjoint(code.co_names)
+
+
+def _rate(loop: ThreadLoop) -> str:
+    return (
+        f"Give it a rate: super().__init__(factory, parent, {loop.name!r}, max_tick_rate_hz=50) "
+        "runs loop() at most 50 times a second."
+    )
 
 
 def _about(rate: float) -> str:

@@ -1,22 +1,11 @@
 """`WiringChecks`: in DEBUG mode, say when a task can never reach a handler.
 
-A task that no handler matches is dropped without a word: that is the
-thesis's dispatch rule, and for a ``process_data`` task nobody waits for it
-is normal. An *event* that nothing handles, though, is almost always a
-mistake (a misspelt name, ``tasks.event("terminate")`` instead of
-``tasks.terminate(...)``, a factory missing from the config), and the
-program then "works" wrongly or waits for its timeout. The same goes for a
-handler that can never run because it is registered under the wrong kind
-of task. This helper says so, once per name, in plain words:
-
-* `unhandled`: the node's run loop calls it for a task no handler matched
-  (only in DEBUG mode; the branch costs nothing for tasks that are handled);
-* `check_never_ran`: the node calls it at its wiring check, a few seconds
-  after it starts, for handlers that have not run once.
-
-Events that SNR's own components announce for whoever cares
-(``comms_disconnected``, ``button_released``, ...) are listed in
-`OPTIONAL_EVENTS` and never reported.
+A task no handler matches is dropped without a word (the thesis's rule), but an
+*event* nothing handles is almost always a mistake, as is a handler registered
+under the wrong kind of task (docs/errors.md, 15). The run loop calls
+`unhandled` for a task no handler matched; the node's wiring check calls
+`check_never_ran`. Events SNR's components announce for whoever cares are
+never reported.
 
 Example::
 
@@ -35,15 +24,14 @@ from snr.core.checks.student_code import describe_callable
 from snr.core.dispatch import HandlerTable
 from snr.prelude import DataKey, Page, Task, TaskName, TaskType
 
-__all__ = ["OPTIONAL_EVENTS", "WiringChecks"]
+__all__ = ["WiringChecks"]
 
-OPTIONAL_EVENTS: Set[TaskName] = {
+_OPTIONAL_EVENTS: Set[TaskName] = {
     "comms_connected",
     "comms_disconnected",
     "button_pressed",
     "button_released",
-}
-"""Events SNR's components announce whether or not anything listens: never reported."""
+}  # announced by SNR's components whether or not anything listens
 
 _BUILDER_OF = {
     "terminate": "tasks.terminate('why')",
@@ -71,7 +59,7 @@ class WiringChecks:
         checks.check_never_ran()    # a few seconds after the node started
     """
 
-    MAX_REPORTS = 100  # a loop inventing names must not fill the log
+    MAX_REPORTS = 100
 
     def __init__(
         self,
@@ -86,15 +74,14 @@ class WiringChecks:
         self.datastore = datastore
         self._reported: Set[Tuple[TaskType, str]] = set()
 
-    # -- a task that reached no handler -----------------------------------
     def unhandled(self, task: Task) -> None:
         """Warn, once per name, about an event no handler on this node matches."""
         if task.type is not TaskType.event:
-            return  # only events are mistakes: a page or process_data nobody handles is normal
+            return  # a page or process_data nobody handles is normal
         name = task.name
         if (
             not isinstance(name, str)
-            or name in OPTIONAL_EVENTS
+            or name in _OPTIONAL_EVENTS
             or name.startswith("snr_")
             or (TaskType.event, name) in self._reported
             or len(self._reported) >= self.MAX_REPORTS
@@ -147,17 +134,9 @@ class WiringChecks:
             ):
                 yield key[1]
 
-    # -- handlers that never ran ---------------------------------------------
     def check_never_ran(self) -> None:
-        """Warn about handlers that have not run and cannot, as they are registered.
-
-        Called once, at the node's wiring check. Two silent mix-ups are caught:
-
-        * a handler of ``(TaskType.event, key)`` for a *data key*: stored data
-          arrives as ``store_page`` tasks, never as events;
-        * a handler of ``(TaskType.process_data, key)`` while every page under
-          ``key`` is stored with ``process=False``, which sends no process_data.
-        """
+        """Warn about handlers that have not run and cannot: an event that is a data key, a
+        process_data handler of pages stored with ``process=False``."""
         for handler, task_id in self._never_ran():
             if not isinstance(task_id, tuple) or (task_id in self._reported):
                 continue
