@@ -132,11 +132,10 @@ def normalize_keys(keys: Keys, where: str) -> Tuple[str, ...]:
 
 
 class CommsLoop(ThreadLoop):
-    """Base of the comms components: forwards pages by key over its links.
+    """Base of the comms components: forwards the pages stored under ``keys`` over its links.
 
-    Subclasses open links (``open_link``) from ``begin()`` or ``loop()``.
-    Pages stored under ``keys`` go to every open link, except back to the
-    link they came from or to the node they came from.
+    Subclasses open links (``open_link``) from ``begin()`` or ``loop()``. A
+    page goes to every open link but the one it came from and its origin's.
 
     Example::
 
@@ -170,7 +169,7 @@ class CommsLoop(ThreadLoop):
     """The system its hellos name; peers of another (or none) are refused. None: no check."""
 
     secret: Optional[bytes] = None
-    """The secret its links prove they know and ask peers to prove; None: no authentication."""
+    """The secret its links prove and ask peers to prove; None: no authentication."""
 
     def __init__(
         self,
@@ -206,13 +205,12 @@ class CommsLoop(ThreadLoop):
         self.io_loop: Optional[IOLoop] = None  # the node's, while this component runs
         self._links_lock = threading.Lock()
         self._forwarded = frozenset(self.keys)
-        # Pages a link delivered under a forwarded key, until forward_page sees
-        # them: {id(page): (page, link)} so they are not sent back to that link.
+        # Pages a link delivered under a forwarded key, not to be sent back to it.
         self._arrived: Dict[int, Tuple[Page, Link]] = {}
         self._unsent_reported = False
         self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
         self.task_handlers = {(TaskType.store_page, key): self.forward_page for key in self.keys}
-        if parent.profiler is not None:  # the profile also tells what was sent and dropped
+        if parent.profiler is not None:
             parent.profiler.add_report(name, self.stats_text)
         self.burst_handlers = {(TaskType.store_page, key): self.forward_burst for key in self.keys}
 
@@ -646,7 +644,7 @@ class Outbox:
         return FIRST if first else QUEUED
 
     def put_first(self, frame: bytes) -> None:
-        """Queue ``frame`` before everything waiting, never to be pushed out (e.g. a header).
+        """Queue ``frame`` first in line, never to be pushed out (e.g. a header).
 
         Example::
 
@@ -692,7 +690,7 @@ class Outbox:
             self.loss.dropped(pushed_out)
 
     def _gone(self, entry: _Entry) -> None:
-        """``entry`` leaves (written or pushed out); the deque forgets it when it reaches it."""
+        """``entry`` leaves (written or pushed out); the deque forgets it later."""
         if entry.data is not None:
             self._bytes -= len(entry.data)
             entry.data = None
@@ -759,9 +757,7 @@ class Outbox:
                     del self._by_key[key]
 
     def take(self, timeout_s: Optional[float] = None) -> Optional[bytes]:
-        """For a writer thread: the oldest frame, waiting up to ``timeout_s`` for one.
-
-        Returns None when ``timeout_s`` passed, or the outbox is closed and empty.
+        """For a writer thread: the oldest frame, waiting up to ``timeout_s`` (else None).
 
         Example::
 
@@ -820,10 +816,7 @@ _SHOWN_ROLE_CHARS = 60  # a peer's role in log lines is cut to this many charact
 
 
 def shown_role(role: str) -> str:
-    """A peer's role as log lines show it: quoted, and cut short if it is long.
-
-    A role is whatever the peer's hello said; a hostile or broken peer may
-    send megabytes of it, which must not be copied into every log line.
+    """A peer's role as log lines show it: quoted, cut short (a hostile hello may send megabytes).
 
     Example::
 
@@ -836,26 +829,13 @@ def shown_role(role: str) -> str:
 
 
 class LinkState(enum.Enum):
-    """Where a link is in its life: one value, moved by the methods named below.
+    """Where a link is in its life: one value (the moves: docs/design.md, "A link's states").
 
-    ======== ================================================ ==========================
-    state    the link                                         moves on to
-    ======== ================================================ ==========================
-    HELLO    waits for the peer's hello (and proof, with a    OPEN, ENDING, CLOSED
-             secret): sends no page, takes none
-    OPEN     sends pages, reads, beats, judges silence        CLOSING, ENDING, CLOSED
-    CLOSING  ``close()``: writes what waits, then a bye       DRAINING, ENDING, CLOSED
-    DRAINING all written, half-closed: reads what still comes CLOSED (after ``drain_s``)
-    ENDING   ``abort()``, or the node's thread found the end: CLOSED (on the I/O thread)
-             no more reads; the I/O thread finishes it
-    CLOSED   transport closed, the `CommsLoop` told           (the end)
-    ======== ================================================ ==========================
-
-    Whether the link reads is the one other thing that changes: it stops
-    while pages it read wait for room in the node's queue (``Link._held``).
-
-    A link whose node names no system and has no secret starts OPEN (as
-    older SNR did); any other starts in HELLO (docs/comms.md, "Who may connect").
+    HELLO (the handshake: no page either way; a node with no system and no
+    secret starts OPEN) → OPEN (pages, beats) → CLOSING (``close()``: writing
+    what waits, then a bye) → DRAINING (half-closed, reading the last bytes)
+    → CLOSED (transport closed, the `CommsLoop` told); ENDING when aborted or
+    its end was found on the node's thread, finished on the I/O thread.
 
     Example::
 
@@ -879,20 +859,11 @@ _ENDED = (LinkState.ENDING, LinkState.CLOSED)  # no more reading or writing
 class Link:
     """One live connection to one peer, served by the node's `IOLoop` (no thread of its own).
 
-    The I/O loop reads the transport when bytes arrive, cuts them into frames
-    and hands pages to the `CommsLoop`; it writes queued frames when the
-    transport has room. The link ends on the loop's thread when the peer goes
-    away, a bad length header arrives, the peer falls silent, or the link is
-    closed or aborted: it closes the transport and tells the `CommsLoop`.
-
-    Liveness (docs/wire-format.md 3.3): a link that has sent nothing for
-    ``beat_s`` sends a beat; a sign of life is a whole frame, or 16 KiB more
-    of one still arriving. A connection with no well-formed frame within
-    ``hello_timeout_s`` is closed; a peer that promised beats and is silent
-    for ``max(dead_after_s, 3 * its beat_s)`` is lost. A link closed in order
-    sends a bye last, to a peer whose hello said it understands one. While
-    the node's queue is over its high-water mark the link reads nothing
-    (``_held``); bytes piling up in the OS meanwhile are the peer's sign of life.
+    The loop reads the transport, cuts frames and hands pages to the
+    `CommsLoop`, and writes the outbox when the transport has room. The link
+    beats when quiet, ends when the peer goes, falls silent (wire format 3.3)
+    or sends a bad length, and reads nothing while the node's queue is over
+    its high-water mark (``_held``; docs/design.md, "One I/O thread per node").
 
     Example::
 
@@ -1035,7 +1006,7 @@ class Link:
             if self._peer_takes_bye:  # older peers never get a frame they do not know
                 self._put_control(encode_bye())
             self.outbox.close()
-            self.io.call_soon(self._flush_then_end)
+            self.io.call_soon(self._end_writing)
 
     def abort(self, reason: str = "the link was closed") -> None:
         """End the connection now, dropping what is queued; ``reason`` goes in the log line."""
@@ -1078,9 +1049,7 @@ class Link:
         if self.outbox.put(frame, None, self.transport.send) == FIRST:
             self._wake_writer()
 
-    def _wake_writer(self) -> None:
-        # The outbox stopped being empty. The node's thread writes it itself
-        # before it sleeps, or the loop's thread a moment later (write_soon).
+    def _wake_writer(self) -> None:  # the outbox stopped being empty
         if self.io.in_loop_thread():
             self._want_write()
         else:
@@ -1129,13 +1098,9 @@ class Link:
         self._timer = self.io.call_later(self.owner.hello_timeout_s + _LATE_S, self._tick)
         self.on_writable()  # the hello goes at once
 
-    def _flush_then_end(self) -> None:
-        if self.state is _CLOSING and not len(self.outbox):
-            self._end_writing()
-
     def _end_writing(self) -> None:
         """CLOSING, everything sent: half-close, then read what still comes for a moment."""
-        if self.state is not _CLOSING:
+        if self.state is not _CLOSING or len(self.outbox):
             return
         self.state = _DRAINING
         self.transport.end_writing()
@@ -1148,7 +1113,8 @@ class Link:
         self._timer = None
         if self.state in _ENDED:
             return
-        silence = self._silence_while_paused() if self._held else self._silence()
+        # A paused reader judges silence only while nothing waits unread in the OS.
+        silence = self._silence() if not self._held or self._note_unread() == 0 else None
         if silence is not None:
             self._finish(silence)
             return
@@ -1170,10 +1136,10 @@ class Link:
             self._timer = self.io.call_later(self._next_look_s(), self._tick)
 
     def _next_look_s(self) -> float:
-        """Seconds until the link's first deadline: a beat owed, a silence or hello limit.
+        """Seconds until the first deadline: a beat owed, a silence or hello limit.
 
-        While pages are held or dropped, every quarter beat (their counts move
-        without a frame); a deadline already past, a quarter beat later.
+        A quarter beat while pages are held or dropped (their counts move
+        without a frame), or when the deadline has passed.
         """
         if self._held or self.loss.dropping:
             return self._tick_s
@@ -1190,8 +1156,7 @@ class Link:
         return wait_s if wait_s > 0 else self._tick_s
 
     def _check_recovered(self) -> None:
-        # The peer has caught up: everything queued went out, nothing dropped for a while.
-        if self.loss.dropping and not len(self.outbox):
+        if self.loss.dropping and not len(self.outbox):  # the peer has caught up
             self.loss.recovered(quiet_s=self.owner.recovered_after_s)
 
     def on_io_stop(self) -> None:
@@ -1202,8 +1167,8 @@ class Link:
         """End the link: at once on the I/O loop's thread, else soon, by that thread."""
         if self.io.in_loop_thread():
             self._finish(reason)
-        else:  # the node's thread, reading while idle, leaves it to the loop's
-            self.state = LinkState.ENDING  # and reads it no more meanwhile
+        else:  # the node's thread, reading while idle, reads it no more meanwhile
+            self.state = LinkState.ENDING
             self.io.call_soon(lambda: self._finish(reason))
 
     def _finish(self, reason: str) -> None:
@@ -1220,8 +1185,8 @@ class Link:
             if self._timer is not None:
                 self._timer.cancel()
             self.io.forget(self)
-            # Closing a socket with unread bytes makes the OS reset the
-            # connection, and the peer may then lose what it has not read yet.
+            # Unread bytes make the OS reset the connection on close, and the
+            # peer may then lose what it has not read yet.
             for _ in range(16):
                 try:
                     if not self.transport.recv_into(self.io.buffer):
@@ -1242,11 +1207,8 @@ class Link:
         try:
             self._read()
         except Exception as error:  # a bug must not kill the node silently
-            self._failed(error)
-
-    def _failed(self, error: Exception) -> None:
-        self.owner.log.exception("Link to %s failed", self.label)
-        self._end(f"unexpected {type(error).__name__}: {error}")
+            self.owner.log.exception("Link to %s failed", self.label)
+            self._end(f"unexpected {type(error).__name__}: {error}")
 
     def _read(self) -> None:
         # The I/O loop's thread, or the node's while it is idle: anything
@@ -1366,13 +1328,6 @@ class Link:
             self._unread_seen = unread
         return unread
 
-    def _silence_while_paused(self) -> Optional[str]:
-        """`_silence` for a link that does not read: judged only while nothing waits unread."""
-        unread = self._note_unread()
-        if unread is None or unread:
-            return None
-        return self._silence()
-
     def _silence(self) -> Optional[str]:
         """Why the link is lost if the peer has been quiet too long, else None."""
         now = time.monotonic()
@@ -1451,15 +1406,11 @@ class Link:
         watch_link(self.owner, self)
 
     def _refuse(self, refusal: Refused) -> None:
-        """The peer may not link here: say why (once per peer), count it, close the connection.
-
-        Nothing it sent is stored: pages read with the refused frame are dropped.
-        """
-        if self.state in _ENDED:
-            return
-        self.refusal = refusal
-        self.owner.on_refused(self, refusal)
-        self.abort(f"refused: {refusal.reason}")
+        """The peer may not link here: say why (once per peer), count it, close, store nothing."""
+        if self.state not in _ENDED:
+            self.refusal = refusal
+            self.owner.on_refused(self, refusal)
+            self.abort(f"refused: {refusal.reason}")
 
     def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
         # Said by the component, not per link: sixty hostile connections must
