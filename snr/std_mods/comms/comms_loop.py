@@ -333,15 +333,13 @@ class CommsLoop(ThreadLoop):
             self.links = (*self.links, link)
         self._unsent_reported = False
         link.start()
-        if link.state is _OPEN:  # no handshake: pages may pass at once (else: announce)
+        if link.handshake.done:  # no handshake: pages may pass at once (else: on hello)
             self.announce(link)
         return link
 
     def announce(self, link: Link) -> None:
-        """The link is open for pages: schedule ``COMMS_CONNECTED`` (once per link)."""
-        if not link.announced:
-            link.announced = True
-            self.schedule(tasks.event(COMMS_CONNECTED, [self.name, link.transport.peer]))
+        """The link is open for pages (its handshake is done): schedule ``COMMS_CONNECTED``."""
+        self.schedule(tasks.event(COMMS_CONNECTED, [self.name, link.transport.peer]))
 
     def on_refused(self, link: Link, refusal: Refused) -> None:
         """A peer was refused (I/O thread): log it once per peer (host, role, why), count it.
@@ -387,7 +385,7 @@ class CommsLoop(ThreadLoop):
             return  # said once per peer by on_refused; it was never open for pages
         if not self.is_terminated():
             self.on_link_lost(link, reason)
-            if link.announced:  # only a link that was open for pages is news to handlers
+            if link.handshake.done:  # only a link that was open for pages is news to handlers
                 self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
 
     def say(
@@ -503,9 +501,8 @@ class CommsLoop(ThreadLoop):
         for link in self.links:  # aborted ones end on the I/O thread's next pass
             link.wait_closed(max(0.1, deadline - time.monotonic()))
         self._release_io_loop()
-        self.news.flush()  # what a flood of connections or bad frames left uncounted aloud
-        self.bad_frame_news.flush()
-        self.refusal_news.flush()
+        for news in (self.news, self.bad_frame_news, self.refusal_news):
+            news.flush()  # what a flood of connections or bad frames left unsaid
 
 
 # -- the outbox: frames waiting for one peer ------------------------------
@@ -617,30 +614,14 @@ class Outbox:
 
             outbox.put_all([encode_page(page) for page in pages], "depth")
         """
-        size = 0
-        for frame in frames:
-            size += len(frame)
         with self._lock:
             if self.closed:
                 return CLOSED
             first = not self._live
-            if self._bytes + size <= self.max_bytes:  # the usual case: all fit
-                run = [_Entry(key, frame) for frame in frames]
-                self._entries.extend(run)
-                waiting = self._by_key.get(key)
-                if waiting is None:
-                    self._by_key[key] = collections.deque(run)
-                else:
-                    waiting.extend(run)
-                self._live += len(run)
-                self._bytes += size
-            else:  # room is made frame by frame, so each drop is decided as in put
-                for frame in frames:
-                    if self._bytes + len(frame) > self.max_bytes:
-                        self._make_room(len(frame), key)
-                    self._append(key, frame)
-            if first:
-                self._ready.notify()
+            for frame in frames:
+                if self._bytes + len(frame) > self.max_bytes:
+                    self._make_room(len(frame), key)
+                self._append(key, frame)
         return FIRST if first else QUEUED
 
     def put_first(self, frame: bytes) -> None:
@@ -879,7 +860,6 @@ class Link:
             1,000, for ``link_hints.py``); None otherwise.
         went_silent: the link was closed because the peer fell silent.
         refusal: why the peer was refused (`Refused`), or None.
-        announced: the link reached OPEN and COMMS_CONNECTED was scheduled.
         peer_said_bye: the peer sent a bye: the end that follows is orderly.
         loss: the `LossReport` of pages dropped because the peer fell behind.
     """
@@ -903,7 +883,6 @@ class Link:
         self.bad_frames = 0
         self.went_silent = False
         self.refusal: Optional[Refused] = None
-        self.announced = False
         self.peer_said_bye = False
         self._peer_takes_bye = False  # its hello said it understands a bye frame
         self.pages_sent = 0
@@ -1400,6 +1379,7 @@ class Link:
         self.hello_at = time.monotonic()
         if self.state is _HELLO:
             self.state = _OPEN
+        if self.handshake.needed:  # (else it was announced when it opened)
             self.owner.announce(self)
         self.io.call_soon(self._look_again)  # beats are owed from now on
         self.owner.on_hello(self)
