@@ -333,7 +333,7 @@ class CommsLoop(ThreadLoop):
             self.links = (*self.links, link)
         self._unsent_reported = False
         link.start()
-        if link.handshake.done:  # no handshake: pages may pass at once (else: on hello)
+        if not link.handshake.needed:  # pages may pass at once (else: at the hello)
             self.announce(link)
         return link
 
