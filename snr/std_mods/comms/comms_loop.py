@@ -1,22 +1,14 @@
 """`CommsLoop`, `Link`, `Outbox`: how a node forwards pages by key to its peers.
 
-A `CommsLoop` (thesis 6.4.1) is the comms component a node gets. It forwards
-every page stored under its keys to each open `Link` (one live connection to
-one peer, over a `Transport` of ``io_loop.py``), and stores every page a link
-receives, with the page's original origin and time. A link queues frames in
-its `Outbox` (bounded, newest per key wins, drops counted) and has no thread
-of its own: the node's one `IOLoop` reads its transport when bytes arrive and
-writes when it has room. `SocketsServerLoop`, `SocketsClientLoop` and
-`PipeLoop` are comms loops; they differ only in how they open their links.
+A `CommsLoop` (thesis 6.4.1) forwards every page stored under its keys to
+each open `Link` (one connection to one peer, over a `Transport` of
+``io_loop.py``) and stores every page a link receives, with its origin and
+time. A link queues frames in its `Outbox` and has no thread of its own: the
+node's one `IOLoop` reads and writes it. `SocketsServerLoop`,
+`SocketsClientLoop` and `PipeLoop` differ only in how they open their links
+(a page's whole trip: docs/design.md).
 
-How a page travels::
-
-    node thread                          peer's I/O thread         peer's node thread
-    store_page → CommsLoop.forward_page  →  frame bytes  →  decode → schedule(store_page)
-                 → Link.send → Outbox     (written at once, or     → datastore
-                                           by the I/O thread)      → process_data
-
-Example (what `SocketsPair` and `PipeLoopFactory` build for you)::
+Example::
 
     class MyLoop(CommsLoop):
         def begin(self) -> None:
@@ -108,7 +100,7 @@ DEFAULT_DEAD_AFTER_S = 4.0
 
 _STORE_PAGE = TaskType.store_page
 _NEWS_TICK_S = 0.5  # while news may be counted, how often its counts are looked at
-_NEWS_WINDOW_S = 10.0  # the longest window of the news logs (RateLimitedLog)
+_NEWS_WINDOW_S = 10.0  # the longest window of the news logs
 _MAX_REFUSED_NOTED = 10_000  # refused peers remembered (so each is logged once)
 
 Keys = Union[DataKey, Sequence[DataKey], None]
@@ -141,12 +133,10 @@ def normalize_keys(keys: Keys, where: str) -> Tuple[str, ...]:
 
 
 class CommsLoop(ThreadLoop):
-    """Base of the comms components: forwards pages by key over its links.
+    """Base of the comms components: forwards the pages stored under ``keys`` over its links.
 
-    Subclasses open links (``open_link``) from ``begin()`` or ``loop()``:
-    a sockets server per accepted client, a sockets client per connection,
-    a pipe loop once. Pages stored under ``keys`` go to every open link,
-    except back to the link they came from or to the node they came from.
+    Subclasses open links (``open_link``) from ``begin()`` or ``loop()``. A
+    page goes to every open link but the one it came from and its origin's.
 
     Example::
 
@@ -155,12 +145,10 @@ class CommsLoop(ThreadLoop):
     Attributes:
         keys: the data keys forwarded to peers.
         links: the links not yet closed (read-only tuple, replaced on change).
-        closed_totals: the counters of the links that have closed, added up
-            (``links``, ``pages_sent``, ``pages_received``, ``dropped``,
-            ``bad_frames``), so that what a dead link dropped is not forgotten.
+        closed_totals: the counters of the closed links, added up.
         dead_after_s: a peer that promised beats and is silent this long is lost.
-        beat_s: how often a quiet link sends a beat (a quarter of ``dead_after_s``,
-            at most 1 s); promised to the peer in the hello.
+        beat_s: how often a quiet link sends a beat (a quarter of
+            ``dead_after_s``, at most 1 s); promised in the hello.
     """
 
     hello_timeout_s: float = 5.0
@@ -182,7 +170,7 @@ class CommsLoop(ThreadLoop):
     """The system its hellos name; peers of another (or none) are refused. None: no check."""
 
     secret: Optional[bytes] = None
-    """The secret its links prove they know and ask peers to prove; None: no authentication."""
+    """The secret its links prove and ask peers to prove; None: no authentication."""
 
     def __init__(
         self,
@@ -207,8 +195,8 @@ class CommsLoop(ThreadLoop):
         self.news = RateLimitedLog(self.log, burst=20, window_s=10.0)
         self.bad_frame_news = RateLimitedLog(self.log, burst=5, window_s=5.0)
         self._news_lock = threading.Lock()
-        self._news_at = 0.0  # when news was last counted
-        self._news_ticking = False  # the I/O thread ticks the news (see _news_came)
+        self._news_at = 0.0  # when news was last counted, not logged
+        self._news_ticking = False  # the I/O thread says the counts (see say)
         self.closed_totals: Dict[str, int] = dict.fromkeys(
             ("links", "pages_sent", "pages_received", "dropped", "bad_frames", "refused"), 0
         )
@@ -218,24 +206,20 @@ class CommsLoop(ThreadLoop):
         self.io_loop: Optional[IOLoop] = None  # the node's, while this component runs
         self._links_lock = threading.Lock()
         self._forwarded = frozenset(self.keys)
-        # Pages a link delivered under a forwarded key, until forward_page sees
-        # them: {id(page): (page, link)} so they are not sent back to that link.
+        # Pages a link delivered under a forwarded key, not to be sent back to it.
         self._arrived: Dict[int, Tuple[Page, Link]] = {}
         self._unsent_reported = False
         self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
         self.task_handlers = {(TaskType.store_page, key): self.forward_page for key in self.keys}
-        if parent.profiler is not None:  # the profile also tells what was sent and dropped
+        if parent.profiler is not None:
             parent.profiler.add_report(name, self.stats_text)
         self.burst_handlers = {(TaskType.store_page, key): self.forward_burst for key in self.keys}
 
     def forward_burst(self, run: List[Task]) -> SomeTasks:
-        """`forward_page` for a run of pages under one key: encoded, then queued in one go.
+        """`forward_page` for a run of stored pages under one key, queued in one go.
 
-        The node calls it for ``store_page`` tasks that waited one behind the
-        other (a handler that stored many pages, a replayed recording), all
-        stored already. One link, open, and no page from a link to keep from
-        echoing (the usual pair sending its own pages): the frames go to the
-        link's outbox with one call. Anything else: page by page.
+        With one open link and no received page to keep from echoing back
+        (the usual pair), the frames go to its outbox together; else page by page.
 
         Example (the node calls it; a test may too)::
 
@@ -246,45 +230,35 @@ class CommsLoop(ThreadLoop):
             for task in run:
                 self.forward_page(task, (TaskType.store_page, task.name))
             return None
-        link = links[0]
-        peer = link.peer_role
+        peer = links[0].peer_role
         frames: List[bytes] = []
         for task in run:
             page = task.page()
-            if page is None or page.origin == peer:
-                continue  # a bad task (the node core said so), or the peer's own page
-            try:
-                frames.append(encode_page(page))
-            except NotSerializableError as error:
-                self._report_unsendable(page, error)
+            if page is not None and page.origin != peer:  # (None: the node core said so)
+                try:
+                    frames.append(encode_page(page))
+                except NotSerializableError as error:
+                    self._report_unsendable(page, error)
         if frames:
-            link.send_burst(frames, run[0].name)
+            links[0].send_burst(frames, run[0].name)
         return None
 
-    # -- node thread: sending -------------------------------------------------
     def forward_page(self, task: Task, key: TaskId) -> SomeTasks:
         """Send the page just stored to every open link it did not come from."""
         page = task.page()
         if page is None:
             return None  # the node core has already reported the bad task
         source = None
-        if self._arrived:  # pages from a link, under a key this node forwards
+        if self._arrived:  # a page from a link, under a key this node forwards
             arrived = self._arrived.pop(id(page), None)
             if arrived is not None and arrived[0] is page:
                 source = arrived[1]
         origin = page.origin
-        links = self.links
-        targets: Sequence[Link]
-        if len(links) == 1:  # the usual case, a pair: no list to build
-            link = links[0]
-            sendable = link is not source and link.state is _OPEN and link.peer_role != origin
-            targets = links if sendable else ()
-        else:
-            targets = [
-                link
-                for link in links
-                if link is not source and link.state is _OPEN and link.peer_role != origin
-            ]
+        targets = [
+            link
+            for link in self.links
+            if link is not source and link.state is _OPEN and link.peer_role != origin
+        ]
         if not targets:
             if source is None and not any(link.state is _OPEN for link in self.links):
                 self._report_unsent(page)
@@ -294,9 +268,8 @@ class CommsLoop(ThreadLoop):
         except NotSerializableError as error:
             self._report_unsendable(page, error)
             return None
-        page_key = page.key
         for link in targets:
-            link.send(frame, True, page_key)  # a drop is counted and reported by the link
+            link.send(frame, page.key)  # a drop is counted and reported by the link
         return None
 
     def _report_unsent(self, page: Page) -> None:
@@ -316,11 +289,7 @@ class CommsLoop(ThreadLoop):
 
     # -- I/O thread: receiving -------------------------------------------------
     def deliver(self, link: Link, pages: List[Page]) -> None:
-        """Store pages a link received (called by the thread that read them).
-
-        The link calls it only while the node's queue has room (else it
-        stops reading: the bytes wait in the OS), so no thread waits here.
-        """
+        """Store pages a link received (on the thread that read them; the queue has room)."""
         forwarded = self._forwarded
         if forwarded:
             for page in pages:
@@ -335,9 +304,7 @@ class CommsLoop(ThreadLoop):
 
     # -- opening and closing links --------------------------------------------
     def start_thread(self) -> None:
-        """Acquire the node's I/O loop, then start as every loop does (``begin()``, its thread)."""
-        # Links need the node's I/O loop from begin() on; a restart after a
-        # failed reload keeps the one it has.
+        """Acquire the node's I/O loop (links need it from ``begin()`` on), then start."""
         if self.io_loop is None:
             self.io_loop = IOLoop.acquire(self.parent)
         try:
@@ -367,21 +334,16 @@ class CommsLoop(ThreadLoop):
             self.links = (*self.links, link)
         self._unsent_reported = False
         link.start()
-        if link.state is _OPEN:  # no handshake: pages may pass at once (else: announce)
+        if not link.handshake.needed:  # pages may pass at once (else: at the hello)
             self.announce(link)
         return link
 
     def announce(self, link: Link) -> None:
-        """The link is open for pages: schedule ``COMMS_CONNECTED`` (once per link)."""
-        if not link.announced:
-            link.announced = True
-            self.schedule(tasks.event(COMMS_CONNECTED, [self.name, link.transport.peer]))
+        """The link is open for pages (its handshake is done): schedule ``COMMS_CONNECTED``."""
+        self.schedule(tasks.event(COMMS_CONNECTED, [self.name, link.transport.peer]))
 
     def on_refused(self, link: Link, refusal: Refused) -> None:
-        """A peer was refused (I/O thread): log it once per peer, count it every time.
-
-        A peer is its host, its role and why: a client that retries every
-        second is one line; many peers are at most five lines in 5 s, then a count.
+        """A peer was refused (I/O thread): log it once per peer (host, role, why), count it.
 
         Example (what the log says)::
 
@@ -394,21 +356,20 @@ class CommsLoop(ThreadLoop):
             if seen == 0 and len(self.refused_peers) >= _MAX_REFUSED_NOTED:
                 self.refused_peers.clear()  # a flood of peers: remember the newest ones
             self.refused_peers[key] = seen + 1
-        if seen:
-            return
-        if self.refusal_news.report(
-            "Peers refused",
-            logging.WARNING,
-            "Refused %s %s at %s (this node: %r, system %r): %s. The connection was "
-            "closed; nothing it sent was stored.",
-            self.peer_noun,
-            link.peer_name if link.peer_role else "(no hello yet)",
-            link.transport.peer,
-            self.parent.role,
-            self.system,
-            refusal.reason,
-        ):
-            self._news_came()
+        if not seen:
+            self.say(
+                "Peers refused",
+                logging.WARNING,
+                "Refused %s %s at %s (this node: %r, system %r): %s. The connection was "
+                "closed; nothing it sent was stored.",
+                self.peer_noun,
+                link.peer_name if link.peer_role else "(no hello yet)",
+                link.transport.peer,
+                self.parent.role,
+                self.system,
+                refusal.reason,
+                news=self.refusal_news,
+            )
 
     def link_closed(self, link: Link, reason: str) -> None:
         """A link has closed (called on the I/O thread); log it once."""
@@ -425,68 +386,41 @@ class CommsLoop(ThreadLoop):
             return  # said once per peer by on_refused; it was never open for pages
         if not self.is_terminated():
             self.on_link_lost(link, reason)
-            if link.announced:  # only a link that was open for pages is news to handlers
+            if link.handshake.done:  # only a link that was open for pages is news to handlers
                 self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
 
-    def say(self, what: str, level: int, msg: str, *args: Any) -> None:
+    def say(
+        self, what: str, level: int, msg: str, *args: Any, news: Optional[RateLimitedLog] = None
+    ) -> None:
         """Log news of links (connects, hellos, losses) in full, unless it comes in a flood.
 
-        ``what`` names the kind of news, e.g. ``"Clients connected"``: up to
-        20 lines of a kind in 10 s are logged in full, then they are counted
-        and the count is logged every 10 s (`RateLimitedLog`). A class of
-        robots connecting is logged robot by robot; a program that connects a
-        thousand times a second costs a line every 10 s.
+        ``what`` names the kind of news: up to 20 lines of a kind in 10 s are
+        logged in full, then they are counted and the count is logged every
+        10 s (`RateLimitedLog`; ``news`` is another such log, e.g. the bad frames').
 
         Example::
 
             self.say("Links lost", logging.WARNING, "Lost the link to %s", link.label)
         """
-        if self.news.report(what, level, msg, *args):
-            self._news_came()
+        if (news or self.news).report(what, level, msg, *args):
+            with self._news_lock:  # counted, not logged: the I/O thread says the counts later
+                self._news_at = time.monotonic()
+                io = self.io_loop
+                if self._news_ticking or io is None:
+                    return
+                self._news_ticking = True
+            io.call_soon(lambda: io.call_later(_NEWS_TICK_S, self._tick_news))
 
-    def say_bad_frame(self, what: str, level: int, msg: str, *args: Any) -> None:
-        """`say` for bad frames: at most five lines in 5 s, then a count.
-
-        Example::
-
-            self.say_bad_frame("Bad frames", logging.WARNING, "Bad frame from %s", link.label)
-        """
-        if self.bad_frame_news.report(what, level, msg, *args):
-            self._news_came()
-
-    def tick_news(self) -> None:
-        """Log the counts of news that came in a flood, once their window has passed.
-
-        The I/O thread calls it every half second while counted news may be
-        pending, and never otherwise: quiet comms wake no thread for it.
-
-        Example::
-
-            comms.tick_news()
-        """
-        self.news.tick()
-        self.bad_frame_news.tick()
-        self.refusal_news.tick()
-
-    def _news_came(self) -> None:
-        """Any thread: news was counted, not logged; tick until its window has passed."""
-        with self._news_lock:
-            self._news_at = time.monotonic()
-            io = self.io_loop
-            if self._news_ticking or io is None:
-                return
-            self._news_ticking = True
-        io.call_soon(lambda: io.call_later(_NEWS_TICK_S, self._tick_news_later))
-
-    def _tick_news_later(self) -> None:
+    def _tick_news(self) -> None:
         """I/O thread: say what a flood left counted; again soon while news may be pending."""
-        self.tick_news()
+        for news in (self.news, self.bad_frame_news, self.refusal_news):
+            news.tick()
         io = self.io_loop
         with self._news_lock:
             if io is None or time.monotonic() - self._news_at > _NEWS_WINDOW_S + _NEWS_TICK_S:
                 self._news_ticking = False  # every count has been said
                 return
-        io.call_later(_NEWS_TICK_S, self._tick_news_later)
+        io.call_later(_NEWS_TICK_S, self._tick_news)
 
     def on_hello(self, link: Link) -> None:
         """The peer said which node it is (called on the node's I/O thread)."""
@@ -499,11 +433,7 @@ class CommsLoop(ThreadLoop):
         )
 
     def on_link_lost(self, link: Link, reason: str) -> None:
-        """Log that the peer went away (subclasses say what happens next).
-
-        A warning, unless the peer said goodbye (``link.peer_said_bye``): a
-        node that stops in order is news, not a fault.
-        """
+        """Log that the peer went away: a warning, unless it said goodbye (stopped in order)."""
         if link.peer_said_bye:
             self.say("Links ended", logging.INFO, "The link to %s ended: %s.", link.label, reason)
         else:
@@ -572,9 +502,8 @@ class CommsLoop(ThreadLoop):
         for link in self.links:  # aborted ones end on the I/O thread's next pass
             link.wait_closed(max(0.1, deadline - time.monotonic()))
         self._release_io_loop()
-        self.news.flush()  # what a flood of connections or bad frames left uncounted aloud
-        self.bad_frame_news.flush()
-        self.refusal_news.flush()
+        for news in (self.news, self.bad_frame_news, self.refusal_news):
+            news.flush()  # what a flood of connections or bad frames left unsaid
 
 
 # -- the outbox: frames waiting for one peer ------------------------------
@@ -611,15 +540,12 @@ class _Entry:
 class Outbox:
     """Frames waiting to be written to one peer, oldest first; bounded, newest per key wins.
 
-    Every link that writes to a peer queues here: TCP, pipe and serial (the
-    policy and why: docs/design.md, "One outbox for every link"). When a new
-    frame does not fit, it pushes out the oldest frame waiting under its own
-    key, or, if its key has none waiting, the oldest of the key with the most
-    waiting: a flood under one key never pushes out the last value of
-    another. Frames with no key are never pushed out. ``put`` never blocks.
-
-    Safe from any thread: every change and every write happens under one
-    lock, so frames leave in the order they were put and each whole.
+    Every link queues here: TCP, pipe and serial (docs/design.md, "One outbox
+    for every link"). A frame that does not fit pushes out the oldest frame
+    waiting under its own key, else the oldest of the key with the most
+    waiting; frames with no key are never pushed out. ``put`` never blocks.
+    Every change and write happens under one lock, so frames leave in order
+    and whole, from any thread.
 
     Example::
 
@@ -655,8 +581,8 @@ class Outbox:
         """Queue ``frame``, or with ``write`` and nothing waiting, write it at once.
 
         Returns `SENT`, `FIRST` (queued into an empty outbox: wake the
-        writer), `QUEUED` or `CLOSED`. A frame written in part is queued for
-        the rest, first in line and never pushed out.
+        writer), `QUEUED` or `CLOSED`. The rest of a frame written in part
+        waits first in line.
 
         Example::
 
@@ -689,34 +615,18 @@ class Outbox:
 
             outbox.put_all([encode_page(page) for page in pages], "depth")
         """
-        size = 0
-        for frame in frames:
-            size += len(frame)
         with self._lock:
             if self.closed:
                 return CLOSED
             first = not self._live
-            if self._bytes + size <= self.max_bytes:  # the usual case: all fit
-                run = [_Entry(key, frame) for frame in frames]
-                self._entries.extend(run)
-                waiting = self._by_key.get(key)
-                if waiting is None:
-                    self._by_key[key] = collections.deque(run)
-                else:
-                    waiting.extend(run)
-                self._live += len(run)
-                self._bytes += size
-            else:  # room is made frame by frame, so each drop is decided as in put
-                for frame in frames:
-                    if self._bytes + len(frame) > self.max_bytes:
-                        self._make_room(len(frame), key)
-                    self._append(key, frame)
-            if first:
-                self._ready.notify()
+            for frame in frames:
+                if self._bytes + len(frame) > self.max_bytes:
+                    self._make_room(len(frame), key)
+                self._append(key, frame)
         return FIRST if first else QUEUED
 
     def put_first(self, frame: bytes) -> None:
-        """Queue ``frame`` before everything waiting, never to be pushed out (e.g. a header).
+        """Queue ``frame`` first in line, never to be pushed out (e.g. a header).
 
         Example::
 
@@ -762,7 +672,7 @@ class Outbox:
             self.loss.dropped(pushed_out)
 
     def _gone(self, entry: _Entry) -> None:
-        """``entry`` leaves (written or pushed out); the deque forgets it when it reaches it."""
+        """``entry`` leaves (written or pushed out); the deque forgets it later."""
         if entry.data is not None:
             self._bytes -= len(entry.data)
             entry.data = None
@@ -770,8 +680,6 @@ class Outbox:
 
     def write_to(self, write: Write) -> bool:
         """Write what ``write`` takes now, many frames a call; True once nothing waits.
-
-        What does not fit stays first in line (its key can no longer push it out).
 
         Raises:
             OSError: the peer is gone (not BlockingIOError: a full buffer means "later").
@@ -831,9 +739,7 @@ class Outbox:
                     del self._by_key[key]
 
     def take(self, timeout_s: Optional[float] = None) -> Optional[bytes]:
-        """For a writer thread: the oldest frame, waiting up to ``timeout_s`` for one.
-
-        Returns None when ``timeout_s`` passed, or the outbox is closed and empty.
+        """For a writer thread: the oldest frame, waiting up to ``timeout_s`` (else None).
 
         Example::
 
@@ -854,17 +760,14 @@ class Outbox:
     def close(self, discard: bool = False) -> int:
         """Take no more frames; with ``discard``, forget those waiting. How many were forgotten.
 
-        A writer thread in ``take`` gets what is left, then None.
-
         Example::
 
             outbox.close(discard=True)   # 3
         """
         with self._lock:
             self.closed = True
-            forgotten = 0
+            forgotten = self._live if discard else 0
             if discard:
-                forgotten = self._live
                 self._entries.clear()
                 self._by_key.clear()
                 self._live = self._bytes = 0
@@ -895,10 +798,7 @@ _SHOWN_ROLE_CHARS = 60  # a peer's role in log lines is cut to this many charact
 
 
 def shown_role(role: str) -> str:
-    """A peer's role as log lines show it: quoted, and cut short if it is long.
-
-    A role is whatever the peer's hello said; a hostile or broken peer may
-    send megabytes of it, which must not be copied into every log line.
+    """A peer's role as log lines show it: quoted, cut short (a hostile hello may send megabytes).
 
     Example::
 
@@ -911,26 +811,13 @@ def shown_role(role: str) -> str:
 
 
 class LinkState(enum.Enum):
-    """Where a link is in its life: one value, moved by the methods named below.
+    """Where a link is in its life: one value (the moves: docs/design.md, "A link's states").
 
-    ======== ================================================ ==========================
-    state    the link                                         moves on to
-    ======== ================================================ ==========================
-    HELLO    waits for the peer's hello (and proof, with a    OPEN, ENDING, CLOSED
-             secret): sends no page, takes none
-    OPEN     sends pages, reads, beats, judges silence        CLOSING, ENDING, CLOSED
-    CLOSING  ``close()``: writes what waits, then a bye       DRAINING, ENDING, CLOSED
-    DRAINING all written, half-closed: reads what still comes CLOSED (after ``drain_s``)
-    ENDING   ``abort()``, or the node's thread found the end: CLOSED (on the I/O thread)
-             no more reads; the I/O thread finishes it
-    CLOSED   transport closed, the `CommsLoop` told           (the end)
-    ======== ================================================ ==========================
-
-    Whether the link reads is the one other thing that changes: it stops
-    while pages it read wait for room in the node's queue (``Link._held``).
-
-    A link whose node names no system and has no secret starts OPEN (as
-    older SNR did); any other starts in HELLO (docs/comms.md, "Who may connect").
+    HELLO (the handshake: no page either way; a node with no system and no
+    secret starts OPEN) → OPEN (pages, beats) → CLOSING (``close()``: writing
+    what waits, then a bye) → DRAINING (half-closed, reading the last bytes)
+    → CLOSED (transport closed, the `CommsLoop` told); ENDING when aborted or
+    its end was found on the node's thread, finished on the I/O thread.
 
     Example::
 
@@ -954,28 +841,11 @@ _ENDED = (LinkState.ENDING, LinkState.CLOSED)  # no more reading or writing
 class Link:
     """One live connection to one peer, served by the node's `IOLoop` (no thread of its own).
 
-    The I/O loop reads the link's transport when bytes arrive, cuts them into
-    frames and hands pages to the `CommsLoop`; it writes queued frames when
-    the transport has room. The link ends on the loop's thread when the peer
-    goes away, a bad length header arrives, the peer falls silent, or the
-    link is closed or aborted: it closes the transport and tells the
-    `CommsLoop`.
-
-    Liveness: both sides promise a sign of life in their hello (``beat_s``);
-    a link that has sent nothing for that long sends a beat. A sign of life
-    is a whole frame, or 16 KiB more of one still arriving (a big page on
-    slow Wi-Fi). A connection with no well-formed frame within
-    ``hello_timeout_s`` is closed; a peer that promised beats and is silent
-    for ``max(dead_after_s, 3 * its beat_s)`` is lost (also while pages flow
-    the other way), and the log says how many pages may have been lost.
-
-    Goodbye: a link closed in order sends a bye frame last, to a peer whose
-    hello said it understands one, so that peer logs the end as news.
-
-    Backpressure: while the node's queue is over its high-water mark the
-    link stops reading (the bytes wait in the OS, TCP slows the sender) and
-    reads on once there is room. Meanwhile bytes piling up in the OS are the
-    peer's sign of life; bytes that wait without growing are judged once read.
+    The loop reads the transport, cuts frames and hands pages to the
+    `CommsLoop`, and writes the outbox when the transport has room. The link
+    beats when quiet, ends when the peer goes, falls silent (wire format 3.3)
+    or sends a bad length, and reads nothing while the node's queue is over
+    its high-water mark (``_held``; docs/design.md, "One I/O thread per node").
 
     Example::
 
@@ -988,11 +858,9 @@ class Link:
         pages_sent: pages handed to the transport or queued for it.
         pages_received: pages that arrived.
         keys_received: in DEBUG mode, the keys of the pages that arrived (up to
-            1,000, for the hints of ``link_hints.py``); None otherwise.
+            1,000, for ``link_hints.py``); None otherwise.
         went_silent: the link was closed because the peer fell silent.
-        refusal: why the peer was refused (another system, no or a wrong
-            secret, a page before the handshake ended), or None.
-        announced: the link reached OPEN and COMMS_CONNECTED was scheduled.
+        refusal: why the peer was refused (`Refused`), or None.
         peer_said_bye: the peer sent a bye: the end that follows is orderly.
         loss: the `LossReport` of pages dropped because the peer fell behind.
     """
@@ -1013,11 +881,9 @@ class Link:
         self.peer_role: Optional[str] = None
         self.hello_at: Optional[float] = None  # when the peer's hello arrived
         self.peer_beat_s: Optional[float] = None
-        self.state = LinkState.OPEN
         self.bad_frames = 0
         self.went_silent = False
         self.refusal: Optional[Refused] = None
-        self.announced = False
         self.peer_said_bye = False
         self._peer_takes_bye = False  # its hello said it understands a bye frame
         self.pages_sent = 0
@@ -1043,8 +909,8 @@ class Link:
         self._answer_due = False  # the peer was heard since the last send: answer at once
         self.outbox = Outbox(owner.max_backlog_bytes, self.loss)
         self.handshake = Handshake(owner.parent.role, owner.side, owner.system, owner.secret)
-        if self.handshake.needed:  # no page passes either way until the peer is judged
-            self.state = LinkState.HELLO
+        # No page passes either way until the peer is judged (else OPEN, as older SNR).
+        self.state = LinkState.HELLO if self.handshake.needed else LinkState.OPEN
         self.outbox.put(self.handshake.hello_frame(owner.beat_s))
 
     @property
@@ -1072,11 +938,12 @@ class Link:
         """Hand the link to the node's I/O loop, which sends the hello and starts reading."""
         self.io.call_soon(self._attach)
 
-    def send(self, frame: bytes, now: bool = True, key: Optional[DataKey] = None) -> bool:
+    def send(self, frame: bytes, key: Optional[DataKey] = None) -> bool:
         """Send or queue a page's ``frame`` (node thread); False if the link is not open.
 
-        If the backlog is full, older frames make room (see `Outbox`): they
-        are counted and reported (at most once a second).
+        A frame right behind another waits to leave with it in one write; a
+        frame after a pause goes at once, and so does a reply. When the
+        outbox is full, older frames make room (see `Outbox`).
 
         Example::
 
@@ -1084,45 +951,31 @@ class Link:
         """
         if self.state is not _OPEN:
             return False
-        outbox = self.outbox
-        # A frame right behind another waits for one joined send; a frame after
-        # a pause goes at once, and so does a reply (a fast ping-pong would
-        # otherwise look like a burst and pay a trip through the I/O thread).
         write = None
-        if now and (self._answer_due or time.monotonic() - outbox.last_sent_at >= _BURST_S):
+        if self._answer_due or time.monotonic() - self.outbox.last_sent_at >= _BURST_S:
             self._answer_due = False
             write = self.transport.send
-        outcome = outbox.put(frame, key, write)
-        if outcome == CLOSED:
-            return False
-        self.pages_sent += 1
-        if outcome == FIRST:
-            self._wake_writer()
-        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self.io.events(self) & _WRITE:
-            self.write_waiting()  # a long burst: do not wait for the node to go idle
-        return True
+        return self._queued(self.outbox.put(frame, key, write), 1)
 
     def send_burst(self, frames: List[bytes], key: DataKey) -> None:
-        """`send` for the frames of a run of pages under ``key`` (node thread), with one lock.
-
-        They leave when the node's thread next goes idle, or at once once
-        64 KiB wait.
+        """`send` for the frames of a run of pages under ``key`` (node thread), queued together.
 
         Example::
 
             link.send_burst([encode_page(page) for page in pages], "depth")
         """
-        if self.state is not _OPEN:
-            return
-        outbox = self.outbox
-        outcome = outbox.put_all(frames, key)
+        if self.state is _OPEN:
+            self._queued(self.outbox.put_all(frames, key), len(frames))
+
+    def _queued(self, outcome: str, pages: int) -> bool:
         if outcome == CLOSED:
-            return
-        self.pages_sent += len(frames)
+            return False
+        self.pages_sent += pages
         if outcome == FIRST:
             self._wake_writer()
-        elif outbox.queued_bytes >= _WRITE_NOW_BYTES and not self.io.events(self) & _WRITE:
-            self.write_waiting()
+        elif self.outbox.queued_bytes >= _WRITE_NOW_BYTES and not self.io.events(self) & _WRITE:
+            self.write_waiting()  # a long burst: do not wait for the node to go idle
+        return True
 
     def close(self) -> None:
         """Send what is queued and a goodbye, then end the connection (graceful)."""
@@ -1133,7 +986,7 @@ class Link:
             if self._peer_takes_bye:  # older peers never get a frame they do not know
                 self._put_control(encode_bye())
             self.outbox.close()
-            self.io.call_soon(self._flush_then_end)
+            self.io.call_soon(self._end_writing)
 
     def abort(self, reason: str = "the link was closed") -> None:
         """End the connection now, dropping what is queued; ``reason`` goes in the log line."""
@@ -1176,20 +1029,14 @@ class Link:
         if self.outbox.put(frame, None, self.transport.send) == FIRST:
             self._wake_writer()
 
-    def _wake_writer(self) -> None:
-        # The outbox stopped being empty. The node's thread writes it itself
-        # before it sleeps, or the loop's thread a moment later (write_soon).
+    def _wake_writer(self) -> None:  # the outbox stopped being empty
         if self.io.in_loop_thread():
             self._want_write()
         else:
             self.io.write_soon(self)
 
     def write_waiting(self) -> None:
-        """Write queued frames now without blocking (not on the loop's thread).
-
-        What does not fit is left to the loop's thread, which writes it when
-        the transport has room; after the link has ended the outbox is empty.
-        """
+        """Not the loop's thread: write queued frames now, without blocking (the loop, the rest)."""
         if not len(self.outbox):
             return
         try:
@@ -1205,12 +1052,6 @@ class Link:
 
     def on_writable(self) -> None:
         """I/O thread: write what is queued; stop watching for room once it is all out."""
-        try:
-            self._write()
-        except Exception as error:  # a bug must not kill the node silently
-            self._failed(error)
-
-    def _write(self) -> None:
         if self.state in _ENDED:
             return
         try:
@@ -1237,13 +1078,9 @@ class Link:
         self._timer = self.io.call_later(self.owner.hello_timeout_s + _LATE_S, self._tick)
         self.on_writable()  # the hello goes at once
 
-    def _flush_then_end(self) -> None:
-        if self.state is _CLOSING and not len(self.outbox):
-            self._end_writing()
-
     def _end_writing(self) -> None:
         """CLOSING, everything sent: half-close, then read what still comes for a moment."""
-        if self.state is not _CLOSING:
+        if self.state is not _CLOSING or len(self.outbox):
             return
         self.state = _DRAINING
         self.transport.end_writing()
@@ -1256,7 +1093,8 @@ class Link:
         self._timer = None
         if self.state in _ENDED:
             return
-        silence = self._silence_while_paused() if self._held else self._silence()
+        # A paused reader judges silence only while nothing waits unread in the OS.
+        silence = self._silence() if not self._held or self._note_unread() == 0 else None
         if silence is not None:
             self._finish(silence)
             return
@@ -1278,10 +1116,10 @@ class Link:
             self._timer = self.io.call_later(self._next_look_s(), self._tick)
 
     def _next_look_s(self) -> float:
-        """Seconds until the link's first deadline: a beat owed, a silence or hello limit.
+        """Seconds until the first deadline: a beat owed, a silence or hello limit.
 
-        While pages are held or dropped, every quarter beat (their counts move
-        without a frame); a deadline already past, a quarter beat later.
+        A quarter beat while pages are held or dropped (their counts move
+        without a frame), or when the deadline has passed.
         """
         if self._held or self.loss.dropping:
             return self._tick_s
@@ -1298,8 +1136,7 @@ class Link:
         return wait_s if wait_s > 0 else self._tick_s
 
     def _check_recovered(self) -> None:
-        # The peer has caught up: everything queued went out, nothing dropped for a while.
-        if self.loss.dropping and not len(self.outbox):
+        if self.loss.dropping and not len(self.outbox):  # the peer has caught up
             self.loss.recovered(quiet_s=self.owner.recovered_after_s)
 
     def on_io_stop(self) -> None:
@@ -1310,8 +1147,8 @@ class Link:
         """End the link: at once on the I/O loop's thread, else soon, by that thread."""
         if self.io.in_loop_thread():
             self._finish(reason)
-        else:  # the node's thread, reading while idle, leaves it to the loop's
-            self.state = LinkState.ENDING  # and reads it no more meanwhile
+        else:  # the node's thread, reading while idle, reads it no more meanwhile
+            self.state = LinkState.ENDING
             self.io.call_soon(lambda: self._finish(reason))
 
     def _finish(self, reason: str) -> None:
@@ -1328,8 +1165,8 @@ class Link:
             if self._timer is not None:
                 self._timer.cancel()
             self.io.forget(self)
-            # Closing a socket with unread bytes makes the OS reset the
-            # connection, and the peer may then lose what it has not read yet.
+            # Unread bytes make the OS reset the connection on close, and the
+            # peer may then lose what it has not read yet.
             for _ in range(16):
                 try:
                     if not self.transport.recv_into(self.io.buffer):
@@ -1350,11 +1187,8 @@ class Link:
         try:
             self._read()
         except Exception as error:  # a bug must not kill the node silently
-            self._failed(error)
-
-    def _failed(self, error: Exception) -> None:
-        self.owner.log.exception("Link to %s failed", self.label)
-        self._end(f"unexpected {type(error).__name__}: {error}")
+            self.owner.log.exception("Link to %s failed", self.label)
+            self._end(f"unexpected {type(error).__name__}: {error}")
 
     def _read(self) -> None:
         # The I/O loop's thread, or the node's while it is idle: anything
@@ -1474,13 +1308,6 @@ class Link:
             self._unread_seen = unread
         return unread
 
-    def _silence_while_paused(self) -> Optional[str]:
-        """`_silence` for a link that does not read: judged only while nothing waits unread."""
-        unread = self._note_unread()
-        if unread is None or unread:
-            return None
-        return self._silence()
-
     def _silence(self) -> Optional[str]:
         """Why the link is lost if the peer has been quiet too long, else None."""
         now = time.monotonic()
@@ -1553,28 +1380,25 @@ class Link:
         self.hello_at = time.monotonic()
         if self.state is _HELLO:
             self.state = _OPEN
+        if self.handshake.needed:  # (else it was announced when it opened)
             self.owner.announce(self)
         self.io.call_soon(self._look_again)  # beats are owed from now on
         self.owner.on_hello(self)
         watch_link(self.owner, self)
 
     def _refuse(self, refusal: Refused) -> None:
-        """The peer may not link here: say why (once per peer), count it, close the connection.
-
-        Nothing it sent is stored: pages read with the refused frame are dropped.
-        """
-        if self.state in _ENDED:
-            return
-        self.refusal = refusal
-        self.owner.on_refused(self, refusal)
-        self.abort(f"refused: {refusal.reason}")
+        """The peer may not link here: say why (once per peer), count it, close, store nothing."""
+        if self.state not in _ENDED:
+            self.refusal = refusal
+            self.owner.on_refused(self, refusal)
+            self.abort(f"refused: {refusal.reason}")
 
     def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
         # Said by the component, not per link: sixty hostile connections must
         # not write five lines each (at most five a 5 s, then a count).
         self.bad_frames += 1
         count = self.bad_frames
-        self.owner.say_bad_frame(
+        self.owner.say(
             "Connections reset after a bad frame" if resetting else "Bad frames",
             logging.WARNING,
             "Bad frame from %s: %s (%s; the node keeps running%s; see docs/wire-format.md)",
@@ -1582,4 +1406,5 @@ class Link:
             error,
             "reset the connection" if resetting else "dropped the frame",
             f"; {count} bad frames from this peer so far" if count > 1 else "",
+            news=self.owner.bad_frame_news,
         )

@@ -1,17 +1,12 @@
 """Who may link to a node: its system's name, and its secret (docs/comms.md, "Who may connect").
 
-A classroom network is not a trusted one. Two things keep one team's nodes
-apart from another's, both in the hello that starts every link
-(docs/wire-format.md, section 3.1):
-
-* **The system name** (``system=``, default: the script's folder) stops
-  *accidents*: a node of system ``"team3"`` that reaches team 7's robot by a
-  typo in an address is refused, and both sides say so. No set-up needed.
-* **The secret** (``SNR_SECRET``, ``secret=``, or the file that
-  ``python -m snr secret new`` writes) stops *malice*: each side proves that
-  it knows the secret with an HMAC-SHA256 over a fresh random number (a
-  *nonce*) of the other side, so the secret never crosses the wire and a
-  recorded hello cannot be replayed.
+Both are judged in the hello that starts every link (docs/wire-format.md,
+3.1 and 3.5). The system name (``system=``, default: the script's folder)
+stops accidents: a node of another team reached by a typo is refused. The
+secret (``SNR_SECRET``, ``secret=``, or ``python -m snr secret new``) stops
+malice: each side proves it knows it with an HMAC-SHA256 over the other
+side's fresh nonce, so the secret never crosses the wire and a recorded
+hello cannot be replayed.
 
 Example::
 
@@ -76,10 +71,8 @@ _SIDES = {"client": "server", "server": "client", "pipe": "pipe"}
 def default_system(config: Any = None) -> str:
     """The system a node names when its comms were given no ``system=``.
 
-    The config's ``name`` attribute if it has a non-empty one, else the name
-    of the folder holding the script that runs (``sys.argv[0]``), else the
-    current folder's name. Two scripts in one folder (a team's project)
-    therefore agree without any set-up.
+    The config's ``name`` if it has one, else the folder of the script that
+    runs, else the current folder's: a team's scripts in one folder agree.
 
     Example::
 
@@ -116,10 +109,7 @@ def resolve_system(system: Optional[str], config: Any, where: str) -> Optional[s
 
 
 def secret_file() -> Path:
-    """Where ``python -m snr secret new`` writes the secret, and nodes look for it.
-
-    ``$SNR_SECRET_FILE`` if set, else ``snr/secret`` under ``$XDG_CONFIG_HOME``
-    (by default ``~/.config/snr/secret``).
+    """Where ``python -m snr secret new`` writes the secret (``$SNR_SECRET_FILE`` changes it).
 
     Example::
 
@@ -135,9 +125,8 @@ def secret_file() -> Path:
 def find_secret(secret: Optional[str], where: str) -> Optional[bytes]:
     """The secret a node proves it knows, as bytes, or None for no authentication.
 
-    ``secret`` as given (None: none), or, by default (`FROM_ENVIRONMENT`),
-    ``$SNR_SECRET``, else the first line of `secret_file`, else None. Spaces
-    around it are not part of it.
+    ``secret`` as given, or by default (`FROM_ENVIRONMENT`) ``$SNR_SECRET``,
+    else the first line of `secret_file`, else None; spaces around it dropped.
 
     Raises:
         ConfigError: the secret is empty, or the secret file cannot be read.
@@ -178,12 +167,10 @@ def find_secret(secret: Optional[str], where: str) -> Optional[bytes]:
 
 
 def derived_word(secret: bytes, purpose: str) -> str:
-    """A word made from the secret for one ``purpose``, from which the secret cannot be found.
+    """A word made from the secret for one ``purpose`` that does not give the secret away.
 
-    HMAC-SHA256 keyed with the secret over the ASCII text ``snr-<purpose>``,
-    as 64 lowercase hex digits. The console sends its word as its token and
-    Zenoh checks its word as a password: each may be seen or kept on disk
-    without giving away the secret that the TCP and pipe hellos prove.
+    HMAC-SHA256 keyed with the secret over ``snr-<purpose>``, in hex: the
+    console's token, Zenoh's password.
 
     Example::
 
@@ -205,10 +192,8 @@ def new_secret() -> str:
 def proof_mac(secret: bytes, side: str, prover_nonce: str, verifier_nonce: str) -> str:
     """The proof that the ``side`` (``"client"``, ``"server"`` or ``"pipe"``) knows the secret.
 
-    HMAC-SHA256 keyed with the secret over the ASCII text
-    ``snr-proof <side> <prover's nonce> <verifier's nonce>``, as 64 lowercase
-    hex digits (docs/wire-format.md, section 3.5). The side in it keeps a
-    server from being used to answer its own challenge.
+    HMAC-SHA256 over ``snr-proof <side> <prover's nonce> <verifier's nonce>``
+    (docs/wire-format.md, 3.5); the side keeps a server from answering its own challenge.
 
     Example::
 
@@ -220,8 +205,6 @@ def proof_mac(secret: bytes, side: str, prover_nonce: str, verifier_nonce: str) 
 
 class Refused(Exception):
     """The peer may not link to this node; ``kind`` is ``"system"``, ``"secret"`` or ``"order"``.
-
-    The message says why in words, for the log line.
 
     Example::
 
@@ -235,10 +218,9 @@ class Refused(Exception):
 
 
 class Handshake:
-    """One link's hello and proofs: judges what the peer says before any page may pass.
+    """One link's hello and proofs: judges the peer before any page may pass.
 
-    ``needed`` is False for a node with no system and no secret: it speaks
-    the first hello (version 1) and takes pages at once, as older SNR did.
+    ``needed`` is False with no system and no secret: a version 1 hello, pages at once.
 
     Example::
 
@@ -269,8 +251,7 @@ class Handshake:
                 secret on one side only, or this node's own nonce sent back.
         """
         # A client trusts the address it was given to a server that names no
-        # system (an older SNR, or one told system=None); a server does not
-        # trust every program that reaches its port.
+        # system; a server does not trust every program that reaches its port.
         if self.system is not None and hello.system != self.system:
             if hello.system is None and self.side == "client":
                 pass

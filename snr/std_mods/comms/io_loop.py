@@ -1,30 +1,17 @@
 """The socket transport: `SocketTransport` over TCP, and the `IOLoop` that serves every link.
 
-A link talks over a `Transport`: a non-blocking byte stream (a TCP socket,
-`SocketTransport`; a pipe end, ``pipe.py``). Every link of a node is a
-handler of the node's one `IOLoop`: a ``selectors`` loop on one thread,
-``snr-<role>-io``, that reads when a socket has bytes, writes when one has
-room, and runs the links' timers (beats, silence, paused readers). So a
-server with hundreds of idle clients costs no more threads than one with one.
-
-While the node's own thread has nothing to do, *it* reads the links (Linux,
-with ``epoll``): the loop is the node's `snr.core.task_queue.IdleWaiter`, so
-a page that arrives is read, decoded and queued on the node's thread with no
-hand-off (docs/performance.md). While the node's thread runs handlers, the
-I/O thread reads, so a slow handler never stops a link from being read,
-beating or noticing a dead peer. One lock, the *read role*, decides which of
-the two reads (`IOLoop.wait`). Why and how: docs/design.md, "One I/O thread
-per node".
-
-The loop is shared: every comms component of a node gets it with
-`IOLoop.acquire` (the first starts its thread) and gives it back with
-`IOLoop.release` (the last stops and joins it, within a bound).
+A link talks over a `Transport`: a non-blocking byte stream (a TCP socket, a
+pipe end). Every link of a node is served by the node's one `IOLoop`: a
+``selectors`` loop on one thread, ``snr-<role>-io``, that reads, writes and
+runs the links' timers, so hundreds of idle clients cost no more threads
+than one. On Linux the node's own thread reads the links while it is idle
+(the loop is its `snr.core.task_queue.IdleWaiter`); the *read role*, a lock,
+says which thread reads. Why and how: docs/design.md, "One I/O thread per node".
 
 Example::
 
-    io = IOLoop.acquire(node)        # starts the thread "snr-<role>-io"
-    io.call_soon(lambda: io.watch(handler, selectors.EVENT_READ))
-    ...
+    io = IOLoop.acquire(node)        # the first user starts "snr-<role>-io"
+    io.call_soon(lambda: io.watch(link, selectors.EVENT_READ))
     io.release()                     # the last user stops and joins it
 """
 
@@ -41,7 +28,18 @@ import socket
 import struct
 import threading
 import time
-from typing import Any, Callable, Deque, Dict, Iterator, List, Optional, Protocol, Tuple
+from typing import (
+    TYPE_CHECKING,
+    Any,
+    Callable,
+    Deque,
+    Dict,
+    Iterator,
+    List,
+    Optional,
+    Protocol,
+    Tuple,
+)
 
 from snr.core.node import Node
 from snr.core.task_queue import TaskQueue
@@ -55,10 +53,13 @@ try:  # Linux and macOS say how many bytes wait unread; Windows has no fcntl
 except ImportError:
     _FIONREAD = None
 
-__all__ = ["IOHandler", "IOLoop", "IOTimer", "SocketTransport", "Transport", "unread_bytes"]
+if TYPE_CHECKING:
+    from snr.std_mods.comms.comms_loop import Link
+
+__all__ = ["IOLoop", "IOTimer", "SocketTransport", "Transport", "unread_bytes"]
 
 RECV_BYTES = 256 * 1024
-"""Size of the loop's one receive buffer, shared by all its links (only its thread reads)."""
+"""Size of the loop's one receive buffer, shared by all its links (the read role's holder reads)."""
 
 ROOM_CHECK_S = 0.015
 """While a link has stopped reading because the node is behind, how often room is checked."""
@@ -70,11 +71,7 @@ IDLE_CHECK_S = 0.25
 """While the node's thread sleeps, how often the I/O thread looks whether it is busy again."""
 
 IDLE_STOP_S = 1.0
-"""After this long with no work for the node's thread, the I/O thread stops looking.
-
-An idle node then costs its I/O thread no wake-up at all; the node's thread
-starts the looks again when it next leaves its wait with work (`IOLoop.woken`).
-"""
+"""After this long with no work for the node's thread, the I/O thread stops looking."""
 
 JOIN_TIMEOUT_S = 1.0
 """How long the last `IOLoop.release` waits for the thread to end."""
@@ -88,32 +85,8 @@ _READS = "reads"  # the selector key of the links' read set (the wake-up socket'
 _HAS_EPOLL = hasattr(select, "epoll")
 
 
-class IOHandler(Protocol):
-    """What the loop serves: a link over something with a ``fileno()``.
-
-    The loop calls these on its own thread; they must not block.
-
-    Example: ``Link`` in ``comms_loop.py``.
-    """
-
-    def fileno(self) -> int:
-        """The file descriptor to watch (a socket's)."""
-
-    def on_readable(self) -> None:
-        """Bytes (or end of stream) can be read without blocking."""
-
-    def on_writable(self) -> None:
-        """Some bytes can be written without blocking."""
-
-    def on_io_stop(self) -> None:
-        """The loop is stopping: close now (a last resort; owners close links first)."""
-
-    def write_waiting(self) -> None:
-        """Not the loop's thread: write what waits, without blocking (see `IOLoop.write_soon`)."""
-
-
 class IOTimer:
-    """A callback `IOLoop.call_later` will run once; ``cancel()`` takes it back.
+    """A callback `IOLoop.call_later` runs once; ``cancel()`` takes it back.
 
     Example::
 
@@ -142,14 +115,10 @@ _registry: Dict[int, Tuple[AbstractNode, IOLoop]] = {}
 class IOLoop:
     """One selector thread serving the sockets of every comms link of one node.
 
-    Only the loop's thread touches the selector; other threads ask it for
-    things with `call_soon` (thread-safe: it appends to a queue and wakes the
-    selector through a socket pair). The handlers' sockets are read by the
-    thread that holds the *read role*: the node's thread while it is idle
-    (`wait`, `woken`: it is the node's `snr.core.task_queue.IdleWaiter`), else the loop's thread.
-
-    Get it with `acquire` and give it back with `release`, never by
-    constructing it yourself in a component.
+    Only the loop's thread touches the selector; other threads ask it with
+    `call_soon`. The links are read by the holder of the *read role*: the
+    node's thread while it is idle (`wait`, `woken`), else the loop's thread.
+    Get it with `acquire` and give it back with `release`.
 
     Example::
 
@@ -159,17 +128,11 @@ class IOLoop:
 
     Attributes:
         node: the node whose links it serves.
-        buffer: the receive buffer handlers read into (by the read role's holder).
-        view: a ``memoryview`` of ``buffer``.
+        buffer: the receive buffer links read into, and ``view``, a memoryview of it.
     """
 
     node_reads: bool = _HAS_EPOLL
-    """Let the node's thread read the links while it is idle (needs epoll: Linux).
-
-    Where it is False (or set so), the I/O thread reads every link and hands
-    the pages over to the node's thread, which is correct everywhere, only
-    slower.
-    """
+    """Let the node's thread read the links while it is idle (needs epoll: Linux)."""
 
     def __init__(self, node: AbstractNode) -> None:
         self.node = node
@@ -178,31 +141,25 @@ class IOLoop:
         self.view = memoryview(self.buffer)
         self._users = 0
         self._selector = selectors.DefaultSelector()
-        self._handlers: Dict[IOHandler, int] = {}  # every watched handler: its events
+        self._handlers: Dict[Link, int] = {}  # every watched link: its events
         self._calls: Deque[Callable[[], object]] = collections.deque()
         self._timers: List[Tuple[float, int, IOTimer]] = []
         self._order = itertools.count()  # ties in the timer heap never compare IOTimers
         self._waiting_for_room: List[Callable[[], None]] = []
-        # Handlers with frames another thread queued (write_soon): a dict, so
-        # that a handler is listed once however many bursts it queues.
-        self._to_write: Dict[IOHandler, None] = {}
+        self._to_write: Dict[Link, None] = {}  # write_soon's links, each once
         self._room_timer: Optional[IOTimer] = None
         self._stopping = False
         self._wake_r, self._wake_w = _wake_pair()
         self._woken = False
         self._selector.register(self._wake_r, _READ, None)
         self._thread = threading.Thread(target=self._run, name=f"snr-{node.role}-io", daemon=True)
-        # With node reads: every link watched for reading is in `_reads` (an
-        # epoll set) and in `_node_poll`, never in the selector. The selector
-        # watches `_gate`, which holds `_reads` while the I/O thread reads the
-        # links (the node's thread has been busy for BUSY_READS_S); the
-        # node's thread takes `_reads` out of it before it waits, so the two
-        # threads are never woken for the same bytes. Between two short busy
-        # spells the gate stays shut: no epoll_ctl calls per task.
+        # With node reads, a link watched for reading is in `_reads` and
+        # `_node_poll` (epoll sets), not in the selector, which watches
+        # `_gate`: it holds `_reads` only while the I/O thread reads.
         self._reads: Any = None
         self._gate: Any = None
         self._node_poll: Any = None
-        self._readers: Dict[int, IOHandler] = {}  # fd -> handler, for `_reads`
+        self._readers: Dict[int, Link] = {}  # fd -> link, for `_reads`
         self._role = threading.RLock()  # the read role: whoever holds it reads
         self._node_waiting = False  # the node's thread holds the role in wait()
         self._role_wanted = False  # the loop's thread waits for the role: leave it
@@ -230,7 +187,7 @@ class IOLoop:
     # -- sharing one loop per node ------------------------------------------
     @classmethod
     def acquire(cls, node: AbstractNode) -> IOLoop:
-        """The node's I/O loop, started if this is its first user.
+        """The node's I/O loop, started for its first user.
 
         Example::
 
@@ -312,33 +269,29 @@ class IOLoop:
         if not self._woken:
             self._wake()
 
-    def write_soon(self, handler: IOHandler) -> None:
-        """``handler`` has frames to write, queued by a thread that is not the loop's.
+    def write_soon(self, link: Link) -> None:
+        """``link`` has frames queued by another thread than the loop's.
 
-        The node's thread writes them itself when it next goes idle (`wait`),
-        or sooner (a link writes a big backlog at once); the loop's thread
-        writes what is still waiting `WRITE_DELAY_S` later. So a burst of
-        pages stored by the node's handlers goes out in a few ``send`` calls,
-        made by the thread that already holds the interpreter, instead of
-        waking the I/O thread for each handful of pages.
+        The node's thread writes them when it next goes idle (`wait`); the
+        loop's thread writes what still waits `WRITE_DELAY_S` later.
 
         Example::
 
             io.write_soon(link)   # link.write_waiting() or link.on_writable() will follow
         """
-        self._to_write[handler] = None
-        self.call_soon(lambda: self.call_later(WRITE_DELAY_S, handler.on_writable))
+        self._to_write[link] = None
+        self.call_soon(lambda: self.call_later(WRITE_DELAY_S, link.on_writable))
 
     def write_waiting(self) -> None:
-        """Not the loop's thread: let every handler given to `write_soon` write what waits."""
+        """Not the loop's thread: let every link given to `write_soon` write what waits."""
         to_write = self._to_write
         while to_write:
             try:
-                handler = to_write.popitem()[0]
+                link = to_write.popitem()[0]
             except KeyError:  # emptied meanwhile
                 return
             try:
-                handler.write_waiting()
+                link.write_waiting()
             except Exception:  # a bug in one link must not stop the node
                 self.log.exception("A comms link's write failed; the I/O thread retries it")
 
@@ -350,7 +303,7 @@ class IOLoop:
             pass
 
     # -- loop thread only ---------------------------------------------------
-    def watch(self, handler: IOHandler, events: int) -> None:
+    def watch(self, handler: Link, events: int) -> None:
         """Serve ``handler`` for ``events`` (0: keep it, but select nothing for now)."""
         old = self._handlers.get(handler, 0)
         if old == events and handler in self._handlers:
@@ -376,11 +329,11 @@ class IOLoop:
         elif events:
             self._selector.register(handler, events, handler)
 
-    def events(self, handler: IOHandler) -> int:
+    def events(self, handler: Link) -> int:
         """The events ``handler`` is watched for (0 if none or not watched)."""
         return self._handlers.get(handler, 0)
 
-    def forget(self, handler: IOHandler) -> None:
+    def forget(self, handler: Link) -> None:
         """Stop serving ``handler`` (before its socket is closed)."""
         if self._handlers.get(handler):
             self.watch(handler, 0)
@@ -388,11 +341,7 @@ class IOLoop:
 
     @contextlib.contextmanager
     def read_role(self) -> Iterator[None]:
-        """Hold the read role (loop thread), e.g. to close a link's socket.
-
-        No other thread then reads any link. If the node's thread holds it
-        in its idle wait, it is woken to give it back (a rare event: a link
-        ends).
+        """Hold the read role (loop thread), e.g. to close a link's socket; wakes the node's thread.
 
         Example::
 
@@ -411,14 +360,7 @@ class IOLoop:
 
     # -- the node's thread, while idle (the node's IdleWaiter) ---------------
     def wait(self, timeout_s: Optional[float]) -> None:
-        """Node thread, its queue empty: wait for a task or for bytes on a link.
-
-        The read set leaves the I/O thread's gate first (if it was in it), so
-        that thread is not woken for bytes the node's thread reads; then the
-        node's thread takes the read role (waiting, briefly, for a read the
-        I/O thread has begun) and waits on the links and its own wake-up
-        socket.
-        """
+        """Node thread, its queue empty: write what waits, shut the gate, wait for work or bytes."""
         if self._to_write:  # what the handlers just queued goes before the node sleeps
             self.write_waiting()
         timeout = -1.0 if timeout_s is None else timeout_s
@@ -439,12 +381,7 @@ class IOLoop:
         self._node_ready = _poll(self._node_poll, timeout)
 
     def woken(self) -> None:
-        """Node thread, no longer marked sleeping: read what arrived, give the role back.
-
-        The gate stays shut: the node's thread will read again when it next
-        waits, which is soon unless a handler takes long; after
-        `BUSY_READS_S` of work the I/O thread opens it and reads meanwhile.
-        """
+        """Node thread, no longer marked sleeping: read what arrived, give the read role back."""
         if not self._node_waiting:
             return
         try:
@@ -474,14 +411,11 @@ class IOLoop:
                 self.call_soon(self._check_busy)
 
     def _check_busy(self) -> None:
-        """Loop thread: once the node's thread has worked `BUSY_READS_S`, read its links too.
+        """Loop thread: once the node's thread has worked `BUSY_READS_S`, open the gate and read.
 
-        Runs every `BUSY_READS_S` while the node's thread works, every
-        `IDLE_CHECK_S` while it sleeps between pieces of work, and not at all
-        once it has had no work for `IDLE_STOP_S`: an idle node costs its I/O
-        thread no wake-up. `woken` starts the looks again; the lock makes
-        sure the node's thread never leaves its wait with work while the
-        looks stop unseen.
+        Runs every `BUSY_READS_S` while the node works, every `IDLE_CHECK_S`
+        while it sleeps, and stops after `IDLE_STOP_S` without work (`woken`
+        restarts it; the lock keeps the two from missing each other).
         """
         if not self._waiter_installed:  # the node waits on another's: the gate stays open
             self._looking = False
@@ -505,11 +439,7 @@ class IOLoop:
             self._gate_open = True
 
     def _look_if_busy(self) -> None:
-        """Loop thread, on a timer: start looking if the node's thread works unseen.
-
-        It can get work without leaving a wait with it (a task queued a moment
-        after it woke); then the looks start again within a timer's period.
-        """
+        """Loop thread, on a timer: start looking if the node's thread got work unseen."""
         with self._gate_lock:
             if self._looking or self._node_idle:
                 return
@@ -555,11 +485,7 @@ class IOLoop:
         return timer
 
     def when_room(self, callback: Callable[[], None]) -> None:
-        """Run ``callback`` once the node's queue is below its high-water mark.
-
-        Checked every `ROOM_CHECK_S` for all waiting links together, so a
-        paused reader costs the loop nothing in between.
-        """
+        """Run ``callback`` once the node's queue is below its high-water mark (a look a 15 ms)."""
         self._waiting_for_room.append(callback)
         if self._room_timer is None:
             self._room_timer = self.call_later(ROOM_CHECK_S, self._check_room)
@@ -638,14 +564,9 @@ class IOLoop:
             self._wake_w.close()
 
     def _drain_wake(self) -> None:
-        # Drain first, then clear the flag, then (in _run) run the calls. A
-        # call_soon that saw the flag still set appended before it was
-        # cleared, so the calls run after this see it; one that sees it
-        # cleared rings again, and that byte stays until the next select.
-        # (Clearing first lost wake-ups: a byte rung between the clearing and
-        # the draining was drained with the rest, leaving the flag set with
-        # nothing to wake the selector, so later calls waited for a timer, or
-        # for ever on a loop with no timers, such as a client between links.)
+        # Drain first, then clear the flag, then (in _run) run the calls: a
+        # call_soon that saw the flag set appended before it was cleared; one
+        # that sees it cleared rings again. (Clearing first lost wake-ups.)
         _drain(self._wake_r)
         self._woken = False
 
@@ -685,12 +606,10 @@ def _drain(sock: socket.socket) -> None:
 
 
 class Transport(Protocol):
-    """A byte stream to one peer that the node's `IOLoop` can watch: a TCP socket or a pipe.
+    """A non-blocking byte stream to one peer that the node's `IOLoop` watches (a socket, a pipe).
 
-    Every method returns at once (the file descriptor is non-blocking): the
-    loop calls ``recv_into`` when ``fileno()`` is readable and ``send`` when
-    it is writable, and the node's thread may call ``send`` too (under the
-    outbox's lock) to write a frame straight away.
+    The loop calls ``recv_into`` when ``fileno()`` is readable and ``send``
+    when it is writable; the node's thread may call ``send`` too.
 
     Example: `SocketTransport` below.
     """
@@ -702,16 +621,10 @@ class Transport(Protocol):
         """The file descriptor the I/O loop watches."""
 
     def send(self, data: bytes) -> int:
-        """Write what fits without blocking; how many bytes went.
-
-        Raises BlockingIOError if nothing fits, another OSError if the peer is gone.
-        """
+        """Write what fits; how many bytes went (BlockingIOError: none; another OSError: gone)."""
 
     def recv_into(self, buffer: bytearray) -> int:
-        """Read what has arrived into ``buffer``; 0 at end of stream.
-
-        Raises BlockingIOError if nothing has arrived, another OSError if the link broke.
-        """
+        """Read what arrived; 0 at end of stream (BlockingIOError: nothing yet; OSError: broken)."""
 
     def end_writing(self) -> None:
         """Tell the peer nothing more will be sent (after a graceful flush)."""
@@ -739,53 +652,28 @@ def unread_bytes(fd: int) -> Optional[int]:
     return int(struct.unpack("i", answer)[0])
 
 
-def _enable_keepalive(sock: socket.socket) -> None:
-    """Notice a peer that vanished without a word (cable pulled) in ~10 s, not hours."""
-    sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
-    for option, value in (("TCP_KEEPIDLE", 5), ("TCP_KEEPINTVL", 2), ("TCP_KEEPCNT", 3)):
-        if hasattr(socket, option):  # Linux; other systems keep their defaults
-            try:
-                sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, option), value)
-            except OSError:
-                pass
-
-
-def _limit_unacknowledged(sock: socket.socket, seconds: float) -> None:
-    """Give up on data the peer has not acknowledged for ``seconds`` (Linux).
-
-    Without it, a sender on a path that vanished (Wi-Fi out of range: no FIN,
-    no RST) keeps retransmitting for about 15 minutes.
-    """
-    option = getattr(socket, "TCP_USER_TIMEOUT", None)
-    if option is not None:
-        try:
-            sock.setsockopt(socket.IPPROTO_TCP, option, int(seconds * 1000))
-        except OSError:
-            pass
-
-
 class SocketTransport:
     """A connected TCP socket as a link ``Transport`` (non-blocking, ``TCP_NODELAY`` on).
-
-    The node's I/O loop watches it; nothing here ever blocks.
 
     Example::
 
         SocketTransport(socket.create_connection(("localhost", 9000)), "localhost:9000")
     """
 
-    def __init__(
-        self,
-        sock: socket.socket,
-        peer: str,
-        dead_after_s: float,
-    ) -> None:
+    def __init__(self, sock: socket.socket, peer: str, dead_after_s: float) -> None:
         sock.setblocking(False)
-        # Every frame is written in one call; without this, Nagle's algorithm
-        # holds small frames back for up to ~40-200 ms.
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)
-        _enable_keepalive(sock)
-        _limit_unacknowledged(sock, dead_after_s)
+        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # no Nagle: whole frames go
+        # A peer that vanished without a word (cable pulled) is noticed in
+        # ~10 s, and unacknowledged data (Wi-Fi out of range) is given up after
+        # dead_after_s, not 15 minutes (the options are Linux's).
+        sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
+        options = [("TCP_KEEPIDLE", 5), ("TCP_KEEPINTVL", 2), ("TCP_KEEPCNT", 3)]
+        for option, value in [*options, ("TCP_USER_TIMEOUT", int(dead_after_s * 1000))]:
+            if hasattr(socket, option):
+                try:
+                    sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, option), value)
+                except OSError:
+                    pass
         self.sock = sock
         self.peer = peer
 
@@ -794,11 +682,11 @@ class SocketTransport:
         return self.sock.fileno()
 
     def send(self, data: bytes) -> int:
-        """Write what fits now; raises BlockingIOError if nothing does."""
+        """Write what fits now (BlockingIOError if nothing does)."""
         return self.sock.send(data)
 
     def recv_into(self, buffer: bytearray) -> int:
-        """Read what has arrived; 0 when the peer closed; BlockingIOError if nothing has."""
+        """Read what has arrived; 0 when the peer closed (BlockingIOError if nothing has)."""
         return self.sock.recv_into(buffer)
 
     def end_writing(self) -> None:

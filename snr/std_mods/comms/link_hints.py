@@ -1,14 +1,11 @@
 """In DEBUG mode: keys that should cross a link to another node but do not.
 
-Two nodes that disagree about a data key fail silently: the robot forwards
-``"sensr_data"`` (or never stores the key it forwards) and the topside's
-display handles ``"sensor_data"``, so nothing is shown and nothing is said
-(thesis listing 5.1). A few seconds (``node.key_hints.link_s``) after a
-link's hello arrives, the comms component asks its node to compare the keys
-with what was stored and received, and `MissingKeyHints.check_link` says what
-looks wrong, once per key.
-
-It costs nothing outside DEBUG mode: no timer is set and no key is recorded.
+The robot forwards ``"sensr_data"`` and the topside handles
+``"sensor_data"``: nothing is shown and nothing is said (thesis listing
+5.1). ``node.key_hints.link_s`` after a link's hello, the comms component
+compares the keys with what was stored and received, and
+`MissingKeyHints.check_link` says what looks wrong, once per key. Outside
+DEBUG mode it costs nothing.
 
 Example (what `CommsLoop` does for you)::
 
@@ -62,9 +59,8 @@ def watch_link(comms: CommsLoop, link: Link) -> None:
 def check_link(comms: CommsLoop, link: Link) -> None:
     """On the node's thread: report keys that should have crossed ``link`` by now.
 
-    Pages may come from the peer over more than one link (thesis listing 5.1
-    has two between the same nodes): their received keys count together, and
-    while one of them is younger than the delay its own check will come later.
+    The keys received over every link to the same peer count together
+    (listing 5.1 has two); while one is younger than the delay, its check comes later.
 
     Example::
 

@@ -1,19 +1,17 @@
 """Pipe comms: link two nodes run by `MultiProcRunner` on one machine (thesis 6.4.1).
 
-Each end of a ``multiprocessing.Pipe()`` goes to one role's config. Frames
-are the same as over TCP (docs/wire-format.md), as one byte stream, and the
-node's I/O loop serves the pipe with its sockets::
+Each end of a ``multiprocessing.Pipe()`` goes to one role's config; the
+frames are TCP's (docs/wire-format.md), served by the node's I/O loop. A
+pipe cannot be reconnected: once its other end is closed in every process,
+the loop logs it and stops, and the node keeps running.
+
+Example::
 
     here, there = multiprocessing.Pipe()
     components = {
         "topside": [PipeLoopFactory(here, ["controller_input"]), ...],
         "urov": [PipeLoopFactory(there, ["sensor_data"]), ...],
     }
-    snr.MultiProcRunner(["topside", "urov"], components).run()
-
-A pipe cannot be reconnected: once its other end is closed in every process,
-the loop logs it and stops; the node keeps running. (A process that still holds
-the other end, such as the parent, keeps the pipe open.)
 """
 
 from __future__ import annotations
@@ -51,14 +49,11 @@ _BRIDGE_BYTES = 256 * 1024
 
 
 class PipeTransport(SocketTransport):
-    """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``.
+    """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``: a byte stream of frames.
 
-    On POSIX a two-way pipe is a socket pair, so its file descriptor is
-    wrapped as a socket and served by the node's I/O loop like a TCP
-    connection, carrying frames as a plain byte stream (both ends are SNR, so
-    both read it that way). Where the end is not a socket (a Windows named
-    pipe), a socket pair stands in for it and two small threads copy bytes
-    between the two (``bridged`` is then True); the frames are the same.
+    On POSIX a two-way pipe is a socket pair, served like a TCP connection.
+    Elsewhere (a Windows named pipe) a socket pair stands in for it, and two
+    small threads copy bytes between the two (``bridged`` is then True).
 
     Example::
 
@@ -172,20 +167,15 @@ class PipeLoop(CommsLoop):
         self.link = self.open_link(PipeTransport(self.connection, self.peer_name))
 
     def loop(self) -> None:
-        """Wait; stop once the pipe has closed (a pipe cannot reconnect).
-
-        Stopping the node closes the link (`halt`), which ends the wait.
-        """
+        """Wait; stop once the pipe has closed (a pipe cannot reconnect)."""
         if self.link is None or self.link.wait_closed(None):
             self.set_terminate_flag("the pipe closed")
 
     def decode_message(self, body: bytes) -> Message:
         """A frame's message; on a pipe also a page in `Page.serialize()`'s text.
 
-        Code written for the 2021 release sends pages into a pipe as
-        ``conn.send_bytes(page.serialize().encode())``: a JSON object with the
-        page's fields and no ``"v"``. Such a page is accepted here, checked as
-        strictly as a frame's page (its values, key and origin), and stored.
+        Code of the 2021 release sends ``page.serialize().encode()`` into a
+        pipe: a page's fields with no ``"v"``, checked as strictly as a frame's.
 
         Example::
 
@@ -224,10 +214,8 @@ class PipeLoopFactory(LoopFactory):
         dead_after_s: seconds of silence after which the other end counts as lost.
         peer: what the logs call the other end (default ``"pipe"``).
         system: the system both ends name (as for `SocketsPair`). Default
-            None, no check: only the processes of the program that made the
-            pipe can reach it, so no other system's node can come by mistake,
-            and code of the 2021 release that writes pages into the pipe
-            with no hello keeps working. ``system=SCRIPT_FOLDER`` checks as sockets do.
+            None, no check: only the program that made the pipe reaches it,
+            and 2021 code that writes pages with no hello keeps working.
         secret: the secret both ends prove they know (as for `SocketsPair`;
             default ``$SNR_SECRET`` or the secret file). None: none.
 

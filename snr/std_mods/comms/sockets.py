@@ -1,25 +1,18 @@
 """TCP comms: `SocketsPair` and its server and client loops (thesis 5.1, 5.4.1).
 
 One `SocketsPair` names a server address; its ``server()`` goes in one
-role's config and its ``client(keys)`` in another's (listing 5.3)::
+role's config and its ``client(keys)`` in another's (listing 5.3). The
+client connects (and reconnects, with backoff) and forwards the pages stored
+under its keys; the server stores what its clients send and forwards its own
+keys, if given, to every client. Who may connect: docs/comms.md.
+
+Example::
 
     sockets = snr.SocketsPair(server_tuple=("localhost", 9000))
     components = {
         "input_device": [..., sockets.client(["controller_data"])],
         "receiver": [sockets.server(), ...],
     }
-
-The client connects to the server (retrying with backoff until it is up, and
-again whenever the link drops) and forwards every page stored under its keys.
-The server accepts clients of its own system and stores what they send; given
-keys of its own (``sockets.server(["sensor_data"])``) it forwards those to
-every client over the same connections.
-
-Who may connect: every node names its *system* (``system=``, by default the
-config's name or the script's folder) and a peer of another system is
-refused; with a secret (``SNR_SECRET``, ``secret=``, or the file written by
-``python -m snr secret new``) each side must also prove it knows it
-(docs/comms.md, "Who may connect").
 """
 
 from __future__ import annotations
@@ -65,12 +58,7 @@ __all__ = [
 Address = Tuple[str, int]
 
 DEFAULT_MAX_CONNECTIONS = 64
-"""How many clients a sockets server takes at once.
-
-When a new client comes to a full server, the oldest connection that has not
-said hello is closed to make room (counted and logged); if every one has,
-the new client is refused (counted and logged) and retries later.
-"""
+"""How many clients a sockets server takes at once (see `SocketsServerLoop`)."""
 
 _CONNECT_TIMEOUT_S = 0.5
 _FIRST_RETRY_S = 0.05
@@ -132,16 +120,11 @@ class _SocketsLoop(CommsLoop):
 class SocketsServerLoop(_SocketsLoop):
     """Accepts clients and links to each; built by ``SocketsPair.server()``.
 
-    It listens as soon as the node starts (a port in use stops the node with
-    a `CommsError` naming the port and the role). Its own thread accepts;
-    every accepted connection is served by the node's one I/O thread
-    (``IOLoop``), so hundreds of idle clients add no threads.
-
-    At ``max_connections`` a real node must still get in: a connection that
-    has not said hello (a port scanner, a program that only holds a slot)
-    gives way, oldest first, and is counted in ``closed_silent``; only when
-    every connection is a node that said hello is the newcomer refused
-    (counted in ``refused``).
+    It listens as the node starts (a port in use stops the node with a
+    `CommsError`); its own thread accepts, the node's ``IOLoop`` serves the
+    links. At ``max_connections`` the oldest connection that has not said
+    hello makes room for a newcomer (counted in ``closed_silent``); when every
+    one has, the newcomer is closed (counted in ``refused``).
 
     Example::
 
@@ -172,8 +155,7 @@ class SocketsServerLoop(_SocketsLoop):
             verb="Closed",
         )
         self._listener: Optional[socket.socket] = None
-        # halt() writes a byte to _stop_w: the accepting thread waits for a
-        # client or for it, never waking in between (an idle server costs nothing).
+        # halt() writes a byte to _stop_w, which ends the wait for a client.
         self._stop_r: Optional[socket.socket] = None
         self._stop_w: Optional[socket.socket] = None
 
@@ -217,12 +199,7 @@ class SocketsServerLoop(_SocketsLoop):
         self.dbg("Accepted a connection from %s", link.transport.peer)
 
     def _make_room(self) -> bool:
-        """Close the oldest connection that has not said hello; False if every one has.
-
-        Links are kept in the order they opened, so the first one found is
-        the oldest. A link being aborted no longer counts (it ends on the I/O
-        thread a moment later).
-        """
+        """Close the oldest connection that has not said hello; False if every one has."""
         for link in self.links:
             unproven = link.state is LinkState.HELLO  # no hello, or no proof yet
             if unproven or (link.peer_role is None and link.state is LinkState.OPEN):
@@ -275,12 +252,9 @@ class SocketsServerLoop(_SocketsLoop):
 class SocketsClientLoop(_SocketsLoop):
     """Connects to a sockets server and keeps connecting; built by ``client()``.
 
-    Until the server is up, and after a link drops, it retries with backoff
-    (0.05 s, doubling, at most 1 s between tries). The backoff starts again
-    from 0.05 s only after a link that lasted a second past the server's
-    hello, so a server that accepts and hangs up at once (one that is full)
-    is tried at most once a second, not thousands of times. It logs once
-    when it starts waiting and once when it (re)connects.
+    It retries with backoff (0.05 s, doubling, at most 1 s), back to 0.05 s
+    only after a link that lasted a second past the server's hello, so a
+    server that accepts and hangs up (a full one) is tried once a second.
 
     Example::
 
@@ -335,9 +309,7 @@ class SocketsClientLoop(_SocketsLoop):
         except OSError as error:
             self._report_waiting(error.strerror or str(error))
             return None
-        if sock.getsockname() == sock.getpeername():
-            # With no server up, a connection to a port of this machine can
-            # meet itself (TCP "simultaneous open"); that is not a server.
+        if sock.getsockname() == sock.getpeername():  # TCP "simultaneous open": no server
             sock.close()
             self._report_waiting("connected to itself")
             return None
@@ -366,9 +338,7 @@ class SocketsClientLoop(_SocketsLoop):
             )
 
     def on_link_lost(self, link: Link, reason: str) -> None:
-        if self._loss_reported and link.peer_role is None:
-            # A connection that failed before the server said hello, while the
-            # outage is already reported (e.g. a dying server's backlog).
+        if self._loss_reported and link.peer_role is None:  # no hello, outage already said
             self.dbg("Connection to %s failed again: %s", link.label, reason)
             return
         self._loss_reported = True
@@ -409,8 +379,7 @@ class _SocketsFactory(LoopFactory):
         self.dead_after_s = dead_after_s
         self.max_connections = max_connections
 
-    def __repr__(self) -> str:
-        # (never the secret: a repr may end up in a log or a screenshot)
+    def __repr__(self) -> str:  # never the secret: a repr may end up in a log
         return f"{type(self).__name__}({_describe(self.address)}, keys={list(self.keys)})"
 
 
@@ -450,17 +419,14 @@ class SocketsPair:
             connect to, e.g. ``("192.168.1.10", 9000)`` or ``("localhost", 9000)``.
         max_backlog_bytes: how much may wait for one slow peer before pages are
             dropped (newest page per key kept; counted and logged).
-        dead_after_s: seconds of silence after which a peer counts as lost
-            (both sides send a beat every quarter of it while quiet).
+        dead_after_s: seconds of silence after which a peer counts as lost.
         max_connections: how many clients the server takes at once (64).
         system: the system both ends name in their hello; a peer of another
-            system, or one that names none, is refused. Default: the config's
-            ``name``, else the folder of the script that runs (so a team's
-            scripts in one folder agree). None: no check, which lets in older
-            SNR nodes and programs that send no system.
+            system, or of none, is refused. Default: the config's ``name``,
+            else the script's folder. None: no check (older SNR nodes).
         secret: the secret both ends prove they know (docs/comms.md, "Who
-            may connect"). Default: ``$SNR_SECRET``, else the file written by
-            ``python -m snr secret new``, else none. None: no authentication.
+            may connect"). Default: ``$SNR_SECRET``, else the file of
+            ``python -m snr secret new``, else none. None: none.
 
     Example::
 
