@@ -64,6 +64,7 @@ from snr.prelude.names import (
     Role,
     SomeTasks,
     TaskHandler,
+    TaskHandlerMap,
     TaskId,
     TaskType,
 )
@@ -616,17 +617,15 @@ class NodeCoreEndpoint(NodeCore):
     """
 
     def __init__(self, factory: AbstractFactory, parent: AbstractNode) -> None:
-        super().__init__(factory, parent)
-        self.pages = {}  # a placeholder: the node sets its own datastore (node.pages)
-        self.task_handlers.update(
-            {
-                (TaskType.event, tasks.STORE_PAGES): self.store_pages_handler,
-                (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
-                (TaskType.event, tasks.REMOVE_COMPONENT): self.remove_component_handler,
-                TaskType.reload: self.reload_handler,
-                TaskType.terminate: self.terminate_handler,
-            }
-        )
+        super().__init__(factory, parent)  # pages: set by the node once it is built
+        handlers: TaskHandlerMap = {
+            (TaskType.event, tasks.STORE_PAGES): self.store_pages_handler,
+            (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
+            (TaskType.event, tasks.REMOVE_COMPONENT): self.remove_component_handler,
+            TaskType.reload: self.reload_handler,
+            TaskType.terminate: self.terminate_handler,
+        }
+        self.task_handlers.update(handlers)
 
     def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Put the task's page in the datastore; then process_data if asked.

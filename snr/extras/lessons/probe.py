@@ -436,7 +436,7 @@ def over_comms(
     """`SENT` pages under ``count`` from node ``sender`` to node ``receiver``, linked in memory.
 
     The receiver has the student's part; the sender SNR's own. Real threads
-    and the wall clock (a link is real I/O): it waits up to 2 s for the last
+    and the wall clock (a link is real I/O): it waits up to 3 s for the last
     page, then stops both nodes.
 
     Example::
@@ -471,7 +471,7 @@ def over_comms(
     with quiet("receiver", "sender"):
         for thread in threads:
             thread.start()
-        if not done.wait(2.0):  # what got there, then
+        if not done.wait(3.0):  # what got there, then
             try:
                 got.keys, got.last = list(nodes[0].datastore), nodes[0].get_page("count")
             except Exception as error:

@@ -141,8 +141,8 @@ def grade_datastore(make: Callable[[], Any], path: Path) -> List[Check]:
             f"list(datastore) has all {len(keys) + MANY} keys in order",
             happened=f"{MANY - len(wrong)} of {MANY} right{first}; list(datastore) has "
             f"{len(run.all_keys)} keys{'' if listed else ', not in the order stored'}",
-            hint="grow the table when it holds more than MOST_PER_BUCKET keys a bucket, "
-            "moving every pair to its new bucket (step 4)",
+            hint="each key stored is found again in its bucket (steps 1, 2); when the "
+            "table grows, every pair moves to its new bucket (step 4)",
             line=_line(make, "grow") or setitem,
         )
     )
