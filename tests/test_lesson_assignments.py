@@ -150,6 +150,24 @@ class TestStudentsMistakes(unittest.TestCase):
         self.assertIn("HashDatastore", ran.happened)
         self.assertIn("returned 6.229 (float); it should return the whole Page", ran.happened)
 
+    def test_keys_that_are_not_strings_are_said_on_the_class_line(self) -> None:
+        copy = "        return iter(list(self.order))  # a copy: the node may store"
+        text = self.solution(5, copy, "        return iter([1, 2])  #")
+        ran = self.grade(5, text)["runs without an exception"]
+        self.assertFalse(ran.passed)
+        self.assertRegex(ran.happened, r"^ComponentError: HashDatastore \(\S*mine\.py:\d+\)")
+        self.assertIn("iter() returned [1, 2] (list); it should return each key", ran.happened)
+        self.assertEqual(ran.line, line_of(self.folder / "mine.py", "class HashDatastore"))
+
+    def test_an_exception_in_the_core_names_its_method_and_line(self) -> None:
+        stores = "        self.pages[page.key] = page\n"
+        text = self.solution(6, stores, stores.replace("page.key]", "page.kye]"))
+        ran = self.grade(6, text)["runs without an exception"]
+        self.assertFalse(ran.passed)
+        self.assertRegex(ran.happened, r"MyNodeCore\.store_page_handler \(\S*mine\.py:\d+\)")
+        self.assertIn("AttributeError: 'Page' object has no attribute 'kye'", ran.happened)
+        self.assertEqual(ran.line, line_of(self.folder / "mine.py", "page.kye"))
+
     def test_a_grow_that_loses_pages_fails_on_its_line(self) -> None:
         moves = "                bigger[hash(key) % len(bigger)].append((key, page))\n"
         text = self.solution(5, moves, "                pass  # the pair is lost\n")

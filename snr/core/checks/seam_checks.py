@@ -27,7 +27,6 @@ Example::
 
 from __future__ import annotations
 
-import functools
 import inspect
 from typing import Any, Callable, Iterator, List, Optional, Tuple
 
@@ -214,23 +213,30 @@ def checked_core(core: Optional[AbstractComponent], factory: Any, node: Abstract
                 _SEE,
             )
     # An instance attribute: the node reads core.store_page_handler after this.
-    core.store_page_handler = _checked_store(core.store_page_handler)  # type: ignore[attr-defined]
+    core.store_page_handler = _CheckedStore(core.store_page_handler)  # type: ignore[attr-defined]
     return core
 
 
-def _checked_store(handler: Any) -> Any:
-    """``handler``, what it returns checked: None, or the page's one ``process_data`` task."""
+class _CheckedStore:
+    """A node core's ``store_page_handler``, what it returns checked: None, or one ``process_data``.
 
-    @functools.wraps(handler)
-    def store_page_handler(task: Task, key: TaskId) -> SomeTasks:
-        result = handler(task, key)
+    A callable object, not a function, so that a failure in it names the
+    student's method and line: ``__func__`` and ``__self__`` are the method's.
+    """
+
+    def __init__(self, handler: Any) -> None:
+        self.handler = handler
+        self.__func__ = getattr(handler, "__func__", handler)
+        self.__self__ = getattr(handler, "__self__", None)
+        self.__qualname__ = _name(self.__func__)
+
+    def __call__(self, task: Task, key: TaskId) -> SomeTasks:
+        result = self.handler(task, key)
         if result is None or (isinstance(result, Task) and result.type is TaskType.process_data):
             return result
         raise ComponentError(
-            f"{_name(handler)} returned {result!r} for the page of {task.name!r}: a node "
-            "core's store_page_handler returns the page's process_data task, "
+            f"{self.__qualname__} returned {short_repr(result)} for the page of {task.name!r}: "
+            "a node core's store_page_handler returns the page's process_data task, "
             "Task(TaskType.process_data, page.key, [page]), or None; never a list, "
             f"and never the store_page task itself ({_SEE})."
         )
-
-    return store_page_handler

@@ -49,6 +49,7 @@ from snr import (
     Node,
     Page,
     SimClock,
+    SNRError,
     SomeTasks,
     Task,
     TaskId,
@@ -69,8 +70,10 @@ __all__ = [
     "Probe",
     "Received",
     "error_check",
+    "at_class_line",
     "demo",
     "find_class",
+    "method_line",
     "over_comms",
     "page_words",
     "probe",
@@ -154,25 +157,61 @@ def find_class(module: ModuleType, fits: Callable[[type], bool], what: str) -> t
 def error_check(error: BaseException, path: Path, when: str) -> Check:
     """The failed "runs without an exception" check for ``error``, at ``path``'s line if known.
 
+    When SNR put the mistake into words (a datastore's wrong answer, say),
+    those words are the ones shown.
+
     Example::
 
         error_check(ZeroDivisionError("division by zero"), Path("mine.py"), "storing a page")
     """
     from snr.extras.lessons.grading import _line_in
 
-    cause: BaseException = error
-    while cause.__cause__ is not None and _line_in(cause, path) is None:
-        cause = cause.__cause__
-    words = str(error).split("\n")[0]
+    said = error
+    while said.__cause__ is not None:  # a failed handler: what it raised, and why
+        said = said.__cause__
+    if not isinstance(said, SNRError) or _line_in(said, path) is not None:
+        said = error  # the student's own exception: the handler's report names it
+    found = None
+    for cause in (error, error.__cause__, said):
+        if cause is not None and found is None:
+            found = _line_in(cause, path)
     return Check(
         "runs without an exception",
         False,
         expected="the node runs the whole probe without an exception",
-        happened=f"{type(error).__name__}: {words}, {when}; the run stopped there",
-        hint="read the line named here, and the whole message with `python -m snr lesson "
-        "grade N` (the first lines are the ones to read)",
-        line=_line_in(cause, path) or _line_in(error, path),
+        happened=f"{type(said).__name__}: {str(said).splitlines()[0]} ({when}); the run "
+        "stopped there",
+        hint="read the line named here; run your file with `python FILE` for the traceback",
+        line=found,
     )
+
+
+def method_line(cls: Any, method: str) -> Optional[int]:
+    """The line where ``cls.method`` starts in its file, or None (a builtin, say).
+
+    Example::
+
+        method_line(HashDatastore, "get")    # 76
+    """
+    try:
+        return inspect.getsourcelines(getattr(cls, method))[1]
+    except (OSError, TypeError, AttributeError):
+        return None
+
+
+def at_class_line(error: Check, cls: Any) -> Check:
+    """``error``, naming the line of ``cls`` when no line of the file was in the traceback.
+
+    Example::
+
+        at_class_line(run.error, HashDatastore).line    # the `class HashDatastore:` line
+    """
+    if error.line is None:
+        try:
+            error.line = inspect.getsourcelines(cls)[1]
+        except (OSError, TypeError):
+            pass
+    return error
 
 
 def page_words(page: Any) -> str:

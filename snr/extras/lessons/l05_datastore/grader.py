@@ -25,7 +25,6 @@ Example::
 
 from __future__ import annotations
 
-import inspect
 from pathlib import Path
 from typing import Any, Callable, List, Optional
 
@@ -36,7 +35,9 @@ from snr.extras.lessons.probe import (
     SCRIPT,
     SENT,
     UNKNOWN,
+    at_class_line,
     find_class,
+    method_line,
     over_comms,
     page_words,
     probe,
@@ -53,13 +54,6 @@ def is_datastore(cls: type) -> bool:
         is_datastore(dict)    # True
     """
     return all(callable(getattr(cls, name, None)) for name in DATASTORE_METHODS)
-
-
-def _line(cls: Any, method: str) -> Optional[int]:
-    try:
-        return inspect.getsourcelines(getattr(cls, method))[1]
-    except (OSError, TypeError, AttributeError):
-        return None
 
 
 def grade(path: Path) -> List[Check]:
@@ -86,18 +80,18 @@ def grade_datastore(make: Callable[[], Any], path: Path) -> List[Check]:
         grade_datastore(dict, Path("snr"))    # SNR's own: every check passes
     """
     name = getattr(make, "__qualname__", repr(make))
-    setitem, get = _line(make, "__setitem__"), _line(make, "get")
+    setitem, get = method_line(make, "__setitem__"), method_line(make, "get")
     checks = [
         Check(
             "the datastore",
             True,
             happened=f"{name}, made with {name}() for each node",
-            line=_line(make, "__init__"),
+            line=method_line(make, "__init__"),
         )
     ]
     run = probe(make, None, path)
     if run.error is not None:
-        return [*checks, run.error]
+        return [*checks, at_class_line(run.error, make)]
     checks.append(Check("runs without an exception", True))
     firsts: List[Any] = []
     agains: List[Any] = []
@@ -126,7 +120,7 @@ def grade_datastore(make: Callable[[], Any], path: Path) -> List[Check]:
             happened=f"list(datastore) == {run.keys}, len(datastore) == {run.count!r}",
             hint="append a key to self.order only the first time it is stored; iterate "
             "over a copy of it (step 3)",
-            line=_line(make, "__iter__"),
+            line=method_line(make, "__iter__"),
         )
     )
     many = [f"k{i:03d}" for i in range(MANY)]
@@ -143,12 +137,12 @@ def grade_datastore(make: Callable[[], Any], path: Path) -> List[Check]:
             f"{len(run.all_keys)} keys{'' if listed else ', not in the order stored'}",
             hint="each key stored is found again in its bucket (steps 1, 2); when the "
             "table grows, every pair moves to its new bucket (step 4)",
-            line=_line(make, "grow") or setitem,
+            line=method_line(make, "grow") or setitem,
         )
     )
     got = over_comms(make, None, path)
     if got.error is not None:
-        return [*checks, got.error]
+        return [*checks, at_class_line(got.error, make)]
     last = got.last
     arrived = (
         getattr(last, "data", None) == SENT - 1

@@ -25,7 +25,6 @@ Example::
 
 from __future__ import annotations
 
-import inspect
 from pathlib import Path
 from typing import Any, List, Optional, Type
 
@@ -38,7 +37,9 @@ from snr.extras.lessons.probe import (
     MANY,
     SCRIPT,
     SENT,
+    at_class_line,
     find_class,
+    method_line,
     over_comms,
     page_words,
     probe,
@@ -75,20 +76,13 @@ class CoreFactory(EndpointFactory):
         return self.cls(self, parent)  # type: ignore[call-arg]
 
 
-def _line(cls: Any, method: str) -> Optional[int]:
-    try:
-        return inspect.getsourcelines(getattr(cls, method))[1]
-    except (OSError, TypeError, AttributeError):
-        return None
-
-
 def _handler_line(cls: Any, *names: str) -> Optional[int]:
     """The line of the first of ``names`` the class has (the student's names may differ)."""
     for name in names:
-        line = _line(cls, name)
+        line = method_line(cls, name)
         if line is not None:
             return line
-    return _line(cls, "__init__")
+    return method_line(cls, "__init__")
 
 
 def grade(path: Path) -> List[Check]:
@@ -113,18 +107,18 @@ def grade_core(factory: AbstractFactory, cls: type, path: Path) -> List[Check]:
 
         grade_core(NodeCoreFactory(), NodeCoreEndpoint, Path("snr"))   # all pass
     """
-    store = _line(cls, "store_page_handler")
+    store = method_line(cls, "store_page_handler")
     checks = [
         Check(
             "the node core",
             True,
             happened=f"{cls.__qualname__}, built by the node in place of SNR's own",
-            line=_line(cls, "__init__"),
+            line=method_line(cls, "__init__"),
         )
     ]
     run = probe(None, factory, path)
     if run.error is not None:
-        return [*checks, run.error]
+        return [*checks, at_class_line(run.error, cls)]
     checks.append(Check("runs without an exception", True))
     script = run.at_store[: len(SCRIPT)]
     lost = [(key, value, got) for key, value, got in script if getattr(got, "data", None) != value]
@@ -178,7 +172,7 @@ def grade_core(factory: AbstractFactory, cls: type, path: Path) -> List[Check]:
     )
     got = over_comms(None, factory, path)
     if got.error is not None:
-        return [*checks, got.error]
+        return [*checks, at_class_line(got.error, cls)]
     in_order = got.seen == list(range(SENT))
     stored = getattr(got.last, "data", None) == SENT - 1
     checks.append(
