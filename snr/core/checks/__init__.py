@@ -34,6 +34,8 @@ call as "check this" and come back here for the how:
   a command line that names no role, answered with the roles;
 * ``datastore_guard.py``: ``node.datastore`` as components see it, a read-only
   view that names ``store_data`` when written (every mode);
+* ``seam_checks.py``: a datastore or node core of the student's own
+  (``Config(datastore=..., node_core=...)``), checked where it plugs in;
 * ``top_level.py``: an SNR error nobody caught, printed with the student's frames
   only (``import snr`` sets it as ``sys.excepthook``);
 * ``watchdog.py``: a node stuck without a word, a loop flooding the queue (DEBUG);
