@@ -65,6 +65,7 @@ from snr.utils import MemoryLinkPair
 
 __all__ = [
     "ALONE",
+    "BURST",
     "MANY",
     "SCRIPT",
     "Probe",
@@ -86,6 +87,9 @@ SEED = 5
 SENT = 200
 """Pages the other node sends over comms, under ``count``: 0, 1, 2, ..."""
 MANY = 300
+BURST = 50
+"""Pages under ``burst`` (0, 1, 2, ...) from node ``other`` stored as one ``store_pages``
+event, as a comms component hands over what it read at once."""
 """Keys stored once each, ``k000`` to ``k299``, after the script."""
 UNKNOWN = "never_stored"
 """A key no page is ever stored under."""
@@ -309,7 +313,9 @@ class _Probe(Endpoint):
         self.run.many = {f"k{i:03d}": node.get_data(f"k{i:03d}") for i in range(MANY)}
         self.run.all_keys = list(node.datastore)
         adding = Task(TaskType.event, tasks.ADD_COMPONENT, [_AddedFactory()])
-        return [self.store_data_task(*ALONE), adding, tasks.event("probe_remove")]
+        now = node.get_time_s()
+        burst = tasks.store_pages([Page("burst", i, "other", now, False) for i in range(BURST)])
+        return [self.store_data_task(*ALONE), burst, adding, tasks.event("probe_remove")]
 
     def remove(self, task: Task, key: TaskId) -> SomeTasks:
         self.run.added = ADDED in self.parent.components
