@@ -2,12 +2,14 @@
 
 from __future__ import annotations
 
-from typing import Dict, List, Mapping, Optional, Sequence
+from typing import Callable, Dict, List, Mapping, Optional, Sequence
 
 from snr.core.checks.call_checks import check_config_args, check_role
 from snr.core.checks.profiler import Profiler
+from snr.core.checks.seam_checks import check_seam_args
 from snr.core.clock import NodeClock
-from snr.prelude.abstract import AbstractConfig, AbstractFactory, AbstractProfiler
+from snr.core.node import NodeCoreFactory
+from snr.prelude.abstract import AbstractConfig, AbstractFactory, AbstractProfiler, Datastore
 from snr.prelude.names import Mode, Role
 
 __all__ = ["Config"]
@@ -22,6 +24,12 @@ class Config(AbstractConfig):
         profile: time every handler; defaults to on in DEBUG mode only.
         clock: a `SimClock` to run every node built from this config in
             simulated time (docs/simulator.md); None (the default): the wall clock.
+        datastore: what makes each node's `Datastore`, called with no
+            arguments: None (the default) is ``dict``, SNR's own; or a class
+            of your own.
+        node_core: the factory of each node's core endpoint (a `NodeCore`):
+            None (the default) is ``NodeCoreFactory()``, SNR's own.
+            docs/assignments.md: writing either yourself.
 
     Example::
 
@@ -31,6 +39,7 @@ class Config(AbstractConfig):
         snr.SynchronousRunner("lunar_module", config).run()
 
         snr.Config({"sim": [...]}, clock=snr.SimClock())   # faster than real time
+        snr.Config({"sim": [...]}, datastore=MyDatastore, node_core=MyNodeCoreFactory())
     """
 
     def __init__(
@@ -39,6 +48,8 @@ class Config(AbstractConfig):
         mode: Mode = Mode.DEBUG,
         profile: Optional[bool] = None,
         clock: Optional[NodeClock] = None,
+        datastore: Optional[Callable[[], Datastore]] = None,
+        node_core: Optional[AbstractFactory] = None,
     ) -> None:
         if factories is None:
             factories = {}
@@ -49,6 +60,9 @@ class Config(AbstractConfig):
         self.mode = mode
         self.profile = (mode is Mode.DEBUG) if profile is None else profile
         self.clock = clock
+        check_seam_args(datastore, node_core)
+        self.datastore: Callable[[], Datastore] = dict if datastore is None else datastore
+        self.node_core = NodeCoreFactory() if node_core is None else node_core
 
     def roles(self) -> List[Role]:
         """Every role in the config, in the order written."""

@@ -6,10 +6,13 @@ thread that writes the datastore or runs task handlers. Loop threads reach the
 node through the thread-safe queue (``schedule``, ``store_data``) and the
 read-only ``get_page``/``get_data``.
 
-The node keeps its life cycle, its run loop and its datastore. Its first
-component, the node core endpoint (`NodeCoreEndpoint`, named ``node_core``),
-stores pages (then sends ``process_data`` when asked), adds, removes and
-reloads components, and stops the node on a terminate task (thesis 4.3.2).
+The node keeps its life cycle, its run loop and its datastore (a ``dict``,
+or any `Datastore`). Its first component, the node core endpoint
+(`NodeCoreEndpoint`, named ``node_core``), stores pages (then sends
+``process_data`` when asked), adds, removes and reloads components, and
+stops the node on a terminate task (thesis 4.3.2). Both are seams: a
+``Config(datastore=..., node_core=...)`` of a student's own replaces them
+(`NodeCore` says what a core must do; docs/assignments.md).
 Three helpers do the rest::
 
     Node ──► ComponentSet   build, add, remove, reload, start and stop components;
@@ -27,6 +30,7 @@ import dataclasses
 import enum
 import logging
 import threading
+from abc import abstractmethod
 from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional
 
 from snr.core import tasks
@@ -34,6 +38,7 @@ from snr.core.checks import life_cycle
 from snr.core.checks.datastore_guard import NodeDatastore
 from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
 from snr.core.checks.failures import FailureReport
+from snr.core.checks.seam_checks import checked_core, checked_datastore
 from snr.core.checks.step_mode import StepMode
 from snr.core.clock import clock_of
 from snr.core.components import NODE_CORE_NAME, ComponentSet
@@ -49,15 +54,16 @@ from snr.prelude.abstract import (
     AbstractFactory,
     AbstractLoop,
     AbstractNode,
+    Datastore,
 )
 from snr.prelude.names import (
     ComponentName,
-    DataDict,
     DataKey,
     Mode,
     Role,
     SomeTasks,
     TaskHandler,
+    TaskHandlerMap,
     TaskId,
     TaskType,
 )
@@ -70,7 +76,8 @@ if TYPE_CHECKING:  # DEBUG helpers, imported when a node turns them on (see __in
     from snr.core.checks.watchdog import Watchdog
     from snr.core.checks.wiring_checks import WiringChecks
 
-__all__ = ["NODE_CORE_NAME", "Node", "NodeCoreEndpoint", "NodeCoreFactory", "NodeState"]
+__all__ = ["NODE_CORE_NAME", "Node", "NodeCore", "NodeCoreEndpoint", "NodeCoreFactory"]
+__all__ += ["NodeState"]
 
 _PROCESS_DATA = TaskType.process_data
 _STORE_PAGE = TaskType.store_page
@@ -105,7 +112,8 @@ class Node(AbstractNode):
 
     Attributes:
         datastore: the newest page for each data key, read-only (get_page reads it).
-        pages: the dict behind it, which only the node writes.
+        pages: the `Datastore` behind it (a dict unless the config names
+            another), which only the node writes.
         queue: the task queue (bounded: see `TaskQueue`).
         components: every endpoint and loop by name, in start order.
         state: the `NodeState`.
@@ -152,7 +160,9 @@ class Node(AbstractNode):
         self.timer = Timer(clock)
         self._page_time: Callable[[], float] = clock.stamp
         self.queue = TaskQueue(high_water=self.max_queued_tasks, log=self.log)
-        self.pages: DataDict = {}  # written by the node alone; components see it read-only:
+        # Config(datastore=...): dict, or a student's. Written by the node alone;
+        # components see it read-only:
+        self.pages: Datastore = checked_datastore(getattr(config, "datastore", dict), self)
         self.datastore: Mapping[DataKey, Page] = NodeDatastore(self.pages, role, self.queue)
         self.state = NodeState.CREATED
         self.terminate_reason: Optional[str] = None
@@ -173,7 +183,9 @@ class Node(AbstractNode):
             from snr.core.checks.node_checks import NodeChecks
 
             self._checks = NodeChecks(self, self._components, self._runner)
-        core = self._core = NodeCoreFactory().get(self)
+        factory = getattr(config, "node_core", None) or NodeCoreFactory()  # or a student's
+        core: NodeCore = checked_core(self.build_component(factory), factory, self)
+        self._core = core
         self.add_component(core, start=False)
         self._runner.store_page = core.store_page_handler  # pages are stored before handlers
         core.pages = self.pages
@@ -505,8 +517,97 @@ class Node(AbstractNode):
         return f"<Node {self.role!r} {self.state.value}, {len(self.components)} components>"
 
 
-class NodeCoreEndpoint(Endpoint):
-    """Stores pages and manages components for its node.
+class NodeCore(Endpoint):
+    """What a node needs of its core endpoint: the interface of `Config(node_core=...)`.
+
+    SNR's own is `NodeCoreEndpoint`; one of your own (the course's
+    docs/assignments.md, lesson 6) extends this class, and must:
+
+    * store pages: `store_page_handler`, which the node calls for each
+      ``store_page`` task before that task's handlers;
+    * handle ``tasks.store_pages(pages)``, a burst of pages (from another node,
+      over comms) to store in order, each as its own ``store_page`` task would;
+    * handle ``terminate`` (stop the node: ``parent.set_terminate_flag``),
+      ``reload`` (``parent.reload_component``) and the ``ADD_COMPONENT`` and
+      ``REMOVE_COMPONENT`` events (``parent.build_component``,
+      ``parent.add_component``, ``parent.remove_component``).
+
+    This class names itself ``node_core`` and handles SNR's own two events
+    (``CAUGHT_UP``, ``CHECK_WIRING``); add your handlers to ``task_handlers``.
+
+    Example::
+
+        class MyNodeCore(NodeCore):
+            def __init__(self, factory: EndpointFactory, parent: AbstractNode) -> None:
+                super().__init__(factory, parent)
+                self.task_handlers.update({TaskType.terminate: self.stop, ...})
+
+            def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
+                page = task.val_list[0]
+                self.pages[page.key] = page
+                ...
+
+        Config({"robot": [...]}, node_core=MyNodeCoreFactory())
+    """
+
+    pages: Datastore
+    """The node's datastore (``node.pages``), set by the node: the core alone writes it."""
+    freeze: Optional[Callable[[Any, DataKey], Any]] = None
+    """DEBUG and TEST: makes a page's lists and dicts read-only as it is stored, so that
+    no handler changes what the others see (set by the node; None: DEPLOYED)."""
+
+    def __init__(self, factory: AbstractFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, NODE_CORE_NAME)
+        self.task_handlers = {
+            (TaskType.event, tasks.CAUGHT_UP): self.caught_up_handler,
+            (TaskType.event, tasks.CHECK_WIRING): self.check_wiring_handler,
+        }
+
+    @abstractmethod
+    def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Put the task's page in ``pages``; then return its ``process_data`` task, if asked.
+
+        Not in the handler table: the node's run loop calls it for every
+        ``store_page`` task before the task's handlers (``HandlerRunner``), so
+        they all find the page stored. Returns ``Task(TaskType.process_data,
+        page.key, [page])`` when ``page.process`` is true (or None when no
+        handler waits for it), else None.
+
+        Example::
+
+            core.store_page_handler(tasks.store_page(page), (TaskType.store_page, "depth"))
+        """
+
+    def frozen(self, page: Page) -> Page:
+        """``page``, its data made read-only first in DEBUG and TEST modes (``freeze``)."""
+        if self.freeze is not None:
+            page.data = self.freeze(page.data, page.key)
+        return page
+
+    def caught_up_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Everything scheduled before this task was handled: set the event it carries."""
+        for value in task.val_list:
+            if isinstance(value, threading.Event):
+                value.set()
+        return None
+
+    def check_wiring_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        """Look for wiring mistakes: the node's own check, or the checks it carries.
+
+        A comms component sends this event with its check of one link (a
+        function to call) in ``val_list``, so the check runs on the node's
+        thread; without one, the node checks its handlers' keys.
+        """
+        checks = [value for value in task.val_list if callable(value)]
+        if not checks:
+            self.parent.check_wiring()
+        for check in checks:
+            check()
+        return None
+
+
+class NodeCoreEndpoint(NodeCore):
+    """SNR's own node core: stores pages and manages components for its node.
 
     Example (what it does for you)::
 
@@ -515,20 +616,15 @@ class NodeCoreEndpoint(Endpoint):
     """
 
     def __init__(self, factory: AbstractFactory, parent: AbstractNode) -> None:
-        super().__init__(factory, parent, NODE_CORE_NAME)
-        self.pages: Dict[DataKey, Page] = {}  # the node's own dict (node.pages), set by the node
-        # DEBUG and TEST: makes a page's lists and dicts read-only as it is stored, so
-        # that no handler changes what the others see (set by the node; None: DEPLOYED).
-        self.freeze: Optional[Callable[[Any, DataKey], Any]] = None
-        self.task_handlers = {
+        super().__init__(factory, parent)  # pages: set by the node once it is built
+        handlers: TaskHandlerMap = {
             (TaskType.event, tasks.STORE_PAGES): self.store_pages_handler,
             (TaskType.event, tasks.ADD_COMPONENT): self.add_component_handler,
             (TaskType.event, tasks.REMOVE_COMPONENT): self.remove_component_handler,
-            (TaskType.event, tasks.CAUGHT_UP): self.caught_up_handler,
-            (TaskType.event, tasks.CHECK_WIRING): self.check_wiring_handler,
             TaskType.reload: self.reload_handler,
             TaskType.terminate: self.terminate_handler,
         }
+        self.task_handlers.update(handlers)
 
     def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Put the task's page in the datastore; then process_data if asked.
@@ -552,12 +648,6 @@ class NodeCoreEndpoint(Endpoint):
         if page.process and self.parent.is_handled(_PROCESS_DATA, page.key):
             return Task(_PROCESS_DATA, page.key, [page])
         return None
-
-    def frozen(self, page: Page) -> Page:
-        """``page``, its data made read-only first in DEBUG and TEST modes (``freeze``)."""
-        if self.freeze is not None:
-            page.data = self.freeze(page.data, page.key)
-        return page
 
     def store_pages_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Store a burst of pages (`tasks.store_pages`) in order, in one handler call.
@@ -607,27 +697,6 @@ class NodeCoreEndpoint(Endpoint):
         """Remove the component named in the task."""
         for name in task.val_list:
             self.parent.remove_component(str(name))
-        return None
-
-    def caught_up_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Everything scheduled before this task was handled: set the event it carries."""
-        for value in task.val_list:
-            if isinstance(value, threading.Event):
-                value.set()
-        return None
-
-    def check_wiring_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Look for wiring mistakes: the node's own check, or the checks it carries.
-
-        A comms component sends this event with its check of one link (a
-        function to call) in ``val_list``, so the check runs on the node's
-        thread; without one, the node checks its handlers' keys.
-        """
-        checks = [value for value in task.val_list if callable(value)]
-        if not checks:
-            self.parent.check_wiring()
-        for check in checks:
-            check()
         return None
 
     def reload_handler(self, task: Task, key: TaskId) -> SomeTasks:

@@ -18,7 +18,7 @@ import inspect
 import logging
 from abc import ABCMeta, abstractmethod
 from types import MappingProxyType, ModuleType
-from typing import Any, Callable, Dict, List, Mapping, Optional
+from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Protocol
 
 from snr.prelude.errors import ComponentError
 from snr.prelude.names import (
@@ -41,7 +41,7 @@ from snr.prelude.task import Task
 __all__ = ["AbstractComponent", "AbstractConfig", "AbstractEndpoint", "AbstractFactory"]
 __all__ += ["AbstractLoop", "AbstractMultiRunner", "AbstractNode", "AbstractProfiler"]
 __all__ += ["AbstractRunner", "AbstractTaskQueue", "explain_abstract_error"]
-__all__ += ["missing_methods_error"]
+__all__ += ["Datastore", "missing_methods_error"]
 
 
 class _FriendlyABCMeta(ABCMeta):
@@ -179,6 +179,37 @@ class AbstractTaskQueue(_FriendlyABC):
     @abstractmethod
     def __len__(self) -> int:
         """How many tasks are waiting."""
+
+
+class Datastore(Protocol):
+    """What a node keeps its pages in: the newest page under each key (thesis 4.2, 6.3.1).
+
+    Four methods, the part of a ``dict`` the node uses: SNR's own datastore
+    *is* a ``dict``, the default of ``Config(datastore=...)``. A class of your
+    own with these methods can take its place (docs/assignments.md, lesson 5).
+    The node core writes it, on the node's thread only; ``get_page`` reads it,
+    from any thread.
+
+    Example::
+
+        store = dict()                 # SNR's own; or MyDatastore()
+        store["depth"] = page          # the node core stores a page
+        store.get("depth")             # that page; None for a key never stored
+        list(store), len(store)        # ["depth"], 1: the keys, first stored first
+        Config({"robot": [...]}, datastore=MyDatastore)
+    """
+
+    def __setitem__(self, key: DataKey, page: Page, /) -> None:
+        """Keep ``page`` as the newest under ``key`` (``page.key``), in place of the one before."""
+
+    def get(self, key: DataKey, /) -> Optional[Page]:
+        """The page stored last under ``key``, or None if none ever was."""
+
+    def __iter__(self) -> Iterator[DataKey]:
+        """Every key that has a page, each once, in the order each was first stored."""
+
+    def __len__(self) -> int:
+        """How many keys have a page."""
 
 
 class AbstractNode(_FriendlyABC):

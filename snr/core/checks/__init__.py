@@ -15,6 +15,8 @@ The core calls in at a few places ("check this", "word that failure"); the how i
 * ``runner_checks.py``: a runner never run, a command line without a role;
 * ``datastore_guard.py``, ``read_only.py``: the datastore and page data as
   components see them;
+* ``seam_checks.py``: a datastore or node core of the student's own
+  (``Config(datastore=..., node_core=...)``), checked where it plugs in;
 * ``top_level.py``: an SNR error nobody caught (``sys.excepthook``);
 * ``step_mode.py``, ``profiler.py``: a console's pause and step; handler timings;
 * ``student_code.py``, ``error_text.py``: where the student's code is, and what

@@ -10,8 +10,10 @@ view of the node's own dict (``node.pages``) that refuses every change
 (``[k] = v``, ``del``, ``update``, ``pop``, ``clear``, ``setdefault``,
 ``popitem``, ``|=``) at the line that tries it, and names ``store_data``.
 
-The node writes ``node.pages`` itself, as a plain dict: the guard costs its
-hot path nothing (docs/design.md, "Only the node writes its datastore").
+The node writes ``node.pages`` itself, a plain dict (or the `Datastore` the
+config names): the guard costs its hot path nothing (docs/design.md, "Only
+the node writes its datastore"). It reads the pages through the four methods
+of `Datastore` only, so it works the same over a student's datastore.
 
 Example::
 
@@ -28,7 +30,7 @@ import threading
 from typing import Any, Callable, Dict, Iterator, Mapping, NoReturn, Optional, Tuple
 
 from snr.core.task_queue import TaskQueue
-from snr.prelude import DataKey, DatastoreWriteError, Page
+from snr.prelude import DataKey, Datastore, DatastoreWriteError, Page
 from snr.prelude.student_code import caller_location
 
 __all__ = ["NodeDatastore"]
@@ -61,18 +63,19 @@ class NodeDatastore(Mapping[DataKey, Page]):
 
     __slots__ = ("_pages", "queue", "role")
 
-    def __init__(
-        self, pages: Dict[DataKey, Page], role: str, queue: Optional[TaskQueue] = None
-    ) -> None:
+    def __init__(self, pages: Datastore, role: str, queue: Optional[TaskQueue] = None) -> None:
         self._pages = pages
         self.role = role
         self.queue = queue  # its owner_thread is the node's thread once the node runs
 
     def __getitem__(self, key: DataKey) -> Page:
-        return self._pages[key]
+        page = self._pages.get(key)
+        if page is None:
+            raise KeyError(key)
+        return page
 
     def __contains__(self, key: object) -> bool:
-        return key in self._pages
+        return isinstance(key, str) and self._pages.get(key) is not None
 
     def __iter__(self) -> Iterator[DataKey]:
         return iter(self._pages)
@@ -81,11 +84,16 @@ class NodeDatastore(Mapping[DataKey, Page]):
         return len(self._pages)
 
     def __repr__(self) -> str:
-        return repr(self._pages)
+        return repr(self.copy())
 
     def copy(self) -> Dict[DataKey, Page]:
         """A plain dict of the pages now, the caller's own to change."""
-        return dict(self._pages)
+        pages = {}
+        for key in list(self._pages):  # list(): the keys now, as the node may store more
+            page = self._pages.get(key)
+            if page is not None:
+                pages[key] = page
+        return pages
 
     def _refuse(self, what: str, key: Any = None) -> NoReturn:
         """Raise the error for ``what``, said at the student's line."""
@@ -119,4 +127,4 @@ class NodeDatastore(Mapping[DataKey, Page]):
 
     def __reduce__(self) -> Tuple[Any, ...]:
         # copy.copy, deepcopy and pickle: a copy is a plain dict, the copier's own.
-        return (dict, (dict(self._pages),))
+        return (dict, (self.copy(),))

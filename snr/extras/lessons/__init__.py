@@ -7,7 +7,13 @@ does in the simulator. The lessons' text is docs/lessons.md.
 * ``l01_wall_follower``: lesson 1, a proportional wall follower;
 * ``l02_go_to_goal``: lesson 2, go to a goal round a crate;
 * ``l03_scan_follower``: lesson 3, lesson 1's wall follower seeing by lidar;
-* ``l04_depth_filter``: lesson 4, a filter for a noisy depth sensor.
+* ``l04_depth_filter``: lesson 4, a filter for a noisy depth sensor;
+* ``l05_datastore``: lesson 5, a datastore of your own (a hash table);
+* ``l06_node_core``: lesson 6, a node core endpoint of your own.
+
+Lessons 5 and 6 have students write a part of SNR itself, plugged in where
+SNR's own goes (``Config(datastore=..., node_core=...)``, docs/assignments.md);
+``probe`` runs it in real nodes for their graders.
 
 Example::
 
@@ -83,6 +89,20 @@ LESSONS: Tuple[Lesson, ...] = (
         "l04_depth_filter",
         "depth_filter.py",
         "lesson-4-a-filter",
+    ),
+    Lesson(
+        5,
+        "a datastore: keep each key's newest page, in a hash table of your own",
+        "l05_datastore",
+        "datastore.py",
+        "lesson-5-a-datastore",
+    ),
+    Lesson(
+        6,
+        "a node core: store pages, run process_data, manage components, stop the node",
+        "l06_node_core",
+        "node_core.py",
+        "lesson-6-a-node-core",
     ),
 )
 """Every lesson, in order."""
