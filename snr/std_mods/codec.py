@@ -18,11 +18,10 @@ message for data JSON cannot hold, one strict reader:
   `MAX_DEPTH`, and pages with missing or wrongly typed fields. Nothing is
   unpickled or evaluated, so a bad frame can only be *wrong*, never harmful.
 
-Two JSON backends do the work, each through its public functions only: the
-standard library's ``json`` and, when installed (``pip install
-'snr-robotics[fast]'``), ``orjson``, several times faster. orjson's result is
-used only where it is known to be json's (they differ on NaN, non-ASCII text,
-small floats, integers beyond 64 bits); json gives every verdict and message.
+The standard library's ``json`` does the work, through its public functions
+only. A faster `JsonBackend` may do part of it: one an extra registers in the
+entry point group ``snr.json_backends`` (``snr.extras.orjson``, with
+``pip install 'snr-robotics[fast]'``), used by default when installed;
 ``SNR_JSON=json`` (or ``use_backend("json")``) uses the standard library only.
 
 Example::
@@ -45,31 +44,16 @@ import re
 import struct
 import time
 from dataclasses import dataclass
-from typing import (
-    Any,
-    Callable,
-    Dict,
-    Iterable,
-    List,
-    Mapping,
-    NoReturn,
-    Optional,
-    Tuple,
-    Union,
-)
+from typing import Any, Dict, Iterable, List, Mapping, NoReturn, Optional, Protocol, Tuple, Union
 
-from snr.prelude import NotSerializableError, Page, WireFormatError
-from snr.prelude.install import install_hint, upgrade_hint
+from snr.core import plugins
+from snr.prelude import ConfigError, NotSerializableError, Page, WireFormatError
+from snr.prelude.install import upgrade_hint
 from snr.prelude.not_serializable import not_serializable_error
-
-_orjson: Any
-try:
-    import orjson as _orjson
-except ImportError:  # the optional fast backend is not installed
-    _orjson = None
 
 __all__ = [
     "BACKEND_ENV_VAR",
+    "BACKEND_GROUP",
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "HEADER_BYTES",
@@ -81,6 +65,7 @@ __all__ = [
     "Bye",
     "FrameDecoder",
     "Hello",
+    "JsonBackend",
     "Message",
     "PageEncoder",
     "PathLike",
@@ -118,6 +103,9 @@ rejected, deeper data is refused.
 BACKEND_ENV_VAR = "SNR_JSON"
 """Environment variable choosing the JSON backend: ``json`` (stdlib) or ``orjson``."""
 
+BACKEND_GROUP = "snr.json_backends"
+"""The entry point group of JSON backends (`JsonBackend`), by name: ``orjson``."""
+
 FORMAT_NAME = "snr-pages"
 """The ``format`` field of the header line of recordings and serial links."""
 
@@ -131,10 +119,9 @@ Text = Union[bytes, bytearray, memoryview, str]
 """What the readers take: UTF-8 bytes, or text already decoded."""
 
 _DATA_DEPTH = MAX_DEPTH - 1  # the page object itself is one level
-_JSON_SCALARS = frozenset((str, int, float, bool, type(None)))
-_STR = frozenset((str,))
 _LONE_SURROGATE = re.compile("[\ud800-\udfff]")
 _TOO_DEEP = f"it nests arrays and objects more than {MAX_DEPTH} deep"
+_DATA_TOO_DEEP = f"data nests lists and dicts more than {_DATA_DEPTH} deep"
 
 
 class _Refused(Exception):
@@ -155,6 +142,11 @@ def _opens_too_many(text: bytes, depth: int = MAX_DEPTH) -> bool:
     Shorter text cannot open (and close) that many, and is not counted.
     """
     return len(text) > 2 * depth and text.count(b"[") + text.count(b"{") > depth
+
+
+def _suspect(out: bytes, depth: int = MAX_DEPTH) -> bool:
+    """True when json's ``out`` may hold a lone surrogate (as ``\\ud800``) or nest too deep."""
+    return b"\\ud" in out or _opens_too_many(out, depth)
 
 
 def _problem(value: Any) -> Optional[str]:
@@ -231,12 +223,7 @@ def _load_std(raw: Text) -> Any:
         raise WireFormatError(f"it is not valid JSON for SNR: {error}") from None
     # json reads lone surrogates (escaped as \ud800, or raw in text) and nests as
     # deep as its recursion lets it: where the text may hold either, look.
-    if (
-        b"\\ud" in data
-        or b"\\uD" in data
-        or (isinstance(raw, str) and not raw.isascii())
-        or _opens_too_many(data)
-    ):
+    if _suspect(data) or b"\\uD" in data or (isinstance(raw, str) and not raw.isascii()):
         problem = _problem(value)
         if problem is not None:
             raise WireFormatError(f"it is not valid JSON for SNR: {problem}")
@@ -250,113 +237,25 @@ def _dump_std(obj: Any) -> bytes:
     except (TypeError, ValueError) as error:  # not JSON, NaN/infinity, contains itself
         raise _Refused(str(error)) from error
     except RecursionError:
-        raise _Refused(f"data nests lists and dicts more than {_DATA_DEPTH} deep") from None
+        raise _Refused(_DATA_TOO_DEEP) from None
     # json writes lone surrogates (as \ud800) and nests as deep as its recursion
     # lets it: where the text may hold either, refuse what a reader would reject.
-    if b"\\ud" in out or _opens_too_many(out):
+    if _suspect(out):
         try:
             problem = _problem(json.loads(out))
         except RecursionError:
             problem = _TOO_DEEP
-        if problem == _TOO_DEEP:
-            raise _Refused(f"data nests lists and dicts more than {_DATA_DEPTH} deep")
         if problem is not None:
-            raise _Refused(problem)
+            raise _Refused(_DATA_TOO_DEEP if problem == _TOO_DEEP else problem)
     return out
 
 
-# -- orjson, where its result is known to be json's; json does everything else ------
-
-# Every digit made 0, so that one search finds a run of 19 digits or more.
-_DIGITS_TO_ZERO = bytes.maketrans(b"123456789", b"000000000")
-
-
-def _load_orjson(raw: Text) -> Any:
-    """`_load_std`'s value and verdict, found with orjson where it reads the same."""
-    assert _orjson is not None
-    try:
-        value = _orjson.loads(raw)
-    except _orjson.JSONDecodeError:
-        return _load_std(raw)  # json gives the verdict and the message
-    # orjson rejects NaN, infinity and lone surrogates itself, but reads an
-    # integer beyond 64 bits (19 digits or more) as a float, and nests up to
-    # 1,024 deep: json reads such text again.
-    data = raw.encode("utf-8") if isinstance(raw, str) else bytes(raw)
-    if b"0" * 19 in data.translate(_DIGITS_TO_ZERO) or _opens_too_many(data):
-        return _load_std(raw)
-    return value
-
-
-def _plain(value: Any, depth: int = 1) -> bool:
-    """True when ``value`` holds only exact JSON types, nested at most `MAX_DEPTH` deep.
-
-    That is str, int, float, bool, None, lists, tuples and dicts with str keys,
-    and lists and dicts of subclasses too (both write them as the plain ones:
-    read-only page data is such, in DEBUG and TEST); not other subclasses,
-    enums, dataclasses, dates or UUIDs, which orjson writes and json refuses
-    or writes otherwise. Data that contains itself is endlessly deep, so not
-    plain either. ``depth`` is how deep ``value`` itself is (2 for a page's
-    data). Example: ``_plain({"a": [1, 2.5]})``.
-    """
-    kind = type(value)
-    if kind is dict or (kind is not list and isinstance(value, dict)):
-        if not _STR.issuperset(map(type, value)):  # all keys at once
-            return False
-        value = value.values()
-    elif kind is not list and kind is not tuple and not isinstance(value, list):
-        return kind in _JSON_SCALARS
-    if depth > MAX_DEPTH:
-        return False
-    for item in value:
-        if type(item) not in _JSON_SCALARS and not _plain(item, depth + 1):
-            return False
-    return True
-
-
-def _dump_orjson(obj: Any) -> bytes:
-    """`_dump_std`'s bytes and refusals, written with orjson where it writes the same."""
-    assert _orjson is not None
-    if _plain(obj):
-        try:
-            out: bytes = _orjson.dumps(obj)
-        except TypeError:  # integers beyond 64 bits, lone surrogates: json decides
-            return _dump_std(obj)
-        if _as_json_writes(out):
-            return out
-    return _dump_std(obj)
-
-
-def _as_json_writes(out: bytes) -> bool:
-    """True unless orjson's ``out`` may hold what json writes otherwise.
-
-    That is non-ASCII text and DEL (json escapes them), null (orjson's NaN and
-    infinity, which json refuses; or None) and small floats (0.00001 and 1e-7,
-    where json writes 1e-05 and 1e-07). Example: ``_as_json_writes(b'[0.5]')``.
-    """
-    return (
-        out.isascii()
-        and b"\x7f" not in out
-        and b"null" not in out
-        and b"0.0000" not in out
-        and b"e-" not in out
-    )
-
-
-# -- a page's data and time alone, for PageEncoder ---------------------------------
-#
-# Most pages hold a number, a short name or a small list or dict of those.
-# A number's type says what its JSON is, so it is written directly; anything
-# else is written, and its JSON searched as `_dump_std` and `_dump_orjson` do.
-# None means "let page_json decide", which also gives the refusal's message.
-
-
 def _value_std(value: Any) -> Optional[bytes]:
-    """json's bytes for ``value``, or None where `page_json` must decide.
+    """json's bytes for a page's data or time, or None where `page_json` must decide.
 
-    json writes a float with ``float.__repr__`` and an int with ``int.__repr__``;
-    writing them here saves ``JSONEncoder.encode`` making its C encoder for the
-    call (about 1 µs). Text is encoded without one. Example: ``_value_std(0.5)``
-    is ``b"0.5"``.
+    json writes a float with ``float.__repr__`` and an int with ``int.__repr__``:
+    writing them here saves making json's C encoder for the call.
+    Example: ``_value_std(0.5)`` is ``b"0.5"``.
     """
     kind = type(value)
     if kind is float:
@@ -370,78 +269,84 @@ def _value_std(value: Any) -> Optional[bytes]:
         out = (int.__repr__(value) if kind is int else _ENCODER.encode(value)).encode("ascii")
     except (TypeError, ValueError, RecursionError):  # not JSON, NaN, 4,300 digits...
         return None
-    # a surrogate, maybe lone; data nesting more than a page's data may
-    if b"\\ud" in out or _opens_too_many(out, _DATA_DEPTH):
-        return None
-    return out
+    return None if _suspect(out, _DATA_DEPTH) else out
 
 
-_SMALL = 16  # items in a list or dict `_alike` looks at; longer ones, searching is faster
+# -- the extension point: a faster JSON backend, found by entry point ----------------
 
 
-def _alike(values: Iterable[Any], levels: int) -> bool:
-    """True when orjson writes each of ``values`` as json does, known from their types alone.
+class JsonBackend(Protocol):
+    """A faster way to do part of json's work: what an entry point in `BACKEND_GROUP` makes.
 
-    That holds for ints, bools, None, ASCII text without DEL, floats that are
-    finite and 0 or at least 1e-4 in size (orjson writes NaN as null, 1e-5 as
-    0.00001), and lists and dicts of up to `_SMALL` of them, ``levels`` deep.
-    Integers beyond 64 bits and keys that are not text pass: orjson refuses
-    them. Example: ``_alike([{"seq": 1, "value": 0.5}], 1)`` is True.
+    The entry point names a class (or function) that returns the backend and
+    raises ImportError, its message the install command, when a package it
+    needs is missing. A backend must give json's results or step aside:
+    the codec uses the standard library wherever it does, and for every
+    verdict and message, so the bytes written and the input rejected are the
+    same with any backend (``tests/test_codec.py`` checks the registered
+    ones). ``snr.extras.orjson`` is one; a third:
+
+    Example::
+
+        class UltraJson:  # pyproject.toml: [project.entry-points."snr.json_backends"]
+            def dumps(self, value: Any) -> Optional[bytes]:  # ultra = "mypkg:UltraJson"
+                return None  # "let json write it"
+            def loads(self, raw: Union[bytes, str]) -> Any:
+                raise ValueError("let json read it")
     """
-    for value in values:
-        kind = type(value)
-        if kind is float:
-            # value - value is NaN for NaN and infinity
-            if value - value != 0.0 or (-1e-4 < value < 1e-4 and value != 0.0):
-                return False
-        elif kind is str:
-            if not value.isascii() or "\x7f" in value:
-                return False
-        elif kind is int or kind is bool or value is None:
-            continue
-        elif kind is list or kind is tuple or isinstance(value, list):
-            if not (levels and len(value) <= _SMALL and _alike(value, levels - 1)):
-                return False
-        elif isinstance(value, dict):  # (a list or dict subclass is written as one)
-            if not (
-                levels
-                and len(value) <= _SMALL
-                and _alike(value, 0)  # the keys
-                and _alike(value.values(), levels - 1)
-            ):
-                return False
-        else:
-            return False
-    return True
+
+    def dumps(self, value: Any) -> Optional[bytes]:
+        """The bytes json writes for ``value`` (compact, ASCII), or None to let json write it."""
+
+    def loads(self, raw: Text) -> Any:
+        """The value `load_json` reads from ``raw``, or ValueError to let json read it."""
 
 
-def _value_orjson(value: Any) -> Optional[bytes]:
-    """`_value_std`'s bytes, written with orjson where it writes the same; None as there.
-
-    A number, a name or a small list or dict of them (`_alike`) is written
-    as it is; other data of exact JSON types is written and its bytes are
-    searched as `_dump_orjson` does; the rest goes to `_value_std`.
-    Example: ``_value_orjson({"seq": 1})`` is ``b'{"seq":1}'``.
-    """
-    assert _orjson is not None
-    if type(value) is float and value - value == 0.0 and not -1e-4 < value < 1e-4:
-        return _orjson.dumps(value)  # type: ignore[no-any-return]  # every page's time
-    try:
-        if _alike((value,), 2):
-            return _orjson.dumps(value)  # type: ignore[no-any-return]
-        if _plain(value, depth=2):  # 2: inside the page, so at most _DATA_DEPTH deep
-            out: bytes = _orjson.dumps(value)
-            if _as_json_writes(out):
-                return out
-    except TypeError:  # an integer beyond 64 bits, a key that is not text
-        pass
-    return _value_std(value)  # json's bytes, or None
-
-
-_load: Callable[[Text], Any] = _load_std
-_dump: Callable[[Any], bytes] = _dump_std
-_value: Callable[[Any], Optional[bytes]] = _value_std
+_fast: Optional[JsonBackend] = None  # the backend in use; None: the standard library alone
 _backend = "json"
+_loaded: Dict[str, JsonBackend] = {}
+
+
+def _load(raw: Text) -> Any:
+    if _fast is not None:
+        try:
+            return _fast.loads(raw)
+        except ValueError:  # not known to be json's value: json reads it, and says why not
+            pass
+    return _load_std(raw)
+
+
+def _dump(obj: Any) -> bytes:
+    if _fast is not None:
+        out = _fast.dumps(obj)
+        if out is not None and not _suspect(out):
+            return out
+    return _dump_std(obj)
+
+
+def _value(value: Any) -> Optional[bytes]:
+    if _fast is not None:
+        out = _fast.dumps(value)
+        if out is not None and not _suspect(out, _DATA_DEPTH):
+            return out
+    return _value_std(value)
+
+
+def _load_backend(name: str) -> JsonBackend:
+    """The backend ``name`` of `BACKEND_GROUP`; ValueError if unknown or not installed."""
+    if name not in _loaded:
+        if name not in plugins.names(BACKEND_GROUP):
+            choices = " or ".join(repr(n) for n in ("json", *plugins.names(BACKEND_GROUP)))
+            raise ValueError(f"unknown JSON backend {name!r}; choose {choices}")
+        try:
+            _loaded[name] = plugins.load(BACKEND_GROUP, name, f"the JSON backend {name!r}")()
+        except (ImportError, ConfigError) as error:
+            hint = error.__cause__ if isinstance(error, ConfigError) else error
+            raise ValueError(
+                f"the {name} JSON backend is not installed ({BACKEND_ENV_VAR}={name}?): "
+                f"{hint}, or use 'json'"
+            ) from None
+    return _loaded[name]
 
 
 def available_backends() -> Tuple[str, ...]:
@@ -451,7 +356,14 @@ def available_backends() -> Tuple[str, ...]:
 
         "orjson" in available_backends()   # True after pip install 'snr-robotics[fast]'
     """
-    return ("json", "orjson") if _orjson is not None else ("json",)
+    usable = ["json"]
+    for name in plugins.names(BACKEND_GROUP):
+        try:
+            _load_backend(name)
+            usable.append(name)
+        except ValueError:  # its package is not installed
+            pass
+    return tuple(usable)
 
 
 def backend() -> str:
@@ -468,35 +380,27 @@ def use_backend(name: Optional[str] = None) -> str:
     """Choose the JSON backend; returns the one now in use.
 
     Args:
-        name: ``"json"`` (the standard library), ``"orjson"``, or None for the
-            default: the ``SNR_JSON`` environment variable if set, else orjson
-            when it is installed. The bytes written and the inputs rejected
-            are the same with both; only the speed differs.
+        name: ``"json"`` (the standard library), a backend of `BACKEND_GROUP`
+            (``"orjson"``), or None for the default: the ``SNR_JSON``
+            environment variable if set, else the first one installed (orjson),
+            else json. The bytes written and the inputs rejected are the
+            same with all; only the speed differs.
 
     Raises:
-        ValueError: an unknown name, or orjson asked for but not installed.
+        ValueError: an unknown name, or a backend asked for but not installed.
 
     Example::
 
         use_backend("json")     # compare with the stdlib, e.g. in a test
         use_backend()           # back to the default
     """
-    global _load, _dump, _value, _backend
+    global _fast, _backend
     if name is None:
-        name = os.environ.get(BACKEND_ENV_VAR, "").strip().lower() or (
-            "orjson" if _orjson is not None else "json"
-        )
-    if name == "json":
-        _load, _dump, _value = _load_std, _dump_std, _value_std
-    elif name == "orjson":
-        if _orjson is None:
-            raise ValueError(
-                f"the orjson JSON backend is not installed ({BACKEND_ENV_VAR}=orjson?): "
-                f"{install_hint('fast')}, or use 'json'"
-            )
-        _load, _dump, _value = _load_orjson, _dump_orjson, _value_orjson
-    else:
-        raise ValueError(f"unknown JSON backend {name!r}; choose 'json' or 'orjson'")
+        name = os.environ.get(BACKEND_ENV_VAR, "").strip().lower()
+        if not name:
+            installed = available_backends()
+            name = installed[1] if len(installed) > 1 else "json"  # the first, by name
+    _fast = None if name == "json" else _load_backend(name)
     _backend = name
     return name
 
@@ -719,29 +623,26 @@ def page_from_fields(
         raise WireFormatError("field 'key' of the page must not be empty")
     if "data" not in fields:
         raise WireFormatError(f"the page under {key!r} has no 'data' field")
-    if default_origin is None:
-        for name in ("origin", "created_at_s"):
-            if name not in fields:
-                raise WireFormatError(f"the page under {key!r} has no {name!r} field")
-        origin_value = origin
-    else:
-        origin_value = fields.get("origin", default_origin)
-    if type(origin_value) is not str:
-        raise _bad_type("origin", origin_value, "a JSON string")
-    if default_origin is None and not origin_value:
+    for name in ("origin", "created_at_s") if default_origin is None else ():
+        if name not in fields:
+            raise WireFormatError(f"the page under {key!r} has no {name!r} field")
+    if "origin" not in fields:
+        origin = default_origin
+    if type(origin) is not str:
+        raise _bad_type("origin", origin, "a JSON string")
+    if default_origin is None and not origin:
         raise WireFormatError("field 'origin' of the page must not be empty")
-    if "created_at_s" in fields:
-        if type(created) not in (int, float):
-            raise _bad_type("created_at_s", created, "a number")
-        try:
-            created_s = float(created)  # type: ignore[arg-type]
-        except OverflowError:
-            raise WireFormatError("field 'created_at_s' of the page is too large") from None
-    else:
-        created_s = time.time() if now_s is None else now_s
+    if "created_at_s" not in fields:
+        created = time.time() if now_s is None else now_s
+    elif type(created) not in (int, float):
+        raise _bad_type("created_at_s", created, "a number")
+    try:
+        created_s = float(created)  # type: ignore[arg-type]
+    except OverflowError:  # a whole number past a double's range
+        raise WireFormatError("field 'created_at_s' of the page is too large") from None
     if type(process) is not bool:
         raise _bad_type("process", process, "a JSON bool (true or false)")
-    return Page(key, fields["data"], origin_value, created_s, process)
+    return Page(key, fields["data"], origin, created_s, process)
 
 
 # -- frames: a page (or a hello, beat, bye, proof) between two nodes ------------------
@@ -949,8 +850,7 @@ def decode_body(body: bytes) -> Message:
         obj = load_object(body)
     except WireFormatError as error:
         raise WireFormatError(f"the body: {error}") from None
-    version = obj.get("v")
-    kind = obj.get("kind")
+    version, kind = obj.get("v"), obj.get("kind")
     if type(version) is not int or not (
         version == WIRE_VERSION or (version == HELLO_VERSION and kind in ("hello", "proof"))
     ):
@@ -959,8 +859,6 @@ def decode_body(body: bytes) -> Message:
             f"(and {HELLO_VERSION} for hellos and proofs; the 'v' field, a whole number); "
             "update the older side"
         )
-    if kind == "proof":
-        return _decode_proof(obj, version)
     if kind == "page":
         return page_from_fields(obj, default_origin=None)
     if kind == "beat":
@@ -968,48 +866,16 @@ def decode_body(body: bytes) -> Message:
     if kind == "bye":
         return Bye()
     if kind == "hello":
-        role = obj.get("role")
-        if "role" not in obj:
-            raise WireFormatError("a hello frame has no 'role' field")
-        if type(role) is not str:
+        return _decode_hello(obj, version)
+    if kind == "proof":
+        if version != HELLO_VERSION:
+            raise WireFormatError(f"a proof frame must have version {HELLO_VERSION}")
+        mac: Any = obj.get("mac")
+        if not _is_hex(mac):
             raise WireFormatError(
-                f"field 'role' of a hello frame must be a JSON string, not "
-                f"{type(role).__name__} {role!r:.40}"
+                f"the proof's 'mac' is {mac!r:.40}; it must be {_HEX_DIGITS} lowercase hex digits"
             )
-        if not role:
-            raise WireFormatError("field 'role' of a hello frame must not be empty")
-        beat_s = obj.get("beat_s")
-        if beat_s is not None and (
-            isinstance(beat_s, bool) or not isinstance(beat_s, (int, float)) or not beat_s > 0
-        ):
-            raise WireFormatError(
-                f"the hello's 'beat_s' is {beat_s!r:.40}; it must be a number of seconds above 0"
-            )
-        bye = obj.get("bye", False)
-        if type(bye) is not bool:
-            raise WireFormatError(f"the hello's 'bye' is {bye!r:.40}; it must be true or false")
-        if beat_s is not None:
-            try:
-                beat_s = float(beat_s)  # a whole number past a double's range cannot be
-            except OverflowError:
-                raise WireFormatError(
-                    "the hello's 'beat_s' is a whole number too large for a double; it must "
-                    "be a number of seconds above 0"
-                ) from None
-        if version == WIRE_VERSION:
-            return Hello(role, beat_s, bye)  # the first hello: no system, no challenge
-        system = obj.get("system")
-        if system is not None and (type(system) is not str or not system):
-            raise WireFormatError(
-                f"the hello's 'system' is {system!r:.40}; it must be a non-empty string or null"
-            )
-        nonce = obj.get("nonce")
-        if nonce is not None and not _is_hex(nonce):
-            raise WireFormatError(
-                f"the hello's 'nonce' is {nonce!r:.40}; it must be {_HEX_DIGITS} lowercase "
-                "hex digits"
-            )
-        return Hello(role, beat_s, bye, system, nonce)
+        return Proof(mac)
     raise WireFormatError(
         f"unknown frame kind {kind!r:.40}; known kinds are 'page', 'hello', 'beat', 'bye' "
         "and 'proof'"
@@ -1020,24 +886,54 @@ _HEX_DIGITS = 64  # a nonce (32 random bytes) and an HMAC-SHA256 are both this l
 _HEX = frozenset("0123456789abcdef")
 
 
-def _is_hex(value: object) -> bool:
+def _is_hex(value: Any) -> bool:
     return type(value) is str and len(value) == _HEX_DIGITS and _HEX.issuperset(value)
 
 
-def _decode_proof(obj: Dict[str, Any], version: object) -> Proof:
-    if version != HELLO_VERSION:
-        raise WireFormatError(f"a proof frame must have version {HELLO_VERSION}")
-    mac = obj.get("mac")
-    if not _is_hex(mac):
+def _decode_hello(obj: Dict[str, Any], version: int) -> Hello:
+    if "role" not in obj:
+        raise WireFormatError("a hello frame has no 'role' field")
+    role = obj["role"]
+    if type(role) is not str:
         raise WireFormatError(
-            f"the proof's 'mac' is {mac!r:.40}; it must be {_HEX_DIGITS} lowercase hex digits"
+            f"field 'role' of a hello frame must be a JSON string, not "
+            f"{type(role).__name__} {role!r:.40}"
         )
-    assert isinstance(mac, str)
-    return Proof(mac)
+    if not role:
+        raise WireFormatError("field 'role' of a hello frame must not be empty")
+    beat_s = obj.get("beat_s")
+    if beat_s is not None and (type(beat_s) not in (int, float) or not beat_s > 0):
+        raise WireFormatError(
+            f"the hello's 'beat_s' is {beat_s!r:.40}; it must be a number of seconds above 0"
+        )
+    bye = obj.get("bye", False)
+    if type(bye) is not bool:
+        raise WireFormatError(f"the hello's 'bye' is {bye!r:.40}; it must be true or false")
+    try:
+        beat_s = None if beat_s is None else float(beat_s)
+    except OverflowError:  # a whole number past a double's range
+        raise WireFormatError(
+            "the hello's 'beat_s' is a whole number too large for a double; it must "
+            "be a number of seconds above 0"
+        ) from None
+    if version == WIRE_VERSION:
+        return Hello(role, beat_s, bye)  # the first hello: no system, no challenge
+    system, nonce = obj.get("system"), obj.get("nonce")
+    if system is not None and (type(system) is not str or not system):
+        raise WireFormatError(
+            f"the hello's 'system' is {system!r:.40}; it must be a non-empty string or null"
+        )
+    if nonce is not None and not _is_hex(nonce):
+        raise WireFormatError(
+            f"the hello's 'nonce' is {nonce!r:.40}; it must be {_HEX_DIGITS} lowercase hex digits"
+        )
+    return Hello(role, beat_s, bye, system, nonce)
 
 
-def _too_long(length: int, limit: int) -> str:
-    return f"a length header says {length:,} bytes, over the {limit:,}-byte maximum frame size"
+def _too_long(length: int, limit: int) -> WireFormatError:
+    return WireFormatError(
+        f"a length header says {length:,} bytes, over the {limit:,}-byte maximum frame size"
+    )
 
 
 class FrameDecoder:
@@ -1085,9 +981,6 @@ class FrameDecoder:
     def cut_frames(self, data: bytes, bodies: List[bytes]) -> None:
         """Add ``data`` and append every whole body now available to ``bodies``, in order.
 
-        Whole frames (the usual read) are cut straight from ``data``, not
-        through the buffer.
-
         Raises:
             WireFormatError: a length header is over the maximum frame size.
                 ``bodies`` then holds the whole frames before it; reset the
@@ -1099,29 +992,22 @@ class FrameDecoder:
             decoder.cut_frames(frame + frame[:3], bodies)   # [body]; 3 bytes wait
         """
         limit = self.max_frame_bytes
-        buffer = self._buffer
-        if buffer:  # complete the frame that waits from the head of ``data``
+        if self._buffer:  # a frame began in an earlier chunk: wait for all of it
+            buffer = self._buffer
+            buffer += data
             if len(buffer) < HEADER_BYTES:
-                taken = HEADER_BYTES - len(buffer)
-                buffer += data[:taken]
-                data = data[taken:]
-                if len(buffer) < HEADER_BYTES:
-                    return
+                return
             (length,) = _HEADER.unpack_from(buffer, 0)
             if length > limit:
-                raise WireFormatError(_too_long(length, limit))
-            taken = HEADER_BYTES + length - len(buffer)
-            buffer += data[:taken]
+                raise _too_long(length, limit)
             if len(buffer) < HEADER_BYTES + length:
-                return  # the frame is not all there yet
-            data = data[taken:]
-            bodies.append(bytes(buffer[HEADER_BYTES:]))
-            self._buffer = bytearray()
+                return
+            data, self._buffer = bytes(buffer), bytearray()
         start, size = 0, len(data)
         while size - start >= HEADER_BYTES:
             (length,) = _HEADER.unpack_from(data, start)
             if length > limit:
-                raise WireFormatError(_too_long(length, limit))
+                raise _too_long(length, limit)
             end = start + HEADER_BYTES + length
             if end > size:
                 break
