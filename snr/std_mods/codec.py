@@ -1,28 +1,23 @@
 """The wire format: pages as strict JSON, in frames between nodes and in lines on disk.
 
-Every place where a page leaves or enters a node writes and reads it here
+Every page that leaves or enters a node is written and read here
 (docs/wire-format.md): comms *frames* (a 4-byte big-endian length, then a
 JSON object with ``"v"`` and a ``"kind"``: ``hello``, ``proof``, ``page``,
-``beat`` or ``bye``), and the JSON-lines format of recordings and serial
-links (a header line, then one page per line). One set of rules, one error
-message for data JSON cannot hold, one strict reader:
+``beat`` or ``bye``), and the lines of recordings and serial links (a header
+line, then one page per line). One set of rules:
 
-* **Written:** compact JSON, ASCII only (other characters as ``\\uXXXX``), in
-  a fixed field order, UTF-8 bytes.
+* **Written:** compact JSON, ASCII only (``\\uXXXX``), fields in a fixed order.
 * **Refused when writing** (`NotSerializableError`, naming the key and the
-  part of the data): anything JSON cannot hold, NaN and infinity, lone
+  part of the data): what JSON cannot hold, NaN and infinity, lone
   surrogates, nesting deeper than `MAX_DEPTH`.
 * **Rejected when reading** (`WireFormatError`, saying why): text that is not
-  UTF-8 or not JSON, ``NaN``/``Infinity``, numbers too large for a double
-  (``1e999``), lone surrogates (``"\\ud800"``), nesting deeper than
-  `MAX_DEPTH`, and pages with missing or wrongly typed fields. Nothing is
-  unpickled or evaluated, so a bad frame can only be *wrong*, never harmful.
+  UTF-8 or not JSON, ``NaN``, ``1e999``, lone surrogates, nesting deeper than
+  `MAX_DEPTH`, pages with missing or wrongly typed fields. Nothing is
+  unpickled or evaluated: a bad frame can only be *wrong*, never harmful.
 
-The standard library's ``json`` does the work, through its public functions
-only. A faster `JsonBackend` may do part of it: one an extra registers in the
-entry point group ``snr.json_backends`` (``snr.extras.orjson``, with
-``pip install 'snr-robotics[fast]'``), used by default when installed;
-``SNR_JSON=json`` (or ``use_backend("json")``) uses the standard library only.
+The standard library's ``json`` does the work. A faster `JsonBackend` from an
+extra may do part of it (``snr.extras.orjson``: ``pip install
+'snr-robotics[fast]'``, used when installed; ``SNR_JSON=json`` turns it off).
 
 Example::
 
@@ -94,17 +89,16 @@ __all__ = [
 ]
 
 MAX_DEPTH = 100
-"""Deepest nesting of arrays and objects in one body or line, the outer object included.
+"""Deepest nesting of arrays and objects in a body or line, the outer object included.
 
-So a page's ``data`` may nest 99 deep (``[[1]]`` is 2 deep). Deeper input is
-rejected, deeper data is refused.
+So a page's ``data`` may nest 99 deep (``[[1]]`` is 2 deep).
 """
 
 BACKEND_ENV_VAR = "SNR_JSON"
 """Environment variable choosing the JSON backend: ``json`` (stdlib) or ``orjson``."""
 
 BACKEND_GROUP = "snr.json_backends"
-"""The entry point group of JSON backends (`JsonBackend`), by name: ``orjson``."""
+"""The entry point group of the faster JSON backends (`JsonBackend`): ``orjson``."""
 
 FORMAT_NAME = "snr-pages"
 """The ``format`` field of the header line of recordings and serial links."""
@@ -129,30 +123,23 @@ class _Refused(Exception):
 
 
 class _OutOfRange(Exception):
-    """A number a double cannot hold, such as ``1e999`` (json alone reads it as infinity).
+    """A number a double cannot hold, such as ``1e999`` (not a ValueError, json's verdicts)."""
 
-    Not a ValueError, which is what json's own verdicts are.
+
+def _suspect(text: bytes, depth: int = MAX_DEPTH) -> bool:
+    """True when JSON text may hold a lone surrogate (``\\ud800``) or nest over ``depth``.
+
+    Text shorter than ``2 * depth`` cannot nest that deep; brackets in strings
+    count too (then the decoded value shows that all is well).
     """
-
-
-def _opens_too_many(text: bytes, depth: int = MAX_DEPTH) -> bool:
-    """True when JSON text opens more than ``depth`` arrays and objects, so may nest too deep.
-
-    Brackets inside strings count too: then the decoded value shows it is fine.
-    Shorter text cannot open (and close) that many, and is not counted.
-    """
-    return len(text) > 2 * depth and text.count(b"[") + text.count(b"{") > depth
-
-
-def _suspect(out: bytes, depth: int = MAX_DEPTH) -> bool:
-    """True when json's ``out`` may hold a lone surrogate (as ``\\ud800``) or nest too deep."""
-    return b"\\ud" in out or _opens_too_many(out, depth)
+    return b"\\ud" in text or (
+        len(text) > 2 * depth and text.count(b"[") + text.count(b"{") > depth
+    )
 
 
 def _problem(value: Any) -> Optional[str]:
     """Why a decoded JSON value breaks SNR's rules (nested too deep, a lone surrogate), or None.
 
-    Decoded JSON holds only dict, list, str, int, float, bool and None.
     Example: ``_problem(["\\ud800"])`` names the lone surrogate.
     """
     stack: List[Tuple[Any, int]] = [(value, 1)]  # (a value, how deep it is)
@@ -176,171 +163,52 @@ def _problem(value: Any) -> Optional[str]:
     return None
 
 
-# -- the standard library's json: every verdict and message comes from here ----------
-
-
-def _reject_constant(name: str) -> NoReturn:
-    raise ValueError(f"{name} is not a JSON number")
-
-
-def _finite_float(text: str) -> float:
-    """A JSON number with a fraction or an exponent, read as json reads it, but never infinity."""
-    value = float(text)
-    if math.isinf(value):
-        raise _OutOfRange(f"the number {value!r:.40} is out of range (infinity or too large)")
-    return value
-
-
-_ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
-_DECODER = json.JSONDecoder(parse_constant=_reject_constant, parse_float=_finite_float)
-_SYNTAX_DECODER = json.JSONDecoder(parse_constant=_reject_constant)  # reads 1e999 as inf
-
-
-def _decode(decoder: json.JSONDecoder, text: str) -> Any:
-    """``decoder``'s value for ``text``; json's verdict as a `WireFormatError`."""
-    try:
-        return decoder.decode(text)
-    except ValueError as error:  # json.JSONDecodeError, NaN/Infinity, huge integers
-        raise WireFormatError(f"it is not JSON ({error}): {text[:60]!r}") from None
-    except RecursionError:
-        raise WireFormatError(_TOO_DEEP) from None
-
-
-def _load_std(raw: Text) -> Any:
-    """The JSON value in ``raw``, read strictly with json (`load_json` says what is rejected)."""
-    if isinstance(raw, str):
-        text, data = raw, raw.encode("utf-8", "surrogatepass")
-    else:
-        data = bytes(raw)
-        try:
-            text = data.decode("utf-8")  # strict: surrogates as UTF-8 bytes are not UTF-8
-        except UnicodeDecodeError as error:
-            raise WireFormatError(f"it is not UTF-8 text ({error})") from None
-    try:
-        value = _decode(_DECODER, text)
-    except _OutOfRange as error:
-        _decode(_SYNTAX_DECODER, text)  # text broken further on: json's verdict comes first
-        raise WireFormatError(f"it is not valid JSON for SNR: {error}") from None
-    # json reads lone surrogates (escaped as \ud800, or raw in text) and nests as
-    # deep as its recursion lets it: where the text may hold either, look.
-    if _suspect(data) or b"\\uD" in data or (isinstance(raw, str) and not raw.isascii()):
-        problem = _problem(value)
-        if problem is not None:
-            raise WireFormatError(f"it is not valid JSON for SNR: {problem}")
-    return value
-
-
-def _dump_std(obj: Any) -> bytes:
-    """``obj`` as compact ASCII JSON, written with json; raises `_Refused` saying why not."""
-    try:
-        out = _ENCODER.encode(obj).encode("ascii")
-    except (TypeError, ValueError) as error:  # not JSON, NaN/infinity, contains itself
-        raise _Refused(str(error)) from error
-    except RecursionError:
-        raise _Refused(_DATA_TOO_DEEP) from None
-    # json writes lone surrogates (as \ud800) and nests as deep as its recursion
-    # lets it: where the text may hold either, refuse what a reader would reject.
-    if _suspect(out):
-        try:
-            problem = _problem(json.loads(out))
-        except RecursionError:
-            problem = _TOO_DEEP
-        if problem is not None:
-            raise _Refused(_DATA_TOO_DEEP if problem == _TOO_DEEP else problem)
-    return out
-
-
-def _value_std(value: Any) -> Optional[bytes]:
-    """json's bytes for a page's data or time, or None where `page_json` must decide.
-
-    json writes a float with ``float.__repr__`` and an int with ``int.__repr__``:
-    writing them here saves making json's C encoder for the call.
-    Example: ``_value_std(0.5)`` is ``b"0.5"``.
-    """
-    kind = type(value)
-    if kind is float:
-        # value - value is NaN for NaN and infinity, which json refuses
-        return float.__repr__(value).encode("ascii") if value - value == 0.0 else None
-    if kind is bool:
-        return b"true" if value else b"false"
-    if value is None:
-        return b"null"
-    try:
-        out = (int.__repr__(value) if kind is int else _ENCODER.encode(value)).encode("ascii")
-    except (TypeError, ValueError, RecursionError):  # not JSON, NaN, 4,300 digits...
-        return None
-    return None if _suspect(out, _DATA_DEPTH) else out
-
-
 # -- the extension point: a faster JSON backend, found by entry point ----------------
 
 
 class JsonBackend(Protocol):
-    """A faster way to do part of json's work: what an entry point in `BACKEND_GROUP` makes.
+    """What an entry point of `BACKEND_GROUP` makes: json's results, faster, or a step aside.
 
-    The entry point names a class (or function) that returns the backend and
-    raises ImportError, its message the install command, when a package it
-    needs is missing. A backend must give json's results or step aside:
-    the codec uses the standard library wherever it does, and for every
-    verdict and message, so the bytes written and the input rejected are the
-    same with any backend (``tests/test_codec.py`` checks the registered
-    ones). ``snr.extras.orjson`` is one; a third:
+    The entry point names a class that raises ImportError, its message the
+    pip line, when a package it needs is missing. Wherever a backend steps
+    aside the codec uses json, which also gives every verdict and message, so
+    the bytes written and the input rejected are the same with any backend.
 
     Example::
 
-        class UltraJson:  # pyproject.toml: [project.entry-points."snr.json_backends"]
-            def dumps(self, value: Any) -> Optional[bytes]:  # ultra = "mypkg:UltraJson"
-                return None  # "let json write it"
+        class Slow:  # pyproject.toml: [project.entry-points."snr.json_backends"] slow = "m:Slow"
+            def dumps(self, value: Any) -> Optional[bytes]:
+                return None  # json writes it
             def loads(self, raw: Union[bytes, str]) -> Any:
-                raise ValueError("let json read it")
+                raise ValueError("json reads it")
     """
 
     def dumps(self, value: Any) -> Optional[bytes]:
-        """The bytes json writes for ``value`` (compact, ASCII), or None to let json write it."""
+        """json's bytes for ``value`` (compact, ASCII), or None to let json write it.
+
+        None at least where json's bytes nest more than ``MAX_DEPTH - 1`` deep
+        or hold a lone surrogate (``\\ud800``): the codec does not look again.
+        """
 
     def loads(self, raw: Text) -> Any:
         """The value `load_json` reads from ``raw``, or ValueError to let json read it."""
 
 
-_fast: Optional[JsonBackend] = None  # the backend in use; None: the standard library alone
+_fast: Optional[JsonBackend] = None  # the backend in use; None: json alone
 _backend = "json"
 _loaded: Dict[str, JsonBackend] = {}
 
 
-def _load(raw: Text) -> Any:
-    if _fast is not None:
-        try:
-            return _fast.loads(raw)
-        except ValueError:  # not known to be json's value: json reads it, and says why not
-            pass
-    return _load_std(raw)
-
-
-def _dump(obj: Any) -> bytes:
-    if _fast is not None:
-        out = _fast.dumps(obj)
-        if out is not None and not _suspect(out):
-            return out
-    return _dump_std(obj)
-
-
-def _value(value: Any) -> Optional[bytes]:
-    if _fast is not None:
-        out = _fast.dumps(value)
-        if out is not None and not _suspect(out, _DATA_DEPTH):
-            return out
-    return _value_std(value)
-
-
 def _load_backend(name: str) -> JsonBackend:
     """The backend ``name`` of `BACKEND_GROUP`; ValueError if unknown or not installed."""
+    names = plugins.names(BACKEND_GROUP)
+    if name not in names:
+        choices = " or ".join(repr(n) for n in ("json", *names))
+        raise ValueError(f"unknown JSON backend {name!r}; choose {choices}")
     if name not in _loaded:
-        if name not in plugins.names(BACKEND_GROUP):
-            choices = " or ".join(repr(n) for n in ("json", *plugins.names(BACKEND_GROUP)))
-            raise ValueError(f"unknown JSON backend {name!r}; choose {choices}")
         try:
             _loaded[name] = plugins.load(BACKEND_GROUP, name, f"the JSON backend {name!r}")()
-        except (ImportError, ConfigError) as error:
+        except (ImportError, ConfigError) as error:  # ImportError's message: the pip line
             hint = error.__cause__ if isinstance(error, ConfigError) else error
             raise ValueError(
                 f"the {name} JSON backend is not installed ({BACKEND_ENV_VAR}={name}?): "
@@ -361,7 +229,7 @@ def available_backends() -> Tuple[str, ...]:
         try:
             _load_backend(name)
             usable.append(name)
-        except ValueError:  # its package is not installed
+        except ValueError:  # not installed
             pass
     return tuple(usable)
 
@@ -381,10 +249,8 @@ def use_backend(name: Optional[str] = None) -> str:
 
     Args:
         name: ``"json"`` (the standard library), a backend of `BACKEND_GROUP`
-            (``"orjson"``), or None for the default: the ``SNR_JSON``
-            environment variable if set, else the first one installed (orjson),
-            else json. The bytes written and the inputs rejected are the
-            same with all; only the speed differs.
+            (``"orjson"``), or None for the default: ``SNR_JSON`` if set, else
+            the first backend installed, else json. Only the speed differs.
 
     Raises:
         ValueError: an unknown name, or a backend asked for but not installed.
@@ -399,13 +265,114 @@ def use_backend(name: Optional[str] = None) -> str:
         name = os.environ.get(BACKEND_ENV_VAR, "").strip().lower()
         if not name:
             installed = available_backends()
-            name = installed[1] if len(installed) > 1 else "json"  # the first, by name
+            name = installed[1] if len(installed) > 1 else "json"  # the first faster one
     _fast = None if name == "json" else _load_backend(name)
     _backend = name
     return name
 
 
-# -- JSON text ------------------------------------------------------------------------
+# -- reading and writing: the backend where it answers, else the standard library's json
+
+
+def _reject_constant(name: str) -> NoReturn:
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if math.isinf(value):
+        raise _OutOfRange(f"the number {value!r:.40} is out of range (infinity or too large)")
+    return value
+
+
+_ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
+_DECODER = json.JSONDecoder(parse_constant=_reject_constant, parse_float=_finite_float)
+_SYNTAX_DECODER = json.JSONDecoder(parse_constant=_reject_constant)  # reads 1e999 as inf
+
+
+def _decode(decoder: json.JSONDecoder, text: str) -> Any:
+    try:
+        return decoder.decode(text)
+    except ValueError as error:  # json.JSONDecodeError, NaN/Infinity, huge integers
+        raise WireFormatError(f"it is not JSON ({error}): {text[:60]!r}") from None
+    except RecursionError:
+        raise WireFormatError(_TOO_DEEP) from None
+
+
+def _load(raw: Text) -> Any:
+    """The JSON value in ``raw``, read strictly (`load_json` says what is rejected)."""
+    if _fast is not None:
+        try:
+            return _fast.loads(raw)
+        except ValueError:  # json reads it, and says what is wrong
+            pass
+    if isinstance(raw, str):
+        text, data = raw, raw.encode("utf-8", "surrogatepass")
+    else:
+        data = bytes(raw)
+        try:
+            text = data.decode("utf-8")  # strict: surrogates as UTF-8 bytes are not UTF-8
+        except UnicodeDecodeError as error:
+            raise WireFormatError(f"it is not UTF-8 text ({error})") from None
+    try:
+        value = _decode(_DECODER, text)
+    except _OutOfRange as error:
+        _decode(_SYNTAX_DECODER, text)  # text broken further on: json's verdict comes first
+        raise WireFormatError(f"it is not valid JSON for SNR: {error}") from None
+    # json reads lone surrogates and nests as deep as its recursion lets it
+    if _suspect(data) or b"\\uD" in data or (isinstance(raw, str) and not raw.isascii()):
+        problem = _problem(value)
+        if problem is not None:
+            raise WireFormatError(f"it is not valid JSON for SNR: {problem}")
+    return value
+
+
+def _dump(obj: Any) -> bytes:
+    """``obj`` as compact ASCII JSON; raises `_Refused` saying why not."""
+    out = None if _fast is None else _fast.dumps(obj)
+    if out is not None:
+        return out
+    try:
+        out = _ENCODER.encode(obj).encode("ascii")
+    except (TypeError, ValueError) as error:  # not JSON, NaN/infinity, contains itself
+        raise _Refused(str(error)) from error
+    except RecursionError:
+        raise _Refused(_DATA_TOO_DEEP) from None
+    if _suspect(out):  # json writes lone surrogates (\ud800), and nests as deep as it can
+        try:
+            problem = _problem(json.loads(out))
+        except RecursionError:
+            problem = _TOO_DEEP
+        if problem is not None:
+            raise _Refused(_DATA_TOO_DEEP if problem == _TOO_DEEP else problem)
+    return out
+
+
+def _value(value: Any) -> Optional[bytes]:
+    """The JSON of a page's data or time, or None where `page_json` must decide.
+
+    json writes a float or an int with its ``repr``: written here without
+    making json's encoder for the call. Example: ``_value(0.5)`` is ``b"0.5"``.
+    """
+    out = None if _fast is None else _fast.dumps(value)
+    if out is not None:
+        return out
+    kind = type(value)
+    if kind is float:
+        # value - value is NaN for NaN and infinity, which json refuses
+        return float.__repr__(value).encode("ascii") if value - value == 0.0 else None
+    if kind is bool:
+        return b"true" if value else b"false"
+    if value is None:
+        return b"null"
+    try:
+        out = (int.__repr__(value) if kind is int else _ENCODER.encode(value)).encode("ascii")
+    except (TypeError, ValueError, RecursionError):  # not JSON, NaN, 4,300 digits...
+        return None
+    return None if _suspect(out, _DATA_DEPTH) else out
+
+
+# -- JSON text and pages --------------------------------------------------------------
 
 
 def load_json(raw: Text) -> Any:
@@ -453,18 +420,11 @@ def dump_json(obj: Mapping[str, Any], what: str = "it") -> bytes:
         raise NotSerializableError(f"Cannot write {what} as JSON: {error}") from None
 
 
-# -- pages ----------------------------------------------------------------------------
-
-
 def data_json(key: str, data: Any, to: str) -> bytes:
-    """A page's ``data`` alone as compact, ASCII-only JSON bytes, refused as pages are.
+    """A page's ``data`` alone as JSON bytes, refused as `page_json` refuses it.
 
-    For formats that send the data without the rest of the page (a serial
-    link's plain lines, a board's compact lines).
-
-    Raises:
-        NotSerializableError: the same message as `page_json` (naming ``key``,
-            the part of the data and the fix).
+    For formats that send the data without the page (a serial link's plain
+    lines, a board's compact lines).
 
     Example::
 
@@ -488,29 +448,28 @@ def page_json(
 
     Raises:
         NotSerializableError: the data is not JSON (a set, an object, NaN,
-            a lone surrogate, too deep): the message names the key, the part
-            of the data and the fix.
+            a lone surrogate, too deep), naming the key, the part and the fix.
 
     Example::
 
         page_json(Page("x", [1, 2], "robot", 0.5))
         # b'{"key":"x","data":[1,2],"origin":"robot","created_at_s":0.5,"process":true}'
     """
-    fields: Dict[str, Any] = dict(head) if head else {}
-    fields["key"] = page.key
-    fields["data"] = page.data
-    fields["origin"] = page.origin
-    fields["created_at_s"] = page.created_at_s
-    fields["process"] = page.process
+    fields = {
+        **(head or {}),
+        "key": page.key,
+        "data": page.data,
+        "origin": page.origin,
+        "created_at_s": page.created_at_s,
+        "process": page.process,
+    }
     try:
         return _dump(fields)
     except _Refused as error:
         raise not_serializable_error(page.key, page.data, to=to, reason=str(error)) from None
 
 
-_MAX_ENVELOPES = 1024
-"""The (key, origin) pairs a `PageEncoder` keeps the fixed JSON of; when full it starts again."""
-
+_MAX_ENVELOPES = 1024  # the (key, origin) pairs a PageEncoder keeps; when full it starts again
 _PAGE_FIELDS = frozenset(("key", "data", "origin", "created_at_s", "process"))
 _TAILS = (b',"process":false}', b',"process":true}')
 
@@ -519,13 +478,10 @@ class PageEncoder:
     """`page_json` with the leading fields and the destination given once: a link's encoder.
 
     A node sends pages under a few keys, each from one origin, again and
-    again, and their JSON differs only in the data and the time. So the text
-    around them (the head, the key and the origin, with the field names) is
-    written once per key and origin with `dump_json` and kept in a dict (up
-    to `_MAX_ENVELOPES` pairs; then it is emptied and filled again). A page
-    whose data and time are numbers, names or small lists and dicts of them
-    then costs the JSON of those two and a join; any other page goes through
-    `page_json`. The bytes and the refusals are `page_json`'s either way.
+    again: the JSON around the data and the time (the head, the key, the
+    origin) is written once per key and origin and kept (up to 1,024
+    pairs). A page then costs the JSON of its data and time and a
+    join. The bytes and the refusals are `page_json`'s.
 
     Args:
         head: fields written before the page's, e.g. ``{"v": 1, "kind": "page"}``.
@@ -542,8 +498,8 @@ class PageEncoder:
         self.head = dict(head)
         self.to = to
         # (key, origin) -> the JSON before the data, and between the data and the
-        # time; None where page_json must decide (a head that names a page field,
-        # a key or origin json refuses).
+        # time; None where page_json must decide (a head naming a page field, a
+        # key or origin json refuses)
         self._envelopes: Dict[Tuple[str, str], Optional[Tuple[bytes, bytes]]] = {}
 
     def __call__(self, page: Page) -> bytes:
@@ -561,7 +517,6 @@ class PageEncoder:
         return page_json(page, self.head, self.to)
 
     def _learn(self, key: str, origin: str) -> Optional[Tuple[bytes, bytes]]:
-        """The JSON around a page's data under ``key`` from ``origin``, kept for the next page."""
         if len(self._envelopes) >= _MAX_ENVELOPES:
             self._envelopes.clear()
         envelope: Optional[Tuple[bytes, bytes]] = None
@@ -570,7 +525,7 @@ class PageEncoder:
                 before = _dump({**self.head, "key": key})[:-1] + b',"data":'  # without its "}"
                 envelope = (before, b',"origin":' + _dump(origin) + b',"created_at_s":')
             except _Refused:  # e.g. a lone surrogate in the key: page_json says why
-                envelope = None
+                pass
         self._envelopes[(key, origin)] = envelope
         return envelope
 
@@ -586,12 +541,11 @@ def page_from_fields(
 ) -> Page:
     """The page a decoded JSON object describes.
 
-    ``key`` (a non-empty string) and ``data`` are always required; unknown
-    fields are ignored. In recordings and serial lines a missing ``origin``
-    becomes ``default_origin`` and a missing ``created_at_s`` becomes
-    ``now_s`` (or the current time). With ``default_origin=None`` (comms
-    frames) both are required, and ``origin`` must not be empty. A missing
-    ``process`` is true.
+    ``key`` (not empty) and ``data`` are required; other fields are ignored.
+    A missing ``origin`` becomes ``default_origin``, a missing
+    ``created_at_s`` ``now_s`` (or the current time), a missing ``process``
+    true. With ``default_origin=None`` (frames) origin and time are required
+    and origin must not be empty.
 
     Raises:
         WireFormatError: a field is missing, empty or of the wrong type; the
@@ -604,8 +558,7 @@ def page_from_fields(
     """
     key, origin = fields.get("key"), fields.get("origin")
     created, process = fields.get("created_at_s"), fields.get("process", True)
-    # The common case, checked in one go; the slow path below names the problem.
-    if (
+    if (  # the common case in one go; below, the first problem is named
         type(key) is str
         and key
         and type(origin) is str
@@ -651,10 +604,10 @@ WIRE_VERSION = 1
 """The ``"v"`` field of page, beat and bye frames, and of the first hello (no system)."""
 
 HELLO_VERSION = 2
-"""The ``"v"`` of the hello that names a system and may carry a challenge, and of proofs.
+"""The ``"v"`` of the hello that names a system or carries a challenge, and of proofs.
 
-A node that names no system and has no secret still sends a version 1
-hello, so older nodes understand it (docs/wire-format.md, section 3.1).
+A node with no system and no secret sends a version 1 hello, which older
+nodes understand (docs/wire-format.md, section 3.1).
 """
 
 HEADER_BYTES = 4
@@ -671,13 +624,11 @@ _page_body = PageEncoder({"v": WIRE_VERSION, "kind": "page"})
 class Hello:
     """The first frame on a link: who is on the other end.
 
-    ``beat_s`` is how often the sender promises a sign of life while it has
-    nothing else to send (a `Beat`); None from a peer that makes no promise
-    (older SNR nodes, or a program that does not send beats). ``bye`` is
-    true when the sender understands a `Bye` frame (older nodes do not, so
-    they are never sent one). ``system`` is the system the sender belongs to
-    (None from a version 1 hello, or one that names none), and ``nonce`` its
-    challenge: 64 hex digits from a node with a secret, else None.
+    ``beat_s``: how often the sender promises a sign of life (a `Beat`) while
+    it has nothing else to send, None for no promise (older nodes). ``bye``:
+    it understands a `Bye` frame. ``system``: the system it belongs to (None
+    in a version 1 hello), ``nonce``: its challenge, 64 hex digits from a node
+    with a secret, else None.
 
     Example::
 
@@ -694,9 +645,7 @@ class Hello:
 
 @dataclass(frozen=True)
 class Proof:
-    """The answer to the peer's challenge: ``mac`` proves the sender knows the secret.
-
-    64 lowercase hex digits of an HMAC-SHA256 (see ``handshake.proof_mac``).
+    """The answer to the peer's challenge: ``mac``, an HMAC-SHA256 in 64 lowercase hex digits.
 
     Example::
 
@@ -719,8 +668,6 @@ class Beat:
 @dataclass(frozen=True)
 class Bye:
     """The last frame before an orderly close: "my node is stopping, not lost".
-
-    The peer then knows the end of the connection that follows is no fault.
 
     Example::
 
@@ -767,13 +714,10 @@ def encode_hello(
     system: Optional[str] = None,
     nonce: Optional[str] = None,
 ) -> bytes:
-    """The hello frame a node sends first on every link.
+    """The hello frame a node sends first on every link (the fields: `Hello`).
 
-    With ``beat_s`` the node promises a beat at least that often while it has
-    nothing else to send, so the peer can tell a silent link from a dead one.
-    With ``bye`` it says it understands a bye frame. With a ``system`` or a
-    ``nonce`` (a challenge, from a node with a secret) it is a version 2
-    hello; without either, the version 1 hello older nodes know.
+    With a ``system`` or a ``nonce`` it is a version 2 hello; without
+    either, the version 1 hello older nodes know.
 
     Example::
 
@@ -806,6 +750,7 @@ def encode_proof(mac: str) -> bytes:
 
 
 _BEAT_FRAME = _frame(b'{"v":1,"kind":"beat"}', "a beat")
+_BYE_FRAME = _frame(b'{"v":1,"kind":"bye"}', "a bye")
 
 
 def encode_beat() -> bytes:
@@ -818,13 +763,8 @@ def encode_beat() -> bytes:
     return _BEAT_FRAME
 
 
-_BYE_FRAME = _frame(b'{"v":1,"kind":"bye"}', "a bye")
-
-
 def encode_bye() -> bytes:
-    """The bye frame: the last one before an orderly close (``{"v":1,"kind":"bye"}``).
-
-    Send it only to a peer whose hello said ``"bye": true``.
+    """The bye frame, last before an orderly close, for a peer whose hello said ``"bye": true``.
 
     Example::
 
@@ -834,13 +774,12 @@ def encode_bye() -> bytes:
 
 
 def decode_body(body: bytes) -> Message:
-    """The `Page`, `Hello`, `Beat` or `Bye` in one frame's body (the bytes after the header).
+    """The `Page`, `Hello`, `Beat`, `Bye` or `Proof` in a frame's body (after the header).
 
     Raises:
-        WireFormatError: the body is not UTF-8, not strict JSON (NaN,
-            ``1e999``, a lone surrogate, nesting too deep...), not an object,
-            has another version, an unknown kind, or a missing or mistyped
-            field. The message says which; the caller logs it and drops the frame.
+        WireFormatError: the body is not strict JSON, not an object, has
+            another version, an unknown kind, or a missing or mistyped field.
+            The message says which; the caller logs it and drops the frame.
 
     Example::
 
@@ -939,8 +878,8 @@ def _too_long(length: int, limit: int) -> WireFormatError:
 class FrameDecoder:
     """Cuts a byte stream into frame bodies, however the bytes arrive.
 
-    A ``recv`` may return half a frame or several frames: give every chunk to
-    `cut_frames` (the links do), or `feed` it and take bodies with
+    A ``recv`` may return half a frame or several: give every chunk to
+    `cut_frames` (the links do), or `feed` it and take the bodies with
     `next_frame` until it returns None.
 
     Example::
@@ -982,9 +921,8 @@ class FrameDecoder:
         """Add ``data`` and append every whole body now available to ``bodies``, in order.
 
         Raises:
-            WireFormatError: a length header is over the maximum frame size.
-                ``bodies`` then holds the whole frames before it; reset the
-                connection.
+            WireFormatError: a length header is over the maximum frame size;
+                ``bodies`` holds the whole frames before it. Reset the connection.
 
         Example::
 
@@ -1035,11 +973,7 @@ def header_line() -> str:
 
 
 def page_to_line(page: Page) -> str:
-    """One page as one line of JSON (without the newline).
-
-    Raises:
-        NotSerializableError: the page's data is not JSON (a set, an object,
-            NaN...); the message names the key, the part and the fix.
+    """One page as one line of JSON (without the newline); refused as `page_json` refuses it.
 
     Example::
 
@@ -1053,11 +987,7 @@ _line_encoder = PageEncoder({}, to="to a recording or serial link")
 
 
 def decode_line(line: Text) -> Dict[str, Any]:
-    """The JSON object on one line (a page or a header), read strictly.
-
-    Raises:
-        WireFormatError: the line is not UTF-8, not strict JSON, or not a
-            JSON object.
+    """The JSON object on one line (a page or a header), read as `load_object` reads it.
 
     Example::
 

@@ -89,7 +89,8 @@ def _plain(value: Any, depth: int = 1) -> bool:
     read-only page data is such, in DEBUG and TEST); not other subclasses,
     enums, dataclasses, dates or UUIDs, which orjson writes and json refuses
     or writes otherwise. Data that contains itself is endlessly deep, so not
-    plain either. Example: ``_plain({"a": [1, 2.5]})``.
+    plain either. ``depth`` is how deep ``value`` itself is (2 for a page's
+    data). Example: ``_plain({"a": [1, 2.5]})``.
     """
     kind = type(value)
     if kind is dict or (kind is not list and isinstance(value, dict)):
@@ -141,16 +142,17 @@ class OrjsonBackend:
     def dumps(self, value: Any) -> Optional[bytes]:
         """orjson's bytes for ``value`` where they are json's, else None.
 
-        A number, a name or a small list or dict of them (`_alike`) is
-        written as it is; other data of exact JSON types is written and its
-        bytes are searched (`_as_json_writes`).
+        A number, a name or a small list or dict of them (`_alike`, two deep)
+        is written as it is; other data of exact JSON types, nested at most
+        ``MAX_DEPTH - 1`` deep (`_plain`), is written and its bytes are
+        searched (`_as_json_writes`). orjson refuses lone surrogates itself.
         """
         if type(value) is float and value - value == 0.0 and not -1e-4 < value < 1e-4:
             return _orjson.dumps(value)  # type: ignore[no-any-return]  # every page's time
         try:
             if _alike((value,), 2):
                 return _orjson.dumps(value)  # type: ignore[no-any-return]
-            if _plain(value):
+            if _plain(value, 2):  # None for data nesting over MAX_DEPTH - 1: json decides
                 out: bytes = _orjson.dumps(value)
                 if _as_json_writes(out):
                     return out
