@@ -16,6 +16,7 @@ import sys
 import tempfile
 import unittest
 from typing import Any, Callable, Iterator, List, Optional, Tuple
+from unittest import mock
 
 from snr import Page
 from snr.prelude import NotSerializableError, WireFormatError
@@ -494,6 +495,53 @@ class TestChoosingTheBackend(BackendCase):
             self.skipTest("the environment chooses the backend")
         default = codec.use_backend()
         self.assertEqual(default, "orjson" if "orjson" in BACKENDS else "json")
+
+
+class StepsAside:
+    """A JSON backend that leaves everything to json."""
+
+    def dumps(self, value: Any) -> Optional[bytes]:
+        return None
+
+    def loads(self, raw: Any) -> Any:
+        raise ValueError("json reads it")
+
+
+class TestTheExtensionPoint(BackendCase):
+    """Whatever a backend does, the codec writes json's bytes and refuses what json refuses."""
+
+    def test_a_backend_that_steps_aside_leaves_json_s_bytes_and_verdicts(self) -> None:
+        page = Page("k\u00e9y", {"a": [1, 2.5, None]}, "origin", 1.5)
+        expected = codec.page_json(page, {"v": 1, "kind": "page"})
+        with mock.patch.object(codec, "_fast", StepsAside()):
+            self.assertEqual(encode_page(page)[HEADER_BYTES:], expected)
+            self.assertEqual(codec.load_json(b"[1, 2.5]"), [1, 2.5])
+            with self.assertRaises(WireFormatError):
+                codec.load_json(b"[NaN]")
+
+    @unittest.skipUnless("orjson" in BACKENDS, reason("orjson"))
+    def test_the_orjson_backend_steps_aside_where_the_codec_does_not_look_again(self) -> None:
+        from snr.extras.orjson import OrjsonBackend
+
+        fast = OrjsonBackend()
+        deepest = json.loads(nested(codec.MAX_DEPTH - 1))  # as deep as a page's data may be
+        self.assertEqual(fast.dumps(deepest), nested(codec.MAX_DEPTH - 1))
+        for data in ([deepest], "\ud800", {"a": ["\udfff"]}, [1e-5], {"x": math.nan}):
+            with self.subTest(data=repr(data)[:20]):
+                self.assertIsNone(fast.dumps(data))
+
+    @unittest.skipUnless("orjson" in BACKENDS, reason("orjson"))
+    def test_a_backend_not_installed_names_the_pip_line(self) -> None:
+        from snr.extras import orjson as extra
+
+        with mock.patch.object(extra, "_orjson", None), mock.patch.dict(codec._loaded, clear=True):
+            with self.assertRaises(ValueError) as caught:
+                codec.use_backend("orjson")
+        self.assertEqual(
+            str(caught.exception),
+            "the orjson JSON backend is not installed (SNR_JSON=orjson?): "
+            "pip install 'snr-robotics[fast]', or use 'json'",
+        )
 
 
 if __name__ == "__main__":

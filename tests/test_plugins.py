@@ -15,6 +15,7 @@ DECLARED = {
     "snr.console_transports": ("zenoh",),
     "snr.console_commands": ("console_tools", "graph"),
     "snr.recording_formats": ("mcap",),
+    "snr.json_backends": ("orjson",),
 }
 """What SNR's pyproject.toml declares, group by group."""
 

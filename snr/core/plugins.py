@@ -24,6 +24,8 @@ The groups (``docs/design.md``, "Extras and extension points"):
   `snr.std_mods.io.command_processor.command`;
 * ``snr.recording_formats``: recording formats besides JSON lines
   (``mcap``): a `snr.std_mods.io.recording_formats.RecordingFormat`.
+* ``snr.json_backends``: faster JSON for the page codec (``orjson``): a
+  class whose instances are a `snr.std_mods.codec.JsonBackend`.
 
 Example::
 
@@ -50,6 +52,7 @@ GROUPS: Dict[str, str] = {
     "snr.console_transports": "the ways snr-console reaches a node besides TCP",
     "snr.console_commands": "the console commands kept in extras",
     "snr.recording_formats": "the recording formats besides JSON lines",
+    "snr.json_backends": "the faster JSON backends of the page codec",
 }
 """The extension points of the kernel: entry point group -> what an extra provides there."""
 

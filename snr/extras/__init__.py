@@ -3,10 +3,10 @@
 The kernel (``snr.prelude``, ``snr.core``, ``snr.std_mods``, ``snr.utils``)
 is what a student reads; an *extra* is a part they may never open: Zenoh,
 serial links and boards, viewing (MCAP, the live view), the game
-controller, the simulator, the graph, the demo, the docs builder and the
-names of the 2021 release. Extras ship in the same package; only the
-third-party packages some of them need are pip extras (e.g.
-``pip install 'snr-robotics[zenoh]'``).
+controller, the simulator, the graph, the demo, the docs builder, a faster
+JSON backend (orjson) and the names of the 2021 release. Extras ship in the
+same package; only the third-party packages some of them need are pip
+extras (e.g. ``pip install 'snr-robotics[zenoh]'``).
 
 ``import snr`` loads none of them. The kernel never imports an extra: an
 extra uses the kernel's public names, and plugs into the kernel only

@@ -1,29 +1,23 @@
 """The wire format: pages as strict JSON, in frames between nodes and in lines on disk.
 
-Every place where a page leaves or enters a node writes and reads it here
+Every page that leaves or enters a node is written and read here
 (docs/wire-format.md): comms *frames* (a 4-byte big-endian length, then a
 JSON object with ``"v"`` and a ``"kind"``: ``hello``, ``proof``, ``page``,
-``beat`` or ``bye``), and the JSON-lines format of recordings and serial
-links (a header line, then one page per line). One set of rules, one error
-message for data JSON cannot hold, one strict reader:
+``beat`` or ``bye``), and the lines of recordings and serial links (a header
+line, then one page per line). One set of rules:
 
-* **Written:** compact JSON, ASCII only (other characters as ``\\uXXXX``), in
-  a fixed field order, UTF-8 bytes.
+* **Written:** compact JSON, ASCII only (``\\uXXXX``), fields in a fixed order.
 * **Refused when writing** (`NotSerializableError`, naming the key and the
-  part of the data): anything JSON cannot hold, NaN and infinity, lone
+  part of the data): what JSON cannot hold, NaN and infinity, lone
   surrogates, nesting deeper than `MAX_DEPTH`.
 * **Rejected when reading** (`WireFormatError`, saying why): text that is not
-  UTF-8 or not JSON, ``NaN``/``Infinity``, numbers too large for a double
-  (``1e999``), lone surrogates (``"\\ud800"``), nesting deeper than
-  `MAX_DEPTH`, and pages with missing or wrongly typed fields. Nothing is
-  unpickled or evaluated, so a bad frame can only be *wrong*, never harmful.
+  UTF-8 or not JSON, ``NaN``, ``1e999``, lone surrogates, nesting deeper than
+  `MAX_DEPTH`, pages with missing or wrongly typed fields. Nothing is
+  unpickled or evaluated: a bad frame can only be *wrong*, never harmful.
 
-Two JSON backends do the work, each through its public functions only: the
-standard library's ``json`` and, when installed (``pip install
-'snr-robotics[fast]'``), ``orjson``, several times faster. orjson's result is
-used only where it is known to be json's (they differ on NaN, non-ASCII text,
-small floats, integers beyond 64 bits); json gives every verdict and message.
-``SNR_JSON=json`` (or ``use_backend("json")``) uses the standard library only.
+The standard library's ``json`` does the work. A faster `JsonBackend` from an
+extra may do part of it (``snr.extras.orjson``: ``pip install
+'snr-robotics[fast]'``, used when installed; ``SNR_JSON=json`` turns it off).
 
 Example::
 
@@ -45,31 +39,16 @@ import re
 import struct
 import time
 from dataclasses import dataclass
-from typing import (
-    Any,
-    Callable,
-    Dict,
-    Iterable,
-    List,
-    Mapping,
-    NoReturn,
-    Optional,
-    Tuple,
-    Union,
-)
+from typing import Any, Dict, Iterable, List, Mapping, NoReturn, Optional, Protocol, Tuple, Union
 
-from snr.prelude import NotSerializableError, Page, WireFormatError
-from snr.prelude.install import install_hint, upgrade_hint
+from snr.core import plugins
+from snr.prelude import ConfigError, NotSerializableError, Page, WireFormatError
+from snr.prelude.install import upgrade_hint
 from snr.prelude.not_serializable import not_serializable_error
-
-_orjson: Any
-try:
-    import orjson as _orjson
-except ImportError:  # the optional fast backend is not installed
-    _orjson = None
 
 __all__ = [
     "BACKEND_ENV_VAR",
+    "BACKEND_GROUP",
     "FORMAT_NAME",
     "FORMAT_VERSION",
     "HEADER_BYTES",
@@ -81,6 +60,7 @@ __all__ = [
     "Bye",
     "FrameDecoder",
     "Hello",
+    "JsonBackend",
     "Message",
     "PageEncoder",
     "PathLike",
@@ -109,14 +89,16 @@ __all__ = [
 ]
 
 MAX_DEPTH = 100
-"""Deepest nesting of arrays and objects in one body or line, the outer object included.
+"""Deepest nesting of arrays and objects in a body or line, the outer object included.
 
-So a page's ``data`` may nest 99 deep (``[[1]]`` is 2 deep). Deeper input is
-rejected, deeper data is refused.
+So a page's ``data`` may nest 99 deep (``[[1]]`` is 2 deep).
 """
 
 BACKEND_ENV_VAR = "SNR_JSON"
 """Environment variable choosing the JSON backend: ``json`` (stdlib) or ``orjson``."""
+
+BACKEND_GROUP = "snr.json_backends"
+"""The entry point group of the faster JSON backends (`JsonBackend`): ``orjson``."""
 
 FORMAT_NAME = "snr-pages"
 """The ``format`` field of the header line of recordings and serial links."""
@@ -131,10 +113,9 @@ Text = Union[bytes, bytearray, memoryview, str]
 """What the readers take: UTF-8 bytes, or text already decoded."""
 
 _DATA_DEPTH = MAX_DEPTH - 1  # the page object itself is one level
-_JSON_SCALARS = frozenset((str, int, float, bool, type(None)))
-_STR = frozenset((str,))
 _LONE_SURROGATE = re.compile("[\ud800-\udfff]")
 _TOO_DEEP = f"it nests arrays and objects more than {MAX_DEPTH} deep"
+_DATA_TOO_DEEP = f"data nests lists and dicts more than {_DATA_DEPTH} deep"
 
 
 class _Refused(Exception):
@@ -142,25 +123,23 @@ class _Refused(Exception):
 
 
 class _OutOfRange(Exception):
-    """A number a double cannot hold, such as ``1e999`` (json alone reads it as infinity).
+    """A number a double cannot hold, such as ``1e999`` (not a ValueError, json's verdicts)."""
 
-    Not a ValueError, which is what json's own verdicts are.
+
+def _suspect(text: bytes, depth: int = MAX_DEPTH) -> bool:
+    """True when JSON text may hold a lone surrogate (``\\ud800``) or nest over ``depth``.
+
+    Text shorter than ``2 * depth`` cannot nest that deep; brackets in strings
+    count too (then the decoded value shows that all is well).
     """
-
-
-def _opens_too_many(text: bytes, depth: int = MAX_DEPTH) -> bool:
-    """True when JSON text opens more than ``depth`` arrays and objects, so may nest too deep.
-
-    Brackets inside strings count too: then the decoded value shows it is fine.
-    Shorter text cannot open (and close) that many, and is not counted.
-    """
-    return len(text) > 2 * depth and text.count(b"[") + text.count(b"{") > depth
+    return b"\\ud" in text or (
+        len(text) > 2 * depth and text.count(b"[") + text.count(b"{") > depth
+    )
 
 
 def _problem(value: Any) -> Optional[str]:
     """Why a decoded JSON value breaks SNR's rules (nested too deep, a lone surrogate), or None.
 
-    Decoded JSON holds only dict, list, str, int, float, bool and None.
     Example: ``_problem(["\\ud800"])`` names the lone surrogate.
     """
     stack: List[Tuple[Any, int]] = [(value, 1)]  # (a value, how deep it is)
@@ -184,264 +163,58 @@ def _problem(value: Any) -> Optional[str]:
     return None
 
 
-# -- the standard library's json: every verdict and message comes from here ----------
+# -- the extension point: a faster JSON backend, found by entry point ----------------
 
 
-def _reject_constant(name: str) -> NoReturn:
-    raise ValueError(f"{name} is not a JSON number")
+class JsonBackend(Protocol):
+    """What an entry point of `BACKEND_GROUP` makes: json's results, faster, or a step aside.
 
+    The entry point names a class that raises ImportError, its message the
+    pip line, when a package it needs is missing. Wherever a backend steps
+    aside the codec uses json, which also gives every verdict and message, so
+    the bytes written and the input rejected are the same with any backend.
 
-def _finite_float(text: str) -> float:
-    """A JSON number with a fraction or an exponent, read as json reads it, but never infinity."""
-    value = float(text)
-    if math.isinf(value):
-        raise _OutOfRange(f"the number {value!r:.40} is out of range (infinity or too large)")
-    return value
+    Example::
 
-
-_ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
-_DECODER = json.JSONDecoder(parse_constant=_reject_constant, parse_float=_finite_float)
-_SYNTAX_DECODER = json.JSONDecoder(parse_constant=_reject_constant)  # reads 1e999 as inf
-
-
-def _decode(decoder: json.JSONDecoder, text: str) -> Any:
-    """``decoder``'s value for ``text``; json's verdict as a `WireFormatError`."""
-    try:
-        return decoder.decode(text)
-    except ValueError as error:  # json.JSONDecodeError, NaN/Infinity, huge integers
-        raise WireFormatError(f"it is not JSON ({error}): {text[:60]!r}") from None
-    except RecursionError:
-        raise WireFormatError(_TOO_DEEP) from None
-
-
-def _load_std(raw: Text) -> Any:
-    """The JSON value in ``raw``, read strictly with json (`load_json` says what is rejected)."""
-    if isinstance(raw, str):
-        text, data = raw, raw.encode("utf-8", "surrogatepass")
-    else:
-        data = bytes(raw)
-        try:
-            text = data.decode("utf-8")  # strict: surrogates as UTF-8 bytes are not UTF-8
-        except UnicodeDecodeError as error:
-            raise WireFormatError(f"it is not UTF-8 text ({error})") from None
-    try:
-        value = _decode(_DECODER, text)
-    except _OutOfRange as error:
-        _decode(_SYNTAX_DECODER, text)  # text broken further on: json's verdict comes first
-        raise WireFormatError(f"it is not valid JSON for SNR: {error}") from None
-    # json reads lone surrogates (escaped as \ud800, or raw in text) and nests as
-    # deep as its recursion lets it: where the text may hold either, look.
-    if (
-        b"\\ud" in data
-        or b"\\uD" in data
-        or (isinstance(raw, str) and not raw.isascii())
-        or _opens_too_many(data)
-    ):
-        problem = _problem(value)
-        if problem is not None:
-            raise WireFormatError(f"it is not valid JSON for SNR: {problem}")
-    return value
-
-
-def _dump_std(obj: Any) -> bytes:
-    """``obj`` as compact ASCII JSON, written with json; raises `_Refused` saying why not."""
-    try:
-        out = _ENCODER.encode(obj).encode("ascii")
-    except (TypeError, ValueError) as error:  # not JSON, NaN/infinity, contains itself
-        raise _Refused(str(error)) from error
-    except RecursionError:
-        raise _Refused(f"data nests lists and dicts more than {_DATA_DEPTH} deep") from None
-    # json writes lone surrogates (as \ud800) and nests as deep as its recursion
-    # lets it: where the text may hold either, refuse what a reader would reject.
-    if b"\\ud" in out or _opens_too_many(out):
-        try:
-            problem = _problem(json.loads(out))
-        except RecursionError:
-            problem = _TOO_DEEP
-        if problem == _TOO_DEEP:
-            raise _Refused(f"data nests lists and dicts more than {_DATA_DEPTH} deep")
-        if problem is not None:
-            raise _Refused(problem)
-    return out
-
-
-# -- orjson, where its result is known to be json's; json does everything else ------
-
-# Every digit made 0, so that one search finds a run of 19 digits or more.
-_DIGITS_TO_ZERO = bytes.maketrans(b"123456789", b"000000000")
-
-
-def _load_orjson(raw: Text) -> Any:
-    """`_load_std`'s value and verdict, found with orjson where it reads the same."""
-    assert _orjson is not None
-    try:
-        value = _orjson.loads(raw)
-    except _orjson.JSONDecodeError:
-        return _load_std(raw)  # json gives the verdict and the message
-    # orjson rejects NaN, infinity and lone surrogates itself, but reads an
-    # integer beyond 64 bits (19 digits or more) as a float, and nests up to
-    # 1,024 deep: json reads such text again.
-    data = raw.encode("utf-8") if isinstance(raw, str) else bytes(raw)
-    if b"0" * 19 in data.translate(_DIGITS_TO_ZERO) or _opens_too_many(data):
-        return _load_std(raw)
-    return value
-
-
-def _plain(value: Any, depth: int = 1) -> bool:
-    """True when ``value`` holds only exact JSON types, nested at most `MAX_DEPTH` deep.
-
-    That is str, int, float, bool, None, lists, tuples and dicts with str keys,
-    and lists and dicts of subclasses too (both write them as the plain ones:
-    read-only page data is such, in DEBUG and TEST); not other subclasses,
-    enums, dataclasses, dates or UUIDs, which orjson writes and json refuses
-    or writes otherwise. Data that contains itself is endlessly deep, so not
-    plain either. ``depth`` is how deep ``value`` itself is (2 for a page's
-    data). Example: ``_plain({"a": [1, 2.5]})``.
+        class Slow:  # pyproject.toml: [project.entry-points."snr.json_backends"] slow = "m:Slow"
+            def dumps(self, value: Any) -> Optional[bytes]:
+                return None  # json writes it
+            def loads(self, raw: Union[bytes, str]) -> Any:
+                raise ValueError("json reads it")
     """
-    kind = type(value)
-    if kind is dict or (kind is not list and isinstance(value, dict)):
-        if not _STR.issuperset(map(type, value)):  # all keys at once
-            return False
-        value = value.values()
-    elif kind is not list and kind is not tuple and not isinstance(value, list):
-        return kind in _JSON_SCALARS
-    if depth > MAX_DEPTH:
-        return False
-    for item in value:
-        if type(item) not in _JSON_SCALARS and not _plain(item, depth + 1):
-            return False
-    return True
+
+    def dumps(self, value: Any) -> Optional[bytes]:
+        """json's bytes for ``value`` (compact, ASCII), or None to let json write it.
+
+        None at least where json's bytes nest more than ``MAX_DEPTH - 1`` deep
+        or hold a lone surrogate (``\\ud800``): the codec does not look again.
+        """
+
+    def loads(self, raw: Text) -> Any:
+        """The value `load_json` reads from ``raw``, or ValueError to let json read it."""
 
 
-def _dump_orjson(obj: Any) -> bytes:
-    """`_dump_std`'s bytes and refusals, written with orjson where it writes the same."""
-    assert _orjson is not None
-    if _plain(obj):
-        try:
-            out: bytes = _orjson.dumps(obj)
-        except TypeError:  # integers beyond 64 bits, lone surrogates: json decides
-            return _dump_std(obj)
-        if _as_json_writes(out):
-            return out
-    return _dump_std(obj)
-
-
-def _as_json_writes(out: bytes) -> bool:
-    """True unless orjson's ``out`` may hold what json writes otherwise.
-
-    That is non-ASCII text and DEL (json escapes them), null (orjson's NaN and
-    infinity, which json refuses; or None) and small floats (0.00001 and 1e-7,
-    where json writes 1e-05 and 1e-07). Example: ``_as_json_writes(b'[0.5]')``.
-    """
-    return (
-        out.isascii()
-        and b"\x7f" not in out
-        and b"null" not in out
-        and b"0.0000" not in out
-        and b"e-" not in out
-    )
-
-
-# -- a page's data and time alone, for PageEncoder ---------------------------------
-#
-# Most pages hold a number, a short name or a small list or dict of those.
-# A number's type says what its JSON is, so it is written directly; anything
-# else is written, and its JSON searched as `_dump_std` and `_dump_orjson` do.
-# None means "let page_json decide", which also gives the refusal's message.
-
-
-def _value_std(value: Any) -> Optional[bytes]:
-    """json's bytes for ``value``, or None where `page_json` must decide.
-
-    json writes a float with ``float.__repr__`` and an int with ``int.__repr__``;
-    writing them here saves ``JSONEncoder.encode`` making its C encoder for the
-    call (about 1 µs). Text is encoded without one. Example: ``_value_std(0.5)``
-    is ``b"0.5"``.
-    """
-    kind = type(value)
-    if kind is float:
-        # value - value is NaN for NaN and infinity, which json refuses
-        return float.__repr__(value).encode("ascii") if value - value == 0.0 else None
-    if kind is bool:
-        return b"true" if value else b"false"
-    if value is None:
-        return b"null"
-    try:
-        out = (int.__repr__(value) if kind is int else _ENCODER.encode(value)).encode("ascii")
-    except (TypeError, ValueError, RecursionError):  # not JSON, NaN, 4,300 digits...
-        return None
-    # a surrogate, maybe lone; data nesting more than a page's data may
-    if b"\\ud" in out or _opens_too_many(out, _DATA_DEPTH):
-        return None
-    return out
-
-
-_SMALL = 16  # items in a list or dict `_alike` looks at; longer ones, searching is faster
-
-
-def _alike(values: Iterable[Any], levels: int) -> bool:
-    """True when orjson writes each of ``values`` as json does, known from their types alone.
-
-    That holds for ints, bools, None, ASCII text without DEL, floats that are
-    finite and 0 or at least 1e-4 in size (orjson writes NaN as null, 1e-5 as
-    0.00001), and lists and dicts of up to `_SMALL` of them, ``levels`` deep.
-    Integers beyond 64 bits and keys that are not text pass: orjson refuses
-    them. Example: ``_alike([{"seq": 1, "value": 0.5}], 1)`` is True.
-    """
-    for value in values:
-        kind = type(value)
-        if kind is float:
-            # value - value is NaN for NaN and infinity
-            if value - value != 0.0 or (-1e-4 < value < 1e-4 and value != 0.0):
-                return False
-        elif kind is str:
-            if not value.isascii() or "\x7f" in value:
-                return False
-        elif kind is int or kind is bool or value is None:
-            continue
-        elif kind is list or kind is tuple or isinstance(value, list):
-            if not (levels and len(value) <= _SMALL and _alike(value, levels - 1)):
-                return False
-        elif isinstance(value, dict):  # (a list or dict subclass is written as one)
-            if not (
-                levels
-                and len(value) <= _SMALL
-                and _alike(value, 0)  # the keys
-                and _alike(value.values(), levels - 1)
-            ):
-                return False
-        else:
-            return False
-    return True
-
-
-def _value_orjson(value: Any) -> Optional[bytes]:
-    """`_value_std`'s bytes, written with orjson where it writes the same; None as there.
-
-    A number, a name or a small list or dict of them (`_alike`) is written
-    as it is; other data of exact JSON types is written and its bytes are
-    searched as `_dump_orjson` does; the rest goes to `_value_std`.
-    Example: ``_value_orjson({"seq": 1})`` is ``b'{"seq":1}'``.
-    """
-    assert _orjson is not None
-    if type(value) is float and value - value == 0.0 and not -1e-4 < value < 1e-4:
-        return _orjson.dumps(value)  # type: ignore[no-any-return]  # every page's time
-    try:
-        if _alike((value,), 2):
-            return _orjson.dumps(value)  # type: ignore[no-any-return]
-        if _plain(value, depth=2):  # 2: inside the page, so at most _DATA_DEPTH deep
-            out: bytes = _orjson.dumps(value)
-            if _as_json_writes(out):
-                return out
-    except TypeError:  # an integer beyond 64 bits, a key that is not text
-        pass
-    return _value_std(value)  # json's bytes, or None
-
-
-_load: Callable[[Text], Any] = _load_std
-_dump: Callable[[Any], bytes] = _dump_std
-_value: Callable[[Any], Optional[bytes]] = _value_std
+_fast: Optional[JsonBackend] = None  # the backend in use; None: json alone
 _backend = "json"
+_loaded: Dict[str, JsonBackend] = {}
+
+
+def _load_backend(name: str) -> JsonBackend:
+    """The backend ``name`` of `BACKEND_GROUP`; ValueError if unknown or not installed."""
+    names = plugins.names(BACKEND_GROUP)
+    if name not in names:
+        choices = " or ".join(repr(n) for n in ("json", *names))
+        raise ValueError(f"unknown JSON backend {name!r}; choose {choices}")
+    if name not in _loaded:
+        try:
+            _loaded[name] = plugins.load(BACKEND_GROUP, name, f"the JSON backend {name!r}")()
+        except (ImportError, ConfigError) as error:  # ImportError's message: the pip line
+            hint = error.__cause__ if isinstance(error, ConfigError) else error
+            raise ValueError(
+                f"the {name} JSON backend is not installed ({BACKEND_ENV_VAR}={name}?): "
+                f"{hint}, or use 'json'"
+            ) from None
+    return _loaded[name]
 
 
 def available_backends() -> Tuple[str, ...]:
@@ -451,7 +224,14 @@ def available_backends() -> Tuple[str, ...]:
 
         "orjson" in available_backends()   # True after pip install 'snr-robotics[fast]'
     """
-    return ("json", "orjson") if _orjson is not None else ("json",)
+    usable = ["json"]
+    for name in plugins.names(BACKEND_GROUP):
+        try:
+            _load_backend(name)
+            usable.append(name)
+        except ValueError:  # not installed
+            pass
+    return tuple(usable)
 
 
 def backend() -> str:
@@ -468,40 +248,131 @@ def use_backend(name: Optional[str] = None) -> str:
     """Choose the JSON backend; returns the one now in use.
 
     Args:
-        name: ``"json"`` (the standard library), ``"orjson"``, or None for the
-            default: the ``SNR_JSON`` environment variable if set, else orjson
-            when it is installed. The bytes written and the inputs rejected
-            are the same with both; only the speed differs.
+        name: ``"json"`` (the standard library), a backend of `BACKEND_GROUP`
+            (``"orjson"``), or None for the default: ``SNR_JSON`` if set, else
+            the first backend installed, else json. Only the speed differs.
 
     Raises:
-        ValueError: an unknown name, or orjson asked for but not installed.
+        ValueError: an unknown name, or a backend asked for but not installed.
 
     Example::
 
         use_backend("json")     # compare with the stdlib, e.g. in a test
         use_backend()           # back to the default
     """
-    global _load, _dump, _value, _backend
+    global _fast, _backend
     if name is None:
-        name = os.environ.get(BACKEND_ENV_VAR, "").strip().lower() or (
-            "orjson" if _orjson is not None else "json"
-        )
-    if name == "json":
-        _load, _dump, _value = _load_std, _dump_std, _value_std
-    elif name == "orjson":
-        if _orjson is None:
-            raise ValueError(
-                f"the orjson JSON backend is not installed ({BACKEND_ENV_VAR}=orjson?): "
-                f"{install_hint('fast')}, or use 'json'"
-            )
-        _load, _dump, _value = _load_orjson, _dump_orjson, _value_orjson
-    else:
-        raise ValueError(f"unknown JSON backend {name!r}; choose 'json' or 'orjson'")
+        name = os.environ.get(BACKEND_ENV_VAR, "").strip().lower()
+        if not name:
+            installed = available_backends()
+            name = installed[1] if len(installed) > 1 else "json"  # the first faster one
+    _fast = None if name == "json" else _load_backend(name)
     _backend = name
     return name
 
 
-# -- JSON text ------------------------------------------------------------------------
+# -- reading and writing: the backend where it answers, else the standard library's json
+
+
+def _reject_constant(name: str) -> NoReturn:
+    raise ValueError(f"{name} is not a JSON number")
+
+
+def _finite_float(text: str) -> float:
+    value = float(text)
+    if math.isinf(value):
+        raise _OutOfRange(f"the number {value!r:.40} is out of range (infinity or too large)")
+    return value
+
+
+_ENCODER = json.JSONEncoder(separators=(",", ":"), allow_nan=False)
+_DECODER = json.JSONDecoder(parse_constant=_reject_constant, parse_float=_finite_float)
+_SYNTAX_DECODER = json.JSONDecoder(parse_constant=_reject_constant)  # reads 1e999 as inf
+
+
+def _decode(decoder: json.JSONDecoder, text: str) -> Any:
+    try:
+        return decoder.decode(text)
+    except ValueError as error:  # json.JSONDecodeError, NaN/Infinity, huge integers
+        raise WireFormatError(f"it is not JSON ({error}): {text[:60]!r}") from None
+    except RecursionError:
+        raise WireFormatError(_TOO_DEEP) from None
+
+
+def _load(raw: Text) -> Any:
+    """The JSON value in ``raw``, read strictly (`load_json` says what is rejected)."""
+    if _fast is not None:
+        try:
+            return _fast.loads(raw)
+        except ValueError:  # json reads it, and says what is wrong
+            pass
+    if isinstance(raw, str):
+        text, data = raw, raw.encode("utf-8", "surrogatepass")
+    else:
+        data = bytes(raw)
+        try:
+            text = data.decode("utf-8")  # strict: surrogates as UTF-8 bytes are not UTF-8
+        except UnicodeDecodeError as error:
+            raise WireFormatError(f"it is not UTF-8 text ({error})") from None
+    try:
+        value = _decode(_DECODER, text)
+    except _OutOfRange as error:
+        _decode(_SYNTAX_DECODER, text)  # text broken further on: json's verdict comes first
+        raise WireFormatError(f"it is not valid JSON for SNR: {error}") from None
+    # json reads lone surrogates and nests as deep as its recursion lets it
+    if _suspect(data) or b"\\uD" in data or (isinstance(raw, str) and not raw.isascii()):
+        problem = _problem(value)
+        if problem is not None:
+            raise WireFormatError(f"it is not valid JSON for SNR: {problem}")
+    return value
+
+
+def _dump(obj: Any) -> bytes:
+    """``obj`` as compact ASCII JSON; raises `_Refused` saying why not."""
+    out = None if _fast is None else _fast.dumps(obj)
+    if out is not None:
+        return out
+    try:
+        out = _ENCODER.encode(obj).encode("ascii")
+    except (TypeError, ValueError) as error:  # not JSON, NaN/infinity, contains itself
+        raise _Refused(str(error)) from error
+    except RecursionError:
+        raise _Refused(_DATA_TOO_DEEP) from None
+    if _suspect(out):  # json writes lone surrogates (\ud800), and nests as deep as it can
+        try:
+            problem = _problem(json.loads(out))
+        except RecursionError:
+            problem = _TOO_DEEP
+        if problem is not None:
+            raise _Refused(_DATA_TOO_DEEP if problem == _TOO_DEEP else problem)
+    return out
+
+
+def _value(value: Any) -> Optional[bytes]:
+    """The JSON of a page's data or time, or None where `page_json` must decide.
+
+    json writes a float or an int with its ``repr``: written here without
+    making json's encoder for the call. Example: ``_value(0.5)`` is ``b"0.5"``.
+    """
+    out = None if _fast is None else _fast.dumps(value)
+    if out is not None:
+        return out
+    kind = type(value)
+    if kind is float:
+        # value - value is NaN for NaN and infinity, which json refuses
+        return float.__repr__(value).encode("ascii") if value - value == 0.0 else None
+    if kind is bool:
+        return b"true" if value else b"false"
+    if value is None:
+        return b"null"
+    try:
+        out = (int.__repr__(value) if kind is int else _ENCODER.encode(value)).encode("ascii")
+    except (TypeError, ValueError, RecursionError):  # not JSON, NaN, 4,300 digits...
+        return None
+    return None if _suspect(out, _DATA_DEPTH) else out
+
+
+# -- JSON text and pages --------------------------------------------------------------
 
 
 def load_json(raw: Text) -> Any:
@@ -549,18 +420,11 @@ def dump_json(obj: Mapping[str, Any], what: str = "it") -> bytes:
         raise NotSerializableError(f"Cannot write {what} as JSON: {error}") from None
 
 
-# -- pages ----------------------------------------------------------------------------
-
-
 def data_json(key: str, data: Any, to: str) -> bytes:
-    """A page's ``data`` alone as compact, ASCII-only JSON bytes, refused as pages are.
+    """A page's ``data`` alone as JSON bytes, refused as `page_json` refuses it.
 
-    For formats that send the data without the rest of the page (a serial
-    link's plain lines, a board's compact lines).
-
-    Raises:
-        NotSerializableError: the same message as `page_json` (naming ``key``,
-            the part of the data and the fix).
+    For formats that send the data without the page (a serial link's plain
+    lines, a board's compact lines).
 
     Example::
 
@@ -584,29 +448,28 @@ def page_json(
 
     Raises:
         NotSerializableError: the data is not JSON (a set, an object, NaN,
-            a lone surrogate, too deep): the message names the key, the part
-            of the data and the fix.
+            a lone surrogate, too deep), naming the key, the part and the fix.
 
     Example::
 
         page_json(Page("x", [1, 2], "robot", 0.5))
         # b'{"key":"x","data":[1,2],"origin":"robot","created_at_s":0.5,"process":true}'
     """
-    fields: Dict[str, Any] = dict(head) if head else {}
-    fields["key"] = page.key
-    fields["data"] = page.data
-    fields["origin"] = page.origin
-    fields["created_at_s"] = page.created_at_s
-    fields["process"] = page.process
+    fields = {
+        **(head or {}),
+        "key": page.key,
+        "data": page.data,
+        "origin": page.origin,
+        "created_at_s": page.created_at_s,
+        "process": page.process,
+    }
     try:
         return _dump(fields)
     except _Refused as error:
         raise not_serializable_error(page.key, page.data, to=to, reason=str(error)) from None
 
 
-_MAX_ENVELOPES = 1024
-"""The (key, origin) pairs a `PageEncoder` keeps the fixed JSON of; when full it starts again."""
-
+_MAX_ENVELOPES = 1024  # the (key, origin) pairs a PageEncoder keeps; when full it starts again
 _PAGE_FIELDS = frozenset(("key", "data", "origin", "created_at_s", "process"))
 _TAILS = (b',"process":false}', b',"process":true}')
 
@@ -615,13 +478,10 @@ class PageEncoder:
     """`page_json` with the leading fields and the destination given once: a link's encoder.
 
     A node sends pages under a few keys, each from one origin, again and
-    again, and their JSON differs only in the data and the time. So the text
-    around them (the head, the key and the origin, with the field names) is
-    written once per key and origin with `dump_json` and kept in a dict (up
-    to `_MAX_ENVELOPES` pairs; then it is emptied and filled again). A page
-    whose data and time are numbers, names or small lists and dicts of them
-    then costs the JSON of those two and a join; any other page goes through
-    `page_json`. The bytes and the refusals are `page_json`'s either way.
+    again: the JSON around the data and the time (the head, the key, the
+    origin) is written once per key and origin and kept (up to 1,024
+    pairs). A page then costs the JSON of its data and time and a
+    join. The bytes and the refusals are `page_json`'s.
 
     Args:
         head: fields written before the page's, e.g. ``{"v": 1, "kind": "page"}``.
@@ -638,8 +498,8 @@ class PageEncoder:
         self.head = dict(head)
         self.to = to
         # (key, origin) -> the JSON before the data, and between the data and the
-        # time; None where page_json must decide (a head that names a page field,
-        # a key or origin json refuses).
+        # time; None where page_json must decide (a head naming a page field, a
+        # key or origin json refuses)
         self._envelopes: Dict[Tuple[str, str], Optional[Tuple[bytes, bytes]]] = {}
 
     def __call__(self, page: Page) -> bytes:
@@ -657,7 +517,6 @@ class PageEncoder:
         return page_json(page, self.head, self.to)
 
     def _learn(self, key: str, origin: str) -> Optional[Tuple[bytes, bytes]]:
-        """The JSON around a page's data under ``key`` from ``origin``, kept for the next page."""
         if len(self._envelopes) >= _MAX_ENVELOPES:
             self._envelopes.clear()
         envelope: Optional[Tuple[bytes, bytes]] = None
@@ -666,7 +525,7 @@ class PageEncoder:
                 before = _dump({**self.head, "key": key})[:-1] + b',"data":'  # without its "}"
                 envelope = (before, b',"origin":' + _dump(origin) + b',"created_at_s":')
             except _Refused:  # e.g. a lone surrogate in the key: page_json says why
-                envelope = None
+                pass
         self._envelopes[(key, origin)] = envelope
         return envelope
 
@@ -682,12 +541,11 @@ def page_from_fields(
 ) -> Page:
     """The page a decoded JSON object describes.
 
-    ``key`` (a non-empty string) and ``data`` are always required; unknown
-    fields are ignored. In recordings and serial lines a missing ``origin``
-    becomes ``default_origin`` and a missing ``created_at_s`` becomes
-    ``now_s`` (or the current time). With ``default_origin=None`` (comms
-    frames) both are required, and ``origin`` must not be empty. A missing
-    ``process`` is true.
+    ``key`` (not empty) and ``data`` are required; other fields are ignored.
+    A missing ``origin`` becomes ``default_origin``, a missing
+    ``created_at_s`` ``now_s`` (or the current time), a missing ``process``
+    true. With ``default_origin=None`` (frames) origin and time are required
+    and origin must not be empty.
 
     Raises:
         WireFormatError: a field is missing, empty or of the wrong type; the
@@ -700,8 +558,7 @@ def page_from_fields(
     """
     key, origin = fields.get("key"), fields.get("origin")
     created, process = fields.get("created_at_s"), fields.get("process", True)
-    # The common case, checked in one go; the slow path below names the problem.
-    if (
+    if (  # the common case in one go; below, the first problem is named
         type(key) is str
         and key
         and type(origin) is str
@@ -719,29 +576,26 @@ def page_from_fields(
         raise WireFormatError("field 'key' of the page must not be empty")
     if "data" not in fields:
         raise WireFormatError(f"the page under {key!r} has no 'data' field")
-    if default_origin is None:
-        for name in ("origin", "created_at_s"):
-            if name not in fields:
-                raise WireFormatError(f"the page under {key!r} has no {name!r} field")
-        origin_value = origin
-    else:
-        origin_value = fields.get("origin", default_origin)
-    if type(origin_value) is not str:
-        raise _bad_type("origin", origin_value, "a JSON string")
-    if default_origin is None and not origin_value:
+    for name in ("origin", "created_at_s") if default_origin is None else ():
+        if name not in fields:
+            raise WireFormatError(f"the page under {key!r} has no {name!r} field")
+    if "origin" not in fields:
+        origin = default_origin
+    if type(origin) is not str:
+        raise _bad_type("origin", origin, "a JSON string")
+    if default_origin is None and not origin:
         raise WireFormatError("field 'origin' of the page must not be empty")
-    if "created_at_s" in fields:
-        if type(created) not in (int, float):
-            raise _bad_type("created_at_s", created, "a number")
-        try:
-            created_s = float(created)  # type: ignore[arg-type]
-        except OverflowError:
-            raise WireFormatError("field 'created_at_s' of the page is too large") from None
-    else:
-        created_s = time.time() if now_s is None else now_s
+    if "created_at_s" not in fields:
+        created = time.time() if now_s is None else now_s
+    elif type(created) not in (int, float):
+        raise _bad_type("created_at_s", created, "a number")
+    try:
+        created_s = float(created)  # type: ignore[arg-type]
+    except OverflowError:  # a whole number past a double's range
+        raise WireFormatError("field 'created_at_s' of the page is too large") from None
     if type(process) is not bool:
         raise _bad_type("process", process, "a JSON bool (true or false)")
-    return Page(key, fields["data"], origin_value, created_s, process)
+    return Page(key, fields["data"], origin, created_s, process)
 
 
 # -- frames: a page (or a hello, beat, bye, proof) between two nodes ------------------
@@ -750,10 +604,10 @@ WIRE_VERSION = 1
 """The ``"v"`` field of page, beat and bye frames, and of the first hello (no system)."""
 
 HELLO_VERSION = 2
-"""The ``"v"`` of the hello that names a system and may carry a challenge, and of proofs.
+"""The ``"v"`` of the hello that names a system or carries a challenge, and of proofs.
 
-A node that names no system and has no secret still sends a version 1
-hello, so older nodes understand it (docs/wire-format.md, section 3.1).
+A node with no system and no secret sends a version 1 hello, which older
+nodes understand (docs/wire-format.md, section 3.1).
 """
 
 HEADER_BYTES = 4
@@ -770,13 +624,11 @@ _page_body = PageEncoder({"v": WIRE_VERSION, "kind": "page"})
 class Hello:
     """The first frame on a link: who is on the other end.
 
-    ``beat_s`` is how often the sender promises a sign of life while it has
-    nothing else to send (a `Beat`); None from a peer that makes no promise
-    (older SNR nodes, or a program that does not send beats). ``bye`` is
-    true when the sender understands a `Bye` frame (older nodes do not, so
-    they are never sent one). ``system`` is the system the sender belongs to
-    (None from a version 1 hello, or one that names none), and ``nonce`` its
-    challenge: 64 hex digits from a node with a secret, else None.
+    ``beat_s``: how often the sender promises a sign of life (a `Beat`) while
+    it has nothing else to send, None for no promise (older nodes). ``bye``:
+    it understands a `Bye` frame. ``system``: the system it belongs to (None
+    in a version 1 hello), ``nonce``: its challenge, 64 hex digits from a node
+    with a secret, else None.
 
     Example::
 
@@ -793,9 +645,7 @@ class Hello:
 
 @dataclass(frozen=True)
 class Proof:
-    """The answer to the peer's challenge: ``mac`` proves the sender knows the secret.
-
-    64 lowercase hex digits of an HMAC-SHA256 (see ``handshake.proof_mac``).
+    """The answer to the peer's challenge: ``mac``, an HMAC-SHA256 in 64 lowercase hex digits.
 
     Example::
 
@@ -818,8 +668,6 @@ class Beat:
 @dataclass(frozen=True)
 class Bye:
     """The last frame before an orderly close: "my node is stopping, not lost".
-
-    The peer then knows the end of the connection that follows is no fault.
 
     Example::
 
@@ -866,13 +714,10 @@ def encode_hello(
     system: Optional[str] = None,
     nonce: Optional[str] = None,
 ) -> bytes:
-    """The hello frame a node sends first on every link.
+    """The hello frame a node sends first on every link (the fields: `Hello`).
 
-    With ``beat_s`` the node promises a beat at least that often while it has
-    nothing else to send, so the peer can tell a silent link from a dead one.
-    With ``bye`` it says it understands a bye frame. With a ``system`` or a
-    ``nonce`` (a challenge, from a node with a secret) it is a version 2
-    hello; without either, the version 1 hello older nodes know.
+    With a ``system`` or a ``nonce`` it is a version 2 hello; without
+    either, the version 1 hello older nodes know.
 
     Example::
 
@@ -905,6 +750,7 @@ def encode_proof(mac: str) -> bytes:
 
 
 _BEAT_FRAME = _frame(b'{"v":1,"kind":"beat"}', "a beat")
+_BYE_FRAME = _frame(b'{"v":1,"kind":"bye"}', "a bye")
 
 
 def encode_beat() -> bytes:
@@ -917,13 +763,8 @@ def encode_beat() -> bytes:
     return _BEAT_FRAME
 
 
-_BYE_FRAME = _frame(b'{"v":1,"kind":"bye"}', "a bye")
-
-
 def encode_bye() -> bytes:
-    """The bye frame: the last one before an orderly close (``{"v":1,"kind":"bye"}``).
-
-    Send it only to a peer whose hello said ``"bye": true``.
+    """The bye frame, last before an orderly close, for a peer whose hello said ``"bye": true``.
 
     Example::
 
@@ -933,13 +774,12 @@ def encode_bye() -> bytes:
 
 
 def decode_body(body: bytes) -> Message:
-    """The `Page`, `Hello`, `Beat` or `Bye` in one frame's body (the bytes after the header).
+    """The `Page`, `Hello`, `Beat`, `Bye` or `Proof` in a frame's body (after the header).
 
     Raises:
-        WireFormatError: the body is not UTF-8, not strict JSON (NaN,
-            ``1e999``, a lone surrogate, nesting too deep...), not an object,
-            has another version, an unknown kind, or a missing or mistyped
-            field. The message says which; the caller logs it and drops the frame.
+        WireFormatError: the body is not strict JSON, not an object, has
+            another version, an unknown kind, or a missing or mistyped field.
+            The message says which; the caller logs it and drops the frame.
 
     Example::
 
@@ -949,8 +789,7 @@ def decode_body(body: bytes) -> Message:
         obj = load_object(body)
     except WireFormatError as error:
         raise WireFormatError(f"the body: {error}") from None
-    version = obj.get("v")
-    kind = obj.get("kind")
+    version, kind = obj.get("v"), obj.get("kind")
     if type(version) is not int or not (
         version == WIRE_VERSION or (version == HELLO_VERSION and kind in ("hello", "proof"))
     ):
@@ -959,8 +798,6 @@ def decode_body(body: bytes) -> Message:
             f"(and {HELLO_VERSION} for hellos and proofs; the 'v' field, a whole number); "
             "update the older side"
         )
-    if kind == "proof":
-        return _decode_proof(obj, version)
     if kind == "page":
         return page_from_fields(obj, default_origin=None)
     if kind == "beat":
@@ -968,48 +805,16 @@ def decode_body(body: bytes) -> Message:
     if kind == "bye":
         return Bye()
     if kind == "hello":
-        role = obj.get("role")
-        if "role" not in obj:
-            raise WireFormatError("a hello frame has no 'role' field")
-        if type(role) is not str:
+        return _decode_hello(obj, version)
+    if kind == "proof":
+        if version != HELLO_VERSION:
+            raise WireFormatError(f"a proof frame must have version {HELLO_VERSION}")
+        mac: Any = obj.get("mac")
+        if not _is_hex(mac):
             raise WireFormatError(
-                f"field 'role' of a hello frame must be a JSON string, not "
-                f"{type(role).__name__} {role!r:.40}"
+                f"the proof's 'mac' is {mac!r:.40}; it must be {_HEX_DIGITS} lowercase hex digits"
             )
-        if not role:
-            raise WireFormatError("field 'role' of a hello frame must not be empty")
-        beat_s = obj.get("beat_s")
-        if beat_s is not None and (
-            isinstance(beat_s, bool) or not isinstance(beat_s, (int, float)) or not beat_s > 0
-        ):
-            raise WireFormatError(
-                f"the hello's 'beat_s' is {beat_s!r:.40}; it must be a number of seconds above 0"
-            )
-        bye = obj.get("bye", False)
-        if type(bye) is not bool:
-            raise WireFormatError(f"the hello's 'bye' is {bye!r:.40}; it must be true or false")
-        if beat_s is not None:
-            try:
-                beat_s = float(beat_s)  # a whole number past a double's range cannot be
-            except OverflowError:
-                raise WireFormatError(
-                    "the hello's 'beat_s' is a whole number too large for a double; it must "
-                    "be a number of seconds above 0"
-                ) from None
-        if version == WIRE_VERSION:
-            return Hello(role, beat_s, bye)  # the first hello: no system, no challenge
-        system = obj.get("system")
-        if system is not None and (type(system) is not str or not system):
-            raise WireFormatError(
-                f"the hello's 'system' is {system!r:.40}; it must be a non-empty string or null"
-            )
-        nonce = obj.get("nonce")
-        if nonce is not None and not _is_hex(nonce):
-            raise WireFormatError(
-                f"the hello's 'nonce' is {nonce!r:.40}; it must be {_HEX_DIGITS} lowercase "
-                "hex digits"
-            )
-        return Hello(role, beat_s, bye, system, nonce)
+        return Proof(mac)
     raise WireFormatError(
         f"unknown frame kind {kind!r:.40}; known kinds are 'page', 'hello', 'beat', 'bye' "
         "and 'proof'"
@@ -1020,31 +825,61 @@ _HEX_DIGITS = 64  # a nonce (32 random bytes) and an HMAC-SHA256 are both this l
 _HEX = frozenset("0123456789abcdef")
 
 
-def _is_hex(value: object) -> bool:
+def _is_hex(value: Any) -> bool:
     return type(value) is str and len(value) == _HEX_DIGITS and _HEX.issuperset(value)
 
 
-def _decode_proof(obj: Dict[str, Any], version: object) -> Proof:
-    if version != HELLO_VERSION:
-        raise WireFormatError(f"a proof frame must have version {HELLO_VERSION}")
-    mac = obj.get("mac")
-    if not _is_hex(mac):
+def _decode_hello(obj: Dict[str, Any], version: int) -> Hello:
+    if "role" not in obj:
+        raise WireFormatError("a hello frame has no 'role' field")
+    role = obj["role"]
+    if type(role) is not str:
         raise WireFormatError(
-            f"the proof's 'mac' is {mac!r:.40}; it must be {_HEX_DIGITS} lowercase hex digits"
+            f"field 'role' of a hello frame must be a JSON string, not "
+            f"{type(role).__name__} {role!r:.40}"
         )
-    assert isinstance(mac, str)
-    return Proof(mac)
+    if not role:
+        raise WireFormatError("field 'role' of a hello frame must not be empty")
+    beat_s = obj.get("beat_s")
+    if beat_s is not None and (type(beat_s) not in (int, float) or not beat_s > 0):
+        raise WireFormatError(
+            f"the hello's 'beat_s' is {beat_s!r:.40}; it must be a number of seconds above 0"
+        )
+    bye = obj.get("bye", False)
+    if type(bye) is not bool:
+        raise WireFormatError(f"the hello's 'bye' is {bye!r:.40}; it must be true or false")
+    try:
+        beat_s = None if beat_s is None else float(beat_s)
+    except OverflowError:  # a whole number past a double's range
+        raise WireFormatError(
+            "the hello's 'beat_s' is a whole number too large for a double; it must "
+            "be a number of seconds above 0"
+        ) from None
+    if version == WIRE_VERSION:
+        return Hello(role, beat_s, bye)  # the first hello: no system, no challenge
+    system, nonce = obj.get("system"), obj.get("nonce")
+    if system is not None and (type(system) is not str or not system):
+        raise WireFormatError(
+            f"the hello's 'system' is {system!r:.40}; it must be a non-empty string or null"
+        )
+    if nonce is not None and not _is_hex(nonce):
+        raise WireFormatError(
+            f"the hello's 'nonce' is {nonce!r:.40}; it must be {_HEX_DIGITS} lowercase hex digits"
+        )
+    return Hello(role, beat_s, bye, system, nonce)
 
 
-def _too_long(length: int, limit: int) -> str:
-    return f"a length header says {length:,} bytes, over the {limit:,}-byte maximum frame size"
+def _too_long(length: int, limit: int) -> WireFormatError:
+    return WireFormatError(
+        f"a length header says {length:,} bytes, over the {limit:,}-byte maximum frame size"
+    )
 
 
 class FrameDecoder:
     """Cuts a byte stream into frame bodies, however the bytes arrive.
 
-    A ``recv`` may return half a frame or several frames: give every chunk to
-    `cut_frames` (the links do), or `feed` it and take bodies with
+    A ``recv`` may return half a frame or several: give every chunk to
+    `cut_frames` (the links do), or `feed` it and take the bodies with
     `next_frame` until it returns None.
 
     Example::
@@ -1085,13 +920,9 @@ class FrameDecoder:
     def cut_frames(self, data: bytes, bodies: List[bytes]) -> None:
         """Add ``data`` and append every whole body now available to ``bodies``, in order.
 
-        Whole frames (the usual read) are cut straight from ``data``, not
-        through the buffer.
-
         Raises:
-            WireFormatError: a length header is over the maximum frame size.
-                ``bodies`` then holds the whole frames before it; reset the
-                connection.
+            WireFormatError: a length header is over the maximum frame size;
+                ``bodies`` holds the whole frames before it. Reset the connection.
 
         Example::
 
@@ -1099,29 +930,22 @@ class FrameDecoder:
             decoder.cut_frames(frame + frame[:3], bodies)   # [body]; 3 bytes wait
         """
         limit = self.max_frame_bytes
-        buffer = self._buffer
-        if buffer:  # complete the frame that waits from the head of ``data``
+        if self._buffer:  # a frame began in an earlier chunk: wait for all of it
+            buffer = self._buffer
+            buffer += data
             if len(buffer) < HEADER_BYTES:
-                taken = HEADER_BYTES - len(buffer)
-                buffer += data[:taken]
-                data = data[taken:]
-                if len(buffer) < HEADER_BYTES:
-                    return
+                return
             (length,) = _HEADER.unpack_from(buffer, 0)
             if length > limit:
-                raise WireFormatError(_too_long(length, limit))
-            taken = HEADER_BYTES + length - len(buffer)
-            buffer += data[:taken]
+                raise _too_long(length, limit)
             if len(buffer) < HEADER_BYTES + length:
-                return  # the frame is not all there yet
-            data = data[taken:]
-            bodies.append(bytes(buffer[HEADER_BYTES:]))
-            self._buffer = bytearray()
+                return
+            data, self._buffer = bytes(buffer), bytearray()
         start, size = 0, len(data)
         while size - start >= HEADER_BYTES:
             (length,) = _HEADER.unpack_from(data, start)
             if length > limit:
-                raise WireFormatError(_too_long(length, limit))
+                raise _too_long(length, limit)
             end = start + HEADER_BYTES + length
             if end > size:
                 break
@@ -1149,11 +973,7 @@ def header_line() -> str:
 
 
 def page_to_line(page: Page) -> str:
-    """One page as one line of JSON (without the newline).
-
-    Raises:
-        NotSerializableError: the page's data is not JSON (a set, an object,
-            NaN...); the message names the key, the part and the fix.
+    """One page as one line of JSON (without the newline); refused as `page_json` refuses it.
 
     Example::
 
@@ -1167,11 +987,7 @@ _line_encoder = PageEncoder({}, to="to a recording or serial link")
 
 
 def decode_line(line: Text) -> Dict[str, Any]:
-    """The JSON object on one line (a page or a header), read strictly.
-
-    Raises:
-        WireFormatError: the line is not UTF-8, not strict JSON, or not a
-            JSON object.
+    """The JSON object on one line (a page or a header), read as `load_object` reads it.
 
     Example::
 
