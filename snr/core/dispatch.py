@@ -55,9 +55,7 @@ _MAX_BURST = 256  # store_page tasks a burst handler gets at most in one call
 class HandlerMap(Dict[TaskId, TaskHandler]):
     """A ``task_handlers`` dict that checks its entries and reports changes.
 
-    Endpoints store their handlers in one of these, so a student can keep
-    writing ``self.task_handlers = {...}`` or ``self.task_handlers[id] = f``
-    and the node still hears about every change.
+    So the node hears of ``self.task_handlers[id] = f`` as of ``= {...}``.
 
     Example::
 
@@ -205,10 +203,8 @@ class HandlerRunner:
 
     Args:
         queue: where tasks come from and returned tasks go.
-        components: the node's `snr.core.components.ComponentSet`, whose
-            handler table says who runs.
-        failures: what reports a failed or slow handler (and stops the node
-            outside DEPLOYED mode): `snr.core.checks.failures.FailureReport`.
+        components: the node's `snr.core.components.ComponentSet` (its handler table).
+        failures: the node's `snr.core.checks.failures.FailureReport`.
         timed: time every handler (DEBUG/TEST, or a profiler is on).
 
     Example::
@@ -217,15 +213,12 @@ class HandlerRunner:
         runner.failures.failure   # the HandlerError/LoopError that stopped the node, or None
 
     Attributes:
-        running: False once the node is stopping, or pausing (``StepMode``):
-            `run_queued` returns after the current task.
+        running: False once the node is stopping or pausing: `run_queued`
+            returns after the current task.
         slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
-        on_unhandled: called with each event no handler matched, or None (the
-            default): a DEBUG node reports events nothing handles through it.
-            (A page nobody handles is normal: it was stored all the same.)
-        store_page: what stores a ``store_page`` task's page before its
-            handlers run (set by the node to its core's `store_page_handler`);
-            it returns the page's ``process_data`` task, or None.
+        on_unhandled: None, or (DEBUG) called with each event no handler matched.
+        store_page: the node core's `store_page_handler`, run before a
+            ``store_page`` task's handlers.
     """
 
     def __init__(
@@ -375,9 +368,7 @@ class HandlerRunner:
     def store_first(self, task: Task) -> Optional[Task]:
         """For a ``store_page`` task: store its page now, queue and return what follows.
 
-        What `run_queued` does before a ``store_page`` task's handlers, and
-        the console's ``step`` too. A page that cannot be stored (a key that
-        cannot be a dict key...) is a handler failure, in words, as any other.
+        A page that cannot be stored is reported as a handler's failure.
 
         Example::
 

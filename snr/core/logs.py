@@ -53,9 +53,7 @@ def ensure_log_handler() -> None:
 class _DefaultHandler(logging.StreamHandler):  # type: ignore[type-arg]
     """SNR's stderr handler: it steps aside for any handler the program set.
 
-    It decides line by line, not once when the first node is built: logging
-    may be configured later, and a line that reached the program's handler
-    too would be printed twice.
+    It decides line by line: logging may be configured later.
     """
 
     def handle(self, record: logging.LogRecord) -> bool:
@@ -67,9 +65,7 @@ class _DefaultHandler(logging.StreamHandler):  # type: ignore[type-arg]
 def _another_handler_takes(record: logging.LogRecord, own: logging.Handler) -> bool:
     """Whether ``record`` reaches a handler that prints or keeps it, besides ``own``.
 
-    A handler SNR adds only to listen (the console quoting a failed reload's
-    error back to its user) marks itself ``snr_only_listens``: the line must
-    still be printed.
+    A handler marked ``snr_only_listens`` (the console's) does not count.
     """
     logger: Optional[logging.Logger] = logging.getLogger(record.name)
     while logger is not None:

@@ -441,9 +441,7 @@ class Node(AbstractNode):
     def write_page(self, page: Page) -> None:
         """Put ``page`` in the datastore now; only from the node's own thread while it runs.
 
-        The node's run loop stores every ``store_page`` task's page itself;
-        this is for a handler that must store one at once. Other threads use
-        ``store_page``/``store_data``, which queue it.
+        For a handler that must store a page at once; others queue it (``store_data``).
         """
         self._check_owner_thread("write_page")
         self.pages[page.key] = self._core.frozen(page)
@@ -478,9 +476,8 @@ class Node(AbstractNode):
     def reload_component(self, name: ComponentName = "all") -> List[ComponentName]:
         """Reload the source of one component (or ``"all"``) and rebuild it.
 
-        A reload that fails (a syntax error, a ``get()`` that raises, a loop
-        that will not stop) leaves the old component running and logs why,
-        with the file and line. Returns the names of the rebuilt components.
+        A reload that fails leaves the old component running and logs why.
+        Returns the names of the rebuilt components.
         """
         self._check_owner_thread("reload_component")
         return self._components.reload(name)
@@ -576,9 +573,8 @@ class NodeCore(Endpoint):
     def check_wiring_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Look for wiring mistakes: the node's own check, or the checks it carries.
 
-        A comms component sends this event with its check of one link (a
-        function to call) in ``val_list``, so the check runs on the node's
-        thread; without one, the node checks its handlers' keys.
+        Comms send it with a link's check (a function) in ``val_list``, to run
+        on the node's thread; without one, the node checks its handlers' keys.
         """
         checks = [value for value in task.val_list if callable(value)]
         if not checks:

@@ -94,8 +94,7 @@ class Page(JsonDataclass):
     def __str__(self) -> str:
         """The page in one short line: key, data, origin and age.
 
-        Data longer than 1,000 characters is cut short with ``...``; ``repr(page)``
-        shows it whole.
+        Long data is cut short with ``...``; ``repr(page)`` shows it whole.
 
         Example::
 
@@ -111,9 +110,8 @@ class Page(JsonDataclass):
 def _age_text(created_at_s: float, now_s: float) -> str:
     """How long before ``now_s`` a page was made, in words: ``"0.3 s ago"``.
 
-    A page stamped up to a minute ahead of this computer's clock says so (the
-    clocks of two machines differ); one more than a day old, or further ahead,
-    shows its date instead.
+    A page up to a minute ahead says so (two machines' clocks differ); one
+    older than a day, or further ahead, shows its date.
     """
     try:
         age = now_s - created_at_s

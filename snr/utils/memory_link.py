@@ -164,8 +164,7 @@ class MemoryLinkPair:
     def cut(self) -> None:
         """Break the connection both ways at once: each side reads end of stream.
 
-        No goodbye is sent, so each side logs a lost link (a warning), as
-        when a peer crashes. (Where a pipe is a socket pair: Linux and macOS.)
+        No goodbye is sent: each side logs a lost link, as when a peer crashes.
         """
         for end in self._ends:
             try:  # shut the socket down through a second descriptor of it
@@ -177,8 +176,7 @@ class MemoryLinkPair:
     def close(self) -> None:
         """Close both ends, used or not (a link closes its own end when its node stops).
 
-        Call it once the nodes have stopped, e.g. ``self.addCleanup(pair.close)``
-        in a test, so that an end no node took is not left open.
+        Call it once the nodes have stopped, e.g. ``self.addCleanup(pair.close)``.
         """
         for end in self._ends:
             end.close()
