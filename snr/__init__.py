@@ -4,24 +4,13 @@ Everything a student needs is here::
 
     from snr import *
 
-That gives the names of ``__all__`` below: what the thesis's listings, the
-tutorial and the examples use, and the names kept for code written against
-the 2021 release (``snr.extras.compat2021``). The rest of SNR, the machinery and the
-less common components, is imported from its own module, e.g.
-``from snr.std_mods.comms import SocketsServerFactory`` or
-``from snr.core.task_queue import TaskQueue``.
+That gives ``__all__`` below: what the listings, tutorial and examples use, and
+the 2021 release's names. The rest is imported from its own module, e.g.
+``from snr.std_mods.comms import SocketsServerFactory``. Most names are
+imported on first use, so ``import snr`` stays light.
 
-``python -m snr docs`` builds this documentation, offline, and opens it in a
-browser: the guide (concepts, a tutorial, each ready-made component) and
-the API reference. ``python -m snr demo`` runs a whole system of nodes, the
-thesis's underwater vehicle; its code is the ``snr.extras.demo`` package. In a copy
-of SNR's source, the guide's pages are ``docs/*.md`` and the thesis's
-listings are in ``examples/``.
-
-``import snr`` is kept light: the ready-made components (``snr.std_mods``),
-the extras (``snr.extras``: Zenoh, serial, controller, simulator...),
-``SNRTestCase`` (with ``unittest``) and the 2021 names are imported the
-first time one is used; ``from snr import *`` imports everything it names.
+``python -m snr docs`` builds and opens the guide and API reference, offline;
+``python -m snr demo`` runs the thesis's underwater vehicle.
 """
 
 # This file is the one list of the public names (docs/design.md, "The public

@@ -1,24 +1,11 @@
 """``python -m snr``: the SNR command line.
 
-Commands::
+``python -m snr --help`` lists its commands (demo, console, graph, docs, convert,
+lesson, plot, secret, version); ``python -m snr COMMAND --help`` tells one.
 
-    python -m snr demo [--seconds N] [--verbose] [--view [--view-port P]]
-                                       run the UROV demo system (no hardware needed);
-                                       --view: watch it live in Foxglove or Lichtblick
-    python -m snr demo --sim [--seconds N] [--frames DIR]
-                                       a simulated rover follows the walls of a room
-    python -m snr console HOST:PORT    type commands into a running node (snr-console)
-    python -m snr graph FILE [--role R] [--format mermaid|dot|text] [-- ARGS...]
-                                       draw the system FILE runs, without running it
-    python -m snr docs [--serve]       build (if needed) and open the docs, offline
-    python -m snr convert IN OUT       convert a recording: JSON lines <-> MCAP (by OUT's name)
-    python -m snr lesson list|start N|grade N [FILE...]
-                                       the course's lessons: start one, grade your file
-    python -m snr plot FILE KEY... [-o OUT.png]
-                                       draw keys of a recording over time, to a PNG file
-    python -m snr secret new [--force] write a fresh secret for this computer's nodes
-                                       (docs/comms.md, "Who may connect")
-    python -m snr version              print the installed version (also: --version)
+Example::
+
+    python -m snr demo --seconds 10
 """
 
 from __future__ import annotations

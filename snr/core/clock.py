@@ -1,11 +1,8 @@
 """`NodeClock`: the time a node and its loops run on; the wall's by default.
 
-The one extension point for time (the model: gpiozero's pin factories). A
-`Config(clock=...)` hands its clock to every node built from it; without
-one, nodes read the wall. A node and a loop ask the clock for what they need
-(seconds, a page's stamp, a turn) and never which clock it is. The wall
-hands out no turns, so they run freely; `snr.utils.sim_clock.SimClock`
-(simulated time, docs/sim-time.md) makes them take turns.
+The one extension point for time: `Config(clock=...)` hands its clock to every
+node built from it. The wall hands out no turns; `snr.utils.sim_clock.SimClock`
+(docs/sim-time.md) makes nodes and loops take turns.
 """
 
 from __future__ import annotations
@@ -19,10 +16,6 @@ __all__ = ["LoopTurn", "NodeClock", "NodeTurn", "clock_of"]
 
 class NodeTurn(Protocol):
     """A node's place on a clock that takes turns; also the node's idle waiter.
-
-    The node waits for its first turn (``begin``) as it starts, gives the
-    clock back whenever its queue is empty (``wait``: it is the queue's
-    `IdleWaiter`) and leaves as it stops (``end``).
 
     Example (what `Node` does)::
 
@@ -77,10 +70,8 @@ class LoopTurn(Protocol):
 class NodeClock:
     """The wall clock, and what every clock gives a node: seconds, stamps, turns.
 
-    Calling it gives seconds (so ``Timer(clock)`` works); ``stamp()`` gives
-    a page's ``created_at_s``. The wall hands out no turns (None): nodes and
-    loops wait on their own. A clock that takes turns (`SimClock`) overrides
-    all four.
+    Calling it gives seconds; ``stamp()`` a page's ``created_at_s``; the wall
+    hands out no turns (None).
 
     Example::
 

@@ -1,16 +1,9 @@
 """`ComponentSet`: a node's endpoints and loops, and their life cycle.
 
-It builds components from factories (explaining a wrong ``get()``), adds,
-removes and hot-reloads them, starts and stops them, and keeps the node's
-handler table in step with them. The node owns one and calls it from its own
-thread; the set never calls back into the node except through `AbstractNode`.
-
-Reloading never lies. A reload whose new code fails to import, build or start
-keeps the old component *running* (a loop's thread is restarted) and logs what
-failed with the file and line. A loop that does not stop within
-``join_timeout_s`` is not reloaded at all (two copies would run side by side):
-the reload is refused, naming the line the loop is blocked on, and the loop
-carries on.
+It builds, adds, removes, hot-reloads, starts and stops components and keeps
+the node's handler table in step, on the node's thread. A reload that fails
+keeps the old component running and logs why with the file and line; a loop
+that does not stop in ``join_timeout_s`` is not reloaded (two would run).
 
 Example::
 
@@ -145,9 +138,12 @@ class ComponentSet:
     def reload(self, name: ComponentName = "all") -> List[ComponentName]:
         """Reload the source of one component (or ``"all"``) and rebuild it.
 
-        Returns the names of the rebuilt components. A component whose reload
-        fails keeps running as it was, and the log says why. The node's core
-        (``node_core``) is refused by name and skipped by ``"all"``.
+        Returns the names of the rebuilt components; one that fails keeps
+        running and the log says why. ``node_core`` is never reloaded.
+
+        Example::
+
+            components.reload("depth_filter")   # ['depth_filter']
         """
         if name == "all":
             named = self.by_name.items()
@@ -279,8 +275,7 @@ class ComponentSet:
         """``component`` changed its ``task_handlers``: rebuild the table before the next task.
 
         Raises:
-            ComponentError: a burst handler of the component lost its task
-                handler (raised in the handler that made the change).
+            ComponentError: a burst handler of the component lost its task handler.
         """
         if self.by_name.get(component.name) is component:
             self.table_stale = True

@@ -1,47 +1,19 @@
 """The node's dispatch: which handlers run for a task, and running them.
 
-`HandlerTable` finds the handlers for a task in O(1). Thesis 4.4.1 matches a
-task against every endpoint in turn: first by ``(type, name)``, then by
-``type``. That costs time for every endpoint on every task. Here the same
-answer is computed ahead of time (thesis 8.1): for every task id that any
-component registered, the table holds the list of handlers that the
-two-phase match would find, in component order. A task then needs one or two
-dict look-ups, however many components the node has.
-
-The table is rebuilt when a component is removed or reloaded or changes its
-``task_handlers`` (the mapping is a :class:`HandlerMap` that reports changes),
-and extended in place when a component is added at the end.
-
-`HandlerRunner` is the one place where SNR calls a student's task handler.
-For every handler that matches a task it
-
-0. for a ``store_page`` task, first stores its page (the node core's
-   `store_page_handler`, called here directly: no table look-up, no timing)
-   and queues its ``process_data`` task, so every handler finds the page in
-   the datastore. When one component alone handles the task's key and has
-   a burst handler for it (``burst_handlers``), the ``store_page`` tasks
-   under that key right behind it are stored too and the burst handler is
-   called once for the run (`HandlerRunner.run_burst`);
-1. calls ``handler(task, key)``, timing it unless the node is DEPLOYED
-   without a profiler (the time goes to the handler's profiler cell, two
-   additions, and a handler slower than ``slow_handler_s`` is reported once);
-2. queues the tasks it returned, keeping their order (a high-priority task
-   goes to the urgent lane);
-3. hands a raised exception or a wrong return value to the node's
-   `snr.core.checks.failures.FailureReport`, which puts it into words (a
-   `HandlerError` that names the handler, the task and the student's lines).
-   In DEBUG and TEST mode the first one stops the node (``Node.loop()``
-   raises it); in DEPLOYED mode it is logged and the node keeps running.
+`HandlerTable` answers thesis 4.4.1's two-phase match (``(type, name)``, then
+``type``) ahead of time for every registered task id, so a task needs one or
+two dict look-ups however many components the node has. `HandlerRunner` is the
+one place where SNR calls a student's task handler: it stores a
+``store_page`` task's page first, runs the handlers in component order (timed
+unless DEPLOYED without a profiler), queues what they return and hands a
+failure to the node's `snr.core.checks.failures.FailureReport`. docs/design.md
+("Dispatch: a handler table, not a scan") tells the rest, bursts included.
 
 Example::
 
     table = HandlerTable()
     table.rebuild(node.components.values())
     table.lookup(TaskType.event, "ping")   # [(handler, key, component, cell), ...]
-
-    runner = HandlerRunner(node.queue, components, FailureReport(role, mode, log, stop))
-    node.schedule(tasks.event("go"))
-    runner.run_queued()      # runs every handler of (event, 'go'), and what follows
 """
 
 from __future__ import annotations
@@ -83,9 +55,7 @@ _MAX_BURST = 256  # store_page tasks a burst handler gets at most in one call
 class HandlerMap(Dict[TaskId, TaskHandler]):
     """A ``task_handlers`` dict that checks its entries and reports changes.
 
-    Endpoints store their handlers in one of these, so a student can keep
-    writing ``self.task_handlers = {...}`` or ``self.task_handlers[id] = f``
-    and the node still hears about every change.
+    So the node hears of ``self.task_handlers[id] = f`` as of ``= {...}``.
 
     Example::
 
@@ -146,8 +116,7 @@ class HandlerMap(Dict[TaskId, TaskHandler]):
 class HandlerTable:
     """Precomputed two-phase matches for every registered task id.
 
-    Each entry carries the profiler's cell for its handler, fetched once here,
-    so timing a handler costs the node two additions and no look-up.
+    Each entry carries its handler's profiler cell.
 
     Example::
 
@@ -234,10 +203,8 @@ class HandlerRunner:
 
     Args:
         queue: where tasks come from and returned tasks go.
-        components: the node's `snr.core.components.ComponentSet`, whose
-            handler table says who runs.
-        failures: what reports a failed or slow handler (and stops the node
-            outside DEPLOYED mode): `snr.core.checks.failures.FailureReport`.
+        components: the node's `snr.core.components.ComponentSet` (its handler table).
+        failures: the node's `snr.core.checks.failures.FailureReport`.
         timed: time every handler (DEBUG/TEST, or a profiler is on).
 
     Example::
@@ -246,15 +213,12 @@ class HandlerRunner:
         runner.failures.failure   # the HandlerError/LoopError that stopped the node, or None
 
     Attributes:
-        running: False once the node is stopping, or pausing (``StepMode``):
-            `run_queued` returns after the current task.
+        running: False once the node is stopping or pausing: `run_queued`
+            returns after the current task.
         slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
-        on_unhandled: called with each event no handler matched, or None (the
-            default): a DEBUG node reports events nothing handles through it.
-            (A page nobody handles is normal: it was stored all the same.)
-        store_page: what stores a ``store_page`` task's page before its
-            handlers run (set by the node to its core's `store_page_handler`);
-            it returns the page's ``process_data`` task, or None.
+        on_unhandled: None, or (DEBUG) called with each event no handler matched.
+        store_page: the node core's `store_page_handler`, run before a
+            ``store_page`` task's handlers.
     """
 
     def __init__(
@@ -279,12 +243,13 @@ class HandlerRunner:
     def run_queued(self, max_tasks: int = 100_000) -> None:
         """Run queued tasks until the queue is empty, the node stops, or ``max_tasks`` ran.
 
-        For each task, oldest first (urgent ones first): find its handlers in
-        the table, run each in component order, and queue what each returns.
-        This is the node's hot path, the one place that runs handlers for
-        tasks, timed or not: every task passes here, so it keeps names in
-        locals, tests ``timed`` instead of having a second copy, and queues
-        the common result (one Task) itself.
+        Urgent tasks first, then oldest first: each task's handlers run in
+        component order and what they return is queued. The node's hot path.
+
+        Example::
+
+            node.schedule(tasks.event("go"))
+            runner.run_queued()   # every handler of (event, 'go'), and what follows
         """
         normal, urgent = self.queue.normal, self.queue.urgent
         components = self.components
@@ -299,8 +264,7 @@ class HandlerRunner:
             if components.table_stale:  # what the last task changed applies now
                 components.refresh_table()
             if task.type is _STORE_PAGE:
-                # The node core's part, before any handler and without a handler
-                # call: no look-up, no timing, so a loop's page reaches its reader sooner.
+                # The node core's part, before any handler (no look-up, no timing).
                 self.store_first(task)
                 # A run for a burst handler starts only from the normal lane: a
                 # paused node runs urgent tasks one at a time, `execute_task` one task.
@@ -341,11 +305,9 @@ class HandlerRunner:
     def run_burst(self, first: Task, burst: BurstEntry) -> None:
         """Run ``burst``'s handler for ``first`` and the run of tasks like it behind it.
 
-        ``first`` (a ``store_page`` task, its page stored) and every
-        ``store_page`` task under the same key at the head of the queue, up
-        to `_MAX_BURST`, each stored first as usual, go to the burst handler
-        in one call; it is timed as one call per task. What it returns is
-        queued as a handler's result is.
+        ``first`` and the ``store_page`` tasks under its key at the head of
+        the queue (at most `_MAX_BURST`), each page stored first, go to the
+        burst handler in one call; its result is queued as a handler's is.
 
         Example (what `run_queued` does when the table has a burst handler)::
 
@@ -406,9 +368,7 @@ class HandlerRunner:
     def store_first(self, task: Task) -> Optional[Task]:
         """For a ``store_page`` task: store its page now, queue and return what follows.
 
-        What `run_queued` does before a ``store_page`` task's handlers, and
-        the console's ``step`` too. A page that cannot be stored (a key that
-        cannot be a dict key...) is a handler failure, in words, as any other.
+        A page that cannot be stored is reported as a handler's failure.
 
         Example::
 

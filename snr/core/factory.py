@@ -1,10 +1,8 @@
 """Factories: build components for a node and reload their source code.
 
-A config lists factories, not components, because components must not start
-until their node runs (thesis 6.2.10). A factory also keeps the modules that
-hold its component's code, so the node can ``importlib.reload`` them and build
-a fresh component from the *same* factory object; state kept on the factory
-survives the reload.
+A config lists factories, not components, which must not start before their
+node runs (thesis 6.2.10). A factory keeps its component's modules to reload
+them; state kept on the factory survives the reload.
 """
 
 from __future__ import annotations

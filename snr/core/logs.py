@@ -33,12 +33,8 @@ def level_for_mode(mode: Mode) -> int:
 def ensure_log_handler() -> None:
     """Give the ``snr`` logger SNR's own stderr handler, once per process.
 
-    The handler writes a line only while nobody else would: while the
-    program has set no handler of its own on the root logger, nor on the
-    ``snr`` loggers the line passes on its way up. A program that calls
-    ``logging.basicConfig``, before or after building its nodes, gets each
-    line once, formatted its way; one that never configures logging sees
-    SNR's lines on stderr.
+    It writes a line only while the program has set no handler of its own,
+    so ``logging.basicConfig`` gets each line once, formatted its way.
 
     Example::
 
@@ -57,9 +53,7 @@ def ensure_log_handler() -> None:
 class _DefaultHandler(logging.StreamHandler):  # type: ignore[type-arg]
     """SNR's stderr handler: it steps aside for any handler the program set.
 
-    It decides line by line, not once when the first node is built: logging
-    may be configured later, and a line that reached the program's handler
-    too would be printed twice.
+    It decides line by line: logging may be configured later.
     """
 
     def handle(self, record: logging.LogRecord) -> bool:
@@ -71,9 +65,7 @@ class _DefaultHandler(logging.StreamHandler):  # type: ignore[type-arg]
 def _another_handler_takes(record: logging.LogRecord, own: logging.Handler) -> bool:
     """Whether ``record`` reaches a handler that prints or keeps it, besides ``own``.
 
-    A handler SNR adds only to listen (the console quoting a failed reload's
-    error back to its user) marks itself ``snr_only_listens``: the line must
-    still be printed.
+    A handler marked ``snr_only_listens`` (the console's) does not count.
     """
     logger: Optional[logging.Logger] = logging.getLogger(record.name)
     while logger is not None:
@@ -91,11 +83,8 @@ def _another_handler_takes(record: logging.LogRecord, own: logging.Handler) -> b
 class LossReport:
     """Counts what had to be dropped, says so at most once a second, and says when it ended.
 
-    Dropping is sometimes the right thing (a full queue, a slow peer) but it
-    is never silent: ``dropped()`` counts, a line with the numbers is logged
-    at most every ``every_s`` seconds while drops go on, and ``recovered()``
-    logs one "recovered" line with the total when the cause has passed.
-    Safe to call from any thread.
+    A drop is never silent: a line at most every ``every_s`` seconds, then one
+    "recovered" line with the total. Safe from any thread.
 
     Example::
 
@@ -172,9 +161,7 @@ class LossReport:
     def ended(self, how: str) -> bool:
         """The source of the drops is gone (e.g. a link closed): say the drops not yet logged.
 
-        Drops counted in the last second are not yet in the log; without this
-        they would vanish with the link. Ends the episode (no "Recovered" line
-        follows). Returns True if there was anything to say.
+        Ends the episode (no "Recovered" line follows); True if there was anything to say.
 
         Example::
 

@@ -36,18 +36,12 @@ class LoopState(enum.Enum):
 class ThreadLoop(Component, AbstractLoop):
     """Subclass this to run code continuously beside the node (thesis 4.4.3).
 
-    Write ``loop()`` (required) and, if needed, ``setup()``, ``halt()`` and
-    ``terminate()``. ``loop()`` is called again and again on the loop's own
-    thread, at most ``max_tick_rate_hz`` times a second (0: no limit, so
-    ``loop()`` must block on I/O itself). From the thread, talk to the node
-    only with ``self.schedule(...)``, ``self.store_data(...)``,
-    ``self.get_page(...)`` and ``self.get_data(...)``; they are thread-safe.
-
-    On a `SimClock` (simulated time), a loop with a tick rate ticks at exact
-    multiples of its period of simulated time, and takes turns with its node:
-    each pass of ``loop()`` runs while nothing else in the node runs. A loop
-    with no tick rate waits on the outside world (a socket, a serial port), so
-    it runs freely on the wall clock, unless its class sets `follows_clock`.
+    Write ``loop()`` and, if needed, ``setup()``, ``halt()`` and ``terminate()``.
+    ``loop()`` runs again and again on the loop's own thread, at most
+    ``max_tick_rate_hz`` times a second (0: no limit: it must block on I/O).
+    From the thread use only the thread-safe ``schedule``, ``store_data``,
+    ``get_page`` and ``get_data``. On a `SimClock`, a loop with a tick rate
+    takes turns with its node (docs/sim-time.md).
 
     Example::
 
@@ -82,10 +76,8 @@ class ThreadLoop(Component, AbstractLoop):
         self._clock_turn: Optional[LoopTurn] = None  # its place on a clock with turns, if any
         self.terminate_reason = ""
         self._stop_event = threading.Event()
-        # Held while the loop may run; released to stop it. Waiting between
-        # passes on this lock (C code that lets go of the GIL at once) instead
-        # of on the Event (a Python-level Condition) hands the GIL back to the
-        # node sooner after each pass, which shows in the loop → handler latency.
+        # Held while the loop may run; released to stop it. Waiting on a lock,
+        # not the Event, hands the GIL back to the node sooner after each pass.
         self._running_lock = threading.Lock()
         self._running_lock.acquire()
         self._thread: Optional[threading.Thread] = None
@@ -94,8 +86,7 @@ class ThreadLoop(Component, AbstractLoop):
     def setup(self) -> None:
         """Runs once on the loop's thread before the first ``loop()``.
 
-        What it stores is in the datastore by the time the first ``loop()``
-        runs (the loop waits, at most a second, for the node to handle it).
+        What it stores is in the datastore by the first ``loop()``.
 
         Example::
 
@@ -133,8 +124,7 @@ class ThreadLoop(Component, AbstractLoop):
         """Sleep up to ``seconds``, waking early when the loop is stopped.
 
         Use it instead of ``time.sleep`` inside ``loop()`` so shutdown is quick.
-        Returns True if the loop was stopped while waiting. On a `SimClock`
-        the seconds are simulated (for a loop with a tick rate, or `follows_clock`).
+        Returns True if the loop was stopped while waiting.
         """
         turn = self._clock_turn
         if turn is not None and threading.current_thread() is self._thread:
@@ -211,13 +201,8 @@ class ThreadLoop(Component, AbstractLoop):
     def _wait_for_setup_tasks(self, timeout_s: float = 1.0) -> None:
         """Let the node handle what ``setup()`` stored before the first ``loop()``.
 
-        ``store_data`` from a loop only queues the page; without this wait, a
-        ``loop()`` reading it at once (thesis listing A.4) could find nothing.
-        The node handles tasks in order, so once it has handled a marker task
-        scheduled now, it has handled everything ``setup()`` scheduled. The
-        wait ends early if the loop is stopped, and after ``timeout_s`` anyway.
-        On a `SimClock` the loop gives its turn back for no time: its node,
-        which has work, goes first.
+        A ``loop()`` reading it at once (thesis listing A.4) must find it: the
+        node handles tasks in order, so the wait is for a marker task behind them.
         """
         turn = self._clock_turn
         if turn is not None:
@@ -243,10 +228,8 @@ class ThreadLoop(Component, AbstractLoop):
             self.setup()
             if type(self).setup is not ThreadLoop.setup:
                 self._wait_for_setup_tasks()
-            # Between loop() and the wait, as little as can be: a page that
-            # loop() stored reaches the node's thread only once this thread
-            # blocks and lets go of the GIL. So the wait is the lock's own
-            # (what wait_s does), and the pass is counted after it.
+            # A stored page reaches the node only once this thread blocks and
+            # lets go of the GIL: so little between loop() and the wait.
             running, rate_hz = self._running_lock, self.max_tick_rate_hz
             first_s, ticks = (0.0 if turn is None else turn.now_s()), 0
             while not stop.is_set():
@@ -267,8 +250,7 @@ class ThreadLoop(Component, AbstractLoop):
                 if stopped:
                     break
         except BaseException as error:  # every way out is reported, in words
-            # sys.exit() and KeyboardInterrupt included: either would end this
-            # thread with no word (or a raw traceback), never the program.
+            # sys.exit() and Ctrl-C too: they would end this thread silently.
             self.parent.loop_failed(self, error)
         finally:
             self.state = LoopState.STOPPED

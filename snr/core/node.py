@@ -1,19 +1,11 @@
 """`Node`: one running program on one device (thesis 4.2, 6.3.1).
 
-A node owns a task queue, a datastore of pages and its components. One thread
-(the one that calls :meth:`Node.loop`) owns the node's state: it is the only
-thread that writes the datastore or runs task handlers. Loop threads reach the
-node through the thread-safe queue (``schedule``, ``store_data``) and the
-read-only ``get_page``/``get_data``.
-
-The node keeps its life cycle, its run loop and its datastore (a ``dict``,
-or any `Datastore`). Its first component, the node core endpoint
-(`NodeCoreEndpoint`, named ``node_core``), stores pages (then sends
-``process_data`` when asked), adds, removes and reloads components, and
-stops the node on a terminate task (thesis 4.3.2). Both are seams: a
-``Config(datastore=..., node_core=...)`` of a student's own replaces them
-(`NodeCore` says what a core must do; docs/assignments.md).
-Three helpers do the rest::
+A node owns a task queue, a datastore of pages and its components. The thread
+that calls :meth:`Node.loop` alone writes the datastore and runs handlers; loop
+threads use the thread-safe ``schedule``, ``store_data`` and ``get_page``.
+The node core endpoint (``node_core``) stores pages and manages components
+(thesis 4.3.2); ``Config(datastore=..., node_core=...)`` can replace both
+(docs/assignments.md). Three helpers do the rest (docs/design.md)::
 
     Node ──► ComponentSet   build, add, remove, reload, start and stop components;
       │                     keep the HandlerTable in step with them
@@ -118,19 +110,12 @@ class Node(AbstractNode):
         components: every endpoint and loop by name, in start order.
         state: the `NodeState`.
         terminate_reason: why the node stopped, once it has.
-        key_hints: in DEBUG mode, the `MissingKeyHints` that log a hint for a
-            data key read but never stored (None in other modes).
-        wiring_checks: in DEBUG mode, the
-            `snr.core.checks.wiring_checks.WiringChecks` that warn about an
-            event nothing handles and a handler nothing can reach (None in
-            other modes).
-        step_mode: the `StepMode` a console uses to pause the node, run its
-            tasks one at a time and resume it.
-        watchdog: in DEBUG mode, the `snr.core.checks.watchdog.Watchdog` that
-            says when the node is stuck without a word: a handler that does not return, a ``loop()``
-            that never returns, a loop flooding the queue, a node nothing will
-            ever stop (None in other modes; set it to None before ``loop()``
-            to switch it off).
+        key_hints: DEBUG: the `MissingKeyHints` (a data key read, never stored).
+        wiring_checks: DEBUG: the `snr.core.checks.wiring_checks.WiringChecks`
+            (events nothing handles, handlers nothing reaches).
+        step_mode: the `StepMode` a console uses to pause and step the node.
+        watchdog: DEBUG: the `snr.core.checks.watchdog.Watchdog` that says when
+            the node is stuck (set it to None before ``loop()`` to switch it off).
     """
 
     key_hints: Optional[MissingKeyHints]
@@ -260,9 +245,8 @@ class Node(AbstractNode):
     def check_wiring(self) -> None:
         """In DEBUG mode, warn about handlers of data keys that look misspelled.
 
-        Runs once by itself a few seconds after the node starts (see
-        `MissingKeyHints.check_handlers`), and about handlers registered so
-        that they can never run (see
+        Runs once by itself a few seconds after the node starts; also about
+        handlers that can never run (see
         `snr.core.checks.wiring_checks.WiringChecks.check_never_ran`).
         """
         if self._checks is not None:
@@ -457,9 +441,7 @@ class Node(AbstractNode):
     def write_page(self, page: Page) -> None:
         """Put ``page`` in the datastore now; only from the node's own thread while it runs.
 
-        The node's run loop stores every ``store_page`` task's page itself;
-        this is for a handler that must store one at once. Other threads use
-        ``store_page``/``store_data``, which queue it.
+        For a handler that must store a page at once; others queue it (``store_data``).
         """
         self._check_owner_thread("write_page")
         self.pages[page.key] = self._core.frozen(page)
@@ -494,9 +476,8 @@ class Node(AbstractNode):
     def reload_component(self, name: ComponentName = "all") -> List[ComponentName]:
         """Reload the source of one component (or ``"all"``) and rebuild it.
 
-        A reload that fails (a syntax error, a ``get()`` that raises, a loop
-        that will not stop) leaves the old component running and logs why,
-        with the file and line. Returns the names of the rebuilt components.
+        A reload that fails leaves the old component running and logs why.
+        Returns the names of the rebuilt components.
         """
         self._check_owner_thread("reload_component")
         return self._components.reload(name)
@@ -567,11 +548,9 @@ class NodeCore(Endpoint):
     def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Put the task's page in ``pages``; then return its ``process_data`` task, if asked.
 
-        Not in the handler table: the node's run loop calls it for every
-        ``store_page`` task before the task's handlers (``HandlerRunner``), so
-        they all find the page stored. Returns ``Task(TaskType.process_data,
-        page.key, [page])`` when ``page.process`` is true (or None when no
-        handler waits for it), else None.
+        The run loop calls it for every ``store_page`` task before the task's
+        handlers. Returns ``Task(TaskType.process_data, page.key, [page])``
+        when ``page.process`` is true and some handler waits for it, else None.
 
         Example::
 
@@ -594,9 +573,8 @@ class NodeCore(Endpoint):
     def check_wiring_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Look for wiring mistakes: the node's own check, or the checks it carries.
 
-        A comms component sends this event with its check of one link (a
-        function to call) in ``val_list``, so the check runs on the node's
-        thread; without one, the node checks its handlers' keys.
+        Comms send it with a link's check (a function) in ``val_list``, to run
+        on the node's thread; without one, the node checks its handlers' keys.
         """
         checks = [value for value in task.val_list if callable(value)]
         if not checks:
@@ -627,12 +605,7 @@ class NodeCoreEndpoint(NodeCore):
         self.task_handlers.update(handlers)
 
     def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Put the task's page in the datastore; then process_data if asked.
-
-        Not in the handler table: the node's run loop calls it for every
-        ``store_page`` task before the task's handlers (``HandlerRunner``), so
-        they all find the page stored.
-        """
+        """Put the task's page in the datastore; then process_data if asked (see `NodeCore`)."""
         page = task.page()
         if page is None:
             self.err(life_cycle.NOT_A_PAGE, task.name, task.val_list)
@@ -643,8 +616,7 @@ class NodeCoreEndpoint(NodeCore):
         if self.freeze is not None:  # DEBUG, TEST (DEPLOYED pays only this test)
             page.data = self.freeze(page.data, page.key)
         self.pages[page.key] = page  # node.write_page, on the node's own thread
-        # The page's process_data task, only if some handler waits for it: a
-        # page nobody processes (a sender's page, say) costs no task.
+        # Its process_data task only if some handler waits for it.
         if page.process and self.parent.is_handled(_PROCESS_DATA, page.key):
             return Task(_PROCESS_DATA, page.key, [page])
         return None
@@ -652,12 +624,8 @@ class NodeCoreEndpoint(NodeCore):
     def store_pages_handler(self, task: Task, key: TaskId) -> SomeTasks:
         """Store a burst of pages (`tasks.store_pages`) in order, in one handler call.
 
-        Each page is stored and its ``process_data`` task queued, exactly as
-        its own ``store_page`` task would have done, but without a dispatch
-        per page. When a page's key has ``store_page`` handlers besides this
-        core (a comms component forwarding it, a recorder), that page and the
-        ones after it go back to the front of the queue as one ``store_page``
-        task each, so every handler sees them in the usual order.
+        As one ``store_page`` task a page would. From the first page whose key
+        other handlers store too, the rest go back first in line, a task each.
         """
         node, pages, freeze = self.parent, self.pages, self.freeze
         processed: List[Task] = []

@@ -1,31 +1,14 @@
 """Extension points: how the kernel finds what an extra provides, by group and name.
 
-The kernel (everything in ``snr`` outside ``snr.extras``) never imports an
-extra. An extra that plugs into it declares what it provides as a Python
-*entry point* in ``pyproject.toml``, the way gpiozero finds its pin
-factories::
+The kernel never imports an extra: an extra declares what it provides as an
+entry point in ``pyproject.toml`` (as gpiozero's pin factories)::
 
     [project.entry-points."snr.recording_formats"]
     mcap = "snr.extras.viz.mcap_format:MCAP"
 
-and the kernel asks for it by group and name with `load`, only when it is
-needed. Entry points are written when the package is installed, so after
-editing them in a checkout run ``pip install -e .`` again.
-
-The groups (``docs/design.md``, "Extras and extension points"):
-
-* ``snr.commands``: the ``python -m snr`` commands kept in extras (``demo``,
-  ``graph``, ``docs``, ``convert``, ``lesson``, ``plot``): a module with
-  ``add_arguments(parser)`` and ``run(args) -> int``;
-* ``snr.console_transports``: other ways for ``snr-console`` to reach a node
-  (``zenoh``): a `snr.std_mods.io.remote_console.ConsoleClient` subclass;
-* ``snr.console_commands``: console commands kept in extras (``console_tools``:
-  ``pause``, ``step``, ``resume``, ``echo``, ``hz``; ``graph``): a module that registers them with
-  `snr.std_mods.io.command_processor.command`;
-* ``snr.recording_formats``: recording formats besides JSON lines
-  (``mcap``): a `snr.std_mods.io.recording_formats.RecordingFormat`.
-* ``snr.json_backends``: faster JSON for the page codec (``orjson``): a
-  class whose instances are a `snr.std_mods.codec.JsonBackend`.
+and the kernel asks for it with `load` when it is needed (after editing them,
+``pip install -e .`` again). The groups, `GROUPS`, are in docs/design.md
+("Extras and extension points").
 
 Example::
 
@@ -91,9 +74,7 @@ def load(group: str, name: str, what: str) -> Any:
         what: what needs it, for the error, e.g. ``"python -m snr demo"``.
 
     Raises:
-        ConfigError: no installed package provides ``name`` (the error lists the
-            names there are and how to register SNR's own), or the extra cannot
-            be imported (a package it needs is missing).
+        ConfigError: no installed package provides ``name``, or it cannot be imported.
 
     Example::
 

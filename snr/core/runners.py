@@ -43,9 +43,6 @@ INTERRUPTED_MESSAGE = "Interrupted by user, exiting"
 def report_error(error: SNRError, role: Optional[Role] = None) -> None:
     """Print an SNR error for a person: its message, without a framework traceback.
 
-    The message already names the student's file, class or handler and shows
-    their traceback frames; SNR's own frames would only hide it.
-
     Example::
 
         except SNRError as error:
@@ -79,15 +76,9 @@ def _config_or_exit(
 class SynchronousRunner(AbstractRunner):
     """Runs the node for one role in this process until it stops.
 
-    It is the top of a student's program, so when the node stops with an
-    SNR error (a handler raised, a component is written wrongly, ...) it
-    prints the error's message, which points at the student's code, and
-    exits with status 1, instead of a traceback through SNR's internals.
-    Pass ``exit_on_error=False`` to get the exception instead, and
-    ``announce_interrupt=False`` to stop quietly on Ctrl-C (as `MultiProcRunner`
-    children do, so the message is printed once). ``on_node`` is called with
-    the node as soon as it is built, before it runs, e.g. to hand it to a
-    thread that may stop it with ``node.set_terminate_flag(reason)``.
+    An SNR error is printed (it points at the student's code) and exits with
+    status 1; ``exit_on_error=False`` raises it instead. ``announce_interrupt=False``
+    stops quietly on Ctrl-C. ``on_node`` gets the node once built, before it runs.
 
     Example::
 
@@ -145,10 +136,8 @@ class SynchronousRunner(AbstractRunner):
 class TestRunner(AbstractRunner):
     """Runs one node in the calling thread, stopping it after ``timeout_s``.
 
-    Exceptions from the node (e.g. a failing handler in TEST mode) reach the
-    caller, so a test fails with the handler's name. A node that is still
-    running when the time limit comes is stopped, and ``timed_out`` says so;
-    `SNRTestCase.run_test_node` turns that into a failed test.
+    The node's exceptions reach the caller; a node still running at the limit
+    is stopped, and ``timed_out`` says so.
 
     Example::
 
@@ -160,8 +149,7 @@ class TestRunner(AbstractRunner):
     Attributes:
         node: the node, once ``run()`` has built it.
         timed_out: True when the time limit, not the node itself, ended the run.
-        alive_at_timeout: the names of the loops whose threads were still
-            running when the time limit came (empty when it did not).
+        alive_at_timeout: the loops still running at the limit.
     """
 
     __test__ = False  # not a pytest test class despite the name
@@ -201,9 +189,7 @@ class CliRunner(AbstractRunner):
 
     ``python main.py urov`` runs the ``urov`` node; ``python main.py topside
     urov`` runs both, each in its own process. ``--mode deployed`` overrides
-    the config's mode. An unknown or missing role prints the known roles; a
-    wrong config or an SNR error while running prints its message (no
-    traceback through SNR) and exits with status 1.
+    the config's mode; an unknown role prints the known ones.
 
     Example::
 

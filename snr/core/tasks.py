@@ -71,11 +71,8 @@ def store_page(page: Page) -> Task:
 def store_pages(pages: List[Page]) -> Task:
     """One task that stores ``pages`` in order, as one `store_page` task each would.
 
-    For a burst of pages that arrive together (a comms link queues what one
-    read brought this way): the node core stores them in one handler call
-    instead of one dispatch per page. Handlers see the same thing in the same
-    order: each page is stored, every ``store_page`` handler of its key runs,
-    and its ``process_data`` task is queued (if some handler waits for it).
+    For pages that arrive together (a comms link's read): handlers see the
+    same as for one task a page.
 
     Example::
 

@@ -1,9 +1,7 @@
 """Layer 0 of SNR: data types, type aliases, errors and interfaces.
 
-Nothing here imports from the rest of ``snr``. The package gives what its
-modules export (each module's ``__all__``), so a name is listed once, in the
-module that defines it; the names for students are chosen in ``snr/__init__.py``.
-``from snr.prelude import *`` works as in the 2021 release (thesis listing A.1).
+Nothing here imports from the rest of ``snr``; the package gives each module's
+``__all__`` (``from snr.prelude import *``, thesis listing A.1).
 
 Example::
 

@@ -1,9 +1,7 @@
 """The interfaces of SNR (thesis 6.2.4-6.2.10) as abstract base classes.
 
-Students rarely use these directly: they subclass ``Endpoint``, ``ThreadLoop``,
-``EndpointFactory`` and ``LoopFactory`` from ``snr``, which implement them.
-They are here so that the parts of SNR depend on *interfaces*, not on each
-other, and so that type annotations such as ``parent: AbstractNode`` work.
+Students subclass ``Endpoint``, ``ThreadLoop`` and their factories instead;
+these let SNR's parts depend on interfaces and annotate ``parent: AbstractNode``.
 
 Example::
 
@@ -45,13 +43,7 @@ __all__ += ["Datastore", "missing_methods_error"]
 
 
 class _FriendlyABCMeta(ABCMeta):
-    """ABCMeta that explains a missing method in plain words (thesis 7.3).
-
-    Python's own message, "Can't instantiate abstract class X with abstract
-    methods halt", talks about abstract classes to a student who wrote a
-    concrete one. SNR's ABCs check first and raise a ComponentError that names
-    the class, its file and line, the missing methods and the easy fix.
-    """
+    """ABCMeta whose missing-method error names the class, its line and the fix (thesis 7.3)."""
 
     def __call__(cls, *args: Any, **kwargs: Any) -> Any:
         if cls.__abstractmethods__:
@@ -60,11 +52,7 @@ class _FriendlyABCMeta(ABCMeta):
 
     @property
     def __signature__(cls) -> inspect.Signature:
-        """The real constructor signature, for ``help()`` and ``inspect``.
-
-        Without this, ``inspect.signature(Node)`` would describe the
-        ``__call__`` above, ``(*args, **kwargs)``, and hide what a student
-        must pass. This is the signature of ``cls.__init__`` without ``self``.
+        """``cls.__init__``'s signature without ``self``, for ``help()`` (not ``__call__``'s).
 
         Example::
 
@@ -72,9 +60,7 @@ class _FriendlyABCMeta(ABCMeta):
             >>> print(inspect.signature(snr.TimeoutLoopFactory))
             (seconds: 'float' = 0.0, ms: 'float' = 0.0, name: 'Optional[str]' = None) -> None
         """
-        # The class's own __init__ (inherited or not): what Python calls after
-        # the check in __call__ above. mypy warns about __init__ on an
-        # instance; here the "instance" is the class itself, so it is sound.
+        # mypy warns about __init__ on an instance; here it is the class: sound.
         init = inspect.signature(cls.__init__)  # type: ignore[misc]
         parameters = list(init.parameters.values())[1:]  # drop self
         return init.replace(parameters=parameters, return_annotation=None)
@@ -89,8 +75,7 @@ class _FriendlyABC(metaclass=_FriendlyABCMeta):
 def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
     """The ComponentError for building ``cls`` while it lacks required methods.
 
-    The words are made by `snr.prelude.abstract_errors`, imported here only
-    when this mistake happens.
+    The words come from `snr.prelude.abstract_errors`, imported only then.
 
     Example::
 
@@ -106,9 +91,7 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
 def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
     """Re-word Python's "Can't instantiate abstract class" TypeError, or None.
 
-    Used where SNR builds things (a factory's ``get()``) for abstract classes
-    that are not SNR's own, e.g. a student's ``Sensor(ABC)`` base class. The
-    words are made by `snr.prelude.abstract_errors`, as above.
+    For abstract classes that are not SNR's own, e.g. a student's ``Sensor(ABC)``.
 
     Example::
 
@@ -132,11 +115,7 @@ class AbstractProfiler(_FriendlyABC):
 
     @abstractmethod
     def task_cell(self, task_id: TaskId, where: str) -> StatsCell:
-        """The ``[times_called, total_s]`` cell of a handler for ``task_id`` in ``where``.
-
-        The node asks once per handler, when it is registered, and adds to the
-        cell after every run: timing costs two additions per task.
-        """
+        """The ``[times_called, total_s]`` cell of a handler for ``task_id`` in ``where``."""
 
     @abstractmethod
     def loop_cell(self, name: ComponentName) -> StatsCell:
@@ -184,11 +163,8 @@ class AbstractTaskQueue(_FriendlyABC):
 class Datastore(Protocol):
     """What a node keeps its pages in: the newest page under each key (thesis 4.2, 6.3.1).
 
-    Four methods, the part of a ``dict`` the node uses: SNR's own datastore
-    *is* a ``dict``, the default of ``Config(datastore=...)``. A class of your
-    own with these methods can take its place (docs/assignments.md, lesson 5).
-    The node core writes it, on the node's thread only; ``get_page`` reads it,
-    from any thread.
+    The four methods of a ``dict`` the node uses (SNR's own *is* a ``dict``);
+    a class of yours with them can take its place (docs/assignments.md, lesson 5).
 
     Example::
 
@@ -222,9 +198,8 @@ class AbstractNode(_FriendlyABC):
         components: every endpoint and loop, by name, in start order.
         log: the node's logger (``logging.Logger``).
         profiler: the profiler, or None when profiling is off.
-        datastore: the newest page for each data key, read-only: only the
-            node writes it (its run loop stores each ``store_page`` task's
-            page); read it with ``get_page``, store with ``store_data``.
+        datastore: the newest page for each data key, read-only (only the
+            node writes it): read with ``get_page``, store with ``store_data``.
 
     Example::
 
@@ -265,10 +240,6 @@ class AbstractNode(_FriendlyABC):
     def is_handled(self, task_type: TaskType, name: str) -> bool:
         """True if some handler would run now for a task with this type and name.
 
-        The node core asks it before making a page's ``process_data`` task,
-        so a page nobody processes costs no task. A node answers it from its
-        handler table; this default asks `get_task_handlers`.
-
         Example::
 
             node.is_handled(TaskType.process_data, "depth_m")   # a filter waits for it?
@@ -306,19 +277,15 @@ class AbstractNode(_FriendlyABC):
     def wait_for_room(self, timeout_s: float) -> bool:
         """Wait (up to ``timeout_s``) until the node's queue has room; True if it has.
 
-        For producers on other threads that can hold back without losing
-        anything, such as a socket reader. A node without a bounded queue
-        always has room.
+        Example (a socket reader holding back)::
+
+            while not node.wait_for_room(0.25): ...
         """
         return True
 
     # -- what components tell their node (called by SNR, not by students) --
     def handlers_changed(self, component: AbstractComponent) -> None:
         """``component`` changed its ``task_handlers``: look them up again before the next task.
-
-        A component calls it whenever its mapping is assigned or changed, so a
-        node that keeps a handler table (`Node`) rebuilds it; a node that looks
-        handlers up every time (a mock) has nothing to do.
 
         Example (what ``Component`` does when a handler is added)::
 
@@ -338,10 +305,6 @@ class AbstractNode(_FriendlyABC):
 
     def schedule_first(self, tasks: List[Task]) -> None:
         """Queue ``tasks`` first in line, in their order (the node's own thread only).
-
-        The node core uses it to put back the pages of a burst it splits, so
-        they are stored before anything queued after the burst. A node without
-        a queue of its own (a mock) queues them as `schedule` does.
 
         Example::
 
@@ -407,15 +370,9 @@ class AbstractComponent(_FriendlyABC):
     factory: AbstractFactory
     parent: AbstractNode
     name: ComponentName
-    #: Handlers for a run of ``store_page`` tasks under one key, in one call,
-    #: by the same ``(TaskType.store_page, key)`` id as in ``task_handlers``
-    #: (which must have it too: else the node refuses the component, saying so).
-    #: The node uses one when this component is the only one that handles
-    #: the id and several such tasks wait one behind the other: it stores
-    #: every page of the run, then calls the burst handler once with the
-    #: tasks (at most 256, in order). For what gains from seeing a burst
-    #: whole, such as comms encoding and queueing pages in one go; a
-    #: student's component does not need it. Example (``CommsLoop``)::
+    #: Handlers for a run of ``store_page`` tasks under one key, in one call, by
+    #: the same id as in ``task_handlers`` (docs/design.md, "Bursts"); students
+    #: need none. Example (``CommsLoop``)::
     #:
     #:     self.burst_handlers = {(TaskType.store_page, "depth"): self.forward_burst}
     burst_handlers: Mapping[TaskId, BurstHandler] = MappingProxyType({})
@@ -491,12 +448,7 @@ class AbstractLoop(AbstractComponent):
         return ""
 
     def start_thread(self) -> None:
-        """Called by the node to start the loop: ``begin()``, then its thread.
-
-        The thread runs ``setup()`` once, then ``loop()`` over and over. The
-        node calls this instead of ``begin()`` for a loop, so a student who
-        overrides ``begin`` cannot forget to start the thread.
-        This default only calls ``begin()``: `ThreadLoop` starts the thread.
+        """Called by the node to start the loop: ``begin()``, then its thread (`ThreadLoop`).
 
         Example (what the node does for each loop as it starts)::
 

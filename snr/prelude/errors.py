@@ -1,10 +1,8 @@
 """The exceptions SNR raises: every one of them, in one tree.
 
 Every SNR error is an :class:`SNRError`, so one ``except SNRError`` catches them
-all. Messages follow one shape: *what* went wrong (naming your class, handler,
-file and line), *why* it probably happened, and *what to do*. The helpers that
-find your file and line are in `snr.core.checks.student_code`; the words for each
-mistake are next to the code that finds it.
+all. Each message says what went wrong (naming your file and line), why, and
+what to do (docs/errors.md).
 
 Example::
 
@@ -29,9 +27,6 @@ The tree::
      |    +-- NotSerializableError  data cannot be sent between nodes
      |    +-- ConsoleConnectionError  a console cannot reach its node, or lost it
      +-- RemovedApiError      a 2021 name was used whose job is done another way now
-
-`tests/test_prelude.py` checks that this drawing names every subclass of
-`SNRError` in the package, so a new error is added here or the suite fails.
 """
 
 from __future__ import annotations
@@ -70,8 +65,7 @@ class ComponentError(SNRError):
 class MissingSuperInitError(ComponentError, AttributeError):
     """A component's ``__init__`` used the component before ``super().__init__``.
 
-    It is also an ``AttributeError``, so ``hasattr`` and ``getattr(obj, name,
-    default)`` keep working on a half-built component.
+    It is also an ``AttributeError``, so ``hasattr`` keeps working.
 
     Example::
 

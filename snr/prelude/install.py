@@ -1,9 +1,7 @@
 """How to install SNR and its extras: the one place that writes the ``pip`` lines.
 
-SNR is published as ``snr-robotics`` (the name ``snr`` on the package index is
-another project) and imported as ``snr``, as pyserial is imported as ``serial``.
-Every message that tells a user to install something builds its line here, so
-the name cannot drift between them.
+SNR is published as ``snr-robotics`` (``snr`` on the index is another project)
+and imported as ``snr``.
 
 Example::
 

@@ -1,12 +1,8 @@
 """`JsonDataclass`: dataclasses-json's methods, imported on first use.
 
-``Page`` and ``Task`` used to subclass ``dataclasses_json.DataClassJsonMixin``.
-Importing dataclasses-json pulls in marshmallow and ``importlib.metadata``,
-over a third of what ``import snr`` cost, while only ``serialize()`` /
-``deserialize()`` need it (nodes talk to each other with the plain ``json``
-wire format). This base class offers the same methods, with the same
-arguments and results, and imports dataclasses-json the first time one of
-them runs.
+dataclasses-json is slow to import and only ``serialize()``/``deserialize()``
+need it (the wire format is plain ``json``), so ``Page`` and ``Task`` get its
+mixin's methods from this base, which imports it on first use.
 """
 
 from __future__ import annotations
@@ -40,12 +36,8 @@ def _mixin() -> Any:
 class JsonDataclass:
     """Base of a dataclass with dataclasses-json's methods, loaded lazily.
 
-    A drop-in for ``dataclasses_json.DataClassJsonMixin``: ``to_json``,
-    ``from_json``, ``to_dict``, ``from_dict`` and ``schema`` behave exactly as
-    the mixin's do (they call them). dataclasses-json is imported the first
-    time one is called; from then on the class (and every subclass) is also
-    registered as a virtual subclass of ``DataClassJsonMixin``, so
-    ``isinstance(obj, DataClassJsonMixin)`` is true as it was before.
+    A drop-in for ``dataclasses_json.DataClassJsonMixin`` (its methods call the
+    mixin's); once loaded, ``isinstance(obj, DataClassJsonMixin)`` is true.
 
     Example::
 

@@ -6,11 +6,8 @@ Students mostly meet these names in annotations::
 
     def on_depth(self, task: Task, key: TaskId) -> SomeTasks: ...
 
-Aliases that mention `Task`, `Page` or the ABCs are written as strings so that
-this module has no imports from the rest of the package (it is the bottom of the
-layer cake). The strings are full dotted names, so tools that read annotations
-at run time (the API docs, ``typing.get_type_hints``) resolve them from any
-module.
+Aliases that mention `Task`, `Page` or the ABCs are full dotted names in strings:
+this module, the bottom layer, imports nothing of the package.
 """
 
 from __future__ import annotations

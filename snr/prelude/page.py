@@ -21,21 +21,16 @@ _PREVIEW_CHARS = 1000  # str(page) shows a game pad's buttons, not a camera fram
 class Page(JsonDataclass):
     """A value stored under a key, stamped with where and when it was made.
 
-    Pages outlive tasks: the newest page for each key stays in the datastore.
-    Endpoints make pages with ``self.page(key, data)`` or, more often, store
-    them straight away with ``self.store_data(key, data)``.
+    The newest page for each key stays in the datastore; endpoints usually
+    store one with ``self.store_data(key, data)``.
 
     Attributes:
         key: the data key, e.g. ``"depth_m"``.
         data: the value (JSON-able if it is to cross between nodes).
         origin: the role of the node that made it, e.g. ``"urov"``.
-        created_at_s: wall-clock time it was made (``time.time()``), so pages
-            from different machines can be compared.
+        created_at_s: wall-clock time it was made (``time.time()``).
         process: when true, a ``process_data`` task follows once the page is in
             the datastore.
-
-    ``print(page)`` shows a short line (`Page.__str__`); ``repr(page)`` shows
-    every field, for debugging.
 
     Example::
 
@@ -69,11 +64,7 @@ class Page(JsonDataclass):
     def __bool__(self) -> bool:
         """Always True (a page exists); warns, once per line, when its data is false.
 
-        ``if page:`` tests that there is a page, never its value, so with data
-        ``False``, ``0`` or ``[]`` it is still true: the robot acts on a value
-        it never read. Python warns the same way for an XML element. The
-        warning names both fixes; to test for a page, ``is not None`` is the
-        clear way, and it says nothing.
+        ``if page:`` never tests the page's value; ``is not None`` tests for a page.
 
         Example::
 
@@ -103,8 +94,7 @@ class Page(JsonDataclass):
     def __str__(self) -> str:
         """The page in one short line: key, data, origin and age.
 
-        Data longer than 1,000 characters is cut short with ``...``; ``repr(page)``
-        shows it whole.
+        Long data is cut short with ``...``; ``repr(page)`` shows it whole.
 
         Example::
 
@@ -120,9 +110,8 @@ class Page(JsonDataclass):
 def _age_text(created_at_s: float, now_s: float) -> str:
     """How long before ``now_s`` a page was made, in words: ``"0.3 s ago"``.
 
-    A page stamped up to a minute ahead of this computer's clock says so (the
-    clocks of two machines differ); one more than a day old, or further ahead,
-    shows its date instead.
+    A page up to a minute ahead says so (two machines' clocks differ); one
+    older than a day, or further ahead, shows its date.
     """
     try:
         age = now_s - created_at_s

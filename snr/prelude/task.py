@@ -16,16 +16,14 @@ __all__ = ["Task", "format_task"]
 class Task(JsonDataclass):
     """An ephemeral event handed to every endpoint that registered for it.
 
-    A task is identified by its ``type`` and ``name``; ``val_list`` carries any
-    values the handlers need. It is gone once every matching handler ran.
+    Its id is ``(type, name)``; ``val_list`` carries values for the handlers
+    (build tasks with ``snr.tasks``).
 
     Example::
 
         task = Task(TaskType.event, "button_pressed", ["A"])
         task.id()            # (TaskType.event, 'button_pressed')
         Task.deserialize(task.serialize()) == task   # True
-
-    Usually you build tasks with the helpers in ``snr.tasks`` instead.
     """
 
     type: TaskType
@@ -39,9 +37,6 @@ class Task(JsonDataclass):
 
     def page(self) -> Optional[Page]:
         """The page this task carries (a ``store_page`` or ``process_data`` task's), or None.
-
-        None when the first value is not a `Page` or there is none, so a
-        handler checks once instead of indexing ``val_list`` and testing types.
 
         Example::
 
@@ -80,10 +75,8 @@ ValuesShown = Literal["all", "data", "none"]
 def format_task(task: Union[Task, TaskId], values: ValuesShown = "all") -> str:
     """A task (or a task id) in one line: the one way SNR prints tasks.
 
-    Messages, the printer, the console and the profiler all use it, so a
-    task reads the same wherever it shows up. Pages show in their short form
-    (see `Page`); ``values="data"`` shows only a page's data, ``"none"`` only
-    the id.
+    Pages show in their short form; ``values="data"`` shows only a page's
+    data, ``"none"`` only the id.
 
     Example::
 

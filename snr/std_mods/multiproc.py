@@ -29,12 +29,8 @@ __all__ = ["MultiProcRunner"]
 def _watch_parent(role: Role, link: Connection, node: Node) -> None:
     """Stop ``node`` when its parent asks to, or when the parent dies (a thread's target).
 
-    The parent holds the write end of a pipe to each child. It writes a reason
-    to ask the child to stop; if the parent dies in any way (even SIGKILL) the
-    OS closes the write end and the child reads EOF. A pipe works with every
-    start method and OS, unlike ``prctl(PR_SET_PDEATHSIG)`` (Linux only) or
-    polling the parent's pid (slow, and pids are reused). A stop asked for
-    while the node was being built waits in the pipe until it is read here.
+    The parent writes a reason to the child's pipe; if it dies (even by SIGKILL)
+    the OS closes the pipe and the child reads EOF: every OS, every start method.
     """
     try:
         reason = link.recv_bytes().decode("utf-8", "replace")
@@ -90,12 +86,8 @@ def _set_handlers(sigint: Any, sigterm: Any) -> None:
 class MultiProcRunner(AbstractMultiRunner):
     """Runs several roles at once, each node in its own process.
 
-    Handy for trying a whole system on one machine, e.g. with pipe comms.
-    Stopping the parent stops every child in order: Ctrl-C (SIGINT) or SIGTERM
-    to the parent asks each child's node to terminate (``join_timeout_s``
-    bounds the wait; then the child is terminated, and killed if need be), and
-    if the parent dies (even by SIGKILL), each child notices and stops its
-    node, so no child is left running on its own.
+    Ctrl-C or SIGTERM to the parent stops every child's node (``join_timeout_s``
+    bounds the wait); if the parent dies, each child stops its node too.
 
     Example::
 

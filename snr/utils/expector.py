@@ -133,9 +133,8 @@ class Expector(Generic[K]):
     The key type can be written out, ``Expector[str]({"beep": 2}, self)``;
     it is inferred from the expectations otherwise.
 
-    Keys it is told about but does not expect are counted apart, in
-    ``others`` (the first ``MAX_OTHERS`` different ones), so a failure can say
-    what was seen instead, and which of it is closest to each missing key.
+    Keys it does not expect are counted in ``others``, so a failure can say
+    what was seen instead.
 
     Example::
 
@@ -295,9 +294,7 @@ class OrderedExpector(Expector[K]):
 class MultiProcExpector(Expector[K]):
     """An `Expector` whose counts are shared between processes.
 
-    Create it before starting the processes (e.g. before `MultiProcRunner`);
-    the counts live in shared memory, so the test process sees what the nodes
-    in child processes counted.
+    Create it before starting the processes; the counts are in shared memory.
 
     Example::
 

@@ -18,11 +18,8 @@ __all__ = [
 class ExpectorEndpoint(Endpoint):
     """Registers a handler for every id the expector watches and counts them.
 
-    With ``exit_when_satisfied`` it stops the node as soon as every
-    expectation has been reached. It also tells the expector about the other
-    tasks of the same types (e.g. every store_page when it expects
-    ``(TaskType.store_page, "out")``), so a failure can list what was seen
-    instead of what was missing, with the closest match.
+    With ``exit_when_satisfied`` it stops the node once every expectation is
+    met; other tasks of the same types are told too, for the failure message.
 
     Example::
 

@@ -1,10 +1,7 @@
 """An in-memory connection pair: link two nodes of one process with no port and no process.
 
-A `MemoryLinkPair` is the pipe component (`PipeLoopFactory`) on both ends of
-one ``multiprocessing.Pipe()``, a pair of local stream sockets with no
-address: the node's I/O loop serves it as it serves a TCP connection, so a
-test runs the real link code, with no port to pick and no child process.
-`memory_transport_pair` gives the two raw ends, for a `CommsLoop` of your own.
+A `MemoryLinkPair` is the pipe component on both ends of one
+``multiprocessing.Pipe()``: a test runs the real link code with no port to pick.
 
 Example::
 
@@ -45,9 +42,7 @@ __all__ = [
 class MemoryTransport(SocketTransport):
     """One end of an in-memory byte stream, as a link ``Transport``.
 
-    Made in pairs by `memory_transport_pair`; what one end sends, the other
-    receives, in order. It reads, writes and ends like a TCP connection's
-    `SocketTransport`, without the TCP options (a local socket pair has none).
+    Made in pairs by `memory_transport_pair`; it acts as a TCP `SocketTransport`.
 
     Example::
 
@@ -82,10 +77,7 @@ def memory_transport_pair(
 class MemoryLinkLoop(PipeLoop):
     """Forwards pages over one end of a `MemoryLinkPair`; built by `MemoryLinkFactory`.
 
-    It is the pipe component (`PipeLoop`): the pair is a ``multiprocessing.Pipe()``
-    whose two ends stay in one process. Only its log line for a lost peer is
-    the one a network link writes ("Lost the link to ..."), since a memory link
-    stands in for one in tests.
+    A `PipeLoop` that logs a lost peer as a network link does ("Lost the link to ...").
 
     Example::
 
@@ -172,8 +164,7 @@ class MemoryLinkPair:
     def cut(self) -> None:
         """Break the connection both ways at once: each side reads end of stream.
 
-        No goodbye is sent, so each side logs a lost link (a warning), as
-        when a peer crashes. (Where a pipe is a socket pair: Linux and macOS.)
+        No goodbye is sent: each side logs a lost link, as when a peer crashes.
         """
         for end in self._ends:
             try:  # shut the socket down through a second descriptor of it
@@ -185,8 +176,7 @@ class MemoryLinkPair:
     def close(self) -> None:
         """Close both ends, used or not (a link closes its own end when its node stops).
 
-        Call it once the nodes have stopped, e.g. ``self.addCleanup(pair.close)``
-        in a test, so that an end no node took is not left open.
+        Call it once the nodes have stopped, e.g. ``self.addCleanup(pair.close)``.
         """
         for end in self._ends:
             end.close()

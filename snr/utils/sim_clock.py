@@ -4,31 +4,12 @@ A `snr.core.clock.NodeClock` whose nodes and loops take turns: the kernel
 knows it only through that interface.
 
 A node built from ``Config(..., clock=SimClock())`` reads its time from the
-clock instead of the wall: ``get_time_s()``, the ``created_at_s`` of its
-pages, the ticks of its loops, ``wait_s`` and ``TimeoutLoop``. The clock jumps
-only when nothing can act at the current instant, so ten idle simulated
-seconds pass at once; and the threads that follow it take *turns*, one at a
-time in a fixed order, so the same run gives the same pages.
-
-Who takes turns (each holds a `Turn` of the clock):
-
-* every node built with the clock, from its start until it stops: it holds
-  the clock while it runs tasks and gives it back when its queue is empty;
-* every loop with a tick rate, and ``TimeoutLoop``: it holds the clock for a
-  pass of ``loop()`` and gives it back to wait for its next tick.
-
-Who gets the clock next, each time it is given back:
-
-1. a node with work (tasks queued, or not started yet), in order of role;
-2. else the turn waiting for the earliest instant (role, then loop name, on
-   a tie); if that instant is later than now, the clock jumps to it, at
-   ``speed`` times real time when a speed is set;
-3. else nobody: the run waits for the outside world (a page from a link, a
-   stop), and ``wall_waits`` counts each quarter second of it.
-
-Safety waits (joining threads, back-pressure, a test's time limit, comms
-reconnect back-off) stay on the wall clock, so a clock that stops advancing
-ends in a clear timeout, never in a hang.
+clock. Nodes and ticking loops take *turns* in a fixed order, so the same run
+gives the same pages, and the clock jumps when nothing can act now. Who gets
+the clock next: a node with work (by role), else the turn waiting for the
+earliest instant, else nobody (a wall wait). Safety waits stay on the wall
+clock, so a stalled clock ends in a timeout, never a hang. docs/sim-time.md
+tells the whole story.
 """
 
 from __future__ import annotations
@@ -53,8 +34,7 @@ _NS = 1_000_000_000
 class Turn:
     """One thread's place in a `SimClock`'s lockstep: a node's or a loop's.
 
-    Made by `SimClock.node_turn` and `SimClock.loop_turn`; the node and the
-    loop use it, a student never does.
+    Made by `SimClock.node_turn` and `SimClock.loop_turn`; students never use one.
 
     Example::
 
@@ -174,17 +154,12 @@ class SimClock(NodeClock):
     Args:
         speed: simulated seconds per real second: None (the default) runs as
             fast as the computer can, 1.0 in real time, 0.5 at half speed.
-        epoch_s: the ``created_at_s`` of pages made at simulated time 0. It
-            is fixed (0 by default) so that a recording does not depend on
-            the day it was made.
+        epoch_s: the ``created_at_s`` of pages made at simulated time 0
+            (fixed, 0 by default, so a recording does not depend on the day).
 
-    Calling the clock gives the simulated seconds since it was made, so
-    ``Timer(clock)`` works. The loops of a node with a tick rate
-    tick exactly at multiples of their period, ``TimeoutLoop`` ends the node at
-    its simulated time, and the same seed gives the same pages, run after run.
-
-    Build every node of a run before running any, and run every node built
-    with the clock: the clock waits for each node's first turn.
+    Calling the clock gives the simulated seconds since it was made. Build
+    every node of a run before running any: the clock waits for each
+    node's first turn.
 
     Example::
 
@@ -197,10 +172,8 @@ class SimClock(NodeClock):
     Attributes:
         turns: how many turns it has handed out.
         jumps: how many times time jumped ahead to the next instant someone waited for.
-        wall_waits: how many times a thread, after waiting a quarter second
-            of real time for its turn, found that nobody could act: the run was
-            held up by something outside the clock (a page from a link, a stop
-            from another thread). 0 in a run that only simulates.
+        wall_waits: quarter seconds of real time in which nobody could act
+            (waiting for a link or a stop); 0 in a run that only simulates.
         paced_waits: waits on the wall clock to keep to ``speed``.
     """
 

@@ -1,10 +1,6 @@
 """`TempFile`: the path `SNRTestCase.temp_file` returns, a str that can do more.
 
-A `TempFile` *is* a ``str`` (the file's path), so it goes wherever a path
-goes: ``open(path)``, ``os.path.join``, ``os.fspath``, a recorder's or
-replayer's filename, a subprocess's arguments. It also has the helpers the
-2021 release's ``TempFile`` had: ``.path``, ``.open()``, ``.assertExists()``,
-and use as a context manager that checks the file was written and removes it.
+A `TempFile` *is* a ``str`` path, with the 2021 release's helpers too.
 """
 
 from __future__ import annotations
@@ -23,9 +19,6 @@ __all__ = ["TempFile"]
 
 class TempFile(str):
     """The path of a file in a fresh temp folder; a ``str`` with test helpers.
-
-    Made by `SNRTestCase.temp_file`, which removes the folder after the test
-    (unless made with ``cleanup=False``).
 
     Example::
 

@@ -42,11 +42,7 @@ class SNRTestCase(unittest.TestCase):
     """The role of nodes built by ``get_config`` and ``run_test_node``."""
 
     timeout_s: float = 2.0
-    """The default time limit of ``run_test_node``, in seconds.
-
-    A node under test normally stops within a fraction of a second; set a
-    larger value on a test class whose nodes need longer, e.g.
-    ``timeout_s = 5.0``."""
+    """The default time limit of ``run_test_node``, in seconds (set more on a slow test class)."""
 
     def expector(self, expectations: Mapping[K, int]) -> Expector[K]:
         """An `Expector` that fails this test when unmet."""
@@ -69,19 +65,15 @@ class SNRTestCase(unittest.TestCase):
     ) -> Node:
         """Build a node from ``factories``, run it until it stops, and return it.
 
-        The node must stop by itself when the test's work is done (e.g.
-        ``ExpectorEndpointFactory(expector, exit_when_satisfied=True)``); one
-        still running after ``timeout_s`` is stopped and the test fails,
-        naming its components. See ``docs/utilities.md``, "Ending a node
-        under test".
+        The node must stop by itself; one still running after ``timeout_s``
+        fails the test (docs/utilities.md, "Ending a node under test").
 
         Args:
             factories: the components of the node (its role is ``self.role``).
             mode: the node's mode (TEST: failures stop the node and fail the test).
             timeout_s: the time limit in seconds; None for ``self.timeout_s``.
-            expect_timeout: run until the time limit on purpose, e.g. to check
-                that a node keeps running. The test then fails if the node
-                stopped before the limit, and passes when the limit stops it.
+            expect_timeout: run until the time limit on purpose (the test
+                fails if the node stopped before it).
 
         Returns:
             The stopped node, to inspect its datastore.
@@ -128,18 +120,12 @@ class SNRTestCase(unittest.TestCase):
     ) -> TempFile:
         """A file's path in a fresh temp folder, removed after the test.
 
-        Today's call, ``temp_file(suffix="", contents=None)``, names the file
-        ``file`` + ``suffix`` and writes ``contents`` to it; the 2021 call,
-        ``temp_file(filename=None, overwrite=False, cleanup=True)``, names it
-        ``filename`` (``overwrite`` changes nothing: the folder is new). A
-        first argument by position is a suffix when it starts with ``.`` or
-        ``_``, a file name otherwise; a second is the contents when a str.
-        ``cleanup=False`` keeps the file and folder (``docs/utilities.md``).
+        ``temp_file(suffix="", contents=None)`` names the file ``file`` +
+        ``suffix``; the 2021 call ``temp_file(filename, overwrite, cleanup)``
+        still works (docs/utilities.md).
 
         Returns:
-            A `TempFile`: a ``str`` path with ``.path``, ``.open()``,
-            ``.assertExists()``, and a context manager that fails unless the
-            file exists at the end of the block, then removes it.
+            A `TempFile` (a ``str`` path with helpers).
 
         Example::
 

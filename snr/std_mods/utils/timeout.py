@@ -47,11 +47,8 @@ class TimeoutLoop(ThreadLoop):
 class TimeoutLoopFactory(LoopFactory):
     """Builds a `TimeoutLoop`: ``TimeoutLoopFactory(seconds=20)`` or ``(ms=500)``.
 
-    The two add up: ``TimeoutLoopFactory(seconds=1, ms=500)`` is 1.5 s,
-    counted from when the node was created. With no time (or 0),
-    ``TimeoutLoopFactory()``, the node stops as soon as it has started: a
-    start-and-stop check, as tests written for the 2021 release use it. A
-    negative time is a `ComponentError`.
+    The two add up, counted from when the node was created; with no time the
+    node stops as soon as it has started (a start-and-stop check).
 
     Example::
 
