@@ -21,7 +21,6 @@ imported on first use, so ``import snr`` stays light.
 from typing import TYPE_CHECKING, Any, Dict, List, Tuple
 
 from snr.core import (
-    CliRunner,
     Config,
     Endpoint,
     EndpointFactory,
@@ -111,7 +110,7 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         RecorderEndpointFactory,
         ReplayerLoopFactory,
     )
-    from snr.std_mods.multiproc import MultiProcRunner
+    from snr.std_mods.runners import CliRunner, MultiProcRunner
     from snr.std_mods.utils import (
         PrinterEndpointFactory,
         StopwatchEndpointFactory,
@@ -161,7 +160,7 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
         "SocketsPair",
     ),
     "snr.std_mods.filters": ("KalmanFilterFactory", "MovingAvgFilterFactory"),
-    "snr.std_mods.multiproc": ("MultiProcRunner",),
+    "snr.std_mods.runners": ("CliRunner", "MultiProcRunner"),
     "snr.std_mods.io": (
         "CommandReceiverFactory",
         "RecorderEndpointFactory",

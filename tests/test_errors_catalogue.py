@@ -35,7 +35,7 @@ from unittest import mock
 
 import tests.test_errors_silence as silence
 from snr import AbstractNode, Config, SynchronousRunner
-from snr.std_mods import multiproc
+from snr.std_mods import runners as std_runners
 from tests.examples_support import ROOT
 
 BOUND_S = silence.BOUND_S
@@ -203,7 +203,7 @@ def run_side_by_side(entry: Entry) -> List[Tuple[List[str], int]]:
     try:
         for log in loggers:
             log.setLevel(logging.INFO)
-        with mock.patch.object(multiproc, "MultiProcRunner", side_by_side(statuses)):
+        with mock.patch.object(std_runners, "MultiProcRunner", side_by_side(statuses)):
             lines, _ = silence.run_program(program, [], ["robot.py", *roles], tune, done)
     finally:
         for log, level in zip(loggers, levels):

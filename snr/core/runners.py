@@ -1,11 +1,11 @@
 """Runners: build nodes from a config and run them (thesis 4.2.1).
 
 * `SynchronousRunner` runs one role in this process.
-* `CliRunner` reads the role(s) from the command line: ``python main.py urov``.
 * `TestRunner` runs one node under a time limit, for tests.
 
-`MultiProcRunner`, several roles at once, one process each, is in
-``snr/std_mods/multiproc.py``: `CliRunner` loads it for two roles or more.
+`CliRunner` (the roles named on the command line) and `MultiProcRunner`
+(several roles at once, one process each) build on these, in
+``snr/std_mods/runners.py``.
 """
 
 from __future__ import annotations
@@ -15,7 +15,7 @@ import threading
 from typing import TYPE_CHECKING, Callable, List, Mapping, Optional, Sequence, Union
 
 from snr.core.checks import call_checks
-from snr.core.checks.runner_checks import no_role_given, runner_built, runner_ran
+from snr.core.checks.runner_checks import runner_built, runner_ran
 from snr.core.config import Config
 from snr.core.node import Node
 from snr.prelude.abstract import (
@@ -24,17 +24,17 @@ from snr.prelude.abstract import (
     AbstractRunner,
 )
 from snr.prelude.errors import ConfigError, SNRError
-from snr.prelude.names import Mode, Role
+from snr.prelude.names import Role
 
 if TYPE_CHECKING:
-    import argparse
+    pass
 
 # What a runner runs: a Config, or each role's factories. A Mapping (not the Dict
 # of ComponentsByRole), like Config's own argument: dicts are invariant, so
 # mypy --strict would reject a plain {"robot": [TimeoutLoopFactory(...)]}.
 _System = Union[AbstractConfig, Mapping[Role, Sequence[AbstractFactory]]]
 
-__all__ = ["INTERRUPTED_MESSAGE", "CliRunner", "SynchronousRunner", "TestRunner", "report_error"]
+__all__ = ["INTERRUPTED_MESSAGE", "SynchronousRunner", "TestRunner", "report_error"]
 
 INTERRUPTED_MESSAGE = "Interrupted by user, exiting"
 """What a runner prints when Ctrl-C stops it (as in thesis figure 5.4)."""
@@ -182,76 +182,3 @@ class TestRunner(AbstractRunner):
             node.loop()
         finally:
             watchdog.cancel()
-
-
-class CliRunner(AbstractRunner):
-    """Runs the role(s) named on the command line (thesis listing 5.1).
-
-    ``python main.py urov`` runs the ``urov`` node; ``python main.py topside
-    urov`` runs both, each in its own process. ``--mode deployed`` overrides
-    the config's mode; an unknown role prints the known ones.
-
-    Example::
-
-        if __name__ == "__main__":
-            snr.CliRunner(components, sys.argv).run()
-    """
-
-    def __init__(
-        self,
-        components_or_config: _System,
-        argv: Optional[Sequence[str]] = None,
-    ) -> None:
-        self.config = _config_or_exit(
-            lambda: call_checks.check_cli_args(CliRunner, components_or_config, argv),
-            components_or_config,
-            exit_on_error=True,
-        )
-        self.argv = list(sys.argv if argv is None else argv)
-        runner_built(self, self.config)
-
-    def parse(self) -> argparse.Namespace:
-        """The parsed command line; exits with a clear message when it is wrong."""
-        import argparse  # only a command line needs it: kept out of `import snr`
-
-        roles = self.config.roles()
-        known = ", ".join(roles)
-        prog = self.argv[0] if self.argv else "snr"
-        parser = argparse.ArgumentParser(
-            prog=prog,
-            description="Run one or more nodes of this SNR system.",
-            epilog=f"roles in this config: {known or '(none)'}",
-        )
-        parser.add_argument("roles", nargs="+", metavar="ROLE", help=f"the role(s) to run: {known}")
-        modes = [m.value for m in Mode]
-        parser.add_argument("--mode", choices=modes, help="override the config's mode")
-        parser.add_argument("--verbose", action="store_true", help=argparse.SUPPRESS)  # top_level
-        if len(self.argv) < 2:
-            no_role_given(parser, prog, roles)  # usage, the roles and an example; exit status 2
-        args = parser.parse_args(self.argv[1:])
-        for role in args.roles:
-            try:
-                self.config.get(role)
-            except ConfigError as error:
-                parser.error(str(error))
-        return args
-
-    def run(self) -> None:
-        """Run the chosen role(s); Ctrl-C exits cleanly."""
-        runner_ran(self)
-        args = self.parse()
-        config = self.config
-        if args.mode is not None and isinstance(config, Config):
-            config = Config(
-                config.factories, mode=Mode(args.mode), profile=config.profile, clock=config.clock
-            )
-        try:
-            if len(args.roles) == 1:
-                SynchronousRunner(args.roles[0], config).run()
-            else:
-                from snr.std_mods import multiproc  # only several roles need processes
-
-                multiproc.MultiProcRunner(args.roles, config).run()
-        except SNRError as error:
-            report_error(error)
-            raise SystemExit(1) from None

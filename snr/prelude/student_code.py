@@ -23,6 +23,8 @@ __all__ += ["outside_runtime", "short_path", "short_repr"]
 
 _SNR_DIR = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 _RUNTIME_DIRS = tuple(os.path.join(_SNR_DIR, sub) + os.sep for sub in ("core", "prelude"))
+# The runners built on the core's (CliRunner, MultiProcRunner) are the runtime too.
+_RUNTIME_DIRS += (os.path.join(_SNR_DIR, "std_mods", "runners.py"),)
 
 
 def short_path(path: Optional[str]) -> str:
@@ -59,7 +61,7 @@ def describe_class(cls: type) -> str:
 
 
 def is_runtime_file(filename: str) -> bool:
-    """True for files of SNR's runtime (``snr/core``, ``snr/prelude``), which reports skip.
+    """True for SNR's runtime files (``snr/core``, ``snr/prelude``, the runners): reports skip them.
 
     Example::
 

@@ -27,9 +27,9 @@ from typing import Any, Callable, Dict, List, Optional, Sequence, Tuple
 
 from snr.core import Config, Node
 from snr.core.checks.runner_checks import runner_ran
-from snr.core.runners import CliRunner, SynchronousRunner, TestRunner
+from snr.core.runners import SynchronousRunner, TestRunner
 from snr.prelude import AbstractConfig, AbstractFactory, ConfigError
-from snr.std_mods.multiproc import MultiProcRunner
+from snr.std_mods.runners import CliRunner, MultiProcRunner
 
 __all__ = ["config_from_script"]
 

@@ -1,29 +1,42 @@
-"""`MultiProcRunner`: several roles at once, each node in a process of its own.
+"""`CliRunner`, the roles named on the command line, and `MultiProcRunner`.
 
-An advanced runner, read after the core: `CliRunner` runs it for a command
-line with two roles or more. How no child outlives its parent is in
-docs/design.md ("Runners").
+`MultiProcRunner` runs several roles at once, each node in a process of its
+own: an advanced runner, read after the core. `CliRunner` runs one role with
+`SynchronousRunner` (``snr/core/runners.py``) and two or more with it. How
+no child outlives its parent is in docs/design.md ("Runners").
 """
 
 from __future__ import annotations
 
 import logging
 import signal
+import sys
 import threading
 import time
 from types import FrameType
 from typing import TYPE_CHECKING, Any, List, Optional, Sequence
 
 from snr.core.checks import call_checks
+from snr.core.checks.runner_checks import no_role_given, runner_built, runner_ran
+from snr.core.config import Config
 from snr.core.node import Node
-from snr.core.runners import INTERRUPTED_MESSAGE, SynchronousRunner, _as_config, _System
-from snr.prelude.abstract import AbstractConfig, AbstractMultiRunner
-from snr.prelude.names import Role
+from snr.core.runners import (
+    INTERRUPTED_MESSAGE,
+    SynchronousRunner,
+    _as_config,
+    _config_or_exit,
+    _System,
+    report_error,
+)
+from snr.prelude.abstract import AbstractConfig, AbstractMultiRunner, AbstractRunner
+from snr.prelude.errors import ConfigError, SNRError
+from snr.prelude.names import Mode, Role
 
 if TYPE_CHECKING:
+    import argparse
     from multiprocessing.connection import Connection
 
-__all__ = ["MultiProcRunner"]
+__all__ = ["CliRunner", "MultiProcRunner"]
 
 
 def _watch_parent(role: Role, link: Connection, node: Node) -> None:
@@ -213,3 +226,74 @@ class MultiProcRunner(AbstractMultiRunner):
             if proc.is_alive():
                 proc.kill()
                 proc.join(self.join_timeout_s)
+
+
+class CliRunner(AbstractRunner):
+    """Runs the role(s) named on the command line (thesis listing 5.1).
+
+    ``python main.py urov`` runs the ``urov`` node; ``python main.py topside
+    urov`` runs both, each in its own process. ``--mode deployed`` overrides
+    the config's mode; an unknown role prints the known ones.
+
+    Example::
+
+        if __name__ == "__main__":
+            snr.CliRunner(components, sys.argv).run()
+    """
+
+    def __init__(
+        self,
+        components_or_config: _System,
+        argv: Optional[Sequence[str]] = None,
+    ) -> None:
+        self.config = _config_or_exit(
+            lambda: call_checks.check_cli_args(CliRunner, components_or_config, argv),
+            components_or_config,
+            exit_on_error=True,
+        )
+        self.argv = list(sys.argv if argv is None else argv)
+        runner_built(self, self.config)
+
+    def parse(self) -> argparse.Namespace:
+        """The parsed command line; exits with a clear message when it is wrong."""
+        import argparse  # only a command line needs it: kept out of `import snr`
+
+        roles = self.config.roles()
+        known = ", ".join(roles)
+        prog = self.argv[0] if self.argv else "snr"
+        parser = argparse.ArgumentParser(
+            prog=prog,
+            description="Run one or more nodes of this SNR system.",
+            epilog=f"roles in this config: {known or '(none)'}",
+        )
+        parser.add_argument("roles", nargs="+", metavar="ROLE", help=f"the role(s) to run: {known}")
+        modes = [m.value for m in Mode]
+        parser.add_argument("--mode", choices=modes, help="override the config's mode")
+        parser.add_argument("--verbose", action="store_true", help=argparse.SUPPRESS)  # top_level
+        if len(self.argv) < 2:
+            no_role_given(parser, prog, roles)  # usage, the roles and an example; exit status 2
+        args = parser.parse_args(self.argv[1:])
+        for role in args.roles:
+            try:
+                self.config.get(role)
+            except ConfigError as error:
+                parser.error(str(error))
+        return args
+
+    def run(self) -> None:
+        """Run the chosen role(s); Ctrl-C exits cleanly."""
+        runner_ran(self)
+        args = self.parse()
+        config = self.config
+        if args.mode is not None and isinstance(config, Config):
+            config = Config(
+                config.factories, mode=Mode(args.mode), profile=config.profile, clock=config.clock
+            )
+        try:
+            if len(args.roles) == 1:
+                SynchronousRunner(args.roles[0], config).run()
+            else:
+                MultiProcRunner(args.roles, config).run()
+        except SNRError as error:
+            report_error(error)
+            raise SystemExit(1) from None
