@@ -20,8 +20,9 @@ listings are in ``examples/``.
 
 ``import snr`` is kept light: the ready-made components (``snr.std_mods``),
 the extras (``snr.extras``: Zenoh, serial, controller, simulator...),
-``SNRTestCase`` (with ``unittest``) and the 2021 names are imported the
-first time one is used; ``from snr import *`` imports everything it names.
+the testing utilities (``snr.utils``: ``SNRTestCase`` with ``unittest``,
+``Expector``, ``SimClock``...) and the 2021 names are imported the first
+time one is used; ``from snr import *`` imports everything it names.
 """
 
 # This file is the one list of the public names (docs/design.md, "The public
@@ -64,15 +65,6 @@ from snr.prelude import (
     TaskId,
     TaskName,
     TaskType,
-)
-from snr.utils import (
-    ExpecterEndpointFactory,
-    Expector,
-    ExpectorEndpointFactory,
-    ListReplayerFactory,
-    MultiProcExpector,
-    OrderedExpector,
-    SimClock,
 )
 
 if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers see them
@@ -127,6 +119,15 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         PrinterEndpointFactory,
         StopwatchEndpointFactory,
         TimeoutLoopFactory,
+    )
+    from snr.utils import (
+        ExpecterEndpointFactory,
+        Expector,
+        ExpectorEndpointFactory,
+        ListReplayerFactory,
+        MultiProcExpector,
+        OrderedExpector,
+        SimClock,
     )
     from snr.utils.test_case import SNRTestCase
 
@@ -183,13 +184,23 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
         "StopwatchEndpointFactory",
         "TimeoutLoopFactory",
     ),
+    "snr.utils": (
+        "ExpecterEndpointFactory",
+        "Expector",
+        "ExpectorEndpointFactory",
+        "ListReplayerFactory",
+        "MultiProcExpector",
+        "OrderedExpector",
+        "SimClock",
+    ),
     "snr.utils.test_case": ("SNRTestCase",),
 }
 """The public names imported on first use, by the module each comes from.
 
 The ready-made components (``snr.std_mods``) and ``SNRTestCase``
-(``unittest``) cost more to import than the rest of SNR together; a program
-pays for them only when it uses them. The names kept for code written
+(``unittest``) cost more to import than the rest of SNR together, and a
+first program needs neither them nor the other testing utilities
+(``snr.utils``); a program pays for them only when it uses them. The names kept for code written
 against the 2021 release (``snr.extras.compat2021``) come with the components they
 alias."""
 

@@ -35,11 +35,7 @@ from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional
 
 from snr.core import tasks
 from snr.core.checks import life_cycle
-from snr.core.checks.datastore_guard import NodeDatastore
 from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
-from snr.core.checks.failures import FailureReport
-from snr.core.checks.seam_checks import checked_core, checked_datastore
-from snr.core.checks.step_mode import StepMode
 from snr.core.clock import clock_of
 from snr.core.components import NODE_CORE_NAME, ComponentSet
 from snr.core.dispatch import HandlerRunner, HandlerTable
@@ -124,8 +120,8 @@ class Node(AbstractNode):
             `snr.core.checks.wiring_checks.WiringChecks` that warn about an
             event nothing handles and a handler nothing can reach (None in
             other modes).
-        step_mode: the `StepMode` a console uses to pause the node, run its
-            tasks one at a time and resume it.
+        step_mode: the `snr.core.checks.step_mode.StepMode` a console uses to
+            pause the node, run its tasks one at a time and resume it.
         watchdog: in DEBUG mode, the `snr.core.checks.watchdog.Watchdog` that
             says when the node is stuck without a word: a handler that does not return, a ``loop()``
             that never returns, a loop flooding the queue, a node nothing will
@@ -146,6 +142,13 @@ class Node(AbstractNode):
     """The queue's high-water mark: loops wait (then drop) above it; see `TaskQueue`."""
 
     def __init__(self, role: Role, config: AbstractConfig) -> None:
+        # Helpers read second (snr/core/checks/) that every node uses, loaded by the
+        # first node built rather than by `import snr` (bench/bench_import.py).
+        from snr.core.checks.datastore_guard import NodeDatastore
+        from snr.core.checks.failures import FailureReport
+        from snr.core.checks.seam_checks import checked_core, checked_datastore
+        from snr.core.checks.step_mode import StepMode
+
         check_node_args(Node, role, config)
         self.role = role
         self.config = config
