@@ -20,9 +20,9 @@ listings are in ``examples/``.
 
 ``import snr`` is kept light: the ready-made components (``snr.std_mods``),
 the extras (``snr.extras``: Zenoh, serial, controller, simulator...),
-the testing utilities (``snr.utils``: ``SNRTestCase`` with ``unittest``,
-``Expector``, ``SimClock``...) and the 2021 names are imported the first
-time one is used; ``from snr import *`` imports everything it names.
+the testing utilities (``snr.utils``, ``SNRTestCase`` with ``unittest``)
+and the 2021 names are imported the first time one is used;
+``from snr import *`` imports everything it names.
 """
 
 # This file is the one list of the public names (docs/design.md, "The public
@@ -198,11 +198,10 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
 """The public names imported on first use, by the module each comes from.
 
 The ready-made components (``snr.std_mods``) and ``SNRTestCase``
-(``unittest``) cost more to import than the rest of SNR together, and a
-first program needs neither them nor the other testing utilities
-(``snr.utils``); a program pays for them only when it uses them. The names kept for code written
-against the 2021 release (``snr.extras.compat2021``) come with the components they
-alias."""
+(``unittest``) cost more to import than the rest of SNR together; a program
+pays for them, and the other testing utilities, only when it uses them. The
+names kept for code written against the 2021 release
+(``snr.extras.compat2021``) come with the components they alias."""
 
 __version__ = "0.1.0"
 

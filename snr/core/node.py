@@ -142,8 +142,7 @@ class Node(AbstractNode):
     """The queue's high-water mark: loops wait (then drop) above it; see `TaskQueue`."""
 
     def __init__(self, role: Role, config: AbstractConfig) -> None:
-        # Helpers read second (snr/core/checks/) that every node uses, loaded by the
-        # first node built rather than by `import snr` (bench/bench_import.py).
+        # Read second (snr/core/checks/); here, not on top, to keep `import snr` light:
         from snr.core.checks.datastore_guard import NodeDatastore
         from snr.core.checks.failures import FailureReport
         from snr.core.checks.seam_checks import checked_core, checked_datastore
