@@ -6,11 +6,16 @@ Everything a student needs is here::
 
 That gives ``__all__`` below: what the listings, tutorial and examples use, and
 the 2021 release's names. The rest is imported from its own module, e.g.
-``from snr.std_mods.comms import SocketsServerFactory``. Most names are
-imported on first use, so ``import snr`` stays light.
+``from snr.std_mods.comms import SocketsServerFactory``.
 
 ``python -m snr docs`` builds and opens the guide and API reference, offline;
 ``python -m snr demo`` runs the thesis's underwater vehicle.
+
+``import snr`` is kept light: the ready-made components (``snr.std_mods``),
+the extras (``snr.extras``: Zenoh, serial, controller, simulator...),
+the testing utilities (``snr.utils``, ``SNRTestCase`` with ``unittest``)
+and the 2021 names are imported the first time one is used;
+``from snr import *`` imports everything it names.
 """
 
 # This file is the one list of the public names (docs/design.md, "The public
@@ -52,15 +57,6 @@ from snr.prelude import (
     TaskId,
     TaskName,
     TaskType,
-)
-from snr.utils import (
-    ExpecterEndpointFactory,
-    Expector,
-    ExpectorEndpointFactory,
-    ListReplayerFactory,
-    MultiProcExpector,
-    OrderedExpector,
-    SimClock,
 )
 
 if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers see them
@@ -115,6 +111,15 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         PrinterEndpointFactory,
         StopwatchEndpointFactory,
         TimeoutLoopFactory,
+    )
+    from snr.utils import (
+        ExpecterEndpointFactory,
+        Expector,
+        ExpectorEndpointFactory,
+        ListReplayerFactory,
+        MultiProcExpector,
+        OrderedExpector,
+        SimClock,
     )
     from snr.utils.test_case import SNRTestCase
 
@@ -171,15 +176,24 @@ _LAZY: Dict[str, Tuple[str, ...]] = {
         "StopwatchEndpointFactory",
         "TimeoutLoopFactory",
     ),
+    "snr.utils": (
+        "ExpecterEndpointFactory",
+        "Expector",
+        "ExpectorEndpointFactory",
+        "ListReplayerFactory",
+        "MultiProcExpector",
+        "OrderedExpector",
+        "SimClock",
+    ),
     "snr.utils.test_case": ("SNRTestCase",),
 }
 """The public names imported on first use, by the module each comes from.
 
 The ready-made components (``snr.std_mods``) and ``SNRTestCase``
 (``unittest``) cost more to import than the rest of SNR together; a program
-pays for them only when it uses them. The names kept for code written
-against the 2021 release (``snr.extras.compat2021``) come with the components they
-alias."""
+pays for them, and the other testing utilities, only when it uses them. The
+names kept for code written against the 2021 release
+(``snr.extras.compat2021``) come with the components they alias."""
 
 __version__ = "0.1.0"
 

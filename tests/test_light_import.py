@@ -31,6 +31,18 @@ HEAVY = [
     "argparse",
 ]
 
+# Loaded by the first use, not by ``import snr``: the testing utilities, the
+# words for an abstract class built, and the helpers read second that only a
+# built node needs (the last four).
+FIRST_USE = [
+    "snr.utils",
+    "snr.prelude.abstract_errors",
+    "snr.core.checks.datastore_guard",
+    "snr.core.checks.failures",
+    "snr.core.checks.seam_checks",
+    "snr.core.checks.step_mode",
+]
+
 
 def loaded_after(code: str, modules: List[str]) -> Dict[str, bool]:
     """Which of ``modules`` a fresh interpreter has loaded after running ``code``."""
@@ -55,6 +67,14 @@ class TestLightImport(unittest.TestCase):
     def test_import_snr_loads_none_of_the_heavy_modules(self) -> None:
         loaded = loaded_after("import snr", HEAVY)
         self.assertEqual([m for m, yes in loaded.items() if yes], [])
+
+    def test_import_snr_leaves_what_a_node_or_a_test_needs_for_their_first_use(self) -> None:
+        self.assertEqual([m for m, yes in loaded_after("import snr", FIRST_USE).items() if yes], [])
+        config = "snr.Config({'robot': [snr.TimeoutLoopFactory(seconds=1)]}, mode=snr.Mode.TEST)"
+        node = f"import snr\nsnr.Node('robot', {config})"
+        self.assertEqual([m for m, yes in loaded_after(node, FIRST_USE[2:]).items() if not yes], [])
+        loaded = loaded_after("import snr\nsnr.SimClock", ["snr.utils"])
+        self.assertEqual(loaded, {"snr.utils": True})
 
     def test_from_snr_import_star_does_not_load_dataclasses_json(self) -> None:
         loaded = loaded_after("from snr import *", ["dataclasses_json", "marshmallow"])

@@ -6,7 +6,6 @@ from typing import Callable, Dict, List, Mapping, Optional, Sequence
 
 from snr.core.checks.call_checks import check_config_args, check_role
 from snr.core.checks.profiler import Profiler
-from snr.core.checks.seam_checks import check_seam_args
 from snr.core.clock import NodeClock
 from snr.core.node import NodeCoreFactory
 from snr.prelude.abstract import AbstractConfig, AbstractFactory, AbstractProfiler, Datastore
@@ -51,6 +50,8 @@ class Config(AbstractConfig):
         datastore: Optional[Callable[[], Datastore]] = None,
         node_core: Optional[AbstractFactory] = None,
     ) -> None:
+        from snr.core.checks.seam_checks import check_seam_args  # read second; used here only
+
         if factories is None:
             factories = {}
         check_config_args(Config, factories, mode, clock)

@@ -27,11 +27,7 @@ from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional
 
 from snr.core import tasks
 from snr.core.checks import life_cycle
-from snr.core.checks.datastore_guard import NodeDatastore
 from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
-from snr.core.checks.failures import FailureReport
-from snr.core.checks.seam_checks import checked_core, checked_datastore
-from snr.core.checks.step_mode import StepMode
 from snr.core.clock import clock_of
 from snr.core.components import NODE_CORE_NAME, ComponentSet
 from snr.core.dispatch import HandlerRunner, HandlerTable
@@ -113,7 +109,8 @@ class Node(AbstractNode):
         key_hints: DEBUG: the `MissingKeyHints` (a data key read, never stored).
         wiring_checks: DEBUG: the `snr.core.checks.wiring_checks.WiringChecks`
             (events nothing handles, handlers nothing reaches).
-        step_mode: the `StepMode` a console uses to pause and step the node.
+        step_mode: the `snr.core.checks.step_mode.StepMode` a console uses to
+            pause and step the node.
         watchdog: DEBUG: the `snr.core.checks.watchdog.Watchdog` that says when
             the node is stuck (set it to None before ``loop()`` to switch it off).
     """
@@ -131,6 +128,12 @@ class Node(AbstractNode):
     """The queue's high-water mark: loops wait (then drop) above it; see `TaskQueue`."""
 
     def __init__(self, role: Role, config: AbstractConfig) -> None:
+        # Read second (snr/core/checks/); here, not on top, to keep `import snr` light:
+        from snr.core.checks.datastore_guard import NodeDatastore
+        from snr.core.checks.failures import FailureReport
+        from snr.core.checks.seam_checks import checked_core, checked_datastore
+        from snr.core.checks.step_mode import StepMode
+
         check_node_args(Node, role, config)
         self.role = role
         self.config = config

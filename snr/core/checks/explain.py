@@ -50,7 +50,7 @@ from snr.prelude import (
     TaskHandler,
     ThreadSafetyError,
 )
-from snr.prelude.abstract_errors import explain_abstract_error
+from snr.prelude.abstract import explain_abstract_error  # loads abstract_errors when used
 from snr.prelude.task import format_task
 
 __all__ = [

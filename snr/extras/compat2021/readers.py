@@ -21,14 +21,14 @@ from __future__ import annotations
 from types import TracebackType
 from typing import TYPE_CHECKING, Generic, Iterator, Optional, Tuple, Type, TypeVar, Union
 
-from typing_extensions import Self
-
 from snr.prelude import AbstractComponent, AbstractNode, DataKey, Page
 from snr.std_mods.codec import PathLike
 from snr.std_mods.io import replayer
 
-if TYPE_CHECKING:
+if TYPE_CHECKING:  # for annotations only: typing_extensions takes ~2 ms to import
     import unittest
+
+    from typing_extensions import Self
 
 __all__ = ["PageReader", "Parent", "TextReader", "TextReplayerFactory"]
 

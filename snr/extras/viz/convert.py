@@ -14,10 +14,9 @@ Example::
 
 from __future__ import annotations
 
-import argparse
 import os
 import sys
-from typing import IO, NamedTuple, Optional
+from typing import IO, TYPE_CHECKING, NamedTuple, Optional
 
 from snr.extras.viz.mcap_files import (
     COMPRESSIONS,
@@ -28,6 +27,9 @@ from snr.extras.viz.mcap_files import (
 from snr.prelude import ConfigError, SNRError
 from snr.std_mods.codec import PathLike, header_line, page_to_line
 from snr.std_mods.io.replayer import PageReader
+
+if TYPE_CHECKING:  # for annotations only: the command line imports argparse itself
+    import argparse
 
 __all__ = ["Conversion", "add_arguments", "convert_recording", "run"]
 
