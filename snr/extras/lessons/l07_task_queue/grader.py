@@ -59,7 +59,7 @@ ROUNDS = 72
 """Tasks handed over one at a time in the lost wake-up check."""
 SPREAD = 24
 """The lost wake-up check puts each task at one of the first this many calls of ``wait``."""
-NAP_S = 0.2
+NAP_S = 0.4
 """The consumer's ``wait`` timeout in the lost wake-up check: a lost wake-up costs this much."""
 SWITCH_S = 1e-6
 """``sys.setswitchinterval`` while grading: threads switch as often as Python lets them."""
