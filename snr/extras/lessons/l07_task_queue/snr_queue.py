@@ -4,9 +4,10 @@ The node uses `snr.core.task_queue.TaskQueue` directly (there is no ``Config`` o
 it: docs/assignments.md says why); this thin adapter gives it the five names
 lesson 7's queue has, and nothing more:
 
-* ``put(task)``: `TaskQueue.put`, which waits while the normal lane holds
-  ``capacity`` tasks (its ``high_water``), at most ``max_wait_s``; False when
-  it dropped the task (its loss count went up);
+* ``put(task)``: `TaskQueue.put`, which, once the normal lane holds
+  ``capacity`` tasks (its ``high_water``), waits until the consumer has
+  worked it down to half (the low-water mark), at most ``max_wait_s``; False
+  when it dropped the task (its loss count went up);
 * ``take()``: `TaskQueue.pop`; ``wait(timeout_s)``, ``close()``, ``len()``:
   the same methods.
 
