@@ -1,18 +1,22 @@
-"""Lessons 5 and 6: a datastore and a node core of the student's own, through Config's seams.
+"""Lessons 5 to 7: a datastore, a node core and a task queue of the student's own.
 
 ``Config(datastore=..., node_core=...)`` puts a student's class where SNR's
-own part goes (docs/assignments.md). Here: SNR's own datastore (a ``dict``)
-and node core pass the lessons' graders, which are SNR's own tests of those
-parts; each solution passes and each starter fails with checks that say why;
-the mistakes a student makes in either part are said where they are made
-(snr/core/checks/seam_checks.py); and the default path is SNR's own parts,
-untouched.
+own part goes (docs/assignments.md); lesson 7's queue is graded with threads
+of the grader's own (there is no seam for the queue). Here: SNR's own
+datastore (a ``dict``), node core and task queue pass the lessons' graders,
+which are SNR's own tests of those parts; each solution passes and each
+starter fails with checks that say why; the mistakes a student makes in each
+part are said where they are made (snr/core/checks/seam_checks.py) or fail
+the check that names them; and the default path is SNR's own parts, untouched.
 """
 
 from __future__ import annotations
 
+import contextlib
+import io
 import logging
 import shutil
+import sys
 import tempfile
 import time
 import unittest
@@ -29,9 +33,13 @@ from snr.extras.lessons.l05_datastore.grader import grade_datastore
 from snr.extras.lessons.l05_datastore.solution import HashDatastore
 from snr.extras.lessons.l06_node_core.grader import grade_core
 from snr.extras.lessons.l06_node_core.solution import MyNodeCoreFactory
+from snr.extras.lessons.l07_task_queue import solution as queue_solution
+from snr.extras.lessons.l07_task_queue import starter as queue_starter
+from snr.extras.lessons.l07_task_queue.grader import grade_queue
+from snr.extras.lessons.l07_task_queue.snr_queue import SnrTaskQueue
 from snr.prelude import ComponentError, ConfigError
 
-DATASTORE, NODE_CORE = lesson(5), lesson(6)
+DATASTORE, NODE_CORE, QUEUE = lesson(5), lesson(6), lesson(7)
 
 
 def line_of(path: Path, text: str) -> int:
@@ -81,6 +89,11 @@ class TestSnrsOwnPartsPassTheGraders(unittest.TestCase):
         self.assert_all_passed(checks, 10)
         self.assertIn("NodeCoreEndpoint", checks[0].happened)
 
+    def test_snrs_task_queue_passes_lesson_7(self) -> None:
+        checks = grade_queue(SnrTaskQueue, Path("snr"))
+        self.assert_all_passed(checks, 11)
+        self.assertIn("SnrTaskQueue", checks[0].happened)
+
     def test_a_datastore_that_keeps_nothing_fails_them(self) -> None:
         failed = [check.name for check in grade_datastore(Lossy, Path("x.py")) if not check.passed]
         self.assertIn("gives back the page stored under a key", failed)
@@ -89,7 +102,7 @@ class TestSnrsOwnPartsPassTheGraders(unittest.TestCase):
 
 class TestSolutionsAndStarters(unittest.TestCase):
     def test_each_solution_passes_in_under_five_seconds(self) -> None:
-        for one in (DATASTORE, NODE_CORE):
+        for one in (DATASTORE, NODE_CORE, QUEUE):
             with self.subTest(lesson=one.number):
                 started = time.monotonic()
                 checks = grade_file(one, one.folder / "solution.py")
@@ -100,6 +113,7 @@ class TestSolutionsAndStarters(unittest.TestCase):
         for one, first_failed, blamed in (
             (DATASTORE, "gives back the page stored under a key", "def __setitem__("),
             (NODE_CORE, "stores each page before its handlers run", "def store_page_handler("),
+            (QUEUE, "gives back one thread's tasks in the order put", "def put("),
         ):
             with self.subTest(lesson=one.number):
                 started = time.monotonic()
@@ -133,7 +147,12 @@ class TestStudentsMistakes(unittest.TestCase):
         return text.replace(old, new)
 
     def test_renamed_copies_of_the_solutions_pass(self) -> None:
-        for number, old, new in ((5, "HashDatastore", "Pages"), (6, "MyNodeCore", "Core")):
+        renames = (
+            (5, "HashDatastore", "Pages"),
+            (6, "MyNodeCore", "Core"),
+            (7, "MyTaskQueue", "Jobs"),
+        )
+        for number, old, new in renames:
             with self.subTest(lesson=number):
                 text = self.solution(number, old, new)
                 checks = self.grade(number, text, f"lesson{number}.py")
@@ -207,6 +226,117 @@ class TestStudentsMistakes(unittest.TestCase):
         ran = self.grade(6, text)["runs without an exception"]
         self.assertFalse(ran.passed)
         self.assertIn("store_page_handler returns the page's process_data task", ran.happened)
+
+
+class TestQueueMistakes(unittest.TestCase):
+    """Lesson 7: each typical mistake in a task queue fails the check that names it."""
+
+    def setUp(self) -> None:
+        self.folder = Path(tempfile.mkdtemp(prefix="snr-queue-"))
+        self.addCleanup(shutil.rmtree, self.folder, True)
+
+    def grade(self, old: str, new: str) -> Dict[str, Check]:
+        """Grade the solution with ``old`` replaced by ``new``: each check, by name."""
+        text = (QUEUE.folder / "solution.py").read_text("utf-8")
+        self.assertIn(old, text)
+        path = self.folder / "mine.py"
+        path.write_text(text.replace(old, new), "utf-8")
+        started = time.monotonic()
+        checks = {check.name: check for check in grade_file(QUEUE, path)}
+        self.assertLess(time.monotonic() - started, 8.0, "a failing grade is bounded too")
+        return checks
+
+    def failed(self, checks: Dict[str, Check]) -> List[str]:
+        return [name for name, check in checks.items() if not check.passed]
+
+    def line(self, text: str) -> int:
+        return line_of(self.folder / "mine.py", text)
+
+    def wait_block(self) -> str:
+        """The solution's ``wait`` from ``with self.changed:`` to its sleep."""
+        text = (QUEUE.folder / "solution.py").read_text("utf-8")
+        start = text.index("        with self.changed:\n            # Checked under the lock")
+        end = text.index("self.changed.wait(left)", start) + len("self.changed.wait(left)")
+        return text[start:end]
+
+    def test_a_busy_wait_fails_the_idle_check_saying_so(self) -> None:
+        spins = """        while not self.urgent and not self.normal and not self.closed:
+            if time.monotonic() > deadline:  # checks again and again: a busy wait
+                return"""
+        checks = self.grade(self.wait_block(), spins)
+        self.assertEqual(self.failed(checks), ["an idle consumer uses no CPU"])
+        idle = checks["an idle consumer uses no CPU"]
+        self.assertRegex(idle.happened, r"^wait\(0\.4\) used 0\.\d\d s of CPU in 0\.\d\d s: it ")
+        self.assertIn("busy waiting", idle.happened)
+        self.assertIn("self.changed.wait(left)", idle.hint)
+        self.assertEqual(idle.line, self.line("def wait("))
+
+    def test_a_check_outside_the_lock_loses_a_wake_up(self) -> None:
+        outside = """        while not self.urgent and not self.normal and not self.closed:
+            left = deadline - time.monotonic()
+            if left <= 0:
+                return
+            with self.changed:  # the lock taken only to sleep: a put can slip in before
+                self.changed.wait(left)"""
+        checks = self.grade(self.wait_block(), outside)
+        self.assertEqual(self.failed(checks), ["no wake-up is lost"])
+        lost = checks["no wake-up is lost"]
+        self.assertIn("was put as the consumer went to sleep, and it slept on for", lost.happened)
+        self.assertIn("under one lock", lost.hint)
+        self.assertEqual(lost.line, self.line("def wait("))
+
+    def test_a_put_that_forgets_to_notify_leaves_wait_asleep(self) -> None:
+        checks = self.grade(
+            "            self.changed.notify_all()  # the consumer may be sleeping in wait\n", ""
+        )
+        wakes = checks["wait sleeps until a task comes, and returns as soon as one does"]
+        self.assertFalse(wakes.passed)
+        self.assertIn("(at its timeout: nothing woke it)", wakes.happened)
+        self.assertIn("put calls self.changed.notify_all()", wakes.hint)
+        self.assertEqual(wakes.line, self.line("def put("))
+        self.assertTrue(checks["an idle consumer uses no CPU"].passed)
+
+    def test_a_put_that_never_waits_fails_the_full_queue_checks(self) -> None:
+        checks = self.grade("len(self.normal) >= self.capacity", "False")
+        room = checks["put waits while the queue is full, and goes on when there is room"]
+        self.assertFalse(room.passed)
+        self.assertEqual(room.happened, "put returned True at once, with the queue full")
+        self.assertFalse(checks["put gives up after max_wait_s"].passed)
+        self.assertTrue(
+            checks["many producers: every task taken once, each producer's in order"].passed
+        )
+
+    def test_an_exception_stops_the_grade_at_its_line(self) -> None:
+        checks = self.grade(
+            "            lane = self.urgent or self.normal\n            if not lane:\n"
+            "                return None\n            task = lane.popleft()",
+            "            task = self.normal.popleft()",
+        )
+        ran = checks["runs without an exception"]
+        self.assertFalse(ran.passed)
+        self.assertIn("IndexError: pop from an empty deque", ran.happened)
+        self.assertEqual(ran.line, self.line("task = self.normal.popleft()"))
+        self.assertEqual(len(checks), 2, "the grade stops there")
+
+    def test_the_grade_puts_the_switch_interval_back(self) -> None:
+        before = sys.getswitchinterval()
+        grade_queue(queue_solution.MyTaskQueue, QUEUE.folder / "solution.py")
+        self.assertEqual(sys.getswitchinterval(), before)
+
+    def test_the_queue_runs_between_loops_and_a_node(self) -> None:
+        for module, said in (
+            (queue_solution, "each loop's once, in order."),
+            (queue_starter, "were put (put returned True) but never came out of the queue."),
+        ):
+            with self.subTest(module=module.__name__):
+                out = io.StringIO()
+                log = logging.getLogger("snr.queue_demo")  # "terminated: Timeout", at the end
+                self.addCleanup(log.setLevel, log.level)
+                log.setLevel(logging.CRITICAL)
+                with contextlib.redirect_stdout(out):
+                    module.main(["task_queue.py", "--seconds", "0.3"], module.MyTaskQueue)
+                self.assertRegex(out.getvalue(), r"^4 loops put [\d,]+ tasks into a MyTaskQueue")
+                self.assertIn(said, out.getvalue())
 
 
 class TestTheSeams(unittest.TestCase):

@@ -9,11 +9,13 @@ does in the simulator. The lessons' text is docs/lessons.md.
 * ``l03_scan_follower``: lesson 3, lesson 1's wall follower seeing by lidar;
 * ``l04_depth_filter``: lesson 4, a filter for a noisy depth sensor;
 * ``l05_datastore``: lesson 5, a datastore of your own (a hash table);
-* ``l06_node_core``: lesson 6, a node core endpoint of your own.
+* ``l06_node_core``: lesson 6, a node core endpoint of your own;
+* ``l07_task_queue``: lesson 7, a task queue safe for many producers.
 
-Lessons 5 and 6 have students write a part of SNR itself, plugged in where
-SNR's own goes (``Config(datastore=..., node_core=...)``, docs/assignments.md);
-``probe`` runs it in real nodes for their graders.
+Lessons 5 to 7 have students write a part of SNR itself: 5 and 6 plug in
+where SNR's own goes (``Config(datastore=..., node_core=...)``,
+docs/assignments.md), and ``probe`` runs them in real nodes for their
+graders; lesson 7's grader runs the queue with threads of its own.
 
 Example::
 
@@ -103,6 +105,13 @@ LESSONS: Tuple[Lesson, ...] = (
         "l06_node_core",
         "node_core.py",
         "lesson-6-a-node-core",
+    ),
+    Lesson(
+        7,
+        "a task queue: many producers, one consumer, nothing lost, no CPU spent waiting",
+        "l07_task_queue",
+        "task_queue.py",
+        "lesson-7-a-task-queue",
     ),
 )
 """Every lesson, in order."""
