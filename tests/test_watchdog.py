@@ -21,6 +21,7 @@ import sys
 import tempfile
 import textwrap
 import threading
+import time
 import types
 import unittest
 from typing import Any, Callable, Dict, List, Optional, Tuple
@@ -28,14 +29,19 @@ from typing import Any, Callable, Dict, List, Optional, Tuple
 from snr import (
     AbstractNode,
     Config,
+    Endpoint,
     LoopFactory,
     Node,
     SNRTestCase,
+    SomeTasks,
+    Task,
+    TaskId,
     TaskType,
     ThreadLoop,
+    tasks,
 )
 from tests.examples_support import ROOT, script_env
-from tests.helpers import LoopFactoryOf, StopWhenFactory
+from tests.helpers import FactoryOf, LoopFactoryOf, StopWhenFactory
 
 HERE = "test_watchdog.py"
 ERRORS_MD = os.path.join(ROOT, "docs", "errors.md")
@@ -349,6 +355,59 @@ class TestTheClassesOfTheDocs(SNRTestCase):
             sorted(node.watchdog.said if node.watchdog else []),
             ["flood counter", "flood fast_counter"],
         )
+
+
+class Stuck(Endpoint):
+    """Its handler of the event 'go' blocks until the test lets it go."""
+
+    def __init__(self, factory: FactoryOf, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, "stuck")
+        self.released = threading.Event()
+        self.task_handlers = {(TaskType.event, "go"): self.on_go}
+
+    def on_go(self, task: Task, key: TaskId) -> SomeTasks:
+        self.released.wait(5.0)
+        return None
+
+
+class TestAnIdleNode(unittest.TestCase):
+    """An idle node is not stuck: the watchdog sleeps, and its first task wakes it."""
+
+    def test_the_watchdog_dozes_while_idle_and_wakes_with_the_work(self) -> None:
+        built: List[Stuck] = []
+
+        def build(factory: FactoryOf, parent: AbstractNode) -> Stuck:
+            built.append(Stuck(factory, parent))
+            return built[-1]
+
+        node = Node("robot", Config({"robot": [FactoryOf(build)]}))
+        watchdog = node.watchdog
+        assert watchdog is not None
+        watchdog.every_s, watchdog.stuck_s, watchdog.dozing_s = 0.01, 0.1, 30.0
+        seen: Dict[str, float] = {}
+
+        def drive() -> None:
+            deadline = time.monotonic() + 5.0
+            while not watchdog.dozing and time.monotonic() < deadline:
+                time.sleep(0.01)
+            seen["dozed"] = float(watchdog.dozing)
+            sent_at = time.monotonic()
+            node.schedule(tasks.event("go"))
+            while not watchdog.said and time.monotonic() < deadline + 5.0:
+                time.sleep(0.01)
+            seen["said_after_s"] = time.monotonic() - sent_at
+            built[0].released.set()
+            node.set_terminate_flag("the test saw what it waited for")
+
+        driver = threading.Thread(target=drive, daemon=True)
+        with self.assertLogs("snr.robot", "WARNING"):
+            driver.start()
+            node.loop()
+        driver.join(5.0)
+        self.assertEqual(seen["dozed"], 1.0, "an idle node's watchdog sleeps until there is work")
+        self.assertEqual(watchdog.said, ["handler Stuck.on_go"])
+        # Found about stuck_s after the task came, not dozing_s (30 s) later.
+        self.assertLess(seen["said_after_s"], 3.0)
 
 
 class TestAnUnmetExpectation(unittest.TestCase):

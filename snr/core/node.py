@@ -296,6 +296,7 @@ class Node(AbstractNode):
         queue = self.queue
         run_queued = self._runner.run_queued
         step_mode = self.step_mode
+        watchdog = self.watchdog  # DEBUG: it sleeps while the node idles, until there is work
         while not self._stop_requested:
             if step_mode.paused:  # a console paused the node: see checks/step_mode.py
                 step_mode.run_paused(self.idle_wake_s)
@@ -303,6 +304,8 @@ class Node(AbstractNode):
             run_queued()
             if not (self._stop_requested or queue):
                 queue.wait(self.idle_wake_s)  # a producer's task or stop wakes it
+                if watchdog is not None and watchdog.dozing and queue:
+                    watchdog.wake()
 
     def get_task_handlers(self, task: Task) -> List[tuple[TaskHandler, TaskId]]:
         """Every (handler, matched task id) for ``task``, in component order."""

@@ -274,6 +274,17 @@ class TaskQueue(AbstractTaskQueue):
         return lane.popleft() if lane else None
 
     @property
+    def sleeping(self) -> bool:
+        """True while the node's thread sleeps in `wait` (any thread may look).
+
+        Example::
+
+            if node.queue.sleeping and not len(node.queue):
+                ...   # the node is idle
+        """
+        return self._sleeping
+
+    @property
     def waiter(self) -> Optional[IdleWaiter]:
         """What the node's thread sleeps on when idle instead of the bell (None: the bell)."""
         return self._waiter

@@ -16,7 +16,10 @@ as a warning, with the line it is on and the rule it breaks (docs/design.md,
 4. a node with an empty queue, no handler running, no loop alive and no other
    thread for ``idle_s``: only Ctrl+C can end it.
 
-A look that finds nothing to watch makes the next one wait ``stuck_s``.
+A look that finds nothing to watch makes the next one wait ``stuck_s``; if
+besides the node's thread sleeps with an empty queue and no student's loop
+runs, the watchdog sleeps until the node gets work (an idle node is not stuck),
+or ``dozing_s`` at most.
 
 Example::
 
@@ -107,6 +110,8 @@ class Watchdog:
 
     Attributes:
         every_s: seconds between two looks at the node (0.5).
+        dozing_s: the longest an idle node goes unlooked at (20 s; it is
+            looked at as soon as it gets work).
         stuck_s: how long before a stuck handler, loop or flood is reported (2 s).
         idle_s: how long before a node nothing can stop is reported (3 s).
         handler_stuck: True while the node's thread has been in one handler
@@ -119,6 +124,7 @@ class Watchdog:
     idle_s: float = 3.0
     spin_hz: float = 1000.0
     """Passes a second of a rate-less, storing loop that are reported (rule 3b)."""
+    dozing_s: float = 20.0
     FLOOD_GRACE_S = 1.0
     """A node that was behind less than this long ago still counts as behind."""
 
@@ -127,7 +133,11 @@ class Watchdog:
         self.handler_stuck = False
         self.said: List[str] = []
         self._said_about: Set[object] = set()
-        self._stop = threading.Event()
+        self._bell = threading.Event()  # set: look now (the node got work, or stop)
+        self._stopping = False
+        self.dozing = False
+        """True while the watchdog sleeps until the node gets work (`wake` then rings)."""
+        self._theirs_alive = False  # a student's loop was running at the last look
         self._thread: Optional[threading.Thread] = None
         self._node_thread: Optional[int] = None
         self._ignored: Set[Optional[int]] = set()
@@ -157,7 +167,8 @@ class Watchdog:
 
     def stop(self) -> None:
         """Stop watching (the node is stopping); waits for the thread, briefly."""
-        self._stop.set()
+        self._stopping = True
+        self._bell.set()
         thread = self._thread
         if thread is not None and thread is not threading.current_thread():
             thread.join(1.0)
@@ -166,13 +177,44 @@ class Watchdog:
         self._loop_waits.clear()
         self._flooders = []
 
+    def wake(self) -> None:
+        """The node's thread left its idle wait with work: look now if dozing (node thread).
+
+        Example::
+
+            if watchdog.dozing:
+                watchdog.wake()
+        """
+        self.dozing = False
+        self._bell.set()
+
     def _run(self) -> None:
-        while not self._stop.wait(self.stuck_s if self._quiet else self.every_s):
+        while True:
+            self._bell.wait(self._wait_s())
+            self._bell.clear()
+            self.dozing = False
+            if self._stopping:
+                return
             try:
                 self.check()
             except Exception:
                 self.node.log.exception("The watchdog failed and stops; the node runs on.")
                 return
+
+    def _wait_s(self) -> float:
+        """Until the next look: ``every_s``, ``stuck_s`` if nothing was found, ``dozing_s`` idle."""
+        if not self._quiet:
+            return self.every_s
+        if self._theirs_alive:
+            return self.stuck_s  # a student's loop may be stuck in a while of its own
+        # Say we doze first, then see whether the node's thread sleeps with nothing
+        # queued: a thread leaving its wait after that sees `dozing` and rings.
+        self.dozing = True
+        queue = self.node.queue
+        if not queue.sleeping or len(queue):
+            self.dozing = False
+            return self.stuck_s
+        return self.dozing_s
 
     def check(self) -> None:
         """Look at the node once: sample its threads' stacks and apply the four rules."""
@@ -182,6 +224,7 @@ class Watchdog:
         handler = _called_by(frames.get(self._node_thread or -1), _HANDLER_CALLERS)
         self._check_handler(handler, now)
         theirs = [loop for loop in loops if _is_students(loop)]
+        self._theirs_alive = any(loop.is_alive() for loop in theirs)
         self._check_loops(theirs, frames, now)
         self._check_flood(theirs, now)
         self._check_spin(theirs, now)

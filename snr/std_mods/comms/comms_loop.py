@@ -795,6 +795,7 @@ _WRITE = selectors.EVENT_WRITE
 _MAX_KEYS_NOTED = 1000  # DEBUG: how many received keys a link remembers for the hints
 _PROGRESS_BYTES = 16 * 1024  # this much of a frame still arriving is a sign of life (a big frame)
 _SHOWN_ROLE_CHARS = 60  # a peer's role in log lines is cut to this many characters
+_BEAT = encode_beat()  # the one frame an idle link receives, once a beat interval
 
 
 def shown_role(role: str) -> str:
@@ -906,6 +907,7 @@ class Link:
         self._held: List[Page] = []  # read while the node was behind: no more reads until sent
         self._timer: Optional[IOTimer] = None
         self._tick_s = min(_TICK_S, owner.beat_s / 4)
+        self._beat_grid_s = owner.beat_s / 4  # beats are looked at on this grid (_next_look_s)
         self._answer_due = False  # the peer was heard since the last send: answer at once
         self.outbox = Outbox(owner.max_backlog_bytes, self.loss)
         self.handshake = Handshake(owner.parent.role, owner.side, owner.system, owner.secret)
@@ -1103,9 +1105,11 @@ class Link:
                 self.state is _OPEN
                 and self.peer_beat_s is not None
                 and not len(self.outbox)
-                and time.monotonic() - self.outbox.last_sent_at >= self.owner.beat_s
+                # due before the next look on the beat grid: it goes now, a little early
+                and time.monotonic() + self._beat_grid_s
+                >= self.outbox.last_sent_at + self.owner.beat_s
             ):
-                self._put_control(encode_beat())  # quiet for beat_s: a sign of life
+                self._put_control(_BEAT)  # quiet for beat_s: a sign of life
             self._check_recovered()
             self._timer = self.io.call_later(self._next_look_s(), self._tick)
 
@@ -1119,7 +1123,12 @@ class Link:
         """Seconds until the first deadline: a beat owed, a silence or hello limit.
 
         A quarter beat while pages are held or dropped (their counts move
-        without a frame), or when the deadline has passed.
+        without a frame), or when the deadline has passed. The look for a
+        beat is on a grid of quarter beats, the same for every link of the
+        node: it comes at the last grid point before the beat is due (the beat
+        goes a little early, never late), so one wake-up of the I/O thread
+        beats for every quiet link at once (a server with 300 idle clients
+        wakes about 4 times a second, not 300).
         """
         if self._held or self.loss.dropping:
             return self._tick_s
@@ -1130,7 +1139,8 @@ class Link:
         if self.state is _HELLO:
             due.append(self.opened_at + owner.hello_timeout_s)
         if self.peer_beat_s is not None:
-            due.append(self.outbox.last_sent_at + owner.beat_s)
+            grid = self._beat_grid_s
+            due.append((self.outbox.last_sent_at + owner.beat_s) // grid * grid)
             due.append(self.last_heard + max(owner.dead_after_s, 3 * self.peer_beat_s))
         wait_s = min(due) + _LATE_S - time.monotonic() if due else 0.0
         return wait_s if wait_s > 0 else self._tick_s
@@ -1214,6 +1224,11 @@ class Link:
             self._end("the peer closed the connection")
             return
         self._answer_due = True
+        if count == len(_BEAT) and self.io.view[:count] == _BEAT and not decoder.pending_bytes():
+            # A lone beat (what an idle link gets): a sign of life, nothing to decode.
+            self._heard_frame = True
+            self._heard(time.monotonic())
+            return
         bodies: List[bytes] = []
         pages: List[Page] = []
         try:
