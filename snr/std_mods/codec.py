@@ -194,8 +194,27 @@ class JsonBackend(Protocol):
         """The value `load_json` reads from ``raw``, or ValueError to let json read it."""
 
 
-_fast: Optional[JsonBackend] = None  # the backend in use; None: json alone
-_backend = "json"
+class _DefaultOnFirstUse:
+    """The backend until the first value is read or written: then the default is chosen.
+
+    Finding the installed backends reads the packages' entry points
+    (``importlib.metadata``, about 13 ms), so importing the codec does not:
+    ``from snr import *`` and a program that sends no page never pay it.
+    """
+
+    def dumps(self, value: Any) -> Optional[bytes]:
+        use_backend()
+        return None if _fast is None else _fast.dumps(value)
+
+    def loads(self, raw: Text) -> Any:
+        use_backend()
+        if _fast is None:
+            raise ValueError("json reads it")
+        return _fast.loads(raw)
+
+
+_fast: Optional[JsonBackend] = _DefaultOnFirstUse()  # the backend in use; None: json alone
+_backend: Optional[str] = None  # None: not chosen yet
 _loaded: Dict[str, JsonBackend] = {}
 
 
@@ -241,7 +260,7 @@ def backend() -> str:
 
         backend()   # 'orjson'
     """
-    return _backend
+    return use_backend() if _backend is None else _backend
 
 
 def use_backend(name: Optional[str] = None) -> str:
@@ -969,7 +988,7 @@ def header_line() -> str:
 
         header_line()   # '{"format":"snr-pages","version":1}'
     """
-    return dump_json({"format": FORMAT_NAME, "version": FORMAT_VERSION}).decode("ascii")
+    return _ENCODER.encode({"format": FORMAT_NAME, "version": FORMAT_VERSION})  # no backend needed
 
 
 def page_to_line(page: Page) -> str:
@@ -1051,6 +1070,3 @@ def page_from_line(
         check_header(fields)
         return None
     return page_from_fields(fields, default_origin, now_s)
-
-
-use_backend()
