@@ -358,8 +358,17 @@ class PongerFactory(EndpointFactory):
         return Ponger(self, parent)
 
 
+def thread_names() -> Dict[int, str]:
+    """Native thread id -> Python thread name, for this process."""
+    return {t.native_id: t.name for t in threading.enumerate() if t.native_id is not None}
+
+
 class Announcer(Endpoint):
-    """Tells the bench when the link is up (the idle measurement starts then)."""
+    """Tells the bench when the link is up (the idle measurement starts then).
+
+    It reports the process id and the names of its threads, which
+    bench_idle.py reads CPU time by.
+    """
 
     def __init__(self, factory: AnnouncerFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, "announcer")
@@ -367,7 +376,7 @@ class Announcer(Endpoint):
         self.task_handlers = {(TaskType.event, COMMS_CONNECTED): self.connected}
 
     def connected(self, task: Task, key: TaskId) -> SomeTasks:
-        self.report.send(("connected", os.getpid()))
+        self.report.send(("connected", (os.getpid(), thread_names())))
         return None
 
 

@@ -30,56 +30,28 @@ import re
 import select
 import socket
 import statistics
-import threading
 import time
 from multiprocessing.connection import Connection
 from typing import Any, Dict, List, Optional, Tuple
 
-from bench_comms import SAFETY_S, Processes, free_port, run_node, zmq
+from bench_comms import (
+    SAFETY_S,
+    AnnouncerFactory,
+    Processes,
+    free_port,
+    run_node,
+    thread_names,
+    zmq,
+)
 
 from snr import (
-    COMMS_CONNECTED,
-    AbstractNode,
-    Endpoint,
-    EndpointFactory,
     Mode,
     SocketsPair,
-    SomeTasks,
-    Task,
-    TaskId,
-    TaskType,
 )
 
 BEAT_S = 1.0  # the baselines' beat, as SNR's default (a quarter of 4 s, at most 1 s)
 DEAD_AFTER_S = 4.0
 Threads = Dict[str, float]  # "server io" -> % of a core
-
-
-def thread_names() -> Dict[int, str]:
-    """Native thread id -> Python thread name, for this process."""
-    return {t.native_id: t.name for t in threading.enumerate() if t.native_id is not None}
-
-
-class Announcer(Endpoint):
-    """Reports, once the link is up, the process id and the names of its threads."""
-
-    def __init__(self, factory: AnnouncerFactory, parent: AbstractNode) -> None:
-        super().__init__(factory, parent, "announcer")
-        self.report = factory.report
-        self.task_handlers = {(TaskType.event, COMMS_CONNECTED): self.connected}
-
-    def connected(self, task: Task, key: TaskId) -> SomeTasks:
-        self.report.send(("connected", (os.getpid(), thread_names())))
-        return None
-
-
-class AnnouncerFactory(EndpointFactory):
-    def __init__(self, report: Connection) -> None:
-        super().__init__()
-        self.report = report
-
-    def get(self, parent: AbstractNode) -> Announcer:
-        return Announcer(self, parent)
 
 
 def short_name(role: str, name: str) -> str:
