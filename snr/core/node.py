@@ -150,7 +150,7 @@ class Node(AbstractNode):
         self.queue = TaskQueue(high_water=self.max_queued_tasks, log=self.log)
         # Config(datastore=...): dict, or a student's. Written by the node alone;
         # components see it read-only:
-        self.pages: Datastore = checked_datastore(getattr(config, "datastore", dict), self)
+        self.pages: Datastore = checked_datastore(config.datastore, self)
         self.datastore: Mapping[DataKey, Page] = NodeDatastore(self.pages, role, self.queue)
         self.state = NodeState.CREATED
         self.terminate_reason: Optional[str] = None
@@ -171,7 +171,7 @@ class Node(AbstractNode):
             from snr.core.checks.node_checks import NodeChecks
 
             self._checks = NodeChecks(self, self._components, self._runner)
-        factory = getattr(config, "node_core", None) or NodeCoreFactory()  # or a student's
+        factory = config.node_core or NodeCoreFactory()  # or a student's
         core: NodeCore = checked_core(self.build_component(factory), factory, self)
         self._core = core
         self.add_component(core, start=False)

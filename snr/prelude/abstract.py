@@ -498,6 +498,10 @@ class AbstractConfig(_FriendlyABC):
     """
 
     mode: Mode
+    datastore: Callable[[], Datastore] = dict
+    """What makes each node's datastore (`Config(datastore=...)`)."""
+    node_core: Optional[AbstractFactory] = None
+    """The factory of each node's core endpoint; None: SNR's own."""
 
     @abstractmethod
     def get(self, role: Role) -> List[AbstractFactory]:
