@@ -1,7 +1,7 @@
 """``python -m snr``: the SNR command line.
 
 ``python -m snr --help`` lists its commands (demo, console, graph, docs, convert,
-lesson, plot, secret, version); ``python -m snr COMMAND --help`` tells one.
+lesson, plot, router, secret, version); ``python -m snr COMMAND --help`` tells one.
 
 Example::
 
@@ -113,6 +113,13 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "over time: one subplot per key, each number in its data a line. Writes a PNG "
         f"file, no screen needed (needs {install_hint('plot')}).",
     )
+    router_parser = sub.add_parser(
+        "router",
+        help="run a Zenoh router for a classroom, set up from the secret (docs/comms.md)",
+        description="A Zenoh router that nodes in mode='client' connect to where multicast "
+        "is blocked; with a secret, only nodes with the same secret link to it. --zenohd "
+        f"prints what zenohd needs instead (needs {install_hint('zenoh')}).",
+    )
     secret_parser = sub.add_parser(
         "secret",
         help="make the secret that only your team's nodes know (docs/comms.md)",
@@ -137,7 +144,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         file_args = words[words.index("--") + 1 :]
         words = words[: words.index("--")]
     command: Any = None
-    if words[:1] in (["demo"], ["graph"], ["docs"], ["convert"], ["lesson"], ["plot"]):
+    if words[:1] in (["demo"], ["graph"], ["docs"], ["convert"], ["lesson"], ["plot"], ["router"]):
         # These commands live in extras, found by their entry points (docs/design.md,
         # "Extras and extension points"), loaded only when asked for.
         try:
@@ -151,6 +158,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
                 "convert": convert_parser,
                 "lesson": lesson_parser,
                 "plot": plot_parser,
+                "router": router_parser,
             }
             command.add_arguments(parsers[words[0]])
     args = parser.parse_args(words)

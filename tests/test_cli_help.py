@@ -16,7 +16,18 @@ from typing import Callable, Dict, List, Sequence, Tuple
 import snr.console
 from snr.__main__ import main as snr_main
 
-COMMANDS = ["demo", "console", "docs", "graph", "convert", "lesson", "plot", "secret", "version"]
+COMMANDS = [
+    "demo",
+    "console",
+    "docs",
+    "graph",
+    "convert",
+    "lesson",
+    "plot",
+    "router",
+    "secret",
+    "version",
+]
 """The commands of ``snr``, as ``snr --help`` lists them."""
 
 

@@ -16,7 +16,7 @@ import stat
 import threading
 import time
 import unittest
-from typing import Any, List, Optional
+from typing import Any, List, Optional, Tuple
 from unittest import mock
 
 from snr import Config, Mode, TimeoutLoopFactory
@@ -103,6 +103,65 @@ class TestZenohSecret(CommsFaultTest):
         self.assertNotIn("horse", password)
         self.assertEqual(stat.S_IMODE(os.stat(path).st_mode), 0o600)
         self.assertEqual(stat.S_IMODE(os.stat(os.path.dirname(path)).st_mode), 0o700)
+
+
+@unittest.skipUnless(HAVE_ZENOH, reason("zenoh"))
+class TestZenohRouterSecret(CommsFaultTest):
+    """Through a router set up from the secret (zenohd's part: a Zenoh session in router mode)."""
+
+    def start_router(self, secret: Optional[bytes]) -> str:
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        config = zenoh_config(mode="router", listen=[endpoint], scouting=False, secret=secret)
+        router = _zenoh_module().open(config)
+        self.addCleanup(router.close)
+        return endpoint
+
+    def client_node(self, endpoint: str) -> Tuple[CounterFactory, LocalNodes]:
+        """A robot in client mode with SECRET behind the router: what it stored of ``cmd``."""
+        commands = CounterFactory("cmd")
+        comms = ZenohCommsFactory(
+            SYSTEM,
+            mode="client",
+            publish="tick",
+            subscribe="cmd",
+            connect=[endpoint],
+            scouting=False,
+            secret=SECRET,
+        )
+        config = Config({"robot": [TickerFactory(hz=50), comms, commands]}, mode=Mode.TEST)
+        nodes = self.run_nodes(config, ["robot"])
+        self.addCleanup(nodes.stop)
+        return commands, nodes
+
+    def test_a_router_with_the_secret_forwards_only_between_sessions_with_it(self) -> None:
+        endpoint = self.start_router(SECRET.encode())
+        commands, _ = self.client_node(endpoint)
+        friend = Session(self, endpoint, SECRET.encode())
+        wrong = Session(self, endpoint, b"a guess")
+        stranger = Session(self, endpoint, None)
+        self.assertTrue(wait_until(lambda: len(friend.heard) > 5, 10.0), "the friend hears")
+        deadline = time.monotonic() + 1.0
+        while time.monotonic() < deadline:
+            friend.put(1)
+            wrong.put(2)
+            stranger.put(3)
+            time.sleep(0.05)
+        self.assertTrue(wait_until(lambda: 1 in commands.seen, 5.0), "the robot hears the friend")
+        time.sleep(0.3)
+        self.assertEqual(set(commands.seen), {1}, "only the friend's pages were stored")
+        self.assertEqual(wrong.heard, [], "a session with another secret hears nothing")
+        self.assertEqual(stranger.heard, [], "a session without a secret hears nothing")
+
+    def test_a_router_without_the_secret_refuses_the_node_and_the_node_says_why(self) -> None:
+        endpoint = self.start_router(None)
+        _, nodes = self.client_node(endpoint)
+        # A client must reach its router when it starts, so the node stops with the reason.
+        self.assertTrue(wait_until(lambda: nodes.errors, 10.0), self.log.lines)
+        said = str(nodes.errors[0])
+        self.assertIn("Node 'robot' could not open its Zenoh session", said)
+        self.assertIn(endpoint, said)
+        self.assertIn("the router has another secret, or only one side has one", said)
+        self.assertIn("(this node has one)", said)
 
 
 @unittest.skipUnless(HAVE_ZENOH, reason("zenoh"))
@@ -202,3 +261,53 @@ def _greets(console: Any) -> bool:
 
 if __name__ == "__main__":
     unittest.main()
+
+
+@unittest.skipUnless(HAVE_ZENOH, reason("zenoh"))
+class TestRouterCommand(unittest.TestCase):
+    """``python -m snr router``: a classroom's router, linking only sessions with the secret."""
+
+    def test_the_router_links_a_client_with_the_secret_and_refuses_one_without(self) -> None:
+        import argparse
+        import io
+
+        from snr.extras.zenoh import router as router_command
+
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        out = io.StringIO()
+        with mock.patch.dict(os.environ, {"SNR_SECRET": SECRET}):
+            args = argparse.Namespace(listen=[endpoint], seconds=4.0, zenohd=False)
+            serving = threading.Thread(target=router_command.run, args=(args, out))
+            serving.start()
+        self.addCleanup(serving.join, 10.0)
+        self.assertTrue(wait_until(lambda: "listening on" in out.getvalue(), 5.0), out.getvalue())
+        self.assertIn("only nodes with this computer's secret link to it", out.getvalue())
+        zenoh = _zenoh_module()
+        # A client must reach its router when its session opens: it opens, or it fails.
+        friend = zenoh.open(
+            zenoh_config("client", connect=[endpoint], scouting=False, secret=SECRET.encode())
+        )
+        self.assertTrue(wait_until(lambda: "1 session(s) linked" in out.getvalue(), 5.0))
+        friend.close()
+        for secret in (None, b"a guess"):
+            with self.subTest(secret=secret), self.assertRaises(zenoh.ZError):
+                zenoh.open(
+                    zenoh_config("client", connect=[endpoint], scouting=False, secret=secret)
+                )
+        serving.join(10.0)
+        self.assertTrue(out.getvalue().endswith("Zenoh router stopped.\n"), out.getvalue())
+
+    def test_zenohd_settings_hold_the_password_made_from_the_secret_not_the_secret(self) -> None:
+        import argparse
+        import io
+
+        from snr.extras.zenoh import router as router_command
+
+        out = io.StringIO()
+        with mock.patch.dict(os.environ, {"SNR_SECRET": SECRET}):
+            args = argparse.Namespace(listen=None, seconds=None, zenohd=True)
+            self.assertEqual(router_command.run(args, out), 0)
+        user, password = zenoh_credentials(SECRET.encode())
+        self.assertIn(f"\n{user}:{password}\n", out.getvalue())
+        self.assertIn(f'password: "{password}"', out.getvalue())
+        self.assertNotIn("horse", out.getvalue())

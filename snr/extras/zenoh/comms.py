@@ -691,11 +691,20 @@ class ZenohComms(Endpoint):
         try:
             self.session = zenoh.open(config)
         except zenoh.ZError as error:
+            said = str(error).split(" at /")[0]
+            if "Unable to connect" in said:
+                # A client must reach a router at once; Zenoh says neither why nor who refused.
+                mine = "this node has one" if secret is not None else "this node has none"
+                fix = (
+                    " Likely causes: (1) no router (zenohd, or `python -m snr router`) runs "
+                    "there; (2) the router has another secret, or only one side has one "
+                    f"({mine}): both need the same SNR_SECRET (docs/comms.md, 'Who may connect')."
+                )
+            else:
+                fix = " If a port is in use, stop the other program or pick another port."
             raise CommsError(
                 f"Node {self.parent.role!r} could not open its Zenoh session (listen="
-                f"{spec.listen}, connect={spec.connect}, mode={spec.mode!r}): "
-                f"{str(error).split(' at /')[0]}. If a port is in use, stop the other "
-                "program or pick another port."
+                f"{spec.listen}, connect={spec.connect}, mode={spec.mode!r}): {said}.{fix}"
             ) from None
         session = self.session
         congestion = (
