@@ -321,6 +321,7 @@ class RemoteConsole(ConsoleClient):
 
     @property
     def where(self) -> str:
+        """``"host:port"``."""
         return f"{self.host}:{self.port}"
 
     def connect(self) -> Reply:
@@ -352,6 +353,7 @@ class RemoteConsole(ConsoleClient):
         return self._accept(greeting, f"The node at {self.where}")
 
     def ask(self, line: str, timeout_s: float) -> Reply:
+        """Send ``line`` and read its reply (replies come in request order)."""
         while self._unanswered:  # a reply left unread by Ctrl-C: it is not this one's
             self._receive(timeout_s)
             self._unanswered -= 1
@@ -408,15 +410,18 @@ class RemoteConsole(ConsoleClient):
         )
 
     def close(self) -> None:
+        """Hang up (the node keeps running). Safe to call twice."""
         if self._sock is not None:
             self._sock.close()
             self._sock = None
 
     def is_connected(self) -> bool:
+        """True until the console or the node closed the connection."""
         return self._sock is not None
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser, prog: str) -> None:
+        """``[HOST:PORT]``, and how to reach a node over Zenoh instead."""
         parser.description = (
             "Send commands to a running SNR node (one with a CommandReceiverFactory)."
         )
@@ -435,6 +440,7 @@ class RemoteConsole(ConsoleClient):
 
     @classmethod
     def from_arguments(cls, args: argparse.Namespace) -> RemoteConsole:
+        """The console to ``args.address``; ValueError if it is not ``HOST:PORT``."""
         host, port = parse_address(args.address)
         return cls(host, port, args.token, args.timeout)
 
