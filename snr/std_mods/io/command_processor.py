@@ -1,19 +1,13 @@
 """The console's commands: their registry, `COMMANDS`, and `CommandProcessorEndpoint`.
 
-A console (remote over TCP, local on stdin, or over Zenoh) never touches the
-node itself: it turns each line the user typed into a command task, and this
-endpoint runs the command in a task handler, on the node's thread, then hands
-the reply to the console's `ConsoleSession` (thesis 6.4.3).
-
-A command is a name, a help line and a function: `command` registers one in
-`COMMANDS`. The kernel's commands are registered here; extras register theirs
-the same way, in the modules the entry point group ``snr.console_commands``
-names (step mode's, ``echo``, ``hz``, ``graph``), which `load_extra_commands`
-loads when a console starts.
+A console turns each line typed into a command task; this endpoint runs the
+command in a task handler, on the node's thread, and hands the reply to the
+line's `ConsoleSession` (thesis 6.4.3). `command` registers a command: the
+kernel's below, an extra's in a module named in the entry point group
+``snr.console_commands`` (docs/console.md, "How the console is built").
 
 Example::
 
-    COMMANDS["dump"].usage                 # 'dump profiler|datastore [KEY|PREFIX*]'
     processor.execute("task event beep")   # Reply(Status.OK, "Scheduled ...")
 """
 
@@ -67,18 +61,13 @@ __all__ = [
 REPLY_BUDGET_CHARS = 64 * 1024
 """Longest reply a console command builds; a longer one is cut with a note.
 
-The note says how to ask for the rest, e.g. ``dump datastore KEY``.
-
 Example::
 
     len(processor.execute("dump datastore").text) <= REPLY_BUDGET_CHARS + 400   # True
 """
 
 REPLY_BUDGET_S = 0.01
-"""Node-thread time a listing (``dump datastore``) may take before it stops with a note.
-
-Commands run on the node's thread, so a long listing would delay every task
-behind it. The first 50 keys are always shown (each costs microseconds).
+"""Node-thread time a listing (``dump datastore``) may take, after its first 50 keys.
 
 Example::
 
@@ -92,6 +81,12 @@ _PREVIEW_CHARS = 120
 class _ValueRepr(reprlib.Repr):
     """`reprlib.Repr` that shortens read-only page data (DEBUG, TEST) as the list or dict it is."""
 
+    def __init__(self, chars: int, levels: int, items: int) -> None:
+        super().__init__()
+        self.maxstring = self.maxother = chars
+        self.maxlevel = levels
+        self.maxlist = self.maxtuple = self.maxdict = self.maxset = items
+
     def repr_ReadOnlyList(self, value: List[Any], level: int) -> str:  # reprlib names it so
         return self.repr_list(value, level)
 
@@ -99,15 +94,8 @@ class _ValueRepr(reprlib.Repr):
         return self.repr_dict(value, level)
 
 
-_previews = _ValueRepr()  # a short preview of any value, cheap even for a huge one
-_previews.maxstring = _previews.maxother = _PREVIEW_CHARS
-_previews.maxlevel = 3
-_previews.maxlist = _previews.maxtuple = _previews.maxdict = _previews.maxset = 12
-_whole_values = _ValueRepr()  # one value in full, up to a reply's length
-_whole_values.maxstring = _whole_values.maxother = REPLY_BUDGET_CHARS
-_whole_values.maxlevel = 8
-_whole_values.maxlist = _whole_values.maxtuple = _whole_values.maxdict = 2000
-_whole_values.maxset = 2000
+_previews = _ValueRepr(_PREVIEW_CHARS, 3, 12)  # a short preview, cheap even for a huge value
+_whole_values = _ValueRepr(REPLY_BUDGET_CHARS, 8, 2000)  # one value in full, up to a reply
 
 Answer = Union[str, Reply, None]
 """What a command returns: the text of an OK reply, a reply, or None: it replies later."""
@@ -139,9 +127,8 @@ COMMANDS: Dict[str, CommandHelp] = {}
 def command(usage: str, summary: str, details: str = "") -> Callable[[_Run], _Run]:
     """Register the decorated function as the console command named by ``usage``'s first word.
 
-    The one way to add a command, for the kernel's and for an extra's: raise
-    `CommandFailed` for a reply that says what is wrong; set
-    ``processor.follow_up`` to the tasks the command asks for.
+    The one way to add a command, the kernel's or an extra's: raise
+    `CommandFailed` to refuse; set ``processor.follow_up`` to the tasks it asks for.
 
     Example::
 
@@ -165,8 +152,8 @@ _extras_loaded = False
 def load_extra_commands() -> None:
     """Register the commands of every extra named in the entry point group ``snr.console_commands``.
 
-    Safe to call again; an extra that cannot be imported is skipped (its
-    commands stay unknown). Consoles call it when they start.
+    Consoles call it when they start; it loads once. An extra that cannot be
+    imported is skipped with a warning.
 
     Example::
 
@@ -204,13 +191,27 @@ class CommandFailed(Exception):
     """
 
 
+# Why `check_protected` refuses, by (what the component is, the action).
+_REFUSALS = {
+    ("core", "remove"): "Refused: {} is the node's own core. It stores every page, adds, "
+    "removes and reloads components, and stops the node on `exit`; without it the node "
+    "would run on deaf. To stop the node, type `exit`.",
+    ("core", "reload"): "Refused: {} is the node's own core and runs every reload itself; "
+    "SNR's own code is not reloaded while the node runs. Restart the node to load a new SNR.",
+    ("console", "remove"): "Refused: {} is part of a console; removing it would cut off the "
+    "consoles that use it, maybe this one. Type `quit` to leave this console, or `exit` to "
+    "stop the node.",
+    ("console", "reload"): "{} is part of the console, which cannot reload itself while it "
+    "carries this command. Restart the node to load new console code.",
+}
+
+
 class CommandProcessorEndpoint(Endpoint):
     """Runs console command lines in a task handler and replies to the console.
 
-    Its consoles schedule ``Task(TaskType.event, <its task name>, [line,
-    session])``; you do not build it yourself: `CommandReceiverFactory` and
-    `LocalConsoleFactory` add one to the node. A failing command is reported
-    to the console and logged; it never stops the node.
+    Consoles add one for themselves (`CommandReceiverFactory`) and schedule
+    ``Task(TaskType.event, <its task name>, [line, session])``. A failing
+    command is reported to the console and logged; it never stops the node.
 
     Attributes:
         session: the console of the command being run (None in `execute`).
@@ -263,25 +264,21 @@ class CommandProcessorEndpoint(Endpoint):
     def terminate(self) -> None:
         """Close what the commands keep (e.g. the timer of open ``echo``/``hz`` watches)."""
         for kept in self.state.values():
-            close = getattr(kept, "close", None)
-            if callable(close):
-                close()
+            if callable(getattr(kept, "close", None)):
+                kept.close()
 
     def execute(self, line: str) -> Reply:
-        """Run one command line now and return the reply (on the node's thread).
-
-        Tasks the command asks for (e.g. ``task event go``) are scheduled.
-        """
+        """Run one command line now and return the reply, on the node's thread."""
         reply, follow_up = self._run(line)
         self.schedule(follow_up)
         return reply or Reply(Status.OK, "")
 
     def _run(self, line: str) -> Tuple[Optional[Reply], SomeTasks]:
         """The reply to ``line`` (None: it comes later), and the tasks it asks for."""
-        words = line.split(None, 1)
-        if not words:
+        word, *args = line.split(None, 1) or [""]
+        word = word.lower()
+        if not word:
             return Reply(Status.OK, ""), None
-        word, args = words[0].lower(), words[1] if len(words) > 1 else ""
         entry = COMMANDS.get(word)
         if entry is None or entry.run is None:
             hint = did_you_mean(word, COMMANDS)
@@ -289,7 +286,7 @@ class CommandProcessorEndpoint(Endpoint):
             return Reply(Status.ERROR, text), None
         self.follow_up = None
         try:
-            answer = entry.run(self, args)
+            answer = entry.run(self, "".join(args).strip())
         except CommandFailed as refused:
             answer = Reply(Status.ERROR, str(refused))
         except Exception as error:  # a broken command must not stop the robot
@@ -328,37 +325,19 @@ class CommandProcessorEndpoint(Endpoint):
         The refusal is the reply, and it is logged (repeats are counted, not repeated).
         """
         component = node.components.get(name)
-        if name == NODE_CORE_NAME and action == "remove":
-            reason = (
-                f"Refused: {name!r} is the node's own core. It stores every page, adds, "
-                "removes and reloads components, and stops the node on `exit`; without "
-                "it the node would run on deaf. To stop the node, type `exit`."
-            )
-        elif name == NODE_CORE_NAME:
-            reason = (
-                f"Refused: {name!r} is the node's own core and runs every reload itself; "
-                "SNR's own code is not reloaded while the node runs. Restart the node to "
-                "load a new SNR."
-            )
+        if name == NODE_CORE_NAME:
+            kind = "core"
         elif component is None and action == "reload":
             hint = did_you_mean(name, node.components)
             raise CommandFailed(
                 f"No component named {name!r} in node {node.role!r}.{hint} "
                 f"Components: {', '.join(self.parent.components)}."
             )
-        elif component is None or not _is_console_part(component, self.parent):
-            return
-        elif action == "remove":
-            reason = (
-                f"Refused: {name!r} is part of a console; removing it would cut off the "
-                "consoles that use it, maybe this one. Type `quit` to leave this console, "
-                "or `exit` to stop the node."
-            )
+        elif component is not None and _is_console_part(component, self.parent):
+            kind = "console"
         else:
-            reason = (
-                f"{name!r} is part of the console, which cannot reload itself while it "
-                "carries this command. Restart the node to load new console code."
-            )
+            return
+        reason = _REFUSALS[kind, action].format(repr(name))
         self._refusals.report(
             ("refused", reason[:60]),
             "Refused console commands",
@@ -434,9 +413,8 @@ def _task(p: CommandProcessorEndpoint, args: str) -> Answer:
             p.check_protected(p.full_node("task reload"), name, "reload")
         task = tasks.reload_component(name)
     elif task_type is TaskType.event:
-        if name == tasks.REMOVE_COMPONENT:
-            for target in values:
-                p.check_protected(p.parent, str(target), "remove")
+        for target in values if name == tasks.REMOVE_COMPONENT else ():
+            p.check_protected(p.parent, str(target), "remove")
         task = tasks.event(name, values)
     elif len(values) != 1:
         raise CommandFailed(
@@ -460,31 +438,30 @@ def _task(p: CommandProcessorEndpoint, args: str) -> Answer:
     "an exception), the old version keeps running and the reply says why.",
 )
 def _reload(p: CommandProcessorEndpoint, args: str) -> Answer:
-    target = args.strip()
-    if not target or len(target.split()) != 1:
+    if not args or len(args.split()) != 1:
         raise CommandFailed(
             f"Usage: {COMMANDS['reload'].usage}. Components: {', '.join(p.parent.components)}."
         )
     node = p.full_node("reload")
-    names = [target]
-    if target == "all":
-        names = [
-            name
-            for name, component in node.components.items()
-            if component.factory.reload_targets and not _is_console_part(component, node)
-        ]
-        if not names:
-            return (
-                "Nothing to reload: no component's factory names modules to reload. "
-                "Pass the module to the factory, e.g. `super().__init__(my_module)`."
-            )
-    else:
-        p.check_protected(node, target, "reload")
+    if args != "all":
+        p.check_protected(node, args, "reload")
+        ok, text = _reload_one(node, args)
+        return Reply(Status.OK if ok else Status.ERROR, text)
+    names = [
+        name
+        for name, component in node.components.items()
+        if component.factory.reload_targets and not _is_console_part(component, node)
+    ]
+    if not names:
+        return (
+            "Nothing to reload: no component's factory names modules to reload. "
+            "Pass the module to the factory, e.g. `super().__init__(my_module)`."
+        )
     results = [_reload_one(node, name) for name in names]
-    failed = [message for ok, message in results if not ok]
+    failed = sum(not ok for ok, _ in results)
     text = results[0][1]
     if len(results) > 1:
-        text = f"Reloaded {len(results) - len(failed)} of {len(results)} components:\n"
+        text = f"Reloaded {len(results) - failed} of {len(results)} components:\n"
         text += "\n".join("  " + message for _, message in results)
     return Reply(Status.ERROR if failed else Status.OK, text)
 
@@ -516,16 +493,15 @@ def _list(p: CommandProcessorEndpoint, args: str) -> Answer:
         return commands_table()
     components = p.parent.components
     lines = [f"Components of node {p.parent.role!r} ({len(components)}):"]
-    width = max((len(name) for name in components), default=0)
+    width = max(map(len, components), default=0)
     for name, component in components.items():
-        kind = "loop" if isinstance(component, ThreadLoop) else "endpoint"
-        line = f"  {name:<{width}}  {kind:<8}  {type(component).__name__}"
+        line = f"  {name:<{width}}  endpoint  {type(component).__name__}"
         if isinstance(component, ThreadLoop):
-            line += f" ({component.state.value})"
+            line = (
+                f"  {name:<{width}}  loop      {type(component).__name__} ({component.state.value})"
+            )
         modules = [m.__name__ for m in component.factory.reload_targets]
-        if modules:
-            line += f"  reloads: {', '.join(modules)}"
-        lines.append(line)
+        lines.append(line + (f"  reloads: {', '.join(modules)}" if modules else ""))
     return "\n".join(lines)
 
 
@@ -541,26 +517,27 @@ def _dump(p: CommandProcessorEndpoint, args: str) -> Answer:
     choice = one_choice("dump", words[0] if words else "", ["profiler", "datastore"])
     if len(words) > (1 if choice == "profiler" else 2):
         raise CommandFailed(f"Usage: {COMMANDS['dump'].usage}.")
-    role = p.parent.role
+    role, profiler = p.parent.role, p.parent.profiler
     if choice == "profiler":
-        if p.parent.profiler is None:
-            return (
+        return (
+            profiler.dump()
+            if profiler is not None
+            else (
                 f"Profiling is off for node {role!r}. Turn it on with "
                 "Config(..., profile=True); it is on by default in Mode.DEBUG."
             )
-        return p.parent.profiler.dump()
+        )
     datastore = p.full_node("dump datastore").datastore
-    if len(words) < 2 or words[1].endswith("*"):
-        return _list_datastore(role, datastore, words[1][:-1] if len(words) == 2 else "")
-    key = words[1]
+    key = words[1] if len(words) == 2 else "*"
+    if key.endswith("*"):
+        return _list_datastore(role, datastore, key[:-1])
     page = datastore.get(key)
     if page is None:
         raise CommandFailed(
             f"Node {role!r} has no data under {key!r}.{did_you_mean(key, datastore)} "
             "`dump datastore` lists the keys."
         )
-    age_s = max(0.0, time.time() - page.created_at_s)
-    head = f"{key} (from {page.origin!r}, {age_s:.1f} s ago) = "
+    head = f"{key} (from {page.origin!r}, {max(0.0, time.time() - page.created_at_s):.1f} s ago) = "
     text = _whole_values.repr(page.data)
     data: Any = page.data
     cut_items = isinstance(data, (list, tuple, dict, set, frozenset)) and (
@@ -602,7 +579,7 @@ def _stats(p: CommandProcessorEndpoint, args: str) -> Answer:
 
 @command("help [command]", "Show the commands, or one command in detail.")
 def _help(p: CommandProcessorEndpoint, args: str) -> Answer:
-    topic = args.strip().lower()
+    topic = args.lower()
     if not topic:
         return "Commands (type `help <command>` for details):\n" + commands_table()
     entry = COMMANDS.get(topic)
@@ -701,9 +678,8 @@ def _list_datastore(role: str, datastore: Mapping[str, Page], prefix: str) -> st
     if not keys:
         return f"The datastore of node {role!r} has no keys{where}."
     now = time.time()
-    width = min(max(len(key) for key in keys), 40)
-    count = f"{len(keys):,} key{'s' if len(keys) != 1 else ''}{where}"
-    lines = [f"Datastore of node {role!r} ({count}):"]
+    width = min(max(map(len, keys)), 40)
+    lines = [f"Datastore of node {role!r} ({len(keys):,} key{'s' * (len(keys) != 1)}{where}):"]
     size = len(lines[0])
     for shown, key in enumerate(keys):
         page = datastore.get(key)

@@ -1,13 +1,10 @@
-"""The node's end of the console: `ConsoleLoop`, the one core of its transports, and TCP's.
+"""The node's end of the console: `ConsoleLoop`, the core of every transport, and TCP's.
 
-A console only turns the lines a user types into tasks; the command
-processor it adds to the node (``command_processor.py``) runs each command
-on the node's thread and sends the reply to the line's `ConsoleSession`.
-`CommandReceiverFactory` serves ``snr-console HOST:PORT`` over TCP, one
-thread per connected console (thesis 6.4.3). The local console
-(``snr.extras.console_tools.local``) and the Zenoh one
-(``snr.extras.zenoh.console``) are `ConsoleLoop` s too. The commands and the
-protocol are in ``docs/console.md``.
+A console turns the lines a user types into tasks; its command processor
+(``command_processor.py``) runs each on the node's thread and sends the reply
+to the line's `ConsoleSession`. `CommandReceiverFactory` serves ``snr-console
+HOST:PORT`` over TCP, a thread per connected console (thesis 6.4.3). Limits
+and security: docs/console.md.
 
 Example::
 
@@ -96,15 +93,30 @@ Example::
 
 _SEND_TIMEOUT_S = 2.0  # a console that takes none of a reply for this long is dropped
 _GOODBYE_TIMEOUT_S = 0.5  # for all consoles together, when the node stops
+_MAX_ADDRESSES = 1024  # the token throttle remembers at most so many addresses
 _READ_CHUNK = 4096
+
+# What the receiver logs, by key: the summary of its repeats, and its level.
+_REPORTS = {
+    "slow reader": ("Consoles dropped for not reading their replies", logging.WARNING),
+    "waiting full": ("Consoles pushed out while waiting to give their token", logging.WARNING),
+    "full": ("Consoles turned away (too many connected)", logging.WARNING),
+    "no token": ("Consoles disconnected for giving no token in time", logging.INFO),
+    "idle": ("Idle consoles disconnected", logging.INFO),
+    "too early": (
+        "Console tokens refused unchecked (too soon after wrong ones)",
+        logging.WARNING,
+    ),
+    "wrong token": ("Consoles that gave a wrong token", logging.WARNING),
+    "no auth": ("Consoles that sent a command instead of their token", logging.WARNING),
+}
 
 
 class ConsoleLoop(ThreadLoop):
-    """Base of the consoles: adds a processor at ``begin`` and submits lines to it.
+    """Base of the consoles: adds a command processor at ``begin`` and submits lines to it.
 
-    Subclasses read lines (in ``loop()`` or threads of their own) and call
-    ``self.submit(line, session)``. Each console adds its own processor, so
-    several consoles never run one command twice.
+    Subclasses read lines and call ``self.submit(line, session)``. Each console
+    has its own processor, so several consoles never run one command twice.
 
     Example::
 
@@ -123,11 +135,7 @@ class ConsoleLoop(ThreadLoop):
         self.command_task_name = f"console_command:{name}"
 
     def begin(self) -> None:
-        """Ask the node to add this console's processor (if it has none yet).
-
-        The add task is queued before any command this loop can submit, so
-        the processor exists by the time the first command runs.
-        """
+        """Queue the processor's add task, before any command this loop can submit."""
         if self.processor_name not in self.parent.components:
             factory = CommandProcessorFactory(
                 self.processor_name, self.command_task_name, console=self.name
@@ -135,11 +143,7 @@ class ConsoleLoop(ThreadLoop):
             self.schedule(tasks.add_component(factory))
 
     def submit(self, line: str, session: ConsoleSession) -> None:
-        """Queue a command line; the processor replies to ``session``.
-
-        While the node is paused (``pause``) the command is urgent, so it
-        runs although the node's other tasks wait.
-        """
+        """Queue a command line (urgent while the node is paused); the reply goes to ``session``."""
         priority = console_priority(self.parent)
         self.schedule(Task(TaskType.event, self.command_task_name, [line, session], priority))
 
@@ -157,50 +161,43 @@ class ConsoleLoop(ThreadLoop):
 
 
 class _TokenThrottle:
-    """Wrong tokens from one address make it wait longer and longer before the next try.
+    """Wrong tokens from one address make it wait longer and longer before its next try.
 
-    After the n-th wrong token in a row, the address's next token is checked
-    only after ``first_delay_s * 2 ** (n - 1)`` seconds (at most
-    ``max_delay_s``); earlier tries are refused unchecked. A right token, or
-    ``forget_after_s`` without a wrong one, starts the address afresh. At
-    most ``max_addresses`` are remembered (the longest-quiet is forgotten),
-    so a flood from many addresses costs bounded memory.
+    After n wrong tokens in a row, its next token is checked only after
+    ``first_delay_s * 2 ** (n - 1)`` s (at most ``max_delay_s``). A right token,
+    or ``forget_after_s`` without a wrong one, starts afresh. The longest-quiet
+    addresses are forgotten, so a flood from many addresses costs bounded memory.
     """
 
     def __init__(
-        self,
-        first_delay_s: float = 0.25,
-        max_delay_s: float = 30.0,
-        forget_after_s: float = 600.0,
-        max_addresses: int = 1024,
+        self, first_delay_s: float = 0.25, max_delay_s: float = 30.0, forget_after_s: float = 600.0
     ) -> None:
         self.first_delay_s, self.max_delay_s = first_delay_s, max_delay_s
-        self.forget_after_s, self.max_addresses = forget_after_s, max_addresses
-        self._failures: Dict[str, Tuple[int, float]] = {}  # host -> (in a row, last time)
-        self._lock = threading.Lock()  # each console's thread checks its own tokens
+        self.forget_after_s = forget_after_s
+        self._failures: Dict[str, Tuple[int, float]] = {}  # host -> (in a row, last), oldest first
+        self._lock = threading.Lock()  # each console's thread checks its own token
 
     def _in_a_row(self, host: str, now: float) -> Tuple[int, float]:
         failures, last = self._failures.get(host, (0, 0.0))
         return (failures, last) if now - last <= self.forget_after_s else (0, 0.0)
 
-    def delay_s(self, failures: int) -> float:
-        """The wait after ``failures`` wrong tokens in a row."""
+    def _delay_s(self, failures: int) -> float:
         return min(self.max_delay_s, self.first_delay_s * 2.0 ** min(failures - 1, 30))
 
     def wait_s(self, host: str, now: float) -> float:
         """How long ``host`` must still wait before its next token is checked."""
         failures, last = self._in_a_row(host, now)
-        return max(0.0, last + self.delay_s(failures) - now) if failures else 0.0
+        return max(0.0, last + self._delay_s(failures) - now) if failures else 0.0
 
     def failed(self, host: str, now: float) -> Tuple[int, float]:
         """Count a wrong token; the failures in a row and the wait before the next try."""
         with self._lock:
             failures = self._in_a_row(host, now)[0] + 1
-            self._failures.pop(host, None)  # re-added last: the dict is oldest first
-            if len(self._failures) >= self.max_addresses:
+            self._failures.pop(host, None)
+            if len(self._failures) >= _MAX_ADDRESSES:
                 del self._failures[next(iter(self._failures))]
             self._failures[host] = (failures, now)
-        return failures, self.delay_s(failures)
+        return failures, self._delay_s(failures)
 
     def succeeded(self, host: str) -> None:
         """A right token: ``host`` starts afresh."""
@@ -213,11 +210,10 @@ class _Gone(Exception):
 
 
 class _RemoteConsole(ConsoleSession):
-    """One TCP console, served by a thread of the receiver's while it is connected.
+    """One TCP console and its thread: read a line, have it answered, write the reply, repeat.
 
-    The thread reads a line, has it answered, writes the reply, and only then
-    reads the next: lines sent ahead wait in the socket, so a flood of
-    commands costs the node nothing. Replies reach the thread through `send`.
+    Lines sent ahead wait in the socket, so a flood of commands costs the node
+    nothing. Replies (and goodbyes from other threads) reach the thread through `send`.
     """
 
     def __init__(
@@ -238,12 +234,9 @@ class _RemoteConsole(ConsoleSession):
         self.replies.put(reply)
 
     def interrupt(self, goodbye: Reply) -> None:
-        """Have the console's thread write ``goodbye`` (a BYE) at once, whatever it waits for."""
+        """Have the console's thread write ``goodbye`` at once, whatever it waits for."""
         self.send(goodbye)
-        try:
-            self.sock.shutdown(socket.SHUT_RD)  # ends a wait in recv()
-        except OSError:
-            pass  # closed already
+        _shut(self.sock, socket.SHUT_RD)  # ends a wait in recv()
 
     def serve(self) -> None:
         """The console's thread: greet, then answer line after line until a BYE or a hang-up."""
@@ -278,11 +271,7 @@ class _RemoteConsole(ConsoleSession):
         return self.replies.get()
 
     def write(self, reply: Reply) -> bool:
-        """Send ``reply``; False when it says bye.
-
-        Raises:
-            _Gone: the console took none of it for `_SEND_TIMEOUT_S`.
-        """
+        """Send ``reply``; False after a bye; `_Gone` if the console takes none of it."""
         data = memoryview(reply.encode())
         self.sock.settimeout(_SEND_TIMEOUT_S)
         while data:
@@ -291,8 +280,6 @@ class _RemoteConsole(ConsoleSession):
             except socket.timeout:
                 self.receiver.report(
                     "slow reader",
-                    "Consoles dropped for not reading their replies",
-                    logging.WARNING,
                     f"Dropped console {self.peer}: it did not read its replies ({len(data)} "
                     f"bytes waiting, none taken for {_SEND_TIMEOUT_S:.1f} s).",
                 )
@@ -303,14 +290,20 @@ class _RemoteConsole(ConsoleSession):
         return f"console {self.peer}"
 
 
+def _shut(sock: Optional[socket.socket], how: int) -> None:
+    try:
+        if sock is not None:
+            sock.shutdown(how)
+    except OSError:
+        pass  # closed already
+
+
 class CommandReceiverLoop(ConsoleLoop):
     """Accepts console connections over TCP; each console's thread submits its commands.
 
-    Built by `CommandReceiverFactory`; it listens from ``begin()`` (so a port
-    in use is reported at start-up). Its limits (`MAX_CONSOLES`,
-    `MAX_WAITING_CONSOLES`, the time limits, wrong tokens, consoles that do
-    not read) are in docs/console.md, "Several consoles"; each refusal is
-    said to the console and logged (repeats are counted).
+    Built by `CommandReceiverFactory`; it listens from ``begin()`` (so a port in
+    use is reported at start-up). Its limits are in docs/console.md, "Several
+    consoles"; each refusal is said to the console and logged (repeats are counted).
 
     Example::
 
@@ -329,19 +322,18 @@ class CommandReceiverLoop(ConsoleLoop):
         self._wake_out: Optional[socket.socket] = None
         self._sessions: List[_RemoteConsole] = []  # the oldest first
         self._lock = threading.Lock()
-        # Consoles accepted and not yet served, for the console threads. A thread that
-        # served a console takes the next, so a burst of connections starts few threads.
-        self._accepted: queue.Queue[Optional[_RemoteConsole]] = queue.Queue()
-        self._idle_threads = 0
-        self._threads = 0
         self._throttle = _TokenThrottle()
         self._repeats = RepeatFilter(self.log)
         self._last_summary = time.monotonic()
 
-    def report(self, key: str, what: str, level: int, message: str) -> None:
+    def report(self, key: str, message: str) -> None:
         """Log ``message`` (repeats of ``key`` are counted, then summed up)."""
         with self._lock:
-            self._repeats.report(key, what, level, message)
+            self._repeats.report(key, *_REPORTS[key], message)
+
+    def _bye(self, key: str, message: str, text: str) -> Reply:
+        self.report(key, message)
+        return Reply(Status.BYE, text)
 
     # -- life cycle ---------------------------------------------------------
     def begin(self) -> None:
@@ -366,9 +358,8 @@ class CommandReceiverLoop(ConsoleLoop):
         self._selector = selectors.DefaultSelector()  # not select(): any fd number works
         self._selector.register(self._listener, selectors.EVENT_READ)
         self._selector.register(self._wake_in, selectors.EVENT_READ)
-        host, port = self._listener.getsockname()[:2]
-        factory._now_listening(host, port)
-        self.info("Console receiver listening on %s:%d", host, port)
+        factory.address = self._listener.getsockname()[:2]
+        self.info("Console receiver listening on %s:%d", *factory.address)
         super().begin()
 
     def loop(self) -> None:
@@ -381,10 +372,9 @@ class CommandReceiverLoop(ConsoleLoop):
             self._wake_in.recv(_READ_CHUNK)  # halt() woke it
         elif self._listener in ready:
             try:
-                sock, address = self._listener.accept()
+                self._start(_RemoteConsole(self, *self._listener.accept()))
             except OSError:
-                return  # the client gave up before we accepted
-            self._start(_RemoteConsole(self, sock, address))
+                pass  # the client gave up before we accepted
         if time.monotonic() - self._last_summary >= self._repeats.every_s:
             self._last_summary = time.monotonic()
             with self._lock:
@@ -392,18 +382,14 @@ class CommandReceiverLoop(ConsoleLoop):
 
     def halt(self) -> None:
         """Wake the loop's thread so it sees it must stop."""
-        if self._wake_out is not None:
-            try:
+        try:
+            if self._wake_out is not None:
                 self._wake_out.send(b"\0")
-            except OSError:
-                pass
+        except OSError:
+            pass
 
     def terminate(self) -> None:
-        """Say goodbye to every console, then close all sockets.
-
-        The goodbyes share one short deadline, so consoles that do not read
-        cannot hold up the node's shutdown.
-        """
+        """Say goodbye to every console (one short deadline for all), then close all sockets."""
         goodbye = Reply(Status.BYE, f"Node {self.parent.role!r} is stopping.")
         with self._lock:
             consoles = list(self._sessions)
@@ -412,12 +398,7 @@ class CommandReceiverLoop(ConsoleLoop):
         deadline = time.monotonic() + _GOODBYE_TIMEOUT_S
         for console in consoles:
             if not console.done.wait(max(0.0, deadline - time.monotonic())):
-                try:  # too slow to take its goodbye
-                    console.sock.shutdown(socket.SHUT_RDWR)
-                except OSError:
-                    pass
-        for _ in range(self._threads):
-            self._accepted.put(None)  # each console thread ends
+                _shut(console.sock, socket.SHUT_RDWR)  # too slow to take its goodbye
         self._repeats.flush()
         for closable in (self._selector, self._listener, self._wake_in, self._wake_out):
             if closable is not None:
@@ -428,39 +409,19 @@ class CommandReceiverLoop(ConsoleLoop):
         with self._lock:
             waiting = [c for c in self._sessions if not c.authenticated]
             full = self.factory.token is not None and len(waiting) >= MAX_WAITING_CONSOLES
-            pushed_out = waiting[0] if full else None
-            if pushed_out is not None:
-                self._sessions.remove(pushed_out)
+            if full:
+                self._sessions.remove(waiting[0])
             self._sessions.append(console)
-        if pushed_out is not None:
+        if full:
             self.report(
                 "waiting full",
-                "Consoles pushed out while waiting to give their token",
-                logging.WARNING,
                 f"{MAX_WAITING_CONSOLES} consoles are waiting to give their token, the most "
-                f"this receiver keeps; disconnected the oldest, {pushed_out.peer}, to make room.",
+                f"this receiver keeps; disconnected the oldest, {waiting[0].peer}, to make room.",
             )
             text = "Too many consoles are waiting to give their token."
-            pushed_out.interrupt(Reply(Status.BYE, text))
-        with self._lock:  # an idle console thread takes it, else a new one
-            reuse = self._idle_threads > 0
-            self._idle_threads -= reuse
-            self._threads += not reuse
-        if reuse:
-            self._accepted.put(console)
-        else:
-            name = f"snr-{self.parent.role}-{self.name}-consoles"
-            threading.Thread(
-                target=self._serve_consoles, args=(console,), name=name, daemon=True
-            ).start()
-
-    def _serve_consoles(self, console: Optional[_RemoteConsole]) -> None:
-        """A console thread: serves one console after another until the node stops."""
-        while console is not None:
-            console.serve()
-            with self._lock:
-                self._idle_threads += 1
-            console = self._accepted.get()
+            waiting[0].interrupt(Reply(Status.BYE, text))
+        name = f"snr-{self.parent.role}-{self.name}-consoles"
+        threading.Thread(target=console.serve, name=name, daemon=True).start()
 
     def greet(self, console: _RemoteConsole) -> Reply:
         """The first reply: a request for the token, or the greeting."""
@@ -475,14 +436,12 @@ class CommandReceiverLoop(ConsoleLoop):
             full = sum(c.authenticated for c in self._sessions) >= MAX_CONSOLES
             console.authenticated = not full
         if full:
-            self.report(
+            return self._bye(
                 "full",
-                "Consoles turned away (too many connected)",
-                logging.WARNING,
                 f"Turned away console {console.peer}: {MAX_CONSOLES} are connected, the most "
                 "this receiver serves.",
+                f"Too many consoles ({MAX_CONSOLES}) are open.",
             )
-            return Reply(Status.BYE, f"Too many consoles ({MAX_CONSOLES}) are open.")
         self.info("Console %s connected", console.peer)
         return Reply(Status.HELLO, self.greeting())
 
@@ -503,75 +462,53 @@ class CommandReceiverLoop(ConsoleLoop):
 
     def timed_out(self, console: _RemoteConsole) -> Reply:
         """The goodbye of a console that gave no token, or no command, in time."""
+        auth_s, idle_s = self.auth_timeout_s, self.idle_timeout_s
         if not console.authenticated:
-            self.report(
+            return self._bye(
                 "no token",
-                "Consoles disconnected for giving no token in time",
-                logging.INFO,
-                f"Console {console.peer} gave no token within {self.auth_timeout_s:g} s; "
-                "disconnected it.",
+                f"Console {console.peer} gave no token within {auth_s:g} s; disconnected it.",
+                f"No console token within {auth_s:g} s: disconnected.",
             )
-            text = f"No console token within {self.auth_timeout_s:g} s: disconnected."
-            return Reply(Status.BYE, text)
-        self.report(
+        return self._bye(
             "idle",
-            "Idle consoles disconnected",
-            logging.INFO,
-            f"Console {console.peer} sent no command for {self.idle_timeout_s:g} s; "
-            "disconnected it.",
+            f"Console {console.peer} sent no command for {idle_s:g} s; disconnected it.",
+            f"Closed this console after {idle_s:g} s without a command. Connect again to carry on.",
         )
-        text = (
-            f"Closed this console after {self.idle_timeout_s:g} s without a command. "
-            "Connect again to carry on."
-        )
-        return Reply(Status.BYE, text)
 
     def _authenticate(self, console: _RemoteConsole, line: str) -> Reply:
-        token = self.factory.token
-        assert token is not None
         word, _, given = line.partition(" ")
         host, peer, now = console.host, console.peer, time.monotonic()
         wait_s = self._throttle.wait_s(host, now) if word == "auth" else 0.0
         if wait_s > 0:
-            self.report(
+            return self._bye(
                 "too early",
-                "Console tokens refused unchecked (too soon after wrong ones)",
-                logging.WARNING,
                 f"Console {peer} gave a token {wait_s:.1f} s too soon after wrong ones "
                 f"from {host}; refused it unchecked.",
-            )
-            text = (
                 f"Too many wrong console tokens from {host}: the next one is checked "
                 f"in {wait_s:.1f} s (each wrong token doubles the wait, up to "
-                f"{self._throttle.max_delay_s:g} s)."
+                f"{self._throttle.max_delay_s:g} s).",
             )
-            return Reply(Status.BYE, text)
-        if word == "auth" and tokens_match(token, given.strip()):
+        if word == "auth" and tokens_match(str(self.factory.token), given.strip()):
             self._throttle.succeeded(host)
             return self._let_in(console)
         if word == "auth":
             failures, delay_s = self._throttle.failed(host, now)
             self.report(
                 "wrong token",
-                "Consoles that gave a wrong token",
-                logging.WARNING,
                 f"Console {peer} gave a wrong token ({failures} in a row from {host}); "
                 f"disconnected it. The next token from there is checked after {delay_s:.2f} s.",
             )
         else:
             self.report(
-                "no auth",
-                "Consoles that sent a command instead of their token",
-                logging.WARNING,
-                f"Console {peer} sent a command before its token; disconnected it.",
+                "no auth", f"Console {peer} sent a command before its token; disconnected it."
             )
-        text = (
+        return Reply(
+            Status.BYE,
             "Wrong or missing console token. Give the node's token with "
             f"`snr-console HOST:PORT --token ...` or {TOKEN_ENV_VAR}, or, if the node "
             "has a secret, run the console with the same secret ($SNR_SECRET or "
-            "the secret file; see docs/console.md)."
+            "the secret file; see docs/console.md).",
         )
-        return Reply(Status.BYE, text)
 
     def forget(self, console: _RemoteConsole, why: str) -> None:
         """``console``'s connection ended (``why``): close it and free its place."""
@@ -587,26 +524,21 @@ class CommandReceiverLoop(ConsoleLoop):
 
 
 class CommandReceiverFactory(LoopFactory):
-    """Lets consoles control this node over TCP (thesis 6.4.3).
+    """Lets consoles control this node over TCP (``snr-console HOST:PORT``).
 
-    Adds a `CommandReceiverLoop` and, when it begins, a
-    `CommandProcessorEndpoint` that runs the commands. Connect with
-    ``snr-console HOST:PORT``.
+    Adds a `CommandReceiverLoop`, which adds a `CommandProcessorEndpoint` when it begins.
 
     Args:
         host: address to listen on. The default, ``"127.0.0.1"``, accepts
             consoles on this machine only. Any other address needs a token.
         port: TCP port; ``0`` lets the system pick a free one (see `address`).
-        token: shared secret consoles must present; defaults to the
-            ``SNR_CONSOLE_TOKEN`` environment variable, else a word made from
-            the node's secret (``SNR_SECRET`` or the secret file; see
-            `default_token`), else none.
+        token: shared secret consoles must present; defaults to
+            ``$SNR_CONSOLE_TOKEN``, else a word made from the node's secret
+            (see `default_token`), else none.
         name: the loop's component name.
-        auth_timeout_s: seconds a console may take to give its token
-            (default `DEFAULT_AUTH_TIMEOUT_S`, 5 s).
+        auth_timeout_s: seconds a console may take to give its token.
         idle_timeout_s: seconds a console may send no command before it is
-            disconnected (default `DEFAULT_IDLE_TIMEOUT_S`, 10 minutes);
-            None never disconnects an idle console.
+            disconnected; None never disconnects an idle console.
 
     Raises:
         ConfigError: a non-loopback host without a token, a malformed token,
@@ -616,7 +548,6 @@ class CommandReceiverFactory(LoopFactory):
 
         CommandReceiverFactory()                                # 127.0.0.1:9123
         CommandReceiverFactory(host="0.0.0.0", token="long-random-word")
-        CommandReceiverFactory(idle_timeout_s=60)               # close idle consoles sooner
     """
 
     def __init__(
@@ -648,39 +579,26 @@ class CommandReceiverFactory(LoopFactory):
         self.auth_timeout_s = auth_timeout_s
         self.idle_timeout_s = idle_timeout_s
         self.address: Optional[Tuple[str, int]] = None
-        self._listening = threading.Event()
+        """The ``(host, port)`` it listens on, once it does."""
 
     def get(self, parent: AbstractNode) -> CommandReceiverLoop:
         return CommandReceiverLoop(self, parent)
 
-    def _now_listening(self, host: str, port: int) -> None:
-        self.address = (host, port)
-        self._listening.set()
-
     def wait_until_listening(self, timeout_s: float = 5.0) -> Tuple[str, int]:
-        """The ``(host, port)`` the receiver listens on, once it does.
-
-        Handy with ``port=0`` in tests: start the node in a thread, then ask.
+        """The ``(host, port)`` the receiver listens on, once it does (handy with ``port=0``).
 
         Raises:
             CommsError: the receiver was not listening within ``timeout_s``.
         """
-        if not self._listening.wait(timeout_s) or self.address is None:
+        deadline = time.monotonic() + timeout_s
+        while self.address is None and time.monotonic() < deadline:
+            time.sleep(0.005)
+        if self.address is None:
             raise CommsError(
                 f"The console receiver {self.name!r} was not listening within {timeout_s} s. "
                 "Is the node running (node.loop() called), and did it start without errors?"
             )
         return self.address
-
-    # An Event cannot be pickled; configs are pickled for spawned processes.
-    def __getstate__(self) -> Dict[str, Any]:
-        state = super().__getstate__()
-        del state["_listening"]
-        return state
-
-    def __setstate__(self, state: Dict[str, Any]) -> None:
-        super().__setstate__(state)
-        self._listening = threading.Event()
 
     def __repr__(self) -> str:
         return f"CommandReceiverFactory(host={self.host!r}, port={self.port})"

@@ -1,14 +1,11 @@
-"""The console protocol (``snr-console/1``, ``docs/console.md``): how a console and a node talk.
+"""The console protocol, ``snr-console/1``, and who may talk: see docs/console.md, "The protocol".
 
-Console → node: lines of UTF-8 text (`LineReader`); node → console: reply
-frames, a header ``snr-console/1 <status> <length>\\n`` and ``<length>`` bytes
-of text (`Reply`, `ReplyDecoder`). Also who may talk: the token policy.
+Console → node: lines of UTF-8 text (`LineReader`); node → console: frames of a
+header ``snr-console/1 <status> <length>\\n`` and ``<length>`` bytes of text.
 
 Example::
 
     Reply(Status.OK, "pong").encode()      # b'snr-console/1 ok 4\\npong'
-    decoder = ReplyDecoder()
-    decoder.feed(b"snr-console/1 ok 4\\npong")   # [Reply(Status.OK, 'pong')]
 """
 
 from __future__ import annotations
@@ -67,11 +64,7 @@ SECRET_TOKEN_PURPOSE = "console-token"
 
 
 def default_token(token: Optional[str], where: str) -> Optional[str]:
-    """The console token of a node or console that was given ``token`` (None: the default).
-
-    ``token`` if given, else ``$SNR_CONSOLE_TOKEN`` if set, else a word made
-    from the node's secret (``$SNR_SECRET`` or the secret file), else None:
-    no token (docs/console.md, "Security").
+    """``token``, else ``$SNR_CONSOLE_TOKEN``, else a word made from the node's secret, else None.
 
     Raises:
         ConfigError: the secret is empty or its file cannot be read.
@@ -79,13 +72,11 @@ def default_token(token: Optional[str], where: str) -> Optional[str]:
     Example::
 
         default_token("s3cret-word", "CommandReceiverFactory")   # 's3cret-word'
-        default_token(None, "CommandReceiverFactory")   # None, or '9a1e...' with $SNR_SECRET
     """
     if token is not None:
         return token
-    from_env = os.environ.get(TOKEN_ENV_VAR)
-    if from_env:
-        return from_env
+    if os.environ.get(TOKEN_ENV_VAR):
+        return os.environ[TOKEN_ENV_VAR]
     # Here, not at the top: it loads OpenSSL, and only a node with a secret needs it.
     from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, derived_word, find_secret
 
@@ -94,18 +85,11 @@ def default_token(token: Optional[str], where: str) -> Optional[str]:
 
 
 class Status(enum.Enum):
-    """What kind of reply a frame is.
+    """What kind of reply a frame is: ``hello``/``auth`` greet, ``bye`` ends.
 
     Example::
 
         Reply(Status.ERROR, "Unknown command 'relaod'.")
-
-    Members:
-        HELLO: greeting after connecting; commands may follow.
-        AUTH: greeting of a node that needs a token: send ``auth <token>`` first.
-        OK: the command worked; the text says what happened.
-        ERROR: the command was refused or failed; the text says why.
-        BYE: the node closes the connection after this frame.
     """
 
     HELLO = "hello"
@@ -138,12 +122,10 @@ class Reply:
 
 
 class ConsoleSession(ABC):
-    """One console the node is talking to: where a command's reply goes.
+    """Where a command's replies go: one console the node is talking to.
 
-    A console loop hands each command line to the node with its session; the
-    `CommandProcessorEndpoint` runs the command on the node's thread and calls
-    ``session.send(reply)``, so ``send`` must be quick and never block or
-    raise, even when the console has gone.
+    The command processor calls ``send`` on the node's thread, so it must be
+    quick and never block or raise, even when the console has gone.
 
     Example::
 
@@ -158,10 +140,7 @@ class ConsoleSession(ABC):
 
 
 class ReplyDecoder:
-    """Turns the bytes a console receives into `Reply` frames.
-
-    Feed it whatever ``recv`` returned; it keeps partial frames until the rest
-    arrives.
+    """Turns the bytes a console receives into `Reply` frames, keeping partial ones.
 
     Example::
 
@@ -178,19 +157,18 @@ class ReplyDecoder:
         """Every reply completed by ``data``.
 
         Raises:
-            WireFormatError: the bytes are not this protocol (wrong header,
-                unknown status, oversized frame, or text that is not UTF-8).
+            WireFormatError: the bytes are not this protocol.
         """
         self._buffer += data
         replies: List[Reply] = []
         while True:
             if self._header is None:
                 newline = self._buffer.find(b"\n", 0, _MAX_HEADER_BYTES + 1)
+                if newline < 0 and len(self._buffer) > _MAX_HEADER_BYTES:
+                    raise WireFormatError(_bad_header(bytes(self._buffer)))
                 if newline < 0:
-                    if len(self._buffer) > _MAX_HEADER_BYTES:
-                        raise WireFormatError(self._bad_header(bytes(self._buffer)))
                     return replies
-                self._header = self._parse_header(bytes(self._buffer[:newline]))
+                self._header = _parse_header(bytes(self._buffer[:newline]))
                 del self._buffer[: newline + 1]
             status, length = self._header
             if len(self._buffer) < length:
@@ -205,32 +183,32 @@ class ReplyDecoder:
                     f"A {status.value} reply is not UTF-8 text: {error}"
                 ) from None
 
-    def _parse_header(self, header: bytes) -> Tuple[Status, int]:
-        words = header.split()
-        if len(words) != 3 or words[0] != PROTOCOL.encode() or not words[2].isdigit():
-            raise WireFormatError(self._bad_header(header))
-        try:
-            status = Status(words[1].decode("ascii"))
-        except (UnicodeDecodeError, ValueError):
-            raise WireFormatError(self._bad_header(header)) from None
-        length = int(words[2])
-        if length > MAX_REPLY_BYTES + _TRUNCATION_ROOM:
-            raise WireFormatError(
-                f"A reply announced {length} bytes, more than the {MAX_REPLY_BYTES} "
-                "a node sends; the stream is corrupt."
-            )
-        return status, length
 
-    @staticmethod
-    def _bad_header(header: bytes) -> str:
-        return (
-            f"Expected a reply header like '{PROTOCOL} ok 12', got {header[:40]!r}. "
-            "Is this port an SNR console receiver (CommandReceiverFactory)?"
+def _parse_header(header: bytes) -> Tuple[Status, int]:
+    words = header.split()
+    try:
+        if len(words) != 3 or words[0] != PROTOCOL.encode() or not words[2].isdigit():
+            raise ValueError
+        status = Status(words[1].decode("ascii"))  # UnicodeDecodeError is a ValueError
+    except ValueError:
+        raise WireFormatError(_bad_header(header)) from None
+    if int(words[2]) > MAX_REPLY_BYTES + _TRUNCATION_ROOM:
+        raise WireFormatError(
+            f"A reply announced {int(words[2])} bytes, more than the {MAX_REPLY_BYTES} "
+            "a node sends; the stream is corrupt."
         )
+    return status, int(words[2])
+
+
+def _bad_header(header: bytes) -> str:
+    return (
+        f"Expected a reply header like '{PROTOCOL} ok 12', got {header[:40]!r}. "
+        "Is this port an SNR console receiver (CommandReceiverFactory)?"
+    )
 
 
 class LineReader:
-    """Cuts the bytes a console sends into request lines, as the protocol says.
+    """Cuts the bytes a console sends into request lines.
 
     A line longer than `MAX_LINE_BYTES` is dropped up to its newline, and a
     line that is not UTF-8 is not run: each gets an ``error`` reply instead.
@@ -259,9 +237,9 @@ class LineReader:
             newline = self.inbox.find(b"\n")
             if newline < 0 and at_end and self.inbox:
                 newline = len(self.inbox)
+            if newline < 0 and len(self.inbox) <= MAX_LINE_BYTES:
+                return None
             if newline < 0:
-                if len(self.inbox) <= MAX_LINE_BYTES:
-                    return None
                 self.inbox.clear()
                 skipping, self._skipping = self._skipping, True
                 return None if skipping else _LINE_TOO_LONG
@@ -279,17 +257,13 @@ class LineReader:
 
 
 _LINE_TOO_LONG = Reply(Status.ERROR, f"Ignored a line longer than {MAX_LINE_BYTES} bytes.")
-
-
 _json_decoder = json.JSONDecoder()
 
 
 def parse_values(text: str) -> List[Any]:
     """Values typed after a task's name: JSON literals where they parse, else words.
 
-    Nothing is ever evaluated as Python: ``1`` is a number, ``[1, 2]`` a list,
-    ``"a b"`` one string with a space, ``true``/``null`` are True/None, and
-    any other word (``A``, ``3abc``) is a string.
+    Nothing is ever evaluated as Python.
 
     Example::
 
@@ -297,25 +271,22 @@ def parse_values(text: str) -> List[Any]:
         # [1, 2.5, True, 'a b', [1, 2], {'k': 3}, 'hello']
     """
     values: List[Any] = []
-    position, end = 0, len(text)
-    while True:
-        while position < end and text[position].isspace():
-            position += 1
-        if position >= end:
-            return values
+    words = text.split()
+    position = 0
+    while words:
+        position = text.index(words[0], position)
         try:
             value, stop = _json_decoder.raw_decode(text, position)
         except ValueError:
             stop = -1
-        if stop == end or (stop > position and text[stop].isspace()):
-            values.append(value)
+        if stop == len(text) or (stop > position and text[stop].isspace()):
+            values.append(value)  # it may span several words: "a b", [1, 2]
+            words = text[stop:].split()
             position = stop
-            continue
-        word_end = position
-        while word_end < end and not text[word_end].isspace():
-            word_end += 1
-        values.append(text[position:word_end])
-        position = word_end
+        else:
+            values.append(words.pop(0))
+            position += len(values[-1])
+    return values
 
 
 def parse_address(text: str, default_host: str = "127.0.0.1") -> Tuple[str, int]:
@@ -327,11 +298,8 @@ def parse_address(text: str, default_host: str = "127.0.0.1") -> Tuple[str, int]
     Example::
 
         parse_address("robot.local:9123")   # ('robot.local', 9123)
-        parse_address("9123")               # ('127.0.0.1', 9123)
     """
-    host, sep, port_text = text.strip().rpartition(":")
-    if not sep:
-        host, port_text = default_host, text.strip()
+    host, _, port_text = text.strip().rpartition(":")
     host = host.strip("[]") or default_host
     if not port_text.isdigit() or not 0 < int(port_text) < 65536:
         raise ValueError(
@@ -342,20 +310,16 @@ def parse_address(text: str, default_host: str = "127.0.0.1") -> Tuple[str, int]
 
 
 def is_loopback(host: str) -> bool:
-    """True when ``host`` is reachable only from this machine.
-
-    ``""`` and ``"0.0.0.0"`` mean every network interface, so they are not.
+    """True when ``host`` is reachable only from this machine (``""`` and ``"0.0.0.0"`` are not).
 
     Example::
 
         is_loopback("127.0.0.1"), is_loopback("0.0.0.0")   # (True, False)
     """
-    if host.lower() == "localhost":
-        return True
     import ipaddress  # here, not at the top: only a listening console needs it
 
     try:
-        return ipaddress.ip_address(host).is_loopback
+        return host.lower() == "localhost" or ipaddress.ip_address(host).is_loopback
     except ValueError:
         return False  # a host name (or ""): it may be reachable from outside
 
@@ -369,20 +333,16 @@ def check_listen_policy(host: str, token: Optional[str]) -> None:
 
     Example::
 
-        check_listen_policy("127.0.0.1", None)         # fine
-        check_listen_policy("0.0.0.0", None)           # ConfigError
-        check_listen_policy("0.0.0.0", "s3cret-word")  # fine
+        check_listen_policy("0.0.0.0", "s3cret-word")  # fine; without the token: ConfigError
     """
-    if token is not None:
-        if not token or len(token) > 256 or any(ch.isspace() for ch in token):
-            raise ConfigError(
-                "The console token must be 1 to 256 characters with no spaces "
-                f"(it is sent as `auth <token>` on one line); got {len(token)} "
-                "characters. Pick a long random word, e.g. from "
-                '`python -c "import secrets; print(secrets.token_urlsafe())"`.'
-            )
-        return
-    if not is_loopback(host):
+    if token is not None and (not token or len(token) > 256 or any(c.isspace() for c in token)):
+        raise ConfigError(
+            "The console token must be 1 to 256 characters with no spaces "
+            f"(it is sent as `auth <token>` on one line); got {len(token)} "
+            "characters. Pick a long random word, e.g. from "
+            '`python -c "import secrets; print(secrets.token_urlsafe())"`.'
+        )
+    if token is None and not is_loopback(host):
         raise ConfigError(
             f"CommandReceiverFactory(host={host!r}) would let anyone who can reach this "
             "machine control the node: run tasks, reload code, stop it. Keep the default "
