@@ -80,15 +80,18 @@ def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optio
         open_containers.discard(id(value))
 
 
+_TYPE_HINTS = (
+    ((set, frozenset), "Send a list instead: list(value), or sorted(value) for a stable order."),
+    ((bytes, bytearray), "Send text or numbers instead: value.hex(), or list(value)."),
+    (enum.Enum, "Send value.name or value.value instead."),
+    (complex, "Send [value.real, value.imag] instead."),
+)
+
+
 def _type_hint(value: Any) -> str:
-    if isinstance(value, (set, frozenset)):
-        return "Send a list instead: list(value), or sorted(value) for a stable order."
-    if isinstance(value, (bytes, bytearray)):
-        return "Send text or numbers instead: value.hex(), or list(value)."
-    if isinstance(value, enum.Enum):
-        return "Send value.name or value.value instead."
-    if isinstance(value, complex):
-        return "Send [value.real, value.imag] instead."
+    hint = next((hint for kinds, hint in _TYPE_HINTS if isinstance(value, kinds)), None)
+    if hint is not None:
+        return hint
     if hasattr(value, "tolist"):
         return "Convert it with value.tolist() (numpy arrays and numbers)."
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
@@ -109,18 +112,16 @@ def not_serializable_error(
         not_serializable_error("pose", {"pose": [1, 2, {3}]})   # "... data['pose'][2] is a set"
     """
     found = _find(data, "data", set(), 0)
-    head = f"Cannot send the page stored under {key!r}{where} {to}"
-    allowed = (
-        "Data sent between nodes may only hold dicts, lists, tuples, str, int, "
-        "float, bool and None."
+    why = f"{reason or 'it cannot be written as JSON'}."
+    if found is not None:
+        path, bad, hint = found
+        has = "has a key that is" if hint is _KEY_HINT else "is"
+        what = f"{type(bad).__name__} ({short_repr(bad, 60)})"
+        why = f"{path} {has} a {what}, which JSON cannot hold. {hint}"
+    return NotSerializableError(
+        f"Cannot send the page stored under {key!r}{where} {to}: {why} Data sent between "
+        "nodes may only hold dicts, lists, tuples, str, int, float, bool and None."
     )
-    if found is None:
-        why = reason or "it cannot be written as JSON"
-        return NotSerializableError(f"{head}: {why}. {allowed}")
-    path, bad, hint = found
-    has = "has a key that is" if hint is _KEY_HINT else "is"
-    what = f"{path} {has} a {type(bad).__name__} ({short_repr(bad, 60)})"
-    return NotSerializableError(f"{head}: {what}, which JSON cannot hold. {hint} {allowed}")
 
 
 def check_serializable(key: str, data: Any, to: str = "to another node") -> None:

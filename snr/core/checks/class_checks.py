@@ -1,12 +1,7 @@
 """`check_component`: read a student's component class once for silent mistakes.
 
-The node reads each student class once, when its first component is added
-(docs/errors.md, 15): a name SNR uses (``self.state`` in a loop, ``self.wait_s =
-0.5``), a near miss of a name SNR reads (``self.task_handler``) and an ``async
-def`` hook are errors in DEBUG and TEST; work built and dropped, a hook's
-return nobody reads and a hook SNR never calls (``def terminte``) are DEBUG
-warnings. A class whose source cannot be read is checked only for what its
-``__init__`` set.
+What it finds, and which are errors and which DEBUG warnings: docs/errors.md, 15.
+A class whose source cannot be read is checked only for what its ``__init__`` set.
 
 Example::
 
@@ -17,7 +12,7 @@ from __future__ import annotations
 
 import ast
 import inspect
-from typing import Callable, Dict, Iterator, List, NamedTuple, Optional, Set, Tuple
+from typing import Any, Callable, Dict, Iterator, List, NamedTuple, Optional, Set, Tuple
 
 from snr.core.checks.error_text import closest_match
 from snr.core.checks.handler_checks import async_text
@@ -47,16 +42,8 @@ _SET_BY_SNR = {
     "state": "the loop's state (LoopState.NEW, RUNNING or STOPPED), which SNR sets as the "
     "loop starts and stops, so your value is overwritten",
 }
-_TASK_BUILDERS = {
-    "event",
-    "store_data",
-    "store_page",
-    "terminate",
-    "process_data",
-    "reload_component",
-    "add_component",
-    "remove_component",
-}
+_TASK_BUILDERS = {"event", "store_data", "store_page", "terminate", "process_data"}
+_TASK_BUILDERS |= {"reload_component", "add_component", "remove_component"}
 # task_store_data and task_store_page: the thesis's names (listing 6.3).
 _SELF_BUILDERS = {
     "page",
@@ -67,7 +54,7 @@ _SELF_BUILDERS = {
 }
 
 _NEAR_MISS = 0.8  # closest_match's cutoff for a name SNR uses
-# Names SNR reads: when SNR's stays unset, a value meant for it, what happens.
+# Names SNR reads: when SNR's stays unset, the type of a value meant for it, what happens.
 _READ_BY_SNR: Dict[str, Tuple[Callable[[AbstractComponent], bool], Tuple[type, ...], str]] = {
     "task_handlers": (
         lambda component: not component.task_handlers,
@@ -82,15 +69,12 @@ _READ_BY_SNR: Dict[str, Tuple[Callable[[AbstractComponent], bool], Tuple[type, .
 }
 
 _checked: Dict[type, List[Tuple[str, bool]]] = {}  # class -> [(message, is_error)]
-_MAX_CACHED = 1000
 
 
 def _framework_names(kind: type) -> Dict[str, str]:
     """Each name SNR uses on ``kind``, said: "ThreadLoop's method wait_s()"."""
     names: Dict[str, str] = {}
-    for base in reversed(kind.__mro__):
-        if not is_snr(base):
-            continue
+    for base in filter(is_snr, reversed(kind.__mro__)):
         for name, value in vars(base).items():
             if name.startswith("_") or name in _MAY_SET:
                 continue
@@ -99,7 +83,7 @@ def _framework_names(kind: type) -> Dict[str, str]:
             elif callable(value) or isinstance(value, (staticmethod, classmethod)):
                 names[name] = f"{kind.__name__}'s method {name}()"
     for name, what in _SET_BY_SNR.items():
-        if name != "state" or issubclass(kind, ThreadLoop):
+        if name != "state" or kind is ThreadLoop:
             names[name] = f"{kind.__name__}'s {name}, {what}"
     return names
 
@@ -118,68 +102,47 @@ def check_component(
     if is_snr(cls) or not isinstance(component, (AbstractLoop, AbstractEndpoint)):
         return
     kind: type = ThreadLoop if isinstance(component, AbstractLoop) else Endpoint
+    names = _framework_names(kind)
     first_time = cls not in _checked
     if first_time:
-        if len(_checked) >= _MAX_CACHED:
+        if len(_checked) >= 1000:
             _checked.clear()
-        _checked[cls] = list(_read_class(cls, kind))
+        _checked[cls] = [m for source in _sources(cls) for m in _read_class(source, kind, names)]
     for message, is_error in _checked[cls]:
         if is_error:
             raise ComponentError(message)
-    _check_instance(component, kind)
+    _check_instance(component, kind, names)
     if warn is not None and first_time:
-        for message, is_error in _checked[cls]:
-            if not is_error:
-                warn(message)
+        for message, _ in _checked[cls]:
+            warn(message)  # warnings only: the errors were raised above
 
 
-def _check_instance(component: AbstractComponent, kind: type) -> None:
-    """Collisions seen in the built object (a class's source may be unreadable)."""
-    names = _framework_names(kind)
-    _check_near_misses(component, names)
+def _check_instance(component: AbstractComponent, kind: type, names: Dict[str, str]) -> None:
+    """Mistakes seen in the built object (a class's source may be unreadable)."""
+    cls = type(component)
+    # ``self.task_handler = {...}`` while task_handlers stays empty: raise, at the line.
+    unset = [name for name, (is_unset, _, _) in _READ_BY_SNR.items() if is_unset(component)]
+    for attr, value in vars(component).items() if unset else ():
+        if attr.startswith("_") or attr in names or attr in _MAY_SET:
+            continue
+        guess = closest_match(attr, unset, cutoff=_NEAR_MISS)
+        if guess is not None and isinstance(value, _READ_BY_SNR[guess][1]):
+            raise ComponentError(
+                f"{describe_class(cls)} sets self.{attr}, but SNR reads self.{guess}, which "
+                f"{_READ_BY_SNR[guess][2]}. Did you mean self.{guess}? Rename it: "
+                f"`self.{guess} = ...`.{_assignment(cls, attr)}"
+            )
     for hook in _HOOKS[kind]:
         method = getattr(component, hook, None)
         if inspect.iscoroutinefunction(method):
             raise ComponentError(async_text(describe_callable(method), method))
-    for name in vars(component):
-        if name in names and name not in _SET_BY_SNR:
-            raise ComponentError(_collision(type(component), name, names[name], ""))
+    taken = [n for n in vars(component) if n in names and n not in _SET_BY_SNR]
     if kind is ThreadLoop and not isinstance(
         vars(component).get("state", LoopState.NEW), LoopState
     ):
-        raise ComponentError(_collision(type(component), "state", names["state"], ""))
-
-
-def _check_near_misses(component: AbstractComponent, names: Dict[str, str]) -> None:
-    """``self.task_handler = {...}`` while ``task_handlers`` stays empty: raise, at the line."""
-    unset = [name for name, (is_unset, _, _) in _READ_BY_SNR.items() if is_unset(component)]
-    if not unset:
-        return
-    for attr, value in vars(component).items():
-        if attr.startswith("_") or attr in names or attr in _MAY_SET:
-            continue
-        guess = closest_match(attr, unset, cutoff=_NEAR_MISS)
-        if guess is None or not isinstance(value, _READ_BY_SNR[guess][1]):
-            continue
-        cls = type(component)
-        raise ComponentError(
-            f"{describe_class(cls)} sets self.{attr}, but SNR reads self.{guess}, which "
-            f"{_READ_BY_SNR[guess][2]}. Did you mean self.{guess}? Rename it: "
-            f"`self.{guess} = ...`.{_assignment(cls, attr)}"
-        )
-
-
-def _assignment(cls: type, attr: str) -> str:
-    """The line of the student's class that assigns ``self.attr``, as a block, or ""."""
-    for source in map(_read_source, cls.__mro__):
-        if source is None:
-            continue
-        for method in source.methods():
-            for node in walk_own(method):
-                for target in _attributes_set(node):
-                    if target.attr == attr:
-                        return source.at(method.name, target.lineno)
-    return ""
+        taken.append("state")
+    if taken:
+        raise ComponentError(_collision(cls, taken[0], names[taken[0]], ""))
 
 
 def _collision(cls: type, name: str, what: str, where: str) -> str:
@@ -197,37 +160,23 @@ class _Source(NamedTuple):
     filename: str
     tree: ast.ClassDef
 
-    def methods(self) -> List[ast.FunctionDef]:
-        return [item for item in self.tree.body if isinstance(item, ast.FunctionDef)]
 
-    def at(self, method: str, line: int) -> str:
-        """A line of ``method`` as a `source_block`, on a line of its own."""
-        return "\n" + source_block(self.filename, line, f"{self.cls.__name__}.{method}")
-
-
-def _read_source(cls: type) -> Optional[_Source]:
-    """``cls`` as a `_Source`, or None: SNR's own, or its source cannot be read."""
-    if is_snr(cls) or cls is object:
-        return None
-    try:
-        filename = inspect.getsourcefile(cls)
-    except (OSError, TypeError):
-        return None
-    node = source_node(cls)
-    if filename is None or not isinstance(node, ast.ClassDef):
-        return None
-    return _Source(cls, filename, node)
+def _sources(cls: type) -> Iterator[_Source]:
+    """The student's classes among ``cls`` and its bases whose source can be read."""
+    for base in cls.__mro__:
+        tree = None if is_snr(base) or base is object else source_node(base)
+        filename = inspect.getsourcefile(base) if isinstance(tree, ast.ClassDef) else None
+        if isinstance(tree, ast.ClassDef) and filename is not None:
+            yield _Source(base, filename, tree)
 
 
-def _read_class(cls: type, kind: type) -> Iterator[Tuple[str, bool]]:
-    """(message, is_error) for every mistake in the student's classes of ``cls``."""
-    names = _framework_names(kind)
-    for source in map(_read_source, cls.__mro__):
-        if source is not None:
-            yield from _collisions(source, names, _HOOKS[kind])
-            yield from _dropped_work(source, kind)
-            yield from _ignored_returns(source, _HOOKS[kind])
-            yield from _uncalled_hooks(source, kind)
+def _at(source: _Source, method: str, line: int) -> str:
+    """A line of ``method`` as a `source_block`, on a line of its own."""
+    return "\n" + source_block(source.filename, line, f"{source.cls.__name__}.{method}")
+
+
+def _methods(source: _Source) -> List[ast.FunctionDef]:
+    return [item for item in source.tree.body if isinstance(item, ast.FunctionDef)]
 
 
 def _is_self(node: ast.AST) -> bool:
@@ -242,42 +191,58 @@ def _attributes_set(node: ast.AST) -> List[ast.Attribute]:
     return [target for target in targets if isinstance(target, ast.Attribute)]
 
 
-def _collisions(
-    source: _Source, names: Dict[str, str], hooks: Tuple[str, ...]
-) -> Iterator[Tuple[str, bool]]:
-    for method in source.methods():
-        if method.name in names and method.name not in hooks:
-            where = source.at(method.name, method.lineno)
-            yield _collision(source.cls, method.name, names[method.name], where), True
+def _assignment(cls: type, attr: str) -> str:
+    """The line of the student's class that assigns ``self.attr``, as a block, or ""."""
+    for source in _sources(cls):
+        for method in _methods(source):
+            for node in walk_own(method):
+                for target in _attributes_set(node):
+                    if target.attr == attr:
+                        return _at(source, method.name, target.lineno)
+    return ""
+
+
+def _read_class(source: _Source, kind: type, names: Dict[str, str]) -> List[Tuple[str, bool]]:
+    """(message, is_error) for every mistake in one of the student's classes: errors first."""
+    cls, hooks = source.cls, _HOOKS[kind]
+    errors: List[str] = []
+    dropped: List[str] = []
+    ignored: List[str] = []
+    for method in _methods(source):
+        name = method.name
+        if name in names and name not in hooks:
+            errors.append(_collision(cls, name, names[name], _at(source, name, method.lineno)))
         for node in walk_own(method):
             for target in _attributes_set(node):
                 if target.attr in names and _is_self(target.value):
-                    where = source.at(method.name, target.lineno)
-                    yield _collision(source.cls, target.attr, names[target.attr], where), True
-
-
-def _dropped_work(source: _Source, kind: type) -> Iterator[Tuple[str, bool]]:
-    for method in source.methods():
-        for node in walk_own(method):
-            if not (isinstance(node, ast.Expr) and isinstance(node.value, ast.Call)):
-                continue
-            built = _built(node.value.func)
-            code = ast.unparse(node.value)
-            if built == "page":
-                what, until, use = "a page", "stored", f"`self.store_page({code})`"
-            elif built is None:
-                continue
-            else:
-                what, until = "a task", "returned from a handler or scheduled"
-                use = f"`self.schedule({code})`"
-                if kind is not ThreadLoop:
-                    use = f"`return {code}` (from a handler) or {use}"
-            yield (
-                f"{source.cls.__name__}.{method.name} builds {what}, `{code}`, and drops it: "
-                f"nothing happens until it is {until}. Write {use}."
-                f"{source.at(method.name, node.lineno)}",
-                False,
-            )
+                    where = _at(source, name, target.lineno)
+                    errors.append(_collision(cls, target.attr, names[target.attr], where))
+            if isinstance(node, ast.Expr) and isinstance(node.value, ast.Call):
+                built, code = _built(node.value.func), ast.unparse(node.value)
+                if built == "page":
+                    what, until, use = "a page", "stored", f"`self.store_page({code})`"
+                elif built is None:
+                    continue
+                else:
+                    what, until = "a task", "returned from a handler or scheduled"
+                    use = f"`self.schedule({code})`"
+                    if kind is not ThreadLoop:
+                        use = f"`return {code}` (from a handler) or {use}"
+                dropped.append(
+                    f"{cls.__name__}.{name} builds {what}, `{code}`, and drops it: nothing "
+                    f"happens until it is {until}. Write {use}.{_at(source, name, node.lineno)}"
+                )
+            if isinstance(node, ast.Return) and name in hooks and node.value is not None:
+                if isinstance(node.value, ast.Constant) and node.value.value is None:
+                    continue
+                code = ast.unparse(node.value)
+                ignored.append(
+                    f"{cls.__name__}.{name}() returns `{code}`, but SNR does not use what "
+                    f"{name}() returns: it is dropped. To run a task, schedule it: "
+                    f"`self.schedule({code})`.{_at(source, name, node.lineno)}"
+                )
+    warnings = dropped + ignored + list(_uncalled_hooks(source, kind))
+    return [(e, True) for e in errors] + [(w, False) for w in warnings]
 
 
 def _built(func: ast.expr) -> Optional[str]:
@@ -297,65 +262,31 @@ def _built(func: ast.expr) -> Optional[str]:
     return None
 
 
-def _ignored_returns(source: _Source, hooks: Tuple[str, ...]) -> Iterator[Tuple[str, bool]]:
-    for method in source.methods():
-        if method.name not in hooks:
-            continue
-        for node in walk_own(method):
-            if not isinstance(node, ast.Return) or node.value is None:
-                continue
-            if isinstance(node.value, ast.Constant) and node.value.value is None:
-                continue
-            code = ast.unparse(node.value)
-            yield (
-                f"{source.cls.__name__}.{method.name}() returns `{code}`, but SNR does not use "
-                f"what {method.name}() returns: it is dropped. To run a task, schedule it: "
-                f"`self.schedule({code})`.{source.at(method.name, node.lineno)}",
-                False,
-            )
-
-
-def _uncalled_hooks(source: _Source, kind: type) -> Iterator[Tuple[str, bool]]:
+def _uncalled_hooks(source: _Source, kind: type) -> Iterator[str]:
     hooks = _HOOKS[kind]
-    used = _names_used(source.tree)
-    cls = source.cls.__name__
-    for method in source.methods():
+    # Every x.name, bare name and string in the class: the methods it calls or registers.
+    used: Set[Any] = set()
+    for node in ast.walk(source.tree):
+        used.add(
+            getattr(node, "attr", None) or getattr(node, "id", None) or getattr(node, "value", None)
+        )
+    for method in _methods(source):
         name = method.name
         if name.startswith("_") or name in hooks or name in used:
             continue
-        where = source.at(name, method.lineno)
-        if kind is Endpoint and name in ("setup", "loop"):
-            fix = (
-                "SNR calls begin() when the node starts: rename it to begin."
-                if name == "setup"
-                else "Only a ThreadLoop has a loop(): make the class a ThreadLoop (with a "
-                "LoopFactory) to run it again and again."
-            )
-            yield (
-                f"{cls}.{name}() is never called: an Endpoint has no {name}(). {fix}{where}",
-                False,
-            )
-            continue
-        # "begining", "halting": still that hook.
-        guess = closest_match(name, hooks, _NEAR_MISS) or closest_match(
-            name.removesuffix("ing"), hooks, _NEAR_MISS
-        )
-        if guess is not None:
-            yield (
-                f"{cls}.{name}() is never called: SNR calls {guess}(), and "
-                f"nothing in the class calls {name}(). Did you mean {guess}?{where}",
-                False,
-            )
-
-
-def _names_used(tree: ast.ClassDef) -> Set[str]:
-    """Every ``x.name`` and bare name read in the class: methods it calls or registers."""
-    used: Set[str] = set()
-    for node in ast.walk(tree):
-        if isinstance(node, ast.Attribute):
-            used.add(node.attr)
-        elif isinstance(node, ast.Name):
-            used.add(node.id)
-        elif isinstance(node, ast.Constant) and isinstance(node.value, str):
-            used.add(node.value)  # getattr(self, "name")
-    return used
+        said = f"{source.cls.__name__}.{name}() is never called:"
+        where = _at(source, name, method.lineno)
+        if kind is Endpoint and name == "setup":
+            fix = "SNR calls begin() when the node starts: rename it to begin."
+            yield f"{said} an Endpoint has no setup(). {fix}{where}"
+        elif kind is Endpoint and name == "loop":
+            fix = "make the class a ThreadLoop (with a LoopFactory) to run it again and again."
+            yield f"{said} an Endpoint has no loop(). Only a ThreadLoop has a loop(): {fix}{where}"
+        else:  # "begining", "halting": still that hook
+            guess = closest_match(name, hooks, _NEAR_MISS)
+            guess = guess or closest_match(name.removesuffix("ing"), hooks, _NEAR_MISS)
+            if guess is not None:
+                yield (
+                    f"{said} SNR calls {guess}(), and nothing in the class calls {name}(). "
+                    f"Did you mean {guess}?{where}"
+                )

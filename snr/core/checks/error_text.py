@@ -1,9 +1,8 @@
 """What Python said about an error, kept whole when SNR wraps it, plus a hint; "did you mean".
 
-Python adds the "Did you mean" of an ``AttributeError`` or ``NameError`` only
-when it prints the traceback; `exception_text` keeps it (and works it out where
-Python 3.11 does not, ``TaskType.evnt``), and hints at a `Page` used as its value.
-`short_repr` is `snr.prelude.student_code`'s, named here too.
+Python adds the "Did you mean" of an ``AttributeError`` or ``NameError`` only when
+it prints the traceback; `exception_text` keeps it (and works it out where Python
+3.11 does not, ``TaskType.evnt``). `short_repr` is the prelude's, named here too.
 
 Example::
 
@@ -23,18 +22,13 @@ from snr.core.checks.student_code import innermost_frame
 from snr.prelude.page import Page
 from snr.prelude.student_code import short_repr
 
-__all__ = [
-    "PAGE_IN_A_HANDLER",
-    "closest_key",
-    "closest_match",
-    "did_you_mean",
-    "exception_text",
-    "short_repr",
-    "suggestion",
-]
+__all__ = ["PAGE_IN_A_HANDLER", "closest_key", "closest_match", "did_you_mean"]
+__all__ += ["exception_text", "short_repr", "suggestion"]
 
-
-_SUGGESTION = "Did you mean"
+PAGE_IN_A_HANDLER = (
+    ". A stored page reaches a handler as a Page in task.val_list; "
+    "its value is page.data, e.g. task.val_list[0].data."
+)
 
 
 def exception_text(error: BaseException) -> str:
@@ -46,43 +40,28 @@ def exception_text(error: BaseException) -> str:
 
         exception_text(AttributeError("'Task' object has no attribute 'val_lst'"))
     """
-    lines = traceback.format_exception_only(type(error), error)
-    text = "".join(lines).strip()
+    text = "".join(traceback.format_exception_only(type(error), error)).strip()
     kind = type(error)
     if kind.__module__.split(".", 1)[0] == "snr":  # "ComponentError", as SNR's messages say
         text = text.replace(f"{kind.__module__}.{kind.__qualname__}", kind.__qualname__, 1)
-    if isinstance(error, (AttributeError, NameError)) and _SUGGESTION not in text:
+    if isinstance(error, (AttributeError, NameError)) and "Did you mean" not in text:
         text = _enum_text(error) or text
-        if _SUGGESTION not in text:
-            guess = _guess_name(error)
-            if guess is not None:
-                text = f"{text}. {_SUGGESTION}: {guess!r}?"
+        guess = None if "Did you mean" in text else _guess_name(error)
+        text += f". Did you mean: {guess!r}?" if guess else ""
     if isinstance(error, TypeError) and re.search(r"\bPage\b", text):  # 'Page', Page object
         text += PAGE_IN_A_HANDLER  # explain.page_hint: get_page, loops
-    elif isinstance(error, AttributeError) and _value_has_it(error):
-        data = error.obj.data  # type: ignore[attr-defined]  # a Page: _value_has_it said so
-        # Read-only page data (checks/read_only.py) is said as the list or dict it is.
-        plain = "list" if isinstance(data, list) else "dict" if isinstance(data, dict) else ""
-        text += f". Its data (a {plain or type(data).__name__}) has .{error.name}"
-        text += PAGE_IN_A_HANDLER
+    elif isinstance(error, AttributeError) and isinstance(getattr(error, "obj", None), Page):
+        try:  # does the page's data have what the page lacks (page.items)?
+            data = error.obj.data  # type: ignore[attr-defined]
+            found = isinstance(error.name, str) and hasattr(data, error.name)
+        except Exception:  # the student's property failed: say nothing
+            found = False
+        if found:
+            # Read-only page data (checks/read_only.py) is said as the list or dict it is.
+            plain = "list" if isinstance(data, list) else "dict" if isinstance(data, dict) else ""
+            text += f". Its data (a {plain or type(data).__name__}) has .{error.name}"
+            text += PAGE_IN_A_HANDLER
     return text
-
-
-def _value_has_it(error: AttributeError) -> bool:
-    """True when ``error`` is a Page's missing attribute that its data has (``page.items``)."""
-    page, name = getattr(error, "obj", None), getattr(error, "name", None)
-    if not isinstance(page, Page) or not isinstance(name, str):
-        return False
-    try:
-        return hasattr(page.data, name)
-    except Exception:  # the student's property failed: say nothing
-        return False
-
-
-PAGE_IN_A_HANDLER = (
-    ". A stored page reaches a handler as a Page in task.val_list; "
-    "its value is page.data, e.g. task.val_list[0].data."
-)
 
 
 def _enum_text(error: BaseException) -> Optional[str]:
@@ -94,29 +73,21 @@ def _enum_text(error: BaseException) -> Optional[str]:
         return None
     text = f"AttributeError: type object {cls.__name__!r} has no attribute {name!r}"
     guess = closest_match(name, list(cls.__members__))
-    return f"{text}. {_SUGGESTION}: {guess!r}?" if guess else text
+    return f"{text}. Did you mean: {guess!r}?" if guess else text
 
 
 def _guess_name(error: BaseException) -> Optional[str]:
     """The close match Python 3.12 would name for a misspelt attribute or name."""
-    name = getattr(error, "name", None)
-    if not isinstance(name, str):
+    name, obj = getattr(error, "name", None), getattr(error, "obj", None)
+    frame = innermost_frame(error)
+    try:  # a broken __dir__ must not hide the student's error
+        if isinstance(error, AttributeError):
+            choices = [c for c in dir(obj) if not c.startswith("_")] if obj is not None else []
+        else:
+            choices = [*frame.f_locals, *frame.f_globals, *dir(builtins)] if frame else []
+    except Exception:
         return None
-    choices: Iterable[str]
-    if isinstance(error, AttributeError):
-        obj = getattr(error, "obj", None)
-        if obj is None:
-            return None
-        try:
-            choices = [c for c in dir(obj) if not c.startswith("_")]
-        except Exception:  # a broken __dir__ must not hide the student's error
-            return None
-    else:
-        frame = innermost_frame(error)
-        if frame is None:
-            return None
-        choices = [*frame.f_locals, *frame.f_globals, *dir(builtins)]
-    return closest_match(name, choices)
+    return closest_match(name, choices) if isinstance(name, str) else None
 
 
 def closest_match(word: str, choices: Iterable[str], cutoff: float = 0.6) -> Optional[str]:
@@ -164,4 +135,4 @@ def suggestion(guess: Optional[str]) -> str:
 
         f"Unknown key.{suggestion(closest_key(key, stored))}"
     """
-    return f" {_SUGGESTION} {guess!r}?" if guess else ""
+    return f" Did you mean {guess!r}?" if guess else ""

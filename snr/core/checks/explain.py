@@ -9,11 +9,10 @@ Example::
 from __future__ import annotations
 
 import ast
-import dis
 import inspect
 import logging
 import threading
-from typing import Any, Dict, List, NoReturn, Optional, Set, Tuple
+from typing import Any, List, NoReturn, Optional, Set
 
 from snr.core.checks.call_checks import bad_data_key, page_as_data, wrong_call
 from snr.core.checks.error_text import PAGE_IN_A_HANDLER, exception_text, short_repr
@@ -25,12 +24,11 @@ from snr.core.checks.student_code import (
     def_block,
     describe_callable,
     describe_class,
+    failure_frames,
     is_runtime_file,
     short_path,
     source_block,
     source_node,
-    student_frames,
-    trim_runtime_frames,
     walk_own,
 )
 from snr.prelude import (
@@ -53,89 +51,22 @@ from snr.prelude import (
 from snr.prelude.abstract import explain_abstract_error  # loads abstract_errors when used
 from snr.prelude.task import format_task
 
-__all__ = [
-    "CORE_REFUSED",
-    "bad_result_error",
-    "check_component_args",
-    "check_loop_class",
-    "check_node_args",
-    "check_page_args",
-    "component_without_init",
-    "factory_without_init",
-    "handler_failure",
-    "handlers_before_init",
-    "log_name_taken",
-    "loop_failure",
-    "name_taken_error",
-    "not_stopped_text",
-    "raise_get_failure",
-    "page_hint",
-    "reload_failure",
-    "returning_lines",
-    "slow_handler_text",
-    "start_failure",
-    "used_before_init",
-    "warn_get_returned_none",
-    "wrong_get_result_error",
-    "wrong_thread_error",
-]
+__all__ = ["CORE_REFUSED", "bad_result_error", "check_component_args", "check_loop_class"]
+__all__ += ["check_node_args", "check_page_args", "component_without_init"]
+__all__ += ["factory_without_init", "handler_failure", "handlers_before_init", "log_name_taken"]
+__all__ += ["loop_failure", "name_taken_error", "not_stopped_text", "raise_get_failure"]
+__all__ += ["page_hint", "reload_failure", "returning_lines", "slow_handler_text"]
+__all__ += ["start_failure", "used_before_init", "warn_get_returned_none"]
+__all__ += ["wrong_get_result_error", "wrong_thread_error"]
 
 
-def _task_values(task: Task) -> str:
-    """What a task carries, shortened: its page's key and data, or its values."""
-    values: object = task.val_list  # a task built by hand may hold anything
-    if isinstance(values, list) and len(values) == 1 and isinstance(values[0], Page):
-        page = values[0]
-        return f"carrying the page {page.key!r} with data {short_repr(page.data, 200)}"
-    return f"with values {short_repr(values, 200)}"
-
-
-def _bad_result_hint(result: Any) -> str:
-    """A hint for the likely slip behind a bad return value (or "")."""
-    items = result if isinstance(result, (list, tuple)) else []
-    if isinstance(result, tuple) and all(isinstance(t, Task) for t in items):
-        return " Return a list, [task1, task2], not a tuple."
-    if isinstance(result, Page):
-        return " To store a page, return tasks.store_page(page)."
-    if isinstance(result, bool):
-        return " Return None when there is nothing to do."
-    if inspect.isgenerator(result):
-        return " A handler cannot yield its tasks: return them in a list."
-    if any(t is None for t in items):
-        return " Leave None out of the list."
-    if any(isinstance(t, (list, tuple)) for t in items):
-        return " Return one flat list of Tasks (join lists with + or extend)."
-    return ""
-
-
-def _only_returns_none(func: Any) -> bool:
-    """True if ``func``'s bytecode has no ``return <value>``."""
-    code = code_of(func)
-    if code is None:
-        return False
-    previous: Optional[dis.Instruction] = None
-    saw_return = False
-    for instruction in dis.get_instructions(code):
-        if instruction.opname == "RETURN_CONST":
-            saw_return = True
-            if instruction.argval is not None:
-                return False
-        if instruction.opname == "RETURN_VALUE":
-            saw_return = True
-            if not (
-                previous is not None and previous.opname == "LOAD_CONST" and previous.argval is None
-            ):
-                return False
-        previous = instruction
-    # No return instruction we know (a newer Python's bytecode): never accuse on a guess.
-    return saw_return
-
-
-def _where(error: BaseException) -> str:
-    """The student's frames of ``error`` under a heading; its traceback is then trimmed to them."""
-    frames = student_frames(error.__traceback__)
-    trim_runtime_frames(error)
-    return f"\nWhere it happened (most recent call last):\n{frames}"
+def _fix(error: BaseException, deployed: bool, what: str, kept: str, fix: str) -> str:
+    """The last line of a failure: the node goes on (DEPLOYED), or how to fix ``what``."""
+    if deployed:
+        return f"The node keeps running{kept}."
+    if isinstance(error, SNRError):
+        return f"Fix the {what} as the message above says."
+    return fix
 
 
 def handler_failure(
@@ -157,33 +88,55 @@ def handler_failure(
     if component is not None:
         kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
         where = f" of {kind} {component.name!r}"
-    what = page_hint(error, exception_text(error))
     handling = f"the task {format_task(task, values='none')}"
     if run_size > 1:
         handling = f"a run of {run_size} tasks given to it at once, the first being {handling}"
-    hint = ""
-    values: object = task.val_list
-    if not isinstance(values, list):  # the task was built by hand
-        hint = (
-            f" Its val_list is {short_repr(values, 60)} ({type(values).__name__}), not a list: "
-            "whoever built the task must pass the values in a list, e.g. "
-            f"Task(TaskType.{task.type.name}, {task.name!r}, [value])."
+    values: object = task.val_list  # a task built by hand may hold anything
+    if isinstance(values, list) and len(values) == 1 and isinstance(values[0], Page):
+        carrying = (
+            f"carrying the page {values[0].key!r} with data {short_repr(values[0].data, 200)}"
         )
-    if deployed:
-        fix = "The node keeps running."
-    elif isinstance(error, SNRError):
-        fix = "Fix the handler as the message above says."
     else:
-        fix = (
-            "Fix the handler, or catch the error in it if it can happen in normal use "
-            "(in Mode.DEPLOYED the node logs it and keeps running)."
+        carrying = f"with values {short_repr(values, 200)}"
+    if not isinstance(values, list):
+        carrying += (
+            f". Its val_list is {short_repr(values, 60)} ({type(values).__name__}), not a list: "
+            "whoever built the task must pass the values in a list, e.g. "
+            f"Task(TaskType.{task.type.name}, {task.name!r}, [value])"
         )
+    fix = _fix(
+        error,
+        deployed,
+        "handler",
+        "",
+        "Fix the handler, or catch the error in it if it can happen in normal use "
+        "(in Mode.DEPLOYED the node logs it and keeps running).",
+    )
     failure = HandlerError(
-        f"Task handler {describe_callable(handler)}{where} raised {what}\n"
-        f"while handling {handling} {_task_values(task)}.{hint}{_where(error)}\n{fix}"
+        f"Task handler {describe_callable(handler)}{where} raised "
+        f"{page_hint(error, exception_text(error))}\nwhile handling {handling} {carrying}."
+        f"{failure_frames(error)}\n{fix}"
     )
     failure.__cause__ = error
     return failure
+
+
+def _bad_result_hint(result: Any) -> str:
+    """A hint for the likely slip behind a bad return value (or "")."""
+    items = result if isinstance(result, (list, tuple)) else []
+    if isinstance(result, tuple) and all(isinstance(t, Task) for t in items):
+        return " Return a list, [task1, task2], not a tuple."
+    if isinstance(result, Page):
+        return " To store a page, return tasks.store_page(page)."
+    if isinstance(result, bool):
+        return " Return None when there is nothing to do."
+    if inspect.isgenerator(result):
+        return " A handler cannot yield its tasks: return them in a list."
+    if any(t is None for t in items):
+        return " Leave None out of the list."
+    if any(isinstance(t, (list, tuple)) for t in items):
+        return " Return one flat list of Tasks (join lists with + or extend)."
+    return ""
 
 
 def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerError:
@@ -209,8 +162,7 @@ def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerEr
             " not a Task,"
         )
     handling = f"while handling {format_task(task, values='none')}"
-    code = code_of(handler)
-    lines = returning_lines(handler, result)
+    code, lines = code_of(handler), returning_lines(handler, result)
     if code is None or not lines:
         return HandlerError(
             f"Task handler {describe_callable(handler)} {returned} {handling}. {fix}"
@@ -225,6 +177,26 @@ def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerEr
     return HandlerError(f"Task handler {name} {returned} {at} {handling}.\n{blocks}\n{fix}")
 
 
+def _returns(func: Any) -> Optional[List[ast.Return]]:
+    """``func``'s own ``return <value>`` statements; None without a readable ``def``."""
+    code = code_of(func)
+    node = None if code is None or code.co_flags & inspect.CO_GENERATOR else source_node(code)
+    if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
+        return None
+    return [
+        n
+        for n in walk_own(node)
+        if isinstance(n, ast.Return)
+        and n.value is not None
+        and not (isinstance(n.value, ast.Constant) and n.value.value is None)
+    ]
+
+
+# The kind of value an expression builds, whatever is in it.
+_BUILDS = {ast.Tuple: tuple, ast.List: list, ast.ListComp: list, ast.Dict: dict}
+_BUILDS.update({ast.DictComp: dict, ast.Set: set, ast.SetComp: set, ast.JoinedStr: str})
+
+
 def returning_lines(handler: Any, result: Any) -> List[int]:
     """The lines of ``handler``'s ``return`` statements that can have given ``result``.
 
@@ -235,49 +207,21 @@ def returning_lines(handler: Any, result: Any) -> List[int]:
 
         returning_lines(doubler.double, 42)   # [12]
     """
-    code = code_of(handler)
-    if code is None or code.co_flags & inspect.CO_GENERATOR:
-        return []
-    node = source_node(code)
-    if not isinstance(node, (ast.FunctionDef, ast.AsyncFunctionDef)):
-        return []
-    exact: List[int] = []
-    same_kind: List[int] = []
-    possible: List[int] = []
-    for statement in walk_own(node):
-        if not isinstance(statement, ast.Return):
-            continue
-        value = statement.value
-        if value is None or (isinstance(value, ast.Constant) and value.value is None):
-            continue  # None is never the wrong value
-        if isinstance(value, ast.Constant):
-            if type(value.value) is type(result) and value.value == result:
-                exact.append(statement.lineno)
-            continue
-        builds = _BUILDS.get(type(value))
-        if builds is type(result):
-            same_kind.append(statement.lineno)
-        elif builds is None:
-            possible.append(statement.lineno)
+    returns = _returns(handler) or []
+    exact = [
+        r.lineno
+        for r in returns
+        if isinstance(r.value, ast.Constant)
+        and type(r.value.value) is type(result)
+        and r.value.value == result
+    ]
+    same_kind = [r.lineno for r in returns if _BUILDS.get(type(r.value)) is type(result)]
+    possible = [
+        r.lineno
+        for r in returns
+        if not isinstance(r.value, ast.Constant) and type(r.value) not in _BUILDS
+    ]
     return sorted(exact or same_kind or possible)
-
-
-_BUILDS: Dict[type, type] = {
-    ast.Tuple: tuple,
-    ast.List: list,
-    ast.ListComp: list,
-    ast.Dict: dict,
-    ast.DictComp: dict,
-    ast.Set: set,
-    ast.SetComp: set,
-    ast.JoinedStr: str,
-}
-
-
-_FROM_GET_PAGE = (
-    ". get_page(key) gives the whole Page (its data, time and origin); for the value "
-    "alone, read self.get_data(key), or use page.data."
-)
 
 
 def page_hint(error: BaseException, text: str, in_a_loop: bool = False) -> str:
@@ -290,14 +234,17 @@ def page_hint(error: BaseException, text: str, in_a_loop: bool = False) -> str:
     """
     if PAGE_IN_A_HANDLER not in text:
         return text
-    tb = error.__traceback__
-    names: Tuple[str, ...] = ()
+    tb, names = error.__traceback__, frozenset[str]()
     while tb is not None:
         if not is_runtime_file(tb.tb_frame.f_code.co_filename):
-            names = tb.tb_frame.f_code.co_names  # the innermost frame of the student's
+            names = frozenset(tb.tb_frame.f_code.co_names)  # the innermost frame of the student's
         tb = tb.tb_next
     if in_a_loop or ("get_page" in names and "val_list" not in names):
-        return text.replace(PAGE_IN_A_HANDLER, _FROM_GET_PAGE)
+        return text.replace(
+            PAGE_IN_A_HANDLER,
+            ". get_page(key) gives the whole Page (its data, time and origin); for the value "
+            "alone, read self.get_data(key), or use page.data.",
+        )
     return text
 
 
@@ -323,60 +270,21 @@ def loop_failure(loop: AbstractLoop, error: BaseException, deployed: bool) -> Lo
         )
     elif isinstance(error, KeyboardInterrupt):
         fix = "Ctrl-C stops the whole node; a loop need not catch or raise it."
-    elif deployed:
-        fix = "The node keeps running without this loop."
-    elif isinstance(error, SNRError):
-        fix = "Fix the loop as the message above says."
     else:
-        fix = (
+        fix = _fix(
+            error,
+            deployed,
+            "loop",
+            " without this loop",
             "Fix loop() (or setup()), or catch the error there if it can happen in "
-            "normal use (in Mode.DEPLOYED the node keeps running without the loop)."
+            "normal use (in Mode.DEPLOYED the node keeps running without the loop).",
         )
     failure = LoopError(
         f"Loop {loop.name!r} ({describe_class(type(loop))}) stopped: it raised {what}"
-        f"{_where(error)}\n{fix}"
+        f"{failure_frames(error)}\n{fix}"
     )
     failure.__cause__ = error
     return failure
-
-
-def _wrong_get_signature(factory: AbstractFactory, error: TypeError) -> Optional[ComponentError]:
-    """The error for a ``get()`` that cannot be called as ``get(parent)``, or None."""
-    tb = error.__traceback__
-    if tb is None or tb.tb_next is not None:
-        return None  # raised inside get(): not a call that failed to bind
-    get = type(factory).get
-    try:
-        inspect.signature(get).bind(factory, object())
-        return None
-    except TypeError:
-        pass
-    except ValueError:
-        return None
-    params = ", ".join(inspect.signature(get).parameters)
-    block = "\n" + def_block(get) if hasattr(get, "__code__") else ""
-    return ComponentError(
-        f"{describe_callable(get)} is written as `def get({params})`, but the node calls "
-        "get(parent) with itself as the one argument. Write it as `def get(self, "
-        "parent: AbstractNode) -> MyComponent:` and pass `parent` on: "
-        f"`return MyComponent(self, parent)`.{block}"
-    )
-
-
-def wrong_get_result_error(factory: AbstractFactory, component: Any) -> ComponentError:
-    """The ComponentError for a ``get()`` that returned something not a component."""
-    get = describe_callable(type(factory).get)
-    if isinstance(component, type):
-        return ComponentError(
-            f"{get} returned the class {component.__name__} itself, not a "
-            f"component made from it. Call the class: `return "
-            f"{component.__name__}(self, parent)`."
-        )
-    return ComponentError(
-        f"{get} returned {short_repr(component)} ({type(component).__name__}), "
-        "not an endpoint or loop. get() must build and return the component, "
-        "e.g. `return MyEndpoint(self, parent)`."
-    )
 
 
 def reload_failure(error: BaseException) -> str:
@@ -390,7 +298,7 @@ def reload_failure(error: BaseException) -> str:
         line = (error.text or "").strip()
         shown = f"\n    {line}" if line else ""
         return f"{error.filename}:{error.lineno}: SyntaxError: {error.msg}{shown}"
-    return f"{exception_text(error)}{_where(error)}"
+    return f"{exception_text(error)}{failure_frames(error)}"
 
 
 def check_page_args(key: Any, data: Any) -> None:
@@ -415,37 +323,39 @@ def check_component_args(component_class: type, factory: Any, parent: Any, name:
         check_component_args(Beeper, factory, node, "beeper")   # fine: no error
         check_component_args(Beeper, node, factory, "beeper")   # ComponentError: ... swapped.
     """
-    expected = "super().__init__(factory, parent, name)"
-    valid_name = isinstance(name, str) and bool(name)
-    if isinstance(factory, AbstractFactory) and isinstance(parent, AbstractNode) and valid_name:
+    good_factory, good_parent = (
+        isinstance(factory, AbstractFactory),
+        isinstance(parent, AbstractNode),
+    )
+    if good_factory and good_parent and isinstance(name, str) and name:
         return  # the common case: no need to look up the source file
+    call = "super().__init__(factory, parent, name)"
+    order = "Check the order of the arguments."
     if isinstance(factory, AbstractNode) and isinstance(parent, AbstractFactory):
         problem = (
-            f"passed the node as its factory and the factory as its parent: the arguments "
-            f"are swapped. Write {expected}, in that order (check the order in your "
+            "passed the node as its factory and the factory as its parent: the arguments "
+            f"are swapped. Write {call}, in that order (check the order in your "
             "__init__ and in the factory's get() call too)."
         )
     elif isinstance(factory, str) or isinstance(parent, str):
+        shown = ", ".join(short_repr(a, 40) for a in (factory, parent, name))
         problem = (
-            f"passed its arguments in the wrong order: {short_repr(factory, 40)}, "
-            f"{short_repr(parent, 40)}, {short_repr(name, 40)}. Write {expected}: "
+            f"passed its arguments in the wrong order: {shown}. Write {call}: "
             "the factory first, then the parent node, then the name."
         )
-    elif not isinstance(factory, AbstractFactory):
+    elif not good_factory:
         problem = (
-            f"passed {factory!r} as its factory. The first argument of {expected} must be "
-            "the factory that builds it (inside a factory's get(), pass `self`). Check the "
-            "order of the arguments."
+            f"passed {factory!r} as its factory. The first argument of {call} must be "
+            f"the factory that builds it (inside a factory's get(), pass `self`). {order}"
         )
-    elif not isinstance(parent, AbstractNode):
+    elif not good_parent:
         problem = (
-            f"passed {parent!r} as its parent node. The second argument of {expected} must "
-            "be the node (the `parent` given to the factory's get()). Check the order of "
-            "the arguments."
+            f"passed {parent!r} as its parent node. The second argument of {call} must "
+            f"be the node (the `parent` given to the factory's get()). {order}"
         )
     else:
         problem = (
-            f"passed {name!r} as its name. The third argument of {expected} must be a "
+            f"passed {name!r} as its name. The third argument of {call} must be a "
             "non-empty string that is unique in the node, such as 'depth_filter'."
         )
     raise ComponentError(f"{describe_class(component_class)} {problem}")
@@ -460,22 +370,18 @@ def check_node_args(node_class: Any, role: Any, config: Any) -> None:
         check_node_args(Node, config, "robot")   # ConfigError: ... are swapped.
     """
     if isinstance(role, AbstractConfig) and isinstance(config, str):
-        raise ConfigError(
-            wrong_call("Node", node_class, (role, config), "the role and the config are swapped.")
-        )
+        swapped = "the role and the config are swapped."
+        raise ConfigError(wrong_call("Node", node_class, (role, config), swapped))
     if not isinstance(role, str) or not role:
         raise ConfigError(f"A node's role must be a non-empty string, not {role!r}.")
     if not isinstance(config, AbstractConfig):
         raise ConfigError(
             f"Node({role!r}, ...) needs a snr.Config as its second argument, not "
-            f"{type(config).__name__}. Wrap a dict of factories: "
-            "Config({'robot': [...]})."
+            f"{type(config).__name__}. Wrap a dict of factories: Config({{'robot': [...]}})."
         )
 
 
 _INSTEAD = {
-    "execute_task": "self.schedule(task)",
-    "handle_task": "self.schedule(task)",
     "add_component": "self.schedule(tasks.add_component(factory))",
     "remove_component": "self.schedule(tasks.remove_component(name))",
     "reload_component": "self.schedule(tasks.reload_component(name))",
@@ -492,13 +398,34 @@ def wrong_thread_error(role: str, method: str) -> ThreadSafetyError:
         raise wrong_thread_error("robot", "write_page")
         # write_page() was called on node 'robot' from thread 'snr-robot-clock' ...
     """
-    instead = _INSTEAD.get(method, "self.schedule(task)")
     return ThreadSafetyError(
         f"{method}() was called on node {role!r} from thread "
         f"{threading.current_thread().name!r} (at {caller_location()}), but only "
         "the node's own thread may change the node, and a loop runs on a thread "
-        f"of its own. Use {instead} instead: it hands the work to the node's "
-        "thread and is safe from any thread."
+        f"of its own. Use {_INSTEAD.get(method, 'self.schedule(task)')} instead: it hands "
+        "the work to the node's thread and is safe from any thread."
+    )
+
+
+def _wrong_get_signature(factory: AbstractFactory, error: TypeError) -> Optional[ComponentError]:
+    """The error for a ``get()`` that cannot be called as ``get(parent)``, or None."""
+    get = type(factory).get
+    if error.__traceback__ is None or error.__traceback__.tb_next is not None:
+        return None  # raised inside get(): not a call that failed to bind
+    try:
+        inspect.signature(get).bind(factory, object())
+        return None
+    except TypeError:
+        pass
+    except ValueError:
+        return None
+    params = ", ".join(inspect.signature(get).parameters)
+    block = "\n" + def_block(get) if hasattr(get, "__code__") else ""
+    return ComponentError(
+        f"{describe_callable(get)} is written as `def get({params})`, but the node calls "
+        "get(parent) with itself as the one argument. Write it as `def get(self, "
+        "parent: AbstractNode) -> MyComponent:` and pass `parent` on: "
+        f"`return MyComponent(self, parent)`.{block}"
     )
 
 
@@ -514,34 +441,25 @@ def raise_get_failure(factory: AbstractFactory, error: Exception, role: str) -> 
         explained = explain_abstract_error(error) or _wrong_get_signature(factory, error)
         if explained is not None:
             raise explained from None
-    what = exception_text(error)
     raise ComponentError(
-        f"{describe_callable(type(factory).get)} raised {what}"
-        f"\nwhile building a component for node {role!r}.{_where(error)}"
+        f"{describe_callable(type(factory).get)} raised {exception_text(error)}"
+        f"\nwhile building a component for node {role!r}.{failure_frames(error)}"
     ) from error
 
 
-def factory_without_init(factory: AbstractFactory) -> ComponentError:
-    """The ComponentError for a factory whose ``__init__`` skipped ``super().__init__()``."""
+def wrong_get_result_error(factory: AbstractFactory, component: Any) -> ComponentError:
+    """The ComponentError for a ``get()`` that returned something not a component."""
+    get = describe_callable(type(factory).get)
+    if isinstance(component, type):
+        name = component.__name__
+        return ComponentError(
+            f"{get} returned the class {name} itself, not a component made from it. "
+            f"Call the class: `return {name}(self, parent)`."
+        )
     return ComponentError(
-        f"{describe_class(type(factory))} did not call super().__init__() in its "
-        "__init__. Add "
-        "`super().__init__()` (or `super().__init__(my_module)` to hot-reload "
-        "my_module) as its first line."
-    )
-
-
-def component_without_init(component: Any) -> ComponentError:
-    """The ComponentError for a component whose ``__init__`` skipped ``super().__init__``."""
-    cls = type(component)
-    init = next((vars(k)["__init__"] for k in cls.__mro__ if "__init__" in vars(k)), None)
-    code = getattr(init, "__code__", None)
-    block = "" if code is None or is_runtime_file(code.co_filename) else "\n" + def_block(init)
-    return ComponentError(
-        f"{describe_class(cls)}: its __init__ did not call "
-        "super().__init__(factory, parent, name). Add that line first in "
-        "__init__ so SNR can give the component its name and task handlers."
-        f"{block}"
+        f"{get} returned {short_repr(component)} ({type(component).__name__}), "
+        "not an endpoint or loop. get() must build and return the component, "
+        "e.g. `return MyEndpoint(self, parent)`."
     )
 
 
@@ -550,31 +468,50 @@ def warn_get_returned_none(
 ) -> None:
     """A ``get()`` returned None: refuse one that never returns a value, else warn once.
 
-    At run time None is the documented "add nothing"; ``told`` holds the ``get``s named.
-    """
+    At run time None is the documented "add nothing"; ``told`` holds the ``get``s named."""
     get = type(factory).get
-    if _only_returns_none(get):
+    if _returns(get) == []:
         raise ComponentError(
             f"{describe_callable(get)} returned None: it has no `return` with a "
             f"value, so role {role!r} can never get a component from it. "
             "Return what it builds: `return MyEndpoint(self, parent)`."
         )
-    if running or get in told:
-        return
-    told.add(get)
-    log.warning(
-        "%s returned None this time, so role %r gets no component from it. If you "
-        "meant to add one, check the conditions before its `return`. (Said once per "
-        "factory class.)",
-        describe_callable(get),
-        role,
+    if not running and get not in told:
+        told.add(get)
+        log.warning(
+            "%s returned None this time, so role %r gets no component from it. If you "
+            "meant to add one, check the conditions before its `return`. (Said once per "
+            "factory class.)",
+            describe_callable(get),
+            role,
+        )
+
+
+def factory_without_init(factory: AbstractFactory) -> ComponentError:
+    """The ComponentError for a factory whose ``__init__`` skipped ``super().__init__()``."""
+    return ComponentError(
+        f"{describe_class(type(factory))} did not call super().__init__() in its __init__. "
+        "Add `super().__init__()` (or `super().__init__(my_module)` to hot-reload "
+        "my_module) as its first line."
+    )
+
+
+def component_without_init(component: Any) -> ComponentError:
+    """The ComponentError for a component whose ``__init__`` skipped ``super().__init__``."""
+    cls = type(component)
+    init = next(vars(k)["__init__"] for k in cls.__mro__ if "__init__" in vars(k))
+    code = code_of(init)
+    block = "" if code is None or is_runtime_file(code.co_filename) else "\n" + def_block(init)
+    return ComponentError(
+        f"{describe_class(cls)}: its __init__ did not call "
+        "super().__init__(factory, parent, name). Add that line first in "
+        f"__init__ so SNR can give the component its name and task handlers.{block}"
     )
 
 
 def name_taken_error(role: str, component: Any, other: Any) -> ConfigError:
     """The ConfigError for a component whose name ``other`` already has in node ``role``."""
-    name = component.name
-    factory = getattr(component, "factory", None)
+    name, factory = component.name, getattr(component, "factory", None)
     if getattr(other, "factory", None) is factory:
         return ConfigError(
             f"Node {role!r} got two components named {name!r} from the same "
@@ -584,9 +521,8 @@ def name_taken_error(role: str, component: Any, other: Any) -> ConfigError:
         )
     return ConfigError(
         f"Node {role!r} already has a component named {name!r} "
-        f"({describe_class(type(other))}); "
-        f"{describe_class(type(component))} wants the same name. Give each "
-        "component a unique name (e.g. pass a name to its factory)."
+        f"({describe_class(type(other))}); {describe_class(type(component))} wants the "
+        "same name. Give each component a unique name (e.g. pass a name to its factory)."
     )
 
 
@@ -610,54 +546,55 @@ Example::
     log.error(CORE_REFUSED["reload"], "node_core", node.role)
 """
 
-_BLOCKED_ADVICE = (
-    "Make loop() return often: give reads a timeout and wait with self.wait_s(seconds) "
-    "instead of time.sleep(), so the loop notices when it should stop."
-)
-
 
 def not_stopped_text(component: AbstractComponent, timeout_s: float, reload: bool) -> str:
     """The log message for a loop still running ``timeout_s`` after it was asked to stop."""
     where = component.where_running() if isinstance(component, AbstractLoop) else ""
+    advice = (
+        "Make loop() return often: give reads a timeout and wait with self.wait_s(seconds) "
+        "instead of time.sleep(), so the loop notices when it should stop."
+    )
     if reload:
         return (
             f"Cannot reload loop {component.name!r}: it did not stop within "
             f"{timeout_s:.1f} s of being asked{f' (it is at {where})' if where else ''}, and "
             "a new copy would run beside it. Reload refused; the old version keeps "
-            f"running. {_BLOCKED_ADVICE}"
+            f"running. {advice}"
         )
     return (
         f"Loop {component.name!r} did not stop within {timeout_s:.1f} s of being asked"
         f"{f': it is at {where}' if where else ''}. Its terminate() runs now anyway, while "
-        f"its thread is still going (the thread ends with the program). {_BLOCKED_ADVICE}"
+        f"its thread is still going (the thread ends with the program). {advice}"
     )
 
 
 def start_failure(component: AbstractComponent, error: Exception) -> ComponentError:
     """The ComponentError for a component whose ``begin()`` (or thread start) raised ``error``."""
-    what = exception_text(error)
     return ComponentError(
-        f"{describe_class(type(component))} {component.name!r} failed to start: {what}"
-        f"{_where(error)}"
+        f"{describe_class(type(component))} {component.name!r} failed to start: "
+        f"{exception_text(error)}{failure_frames(error)}"
     )
 
 
 def log_name_taken(component_class: type) -> ComponentError:
     """The ComponentError for ``self.log = ...`` in a component: ``log`` is its logger."""
     return ComponentError(
-        f"{describe_class(component_class)} uses the name 'log' for its own value, but 'log' "
-        "is already the component's logger (self.info(...), self.warn(...) write to it). "
-        f"Use another name, e.g. self.{component_class.__name__.lower()}_log.\n"
-        f"{caller_block()}".rstrip()
+        caller_block(
+            f"{describe_class(component_class)} uses the name 'log' for its own value, but "
+            "'log' is already the component's logger (self.info(...), self.warn(...) write "
+            f"to it). Use another name, e.g. self.{component_class.__name__.lower()}_log."
+        )
     )
 
 
 def handlers_before_init(component_class: type) -> MissingSuperInitError:
     """The error for ``self.task_handlers = ...`` before ``super().__init__``."""
     return MissingSuperInitError(
-        f"{describe_class(component_class)} sets self.task_handlers before calling "
-        "super().__init__(factory, parent, name). Call super().__init__(...) "
-        f"first in __init__, then set task_handlers.\n{caller_block()}".rstrip()
+        caller_block(
+            f"{describe_class(component_class)} sets self.task_handlers before calling "
+            "super().__init__(factory, parent, name). Call super().__init__(...) "
+            "first in __init__, then set task_handlers."
+        )
     )
 
 
@@ -670,10 +607,12 @@ def used_before_init(component: Any, attribute: str) -> AttributeError:
         error.name, error.obj = attribute, component  # Python's "Did you mean" uses these
         return error
     return MissingSuperInitError(
-        f"{describe_class(type(component))} has no {attribute!r} yet: its __init__ did "
-        "not call super().__init__(factory, parent, name), or used the component "
-        'before calling it. Make `super().__init__(factory, parent, "my_name")` '
-        f"the first line of __init__.\n{caller_block()}".rstrip()
+        caller_block(
+            f"{describe_class(type(component))} has no {attribute!r} yet: its __init__ did "
+            "not call super().__init__(factory, parent, name), or used the component "
+            'before calling it. Make `super().__init__(factory, parent, "my_name")` '
+            "the first line of __init__."
+        )
     )
 
 

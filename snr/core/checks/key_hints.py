@@ -1,12 +1,4 @@
-"""`MissingKeyHints`: one log hint per data key that is read but never stored.
-
-``get_data`` returns None for a key nothing has stored, both before its first
-page and when the key is misspelt; in DEBUG mode the node tells this helper of
-each miss (docs/errors.md, 9). After ``typo_s`` a key spelled almost like a
-stored one gets a warning, after ``missing_s`` any key still missing an info
-line; once per key, and the search runs at most every ``CHECK_EVERY_S``. A key
-some handler on the node waits for is expected, not misspelt, and a key whose
-page is late (``on_its_way``: queued, or behind a stuck handler) waits.
+"""`MissingKeyHints`: one log hint per data key that is read but never stored (docs/errors.md, 9).
 
 Example::
 
@@ -29,6 +21,13 @@ __all__ = ["MissingKeyHints"]
 
 class MissingKeyHints:
     """Watches reads of missing data keys and logs a hint when one looks wrong.
+
+    ``get_data`` returns None for a key nothing has stored, both before its first
+    page and when the key is misspelt; a DEBUG node tells this helper of each miss.
+    After ``typo_s`` a key spelled almost like a stored one gets a warning, after
+    ``missing_s`` any key still missing an info line; once per key, searching at
+    most every ``CHECK_EVERY_S``. A key a handler on the node waits for is expected,
+    not misspelt; a key whose page is late (``on_its_way``) waits.
 
     Args:
         log: where hints go (the node's logger).
@@ -65,14 +64,9 @@ class MissingKeyHints:
         link_s: float = 3.0,
         on_its_way: Optional[Callable[[DataKey], bool]] = None,
     ) -> None:
-        self.log = log
-        self.role = role
-        self.clock = clock
-        self.typo_s = typo_s
-        self.missing_s = missing_s
-        self.handlers_s = handlers_s
+        self.log, self.role, self.clock, self.on_its_way = log, role, clock, on_its_way
+        self.typo_s, self.missing_s, self.handlers_s = typo_s, missing_s, handlers_s
         self.link_s = link_s
-        self.on_its_way = on_its_way
         self.last_missed: Dict[int, DataKey] = {}
         self._first_and_next_check: Dict[DataKey, List[float]] = {}
         self._reported: Set[DataKey] = set()
@@ -106,7 +100,7 @@ class MissingKeyHints:
                 self._expected_reads.add(key)
                 del self._first_and_next_check[key]
                 return
-            stored = [k for k in list(stored_keys) if isinstance(k, str)]
+            stored = _str_keys(stored_keys)
             guess = closest_match(key, stored) if isinstance(key, str) else None
             if guess is None and waited_s < self.missing_s:
                 return
@@ -146,7 +140,7 @@ class MissingKeyHints:
             hints.check_handlers([("X", doubler.double)], ["x"])
             # Doubler.double (robot.py:9) handles pages under 'X', but nothing stored 'X' ...
         """
-        stored = [k for k in list(stored_keys) if isinstance(k, str)]
+        stored = _str_keys(stored_keys)
         for key, handler in handled:
             if key in stored or key in self._reported or not isinstance(key, str):
                 continue
@@ -192,8 +186,7 @@ class MissingKeyHints:
                              [("sensor_data", show)], datastore, {"sensr_data"})
             # SensorDisplay.show (topside.py:20) handles pages under 'sensor_data', but ...
         """
-        stored = [k for k in list(stored_keys) if isinstance(k, str)]
-        received = sorted(k for k in list(received_keys) if isinstance(k, str))
+        stored, received = _str_keys(stored_keys), sorted(_str_keys(received_keys))
         for key in forwarded:
             if self._is_news(key, stored):
                 guess = closest_key(key, stored)
@@ -230,6 +223,10 @@ _SILENCE = (
     "(This hint shows once per key, in DEBUG mode only; node.key_hints = None turns "
     "such hints off.)"
 )
+
+
+def _str_keys(keys: Iterable[DataKey]) -> List[str]:
+    return [k for k in list(keys) if isinstance(k, str)]
 
 
 def _describe_handler(handler: TaskHandler) -> str:

@@ -1,7 +1,7 @@
 """Source lines and tracebacks for messages: the rest of `snr.prelude.student_code`.
 
-The helpers the prelude needs itself (`describe_class`, `caller_location`,
-`frame_location`...) are named here too, so a check imports all of them from one place.
+The prelude's helpers (`describe_class`, `caller_location`...) are named here too,
+so a check imports all of them from one place.
 
 Example::
 
@@ -19,7 +19,7 @@ import linecache
 import sys
 import threading
 import traceback
-from types import CodeType, FrameType, TracebackType
+from types import CodeType, FrameType
 from typing import Any, Iterator, Optional
 
 from snr.prelude.student_code import (
@@ -32,29 +32,11 @@ from snr.prelude.student_code import (
     short_path,
 )
 
-__all__ = [
-    "caller_block",
-    "caller_location",
-    "code_name",
-    "code_of",
-    "def_block",
-    "describe_callable",
-    "describe_class",
-    "frame_location",
-    "innermost_frame",
-    "is_runtime_file",
-    "is_snr",
-    "line_with_code",
-    "outside_runtime",
-    "parse_source",
-    "running_line",
-    "short_path",
-    "source_block",
-    "source_node",
-    "student_frames",
-    "trim_runtime_frames",
-    "walk_own",
-]
+__all__ = ["caller_block", "caller_location", "code_name", "code_of", "def_block"]
+__all__ += ["describe_callable", "describe_class", "failure_frames", "frame_location"]
+__all__ += ["innermost_frame", "is_runtime_file", "is_snr", "line_with_code", "outside_runtime"]
+__all__ += ["parse_source", "running_line", "short_path", "source_block", "source_node"]
+__all__ += ["walk_own"]
 
 
 def is_snr(cls: type) -> bool:
@@ -87,6 +69,10 @@ def code_name(code: CodeType, fallback: str) -> str:
     return getattr(code, "co_qualname", None) or fallback
 
 
+def _qualname(func: Any) -> Optional[str]:
+    return getattr(getattr(func, "__func__", func), "__qualname__", None)
+
+
 def describe_callable(func: Any) -> str:
     """``"MyEndpoint.on_depth (robot.py:30)"``: a function with where it is.
 
@@ -94,12 +80,9 @@ def describe_callable(func: Any) -> str:
 
         describe_callable(endpoint.update_filter)
     """
-    name = getattr(getattr(func, "__func__", func), "__qualname__", None) or repr(func)
-    code = code_of(func)
+    name, code = _qualname(func) or repr(func), code_of(func)
     return (
-        str(name)
-        if code is None
-        else f"{name} ({short_path(code.co_filename)}:{code.co_firstlineno})"
+        name if code is None else f"{name} ({short_path(code.co_filename)}:{code.co_firstlineno})"
     )
 
 
@@ -116,35 +99,29 @@ def innermost_frame(error: BaseException) -> Optional[FrameType]:
     return None if tb is None else tb.tb_frame
 
 
-def student_frames(tb: Optional[TracebackType]) -> str:
-    """A traceback as text, with the frames of SNR's runtime left out.
+def failure_frames(error: BaseException) -> str:
+    """The student's frames of ``error`` under a heading; its traceback is then trimmed to them.
+
+    SNR's own frames are left out of both (all of them are shown if only SNR's: a bug in SNR).
 
     Example::
 
-        print(student_frames(error.__traceback__))
+        raise HandlerError(f"... raised {what}{failure_frames(error)}") from error
+        # Where it happened (most recent call last):
         #   File "robot.py", line 30, in on_depth
         #     return 1 / 0
     """
-    frames = traceback.extract_tb(tb)
+    frames = traceback.extract_tb(error.__traceback__)
     theirs = traceback.StackSummary.from_list(
         [f for f in frames if not is_runtime_file(f.filename)]
     )
-    return "".join((theirs or frames).format()).rstrip()  # only SNR: a bug in SNR itself
-
-
-def trim_runtime_frames(error: BaseException) -> None:
-    """Drop SNR's leading frames from ``error``'s traceback, in place.
-
-    Example::
-
-        trim_runtime_frames(error)   # Python's report of it starts at the student's code
-        raise HandlerError("...") from error
-    """
     tb = error.__traceback__
     while tb is not None and is_runtime_file(tb.tb_frame.f_code.co_filename):
         tb = tb.tb_next
-    if tb is not None:
+    if tb is not None:  # Python's own report of it then starts at the student's code
         error.__traceback__ = tb
+    shown = "".join((theirs or frames).format()).rstrip()
+    return f"\nWhere it happened (most recent call last):\n{shown}"
 
 
 def source_block(filename: str, line: int, name: str, context: str = "") -> str:
@@ -173,21 +150,22 @@ def def_block(func: Any) -> str:
     code = code_of(func)
     if code is None:
         return ""
-    name = code_name(code, getattr(getattr(func, "__func__", func), "__qualname__", code.co_name))
+    name = code_name(code, _qualname(func) or code.co_name)
     return source_block(code.co_filename, code.co_firstlineno, name)
 
 
-def caller_block(skip: int = 1) -> str:
-    """The nearest caller outside SNR's runtime as a `source_block`, or "".
+def caller_block(text: str = "") -> str:
+    """``text`` and the nearest caller outside SNR's runtime as a `source_block` under it.
 
     Example::
 
-        raise ComponentError(f"... set too early.\n{caller_block()}")
+        raise ComponentError(caller_block("... set too early."))
     """
-    frame = outside_runtime(sys._getframe(skip))
+    frame = outside_runtime(sys._getframe(1))
     if frame is None:
-        return ""
-    return source_block(frame.f_code.co_filename, frame.f_lineno, frame_name(frame))
+        return text
+    block = source_block(frame.f_code.co_filename, frame.f_lineno, frame_name(frame))
+    return f"{text}\n{block}" if text else block
 
 
 def running_line(thread_id: Optional[int]) -> str:
@@ -197,12 +175,12 @@ def running_line(thread_id: Optional[int]) -> str:
 
         running_line(loop.thread_id)   # "sensor.py:12 in Sonar.loop: `reading = port.read()`"
     """
-    if thread_id is None:
-        return ""
-    frame: Optional[FrameType] = sys._current_frames().get(thread_id)
+    frame = sys._current_frames().get(thread_id) if thread_id is not None else None
     innermost = frame
+    prefixes = (sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix)
+    stdlib = ("<", *(f"{p}/lib/python" for p in prefixes))  # "<frozen ...>" too
     while frame is not None and (
-        is_runtime_file(frame.f_code.co_filename) or _is_stdlib(frame.f_code.co_filename)
+        is_runtime_file(frame.f_code.co_filename) or frame.f_code.co_filename.startswith(stdlib)
     ):
         frame = frame.f_back
     frame = frame or innermost
@@ -221,22 +199,14 @@ def line_with_code(frame: FrameType, line: Optional[int] = None) -> str:
     return frame_location(frame, at) + (f": `{code}`" if code else "")
 
 
-def _is_stdlib(filename: str) -> bool:
-    prefixes = {sys.prefix, sys.base_prefix, sys.exec_prefix, sys.base_exec_prefix}
-    return filename.startswith("<") or any(
-        filename.startswith(f"{prefix}/lib/python") for prefix in prefixes
-    )
-
-
 _PARSE_LOCK = threading.Lock()
 
 
 def parse_source(text: str) -> ast.Module:
     """``ast.parse(text)``, one thread at a time.
 
-    Two nodes in one process may read a student's source at once, and on
-    CPython 3.11.7 two parses at once can fail with ``SystemError: AST
-    constructor recursion depth mismatch``.
+    On CPython 3.11.7 two parses at once (two nodes in one process) can fail with
+    ``SystemError: AST constructor recursion depth mismatch``.
 
     Example::
 
