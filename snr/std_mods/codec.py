@@ -1,23 +1,8 @@
-"""The wire format: pages as strict JSON, in frames between nodes and in lines on disk.
+"""The wire format (docs/wire-format.md): pages as strict JSON, in frames and in lines.
 
-Every page that leaves or enters a node is written and read here
-(docs/wire-format.md): comms *frames* (a 4-byte big-endian length, then a
-JSON object with ``"v"`` and a ``"kind"``: ``hello``, ``proof``, ``page``,
-``beat`` or ``bye``), and the lines of recordings and serial links (a header
-line, then one page per line). One set of rules:
-
-* **Written:** compact JSON, ASCII only (``\\uXXXX``), fields in a fixed order.
-* **Refused when writing** (`NotSerializableError`, naming the key and the
-  part of the data): what JSON cannot hold, NaN and infinity, lone
-  surrogates, nesting deeper than `MAX_DEPTH`.
-* **Rejected when reading** (`WireFormatError`, saying why): text that is not
-  UTF-8 or not JSON, ``NaN``, ``1e999``, lone surrogates, nesting deeper than
-  `MAX_DEPTH`, pages with missing or wrongly typed fields. Nothing is
-  unpickled or evaluated: a bad frame can only be *wrong*, never harmful.
-
-The standard library's ``json`` does the work. A faster `JsonBackend` from an
-extra may do part of it (``snr.extras.orjson``: ``pip install
-'snr-robotics[fast]'``, used when installed; ``SNR_JSON=json`` turns it off).
+The standard library's ``json`` does the work; a faster `JsonBackend` from an
+extra may do part of it. Nothing is unpickled or evaluated: a bad frame can
+only be *wrong*, never harmful.
 
 Example::
 
@@ -39,7 +24,7 @@ import re
 import struct
 import time
 from dataclasses import dataclass
-from typing import Any, Dict, Iterable, List, Mapping, NoReturn, Optional, Protocol, Tuple, Union
+from typing import Any, Callable, Dict, List, Mapping, NoReturn, Optional, Protocol, Tuple, Union
 
 from snr.core import plugins
 from snr.prelude import ConfigError, NotSerializableError, Page, WireFormatError
@@ -89,10 +74,7 @@ __all__ = [
 ]
 
 MAX_DEPTH = 100
-"""Deepest nesting of arrays and objects in a body or line, the outer object included.
-
-So a page's ``data`` may nest 99 deep (``[[1]]`` is 2 deep).
-"""
+"""Deepest nesting in a body or line, the outer object included: ``data`` may nest 99 deep."""
 
 BACKEND_ENV_VAR = "SNR_JSON"
 """Environment variable choosing the JSON backend: ``json`` (stdlib) or ``orjson``."""
@@ -106,6 +88,18 @@ FORMAT_NAME = "snr-pages"
 FORMAT_VERSION = 1
 """The line format version this SNR writes; it reads this version and older."""
 
+WIRE_VERSION = 1
+"""The ``"v"`` field of page, beat and bye frames, and of the first hello (no system)."""
+
+HELLO_VERSION = 2
+"""The ``"v"`` of a hello naming a system or carrying a challenge, and of proofs."""
+
+HEADER_BYTES = 4
+"""Length of the frame header: an unsigned 32-bit big-endian body length."""
+
+MAX_FRAME_BYTES = 16 * 1024 * 1024
+"""Largest body accepted or sent (16 MiB); a longer length header resets the link."""
+
 PathLike = Union[str, "os.PathLike[str]"]
 """A file name: a string or a ``pathlib.Path``."""
 
@@ -116,6 +110,7 @@ _DATA_DEPTH = MAX_DEPTH - 1  # the page object itself is one level
 _LONE_SURROGATE = re.compile("[\ud800-\udfff]")
 _TOO_DEEP = f"it nests arrays and objects more than {MAX_DEPTH} deep"
 _DATA_TOO_DEEP = f"data nests lists and dicts more than {_DATA_DEPTH} deep"
+_HEADER = struct.Struct(">I")
 
 
 class _Refused(Exception):
@@ -123,43 +118,35 @@ class _Refused(Exception):
 
 
 class _OutOfRange(Exception):
-    """A number a double cannot hold, such as ``1e999`` (not a ValueError, json's verdicts)."""
+    """A number a double cannot hold, such as ``1e999`` (a ValueError would be json's)."""
 
 
 def _suspect(text: bytes, depth: int = MAX_DEPTH) -> bool:
-    """True when JSON text may hold a lone surrogate (``\\ud800``) or nest over ``depth``.
-
-    Text shorter than ``2 * depth`` cannot nest that deep; brackets in strings
-    count too (then the decoded value shows that all is well).
-    """
+    """True when JSON text may hold a lone surrogate (``\\ud800``) or nest over ``depth``."""
     return b"\\ud" in text or (
         len(text) > 2 * depth and text.count(b"[") + text.count(b"{") > depth
     )
 
 
-def _problem(value: Any) -> Optional[str]:
-    """Why a decoded JSON value breaks SNR's rules (nested too deep, a lone surrogate), or None.
+def _problem(value: Any, limit: int = MAX_DEPTH) -> Optional[str]:
+    """Why a decoded JSON value breaks SNR's rules (nested over ``limit``, a lone surrogate).
 
-    Example: ``_problem(["\\ud800"])`` names the lone surrogate.
+    Example: ``_problem(["\\ud800"])`` names the lone surrogate; None if all is well.
     """
-    stack: List[Tuple[Any, int]] = [(value, 1)]  # (a value, how deep it is)
+    stack = [(value, 1)]  # (a value, how deep it is)
     while stack:
         node, depth = stack.pop()
-        if depth > MAX_DEPTH:
+        if depth > limit:
             return _TOO_DEEP
-        items: Iterable[Any] = (node,)
-        if type(node) is list:
-            items = node
-        elif type(node) is dict:
-            for key in node:
-                if _LONE_SURROGATE.search(key):
-                    return f"the key {key[:40]!r} holds a lone surrogate, which is not text"
-            items = node.values()
+        items: Any = node if type(node) is list else (node,)
+        if type(node) is dict:
+            items = [*node, *node.values()]  # the keys are strings to check too
         for item in items:
             if type(item) is list or type(item) is dict:
                 stack.append((item, depth + 1))
             elif type(item) is str and _LONE_SURROGATE.search(item):
-                return f"the string {item[:40]!r} holds a lone surrogate, which is not text"
+                what = "key" if type(node) is dict and item in node else "string"
+                return f"the {what} {item[:40]!r} holds a lone surrogate, which is not text"
     return None
 
 
@@ -169,10 +156,8 @@ def _problem(value: Any) -> Optional[str]:
 class JsonBackend(Protocol):
     """What an entry point of `BACKEND_GROUP` makes: json's results, faster, or a step aside.
 
-    The entry point names a class that raises ImportError, its message the
-    pip line, when a package it needs is missing. Wherever a backend steps
-    aside the codec uses json, which also gives every verdict and message, so
-    the bytes written and the input rejected are the same with any backend.
+    Its class raises ImportError (the message: the pip line) when a package it
+    needs is missing. Where it steps aside, json writes, reads and refuses.
 
     Example::
 
@@ -184,23 +169,14 @@ class JsonBackend(Protocol):
     """
 
     def dumps(self, value: Any) -> Optional[bytes]:
-        """json's bytes for ``value`` (compact, ASCII), or None to let json write it.
-
-        None at least where json's bytes nest more than ``MAX_DEPTH - 1`` deep
-        or hold a lone surrogate (``\\ud800``): the codec does not look again.
-        """
+        """json's bytes (compact, ASCII), or None: at least for nesting over 99 or ``\\ud800``."""
 
     def loads(self, raw: Text) -> Any:
         """The value `load_json` reads from ``raw``, or ValueError to let json read it."""
 
 
 class _DefaultOnFirstUse:
-    """The backend until the first value is read or written: then the default is chosen.
-
-    Finding the installed backends reads the packages' entry points
-    (``importlib.metadata``, about 13 ms), so importing the codec does not:
-    ``from snr import *`` and a program that sends no page never pay it.
-    """
+    """The backend until first used: reading entry points costs ~13 ms, not paid at import."""
 
     def dumps(self, value: Any) -> Optional[bytes]:
         use_backend()
@@ -237,11 +213,11 @@ def _load_backend(name: str) -> JsonBackend:
 
 
 def available_backends() -> Tuple[str, ...]:
-    """The JSON backends that can be used here: ``("json", "orjson")`` or ``("json",)``.
+    """The JSON backends installed here.
 
     Example::
 
-        "orjson" in available_backends()   # True after pip install 'snr-robotics[fast]'
+        available_backends()   # ('json', 'orjson') after pip install 'snr-robotics[fast]'
     """
     usable = ["json"]
     for name in plugins.names(BACKEND_GROUP):
@@ -260,19 +236,15 @@ def backend() -> str:
 
         backend()   # 'orjson'
     """
-    return use_backend() if _backend is None else _backend
+    return _backend or use_backend()
 
 
 def use_backend(name: Optional[str] = None) -> str:
-    """Choose the JSON backend; returns the one now in use.
+    """Choose the JSON backend (only the speed differs); returns the one now in use.
 
-    Args:
-        name: ``"json"`` (the standard library), a backend of `BACKEND_GROUP`
-            (``"orjson"``), or None for the default: ``SNR_JSON`` if set, else
-            the first backend installed, else json. Only the speed differs.
-
-    Raises:
-        ValueError: an unknown name, or a backend asked for but not installed.
+    ``name``: ``"json"``, a backend of `BACKEND_GROUP`, or None for the
+    default: ``SNR_JSON`` if set, else the first installed. ValueError for an
+    unknown name or a backend not installed.
 
     Example::
 
@@ -282,9 +254,7 @@ def use_backend(name: Optional[str] = None) -> str:
     global _fast, _backend
     if name is None:
         name = os.environ.get(BACKEND_ENV_VAR, "").strip().lower()
-        if not name:
-            installed = available_backends()
-            name = installed[1] if len(installed) > 1 else "json"  # the first faster one
+        name = name or (*available_backends(), "json")[1]  # the first faster one, else json
     _fast = None if name == "json" else _load_backend(name)
     _backend = name
     return name
@@ -318,8 +288,18 @@ def _decode(decoder: json.JSONDecoder, text: str) -> Any:
         raise WireFormatError(_TOO_DEEP) from None
 
 
-def _load(raw: Text) -> Any:
-    """The JSON value in ``raw``, read strictly (`load_json` says what is rejected)."""
+def load_json(raw: Text) -> Any:
+    """The JSON value in ``raw`` (UTF-8 bytes or text), read strictly.
+
+    Raises:
+        WireFormatError: not UTF-8, not JSON, NaN/Infinity, a number beyond a
+            double (``1e999``), a lone surrogate, nesting over `MAX_DEPTH`.
+
+    Example::
+
+        load_json(b'{"a":[1,2.5]}')   # {'a': [1, 2.5]}
+        load_json(b'[1e999]')         # WireFormatError
+    """
     if _fast is not None:
         try:
             return _fast.loads(raw)
@@ -346,20 +326,27 @@ def _load(raw: Text) -> Any:
     return value
 
 
-def _dump(obj: Any) -> bytes:
-    """``obj`` as compact ASCII JSON; raises `_Refused` saying why not."""
-    out = None if _fast is None else _fast.dumps(obj)
+def _dump(value: Any, depth: int = MAX_DEPTH) -> bytes:
+    """``value`` as compact ASCII JSON nesting at most ``depth`` deep; `_Refused` says why not.
+
+    Numbers are written with their ``repr``, as json writes them, without json's encoder.
+    """
+    out = None if _fast is None else _fast.dumps(value)
     if out is not None:
         return out
+    kind = type(value)
+    # value - value is NaN for NaN and infinity, which json refuses
+    if kind is float and value - value == 0.0:
+        return float.__repr__(value).encode("ascii")
     try:
-        out = _ENCODER.encode(obj).encode("ascii")
-    except (TypeError, ValueError) as error:  # not JSON, NaN/infinity, contains itself
-        raise _Refused(str(error)) from error
+        out = (int.__repr__(value) if kind is int else _ENCODER.encode(value)).encode("ascii")
+    except (TypeError, ValueError) as error:  # not JSON, NaN, 4,300 digits, contains itself
+        raise _Refused(str(error)) from None
     except RecursionError:
         raise _Refused(_DATA_TOO_DEEP) from None
-    if _suspect(out):  # json writes lone surrogates (\ud800), and nests as deep as it can
+    if _suspect(out, depth):  # json writes lone surrogates (\ud800), and nests as deep as it can
         try:
-            problem = _problem(json.loads(out))
+            problem = _problem(json.loads(out), depth)
         except RecursionError:
             problem = _TOO_DEEP
         if problem is not None:
@@ -367,66 +354,24 @@ def _dump(obj: Any) -> bytes:
     return out
 
 
-def _value(value: Any) -> Optional[bytes]:
-    """The JSON of a page's data or time, or None where `page_json` must decide.
-
-    json writes a float or an int with its ``repr``: written here without
-    making json's encoder for the call. Example: ``_value(0.5)`` is ``b"0.5"``.
-    """
-    out = None if _fast is None else _fast.dumps(value)
-    if out is not None:
-        return out
-    kind = type(value)
-    if kind is float:
-        # value - value is NaN for NaN and infinity, which json refuses
-        return float.__repr__(value).encode("ascii") if value - value == 0.0 else None
-    if kind is bool:
-        return b"true" if value else b"false"
-    if value is None:
-        return b"null"
-    try:
-        out = (int.__repr__(value) if kind is int else _ENCODER.encode(value)).encode("ascii")
-    except (TypeError, ValueError, RecursionError):  # not JSON, NaN, 4,300 digits...
-        return None
-    return None if _suspect(out, _DATA_DEPTH) else out
-
-
 # -- JSON text and pages --------------------------------------------------------------
 
 
-def load_json(raw: Text) -> Any:
-    """The JSON value in ``raw`` (UTF-8 bytes or text), read strictly.
-
-    Raises:
-        WireFormatError: not UTF-8, not JSON, NaN/Infinity, a number beyond a
-            double (``1e999``), a lone surrogate, nesting over `MAX_DEPTH`.
-
-    Example::
-
-        load_json(b'{"a":[1,2.5]}')   # {'a': [1, 2.5]}
-        load_json(b'[1e999]')         # WireFormatError
-    """
-    return _load(raw)
-
-
 def load_object(raw: Text) -> Dict[str, Any]:
-    """Like `load_json`, for a body or line that must be a JSON object.
+    """`load_json` for a body or line that must be a JSON object.
 
     Example::
 
         load_object(b'{"key":"x","data":1}')   # {'key': 'x', 'data': 1}
     """
-    obj = _load(raw)
+    obj = load_json(raw)
     if type(obj) is not dict:
         raise WireFormatError(f"it is a JSON {type(obj).__name__}, not an object {{...}}")
     return obj
 
 
 def dump_json(obj: Mapping[str, Any], what: str = "it") -> bytes:
-    """``obj`` as compact, ASCII-only JSON bytes (for small fixed objects, not pages).
-
-    Raises:
-        NotSerializableError: something in it JSON cannot hold.
+    """``obj`` as compact ASCII JSON (small fixed objects, not pages), or NotSerializableError.
 
     Example::
 
@@ -439,53 +384,42 @@ def dump_json(obj: Mapping[str, Any], what: str = "it") -> bytes:
         raise NotSerializableError(f"Cannot write {what} as JSON: {error}") from None
 
 
-def data_json(key: str, data: Any, to: str) -> bytes:
-    """A page's ``data`` alone as JSON bytes, refused as `page_json` refuses it.
+def _refusing(value: Any, key: str, data: Any, to: str) -> bytes:
+    """`_dump`, refusing with the error that names the page's key and the part of its data."""
+    try:
+        return _dump(value)
+    except _Refused as error:
+        raise not_serializable_error(key, data, to=to, reason=str(error)) from None
 
-    For formats that send the data without the page (a serial link's plain
-    lines, a board's compact lines).
+
+def data_json(key: str, data: Any, to: str) -> bytes:
+    """A page's ``data`` alone as JSON bytes (serial lines), refused as `page_json` does.
 
     Example::
 
         data_json("motor", [50, -50], to="to a serial link")   # b'[50,-50]'
     """
-    try:
-        return _dump(data)
-    except _Refused as error:
-        raise not_serializable_error(key, data, to=to, reason=str(error)) from None
+    return _refusing(data, key, data, to)
 
 
 def page_json(
     page: Page, head: Optional[Mapping[str, Any]] = None, to: str = "to another node"
 ) -> bytes:
-    """``page`` as one JSON object: ``head``'s fields, then the page's fields.
-
-    Args:
-        page: the page.
-        head: fields written first, e.g. ``{"v": 1, "kind": "page"}`` for a frame.
-        to: where it is going, for the error message.
+    """``page`` as one JSON object: ``head``'s fields (``{"v": 1, ...}``), then the page's.
 
     Raises:
-        NotSerializableError: the data is not JSON (a set, an object, NaN,
-            a lone surrogate, too deep), naming the key, the part and the fix.
+        NotSerializableError: the data is not JSON (a set, NaN, a lone
+            surrogate, too deep), naming the key, the part, the fix and ``to``.
 
     Example::
 
         page_json(Page("x", [1, 2], "robot", 0.5))
         # b'{"key":"x","data":[1,2],"origin":"robot","created_at_s":0.5,"process":true}'
     """
-    fields = {
-        **(head or {}),
-        "key": page.key,
-        "data": page.data,
-        "origin": page.origin,
-        "created_at_s": page.created_at_s,
-        "process": page.process,
-    }
-    try:
-        return _dump(fields)
-    except _Refused as error:
-        raise not_serializable_error(page.key, page.data, to=to, reason=str(error)) from None
+    key, data = page.key, page.data
+    fields = {**(head or {}), "key": key, "data": data, "origin": page.origin}
+    fields.update(created_at_s=page.created_at_s, process=page.process)
+    return _refusing(fields, key, data, to)
 
 
 _MAX_ENVELOPES = 1024  # the (key, origin) pairs a PageEncoder keeps; when full it starts again
@@ -494,21 +428,14 @@ _TAILS = (b',"process":false}', b',"process":true}')
 
 
 class PageEncoder:
-    """`page_json` with the leading fields and the destination given once: a link's encoder.
+    """`page_json` with ``head`` and ``to`` given once: a link's encoder, the same bytes, faster.
 
-    A node sends pages under a few keys, each from one origin, again and
-    again: the JSON around the data and the time (the head, the key, the
-    origin) is written once per key and origin and kept (up to 1,024
-    pairs). A page then costs the JSON of its data and time and a
-    join. The bytes and the refusals are `page_json`'s.
-
-    Args:
-        head: fields written before the page's, e.g. ``{"v": 1, "kind": "page"}``.
-        to: where the pages go, for the error message.
+    The JSON around the data and the time is written once per key and origin
+    (up to 1,024 pairs) and kept: a page costs the JSON of its data and time.
 
     Example::
 
-        encode = PageEncoder({"v": 1, "kind": "page"})
+        encode = PageEncoder({"v": 1, "kind": "page"}, to="to another node")
         encode(Page("x", 1.5, "robot", 0.5))
         # b'{"v":1,"kind":"page","key":"x","data":1.5,"origin":"robot","created_at_s":0.5,...}'
     """
@@ -516,9 +443,8 @@ class PageEncoder:
     def __init__(self, head: Mapping[str, Any], to: str = "to another node") -> None:
         self.head = dict(head)
         self.to = to
-        # (key, origin) -> the JSON before the data, and between the data and the
-        # time; None where page_json must decide (a head naming a page field, a
-        # key or origin json refuses)
+        # (key, origin) -> the JSON before the data, and between it and the time;
+        # None where page_json must decide (a head naming a page field, a bad key)
         self._envelopes: Dict[Tuple[str, str], Optional[Tuple[bytes, bytes]]] = {}
 
     def __call__(self, page: Page) -> bytes:
@@ -530,9 +456,12 @@ class PageEncoder:
             except KeyError:
                 envelope = self._learn(key, origin)
             if envelope is not None:
-                data, created = _value(page.data), _value(page.created_at_s)
-                if data is not None and created is not None:
+                try:
+                    data = _dump(page.data, _DATA_DEPTH)
+                    created = _dump(page.created_at_s, _DATA_DEPTH)
                     return b"".join((envelope[0], data, envelope[1], created, _TAILS[process]))
+                except _Refused:  # page_json says why
+                    pass
         return page_json(page, self.head, self.to)
 
     def _learn(self, key: str, origin: str) -> Optional[Tuple[bytes, bytes]]:
@@ -558,17 +487,11 @@ def _bad_type(name: str, value: Any, expected: str) -> WireFormatError:
 def page_from_fields(
     fields: Mapping[str, Any], default_origin: Optional[str] = "", now_s: Optional[float] = None
 ) -> Page:
-    """The page a decoded JSON object describes.
+    """The page a decoded JSON object describes; WireFormatError names a bad or missing field.
 
-    ``key`` (not empty) and ``data`` are required; other fields are ignored.
-    A missing ``origin`` becomes ``default_origin``, a missing
-    ``created_at_s`` ``now_s`` (or the current time), a missing ``process``
-    true. With ``default_origin=None`` (frames) origin and time are required
-    and origin must not be empty.
-
-    Raises:
-        WireFormatError: a field is missing, empty or of the wrong type; the
-            message names it.
+    ``key`` and ``data`` are required. A missing ``origin`` becomes
+    ``default_origin``, ``created_at_s`` ``now_s`` (or now), ``process`` true.
+    With ``default_origin=None`` (frames) origin and time are required.
 
     Example::
 
@@ -619,35 +542,14 @@ def page_from_fields(
 
 # -- frames: a page (or a hello, beat, bye, proof) between two nodes ------------------
 
-WIRE_VERSION = 1
-"""The ``"v"`` field of page, beat and bye frames, and of the first hello (no system)."""
-
-HELLO_VERSION = 2
-"""The ``"v"`` of the hello that names a system or carries a challenge, and of proofs.
-
-A node with no system and no secret sends a version 1 hello, which older
-nodes understand (docs/wire-format.md, section 3.1).
-"""
-
-HEADER_BYTES = 4
-"""Length of the frame header: an unsigned 32-bit big-endian body length."""
-
-MAX_FRAME_BYTES = 16 * 1024 * 1024
-"""Largest body accepted or sent (16 MiB); a longer length header resets the link."""
-
-_HEADER = struct.Struct(">I")
-_page_body = PageEncoder({"v": WIRE_VERSION, "kind": "page"})
-
 
 @dataclass(frozen=True)
 class Hello:
     """The first frame on a link: who is on the other end.
 
-    ``beat_s``: how often the sender promises a sign of life (a `Beat`) while
-    it has nothing else to send, None for no promise (older nodes). ``bye``:
-    it understands a `Bye` frame. ``system``: the system it belongs to (None
-    in a version 1 hello), ``nonce``: its challenge, 64 hex digits from a node
-    with a secret, else None.
+    ``beat_s``: how often it promises a `Beat` on a quiet link (None: no
+    promise); ``bye``: it understands `Bye`; ``system``: its system (None in
+    a version 1 hello); ``nonce``: its challenge if it has a secret.
 
     Example::
 
@@ -697,6 +599,8 @@ class Bye:
 Message = Union[Page, Hello, Beat, Bye, Proof]
 """What a frame carries: a `Page`, a `Hello`, a `Beat`, a `Bye` or a `Proof`."""
 
+_page_body = PageEncoder({"v": WIRE_VERSION, "kind": "page"})
+
 
 def _frame(body: bytes, what: str) -> bytes:
     if len(body) > MAX_FRAME_BYTES:
@@ -709,11 +613,7 @@ def _frame(body: bytes, what: str) -> bytes:
 
 
 def encode_page(page: Page) -> bytes:
-    """One frame carrying ``page``.
-
-    Raises:
-        NotSerializableError: the data is not JSON (a set, a custom object,
-            NaN, ...), naming the key and the type, or the frame is too big.
+    """One frame carrying ``page``; NotSerializableError as `page_json`, or when too big.
 
     Example::
 
@@ -726,6 +626,10 @@ def encode_page(page: Page) -> bytes:
     return _HEADER.pack(len(body)) + body
 
 
+def _encode(fields: Dict[str, Any], what: str) -> bytes:
+    return _frame(dump_json(fields, what), what)
+
+
 def encode_hello(
     role: str,
     beat_s: Optional[float] = None,
@@ -735,8 +639,7 @@ def encode_hello(
 ) -> bytes:
     """The hello frame a node sends first on every link (the fields: `Hello`).
 
-    With a ``system`` or a ``nonce`` it is a version 2 hello; without
-    either, the version 1 hello older nodes know.
+    With a ``system`` or a ``nonce`` it is a version 2 hello, else version 1.
 
     Example::
 
@@ -744,17 +647,21 @@ def encode_hello(
         encode_hello("receiver", 1.0, bye=True)   # ...,"beat_s":1.0,"bye":true}
         encode_hello("receiver", system="team7")  # {"v":2,...,"system":"team7"}
     """
-    version = HELLO_VERSION if system is not None or nonce is not None else WIRE_VERSION
-    fields: Dict[str, Any] = {"v": version, "kind": "hello", "role": role}
+    v2 = system is not None or nonce is not None
+    fields: Dict[str, Any] = {
+        "v": HELLO_VERSION if v2 else WIRE_VERSION,
+        "kind": "hello",
+        "role": role,
+    }
     if beat_s is not None:
         fields["beat_s"] = beat_s
     if bye:
         fields["bye"] = True
-    if version == HELLO_VERSION:
+    if v2:
         fields["system"] = system
         if nonce is not None:
             fields["nonce"] = nonce
-    return _frame(dump_json(fields, "the hello frame"), "the hello frame")
+    return _encode(fields, "the hello frame")
 
 
 def encode_proof(mac: str) -> bytes:
@@ -764,8 +671,7 @@ def encode_proof(mac: str) -> bytes:
 
         encode_proof("ab" * 32)   # b'...{"v":2,"kind":"proof","mac":"abab..."}'
     """
-    fields = {"v": HELLO_VERSION, "kind": "proof", "mac": mac}
-    return _frame(dump_json(fields, "the proof frame"), "the proof frame")
+    return _encode({"v": HELLO_VERSION, "kind": "proof", "mac": mac}, "the proof frame")
 
 
 _BEAT_FRAME = _frame(b'{"v":1,"kind":"beat"}', "a beat")
@@ -792,13 +698,41 @@ def encode_bye() -> bytes:
     return _BYE_FRAME
 
 
+_HEX_DIGITS = 64  # a nonce (32 random bytes) and an HMAC-SHA256 are both this long in hex
+_HEX = frozenset("0123456789abcdef")
+
+
+def _is_hex(value: Any) -> bool:
+    return type(value) is str and len(value) == _HEX_DIGITS and _HEX.issuperset(value)
+
+
+# a field of a hello or proof: (is its value right, what it must be); each is optional but mac
+_FIELD_RULES: Dict[str, Tuple[Callable[[Any], Any], str]] = {
+    "beat_s": (
+        lambda v: v is None or (type(v) in (int, float) and v > 0),
+        "a number of seconds above 0",
+    ),
+    "bye": (lambda v: type(v) is bool, "true or false"),
+    "system": (lambda v: v is None or (type(v) is str and v), "a non-empty string or null"),
+    "nonce": (lambda v: v is None or _is_hex(v), f"{_HEX_DIGITS} lowercase hex digits"),
+    "mac": (_is_hex, f"{_HEX_DIGITS} lowercase hex digits"),
+}
+
+
+def _field(obj: Dict[str, Any], kind: str, name: str, default: Any = None) -> Any:
+    value = obj.get(name, default)
+    right, must = _FIELD_RULES[name]
+    if not right(value):
+        raise WireFormatError(f"the {kind}'s {name!r} is {value!r:.40}; it must be {must}")
+    return value
+
+
 def decode_body(body: bytes) -> Message:
-    """The `Page`, `Hello`, `Beat`, `Bye` or `Proof` in a frame's body (after the header).
+    """The `Message` in a frame's body (after the header).
 
     Raises:
-        WireFormatError: the body is not strict JSON, not an object, has
-            another version, an unknown kind, or a missing or mistyped field.
-            The message says which; the caller logs it and drops the frame.
+        WireFormatError: not strict JSON, not an object, another version, an
+            unknown kind, a missing or mistyped field: the message says which.
 
     Example::
 
@@ -828,24 +762,11 @@ def decode_body(body: bytes) -> Message:
     if kind == "proof":
         if version != HELLO_VERSION:
             raise WireFormatError(f"a proof frame must have version {HELLO_VERSION}")
-        mac: Any = obj.get("mac")
-        if not _is_hex(mac):
-            raise WireFormatError(
-                f"the proof's 'mac' is {mac!r:.40}; it must be {_HEX_DIGITS} lowercase hex digits"
-            )
-        return Proof(mac)
+        return Proof(_field(obj, "proof", "mac"))
     raise WireFormatError(
         f"unknown frame kind {kind!r:.40}; known kinds are 'page', 'hello', 'beat', 'bye' "
         "and 'proof'"
     )
-
-
-_HEX_DIGITS = 64  # a nonce (32 random bytes) and an HMAC-SHA256 are both this long in hex
-_HEX = frozenset("0123456789abcdef")
-
-
-def _is_hex(value: Any) -> bool:
-    return type(value) is str and len(value) == _HEX_DIGITS and _HEX.issuperset(value)
 
 
 def _decode_hello(obj: Dict[str, Any], version: int) -> Hello:
@@ -859,14 +780,7 @@ def _decode_hello(obj: Dict[str, Any], version: int) -> Hello:
         )
     if not role:
         raise WireFormatError("field 'role' of a hello frame must not be empty")
-    beat_s = obj.get("beat_s")
-    if beat_s is not None and (type(beat_s) not in (int, float) or not beat_s > 0):
-        raise WireFormatError(
-            f"the hello's 'beat_s' is {beat_s!r:.40}; it must be a number of seconds above 0"
-        )
-    bye = obj.get("bye", False)
-    if type(bye) is not bool:
-        raise WireFormatError(f"the hello's 'bye' is {bye!r:.40}; it must be true or false")
+    beat_s, bye = _field(obj, "hello", "beat_s"), _field(obj, "hello", "bye", False)
     try:
         beat_s = None if beat_s is None else float(beat_s)
     except OverflowError:  # a whole number past a double's range
@@ -876,16 +790,7 @@ def _decode_hello(obj: Dict[str, Any], version: int) -> Hello:
         ) from None
     if version == WIRE_VERSION:
         return Hello(role, beat_s, bye)  # the first hello: no system, no challenge
-    system, nonce = obj.get("system"), obj.get("nonce")
-    if system is not None and (type(system) is not str or not system):
-        raise WireFormatError(
-            f"the hello's 'system' is {system!r:.40}; it must be a non-empty string or null"
-        )
-    if nonce is not None and not _is_hex(nonce):
-        raise WireFormatError(
-            f"the hello's 'nonce' is {nonce!r:.40}; it must be {_HEX_DIGITS} lowercase hex digits"
-        )
-    return Hello(role, beat_s, bye, system, nonce)
+    return Hello(role, beat_s, bye, _field(obj, "hello", "system"), _field(obj, "hello", "nonce"))
 
 
 def _too_long(length: int, limit: int) -> WireFormatError:
@@ -897,8 +802,7 @@ def _too_long(length: int, limit: int) -> WireFormatError:
 class FrameDecoder:
     """Cuts a byte stream into frame bodies, however the bytes arrive.
 
-    A ``recv`` may return half a frame or several: give every chunk to
-    `cut_frames` (the links do), or `feed` it and take the bodies with
+    Give every chunk to `cut_frames`, or `feed` it and take the bodies with
     `next_frame` until it returns None.
 
     Example::
@@ -924,12 +828,7 @@ class FrameDecoder:
             self._error = error
 
     def next_frame(self) -> Optional[bytes]:
-        """The next whole body fed, or None until more bytes arrive.
-
-        Raises:
-            WireFormatError: the length header is over the maximum frame size.
-                The stream cannot be trusted after that: reset the connection.
-        """
+        """The next whole body fed, or None; WireFormatError for a length over the maximum."""
         if self._bodies:
             return self._bodies.pop(0)
         if self._error is not None:
@@ -939,9 +838,7 @@ class FrameDecoder:
     def cut_frames(self, data: bytes, bodies: List[bytes]) -> None:
         """Add ``data`` and append every whole body now available to ``bodies``, in order.
 
-        Raises:
-            WireFormatError: a length header is over the maximum frame size;
-                ``bodies`` holds the whole frames before it. Reset the connection.
+        WireFormatError for a length over the maximum (``bodies`` holds the frames before it).
 
         Example::
 
@@ -991,6 +888,9 @@ def header_line() -> str:
     return _ENCODER.encode({"format": FORMAT_NAME, "version": FORMAT_VERSION})  # no backend needed
 
 
+_line_encoder = PageEncoder({}, to="to a recording or serial link")
+
+
 def page_to_line(page: Page) -> str:
     """One page as one line of JSON (without the newline); refused as `page_json` refuses it.
 
@@ -1002,17 +902,11 @@ def page_to_line(page: Page) -> str:
     return _line_encoder(page).decode("ascii")
 
 
-_line_encoder = PageEncoder({}, to="to a recording or serial link")
+decode_line = load_object
+"""The JSON object on one line (a page or a header): `load_object`.
 
-
-def decode_line(line: Text) -> Dict[str, Any]:
-    """The JSON object on one line (a page or a header), read as `load_object` reads it.
-
-    Example::
-
-        decode_line('{"key":"x","data":1}')   # {'key': 'x', 'data': 1}
-    """
-    return load_object(line)
+Example: ``decode_line('{"key":"x","data":1}')`` is ``{'key': 'x', 'data': 1}``.
+"""
 
 
 def is_header(fields: Mapping[str, Any]) -> bool:
@@ -1026,11 +920,7 @@ def is_header(fields: Mapping[str, Any]) -> bool:
 
 
 def check_header(fields: Mapping[str, Any]) -> None:
-    """Check a header's format name and version.
-
-    Raises:
-        WireFormatError: not an SNR page stream, a version that is not a
-            whole number, or a newer version than this SNR can read.
+    """WireFormatError unless the header names an SNR page stream of a version this SNR reads.
 
     Example::
 
@@ -1054,11 +944,7 @@ def check_header(fields: Mapping[str, Any]) -> None:
 def page_from_line(
     line: Text, default_origin: str = "", now_s: Optional[float] = None
 ) -> Optional[Page]:
-    """The page a line holds, or None for a (valid) header line.
-
-    Raises:
-        WireFormatError: the line is malformed, or is a header of another
-            format or a newer version; the message says which.
+    """The page a line holds, or None for a header line; WireFormatError says what is wrong.
 
     Example::
 

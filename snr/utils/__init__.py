@@ -1,13 +1,11 @@
-"""Layer 3 of SNR: tools for testing your components (thesis 6.5).
+"""Layer 3 of SNR: tools for testing your components (thesis 6.5; docs/utilities.md).
+
+``SNRTestCase`` (with ``unittest``) and the memory link (with comms) are
+imported when first used (PEP 562), so a node that runs no test does not pay.
 
 Example::
 
     from snr.utils import SNRTestCase, ExpectorEndpointFactory, ListReplayerFactory
-
-``SNRTestCase`` is a ``unittest.TestCase``; it and ``unittest`` are imported
-the first time the name is used, so a node that never runs tests does not pay
-for them (PEP 562 module ``__getattr__``). So are ``MemoryLinkPair`` and
-``memory_transport_pair``, which bring in the comms components.
 """
 
 import importlib
@@ -57,10 +55,9 @@ _LAZY = {
 
 
 def __getattr__(name: str) -> Any:
-    """Import ``SNRTestCase`` (with ``unittest``) or the memory link (with comms) on first use."""
+    """Import ``SNRTestCase`` or the memory link on first use."""
     if name in _LAZY:
-        value = getattr(importlib.import_module(_LAZY[name]), name)
-        globals()[name] = value
+        globals()[name] = value = getattr(importlib.import_module(_LAZY[name]), name)
         return value
     raise AttributeError(f"module {__name__!r} has no attribute {name!r}")
 

@@ -1,15 +1,13 @@
-"""Expectors: say which tasks a test expects, and fail when they don't happen.
+"""Expectors: say which tasks a test expects, and fail when they don't happen (thesis 5.2.3).
 
-An expector counts the keys it is told about (usually task ids, from an
-`ExpectorEndpoint` in the node under test; any hashable key works). Used as a
-context manager, it checks on exit that every expectation was met exactly,
-however the node stopped (thesis 5.2.3).
+An expector counts the keys it is told about: task ids, from an
+`ExpectorEndpoint` in the node under test, or any hashable key. Used as a
+context manager, it checks on exit that every expectation was met exactly.
 """
 
 from __future__ import annotations
 
 import threading
-from types import TracebackType
 from typing import (
     TYPE_CHECKING,
     Any,
@@ -21,55 +19,29 @@ from typing import (
     Optional,
     Sequence,
     Tuple,
-    Type,
     TypeVar,
-    Union,
     cast,
 )
 
-from snr.core.checks.error_text import closest_match
-from snr.prelude import TaskId, TaskName, TaskType
+from snr.core.checks.error_text import closest_key
+from snr.prelude import TaskId, TaskType
 from snr.prelude.task import format_task
 
 if TYPE_CHECKING:  # unittest and multiprocessing cost ~20 ms to import
     import unittest
 
-__all__ = [
-    "Expectations",
-    "Expector",
-    "MultiProcExpector",
-    "OrderedExpector",
-    "closest_key",
-    "fail",
-    "format_key",
-]
+__all__ = ["Expector", "MultiProcExpector", "OrderedExpector", "fail"]
 
 # unittest (and pytest) leave out the frames of modules that set this, so a
 # failed expectation points at the test's own line, not at SNR's.
 __unittest = True
 
-Expectations = Union[
-    Mapping[TaskId, int],
-    Mapping[Tuple[TaskType, TaskName], int],
-    Mapping[TaskType, int],
-]
-"""How many times each task id is expected, e.g. ``{(TaskType.event, "go"): 2}``.
-
-A dict whose keys are all ``(type, name)`` pairs (as in thesis listing A.3)
-type-checks as well as one that mixes pairs and bare task types."""
-
 K = TypeVar("K", bound=Hashable)
 """The type of key an expector counts (a task id unless said otherwise)."""
 
 
-def format_key(key: Hashable) -> str:
-    """How an expectation's key is named in a failure message.
-
-    Example::
-
-        format_key((TaskType.event, "beep"))   # "(event, 'beep')"
-        format_key("beep")                     # "'beep'"
-    """
+def _format(key: Hashable) -> str:
+    """A key as a failure names it: ``(event, 'beep')`` for a task id, else its repr."""
     if isinstance(key, TaskType) or (
         isinstance(key, tuple) and len(key) == 2 and isinstance(key[0], TaskType)
     ):
@@ -77,42 +49,19 @@ def format_key(key: Hashable) -> str:
     return repr(key)
 
 
-def _name_of(key: Hashable) -> Optional[str]:
-    """The name part of a key: a task id's name, or the key itself if it is a str."""
-    if isinstance(key, str):
-        return key
-    if isinstance(key, tuple) and len(key) == 2 and isinstance(key[1], str):
-        return key[1]
-    return None
+def _keys(keys: Sequence[Hashable]) -> str:
+    return ", ".join(map(_format, keys))
 
 
-def _kind_of(key: Hashable) -> Hashable:
-    """What must match besides the name: a task id's type (None for a str key)."""
-    return key[0] if isinstance(key, tuple) and len(key) == 2 else None
+def _times(n: int) -> str:
+    return "once" if n == 1 else f"{n} times"
 
 
-def closest_key(missing: K, seen: Sequence[K]) -> Optional[K]:
-    """The key in ``seen`` most like ``missing``, or None: for "did you mean" in failures.
-
-    A key of the same task type with a name spelled almost the same (or the
-    same but for capitals) comes first, then the same name under another type.
-
-    Example::
-
-        closest_key((TaskType.store_page, "out"),
-                    [(TaskType.store_page, "in"), (TaskType.store_page, "Out")])
-        # (TaskType.store_page, 'Out')
-    """
-    name = _name_of(missing)
-    if name is None:
-        return None
-    same_kind = {_name_of(k): k for k in seen if _kind_of(k) == _kind_of(missing)}
-    names = [n for n in same_kind if n is not None]
-    same_but_case = [n for n in names if n.lower() == name.lower()]
-    guess = same_but_case[0] if same_but_case else closest_match(name, names)
-    if guess is not None:
-        return same_kind[guess]
-    return next((k for k in seen if _name_of(k) == name), None)
+def _split(key: Hashable) -> Tuple[Hashable, Optional[str]]:
+    """A key's type (None for a str key) and name (None when it has none)."""
+    if isinstance(key, tuple) and len(key) == 2:
+        return key[0], key[1] if isinstance(key[1], str) else None
+    return None, key if isinstance(key, str) else None
 
 
 def fail(testcase: Optional[unittest.TestCase], message: str) -> None:
@@ -130,11 +79,9 @@ def fail(testcase: Optional[unittest.TestCase], message: str) -> None:
 class Expector(Generic[K]):
     """Expects each task id (or other key) a given number of times, in any order.
 
-    The key type can be written out, ``Expector[str]({"beep": 2}, self)``;
-    it is inferred from the expectations otherwise.
-
-    Keys it does not expect are counted in ``others``, so a failure can say
-    what was seen instead.
+    The key type can be written out, ``Expector[str]({"beep": 2}, self)``.
+    Keys it does not expect are counted in ``others`` (up to ``MAX_OTHERS``),
+    so a failure can say what was seen instead.
 
     Example::
 
@@ -150,12 +97,10 @@ class Expector(Generic[K]):
     MAX_OTHERS = 100
 
     def __init__(
-        self,
-        expectations: Mapping[K, int],
-        testcase: Optional[unittest.TestCase] = None,
+        self, expectations: Mapping[K, int], testcase: Optional[unittest.TestCase] = None
     ) -> None:
         self.expectations: Dict[K, int] = dict(expectations)
-        self.counts: Dict[K, int] = {key: 0 for key in self.expectations}
+        self.counts: Dict[K, int] = dict.fromkeys(self.expectations, 0)
         self.others: Dict[K, int] = {}
         self.testcase = testcase
         self._lock = threading.Lock()
@@ -178,23 +123,29 @@ class Expector(Generic[K]):
             return all(self.counts[k] >= n for k, n in self.expectations.items())
 
     def problems(self) -> List[str]:
-        """One line per expectation not met exactly (empty when all are).
-
-        A key seen too few times names the closest key seen instead, if any.
-        """
+        """One line per expectation not met exactly, naming the closest key seen instead."""
         with self._lock:
             return [
-                f"{format_key(k)}: expected {n}, saw {self.counts[k]}"
+                f"{_format(k)}: expected {n}, saw {self.counts[k]}"
                 + (self._closest_seen(k) if self.counts[k] < n else "")
                 for k, n in self.expectations.items()
                 if self.counts[k] != n
             ]
 
-    def _closest_seen(self, key: K) -> str:
-        guess = closest_key(key, list(self.others))
-        if guess is None:
+    def _closest_seen(self, missing: K) -> str:
+        """`` (closest seen instead: ...)``: the same type, a name like it; else the same name."""
+        kind, name = _split(missing)
+        if name is None:
             return ""
-        return f" (closest seen instead: {format_key(guess)}, {_times(self.others[guess])})"
+        same_kind = {n: k for k in self.others for t, n in [_split(k)] if t == kind and n}
+        guess = closest_key(name, list(same_kind))
+        if guess is not None:
+            seen: Optional[K] = same_kind[guess]
+        else:
+            seen = next((k for k in self.others if _split(k)[1] == name), None)
+        if seen is None:
+            return ""
+        return f" (closest seen instead: {_format(seen)}, {_times(self.others[seen])})"
 
     def seen_instead(self) -> str:
         """The keys seen but not expected, with counts, as one line ("" if none).
@@ -208,7 +159,7 @@ class Expector(Generic[K]):
             others = list(self.others.items())
         if not others:
             return ""
-        shown = ", ".join(f"{format_key(k)} {_times(n)}" for k, n in others[:20])
+        shown = ", ".join(f"{_format(k)} {_times(n)}" for k, n in others[:20])
         more = f" and {len(others) - 20} more" if len(others) > 20 else ""
         return f"Seen but not expected: {shown}{more}."
 
@@ -217,30 +168,15 @@ class Expector(Generic[K]):
         problems = self.problems()
         if problems:
             seen = self.seen_instead()
-            fail(
-                self.testcase,
-                "Expectations not met:\n  " + "\n  ".join(problems) + (f"\n{seen}" if seen else ""),
-            )
+            text = "Expectations not met:\n  " + "\n  ".join(problems)
+            fail(self.testcase, text + (f"\n{seen}" if seen else ""))
 
     def __enter__(self) -> Expector[K]:
         return self
 
-    def __exit__(
-        self,
-        exc_type: Optional[Type[BaseException]],
-        exc: Optional[BaseException],
-        tb: Optional[TracebackType],
-    ) -> None:
+    def __exit__(self, exc_type: Any, *rest: Any) -> None:
         if exc_type is None:
             self.assert_satisfied()
-
-
-def _keys(keys: Sequence[Hashable]) -> str:
-    return ", ".join(map(format_key, keys))
-
-
-def _times(n: int) -> str:
-    return "once" if n == 1 else f"{n} times"
 
 
 class OrderedExpector(Expector[K]):
@@ -253,14 +189,9 @@ class OrderedExpector(Expector[K]):
     """
 
     def __init__(
-        self,
-        expectations: Sequence[K],
-        testcase: Optional[unittest.TestCase] = None,
+        self, expectations: Sequence[K], testcase: Optional[unittest.TestCase] = None
     ) -> None:
-        counts: Dict[K, int] = {}
-        for key in expectations:
-            counts[key] = counts.get(key, 0) + 1
-        super().__init__(counts, testcase)
+        super().__init__({key: expectations.count(key) for key in expectations}, testcase)
         self.order: List[K] = list(expectations)
         self.seen: List[K] = []
 
@@ -276,25 +207,26 @@ class OrderedExpector(Expector[K]):
 
     def problems(self) -> List[str]:
         with self._lock:
-            if self.seen == self.order:
+            order, seen = self.order, self.seen
+            if seen == order:
                 return []
-            for i, (want, got) in enumerate(zip(self.order, self.seen)):
+            for i, (want, got) in enumerate(zip(order, seen)):
                 if want != got:
                     return [
-                        f"at position {i}: expected {format_key(want)}, saw {format_key(got)} "
-                        f"(expected order: {_keys(self.order)}; seen order: {_keys(self.seen)})"
+                        f"at position {i}: expected {_format(want)}, saw {_format(got)} "
+                        f"(expected order: {_keys(order)}; seen order: {_keys(seen)})"
                     ]
-            n = len(self.seen)
-            if n < len(self.order):
-                closest = self._closest_seen(self.order[n])
-                return [f"missing at the end: {_keys(self.order[n:])}{closest}"]
-            return [f"unexpected extra at the end: {_keys(self.seen[len(self.order) :])}"]
+            n = len(seen)
+            if n < len(order):
+                closest = self._closest_seen(order[n])
+                return [f"missing at the end: {_keys(order[n:])}{closest}"]
+            return [f"unexpected extra at the end: {_keys(seen[len(order) :])}"]
 
 
 class MultiProcExpector(Expector[K]):
-    """An `Expector` whose counts are shared between processes.
+    """An `Expector` whose counts are in shared memory, for nodes in other processes.
 
-    Create it before starting the processes; the counts are in shared memory.
+    Create it before starting the processes.
 
     Example::
 
@@ -322,16 +254,14 @@ class MultiProcExpector(Expector[K]):
 
     def call(self, key: K) -> None:
         if key in self.expectations:
-            index = self._keys.index(key)
             with self._shared.get_lock():
-                self._shared[index] += 1
+                self._shared[self._keys.index(key)] += 1
         else:
             super().call(key)  # seen only in this process, unlike the counts
 
     def _sync(self) -> None:
         with self._shared.get_lock():
-            values = list(self._shared)
-        self.counts = dict(zip(self._keys, values))
+            self.counts = dict(zip(self._keys, self._shared))
 
     def is_satisfied(self) -> bool:
         self._sync()
@@ -342,11 +272,8 @@ class MultiProcExpector(Expector[K]):
         return super().problems()
 
     def __getstate__(self) -> Dict[str, Any]:
-        state = dict(self.__dict__)
-        state.pop("_lock", None)
-        state["testcase"] = None  # test cases stay in the test process
-        return state
+        # the lock cannot be pickled; test cases stay in the test process
+        return {**self.__dict__, "_lock": None, "testcase": None}
 
     def __setstate__(self, state: Dict[str, Any]) -> None:
-        self.__dict__.update(state)
-        self._lock = threading.Lock()
+        self.__dict__.update(state, _lock=threading.Lock())

@@ -16,10 +16,9 @@ __all__ = [
 
 
 class ExpectorEndpoint(Endpoint):
-    """Registers a handler for every id the expector watches and counts them.
+    """Counts every task the expector watches (others of their types too, for the failure message).
 
-    With ``exit_when_satisfied`` it stops the node once every expectation is
-    met; other tasks of the same types are told too, for the failure message.
+    With ``exit_when_satisfied`` it stops the node once every expectation is met.
 
     Example::
 
@@ -37,12 +36,11 @@ class ExpectorEndpoint(Endpoint):
         self.expector = expector
         self.exit_when_satisfied = exit_when_satisfied
         expected = expector.task_ids()
-        handlers: Dict[TaskId, TaskHandler] = {}
-        for key in expected:
-            if isinstance(key, tuple) and key[0] not in expected:
-                handlers[key[0]] = self.observe  # the same type, any other name
-        handlers.update({key: self.expect for key in expected})
-        self.task_handlers = handlers
+        # the same type, any other name: observed; the ids expected: counted
+        handlers: Dict[TaskId, TaskHandler] = {
+            k[0]: self.observe for k in expected if isinstance(k, tuple)
+        }
+        self.task_handlers = {**handlers, **{key: self.expect for key in expected}}
 
     def observe(self, task: Task, key: TaskId) -> SomeTasks:
         """Tell the expector about a task it does not expect (for its failure message)."""

@@ -1,7 +1,4 @@
-"""An in-memory connection pair: link two nodes of one process with no port and no process.
-
-A `MemoryLinkPair` is the pipe component on both ends of one
-``multiprocessing.Pipe()``: a test runs the real link code with no port to pick.
+"""`MemoryLinkPair`: link two nodes of one process in memory, with the real link code, no port.
 
 Example::
 
@@ -40,9 +37,7 @@ __all__ = [
 
 
 class MemoryTransport(SocketTransport):
-    """One end of an in-memory byte stream, as a link ``Transport``.
-
-    Made in pairs by `memory_transport_pair`; it acts as a TCP `SocketTransport`.
+    """One end of an in-memory byte stream, a `SocketTransport`; made by `memory_transport_pair`.
 
     Example::
 
@@ -61,9 +56,7 @@ class MemoryTransport(SocketTransport):
 def memory_transport_pair(
     names: Tuple[str, str] = ("memory-a", "memory-b"),
 ) -> Tuple[MemoryTransport, MemoryTransport]:
-    """Two connected `MemoryTransport` ends (as trio's ``memory_stream_pair``).
-
-    Each end's ``peer`` is the name of the *other* end, for log messages.
+    """Two connected `MemoryTransport` ends; each one's ``peer`` names the other.
 
     Example::
 
@@ -75,9 +68,7 @@ def memory_transport_pair(
 
 
 class MemoryLinkLoop(PipeLoop):
-    """Forwards pages over one end of a `MemoryLinkPair`; built by `MemoryLinkFactory`.
-
-    A `PipeLoop` that logs a lost peer as a network link does ("Lost the link to ...").
+    """A `PipeLoop` on one end of a `MemoryLinkPair` that logs a lost peer as a network link does.
 
     Example::
 
@@ -89,10 +80,7 @@ class MemoryLinkLoop(PipeLoop):
 
 
 class MemoryLinkFactory(PipeLoopFactory):
-    """Builds a `MemoryLinkLoop` on one end of a `MemoryLinkPair` (made by the pair).
-
-    Each end serves one node once: a second ``get`` (a second node, or a
-    reload) raises ConfigError, since the first loop owns the end.
+    """Builds a `MemoryLinkLoop` on one end of a `MemoryLinkPair`, for one node once.
 
     Example::
 
@@ -103,19 +91,14 @@ class MemoryLinkFactory(PipeLoopFactory):
     _taken = False
 
     def take_transport(self) -> Connection:
-        """The end this factory holds, once.
-
-        Raises:
-            ConfigError: it was already taken by an earlier loop.
-        """
+        """The end this factory holds; ConfigError if an earlier loop took it."""
         if self._taken:
             raise ConfigError(
                 f"The memory link {self.name!r} was already used by a node; each end of a "
                 "MemoryLinkPair serves one node once. Make a new MemoryLinkPair() for each run."
             )
         self._taken = True
-        connection: Connection = self.connection
-        return connection
+        return self.connection  # type: ignore[no-any-return]
 
     def get(self, parent: AbstractNode) -> MemoryLinkLoop:
         self.take_transport()
@@ -123,11 +106,7 @@ class MemoryLinkFactory(PipeLoopFactory):
 
 
 class MemoryLinkPair:
-    """Two comms components linked in memory, for two nodes of one process.
-
-    Args:
-        max_backlog_bytes: how much may wait for a slow peer before pages are dropped.
-        dead_after_s: seconds of silence after which the other end counts as lost.
+    """Two comms components linked in memory (``max_backlog_bytes``, ``dead_after_s``: a link's).
 
     Example::
 
@@ -162,10 +141,7 @@ class MemoryLinkPair:
         )
 
     def cut(self) -> None:
-        """Break the connection both ways at once: each side reads end of stream.
-
-        No goodbye is sent: each side logs a lost link, as when a peer crashes.
-        """
+        """Break the link both ways with no goodbye: each side logs a lost link, as in a crash."""
         for end in self._ends:
             try:  # shut the socket down through a second descriptor of it
                 with socket.socket(fileno=os.dup(end.fileno())) as sock:
@@ -174,9 +150,6 @@ class MemoryLinkPair:
                 pass
 
     def close(self) -> None:
-        """Close both ends, used or not (a link closes its own end when its node stops).
-
-        Call it once the nodes have stopped, e.g. ``self.addCleanup(pair.close)``.
-        """
+        """Close both ends once the nodes have stopped, e.g. ``self.addCleanup(pair.close)``."""
         for end in self._ends:
             end.close()

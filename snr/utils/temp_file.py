@@ -1,13 +1,9 @@
-"""`TempFile`: the path `SNRTestCase.temp_file` returns, a str that can do more.
-
-A `TempFile` *is* a ``str`` path, with the 2021 release's helpers too.
-"""
+"""`TempFile`: the path `SNRTestCase.temp_file` returns, a ``str`` with the 2021 helpers."""
 
 from __future__ import annotations
 
 import os
-from types import TracebackType
-from typing import IO, TYPE_CHECKING, Any, Optional, Tuple, Type
+from typing import IO, TYPE_CHECKING, Any, Optional, Tuple
 
 from snr.utils.expector import fail
 
@@ -55,8 +51,7 @@ class TempFile(str):
         return self.path
 
     def __reduce__(self) -> Tuple[Any, ...]:
-        # Sent to another process (e.g. in a factory) as the plain path: the
-        # test case stays in the test process.
+        # sent to another process as the plain path: the test case stays here
         return (str, (self.path,))
 
     def open(self, mode: str = "w", encoding: str = "utf-8") -> IO[Any]:
@@ -67,9 +62,7 @@ class TempFile(str):
             with temp.open() as f:
                 f.write("line\\n")
         """
-        if "b" in mode:
-            return open(self.path, mode)
-        return open(self.path, mode, encoding=encoding)
+        return open(self.path, mode, encoding=None if "b" in mode else encoding)
 
     def exists(self) -> bool:
         """True when the file exists."""
@@ -95,12 +88,7 @@ class TempFile(str):
     def __enter__(self) -> TempFile:
         return self
 
-    def __exit__(
-        self,
-        exc_type: Optional[Type[BaseException]],
-        exc: Optional[BaseException],
-        tb: Optional[TracebackType],
-    ) -> None:
+    def __exit__(self, exc_type: Any, *rest: Any) -> None:
         if exc_type is None:
             self.assertExists()
         if self.cleanup:

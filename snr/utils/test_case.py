@@ -4,7 +4,7 @@ from __future__ import annotations
 
 import os
 import unittest
-from typing import Any, List, Mapping, Optional, Sequence, Union
+from typing import Any, List, Mapping, Optional, Sequence, Union, cast
 
 from snr.core import Config, Node, TestRunner
 from snr.core.components import NODE_CORE_NAME
@@ -22,9 +22,7 @@ __unittest = True
 
 
 class SNRTestCase(unittest.TestCase):
-    """A TestCase that can run a node, expect tasks and make temp files.
-
-    Works with ``python -m unittest`` and with pytest.
+    """A TestCase (unittest or pytest) that can run a node, expect tasks and make temp files.
 
     Example (thesis listing A.3)::
 
@@ -42,7 +40,7 @@ class SNRTestCase(unittest.TestCase):
     """The role of nodes built by ``get_config`` and ``run_test_node``."""
 
     timeout_s: float = 2.0
-    """The default time limit of ``run_test_node``, in seconds (set more on a slow test class)."""
+    """The default time limit of ``run_test_node``, in seconds."""
 
     def expector(self, expectations: Mapping[K, int]) -> Expector[K]:
         """An `Expector` that fails this test when unmet."""
@@ -63,36 +61,21 @@ class SNRTestCase(unittest.TestCase):
         timeout_s: Optional[float] = None,
         expect_timeout: bool = False,
     ) -> Node:
-        """Build a node from ``factories``, run it until it stops, and return it.
+        """Build a node of role ``self.role`` from ``factories``, run it until it stops, return it.
 
-        The node must stop by itself; one still running after ``timeout_s``
-        fails the test (docs/utilities.md, "Ending a node under test").
-
-        Args:
-            factories: the components of the node (its role is ``self.role``).
-            mode: the node's mode (TEST: failures stop the node and fail the test).
-            timeout_s: the time limit in seconds; None for ``self.timeout_s``.
-            expect_timeout: run until the time limit on purpose (the test
-                fails if the node stopped before it).
-
-        Returns:
-            The stopped node, to inspect its datastore.
+        A node still running after ``timeout_s`` (None: ``self.timeout_s``)
+        fails the test, unless ``expect_timeout`` says that is the point
+        (docs/utilities.md, "Ending a node under test").
 
         Example::
 
-            with self.expector({(TaskType.store_page, "out"): 4}) as expector:
-                node = self.run_test_node([
-                    ListReplayerFactory([0, 1, 2, 4], "in"),
-                    MovingAvgFilterFactory("in", "out", 2),
-                    ExpectorEndpointFactory(expector, exit_when_satisfied=True),
-                ])
+            node = self.run_test_node([ListReplayerFactory([1, 2], "in"), ...])
             self.run_test_node([DummyEndpointFactory()], timeout_s=0.2, expect_timeout=True)
         """
         limit = self.timeout_s if timeout_s is None else timeout_s
         runner = TestRunner(self.role, self.get_config(factories, mode), limit)
         runner.run()
-        node = runner.node
-        assert node is not None
+        node = cast(Node, runner.node)
         if runner.timed_out and not expect_timeout:
             self.fail(_timed_out_message(node, limit, runner.alive_at_timeout))
         if expect_timeout and not runner.timed_out:
@@ -118,14 +101,9 @@ class SNRTestCase(unittest.TestCase):
         filename: Optional[str] = None,
         overwrite: bool = False,
     ) -> TempFile:
-        """A file's path in a fresh temp folder, removed after the test.
+        """A `TempFile` path (``file`` + ``suffix``) in a fresh temp folder removed after the test.
 
-        ``temp_file(suffix="", contents=None)`` names the file ``file`` +
-        ``suffix``; the 2021 call ``temp_file(filename, overwrite, cleanup)``
-        still works (docs/utilities.md).
-
-        Returns:
-            A `TempFile` (a ``str`` path with helpers).
+        The 2021 call ``temp_file(filename, overwrite, cleanup)`` still works.
 
         Example::
 
@@ -182,7 +160,7 @@ class SNRTestCase(unittest.TestCase):
     ) -> None:
         """Assert ``page`` is a Page with this key and data (and origin)."""
         self.assertIsInstance(page, Page, msg or f"expected a Page for {key!r}, got {page!r}")
-        assert isinstance(page, Page)
+        assert page is not None
         self.assertEqual(page.key, key, msg)
         self.assertEqual(page.data, data, msg)
         if origin is not None:
