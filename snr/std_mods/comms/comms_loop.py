@@ -1,12 +1,8 @@
 """`CommsLoop`, `Link`, `Outbox`: how a node forwards pages by key to its peers.
 
-A `CommsLoop` (thesis 6.4.1) forwards every page stored under its keys to
-each open `Link` (one connection to one peer, over a `Transport` of
-``io_loop.py``) and stores every page a link receives, with its origin and
-time. A link queues frames in its `Outbox` and has no thread of its own: the
-node's one `IOLoop` reads and writes it. `SocketsServerLoop`,
-`SocketsClientLoop` and `PipeLoop` differ only in how they open their links
-(a page's whole trip: docs/design.md).
+A `CommsLoop` (thesis 6.4.1) sends the pages stored under its keys over its
+links and stores what they receive; the sockets and pipe loops differ only
+in how they open links (docs/design.md, "A page's trip").
 
 Example::
 
@@ -99,8 +95,7 @@ DEFAULT_DEAD_AFTER_S = 4.0
 """Seconds of silence after which a peer that promised beats counts as lost."""
 
 _STORE_PAGE = TaskType.store_page
-_NEWS_TICK_S = 0.5  # while news may be counted, how often its counts are looked at
-_NEWS_WINDOW_S = 10.0  # the longest window of the news logs
+_NEWS_TICK_S = 0.5  # while news is counted, how often the counts are looked at
 _MAX_REFUSED_NOTED = 10_000  # refused peers remembered (so each is logged once)
 
 Keys = Union[DataKey, Sequence[DataKey], None]
@@ -135,7 +130,7 @@ def normalize_keys(keys: Keys, where: str) -> Tuple[str, ...]:
 class CommsLoop(ThreadLoop):
     """Base of the comms components: forwards the pages stored under ``keys`` over its links.
 
-    Subclasses open links (``open_link``) from ``begin()`` or ``loop()``. A
+    Subclasses open links (``open_link``) from ``begin()`` or ``loop()``; a
     page goes to every open link but the one it came from and its origin's.
 
     Example::
@@ -144,11 +139,10 @@ class CommsLoop(ThreadLoop):
 
     Attributes:
         keys: the data keys forwarded to peers.
-        links: the links not yet closed (read-only tuple, replaced on change).
+        links: the links not yet closed (a tuple, replaced on change).
         closed_totals: the counters of the closed links, added up.
         dead_after_s: a peer that promised beats and is silent this long is lost.
-        beat_s: how often a quiet link sends a beat (a quarter of
-            ``dead_after_s``, at most 1 s); promised in the hello.
+        beat_s: how often a quiet link beats (``dead_after_s / 4``, at most 1 s).
     """
 
     hello_timeout_s: float = 5.0
@@ -194,15 +188,14 @@ class CommsLoop(ThreadLoop):
         self.links: Tuple[Link, ...] = ()
         self.news = RateLimitedLog(self.log, burst=20, window_s=10.0)
         self.bad_frame_news = RateLimitedLog(self.log, burst=5, window_s=5.0)
+        self.refusal_news = RateLimitedLog(self.log, burst=5, window_s=5.0)
         self._news_lock = threading.Lock()
-        self._news_at = 0.0  # when news was last counted, not logged
         self._news_ticking = False  # the I/O thread says the counts (see say)
         self.closed_totals: Dict[str, int] = dict.fromkeys(
             ("links", "pages_sent", "pages_received", "dropped", "bad_frames", "refused"), 0
         )
         # (peer's host, its role, why) -> how many times it was refused: said once each
         self.refused_peers: Dict[Tuple[str, str, str], int] = {}
-        self.refusal_news = RateLimitedLog(self.log, burst=5, window_s=5.0)
         self.io_loop: Optional[IOLoop] = None  # the node's, while this component runs
         self._links_lock = threading.Lock()
         self._forwarded = frozenset(self.keys)
@@ -210,25 +203,22 @@ class CommsLoop(ThreadLoop):
         self._arrived: Dict[int, Tuple[Page, Link]] = {}
         self._unsent_reported = False
         self._unsendable_reported: Set[Tuple[DataKey, type]] = set()
-        self.task_handlers = {(TaskType.store_page, key): self.forward_page for key in self.keys}
+        self.task_handlers = {(_STORE_PAGE, key): self.forward_page for key in self.keys}
+        self.burst_handlers = {(_STORE_PAGE, key): self.forward_burst for key in self.keys}
         if parent.profiler is not None:
             parent.profiler.add_report(name, self.stats_text)
-        self.burst_handlers = {(TaskType.store_page, key): self.forward_burst for key in self.keys}
 
     def forward_burst(self, run: List[Task]) -> SomeTasks:
-        """`forward_page` for a run of stored pages under one key, queued in one go.
+        """`forward_page` for a run of pages under one key: to one open link in one go.
 
-        With one open link and no received page to keep from echoing back
-        (the usual pair), the frames go to its outbox together; else page by page.
-
-        Example (the node calls it; a test may too)::
+        Example (the node calls it)::
 
             comms.forward_burst([tasks.store_page(page) for page in pages])
         """
         links = self.links
         if len(links) != 1 or self._arrived or links[0].state is not _OPEN:
             for task in run:
-                self.forward_page(task, (TaskType.store_page, task.name))
+                self.forward_page(task, (_STORE_PAGE, task.name))
             return None
         peer = links[0].peer_role
         frames: List[bytes] = []
@@ -260,8 +250,17 @@ class CommsLoop(ThreadLoop):
             if link is not source and link.state is _OPEN and link.peer_role != origin
         ]
         if not targets:
-            if source is None and not any(link.state is _OPEN for link in self.links):
-                self._report_unsent(page)
+            if (
+                source is None
+                and not self._unsent_reported
+                and not any(link.state is _OPEN for link in self.links)
+            ):
+                self._unsent_reported = True
+                self.info(
+                    "No peer is connected, so the page under %r (and any others stored "
+                    "before a peer connects) is not sent. Pages are sent live, never late.",
+                    page.key,
+                )
             return None
         try:
             frame = encode_page(page)
@@ -272,22 +271,12 @@ class CommsLoop(ThreadLoop):
             link.send(frame, page.key)  # a drop is counted and reported by the link
         return None
 
-    def _report_unsent(self, page: Page) -> None:
-        if not self._unsent_reported:
-            self._unsent_reported = True
-            self.info(
-                "No peer is connected, so the page under %r (and any others stored "
-                "before a peer connects) is not sent. Pages are sent live, never late.",
-                page.key,
-            )
-
     def _report_unsendable(self, page: Page, error: NotSerializableError) -> None:
         kind = (page.key, type(page.data))
         if kind not in self._unsendable_reported:
             self._unsendable_reported.add(kind)
             self.err("%s The page was dropped; the node keeps running.", error)
 
-    # -- I/O thread: receiving -------------------------------------------------
     def deliver(self, link: Link, pages: List[Page]) -> None:
         """Store pages a link received (on the thread that read them; the queue has room)."""
         forwarded = self._forwarded
@@ -302,7 +291,6 @@ class CommsLoop(ThreadLoop):
         else:  # the I/O thread: one task each, so the queue's high-water mark counts pages
             self.schedule([Task(_STORE_PAGE, page.key, [page]) for page in pages])
 
-    # -- opening and closing links --------------------------------------------
     def start_thread(self) -> None:
         """Acquire the node's I/O loop (links need it from ``begin()`` on), then start."""
         if self.io_loop is None:
@@ -343,14 +331,13 @@ class CommsLoop(ThreadLoop):
         self.schedule(tasks.event(COMMS_CONNECTED, [self.name, link.transport.peer]))
 
     def on_refused(self, link: Link, refusal: Refused) -> None:
-        """A peer was refused (I/O thread): log it once per peer (host, role, why), count it.
+        """A peer was refused (I/O thread): count it, log it once per (host, role, why).
 
-        Example (what the log says)::
+        Example (the log)::
 
-            Refused client 'topside' at 10.0.0.7:51234: it belongs to system 'team3', ...
+            Refused client 'topside' at 10.0.0.7:51234 (this node: ...): it belongs to ...
         """
-        host = link.transport.peer.rsplit(":", 1)[0]
-        key = (host, link.peer_role or "", refusal.kind)
+        key = (link.transport.peer.rsplit(":", 1)[0], link.peer_role or "", refusal.kind)
         with self._links_lock:
             seen = self.refused_peers.get(key, 0)
             if seen == 0 and len(self.refused_peers) >= _MAX_REFUSED_NOTED:
@@ -382,9 +369,7 @@ class CommsLoop(ThreadLoop):
             totals["dropped"] += link.outbox.dropped
             totals["bad_frames"] += link.bad_frames
             totals["refused"] += link.refusal is not None
-        if link.refusal is not None:
-            return  # said once per peer by on_refused; it was never open for pages
-        if not self.is_terminated():
+        if link.refusal is None and not self.is_terminated():  # (refused: said by on_refused)
             self.on_link_lost(link, reason)
             if link.handshake.done:  # only a link that was open for pages is news to handlers
                 self.schedule(tasks.event(COMMS_DISCONNECTED, [self.name, link.transport.peer]))
@@ -392,19 +377,14 @@ class CommsLoop(ThreadLoop):
     def say(
         self, what: str, level: int, msg: str, *args: Any, news: Optional[RateLimitedLog] = None
     ) -> None:
-        """Log news of links (connects, hellos, losses) in full, unless it comes in a flood.
-
-        ``what`` names the kind of news: up to 20 lines of a kind in 10 s are
-        logged in full, then they are counted and the count is logged every
-        10 s (`RateLimitedLog`; ``news`` is another such log, e.g. the bad frames').
+        """Log news of links in full, unless ``what`` floods (`RateLimitedLog`: 20 in 10 s).
 
         Example::
 
             self.say("Links lost", logging.WARNING, "Lost the link to %s", link.label)
         """
         if (news or self.news).report(what, level, msg, *args):
-            with self._news_lock:  # counted, not logged: the I/O thread says the counts later
-                self._news_at = time.monotonic()
+            with self._news_lock:  # counted: the I/O thread says the counts later
                 io = self.io_loop
                 if self._news_ticking or io is None:
                     return
@@ -412,15 +392,13 @@ class CommsLoop(ThreadLoop):
             io.call_soon(lambda: io.call_later(_NEWS_TICK_S, self._tick_news))
 
     def _tick_news(self) -> None:
-        """I/O thread: say what a flood left counted; again soon while news may be pending."""
-        for news in (self.news, self.bad_frame_news, self.refusal_news):
-            news.tick()
+        """I/O thread: say the counts whose window has passed; again soon while some wait."""
         io = self.io_loop
-        with self._news_lock:
-            if io is None or time.monotonic() - self._news_at > _NEWS_WINDOW_S + _NEWS_TICK_S:
-                self._news_ticking = False  # every count has been said
-                return
-        io.call_later(_NEWS_TICK_S, self._tick_news)
+        with self._news_lock:  # (say looks at _news_ticking under it, after counting)
+            waiting = [news.tick() for news in (self.news, self.bad_frame_news, self.refusal_news)]
+            self._news_ticking = io is not None and any(waiting)
+        if io is not None and self._news_ticking:
+            io.call_later(_NEWS_TICK_S, self._tick_news)
 
     def on_hello(self, link: Link) -> None:
         """The peer said which node it is (called on the node's I/O thread)."""
@@ -449,12 +427,11 @@ class CommsLoop(ThreadLoop):
         return decode_body(body)
 
     def stats(self) -> List[Dict[str, Any]]:
-        """The counters of every open link (see `Link.stats`).
+        """The counters of every open link (`Link.stats`).
 
         Example::
 
-            for link in comms.stats():
-                print(link["peer"], link["dropped"], link["dropped_by_key"])
+            comms.stats()[0]["dropped_by_key"]   # {'depth': 3}
         """
         return [link.stats() for link in self.links]
 
@@ -463,9 +440,7 @@ class CommsLoop(ThreadLoop):
 
         Example::
 
-            print(comms.stats_text())
-            # 1 link
-            #   'receiver' at 127.0.0.1:9000 (open): sent 1,204, received 0, dropped 0, ...
+            print(comms.stats_text())   # "1 link\n  'receiver' at ...: sent 1,204, ..."
         """
         links = self.stats()
         lines = [f"{len(links)} link{'s' if len(links) != 1 else ''}"]
@@ -487,7 +462,6 @@ class CommsLoop(ThreadLoop):
             )
         return "\n".join(lines)
 
-    # -- shutdown -------------------------------------------------------------
     def halt(self) -> None:
         """Flush and close every link (the node is stopping)."""
         for link in self.links:
@@ -506,7 +480,7 @@ class CommsLoop(ThreadLoop):
             news.flush()  # what a flood of connections or bad frames left unsaid
 
 
-# -- the outbox: frames waiting for one peer ------------------------------
+# -- the outbox: frames waiting for one peer
 
 SENT = "sent"
 """`Outbox.put`: written to the peer at once."""
@@ -523,8 +497,7 @@ CLOSED = "closed"
 Write = Callable[[bytes], int]
 """Writes what fits now and says how many bytes went (``socket.send``); BlockingIOError if none."""
 
-MAX_CHUNK_BYTES = 1024 * 1024
-"""``write_to`` joins waiting frames into chunks up to this size: one system call for many."""
+_MAX_CHUNK_BYTES = 1024 * 1024  # write_to joins waiting frames up to this size: one system call
 
 
 class _Entry:
@@ -540,12 +513,8 @@ class _Entry:
 class Outbox:
     """Frames waiting to be written to one peer, oldest first; bounded, newest per key wins.
 
-    Every link queues here: TCP, pipe and serial (docs/design.md, "One outbox
-    for every link"). A frame that does not fit pushes out the oldest frame
-    waiting under its own key, else the oldest of the key with the most
-    waiting; frames with no key are never pushed out. ``put`` never blocks.
-    Every change and write happens under one lock, so frames leave in order
-    and whole, from any thread.
+    Every link queues here (the policy: docs/design.md, "One outbox for every
+    link"). One lock: frames leave in order and whole, from any thread.
 
     Example::
 
@@ -554,10 +523,7 @@ class Outbox:
             ...  # ask the writer to call outbox.write_to(sock.send)
 
     Attributes:
-        max_bytes: how many bytes of frames may wait.
-        loss: where drops are reported (the numbers, at most once a second).
-        dropped: frames pushed out so far.
-        dropped_by_key: the same, per data key.
+        dropped: frames pushed out so far; ``dropped_by_key``: the same, per data key.
         last_sent_at: when bytes last went to the peer (``time.monotonic()``).
     """
 
@@ -580,9 +546,7 @@ class Outbox:
     ) -> str:
         """Queue ``frame``, or with ``write`` and nothing waiting, write it at once.
 
-        Returns `SENT`, `FIRST` (queued into an empty outbox: wake the
-        writer), `QUEUED` or `CLOSED`. The rest of a frame written in part
-        waits first in line.
+        Returns `SENT`, `FIRST` (wake the writer), `QUEUED` or `CLOSED`.
 
         Example::
 
@@ -602,11 +566,7 @@ class Outbox:
                         return SENT
                     self._append(None, frame[sent:])
                     return FIRST
-            first = not self._live
-            if self._bytes + len(frame) > self.max_bytes:
-                self._make_room(len(frame), key)
-            self._append(key, frame)
-        return FIRST if first else QUEUED
+            return self._queue((frame,), key)
 
     def put_all(self, frames: List[bytes], key: DataKey) -> str:
         """`put` for a run of frames under ``key``, in order, with one lock; nothing is written.
@@ -616,13 +576,14 @@ class Outbox:
             outbox.put_all([encode_page(page) for page in pages], "depth")
         """
         with self._lock:
-            if self.closed:
-                return CLOSED
-            first = not self._live
-            for frame in frames:
-                if self._bytes + len(frame) > self.max_bytes:
-                    self._make_room(len(frame), key)
-                self._append(key, frame)
+            return CLOSED if self.closed else self._queue(frames, key)
+
+    def _queue(self, frames: Sequence[bytes], key: Optional[DataKey]) -> str:
+        first = not self._live
+        for frame in frames:
+            if self._bytes + len(frame) > self.max_bytes:
+                self._make_room(len(frame), key)
+            self._append(key, frame)
         return FIRST if first else QUEUED
 
     def put_first(self, frame: bytes) -> None:
@@ -667,12 +628,11 @@ class Outbox:
             self.dropped_by_key[victim_key] = self.dropped_by_key.get(victim_key, 0) + 1
         if pushed_out:
             self.dropped += pushed_out
-            if len(self._entries) > 2 * self._live + 64:  # forget the pushed-out ones now and then
+            if len(self._entries) > 2 * self._live + 64:  # forget the pushed-out ones
                 self._entries = collections.deque(e for e in self._entries if e.data is not None)
             self.loss.dropped(pushed_out)
 
-    def _gone(self, entry: _Entry) -> None:
-        """``entry`` leaves (written or pushed out); the deque forgets it later."""
+    def _gone(self, entry: _Entry) -> None:  # written or pushed out
         if entry.data is not None:
             self._bytes -= len(entry.data)
             entry.data = None
@@ -693,7 +653,7 @@ class Outbox:
                 parts: List[bytes] = []
                 size = 0
                 for entry in self._entries:
-                    if size >= MAX_CHUNK_BYTES:
+                    if size >= _MAX_CHUNK_BYTES:
                         break
                     if entry.data is not None:
                         parts.append(entry.data)
@@ -784,17 +744,16 @@ class Outbox:
         return self._live
 
 
-# -- the link: one connection to one peer ------------------------------
+# -- the link: one connection to one peer
 
 _WRITE_NOW_BYTES = 64 * 1024  # the node's thread writes a backlog this big before it goes idle
 _BURST_S = 0.0002  # a frame this soon after the last send joins a batch for the I/O thread
-_TICK_S = 0.25  # the shortest wait between two looks at a link's beat, silence and drops
 _LATE_S = 0.001  # a look at a deadline comes just after it, so the limit has passed
 _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
 _MAX_KEYS_NOTED = 1000  # DEBUG: how many received keys a link remembers for the hints
-_PROGRESS_BYTES = 16 * 1024  # this much of a frame still arriving is a sign of life (a big frame)
-_SHOWN_ROLE_CHARS = 60  # a peer's role in log lines is cut to this many characters
+_PROGRESS_BYTES = 16 * 1024  # this much of a big frame still arriving is a sign of life
+_SHOWN_ROLE_CHARS = 60
 _BEAT = encode_beat()  # the one frame an idle link receives, once a beat interval
 
 
@@ -812,13 +771,7 @@ def shown_role(role: str) -> str:
 
 
 class LinkState(enum.Enum):
-    """Where a link is in its life: one value (the moves: docs/design.md, "A link's states").
-
-    HELLO (the handshake: no page either way; a node with no system and no
-    secret starts OPEN) → OPEN (pages, beats) → CLOSING (``close()``: writing
-    what waits, then a bye) → DRAINING (half-closed, reading the last bytes)
-    → CLOSED (transport closed, the `CommsLoop` told); ENDING when aborted or
-    its end was found on the node's thread, finished on the I/O thread.
+    """Where a link is in its life (the moves: docs/design.md, "A link's states").
 
     Example::
 
@@ -833,20 +786,13 @@ class LinkState(enum.Enum):
     CLOSED = "closed"
 
 
-_OPEN, _CLOSING, _DRAINING = LinkState.OPEN, LinkState.CLOSING, LinkState.DRAINING
-_HELLO = LinkState.HELLO
-_LIVE = (LinkState.HELLO, LinkState.OPEN)  # looked at on a clock (silence, beats, handshake)
+_HELLO, _OPEN, _CLOSING = LinkState.HELLO, LinkState.OPEN, LinkState.CLOSING
+_LIVE = (_HELLO, _OPEN)  # looked at on a clock (silence, beats, handshake)
 _ENDED = (LinkState.ENDING, LinkState.CLOSED)  # no more reading or writing
 
 
 class Link:
-    """One live connection to one peer, served by the node's `IOLoop` (no thread of its own).
-
-    The loop reads the transport, cuts frames and hands pages to the
-    `CommsLoop`, and writes the outbox when the transport has room. The link
-    beats when quiet, ends when the peer goes, falls silent (wire format 3.3)
-    or sends a bad length, and reads nothing while the node's queue is over
-    its high-water mark (``_held``; docs/design.md, "One I/O thread per node").
+    """One live connection to one peer, served by the node's `IOLoop` (docs/design.md).
 
     Example::
 
@@ -856,14 +802,11 @@ class Link:
         link.close()              # flush, then end the connection
 
     Attributes:
-        pages_sent: pages handed to the transport or queued for it.
-        pages_received: pages that arrived.
-        keys_received: in DEBUG mode, the keys of the pages that arrived (up to
-            1,000, for ``link_hints.py``); None otherwise.
+        pages_sent, pages_received: pages queued for the peer, and arrived.
+        keys_received: DEBUG: keys that arrived (for ``link_hints.py``), else None.
         went_silent: the link was closed because the peer fell silent.
         refusal: why the peer was refused (`Refused`), or None.
         peer_said_bye: the peer sent a bye: the end that follows is orderly.
-        loss: the `LossReport` of pages dropped because the peer fell behind.
     """
 
     flush_timeout_s: float = 1.0
@@ -880,20 +823,24 @@ class Link:
         self.io: IOLoop = io
         self.transport = transport
         self.peer_role: Optional[str] = None
-        self.hello_at: Optional[float] = None  # when the peer's hello arrived
         self.peer_beat_s: Optional[float] = None
-        self.bad_frames = 0
-        self.went_silent = False
+        self.hello_at: Optional[float] = None  # when the handshake ended
         self.refusal: Optional[Refused] = None
-        self.peer_said_bye = False
-        self._peer_takes_bye = False  # its hello said it understands a bye frame
-        self.pages_sent = 0
-        self.pages_received = 0
         self.keys_received: Optional[Set[DataKey]] = None
+        self.went_silent = self.peer_said_bye = False
+        self._peer_takes_bye = False  # its hello said it understands a bye frame
+        self.bad_frames = self.pages_sent = self.pages_received = 0
         self.opened_at = self.last_heard = self._progress_at = time.monotonic()
         self._heard_frame = False  # a well-formed frame has arrived (for the hello timeout)
         self._progress = 0  # bytes of a frame still arriving, since the peer was last heard
         self._sent_when_heard = 0
+        self._unread_seen = 0  # while paused: bytes the OS held for us at the last look
+        self._held: List[Page] = []  # read while the node was behind: read no more until stored
+        self._timer: Optional[IOTimer] = None
+        self._tick_s = owner.beat_s / 4  # beats are looked at on this grid (_next_look_s)
+        self._answer_due = False  # the peer was heard since the last send: answer at once
+        self._closed = threading.Event()
+        self._decoder = FrameDecoder()
         self.loss = LossReport(
             owner.log,
             f"pages for {transport.peer}",
@@ -901,26 +848,17 @@ class Link:
             f"({owner.max_backlog_bytes // 1024:,} KiB wait to be sent; the newest page "
             "under each key is kept)",
         )
-        self._closed = threading.Event()
-        self._decoder = FrameDecoder()
-        self._unread_seen = 0  # while paused: bytes the OS held for us at the last look
-        self._held: List[Page] = []  # read while the node was behind: no more reads until sent
-        self._timer: Optional[IOTimer] = None
-        self._tick_s = min(_TICK_S, owner.beat_s / 4)
-        self._beat_grid_s = owner.beat_s / 4  # beats are looked at on this grid (_next_look_s)
-        self._answer_due = False  # the peer was heard since the last send: answer at once
         self.outbox = Outbox(owner.max_backlog_bytes, self.loss)
         self.handshake = Handshake(owner.parent.role, owner.side, owner.system, owner.secret)
-        # No page passes either way until the peer is judged (else OPEN, as older SNR).
-        self.state = LinkState.HELLO if self.handshake.needed else LinkState.OPEN
+        self.state = _HELLO if self.handshake.needed else _OPEN
         self.outbox.put(self.handshake.hello_frame(owner.beat_s))
 
     @property
     def label(self) -> str:
-        """The peer for log lines: ``"'receiver' at 127.0.0.1:9000"``."""
-        if self.peer_role:
-            return f"{shown_role(self.peer_role)} at {self.transport.peer}"
-        return self.transport.peer
+        """The peer for log lines: ``'receiver' at 127.0.0.1:9000``."""
+        return (
+            f"{self.peer_name} at {self.transport.peer}" if self.peer_role else self.transport.peer
+        )
 
     @property
     def peer_name(self) -> str:
@@ -943,9 +881,7 @@ class Link:
     def send(self, frame: bytes, key: Optional[DataKey] = None) -> bool:
         """Send or queue a page's ``frame`` (node thread); False if the link is not open.
 
-        A frame right behind another waits to leave with it in one write; a
-        frame after a pause goes at once, and so does a reply. When the
-        outbox is full, older frames make room (see `Outbox`).
+        A frame after a pause, or a reply, goes at once; one right behind another waits for it.
 
         Example::
 
@@ -1025,13 +961,13 @@ class Link:
             "heard_s_ago": round(time.monotonic() - self.last_heard, 3),
         }
 
-    # -- writing ---------------------------------------------------------------
+    # -- writing
     def _put_control(self, frame: bytes) -> None:
         """Queue a frame that is not a page (bye, beat, proof), never pushed out."""
         if self.outbox.put(frame, None, self.transport.send) == FIRST:
             self._wake_writer()
 
-    def _wake_writer(self) -> None:  # the outbox stopped being empty
+    def _wake_writer(self) -> None:
         if self.io.in_loop_thread():
             self._want_write()
         else:
@@ -1072,19 +1008,18 @@ class Link:
         if self.state is _CLOSING:
             self._end_writing()
 
-    # -- life: deadlines, beats, the end (I/O thread) --------------------------
+    # -- life: deadlines, beats, the end (I/O thread)
     def _attach(self) -> None:
-        if self.state in _ENDED:  # aborted before the loop got to it
-            return
-        self.io.watch(self, _READ)
-        self._timer = self.io.call_later(self.owner.hello_timeout_s + _LATE_S, self._tick)
-        self.on_writable()  # the hello goes at once
+        if self.state not in _ENDED:  # (else aborted before the loop got to it)
+            self.io.watch(self, _READ)
+            self._timer = self.io.call_later(self.owner.hello_timeout_s + _LATE_S, self._tick)
+            self.on_writable()  # the hello goes at once
 
     def _end_writing(self) -> None:
         """CLOSING, everything sent: half-close, then read what still comes for a moment."""
         if self.state is not _CLOSING or len(self.outbox):
             return
-        self.state = _DRAINING
+        self.state = LinkState.DRAINING
         self.transport.end_writing()
         if self._timer is not None:
             self._timer.cancel()
@@ -1100,18 +1035,18 @@ class Link:
         if silence is not None:
             self._finish(silence)
             return
-        if self.state in _LIVE:
-            if (
-                self.state is _OPEN
-                and self.peer_beat_s is not None
-                and not len(self.outbox)
-                # due before the next look on the beat grid: it goes now, a little early
-                and time.monotonic() + self._beat_grid_s
-                >= self.outbox.last_sent_at + self.owner.beat_s
-            ):
-                self._put_control(_BEAT)  # quiet for beat_s: a sign of life
-            self._check_recovered()
-            self._timer = self.io.call_later(self._next_look_s(), self._tick)
+        if self.state not in _LIVE:
+            return
+        if (
+            self.state is _OPEN
+            and self.peer_beat_s is not None
+            and not len(self.outbox)
+            # due before the next look on the beat grid: it goes now, a little early
+            and time.monotonic() + self._tick_s >= self.outbox.last_sent_at + self.owner.beat_s
+        ):
+            self._put_control(_BEAT)  # quiet for beat_s: a sign of life
+        self._check_recovered()
+        self._timer = self.io.call_later(self._next_look_s(), self._tick)
 
     def _look_again(self) -> None:
         """Put the next look at the link's first deadline (they moved)."""
@@ -1122,26 +1057,21 @@ class Link:
     def _next_look_s(self) -> float:
         """Seconds until the first deadline: a beat owed, a silence or hello limit.
 
-        A quarter beat while pages are held or dropped (their counts move
-        without a frame), or when the deadline has passed. The look for a
-        beat is on a grid of quarter beats, the same for every link of the
-        node: it comes at the last grid point before the beat is due (the beat
-        goes a little early, never late), so one wake-up of the I/O thread
-        beats for every quiet link at once (a server with 300 idle clients
-        wakes about 4 times a second, not 300).
+        Beats are looked at on a grid of quarter beats, the same for every link,
+        so one wake-up beats for every quiet link (300 idle clients: 4 a second).
         """
         if self._held or self.loss.dropping:
             return self._tick_s
-        owner = self.owner
+        limit_s = self.owner.hello_timeout_s
         due = []
         if not self._heard_frame:
-            due.append(self._progress_at + owner.hello_timeout_s)
+            due.append(self._progress_at + limit_s)
         if self.state is _HELLO:
-            due.append(self.opened_at + owner.hello_timeout_s)
+            due.append(self.opened_at + limit_s)
         if self.peer_beat_s is not None:
-            grid = self._beat_grid_s
-            due.append((self.outbox.last_sent_at + owner.beat_s) // grid * grid)
-            due.append(self.last_heard + max(owner.dead_after_s, 3 * self.peer_beat_s))
+            grid = self._tick_s
+            due.append((self.outbox.last_sent_at + self.owner.beat_s) // grid * grid)
+            due.append(self.last_heard + max(self.owner.dead_after_s, 3 * self.peer_beat_s))
         wait_s = min(due) + _LATE_S - time.monotonic() if due else 0.0
         return wait_s if wait_s > 0 else self._tick_s
 
@@ -1157,9 +1087,8 @@ class Link:
         """End the link: at once on the I/O loop's thread, else soon, by that thread."""
         if self.io.in_loop_thread():
             self._finish(reason)
-        else:  # the node's thread, reading while idle, reads it no more meanwhile
-            self.state = LinkState.ENDING
-            self.io.call_soon(lambda: self._finish(reason))
+        else:  # the node's thread, reading while idle
+            self.abort(reason)
 
     def _finish(self, reason: str) -> None:
         """Any state → CLOSED, on the I/O thread: close the transport, tell the `CommsLoop`."""
@@ -1168,7 +1097,7 @@ class Link:
         with self.io.read_role():  # nobody reads the socket while it closes
             if self.peer_said_bye:
                 reason = "it said goodbye (its node is stopping)"
-            elif self.state in (_CLOSING, _DRAINING) and not self.went_silent:
+            elif self.state in (_CLOSING, LinkState.DRAINING) and not self.went_silent:
                 reason = reason if reason.startswith("the peer") else "the link was closed"
             self.state = LinkState.CLOSED
             self.outbox.close(discard=True)
@@ -1177,12 +1106,12 @@ class Link:
             self.io.forget(self)
             # Unread bytes make the OS reset the connection on close, and the
             # peer may then lose what it has not read yet.
-            for _ in range(16):
-                try:
+            try:
+                for _ in range(16):
                     if not self.transport.recv_into(self.io.buffer):
                         break
-                except OSError:
-                    break
+            except OSError:
+                pass
             try:
                 self.transport.close()
             except OSError:
@@ -1191,7 +1120,7 @@ class Link:
         self._closed.set()
         self.owner.link_closed(self, reason)
 
-    # -- reading (whoever holds the I/O loop's read role) ----------------------
+    # -- reading (whoever holds the I/O loop's read role)
     def on_readable(self) -> None:
         """Read what arrived, cut it into frames, hand the pages on."""
         try:
@@ -1201,8 +1130,7 @@ class Link:
             self._end(f"unexpected {type(error).__name__}: {error}")
 
     def _read(self) -> None:
-        # The I/O loop's thread, or the node's while it is idle: anything
-        # else (ending the link, pausing) is left to the loop's thread.
+        # The I/O thread, or the idle node's: ending and pausing are the I/O thread's.
         if self.state in _ENDED or self._held:
             return
         try:
@@ -1225,8 +1153,7 @@ class Link:
             return
         self._answer_due = True
         if count == len(_BEAT) and self.io.view[:count] == _BEAT and not decoder.pending_bytes():
-            # A lone beat (what an idle link gets): a sign of life, nothing to decode.
-            self._heard_frame = True
+            self._heard_frame = True  # a lone beat (an idle link): nothing to decode
             self._heard(time.monotonic())
             return
         bodies: List[bytes] = []
@@ -1340,15 +1267,15 @@ class Link:
         quiet_s = now - self.last_heard
         if quiet_s <= max(self.owner.dead_after_s, 3 * self.peer_beat_s):
             return None
-        at_risk = self.pages_sent - self._sent_when_heard
         self.went_silent = True
         return (
             f"nothing heard from it for {quiet_s:.1f} s, though it promised a sign of life "
             f"every {self.peer_beat_s:g} s (the network path is gone, or the peer froze); "
-            f"{at_risk} pages sent since it was last heard from may be lost"
+            f"{self.pages_sent - self._sent_when_heard} pages sent since it was last heard "
+            "from may be lost"
         )
 
-    # -- the handshake, and frames that are not pages --------------------------
+    # -- the handshake, and frames that are not pages
     def _on_message(self, message: Message) -> None:
         """A frame that is not a page (or a page before the handshake ended)."""
         self._heard_frame = True
@@ -1409,8 +1336,7 @@ class Link:
             self.abort(f"refused: {refusal.reason}")
 
     def _bad_frame(self, error: WireFormatError, resetting: bool = False) -> None:
-        # Said by the component, not per link: sixty hostile connections must
-        # not write five lines each (at most five a 5 s, then a count).
+        # Said by the component: sixty hostile connections must not write five lines each.
         self.bad_frames += 1
         count = self.bad_frames
         self.owner.say(

@@ -1,11 +1,9 @@
 """In DEBUG mode: keys that should cross a link to another node but do not.
 
-The robot forwards ``"sensr_data"`` and the topside handles
-``"sensor_data"``: nothing is shown and nothing is said (thesis listing
-5.1). ``node.key_hints.link_s`` after a link's hello, the comms component
-compares the keys with what was stored and received, and
-`MissingKeyHints.check_link` says what looks wrong, once per key. Outside
-DEBUG mode it costs nothing.
+The robot forwards ``"sensr_data"`` and the topside handles ``"sensor_data"``:
+nothing is shown and nothing is said (thesis listing 5.1). So
+``node.key_hints.link_s`` after a link's hello, the comms component compares
+the keys with what was stored and received (``MissingKeyHints.check_link``).
 
 Example (what `CommsLoop` does for you)::
 
@@ -16,9 +14,9 @@ from __future__ import annotations
 
 import functools
 import time
-from typing import TYPE_CHECKING, List, Optional, Set, Tuple
+from typing import TYPE_CHECKING, List, Set, Tuple
 
-from snr.core import MissingKeyHints, Node, tasks
+from snr.core import Node, tasks
 from snr.prelude import DataKey, TaskHandler, TaskType
 
 if TYPE_CHECKING:
@@ -29,21 +27,15 @@ __all__ = ["check_link", "watch_link"]
 _PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
 
 
-def _hints_of(comms: CommsLoop) -> Optional[MissingKeyHints]:
-    node = comms.parent
-    return node.key_hints if isinstance(node, Node) else None
-
-
 def watch_link(comms: CommsLoop, link: Link) -> None:
     """In DEBUG mode, check ``link``'s keys ``link_s`` from now (I/O thread, on hello).
 
     Example::
 
-        watch_link(self, link)   # in CommsLoop, when the peer's hello arrives
+        watch_link(self, link)   # in CommsLoop, at the peer's hello
     """
-    hints = _hints_of(comms)
-    io = comms.io_loop
-    if hints is None or io is None:
+    node, io = comms.parent, comms.io_loop
+    if not isinstance(node, Node) or node.key_hints is None or io is None:
         return
     if link.keys_received is None:
         link.keys_received = set()  # from now on the link notes what arrives
@@ -53,14 +45,14 @@ def watch_link(comms: CommsLoop, link: Link) -> None:
             check = functools.partial(check_link, comms, link)
             comms.schedule(tasks.event(tasks.CHECK_WIRING, [check]))
 
-    io.call_later(hints.link_s, ask)
+    io.call_later(node.key_hints.link_s, ask)
 
 
 def check_link(comms: CommsLoop, link: Link) -> None:
     """On the node's thread: report keys that should have crossed ``link`` by now.
 
-    The keys received over every link to the same peer count together
-    (listing 5.1 has two); while one is younger than the delay, its check comes later.
+    The keys received over every link to the same peer count together (listing
+    5.1 has two); while one is younger than the delay, its own check comes later.
 
     Example::
 
@@ -69,11 +61,11 @@ def check_link(comms: CommsLoop, link: Link) -> None:
     from snr.std_mods.comms.comms_loop import CommsLoop  # here: comms_loop.py imports this module
 
     node = comms.parent
-    hints = _hints_of(comms)
-    if hints is None or not isinstance(node, Node) or link.is_closed():
+    if not isinstance(node, Node) or node.key_hints is None or link.is_closed():
         return
     if node.components.get(comms.name) is not comms:
         return  # removed or reloaded since
+    hints = node.key_hints
     handled: List[Tuple[DataKey, TaskHandler]] = []
     peer_links: List[Link] = []
     for component in list(node.components.values()):
