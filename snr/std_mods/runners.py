@@ -20,14 +20,7 @@ from snr.core.checks import call_checks
 from snr.core.checks.runner_checks import no_role_given, runner_built, runner_ran
 from snr.core.config import Config
 from snr.core.node import Node
-from snr.core.runners import (
-    INTERRUPTED_MESSAGE,
-    SynchronousRunner,
-    _as_config,
-    _config_or_exit,
-    _System,
-    report_error,
-)
+from snr.core.runners import INTERRUPTED_MESSAGE, SynchronousRunner, System, as_config, report_error
 from snr.prelude.abstract import AbstractConfig, AbstractMultiRunner, AbstractRunner
 from snr.prelude.errors import ConfigError, SNRError
 from snr.prelude.names import Mode, Role
@@ -118,11 +111,11 @@ class MultiProcRunner(AbstractMultiRunner):
     def __init__(
         self,
         roles: Sequence[Role],
-        config: _System,
+        config: System,
         start_method: Optional[str] = None,
         join_timeout_s: float = 5.0,
     ) -> None:
-        self.config = _as_config(config)
+        self.config = as_config(config)
         call_checks.no_sim_clock_across_processes(self.config)
         known = self.config.roles()
         for role in roles:
@@ -243,12 +236,12 @@ class CliRunner(AbstractRunner):
 
     def __init__(
         self,
-        components_or_config: _System,
+        components_or_config: System,
         argv: Optional[Sequence[str]] = None,
     ) -> None:
-        self.config = _config_or_exit(
-            lambda: call_checks.check_cli_args(CliRunner, components_or_config, argv),
+        self.config = as_config(
             components_or_config,
+            lambda: call_checks.check_cli_args(CliRunner, components_or_config, argv),
             exit_on_error=True,
         )
         self.argv = list(sys.argv if argv is None else argv)
