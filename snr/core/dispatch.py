@@ -291,11 +291,9 @@ class HandlerRunner:
         Those are the ``store_page`` tasks under its key at the head of the
         queue (at most `_MAX_BURST`), each page stored first.
 
-        Example (what `run_queued` does when the table has a burst handler)::
+        Example::
 
-            burst = components.table.bursts.get((TaskType.store_page, "depth"))
-            if burst is not None:
-                runner.run_burst(task, burst)   # task and the "depth" pages behind it
+            runner.run_burst(task, components.table.bursts[(TaskType.store_page, "depth")])
         """
         handler, component, cell = burst
         normal = self.queue.normal

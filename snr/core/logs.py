@@ -30,16 +30,12 @@ def level_for_mode(mode: Mode) -> int:
 
 
 def ensure_log_handler() -> None:
-    """Give the ``snr`` logger SNR's own stderr handler, once per process.
-
-    It writes a line only while the program has set no handler of its own,
-    so ``logging.basicConfig`` gets each line once, formatted its way.
+    """Give the ``snr`` logger SNR's own stderr handler (once), which steps aside for the program's.
 
     Example::
 
         ensure_log_handler()          # what every Node does
-        logging.basicConfig(level=logging.INFO)
-        logging.getLogger("snr.urov").warning("Depth sensor silent")   # printed once
+        logging.basicConfig(level=logging.INFO)   # from now on, lines are printed its way
     """
     snr_log = logging.getLogger(_ROOT)
     if any(isinstance(handler, _DefaultHandler) for handler in snr_log.handlers):

@@ -73,6 +73,8 @@ class TaskQueue(AbstractTaskQueue):
         waits_by_thread: the same per thread id (the watchdog names a flooding loop).
         waited_at: per thread id, the caller's frame outside SNR and its line
             at the last wait (the watchdog shows it).
+        sleeping: True while the node's thread sleeps in `wait` (any thread may look).
+        waiter: the `IdleWaiter` the node sleeps on instead of the bell, or None.
     """
 
     def __init__(
@@ -100,8 +102,8 @@ class TaskQueue(AbstractTaskQueue):
             "node cannot keep up (a slow handler, or a loop storing data too fast)",
         )
         self._bell: queue.SimpleQueue[None] = queue.SimpleQueue()
-        self._waiter: Optional[IdleWaiter] = None
-        self._sleeping = False
+        self.waiter: Optional[IdleWaiter] = None
+        self.sleeping = False
         self._rung = False
         self._closed = threading.Event()
 
@@ -118,7 +120,7 @@ class TaskQueue(AbstractTaskQueue):
             self.normal.append(task)
         else:
             return
-        if self._sleeping and not self._rung:  # ring once per sleep
+        if self.sleeping and not self._rung:  # ring once per sleep
             self._ring()
 
     def schedule(self, t: SomeTasks) -> None:
@@ -133,13 +135,13 @@ class TaskQueue(AbstractTaskQueue):
             t = [task for task in t if task.priority]  # dropped: only urgent ones get in
         for task in t:
             (self.urgent if task.priority else self.normal).append(task)
-        if self._sleeping and not self._rung:
+        if self.sleeping and not self._rung:
             self._ring()
 
     def _ring(self) -> None:
         """Wake the sleeping node, once per sleep (on the bell, or on its waiter)."""
         self._rung = True
-        waiter = self._waiter
+        waiter = self.waiter
         if waiter is None:
             self._bell.put(None)
         else:
@@ -222,22 +224,6 @@ class TaskQueue(AbstractTaskQueue):
         lane = self.urgent or self.normal  # urgent tasks first
         return lane.popleft() if lane else None
 
-    @property
-    def sleeping(self) -> bool:
-        """True while the node's thread sleeps in `wait` (any thread may look).
-
-        Example::
-
-            if node.queue.sleeping and not len(node.queue):
-                ...   # the node is idle
-        """
-        return self._sleeping
-
-    @property
-    def waiter(self) -> Optional[IdleWaiter]:
-        """What the node's thread sleeps on when idle instead of the bell (None: the bell)."""
-        return self._waiter
-
     def use_waiter(self, waiter: IdleWaiter) -> bool:
         """Sleep on ``waiter`` from now on instead of the bell; True if it now does.
 
@@ -250,9 +236,9 @@ class TaskQueue(AbstractTaskQueue):
             if node.queue.use_waiter(io_loop):
                 ...   # idle waits now watch the links' sockets too
         """
-        if self._waiter is not None:
-            return self._waiter is waiter
-        self._waiter = waiter
+        if self.waiter is not None:
+            return self.waiter is waiter
+        self.waiter = waiter
         self._bell.put(None)
         return True
 
@@ -263,8 +249,8 @@ class TaskQueue(AbstractTaskQueue):
 
             node.queue.stop_waiter(io_loop)   # the comms are closing
         """
-        if self._waiter is waiter:
-            self._waiter = None
+        if self.waiter is waiter:
+            self.waiter = None
             waiter.wake()
 
     def wait(self, timeout_s: Optional[float], urgent_only: bool = False) -> None:
@@ -273,9 +259,9 @@ class TaskQueue(AbstractTaskQueue):
         ``urgent_only``: sleep even if normal tasks wait (a paused node runs
         none of them; each new task still wakes it once).
         """
-        waiter = self._waiter
+        waiter = self.waiter
         self._rung = False
-        self._sleeping = True
+        self.sleeping = True
         try:
             # Look again now that producers ring: one may have appended just before.
             if self.urgent or (self.normal and not urgent_only):
@@ -288,14 +274,14 @@ class TaskQueue(AbstractTaskQueue):
             except queue.Empty:
                 pass
         finally:
-            self._sleeping = False
+            self.sleeping = False
             if waiter is not None:  # once no producer rings for this sleep any more
                 waiter.woken()
 
     def wake(self) -> None:
         """Wake a thread sleeping in :meth:`wait` (used to stop the node)."""
         self._bell.put(None)
-        waiter = self._waiter
+        waiter = self.waiter
         if waiter is not None:
             waiter.wake()
 

@@ -116,14 +116,6 @@ class AbstractProfiler(_FriendlyABC):
         """The ``[times_called, total_s]`` cell of the loop called ``name``."""
 
     @abstractmethod
-    def log_task(self, task_id: TaskId, where: str, runtime_s: float) -> None:
-        """Record one handler run for ``task_id`` in module ``where``."""
-
-    @abstractmethod
-    def log_loop(self, name: ComponentName, runtime_s: float) -> None:
-        """Record one pass of a loop's ``loop()`` method."""
-
-    @abstractmethod
     def dump(self) -> str:
         """The table of thesis listing 5.2, as text."""
 
