@@ -220,11 +220,9 @@ class Node(AbstractNode):
             raise self._failures.failure
 
     def check_wiring(self) -> None:
-        """In DEBUG mode, warn about handlers of data keys that look misspelled.
+        """In DEBUG mode, warn about handlers of misspelled-looking keys, or that can never run.
 
-        Runs once by itself a few seconds after the node starts; also about
-        handlers that can never run (see
-        `snr.core.checks.wiring_checks.WiringChecks.check_never_ran`).
+        Runs by itself a few seconds after the node starts.
         """
         if self._checks is not None:
             self._checks.check_wiring()
@@ -244,8 +242,7 @@ class Node(AbstractNode):
     def terminate(self) -> None:
         """Halt, join and terminate every component, newest first. Idempotent.
 
-        Only the node's thread may call it while the node runs; other threads
-        use ``set_terminate_flag`` or schedule ``tasks.terminate(reason)``.
+        While the node runs, only its thread may call it (others: ``set_terminate_flag``).
         """
         if self.state in (NodeState.TERMINATING, NodeState.TERMINATED):
             return
@@ -283,12 +280,7 @@ class Node(AbstractNode):
         return [(entry[0], entry[1]) for entry in self._lookup(task)]
 
     def is_handled(self, task_type: TaskType, name: str) -> bool:
-        """True if some handler would run now for a task with this type and name.
-
-        Example::
-
-            node.is_handled(TaskType.process_data, "depth_m")   # a filter waits for it?
-        """
+        """True if some handler would run now for a task with this type and name."""
         table = self._table().table
         return (task_type, name) in table or task_type in table
 
@@ -320,11 +312,10 @@ class Node(AbstractNode):
         self._runner.run_queued(max_tasks=1)
 
     def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
-        """``loop``'s thread ended with ``error``: a failure, reported as a handler's is.
+        """``loop``'s thread ended with ``error``: reported as a handler's failure is.
 
         In DEBUG and TEST mode the node stops and ``loop()`` raises a
-        `LoopError`; DEPLOYED logs it. ``sys.exit()`` or Ctrl-C in a loop stop
-        the node in every mode. Called by the loop's thread as it ends.
+        `LoopError`; DEPLOYED logs it (``sys.exit()`` and Ctrl-C stop it in every mode).
         """
         self._failures.loop_failed(loop, error)
 
@@ -337,24 +328,12 @@ class Node(AbstractNode):
         self.queue.schedule(t)
 
     def schedule_first(self, tasks: List[Task]) -> None:
-        """Queue ``tasks`` first in line, in their order; the node's own thread only.
-
-        Example (the node core putting back the pages of a burst it splits)::
-
-            node.schedule_first([node.store_page_task(page) for page in rest])
-        """
+        """Queue ``tasks`` first in line, in their order; the node's own thread only."""
         self._check_owner_thread("schedule_first")
         self.queue.normal.extendleft(reversed(tasks))
 
     def wait_for_room(self, timeout_s: float) -> bool:
-        """Wait (up to ``timeout_s``) until the queue is below its high-water mark.
-
-        Example (a socket reader that stops reading while the node is behind)::
-
-            while not node.wait_for_room(0.25):
-                if closing:
-                    return
-        """
+        """Wait (up to ``timeout_s``) for room in the queue; True once there is."""
         return self.queue.wait_for_room(timeout_s)
 
     def store_page_task(self, page: Page) -> Task:

@@ -38,7 +38,7 @@ from snr.prelude.task import Task
 __all__ = ["AbstractComponent", "AbstractConfig", "AbstractEndpoint", "AbstractFactory"]
 __all__ += ["AbstractLoop", "AbstractMultiRunner", "AbstractNode", "AbstractProfiler"]
 __all__ += ["AbstractRunner", "AbstractTaskQueue", "explain_abstract_error"]
-__all__ += ["Datastore", "missing_methods_error"]
+__all__ += ["Datastore"]
 
 
 class _FriendlyABCMeta(ABCMeta):
@@ -46,6 +46,8 @@ class _FriendlyABCMeta(ABCMeta):
 
     def __call__(cls, *args: Any, **kwargs: Any) -> Any:
         if cls.__abstractmethods__:
+            from snr.prelude.abstract_errors import missing_methods_error  # loaded only now
+
             raise missing_methods_error(cls, caller_location())
         return super().__call__(*args, **kwargs)
 
@@ -70,29 +72,12 @@ class _FriendlyABC(metaclass=_FriendlyABCMeta):
     __slots__ = ()
 
 
-def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
-    """The ComponentError for building ``cls`` while it lacks required methods.
-
-    Example::
-
-        missing_methods_error(HalfEndpoint)
-        # Cannot create HalfEndpoint (robot.py:5): it lacks these methods that
-        # AbstractEndpoint requires: halt, terminate. Easiest fix: subclass ...
-    """
-    from snr.prelude import abstract_errors
-
-    return abstract_errors.missing_methods_error(cls, created_at)
-
-
 def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
-    """Re-word Python's "Can't instantiate abstract class" TypeError (any class), or None.
+    """`snr.prelude.abstract_errors.explain_abstract_error`, loaded only when called.
 
     Example::
 
-        try:
-            component = factory.get(node)
-        except TypeError as error:
-            raise (explain_abstract_error(error) or error) from error
+        raise (explain_abstract_error(error) or error) from error   # a TypeError
     """
     from snr.prelude import abstract_errors
 

@@ -6,6 +6,7 @@ outlives its parent.
 
 from __future__ import annotations
 
+import copy
 import logging
 import signal
 import sys
@@ -261,9 +262,8 @@ class CliRunner(AbstractRunner):
         args = self.parse()
         config = self.config
         if args.mode is not None and isinstance(config, Config):
-            config = Config(
-                config.factories, mode=Mode(args.mode), profile=config.profile, clock=config.clock
-            )
+            config = copy.copy(config)  # all of it (clock, datastore, node core) but the mode
+            config.mode = Mode(args.mode)
         try:
             if len(args.roles) == 1:
                 SynchronousRunner(args.roles[0], config).run()
