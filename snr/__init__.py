@@ -5,25 +5,18 @@ Everything a student needs is here::
     from snr import *
 
 That gives ``__all__`` below: what the listings, tutorial and examples use, and
-the 2021 release's names. The rest is imported from its own module, e.g.
-``from snr.std_mods.comms import SocketsServerFactory``.
+the 2021 release's names; the rest is imported from its own module, e.g.
+``from snr.std_mods.comms import SocketsServerFactory``. ``python -m snr docs``
+opens the guide and API reference, offline.
 
-``python -m snr docs`` builds and opens the guide and API reference, offline;
-``python -m snr demo`` runs the thesis's underwater vehicle.
-
-``import snr`` is kept light: the ready-made components (``snr.std_mods``),
-the extras (``snr.extras``: Zenoh, serial, controller, simulator...),
-the testing utilities (``snr.utils``, ``SNRTestCase`` with ``unittest``)
-and the 2021 names are imported the first time one is used;
-``from snr import *`` imports everything it names.
+``import snr`` is kept light: the names in ``_LAZY`` are imported the first
+time one is used (``from snr import *`` imports them all).
 """
 
-# This file is the one list of the public names (docs/design.md, "The public
-# names"). To add one: import it below from its package, add it to __all__ and,
-# if it is loaded on first use, to _LAZY; tests/test_public_api.py and the docs
-# build say what is missing.
+# The one list of the public names (docs/design.md, "The public names"): to add
+# one, import it below, add it to __all__ and, if loaded on first use, to _LAZY.
 
-from typing import TYPE_CHECKING, Any, Dict, List, Tuple
+from typing import TYPE_CHECKING, Any, Dict, List
 
 from snr.core import (
     Config,
@@ -123,169 +116,63 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
     )
     from snr.utils.test_case import SNRTestCase
 
-_LAZY: Dict[str, Tuple[str, ...]] = {
+_LAZY: Dict[str, str] = {
     "snr.extras.compat2021": (
-        "AbstractContext",
-        "Consumer",
-        "Context",
-        "ExpectorProtocol",
-        "LocalConsole",
-        "MovingAvgEndpointFactory",
-        "MPExpector",
-        "PageReader",
-        "RemoteConsole",
-        "RemovedApiError",
-        "Settings",
-        "SocketsListenerFactory",
-        "SocketsLoopFactory",
-        "SocketsWrapper",
-        "TaskExpectations",
-        "TaskExpector",
-        "TestRunner",
-        "TextReader",
-        "TextReplayerFactory",
+        "AbstractContext Consumer Context ExpectorProtocol LocalConsole "
+        "MovingAvgEndpointFactory MPExpector PageReader RemoteConsole "
+        "RemovedApiError Settings SocketsListenerFactory SocketsLoopFactory "
+        "SocketsWrapper TaskExpectations TaskExpector TestRunner TextReader "
+        "TextReplayerFactory"
     ),
-    "snr.extras.console_tools": ("LocalConsoleFactory",),
+    "snr.extras.console_tools": "LocalConsoleFactory",
     "snr.extras.controller": (
-        "ControllerLoopFactory",
-        "ControlProcessorFactory",
-        "InputMappingFactory",
-        "Joystick",
-        "SimulatedJoystick",
+        "ControllerLoopFactory ControlProcessorFactory InputMappingFactory "
+        "Joystick SimulatedJoystick"
     ),
-    "snr.extras.plot": ("read_recording",),
-    "snr.extras.serial": ("SerialLinkFactory",),
-    "snr.extras.sim": ("SimRobotFactory", "SimViewFactory", "World"),
-    "snr.extras.viz": ("FoxgloveBridgeFactory",),
-    "snr.extras.zenoh": ("ZenohCommsFactory",),
-    "snr.std_mods.comms": (
-        "COMMS_CONNECTED",
-        "COMMS_DISCONNECTED",
-        "PipeLoopFactory",
-        "SocketsPair",
-    ),
-    "snr.std_mods.filters": ("KalmanFilterFactory", "MovingAvgFilterFactory"),
-    "snr.std_mods.runners": ("CliRunner", "MultiProcRunner"),
-    "snr.std_mods.io": (
-        "CommandReceiverFactory",
-        "RecorderEndpointFactory",
-        "ReplayerLoopFactory",
-    ),
-    "snr.std_mods.utils": (
-        "PrinterEndpointFactory",
-        "StopwatchEndpointFactory",
-        "TimeoutLoopFactory",
-    ),
+    "snr.extras.plot": "read_recording",
+    "snr.extras.serial": "SerialLinkFactory",
+    "snr.extras.sim": "SimRobotFactory SimViewFactory World",
+    "snr.extras.viz": "FoxgloveBridgeFactory",
+    "snr.extras.zenoh": "ZenohCommsFactory",
+    "snr.std_mods.comms": "COMMS_CONNECTED COMMS_DISCONNECTED PipeLoopFactory SocketsPair",
+    "snr.std_mods.filters": "KalmanFilterFactory MovingAvgFilterFactory",
+    "snr.std_mods.runners": "CliRunner MultiProcRunner",
+    "snr.std_mods.io": "CommandReceiverFactory RecorderEndpointFactory ReplayerLoopFactory",
+    "snr.std_mods.utils": "PrinterEndpointFactory StopwatchEndpointFactory TimeoutLoopFactory",
     "snr.utils": (
-        "ExpecterEndpointFactory",
-        "Expector",
-        "ExpectorEndpointFactory",
-        "ListReplayerFactory",
-        "MultiProcExpector",
-        "OrderedExpector",
-        "SimClock",
+        "ExpecterEndpointFactory Expector ExpectorEndpointFactory ListReplayerFactory "
+        "MultiProcExpector OrderedExpector SimClock"
     ),
-    "snr.utils.test_case": ("SNRTestCase",),
+    "snr.utils.test_case": "SNRTestCase",
 }
-"""The public names imported on first use, by the module each comes from.
-
-The ready-made components (``snr.std_mods``) and ``SNRTestCase``
-(``unittest``) cost more to import than the rest of SNR together; a program
-pays for them, and the other testing utilities, only when it uses them. The
-names kept for code written against the 2021 release
-(``snr.extras.compat2021``) come with the components they alias."""
+"""The public names imported on first use, by module: the ready-made components, the testing
+utilities and the 2021 names cost more to import than all the rest."""
 
 __version__ = "0.1.0"
 
-__all__ = [
-    "AbstractComponent",
-    "AbstractContext",
-    "AbstractEndpoint",
-    "AbstractFactory",
-    "AbstractLoop",
-    "AbstractMultiRunner",
-    "AbstractNode",
-    "AbstractProfiler",
-    "COMMS_CONNECTED",
-    "COMMS_DISCONNECTED",
-    "CliRunner",
-    "CommandReceiverFactory",
-    "ComponentName",
-    "ComponentsByRole",
-    "Config",
-    "Consumer",
-    "Context",
-    "ControlProcessorFactory",
-    "ControllerLoopFactory",
-    "DataKey",
-    "Endpoint",
-    "EndpointFactory",
-    "ExpecterEndpointFactory",
-    "Expector",
-    "ExpectorEndpointFactory",
-    "ExpectorProtocol",
-    "FoxgloveBridgeFactory",
-    "InputMappingFactory",
-    "Joystick",
-    "KalmanFilterFactory",
-    "ListReplayerFactory",
-    "LocalConsole",
-    "LocalConsoleFactory",
-    "LoopFactory",
-    "MPExpector",
-    "Mode",
-    "MovingAvgEndpointFactory",
-    "MovingAvgFilter",
-    "MovingAvgFilterFactory",
-    "MultiProcExpector",
-    "MultiProcRunner",
-    "Node",
-    "OrderedExpector",
-    "Page",
-    "PageReader",
-    "PipeLoopFactory",
-    "PrinterEndpointFactory",
-    "RecorderEndpointFactory",
-    "RemoteConsole",
-    "RemovedApiError",
-    "ReplayerLoopFactory",
-    "SNRError",
-    "SNRTestCase",
-    "SerialLinkFactory",
-    "Settings",
-    "SimClock",
-    "SimRobotFactory",
-    "SimViewFactory",
-    "SimulatedJoystick",
-    "SocketsListenerFactory",
-    "SocketsLoopFactory",
-    "SocketsPair",
-    "SocketsWrapper",
-    "SomeTasks",
-    "StopwatchEndpointFactory",
-    "SynchronousRunner",
-    "Task",
-    "TaskExpectations",
-    "TaskExpector",
-    "TaskHandlerMap",
-    "TaskId",
-    "TaskName",
-    "TaskType",
-    "TestRunner",
-    "TextReader",
-    "TextReplayerFactory",
-    "ThreadLoop",
-    "TimeoutLoopFactory",
-    "Timer",
-    "World",
-    "ZenohCommsFactory",
-    "read_recording",
-    "tasks",
-]
+__all__ = ["AbstractComponent", "AbstractContext", "AbstractEndpoint", "AbstractFactory"]
+__all__ += ["AbstractLoop", "AbstractMultiRunner", "AbstractNode", "AbstractProfiler"]
+__all__ += ["COMMS_CONNECTED", "COMMS_DISCONNECTED", "CliRunner", "CommandReceiverFactory"]
+__all__ += ["ComponentName", "ComponentsByRole", "Config", "Consumer", "Context"]
+__all__ += ["ControlProcessorFactory", "ControllerLoopFactory", "DataKey", "Endpoint"]
+__all__ += ["EndpointFactory", "ExpecterEndpointFactory", "Expector", "ExpectorEndpointFactory"]
+__all__ += ["ExpectorProtocol", "FoxgloveBridgeFactory", "InputMappingFactory", "Joystick"]
+__all__ += ["KalmanFilterFactory", "ListReplayerFactory", "LocalConsole", "LocalConsoleFactory"]
+__all__ += ["LoopFactory", "MPExpector", "Mode", "MovingAvgEndpointFactory", "MovingAvgFilter"]
+__all__ += ["MovingAvgFilterFactory", "MultiProcExpector", "MultiProcRunner", "Node"]
+__all__ += ["OrderedExpector", "Page", "PageReader", "PipeLoopFactory", "PrinterEndpointFactory"]
+__all__ += ["RecorderEndpointFactory", "RemoteConsole", "RemovedApiError", "ReplayerLoopFactory"]
+__all__ += ["SNRError", "SNRTestCase", "SerialLinkFactory", "Settings", "SimClock"]
+__all__ += ["SimRobotFactory", "SimViewFactory", "SimulatedJoystick", "SocketsListenerFactory"]
+__all__ += ["SocketsLoopFactory", "SocketsPair", "SocketsWrapper", "SomeTasks"]
+__all__ += ["StopwatchEndpointFactory", "SynchronousRunner", "Task", "TaskExpectations"]
+__all__ += ["TaskExpector", "TaskHandlerMap", "TaskId", "TaskName", "TaskType", "TestRunner"]
+__all__ += ["TextReader", "TextReplayerFactory", "ThreadLoop", "TimeoutLoopFactory", "Timer"]
+__all__ += ["World", "ZenohCommsFactory", "read_recording", "tasks"]
 
 
 def _set_excepthook() -> None:
-    """An SNR error a student's own call raises shows their frames, not SNR's (errors.md 16p)."""
+    """An SNR error a student's call raises shows their frames, not SNR's (errors.md 16p)."""
     from snr.core.checks.top_level import install_excepthook
 
     install_excepthook()
@@ -293,7 +180,7 @@ def _set_excepthook() -> None:
 
 _set_excepthook()
 
-_HOME: Dict[str, str] = {name: module for module, names in _LAZY.items() for name in names}
+_HOME: Dict[str, str] = {name: module for module, names in _LAZY.items() for name in names.split()}
 
 
 def __getattr__(name: str) -> Any:

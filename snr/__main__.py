@@ -12,7 +12,7 @@ from __future__ import annotations
 
 import argparse
 import sys
-from typing import Any, List, Optional, Sequence
+from typing import Any, Dict, List, Optional, Sequence, Tuple
 
 import snr
 import snr.console
@@ -20,6 +20,68 @@ from snr.core import plugins
 from snr.prelude.install import DISTRIBUTION, install_hint
 
 __all__ = ["main"]
+
+
+_COMMANDS: Dict[str, Tuple[str, Optional[str]]] = {  # name: (help, description)
+    "demo": (
+        "run a demo, no hardware needed: the UROV of the thesis (two nodes over "
+        "TCP), or with --sim a simulated rover that follows walls",
+        "By default: the UROV of the thesis, two nodes in two processes "
+        "talking over TCP, which is what SNR is for. --sim: one node, a simulated rover "
+        "driven by the wall follower of the first lesson (docs/lessons.md).",
+    ),
+    # Never parsed here: `snr console ...` goes to snr.console.main, whose help is its own.
+    "console": (
+        "type commands into a running node, by HOST:PORT or, with --zenoh, by its "
+        "role (the same as snr-console)",
+        None,
+    ),
+    "docs": (
+        "build (if needed) and open SNR's docs, the guide and the API reference, offline",
+        "Build SNR's documentation, the guide and the API reference, as HTML "
+        "(only if a page or the code changed since the last build), then open it in a "
+        "browser, to read offline; --serve serves it on http://127.0.0.1 instead.",
+    ),
+    "graph": (
+        "draw the data-flow graph of the system a program runs, without running it",
+        "Draw the nodes, components, data keys and links of the system FILE "
+        "would run. FILE runs until it starts an SNR runner; the runner hands over its "
+        "config instead of starting nodes. Keys read but never stored, or stored but "
+        "never read, are marked (!).",
+    ),
+    "convert": (
+        "convert a recording between JSON lines and MCAP (*.mcap)",
+        "Convert a recording of pages: JSON lines to MCAP, or MCAP to JSON "
+        "lines. The source's format is read from its first bytes, the target's from its "
+        "name (*.mcap: MCAP, anything else: JSON lines).",
+    ),
+    "lesson": (
+        "the course's lessons: list them, start one, grade your file in the simulator",
+        None,
+    ),
+    "plot": (
+        "draw keys of a recording over time, to a PNG file (pictures of a run)",
+        "Draw the pages of each KEY in a recording (JSON lines or MCAP) "
+        "over time: one subplot per key, each number in its data a line. Writes a PNG "
+        f"file, no screen needed (needs {install_hint('plot')}).",
+    ),
+    "router": (
+        "run a Zenoh router for a classroom, set up from the secret (docs/comms.md)",
+        "A Zenoh router that nodes in mode='client' connect to where multicast "
+        "is blocked; with a secret, only nodes with the same secret link to it. --zenohd "
+        f"prints what zenohd needs instead (needs {install_hint('zenoh')}).",
+    ),
+    "secret": (
+        "make the secret that only your team's nodes know (docs/comms.md)",
+        "new: write a fresh random secret to the secret file, which every "
+        "node on this computer then uses to prove it belongs to your system; copy the "
+        "file to each computer of your team. SNR_SECRET in the environment wins over it.",
+    ),
+    "version": (
+        "print the installed SNR version",
+        "Print the version of the SNR that 'import snr' finds.",
+    ),
+}
 
 
 def main(argv: Optional[Sequence[str]] = None) -> int:
@@ -33,14 +95,10 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         "--version", action=_PrintVersion, help="print the installed version and exit"
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
-    demo_parser = sub.add_parser(
-        "demo",
-        help="run a demo, no hardware needed: the UROV of the thesis (two nodes over "
-        "TCP), or with --sim a simulated rover that follows walls",
-        description="By default: the UROV of the thesis, two nodes in two processes "
-        "talking over TCP, which is what SNR is for. --sim: one node, a simulated rover "
-        "driven by the wall follower of the first lesson (docs/lessons.md).",
-    )
+    parsers = {
+        name: sub.add_parser(name, help=h, description=d) for name, (h, d) in _COMMANDS.items()
+    }
+    demo_parser = parsers["demo"]
     demo_parser.add_argument("--seconds", type=float, default=15.0, help="how long to run")
     demo_parser.add_argument(
         "--verbose", action="store_true", help="show the nodes' whole log, not only warnings"
@@ -66,28 +124,8 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         default=None,
         help="with --sim: write PNG frames to DIR instead of opening a window",
     )
-    # Never parsed here: `snr console ...` goes to snr.console.main, whose help is its own.
-    sub.add_parser(
-        "console",
-        help="type commands into a running node, by HOST:PORT or, with --zenoh, by its "
-        "role (the same as snr-console)",
-    )
-    docs_parser = sub.add_parser(
-        "docs",
-        help="build (if needed) and open SNR's docs, the guide and the API reference, offline",
-        description="Build SNR's documentation, the guide and the API reference, as HTML "
-        "(only if a page or the code changed since the last build), then open it in a "
-        "browser, to read offline; --serve serves it on http://127.0.0.1 instead.",
-    )
-    graph_parser = sub.add_parser(
-        "graph",
-        usage="snr graph FILE [--role ROLE] [--format {mermaid,dot,text}] [-- ARGS...]",
-        help="draw the data-flow graph of the system a program runs, without running it",
-        description="Draw the nodes, components, data keys and links of the system FILE "
-        "would run. FILE runs until it starts an SNR runner; the runner hands over its "
-        "config instead of starting nodes. Keys read but never stored, or stored but "
-        "never read, are marked (!).",
-    )
+    graph_parser = parsers["graph"]
+    graph_parser.usage = "snr graph FILE [--role ROLE] [--format {mermaid,dot,text}] [-- ARGS...]"
     graph_parser.add_argument("file", metavar="FILE", help="the program, e.g. main.py")
     graph_parser.add_argument(
         "--role", action="append", default=None, help="draw only this role (repeatable)"
@@ -95,46 +133,9 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
     graph_parser.add_argument(
         "--format", choices=["mermaid", "dot", "text"], default="mermaid", help="default mermaid"
     )
-    convert_parser = sub.add_parser(
-        "convert",
-        help="convert a recording between JSON lines and MCAP (*.mcap)",
-        description="Convert a recording of pages: JSON lines to MCAP, or MCAP to JSON "
-        "lines. The source's format is read from its first bytes, the target's from its "
-        "name (*.mcap: MCAP, anything else: JSON lines).",
-    )
-    lesson_parser = sub.add_parser(
-        "lesson",
-        help="the course's lessons: list them, start one, grade your file in the simulator",
-    )
-    plot_parser = sub.add_parser(
-        "plot",
-        help="draw keys of a recording over time, to a PNG file (pictures of a run)",
-        description="Draw the pages of each KEY in a recording (JSON lines or MCAP) "
-        "over time: one subplot per key, each number in its data a line. Writes a PNG "
-        f"file, no screen needed (needs {install_hint('plot')}).",
-    )
-    router_parser = sub.add_parser(
-        "router",
-        help="run a Zenoh router for a classroom, set up from the secret (docs/comms.md)",
-        description="A Zenoh router that nodes in mode='client' connect to where multicast "
-        "is blocked; with a secret, only nodes with the same secret link to it. --zenohd "
-        f"prints what zenohd needs instead (needs {install_hint('zenoh')}).",
-    )
-    secret_parser = sub.add_parser(
-        "secret",
-        help="make the secret that only your team's nodes know (docs/comms.md)",
-        description="new: write a fresh random secret to the secret file, which every "
-        "node on this computer then uses to prove it belongs to your system; copy the "
-        "file to each computer of your team. SNR_SECRET in the environment wins over it.",
-    )
-    secret_parser.add_argument("action", choices=["new"], help="new: make a fresh secret")
-    secret_parser.add_argument(
+    parsers["secret"].add_argument("action", choices=["new"], help="new: make a fresh secret")
+    parsers["secret"].add_argument(
         "--force", action="store_true", help="replace the secret file if it exists"
-    )
-    sub.add_parser(
-        "version",
-        help="print the installed SNR version",
-        description="Print the version of the SNR that 'import snr' finds.",
     )
     words = list(sys.argv[1:] if argv is None else argv)
     if words[:1] == ["console"]:  # its own options, e.g. --token, go to snr-console
@@ -153,13 +154,6 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             print(f"snr {words[0]}: {error}", file=sys.stderr)
             return 1
         if hasattr(command, "add_arguments"):  # its own options, e.g. convert's
-            parsers = {
-                "docs": docs_parser,
-                "convert": convert_parser,
-                "lesson": lesson_parser,
-                "plot": plot_parser,
-                "router": router_parser,
-            }
             command.add_arguments(parsers[words[0]])
     args = parser.parse_args(words)
     if args.command == "demo":

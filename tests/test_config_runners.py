@@ -123,6 +123,18 @@ class TestCliRunner(unittest.TestCase):
         CliRunner(components, ["main.py", "urov", "--mode", "test"]).run()
         self.assertEqual(built, [("urov", Mode.TEST)])
 
+    def test_the_mode_option_keeps_the_rest_of_the_config(self) -> None:
+        made: List[str] = []  # one entry for each datastore the config's class made
+
+        class Store(dict):  # type: ignore[type-arg]
+            def __init__(self) -> None:
+                super().__init__()
+                made.append("store")
+
+        config = Config({"urov": [TimeoutLoopFactory(seconds=0.05)]}, datastore=Store)
+        CliRunner(config, ["main.py", "urov", "--mode", "test"]).run()
+        self.assertEqual(made, ["store"])
+
     def test_ctrl_c_exits_cleanly(self) -> None:
         script = READY + textwrap.dedent(
             """

@@ -1,8 +1,7 @@
 """`Component`: what `Endpoint` and `ThreadLoop` share.
 
 A component belongs to one node (its ``parent``), has a unique ``name`` there,
-remembers the ``factory`` that built it, and registers ``task_handlers``. It
-talks to the rest of the node only through tasks and pages.
+remembers its ``factory``, and talks to the node only through tasks and pages.
 """
 
 from __future__ import annotations
@@ -32,12 +31,9 @@ class Component(AbstractComponent):
     """
 
     produces: Sequence[DataKey] = ()
-    """Data keys this component stores, for the system's graph (optional).
+    """Data keys this component stores, for ``python -m snr graph`` (optional).
 
-    ``python -m snr graph`` finds most keys in the code itself
-    (``self.store_data("depth", ...)``, ``self.store_data_task(self.output, ...)``);
-    when the keys are computed while running, name them all here (the code is
-    then not searched).
+    The graph finds literal keys in the code itself; name computed ones all here.
 
     Example::
 
@@ -47,9 +43,7 @@ class Component(AbstractComponent):
     reads: Sequence[DataKey] = ()
     """Data keys this component reads with ``get_data``/``get_page``, for the graph (optional).
 
-    Keys it registers handlers for, and keys read with a literal or an
-    attribute (``self.get_data("heading")``, ``self.get_data(self.input)``),
-    are found without it; set it, and it is the whole list.
+    As ``produces``: set it, and it is the whole list.
 
     Example::
 
@@ -57,7 +51,7 @@ class Component(AbstractComponent):
     """
 
     def __init__(self, factory: AbstractFactory, parent: AbstractNode, name: ComponentName) -> None:
-        explain.check_component_args(type(self), factory, parent, name)  # which is wrong, if any
+        explain.check_component_args(type(self), factory, parent, name)
         self.factory = factory
         self.parent = parent
         self.name = name
@@ -66,20 +60,15 @@ class Component(AbstractComponent):
 
     @property
     def log(self) -> logging.Logger:
-        """This component's logger, ``snr.<role>.<name>``.
-
-        Made on first use: creating a logger is slow and never freed, and
-        most components of a busy node never log.
-        """
+        """This component's logger, ``snr.<role>.<name>`` (made on first use: it is never freed)."""
         if self._log is None:
             self._log = self.parent.log.getChild(self.name)
         return self._log
 
     @log.setter
     def log(self, value: Any) -> None:
-        raise explain.log_name_taken(type(self))  # a clearer word than "property has no setter"
+        raise explain.log_name_taken(type(self))
 
-    # -- handlers ---------------------------------------------------------
     @property
     def task_handlers(self) -> TaskHandlerMap:
         """Which handler runs for which task id; assign a dict in ``__init__``.
@@ -102,7 +91,6 @@ class Component(AbstractComponent):
     def _handlers_changed(self) -> None:
         self.parent.handlers_changed(self)
 
-    # -- life cycle hooks (documented no-ops: override what you need) -------
     def begin(self) -> None:
         """Runs once when the node starts; override to start things up."""
 
@@ -115,7 +103,6 @@ class Component(AbstractComponent):
     def join(self, timeout_s: Optional[float] = None) -> None:
         """Wait for the component's threads to end (endpoints have none)."""
 
-    # -- talking to the node ------------------------------------------------
     def schedule(self, t: SomeTasks) -> None:
         """Queue tasks on the node; safe from any thread.
 
@@ -168,7 +155,6 @@ class Component(AbstractComponent):
         """The newest data under ``key``, or None. Read-only; any thread."""
         return self.parent.get_data(key)
 
-    # -- logging (``self.warn("bad value %s", value)``) ----------------------
     def dbg(self, msg: str, *args: Any) -> None:
         """Log a debug message, e.g. ``self.dbg("got %s", value)``."""
         self.log.debug(msg, *args)
@@ -192,9 +178,8 @@ class Component(AbstractComponent):
     if not TYPE_CHECKING:  # hidden from mypy, which would let any misspelt attribute pass
 
         def __getattr__(self, attribute: str) -> Any:
-            # Only reached when normal lookup fails. Before Component.__init__ has
-            # run, every missing attribute means "super().__init__ was forgotten":
-            # say so instead of a bare AttributeError deep inside SNR.
+            # Only reached when normal lookup fails: explain's words say whether
+            # super().__init__ was forgotten.
             raise explain.used_before_init(self, attribute)
 
     def __repr__(self) -> str:

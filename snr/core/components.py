@@ -1,9 +1,8 @@
 """`ComponentSet`: a node's endpoints and loops, and their life cycle.
 
-It builds, adds, removes, hot-reloads, starts and stops components and keeps
-the node's handler table in step, on the node's thread. A reload that fails
-keeps the old component running and logs why with the file and line; a loop
-that does not stop in ``join_timeout_s`` is not reloaded (two would run).
+It builds, adds, removes, hot-reloads, starts and stops components on the
+node's thread, and keeps the node's handler table in step. A reload that fails
+keeps the old component running and logs why.
 
 Example::
 
@@ -16,7 +15,6 @@ Example::
 
 from __future__ import annotations
 
-import functools
 import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
@@ -48,9 +46,9 @@ class ComponentSet:
 
     Attributes:
         by_name: the components by name, in start order (the node's ``components``).
-        table: the `HandlerTable`; call `refresh_table` before using it.
-        table_stale: True when a change since the table was built is not in it yet.
+        table: the `HandlerTable`; `refresh_table` it while ``table_stale``.
         running: True between `start_all` and `shutdown`.
+        check_added: DEBUG and TEST: reads each component's class as it is added.
     """
 
     def __init__(self, node: AbstractNode, table: HandlerTable, join_timeout_s: float) -> None:
@@ -61,11 +59,8 @@ class ComponentSet:
         self.running = False
         self.table_stale = True
         self._none_told: Set[Any] = set()  # factories' get() already said to return None
-        #: Called with each component before it is added (set by the node in DEBUG
-        #: and TEST mode to read the student's class; see `check_component`).
         self.check_added: Optional[Callable[[AbstractComponent], None]] = None
 
-    # -- building ----------------------------------------------------------
     def build(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
         """``factory.get(node)``, with any mistake in it explained.
 
@@ -90,7 +85,6 @@ class ComponentSet:
             raise explain.wrong_get_result_error(factory, component)
         return component
 
-    # -- adding and removing ------------------------------------------------
     def add(self, component: AbstractComponent, start: bool = True) -> None:
         """Add ``component`` last; it begins at once if the set is running.
 
@@ -114,17 +108,14 @@ class ComponentSet:
             self.start(component)
 
     def remove(self, name: ComponentName) -> None:
-        """Halt, join, terminate and forget the component called ``name``.
-
-        The node's core (``node_core``) is never removed: the refusal is logged.
-        """
+        """Halt, join, terminate and forget the component called ``name`` (never ``node_core``)."""
         component = self._find("remove component", name)
         if component is None:
             return
         del self.by_name[name]
         self.stop(component)
         self._warn_if_alive(component)
-        self.call_safely(component.terminate, component, "terminate")
+        self.call_safely("terminate", component)
         self.table_stale = True
 
     def _find(self, action: str, name: ComponentName) -> Optional[AbstractComponent]:
@@ -134,12 +125,10 @@ class ComponentSet:
             component_log.not_found(self.node.log, action, name, self.node.role, self.by_name)
         return component
 
-    # -- hot reload ---------------------------------------------------------
     def reload(self, name: ComponentName = "all") -> List[ComponentName]:
-        """Reload the source of one component (or ``"all"``) and rebuild it.
+        """Reload the source of one component (or ``"all"``, never ``node_core``) and rebuild it.
 
-        Returns the names of the rebuilt components; one that fails keeps
-        running and the log says why. ``node_core`` is never reloaded.
+        Returns the names of the rebuilt components; one that fails keeps running.
 
         Example::
 
@@ -166,7 +155,7 @@ class ComponentSet:
         if new is None:
             self._resume(old)
             return False
-        self.call_safely(old.terminate, old, "terminate")
+        self.call_safely("terminate", old)
         items = [
             (new.name if n == old.name else n, new if c is old else c)
             for n, c in self.by_name.items()
@@ -209,7 +198,6 @@ class ComponentSet:
         return new
 
     def _resume(self, old: AbstractComponent) -> None:
-        """Start ``old`` again after a failed reload stopped it."""
         if not self.running:
             return
         try:
@@ -217,7 +205,6 @@ class ComponentSet:
         except Exception as error:
             component_log.reload_refused(self.node.log, "restart", old, error)
 
-    # -- starting and stopping ----------------------------------------------
     def start_all(self, keep_going: Callable[[], bool]) -> None:
         """Start every component in order while ``keep_going()`` says so."""
         self.running = True
@@ -241,7 +228,7 @@ class ComponentSet:
 
     def stop(self, component: AbstractComponent) -> None:
         """Halt ``component`` and wait (up to ``join_timeout_s``) for its thread."""
-        self.call_safely(functools.partial(_halt, component), component, "halt")
+        self.call_safely("halt", component)
         component.join(self.join_timeout_s)
 
     def shutdown(self) -> None:
@@ -249,30 +236,27 @@ class ComponentSet:
         self.running = False
         components = list(self.by_name.values())[::-1]
         for component in components:
-            self.call_safely(functools.partial(_halt, component), component, "halt")
+            self.call_safely("halt", component)
         deadline = time.monotonic() + self.join_timeout_s
         for component in components:
             component.join(max(0.0, deadline - time.monotonic()))
         for component in components:
             self._warn_if_alive(component)
-            self.call_safely(component.terminate, component, "terminate")
+            self.call_safely("terminate", component)
 
     def _warn_if_alive(self, component: AbstractComponent) -> None:
         if component.is_alive():
             component_log.still_running(self.node.log, component, self.join_timeout_s, reload=False)
 
-    def call_safely(
-        self, method: Callable[[], None], component: AbstractComponent, what: str
-    ) -> None:
-        """Call a life-cycle ``method``; log (never raise) what goes wrong."""
+    def call_safely(self, what: str, component: AbstractComponent) -> None:
+        """Halt or terminate (``what``) ``component``; log (never raise) what goes wrong."""
         try:
-            method()
+            _halt(component) if what == "halt" else component.terminate()
         except Exception:
             component_log.call_failed(self.node.log, component, what)
 
-    # -- the handler table ----------------------------------------------------
     def handlers_changed(self, component: AbstractComponent) -> None:
-        """``component`` changed its ``task_handlers``: rebuild the table before the next task.
+        """``component`` changed its ``task_handlers``: the table is stale.
 
         Raises:
             ComponentError: a burst handler of the component lost its task handler.
@@ -282,21 +266,16 @@ class ComponentSet:
             check_burst_handlers(component)
 
     def refresh_table(self) -> None:
-        """Rebuild the table from the components, with every change made since it was built."""
+        """Rebuild the table from the components."""
         self.table.rebuild(self.by_name.values())
         self.table_stale = False
 
 
 def _start(component: AbstractComponent) -> None:
-    """Start ``component``: ``begin()``; a loop's ``start_thread()`` also starts its thread."""
-    if isinstance(component, AbstractLoop):
-        component.start_thread()
-    else:
-        component.begin()
+    (component.start_thread if isinstance(component, AbstractLoop) else component.begin)()
 
 
 def _halt(component: AbstractComponent) -> None:
-    """Ask ``component`` to stop: a loop's stop flag first (its thread ends), then ``halt()``."""
     if isinstance(component, AbstractLoop):
         component.set_terminate_flag("node stopping")
     component.halt()

@@ -1,13 +1,10 @@
 """The node's dispatch: which handlers run for a task, and running them.
 
 `HandlerTable` answers thesis 4.4.1's two-phase match (``(type, name)``, then
-``type``) ahead of time for every registered task id, so a task needs one or
-two dict look-ups however many components the node has. `HandlerRunner` is the
-one place where SNR calls a student's task handler: it stores a
-``store_page`` task's page first, runs the handlers in component order (timed
-unless DEPLOYED without a profiler), queues what they return and hands a
-failure to the node's `snr.core.checks.failures.FailureReport`. docs/design.md
-("Dispatch: a handler table, not a scan") tells the rest, bursts included.
+``type``) ahead of time, so a task needs one or two dict look-ups however many
+components the node has. `HandlerRunner` is the one place where SNR calls a
+student's handler. docs/design.md ("Dispatch: a handler table, not a scan")
+tells the rest, bursts included.
 
 Example::
 
@@ -52,10 +49,12 @@ _EVENT = TaskType.event
 _MAX_BURST = 256  # store_page tasks a burst handler gets at most in one call
 
 
-class HandlerMap(Dict[TaskId, TaskHandler]):
-    """A ``task_handlers`` dict that checks its entries and reports changes.
+def _nothing() -> None:
+    pass
 
-    So the node hears of ``self.task_handlers[id] = f`` as of ``= {...}``.
+
+class HandlerMap(Dict[TaskId, TaskHandler]):
+    """A ``task_handlers`` dict that checks its entries and reports changes to the node.
 
     Example::
 
@@ -72,22 +71,18 @@ class HandlerMap(Dict[TaskId, TaskHandler]):
     ) -> None:
         super().__init__()
         self._owner_class = owner_class
-        self._on_change = None  # filling it is no change
+        self._on_change: Callable[[], None] = _nothing  # filling it is no change
         self.update(items or {})
-        self._on_change = on_change
-
-    def _changed(self) -> None:
-        if self._on_change is not None:
-            self._on_change()
+        self._on_change = on_change or _nothing
 
     def __setitem__(self, key: TaskId, handler: TaskHandler) -> None:
         check_entry(key, handler, self._owner_class)
         super().__setitem__(key, handler)
-        self._changed()
+        self._on_change()
 
     def __delitem__(self, key: TaskId) -> None:
         super().__delitem__(key)
-        self._changed()
+        self._on_change()
 
     def update(self, *args: Any, **kwargs: Any) -> None:
         for key, handler in dict(*args, **kwargs).items():
@@ -95,12 +90,12 @@ class HandlerMap(Dict[TaskId, TaskHandler]):
 
     def pop(self, key: TaskId, *default: Any) -> Any:
         result = super().pop(key, *default)
-        self._changed()
+        self._on_change()
         return result
 
     def popitem(self) -> Tuple[TaskId, TaskHandler]:
         result = super().popitem()
-        self._changed()
+        self._on_change()
         return result
 
     def setdefault(self, key: TaskId, default: Any = None) -> Any:
@@ -110,13 +105,11 @@ class HandlerMap(Dict[TaskId, TaskHandler]):
 
     def clear(self) -> None:
         super().clear()
-        self._changed()
+        self._on_change()
 
 
 class HandlerTable:
-    """Precomputed two-phase matches for every registered task id.
-
-    Each entry carries its handler's profiler cell.
+    """Precomputed two-phase matches for every registered task id, with profiler cells.
 
     Example::
 
@@ -127,9 +120,8 @@ class HandlerTable:
 
     def __init__(self, profiler: Optional[AbstractProfiler] = None) -> None:
         self.table: Dict[TaskId, List[Entry]] = {}
-        #: ``(TaskType.store_page, key)`` -> the burst handler for a run of those
-        #: tasks, where one component alone handles them and declares one
-        #: (`AbstractComponent.burst_handlers`). Refilled in place, as ``table``.
+        #: ``(TaskType.store_page, key)`` -> the burst handler of the one
+        #: component that handles those tasks, if it has one. Refilled in place.
         self.bursts: Dict[TaskId, BurstEntry] = {}
         self.profiler = profiler
 
@@ -154,8 +146,7 @@ class HandlerTable:
     def add(self, component: AbstractComponent) -> None:
         """Extend the table for a component added after all the others.
 
-        Never raises for a student's mistake: it runs between two tasks, where
-        nothing could report it. `check_burst_handlers` refuses those earlier.
+        Never raises: it runs between two tasks, where nothing could report it.
         """
         handlers = component.task_handlers
         table = self.table
@@ -167,14 +158,11 @@ class HandlerTable:
         for key, handler in handlers.items():
             entry: Entry = (handler, key, component, self._cell(handler, key))
             table.setdefault(key, []).append(entry)
-            if isinstance(key, TaskType):
-                # Fallback: this type-level handler also serves every specific
-                # id of its type that this component did not register itself.
+            if isinstance(key, TaskType):  # it also serves its type's other specific ids
                 for specific in [k for k in table if isinstance(k, tuple) and k[0] is key]:
                     if specific not in handlers:
                         table[specific].append(entry)
-        # Only the ids this component handles can have changed (a type-level
-        # store_page handler joins every specific id of that type).
+        # Only this component's ids changed (a type-level store_page handler: all).
         self._find_bursts(table if _STORE_PAGE in handlers else handlers)
 
     def _find_bursts(self, keys: Iterable[TaskId]) -> None:
@@ -213,12 +201,11 @@ class HandlerRunner:
         runner.failures.failure   # the HandlerError/LoopError that stopped the node, or None
 
     Attributes:
-        running: False once the node is stopping or pausing: `run_queued`
-            returns after the current task.
+        running: False once the node is stopping or pausing (`run_queued` returns).
         slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
         on_unhandled: None, or (DEBUG) called with each event no handler matched.
         store_page: the node core's `store_page_handler`, run before a
-            ``store_page`` task's handlers.
+            ``store_page`` task's handlers (set by the node).
     """
 
     def __init__(
@@ -235,16 +222,13 @@ class HandlerRunner:
         self.running = True
         self.timed = timed
         self.slow_handler_s = slow_handler_s
-        #: Called with an event that no handler matched (set by a DEBUG node).
         self.on_unhandled: Optional[Callable[[Task], None]] = None
-        #: Stores a store_page task's page before its handlers (set by the node).
         self.store_page: Optional[TaskHandler] = None
 
     def run_queued(self, max_tasks: int = 100_000) -> None:
         """Run queued tasks until the queue is empty, the node stops, or ``max_tasks`` ran.
 
-        Urgent tasks first, then oldest first: each task's handlers run in
-        component order and what they return is queued. The node's hot path.
+        Urgent tasks first, then oldest first; what handlers return is queued.
 
         Example::
 
@@ -264,10 +248,9 @@ class HandlerRunner:
             if components.table_stale:  # what the last task changed applies now
                 components.refresh_table()
             if task.type is _STORE_PAGE:
-                # The node core's part, before any handler (no look-up, no timing).
-                self.store_first(task)
-                # A run for a burst handler starts only from the normal lane: a
-                # paused node runs urgent tasks one at a time, `execute_task` one task.
+                self.store_first(task)  # the node core's part, before any handler
+                # A burst starts only from the normal lane (a paused node and
+                # `execute_task` run urgent tasks one at a time).
                 if bursts and lane is normal and normal and normal[0].name == task.name:
                     burst = bursts.get((_STORE_PAGE, task.name))
                     if burst is not None and normal[0].type is _STORE_PAGE:
@@ -303,17 +286,14 @@ class HandlerRunner:
                 return
 
     def run_burst(self, first: Task, burst: BurstEntry) -> None:
-        """Run ``burst``'s handler for ``first`` and the run of tasks like it behind it.
+        """Run ``burst``'s handler in one call for ``first`` and the tasks like it behind it.
 
-        ``first`` and the ``store_page`` tasks under its key at the head of
-        the queue (at most `_MAX_BURST`), each page stored first, go to the
-        burst handler in one call; its result is queued as a handler's is.
+        Those are the ``store_page`` tasks under its key at the head of the
+        queue (at most `_MAX_BURST`), each page stored first.
 
-        Example (what `run_queued` does when the table has a burst handler)::
+        Example::
 
-            burst = components.table.bursts.get((TaskType.store_page, "depth"))
-            if burst is not None:
-                runner.run_burst(task, burst)   # task and the "depth" pages behind it
+            runner.run_burst(task, components.table.bursts[(TaskType.store_page, "depth")])
         """
         handler, component, cell = burst
         normal = self.queue.normal
@@ -367,8 +347,6 @@ class HandlerRunner:
 
     def store_first(self, task: Task) -> Optional[Task]:
         """For a ``store_page`` task: store its page now, queue and return what follows.
-
-        A page that cannot be stored is reported as a handler's failure.
 
         Example::
 

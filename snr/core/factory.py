@@ -1,8 +1,6 @@
-"""Factories: build components for a node and reload their source code.
+"""Factories: build components for a node and reload their source code (thesis 6.2.10).
 
-A config lists factories, not components, which must not start before their
-node runs (thesis 6.2.10). A factory keeps its component's modules to reload
-them; state kept on the factory survives the reload.
+State kept on the factory survives a reload.
 """
 
 from __future__ import annotations
@@ -53,19 +51,14 @@ class Factory(AbstractFactory):
         raise NotImplementedError  # replaced by every subclass (checked in __init__)
 
     def reload(self) -> None:
-        """Reload every module in ``reload_targets`` from its source file.
-
-        Raises whatever the import raises (e.g. ``SyntaxError``): the node then
-        keeps the old component running and reports the error.
-        """
+        """Reload every module in ``reload_targets``; raises what the import raises."""
         fresh: List[ModuleType] = []
         for module in self.reload_targets:
             current = sys.modules.get(module.__name__, module)
             fresh.append(importlib.reload(current))
         self.reload_targets = fresh
 
-    # Modules cannot be pickled; send their names instead so configs can be
-    # passed to processes started with "spawn" (MultiProcRunner on macOS).
+    # Modules cannot be pickled: their names go to processes started with "spawn".
     def __getstate__(self) -> Dict[str, Any]:
         state = dict(self.__dict__)
         state["reload_targets"] = [m.__name__ for m in self.reload_targets]

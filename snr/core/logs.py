@@ -1,9 +1,8 @@
 """Logging set-up: readable lines on stderr unless the program set its own.
 
-Every node logs to ``snr.<role>`` and every component to
-``snr.<role>.<component>``, so one call quiets a whole node::
+A node logs to ``snr.<role>``, a component to ``snr.<role>.<component>``::
 
-    node.log.setLevel(logging.WARNING)
+    node.log.setLevel(logging.WARNING)   # quiets a whole node
 """
 
 from __future__ import annotations
@@ -12,7 +11,7 @@ import logging
 import sys
 import threading
 import time
-from typing import Callable, Optional
+from typing import Callable, Optional, Tuple
 
 from snr.core.checks.repeats import RepeatFilter  # kept here too: components import it
 from snr.prelude import Mode
@@ -31,16 +30,12 @@ def level_for_mode(mode: Mode) -> int:
 
 
 def ensure_log_handler() -> None:
-    """Give the ``snr`` logger SNR's own stderr handler, once per process.
-
-    It writes a line only while the program has set no handler of its own,
-    so ``logging.basicConfig`` gets each line once, formatted its way.
+    """Give the ``snr`` logger SNR's own stderr handler (once), which steps aside for the program's.
 
     Example::
 
         ensure_log_handler()          # what every Node does
-        logging.basicConfig(level=logging.INFO)
-        logging.getLogger("snr.urov").warning("Depth sensor silent")   # printed once
+        logging.basicConfig(level=logging.INFO)   # from now on, lines are printed its way
     """
     snr_log = logging.getLogger(_ROOT)
     if any(isinstance(handler, _DefaultHandler) for handler in snr_log.handlers):
@@ -51,10 +46,7 @@ def ensure_log_handler() -> None:
 
 
 class _DefaultHandler(logging.StreamHandler):  # type: ignore[type-arg]
-    """SNR's stderr handler: it steps aside for any handler the program set.
-
-    It decides line by line: logging may be configured later.
-    """
+    """SNR's stderr handler: it steps aside, line by line, for any handler the program set."""
 
     def handle(self, record: logging.LogRecord) -> bool:
         if _another_handler_takes(record, self):
@@ -92,7 +84,7 @@ class LossReport:
         loss.dropped()          # logs at once: the first drop
         loss.dropped(5)         # counted; logged a second later if drops go on
         loss.recovered()        # "recovered: 6 tasks from loops dropped over 0.2 s"
-        loss.total              # 6
+        loss.total              # 6: every drop so far (``last_drop``: the last one's time)
     """
 
     def __init__(
@@ -112,19 +104,16 @@ class LossReport:
         self._clock = clock
         self._lock = threading.Lock()
         self.total = 0
-        """Everything dropped so far, over the whole life of the report."""
         self._episode = 0
         self._unsaid = 0
         self._episode_start: Optional[float] = None
         self._last_said = 0.0
         self.last_drop = 0.0
-        """When the last drop was counted (the clock's time)."""
 
     def dropped(self, n: int = 1) -> None:
         """Count ``n`` more dropped items; log the count if a second has passed."""
         with self._lock:
-            now = self._clock()
-            self.last_drop = now
+            now = self.last_drop = self._clock()
             self.total += n
             self._episode += n
             self._unsaid += n
@@ -140,6 +129,16 @@ class LossReport:
             f"{self.total} in all): {self.why}."
         )
 
+    def _end(self, quiet_s: float = 0.0) -> Optional[Tuple[int, int, float]]:
+        """End the episode: (unsaid, episode, seconds); None without one or within ``quiet_s``."""
+        with self._lock:
+            now = self._clock()
+            if self._episode_start is None or now - self.last_drop < quiet_s:
+                return None
+            ended = self._unsaid, self._episode, now - self._episode_start
+            self._episode, self._unsaid, self._episode_start = 0, 0, None
+            return ended
+
     def recovered(self, quiet_s: float = 0.0) -> bool:
         """The cause of the drops has passed: log the episode's total once.
 
@@ -147,16 +146,13 @@ class LossReport:
         peer that keeps up by fits and starts gives one episode, not many).
         Returns True if the episode ended now.
         """
-        with self._lock:
-            now = self._clock()
-            if self._episode_start is None or now - self.last_drop < quiet_s:
-                return False
-            episode, since = self._episode, now - self._episode_start
-            self._episode, self._unsaid, self._episode_start = 0, 0, None
-        self.log.warning(
-            f"Recovered: {episode} {self.what} {self.verb.lower()} over {since:.1f} s."
-        )
-        return True
+        ended = self._end(quiet_s)
+        if ended is not None:
+            _, episode, since = ended
+            self.log.warning(
+                f"Recovered: {episode} {self.what} {self.verb.lower()} over {since:.1f} s."
+            )
+        return ended is not None
 
     def ended(self, how: str) -> bool:
         """The source of the drops is gone (e.g. a link closed): say the drops not yet logged.
@@ -168,14 +164,10 @@ class LossReport:
             loss.ended("the link ended")
             # "Dropped 3 more pages for 'urov' before the link ended (8 over 0.4 s, 8 in all)."
         """
-        with self._lock:
-            if self._episode_start is None:
-                return False
-            unsaid, episode = self._unsaid, self._episode
-            since = self._clock() - self._episode_start
-            self._episode, self._unsaid, self._episode_start = 0, 0, None
-        if not unsaid:  # every drop is in the log already
+        ended = self._end()
+        if ended is None or not ended[0]:  # nothing, or every drop is in the log already
             return False
+        unsaid, episode, since = ended
         self.log.warning(
             f"{self.verb} {unsaid} more {self.what} before {how} ({episode} over {since:.1f} s, "
             f"{self.total} in all)."

@@ -1,19 +1,10 @@
 """`Node`: one running program on one device (thesis 4.2, 6.3.1).
 
-A node owns a task queue, a datastore of pages and its components. The thread
-that calls :meth:`Node.loop` alone writes the datastore and runs handlers; loop
-threads use the thread-safe ``schedule``, ``store_data`` and ``get_page``.
-The node core endpoint (``node_core``) stores pages and manages components
-(thesis 4.3.2); ``Config(datastore=..., node_core=...)`` can replace both
-(docs/assignments.md). Three helpers do the rest (docs/design.md)::
-
-    Node ──► ComponentSet   build, add, remove, reload, start and stop components;
-      │                     keep the HandlerTable in step with them
-      ├────► HandlerRunner  run a task's handlers, time them, queue what they
-      │                     return; its FailureReport (checks/failures.py) puts
-      │                     failures into words
-      └────► NodeChecks     wire in the checks for silent mistakes (key hints,
-                            wiring checks, watchdog: DEBUG mode)
+A node owns a task queue, a datastore of pages and its components; the thread
+that calls :meth:`Node.loop` alone writes the datastore and runs handlers. Its
+core endpoint (``node_core``) stores pages and manages components (thesis
+4.3.2). `ComponentSet`, `HandlerRunner` and the DEBUG ``NodeChecks`` do the rest
+(docs/design.md).
 """
 
 from __future__ import annotations
@@ -64,8 +55,7 @@ if TYPE_CHECKING:  # DEBUG helpers, imported when a node turns them on (see __in
     from snr.core.checks.watchdog import Watchdog
     from snr.core.checks.wiring_checks import WiringChecks
 
-__all__ = ["NODE_CORE_NAME", "Node", "NodeCore", "NodeCoreEndpoint", "NodeCoreFactory"]
-__all__ += ["NodeState"]
+__all__ = ["NODE_CORE_NAME", "Node", "NodeCore", "NodeCoreEndpoint", "NodeCoreFactory", "NodeState"]
 
 _PROCESS_DATA = TaskType.process_data
 _STORE_PAGE = TaskType.store_page
@@ -99,31 +89,23 @@ class Node(AbstractNode):
         node.is_terminated()  # True
 
     Attributes:
-        datastore: the newest page for each data key, read-only (get_page reads it).
-        pages: the `Datastore` behind it (a dict unless the config names
-            another), which only the node writes.
+        datastore: the newest page for each data key, read-only.
+        pages: the `Datastore` behind it, which only the node writes.
         queue: the task queue (bounded: see `TaskQueue`).
         components: every endpoint and loop by name, in start order.
         state: the `NodeState`.
         terminate_reason: why the node stopped, once it has.
-        key_hints: DEBUG: the `MissingKeyHints` (a data key read, never stored).
-        wiring_checks: DEBUG: the `snr.core.checks.wiring_checks.WiringChecks`
-            (events nothing handles, handlers nothing reaches).
-        step_mode: the `snr.core.checks.step_mode.StepMode` a console uses to
-            pause and step the node.
-        watchdog: DEBUG: the `snr.core.checks.watchdog.Watchdog` that says when
-            the node is stuck (set it to None before ``loop()`` to switch it off).
+        step_mode: the `snr.core.checks.step_mode.StepMode` a console pauses it with.
+        key_hints, wiring_checks, watchdog: DEBUG: the checks for silent
+            mistakes (snr/core/checks/); set one to None before ``loop()`` to
+            switch it off.
     """
 
     key_hints: Optional[MissingKeyHints]
     wiring_checks: Optional[WiringChecks]
     watchdog: Optional[Watchdog]
     idle_wake_s: Optional[float] = None
-    """How long an idle node sleeps at most (None: until a task comes or it is stopped).
-
-    Stopping closes the queue, which wakes the node, so an idle node need not
-    look now and then: it uses no CPU at all.
-    """
+    """How long an idle node sleeps at most (None: until a task comes or it is stopped)."""
     max_queued_tasks: int = 10_000
     """The queue's high-water mark: loops wait (then drop) above it; see `TaskQueue`."""
 
@@ -143,13 +125,10 @@ class Node(AbstractNode):
         if self.log.level == logging.NOTSET:
             self.log.setLevel(level_for_mode(self.mode))
         self.profiler = config.get_profiler()
-        # The node's clock (clock.py): the wall's, or one it takes turns on (a SimClock).
-        clock = clock_of(config)
+        clock = clock_of(config)  # the wall's, or one it takes turns on (a SimClock)
         self.timer = Timer(clock)
         self._page_time: Callable[[], float] = clock.stamp
         self.queue = TaskQueue(high_water=self.max_queued_tasks, log=self.log)
-        # Config(datastore=...): dict, or a student's. Written by the node alone;
-        # components see it read-only:
         self.pages: Datastore = checked_datastore(config.datastore, self)
         self.datastore: Mapping[DataKey, Page] = NodeDatastore(self.pages, role, self.queue)
         self.state = NodeState.CREATED
@@ -162,22 +141,21 @@ class Node(AbstractNode):
         timed = self.profiler is not None or self.mode is not Mode.DEPLOYED
         self._runner = HandlerRunner(self.queue, self._components, self._failures, timed)
         self.step_mode = StepMode(self.queue, self._runner, self._lookup, self.is_terminated)
-        # The checks for silent mistakes (snr/core/checks/, read second): NodeChecks
-        # sets key_hints, wiring_checks and watchdog in DEBUG mode, and reads each
-        # component's class in DEBUG and TEST. A DEPLOYED node does not load them.
+        # NodeChecks sets key_hints, wiring_checks and watchdog in DEBUG mode and
+        # reads each component's class in DEBUG and TEST; DEPLOYED does not load it.
         self.key_hints = self.wiring_checks = self.watchdog = None
         self._checks: Optional[NodeChecks] = None
         if self.mode is not Mode.DEPLOYED:
             from snr.core.checks.node_checks import NodeChecks
 
             self._checks = NodeChecks(self, self._components, self._runner)
-        factory = config.node_core or NodeCoreFactory()  # or a student's
+        factory = config.node_core or NodeCoreFactory()
         core: NodeCore = checked_core(self.build_component(factory), factory, self)
         self._core = core
         self.add_component(core, start=False)
         self._runner.store_page = core.store_page_handler  # pages are stored before handlers
         core.pages = self.pages
-        if self.mode is not Mode.DEPLOYED:  # page data read-only: checks/read_only.py
+        if self.mode is not Mode.DEPLOYED:
             from snr.core.checks.read_only import freeze
 
             core.freeze = freeze
@@ -185,7 +163,6 @@ class Node(AbstractNode):
             component = self.build_component(factory)
             if component is not None:
                 self.add_component(component, start=False)
-        # Built: in line for its first turn, if its clock hands out turns.
         self._clock_turn = clock.node_turn(role, self.queue, self.is_terminated)
         if self._clock_turn is not None:
             self.queue.use_waiter(self._clock_turn)
@@ -208,9 +185,6 @@ class Node(AbstractNode):
     def slow_handler_s(self, seconds: float) -> None:
         self._runner.slow_handler_s = seconds
 
-    # ------------------------------------------------------------------
-    # Control flow (thesis listing 6.1)
-    # ------------------------------------------------------------------
     def loop(self) -> None:
         """Begin every component, then run tasks until the node terminates.
 
@@ -233,7 +207,7 @@ class Node(AbstractNode):
         except KeyboardInterrupt:
             self.set_terminate_flag("interrupted by user (Ctrl-C)")
             raise
-        except Exception as error:  # e.g. a server that cannot listen: say so, not "terminate()"
+        except Exception as error:  # e.g. a server that cannot listen
             self.set_terminate_flag(f"{type(error).__name__} (below)")
             raise
         finally:
@@ -246,11 +220,9 @@ class Node(AbstractNode):
             raise self._failures.failure
 
     def check_wiring(self) -> None:
-        """In DEBUG mode, warn about handlers of data keys that look misspelled.
+        """In DEBUG mode, warn about handlers of misspelled-looking keys, or that can never run.
 
-        Runs once by itself a few seconds after the node starts; also about
-        handlers that can never run (see
-        `snr.core.checks.wiring_checks.WiringChecks.check_never_ran`).
+        Runs by itself a few seconds after the node starts.
         """
         if self._checks is not None:
             self._checks.check_wiring()
@@ -270,8 +242,7 @@ class Node(AbstractNode):
     def terminate(self) -> None:
         """Halt, join and terminate every component, newest first. Idempotent.
 
-        Only the node's thread may call it while the node runs; other threads
-        use ``set_terminate_flag`` or schedule ``tasks.terminate(reason)``.
+        While the node runs, only its thread may call it (others: ``set_terminate_flag``).
         """
         if self.state in (NodeState.TERMINATING, NodeState.TERMINATED):
             return
@@ -289,16 +260,13 @@ class Node(AbstractNode):
         self.state = NodeState.TERMINATED
         self.log.info("Node %r terminated: %s", self.role, self.terminate_reason)
 
-    # ------------------------------------------------------------------
-    # Task execution (thesis listing 6.2)
-    # ------------------------------------------------------------------
     def _run_tasks(self) -> None:
         queue = self.queue
         run_queued = self._runner.run_queued
         step_mode = self.step_mode
-        watchdog = self.watchdog  # DEBUG: it sleeps while the node idles, until there is work
+        watchdog = self.watchdog  # DEBUG: it dozes while the node idles
         while not self._stop_requested:
-            if step_mode.paused:  # a console paused the node: see checks/step_mode.py
+            if step_mode.paused:  # a console paused the node
                 step_mode.run_paused(self.idle_wake_s)
                 continue
             run_queued()
@@ -312,12 +280,7 @@ class Node(AbstractNode):
         return [(entry[0], entry[1]) for entry in self._lookup(task)]
 
     def is_handled(self, task_type: TaskType, name: str) -> bool:
-        """True if some handler would run now for a task with this type and name.
-
-        Example::
-
-            node.is_handled(TaskType.process_data, "depth_m")   # a filter waits for it?
-        """
+        """True if some handler would run now for a task with this type and name."""
         table = self._table().table
         return (task_type, name) in table or task_type in table
 
@@ -325,7 +288,6 @@ class Node(AbstractNode):
         return self._table().lookup(task.type, task.name)
 
     def _table(self) -> HandlerTable:
-        """The handler table, with every change to the components in it."""
         if self._components.table_stale:
             self._components.refresh_table()
         return self._components.table
@@ -350,17 +312,13 @@ class Node(AbstractNode):
         self._runner.run_queued(max_tasks=1)
 
     def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
-        """``loop``'s thread ended with ``error``: a failure, reported as a handler's is.
+        """``loop``'s thread ended with ``error``: reported as a handler's failure is.
 
         In DEBUG and TEST mode the node stops and ``loop()`` raises a
-        `LoopError`; DEPLOYED logs it. ``sys.exit()`` or Ctrl-C in a loop stop
-        the node in every mode. Called by the loop's thread as it ends.
+        `LoopError`; DEPLOYED logs it (``sys.exit()`` and Ctrl-C stop it in every mode).
         """
         self._failures.loop_failed(loop, error)
 
-    # ------------------------------------------------------------------
-    # Scheduling (thesis listing 6.3)
-    # ------------------------------------------------------------------
     def schedule(self, t: SomeTasks) -> None:
         """Queue a task or a list of tasks; safe from any thread.
 
@@ -370,24 +328,12 @@ class Node(AbstractNode):
         self.queue.schedule(t)
 
     def schedule_first(self, tasks: List[Task]) -> None:
-        """Queue ``tasks`` first in line, in their order; the node's own thread only.
-
-        Example (the node core putting back the pages of a burst it splits)::
-
-            node.schedule_first([node.store_page_task(page) for page in rest])
-        """
+        """Queue ``tasks`` first in line, in their order; the node's own thread only."""
         self._check_owner_thread("schedule_first")
         self.queue.normal.extendleft(reversed(tasks))
 
     def wait_for_room(self, timeout_s: float) -> bool:
-        """Wait (up to ``timeout_s``) until the queue is below its high-water mark.
-
-        Example (a socket reader that stops reading while the node is behind)::
-
-            while not node.wait_for_room(0.25):
-                if closing:
-                    return
-        """
+        """Wait (up to ``timeout_s``) for room in the queue; True once there is."""
         return self.queue.wait_for_room(timeout_s)
 
     def store_page_task(self, page: Page) -> Task:
@@ -398,9 +344,6 @@ class Node(AbstractNode):
         """A task that stores ``data`` under ``key`` when it runs (thesis: ``task_store_data``)."""
         return Task(_STORE_PAGE, key, [self.page(key, data, process)])
 
-    # ------------------------------------------------------------------
-    # Datastore (thesis listing 6.4)
-    # ------------------------------------------------------------------
     def page(self, key: DataKey, data: Any, process: bool = True) -> Page:
         """A new page from this node, stamped with the node's clock (wall or `SimClock`).
 
@@ -409,8 +352,6 @@ class Node(AbstractNode):
                 ``data`` is a whole `Page` (store ``page.data``). DEBUG and
                 TEST modes only: DEPLOYED makes pages without these checks.
         """
-        # A deployed robot's code was checked while it was developed (in DEBUG or
-        # TEST, with the checks): its pages are made without them (performance.md).
         if self._checks is not None:
             check_page_args(key, data)
         return Page(key, data, self.role, self._page_time(), process)
@@ -452,9 +393,6 @@ class Node(AbstractNode):
         self._check_owner_thread("write_page")
         self.pages[page.key] = self._core.frozen(page)
 
-    # ------------------------------------------------------------------
-    # Components (the work is done by ComponentSet)
-    # ------------------------------------------------------------------
     def build_component(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
         """``factory.get(self)``, with any mistake in ``get()`` explained.
 
@@ -507,20 +445,13 @@ class Node(AbstractNode):
 class NodeCore(Endpoint):
     """What a node needs of its core endpoint: the interface of `Config(node_core=...)`.
 
-    SNR's own is `NodeCoreEndpoint`; one of your own (the course's
-    docs/assignments.md, lesson 6) extends this class, and must:
-
-    * store pages: `store_page_handler`, which the node calls for each
-      ``store_page`` task before that task's handlers;
-    * handle ``tasks.store_pages(pages)``, a burst of pages (from another node,
-      over comms) to store in order, each as its own ``store_page`` task would;
-    * handle ``terminate`` (stop the node: ``parent.set_terminate_flag``),
-      ``reload`` (``parent.reload_component``) and the ``ADD_COMPONENT`` and
-      ``REMOVE_COMPONENT`` events (``parent.build_component``,
-      ``parent.add_component``, ``parent.remove_component``).
-
-    This class names itself ``node_core`` and handles SNR's own two events
-    (``CAUGHT_UP``, ``CHECK_WIRING``); add your handlers to ``task_handlers``.
+    SNR's own is `NodeCoreEndpoint`; one of yours (docs/assignments.md, lesson
+    6) extends this class and must store pages (`store_page_handler`, called
+    for each ``store_page`` task before its handlers), store the bursts of
+    ``tasks.store_pages(pages)`` in order, and handle ``terminate``,
+    ``reload``, ``ADD_COMPONENT`` and ``REMOVE_COMPONENT`` with the parent's
+    methods. This class is named ``node_core`` and handles SNR's own two
+    events (``CAUGHT_UP``, ``CHECK_WIRING``).
 
     Example::
 
@@ -540,8 +471,7 @@ class NodeCore(Endpoint):
     pages: Datastore
     """The node's datastore (``node.pages``), set by the node: the core alone writes it."""
     freeze: Optional[Callable[[Any, DataKey], Any]] = None
-    """DEBUG and TEST: makes a page's lists and dicts read-only as it is stored, so that
-    no handler changes what the others see (set by the node; None: DEPLOYED)."""
+    """DEBUG and TEST: makes a page's data read-only as it is stored (None: DEPLOYED)."""
 
     def __init__(self, factory: AbstractFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, NODE_CORE_NAME)
@@ -552,11 +482,10 @@ class NodeCore(Endpoint):
 
     @abstractmethod
     def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Put the task's page in ``pages``; then return its ``process_data`` task, if asked.
+        """Put the task's page in ``pages``; return its ``process_data`` task, if asked.
 
-        The run loop calls it for every ``store_page`` task before the task's
-        handlers. Returns ``Task(TaskType.process_data, page.key, [page])``
-        when ``page.process`` is true and some handler waits for it, else None.
+        That is ``Task(TaskType.process_data, page.key, [page])`` when
+        ``page.process`` is true and some handler waits for it, else None.
 
         Example::
 
@@ -577,11 +506,7 @@ class NodeCore(Endpoint):
         return None
 
     def check_wiring_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Look for wiring mistakes: the node's own check, or the checks it carries.
-
-        Comms send it with a link's check (a function) in ``val_list``, to run
-        on the node's thread; without one, the node checks its handlers' keys.
-        """
+        """Run the link checks (functions) the task carries, or else the node's own check."""
         checks = [value for value in task.val_list if callable(value)]
         if not checks:
             self.parent.check_wiring()
@@ -617,39 +542,34 @@ class NodeCoreEndpoint(NodeCore):
             self.err(life_cycle.NOT_A_PAGE, task.name, task.val_list)
             return None
         if not page.origin:  # made by tasks.store_data(), which has no node
-            page = dataclasses.replace(page, origin=self.parent.role)
-            task.val_list[0] = page
+            page = task.val_list[0] = dataclasses.replace(page, origin=self.parent.role)
         if self.freeze is not None:  # DEBUG, TEST (DEPLOYED pays only this test)
             page.data = self.freeze(page.data, page.key)
-        self.pages[page.key] = page  # node.write_page, on the node's own thread
-        # Its process_data task only if some handler waits for it.
+        self.pages[page.key] = page
         if page.process and self.parent.is_handled(_PROCESS_DATA, page.key):
             return Task(_PROCESS_DATA, page.key, [page])
         return None
 
     def store_pages_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Store a burst of pages (`tasks.store_pages`) in order, in one handler call.
+        """Store a burst of pages (`tasks.store_pages`) in order, as a task a page would.
 
-        As one ``store_page`` task a page would. From the first page whose key
-        other handlers store too, the rest go back first in line, a task each.
+        From the first page that must be fixed or explained, or whose key other
+        handlers store too, the rest go back first in line, a task each.
         """
         node, pages, freeze = self.parent, self.pages, self.freeze
         processed: List[Task] = []
         wanted: Dict[DataKey, bool] = {}  # per key, asked once a burst: is it processed?
         burst = task.val_list
         for index, page in enumerate(burst):
-            # Page by page from here when the usual handler must explain or fix
-            # the page, or when a handler besides this core stores its key.
             if not (isinstance(page, Page) and page.origin) or (
                 page.key not in wanted and node.is_handled(_STORE_PAGE, page.key)
             ):
-                # One store_page task each, first in line, in order.
                 rest = [Task(_STORE_PAGE, str(getattr(p, "key", "")), [p]) for p in burst[index:]]
                 node.schedule_first(rest)
                 break
             if freeze is not None:
                 page.data = freeze(page.data, page.key)
-            pages[page.key] = page  # node.write_page, on the node's own thread
+            pages[page.key] = page
             if page.key not in wanted:
                 wanted[page.key] = node.is_handled(_PROCESS_DATA, page.key)
             if page.process and wanted[page.key]:

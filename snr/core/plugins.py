@@ -1,14 +1,12 @@
 """Extension points: how the kernel finds what an extra provides, by group and name.
 
-The kernel never imports an extra: an extra declares what it provides as an
-entry point in ``pyproject.toml`` (as gpiozero's pin factories)::
+An extra declares what it provides as an entry point in ``pyproject.toml``
+(as gpiozero's pin factories), and the kernel asks for it with `load`::
 
     [project.entry-points."snr.recording_formats"]
     mcap = "snr.extras.viz.mcap_format:MCAP"
 
-and the kernel asks for it with `load` when it is needed (after editing them,
-``pip install -e .`` again). The groups, `GROUPS`, are in docs/design.md
-("Extras and extension points").
+docs/design.md ("Extras and extension points") lists the `GROUPS`.
 
 Example::
 
@@ -42,7 +40,7 @@ GROUPS: Dict[str, str] = {
 
 @functools.cache
 def _entry_points(group: str) -> Tuple[metadata.EntryPoint, ...]:
-    from importlib import metadata  # only when an extra is asked for: it costs milliseconds
+    from importlib import metadata  # only now: it costs milliseconds
 
     found: Any = metadata.entry_points()
     if hasattr(found, "select"):  # Python 3.10 and later

@@ -12,29 +12,24 @@ from __future__ import annotations
 
 import sys
 import threading
-from typing import TYPE_CHECKING, Callable, List, Mapping, Optional, Sequence, Union
+from typing import Callable, List, Mapping, Optional, Sequence, Union
 
 from snr.core.checks import call_checks
 from snr.core.checks.runner_checks import runner_built, runner_ran
 from snr.core.config import Config
 from snr.core.node import Node
-from snr.prelude.abstract import (
-    AbstractConfig,
-    AbstractFactory,
-    AbstractRunner,
-)
+from snr.prelude.abstract import AbstractConfig, AbstractFactory, AbstractRunner
 from snr.prelude.errors import ConfigError, SNRError
 from snr.prelude.names import Role
 
-if TYPE_CHECKING:
-    pass
+System = Union[AbstractConfig, Mapping[Role, Sequence[AbstractFactory]]]
+"""What a runner runs: a `Config`, or each role's factories, ``{"robot": [...]}``.
 
-# What a runner runs: a Config, or each role's factories. A Mapping (not the Dict
-# of ComponentsByRole), like Config's own argument: dicts are invariant, so
-# mypy --strict would reject a plain {"robot": [TimeoutLoopFactory(...)]}.
-_System = Union[AbstractConfig, Mapping[Role, Sequence[AbstractFactory]]]
+A Mapping, as `Config` takes: mypy --strict would reject a plain dict for
+``Dict`` (dicts are invariant)."""
 
-__all__ = ["INTERRUPTED_MESSAGE", "SynchronousRunner", "TestRunner", "report_error"]
+__all__ = ["INTERRUPTED_MESSAGE", "System", "SynchronousRunner", "TestRunner", "as_config"]
+__all__ += ["report_error"]
 
 INTERRUPTED_MESSAGE = "Interrupted by user, exiting"
 """What a runner prints when Ctrl-C stops it (as in thesis figure 5.4)."""
@@ -52,20 +47,21 @@ def report_error(error: SNRError, role: Optional[Role] = None) -> None:
     print(f"{type(error).__name__}{where}: {error}", file=sys.stderr, flush=True)
 
 
-def _as_config(components_or_config: _System) -> AbstractConfig:
-    if isinstance(components_or_config, AbstractConfig):
-        return components_or_config
-    return Config(components_or_config)
-
-
-def _config_or_exit(
-    check: Callable[[], None], config: _System, exit_on_error: bool
+def as_config(
+    system: System, check: Callable[[], None] = lambda: None, exit_on_error: bool = False
 ) -> AbstractConfig:
-    """The config, after ``check()`` of the call; a wrong one is reported without a
-    traceback (a runner is the top of a program) unless ``exit_on_error`` is False."""
+    """``system`` as a config, once ``check()`` (of a runner's arguments) passed.
+
+    With ``exit_on_error`` a `ConfigError` is printed without a traceback and
+    the program exits with status 1: a runner is the top of a program.
+
+    Example::
+
+        as_config({"robot": [TimeoutLoopFactory(seconds=1)]})   # a Config
+    """
     try:
         check()
-        return _as_config(config)
+        return system if isinstance(system, AbstractConfig) else Config(system)
     except ConfigError as error:
         if not exit_on_error:
             raise
@@ -94,15 +90,15 @@ class SynchronousRunner(AbstractRunner):
     def __init__(
         self,
         role: Role,
-        config: _System,
+        config: System,
         exit_on_error: bool = True,
         announce_interrupt: bool = True,
         on_node: Optional[Callable[[Node], None]] = None,
     ) -> None:
         self.role = role
-        self.config = _config_or_exit(
-            lambda: call_checks.check_runner_args(SynchronousRunner, role, config),
+        self.config = as_config(
             config,
+            lambda: call_checks.check_runner_args(SynchronousRunner, role, config),
             exit_on_error,
         )
         self.exit_on_error = exit_on_error
@@ -134,10 +130,7 @@ class SynchronousRunner(AbstractRunner):
 
 
 class TestRunner(AbstractRunner):
-    """Runs one node in the calling thread, stopping it after ``timeout_s``.
-
-    The node's exceptions reach the caller; a node still running at the limit
-    is stopped, and ``timed_out`` says so.
+    """Runs one node in the calling thread (its errors propagate), stopping it after ``timeout_s``.
 
     Example::
 

@@ -1,29 +1,11 @@
-"""`TaskQueue`: the thread-safe queue between loops and the node's thread.
+"""`TaskQueue`: the tasks waiting for a node's thread.
 
-Two deques: ``urgent`` for high-priority tasks (terminate) and ``normal`` for
-the rest, each FIFO. ``deque.append``/``popleft`` are atomic in CPython, so
-producers never take a lock.
-
-**How an idle node waits.** When its queue is empty, the node's thread sleeps
-in `TaskQueue.wait`, with a timeout, and producers wake it only while it
-sleeps: an idle node uses no CPU, and a busy one pays nothing for waking.
-What it sleeps on is the queue's *bell*, a ``queue.SimpleQueue`` (a blocking
-get with a timeout), unless something else was installed with `use_waiter`:
-an `IdleWaiter`, the one way to change how an idle node waits. SNR has three:
-a `SimClock`'s turn (an idle node gives the clock back), the socket comms'
-I/O loop and Zenoh's idle reader (an idle node reads its links itself, so a
-page that arrives needs no hand-off from another thread).
-
-The queue is bounded by a *high-water mark* (``high_water``, 10,000 tasks by
-default). A task offered by another thread (a loop's ``store_data``) while the
-normal lane is above it waits until the node has worked the lane down to the
-*low-water mark* (half the high one): a loop that produces faster than the
-node can handle is slowed to the node's pace (backpressure). If the node does
-not catch up within ``max_wait_s`` (1 s) the waiting task is dropped, counted
-and logged (at most once a second, with numbers), so a stuck node can never
-fill the memory. Tasks the node's own handlers return never wait (the node
-would wait on itself) and urgent tasks (terminate) never wait or drop.
-Readers of sockets ask `wait_for_room(0)` and stop reading instead of waiting.
+Two FIFO lanes, ``urgent`` (terminate) and ``normal``; ``deque.append`` and
+``popleft`` are atomic in CPython, so producers never take a lock. An idle node
+sleeps in `TaskQueue.wait` on a bell, or on an `IdleWaiter`, and producers
+ring only while it sleeps. Above a high-water mark, other threads wait
+(backpressure), then drop what they offer, counted and logged. docs/design.md
+("The queue", "How an idle node waits") tells the whole story.
 """
 
 from __future__ import annotations
@@ -48,28 +30,13 @@ __all__ = ["IdleWaiter", "TaskQueue"]
 class IdleWaiter(Protocol):
     """What a node's thread sleeps on while its queue is empty, instead of the bell.
 
-    The one extension point for how an idle node waits (see `TaskQueue.use_waiter`).
-    The queue calls ``wait`` while it counts the node as sleeping, then
-    ``woken`` once it no longer does, on the node's thread; producers call
-    ``wake`` (any thread), only while the node sleeps.
+    The one extension point for how an idle node waits (`TaskQueue.use_waiter`).
+    The queue calls ``wait``, then ``woken``, on the node's thread; producers
+    call ``wake`` (any thread), only while the node sleeps.
 
-    Example (a waiter that sleeps on an Event, as the bell does)::
+    Example (SNR has three: a `SimClock`'s turn, the socket I/O loop, Zenoh's reader)::
 
-        class EventWaiter:
-            def __init__(self) -> None:
-                self.event = threading.Event()
-
-            def wait(self, timeout_s: Optional[float]) -> None:
-                self.event.wait(timeout_s)
-                self.event.clear()
-
-            def woken(self) -> None:
-                pass
-
-            def wake(self) -> None:
-                self.event.set()
-
-        node.queue.use_waiter(EventWaiter())
+        node.queue.use_waiter(io_loop)   # io_loop has wait, woken and wake
     """
 
     def wait(self, timeout_s: Optional[float]) -> None:
@@ -98,18 +65,16 @@ class TaskQueue(AbstractTaskQueue):
         queue.get().name      # 'a'
 
     Attributes:
-        normal: the FIFO lane of ordinary tasks (the node pops from it).
+        normal: the FIFO lane of ordinary tasks.
         urgent: the lane of high-priority tasks, served first.
-        owner_thread: the consuming thread's id (set by the node as it
-            starts); tasks it schedules itself never wait.
-        holds_back: ids of other threads that never wait here because they
-            hold back on their own (a socket I/O thread stops reading); see
-            `never_wait`.
+        owner_thread: the node's thread id; tasks it schedules never wait.
+        holds_back: ids of threads that never wait here (see `never_wait`).
         waits: how many times a producer had to wait for space.
-        waits_by_thread: the same, for each thread id that had to wait (the
-            watchdog names a loop that floods the queue with it).
-        waited_at: for each thread id that had to wait, the caller's frame
-            outside SNR and its line at the last wait (the watchdog shows it).
+        waits_by_thread: the same per thread id (the watchdog names a flooding loop).
+        waited_at: per thread id, the caller's frame outside SNR and its line
+            at the last wait (the watchdog shows it).
+        sleeping: True while the node's thread sleeps in `wait` (any thread may look).
+        waiter: the `IdleWaiter` the node sleeps on instead of the bell, or None.
     """
 
     def __init__(
@@ -137,16 +102,13 @@ class TaskQueue(AbstractTaskQueue):
             "node cannot keep up (a slow handler, or a loop storing data too fast)",
         )
         self._bell: queue.SimpleQueue[None] = queue.SimpleQueue()
-        self._waiter: Optional[IdleWaiter] = None
-        self._sleeping = False
+        self.waiter: Optional[IdleWaiter] = None
+        self.sleeping = False
         self._rung = False
         self._closed = threading.Event()
 
     def put(self, task: Task) -> None:
-        """Queue one task. Any thread; what `schedule` does with a single `Task`.
-
-        From a thread other than the node's, this may wait while the queue is
-        above its high-water mark, and drop the task if it stays there.
+        """Queue one task from any thread (another than the node's may wait, or drop it).
 
         Example::
 
@@ -158,15 +120,11 @@ class TaskQueue(AbstractTaskQueue):
             self.normal.append(task)
         else:
             return
-        if self._sleeping and not self._rung:  # ring once per sleep
+        if self.sleeping and not self._rung:  # ring once per sleep
             self._ring()
 
     def schedule(self, t: SomeTasks) -> None:
-        """Queue a task, a list of tasks, or nothing (None). Any thread.
-
-        From a thread other than the node's, this may wait while the queue is
-        above its high-water mark, and drop the task if it stays there.
-        """
+        """Queue a task, a list of tasks, or nothing (None), as `put` does."""
         if t is None:
             return
         if isinstance(t, Task):
@@ -177,13 +135,13 @@ class TaskQueue(AbstractTaskQueue):
             t = [task for task in t if task.priority]  # dropped: only urgent ones get in
         for task in t:
             (self.urgent if task.priority else self.normal).append(task)
-        if self._sleeping and not self._rung:
+        if self.sleeping and not self._rung:
             self._ring()
 
     def _ring(self) -> None:
         """Wake the sleeping node, once per sleep (on the bell, or on its waiter)."""
         self._rung = True
-        waiter = self._waiter
+        waiter = self.waiter
         if waiter is None:
             self._bell.put(None)
         else:
@@ -205,23 +163,19 @@ class TaskQueue(AbstractTaskQueue):
         return True
 
     def _drain(self, timeout_s: float) -> bool:
-        """Wait up to ``timeout_s`` until the normal lane is down to the low-water mark.
-
-        False on timeout; True once it is there, or when `close` ends the wait.
-        """
+        """Wait up to ``timeout_s`` for the low-water mark (or `close`); False on timeout."""
         deadline = time.monotonic() + timeout_s
         while len(self.normal) > self.low_water:
             left = deadline - time.monotonic()
             if left <= 0:
                 return False
-            # Poll: the node works the lane down without a word to producers,
-            # so its hot path pays nothing. close() ends the wait at once.
+            # Poll: the node works the lane down without a word, paying nothing.
             if self._closed.wait(min(left, 0.005)):
                 return True
         return True
 
     def _count_wait(self, me: int) -> None:
-        """Count a producer's wait and remember where it waits (slow path: the queue is full)."""
+        """Count a producer's wait and remember where it waits."""
         self.waits += 1
         if len(self.waits_by_thread) >= 100:  # threads come and go; keep these bounded
             self.waits_by_thread.clear()
@@ -234,10 +188,8 @@ class TaskQueue(AbstractTaskQueue):
     def never_wait(self, thread_id: int) -> None:
         """Let ``thread_id``'s tasks in at once, whatever the queue's length.
 
-        For a thread that serves many producers and holds back by itself when
-        the queue is full (a socket I/O thread stops reading): making it wait
-        would stall every link it serves. Its tasks still count towards the
-        high-water mark the others see.
+        For a thread that holds back by itself (a socket I/O thread stops
+        reading): making it wait would stall every link it serves.
 
         Example::
 
@@ -246,11 +198,10 @@ class TaskQueue(AbstractTaskQueue):
         self.holds_back.add(thread_id)
 
     def wait_for_room(self, timeout_s: float) -> bool:
-        """Wait up to ``timeout_s`` until the normal lane is below the high-water mark.
+        """Wait up to ``timeout_s`` for room below the high-water mark; False on timeout.
 
-        For producers that can hold back without losing anything, such as a
-        socket reader (unread bytes stay in the OS, and TCP slows the sender).
-        True once there is room (or the node is stopping); False on timeout.
+        For producers that can hold back, such as a socket reader. True too
+        when the node is stopping.
 
         Example::
 
@@ -273,55 +224,33 @@ class TaskQueue(AbstractTaskQueue):
         lane = self.urgent or self.normal  # urgent tasks first
         return lane.popleft() if lane else None
 
-    @property
-    def sleeping(self) -> bool:
-        """True while the node's thread sleeps in `wait` (any thread may look).
-
-        Example::
-
-            if node.queue.sleeping and not len(node.queue):
-                ...   # the node is idle
-        """
-        return self._sleeping
-
-    @property
-    def waiter(self) -> Optional[IdleWaiter]:
-        """What the node's thread sleeps on when idle instead of the bell (None: the bell)."""
-        return self._waiter
-
     def use_waiter(self, waiter: IdleWaiter) -> bool:
         """Sleep on ``waiter`` from now on instead of the bell; True if it now does.
 
         One waiter at a time, the first to ask: False if another is installed
-        (a node on a `SimClock` sleeps on its turn; a node with sockets and
-        Zenoh sleeps on whichever comms started first). A comms refused here
-        reads its links on a thread of its own and queues what it reads,
-        which is always correct, only a hand-off slower. Call it from the
-        node's thread, or before the node runs; a sleep on the bell in
-        progress is ended, so no wake-up is lost.
+        (a refused comms reads on a thread of its own). Call it from the node's
+        thread, or before the node runs; a sleep in progress is ended.
 
         Example (what the socket comms' I/O loop does as it starts)::
 
             if node.queue.use_waiter(io_loop):
                 ...   # idle waits now watch the links' sockets too
         """
-        if self._waiter is not None:
-            return self._waiter is waiter
-        self._waiter = waiter
+        if self.waiter is not None:
+            return self.waiter is waiter
+        self.waiter = waiter
         self._bell.put(None)
         return True
 
     def stop_waiter(self, waiter: IdleWaiter) -> None:
-        """Sleep on the bell again if ``waiter`` is the one installed (else nothing changes).
-
-        A sleep on ``waiter`` in progress is ended, so no wake-up is lost.
+        """Sleep on the bell again if ``waiter`` is the one installed; a sleep on it ends.
 
         Example::
 
             node.queue.stop_waiter(io_loop)   # the comms are closing
         """
-        if self._waiter is waiter:
-            self._waiter = None
+        if self.waiter is waiter:
+            self.waiter = None
             waiter.wake()
 
     def wait(self, timeout_s: Optional[float], urgent_only: bool = False) -> None:
@@ -330,12 +259,11 @@ class TaskQueue(AbstractTaskQueue):
         ``urgent_only``: sleep even if normal tasks wait (a paused node runs
         none of them; each new task still wakes it once).
         """
-        waiter = self._waiter
+        waiter = self.waiter
         self._rung = False
-        self._sleeping = True
+        self.sleeping = True
         try:
-            # Check again now that producers will ring: one may have appended
-            # just before it saw us sleeping.
+            # Look again now that producers ring: one may have appended just before.
             if self.urgent or (self.normal and not urgent_only):
                 return
             if waiter is not None:
@@ -346,16 +274,14 @@ class TaskQueue(AbstractTaskQueue):
             except queue.Empty:
                 pass
         finally:
-            self._sleeping = False
-            if waiter is not None:
-                # Reading what woke it queues tasks: done once no producer
-                # rings for this sleep any more.
+            self.sleeping = False
+            if waiter is not None:  # once no producer rings for this sleep any more
                 waiter.woken()
 
     def wake(self) -> None:
         """Wake a thread sleeping in :meth:`wait` (used to stop the node)."""
         self._bell.put(None)
-        waiter = self._waiter
+        waiter = self.waiter
         if waiter is not None:
             waiter.wake()
 

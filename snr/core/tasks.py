@@ -32,14 +32,11 @@ REMOVE_COMPONENT: TaskName = "remove_component"
 """Name of the event task that removes a component by name."""
 
 CAUGHT_UP: TaskName = "snr_caught_up"
-"""Event a loop schedules after ``setup()``: the node handles it once everything
-scheduled before it was handled (the node core then sets the event it carries)."""
+"""Event a loop schedules after ``setup()``; the node core sets the event it carries."""
 
 CHECK_WIRING: TaskName = "snr_check_wiring"
-"""Event a DEBUG node schedules for itself a few seconds after it starts: the node
-core then looks for handlers of data keys that look misspelled. A comms component
-sends it too, a few seconds after a link comes up, carrying its check of that link
-(a function the node core calls on the node's thread)."""
+"""Event that has the node core look for wiring mistakes: a DEBUG node's own, a few
+seconds after it starts, or a comms link's, carrying its check (a function)."""
 
 STORE_PAGES: TaskName = "snr_store_pages"
 """Name of the event task that stores several pages in order (see `store_pages`)."""
@@ -70,9 +67,6 @@ def store_page(page: Page) -> Task:
 
 def store_pages(pages: List[Page]) -> Task:
     """One task that stores ``pages`` in order, as one `store_page` task each would.
-
-    For pages that arrive together (a comms link's read): handlers see the
-    same as for one task a page.
 
     Example::
 

@@ -1,7 +1,6 @@
 """The interfaces of SNR (thesis 6.2.4-6.2.10) as abstract base classes.
 
-Students subclass ``Endpoint``, ``ThreadLoop`` and their factories instead;
-these let SNR's parts depend on interfaces and annotate ``parent: AbstractNode``.
+Students subclass ``Endpoint``, ``ThreadLoop`` and their factories instead.
 
 Example::
 
@@ -39,7 +38,7 @@ from snr.prelude.task import Task
 __all__ = ["AbstractComponent", "AbstractConfig", "AbstractEndpoint", "AbstractFactory"]
 __all__ += ["AbstractLoop", "AbstractMultiRunner", "AbstractNode", "AbstractProfiler"]
 __all__ += ["AbstractRunner", "AbstractTaskQueue", "explain_abstract_error"]
-__all__ += ["Datastore", "missing_methods_error"]
+__all__ += ["Datastore"]
 
 
 class _FriendlyABCMeta(ABCMeta):
@@ -47,6 +46,8 @@ class _FriendlyABCMeta(ABCMeta):
 
     def __call__(cls, *args: Any, **kwargs: Any) -> Any:
         if cls.__abstractmethods__:
+            from snr.prelude.abstract_errors import missing_methods_error  # loaded only now
+
             raise missing_methods_error(cls, caller_location())
         return super().__call__(*args, **kwargs)
 
@@ -60,7 +61,6 @@ class _FriendlyABCMeta(ABCMeta):
             >>> print(inspect.signature(snr.TimeoutLoopFactory))
             (seconds: 'float' = 0.0, ms: 'float' = 0.0, name: 'Optional[str]' = None) -> None
         """
-        # mypy warns about __init__ on an instance; here it is the class: sound.
         init = inspect.signature(cls.__init__)  # type: ignore[misc]
         parameters = list(init.parameters.values())[1:]  # drop self
         return init.replace(parameters=parameters, return_annotation=None)
@@ -72,33 +72,12 @@ class _FriendlyABC(metaclass=_FriendlyABCMeta):
     __slots__ = ()
 
 
-def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
-    """The ComponentError for building ``cls`` while it lacks required methods.
-
-    The words come from `snr.prelude.abstract_errors`, imported only then.
-
-    Example::
-
-        missing_methods_error(HalfEndpoint)
-        # Cannot create HalfEndpoint (robot.py:5): it lacks these methods that
-        # AbstractEndpoint requires: halt, terminate. Easiest fix: subclass ...
-    """
-    from snr.prelude import abstract_errors
-
-    return abstract_errors.missing_methods_error(cls, created_at)
-
-
 def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
-    """Re-word Python's "Can't instantiate abstract class" TypeError, or None.
-
-    For abstract classes that are not SNR's own, e.g. a student's ``Sensor(ABC)``.
+    """`snr.prelude.abstract_errors.explain_abstract_error`, loaded only when called.
 
     Example::
 
-        try:
-            component = factory.get(node)
-        except TypeError as error:
-            raise (explain_abstract_error(error) or error) from error
+        raise (explain_abstract_error(error) or error) from error   # a TypeError
     """
     from snr.prelude import abstract_errors
 
@@ -120,14 +99,6 @@ class AbstractProfiler(_FriendlyABC):
     @abstractmethod
     def loop_cell(self, name: ComponentName) -> StatsCell:
         """The ``[times_called, total_s]`` cell of the loop called ``name``."""
-
-    @abstractmethod
-    def log_task(self, task_id: TaskId, where: str, runtime_s: float) -> None:
-        """Record one handler run for ``task_id`` in module ``where``."""
-
-    @abstractmethod
-    def log_loop(self, name: ComponentName, runtime_s: float) -> None:
-        """Record one pass of a loop's ``loop()`` method."""
 
     @abstractmethod
     def dump(self) -> str:
@@ -161,14 +132,13 @@ class AbstractTaskQueue(_FriendlyABC):
 
 
 class Datastore(Protocol):
-    """What a node keeps its pages in: the newest page under each key (thesis 4.2, 6.3.1).
+    """What a node keeps its pages in: the four methods of a ``dict`` the node uses.
 
-    The four methods of a ``dict`` the node uses (SNR's own *is* a ``dict``);
-    a class of yours with them can take its place (docs/assignments.md, lesson 5).
+    SNR's own is a ``dict``; a class of yours can take its place
+    (docs/assignments.md, lesson 5).
 
     Example::
 
-        store = dict()                 # SNR's own; or MyDatastore()
         store["depth"] = page          # the node core stores a page
         store.get("depth")             # that page; None for a key never stored
         list(store), len(store)        # ["depth"], 1: the keys, first stored first
@@ -198,8 +168,7 @@ class AbstractNode(_FriendlyABC):
         components: every endpoint and loop, by name, in start order.
         log: the node's logger (``logging.Logger``).
         profiler: the profiler, or None when profiling is off.
-        datastore: the newest page for each data key, read-only (only the
-            node writes it): read with ``get_page``, store with ``store_data``.
+        datastore: the newest page for each data key, read-only.
 
     Example::
 
@@ -215,7 +184,6 @@ class AbstractNode(_FriendlyABC):
     profiler: Optional[AbstractProfiler]
     datastore: Mapping[DataKey, Page]
 
-    # -- control flow (listing 6.1) -------------------------------------
     @abstractmethod
     def loop(self) -> None:
         """Begin every component, then run tasks until terminated."""
@@ -232,7 +200,6 @@ class AbstractNode(_FriendlyABC):
     def is_terminated(self) -> bool:
         """True once the node has been asked to stop."""
 
-    # -- task execution (listing 6.2) -----------------------------------
     @abstractmethod
     def get_task_handlers(self, task: Task) -> List[tuple[TaskHandler, TaskId]]:
         """Every handler that matches ``task``, in component order."""
@@ -254,7 +221,6 @@ class AbstractNode(_FriendlyABC):
     def execute_task(self, t: Task) -> None:
         """Run every matching handler for ``t`` and queue what they return."""
 
-    # -- components (what the node core endpoint asks of its node) --------
     @abstractmethod
     def build_component(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
         """Ask ``factory`` for a component for this node, explaining a wrong ``get()``."""
@@ -283,7 +249,6 @@ class AbstractNode(_FriendlyABC):
         """
         return True
 
-    # -- what components tell their node (called by SNR, not by students) --
     def handlers_changed(self, component: AbstractComponent) -> None:
         """``component`` changed its ``task_handlers``: look them up again before the next task.
 
@@ -312,7 +277,6 @@ class AbstractNode(_FriendlyABC):
         """
         self.schedule(tasks)
 
-    # -- scheduling (listing 6.3) ----------------------------------------
     @abstractmethod
     def schedule(self, t: SomeTasks) -> None:
         """Queue tasks (thread-safe)."""
@@ -333,7 +297,6 @@ class AbstractNode(_FriendlyABC):
         """The thesis's name (listing 6.3) for `store_data_task`, kept as an alias."""
         return self.store_data_task(key, data, process)
 
-    # -- datastore (listing 6.4) ------------------------------------------
     @abstractmethod
     def page(self, key: DataKey, data: Any, process: bool = True) -> Page:
         """A new page stamped with this node's role and the time."""
@@ -371,10 +334,7 @@ class AbstractComponent(_FriendlyABC):
     parent: AbstractNode
     name: ComponentName
     #: Handlers for a run of ``store_page`` tasks under one key, in one call, by
-    #: the same id as in ``task_handlers`` (docs/design.md, "Bursts"); students
-    #: need none. Example (``CommsLoop``)::
-    #:
-    #:     self.burst_handlers = {(TaskType.store_page, "depth"): self.forward_burst}
+    #: their ``task_handlers`` id (docs/design.md, "Bursts"); students need none.
     burst_handlers: Mapping[TaskId, BurstHandler] = MappingProxyType({})
 
     @property
@@ -441,10 +401,7 @@ class AbstractLoop(AbstractComponent):
         """True once this loop has been asked to stop."""
 
     def where_running(self) -> str:
-        """The line the loop's thread is running now, e.g. ``sensor.py:12 `read()```.
-
-        Used to say where a loop that will not stop is blocked; "" if unknown.
-        """
+        """The line the loop's thread runs now (where it blocks), e.g. ``sensor.py:12``; or ""."""
         return ""
 
     def start_thread(self) -> None:
@@ -459,12 +416,10 @@ class AbstractLoop(AbstractComponent):
     def cancel_stop(self) -> None:
         """Take back a request to stop: the loop carries on (a reload was refused).
 
-        Example (a loop that did not stop in time to be reloaded)::
+        Example::
 
-            loop.set_terminate_flag("reloading")
-            loop.join(1.0)
             if loop.is_alive():
-                loop.cancel_stop()   # the old version keeps running
+                loop.cancel_stop()   # it did not stop in time: the old version runs on
         """
 
 

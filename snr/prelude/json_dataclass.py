@@ -1,9 +1,4 @@
-"""`JsonDataclass`: dataclasses-json's methods, imported on first use.
-
-dataclasses-json is slow to import and only ``serialize()``/``deserialize()``
-need it (the wire format is plain ``json``), so ``Page`` and ``Task`` get its
-mixin's methods from this base, which imports it on first use.
-"""
+"""`JsonDataclass`: dataclasses-json's methods, imported on first use (it is slow to import)."""
 
 from __future__ import annotations
 
@@ -34,10 +29,7 @@ def _mixin() -> Any:
 
 
 class JsonDataclass:
-    """Base of a dataclass with dataclasses-json's methods, loaded lazily.
-
-    A drop-in for ``dataclasses_json.DataClassJsonMixin`` (its methods call the
-    mixin's); once loaded, ``isinstance(obj, DataClassJsonMixin)`` is true.
+    """A drop-in for ``dataclasses_json.DataClassJsonMixin`` that imports it on first use.
 
     Example::
 
@@ -51,9 +43,6 @@ class JsonDataclass:
     """
 
     __slots__ = ()  # so a slotted subclass (Page, Task) has no per-object dict
-
-    # Each method hands its arguments to the mixin's method of the same name,
-    # so they take exactly the mixin's arguments (indent=, infer_missing=, ...).
 
     def to_json(self, **kw: Any) -> str:
         """This object as JSON text (dataclasses-json's ``to_json``).

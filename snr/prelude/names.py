@@ -2,12 +2,10 @@
 
 Students mostly meet these names in annotations::
 
-    from snr import DataKey, TaskId, SomeTasks, TaskType
-
     def on_depth(self, task: Task, key: TaskId) -> SomeTasks: ...
 
-Aliases that mention `Task`, `Page` or the ABCs are full dotted names in strings:
-this module, the bottom layer, imports nothing of the package.
+Aliases that mention `Task`, `Page` or the ABCs use dotted names in strings:
+this bottom layer imports nothing of the package.
 """
 
 from __future__ import annotations
@@ -63,8 +61,7 @@ class TaskType(enum.Enum):
     reload = "reload"
     terminate = "terminate"
 
-    # Members are singletons, so identity hashing is correct, and it is twice
-    # as fast as Enum's hash-by-name: every task dispatch hashes a TaskType.
+    # Members are singletons: identity hashing is correct, and twice as fast as Enum's.
     __hash__ = object.__hash__
 
     def __repr__(self) -> str:

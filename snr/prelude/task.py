@@ -14,10 +14,7 @@ __all__ = ["Task", "format_task"]
 
 @dataclass(slots=True)
 class Task(JsonDataclass):
-    """An ephemeral event handed to every endpoint that registered for it.
-
-    Its id is ``(type, name)``; ``val_list`` carries values for the handlers
-    (build tasks with ``snr.tasks``).
+    """An ephemeral event handed to every endpoint that registered for it (see ``snr.tasks``).
 
     Example::
 
@@ -61,10 +58,7 @@ class Task(JsonDataclass):
         return cls.from_json(text)
 
     def __str__(self) -> str:
-        """The task in one line, as thesis figure 5.4 prints it: `format_task`.
-
-        ``repr(task)`` shows every field in full, for debugging.
-        """
+        """The task in one line, as thesis figure 5.4 prints it: `format_task`."""
         return format_task(self)
 
 
@@ -75,8 +69,7 @@ ValuesShown = Literal["all", "data", "none"]
 def format_task(task: Union[Task, TaskId], values: ValuesShown = "all") -> str:
     """A task (or a task id) in one line: the one way SNR prints tasks.
 
-    Pages show in their short form; ``values="data"`` shows only a page's
-    data, ``"none"`` only the id.
+    ``values="data"`` shows only a page's data, ``"none"`` only the id.
 
     Example::
 

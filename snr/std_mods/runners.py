@@ -1,13 +1,12 @@
-"""`CliRunner`, the roles named on the command line, and `MultiProcRunner`.
+"""`CliRunner`, the roles named on the command line, and `MultiProcRunner`, a process each.
 
-`MultiProcRunner` runs several roles at once, each node in a process of its
-own: an advanced runner, read after the core. `CliRunner` runs one role with
-`SynchronousRunner` (``snr/core/runners.py``) and two or more with it. How
-no child outlives its parent is in docs/design.md ("Runners").
+Built on `snr.core.runners`; docs/design.md ("Runners") tells how no child
+outlives its parent.
 """
 
 from __future__ import annotations
 
+import copy
 import logging
 import signal
 import sys
@@ -20,14 +19,7 @@ from snr.core.checks import call_checks
 from snr.core.checks.runner_checks import no_role_given, runner_built, runner_ran
 from snr.core.config import Config
 from snr.core.node import Node
-from snr.core.runners import (
-    INTERRUPTED_MESSAGE,
-    SynchronousRunner,
-    _as_config,
-    _config_or_exit,
-    _System,
-    report_error,
-)
+from snr.core.runners import INTERRUPTED_MESSAGE, SynchronousRunner, System, as_config, report_error
 from snr.prelude.abstract import AbstractConfig, AbstractMultiRunner, AbstractRunner
 from snr.prelude.errors import ConfigError, SNRError
 from snr.prelude.names import Mode, Role
@@ -40,30 +32,22 @@ __all__ = ["CliRunner", "MultiProcRunner"]
 
 
 def _watch_parent(role: Role, link: Connection, node: Node) -> None:
-    """Stop ``node`` when its parent asks to, or when the parent dies (a thread's target).
-
-    The parent writes a reason to the child's pipe; if it dies (even by SIGKILL)
-    the OS closes the pipe and the child reads EOF: every OS, every start method.
-    """
+    """Stop ``node`` when its parent writes a reason to the pipe, or dies (EOF, even on SIGKILL)."""
     try:
         reason = link.recv_bytes().decode("utf-8", "replace")
     except (EOFError, OSError):
         reason = "parent process died"
-        # Nobody is left to report this for the child, so say it here.
         logging.getLogger(f"snr.{role}").warning(
             "Node %r: its parent process died, stopping it.", role
         )
-    # Thread-safe, unlike a signal handler, which could interrupt the node's
-    # thread while it holds the task queue's lock.
-    node.set_terminate_flag(reason)
+    node.set_terminate_flag(reason)  # thread-safe, unlike a signal handler
 
 
 def _run_role(
     role: Role, config: AbstractConfig, link: Connection, inherited: Sequence[Connection]
 ) -> None:
     """Entry point of each MultiProcRunner child process."""
-    # A forked child inherits the write end of every child's pipe; while it
-    # holds them, no child could see its parent die.
+    # A forked child inherits every child's write end: while held, no child sees its parent die.
     for writer in inherited:
         writer.close()
 
@@ -81,8 +65,7 @@ def _start_method(requested: Optional[str]) -> str:
 
     if requested is not None:
         return requested
-    # fork is fast and needs nothing picklable, but forking a process that
-    # runs threads can deadlock; fall back to spawn then.
+    # fork is fast and pickles nothing, but forking a process with threads can deadlock.
     methods = multiprocessing.get_all_start_methods()
     if "fork" in methods and threading.active_count() == 1:
         return "fork"
@@ -118,11 +101,11 @@ class MultiProcRunner(AbstractMultiRunner):
     def __init__(
         self,
         roles: Sequence[Role],
-        config: _System,
+        config: System,
         start_method: Optional[str] = None,
         join_timeout_s: float = 5.0,
     ) -> None:
-        self.config = _as_config(config)
+        self.config = as_config(config)
         call_checks.no_sim_clock_across_processes(self.config)
         known = self.config.roles()
         for role in roles:
@@ -137,8 +120,8 @@ class MultiProcRunner(AbstractMultiRunner):
     def run(self) -> None:
         """Start every role's process and wait for all of them to end.
 
-        Ctrl-C prints `INTERRUPTED_MESSAGE`; Ctrl-C and SIGTERM then stop every
-        child and return normally (see `stopped_by`).
+        Ctrl-C (which prints `INTERRUPTED_MESSAGE`) and SIGTERM stop every child
+        and return normally (see `stopped_by`).
         """
         import multiprocessing  # lazily: see _start_method
 
@@ -147,8 +130,7 @@ class MultiProcRunner(AbstractMultiRunner):
         self.stopped_by = None
         pipes = [ctx.Pipe(duplex=False) for _ in self.roles]
         writers: List[Connection] = [writer for _, writer in pipes]
-        # Only a forked child shares the parent's memory and open files; other
-        # start methods pickle the arguments, and the writers must stay here.
+        # Only a forked child shares the parent's open files; spawn pickles the arguments.
         inherited = writers if method == "fork" else []
         procs = [
             ctx.Process(
@@ -177,9 +159,7 @@ class MultiProcRunner(AbstractMultiRunner):
                 self.stopped_by = requested[0]
                 if self.stopped_by == "SIGINT":
                     print(INTERRUPTED_MESSAGE, flush=True)
-                if main:
-                    # One request is enough: a second Ctrl-C must not break off
-                    # the (bounded) wait for the children with a traceback.
+                if main:  # a second Ctrl-C must not break off the bounded wait
                     _set_handlers(signal.SIG_IGN, signal.SIG_IGN)
                 self._stop_children(procs, writers, f"parent asked to stop ({self.stopped_by})")
         finally:
@@ -193,11 +173,7 @@ class MultiProcRunner(AbstractMultiRunner):
 
     @staticmethod
     def _wait(procs: Sequence[Any], requested: List[str]) -> None:
-        """Wait until every child has ended or a signal asked the parent to stop.
-
-        The signal handlers only note the signal: an exception raised inside
-        a wait for a child could lose that child's exit status.
-        """
+        """Wait until every child has ended or a signal was noted (by the handlers, not raised)."""
         from multiprocessing.connection import wait
 
         while not requested:
@@ -243,12 +219,12 @@ class CliRunner(AbstractRunner):
 
     def __init__(
         self,
-        components_or_config: _System,
+        components_or_config: System,
         argv: Optional[Sequence[str]] = None,
     ) -> None:
-        self.config = _config_or_exit(
-            lambda: call_checks.check_cli_args(CliRunner, components_or_config, argv),
+        self.config = as_config(
             components_or_config,
+            lambda: call_checks.check_cli_args(CliRunner, components_or_config, argv),
             exit_on_error=True,
         )
         self.argv = list(sys.argv if argv is None else argv)
@@ -286,9 +262,8 @@ class CliRunner(AbstractRunner):
         args = self.parse()
         config = self.config
         if args.mode is not None and isinstance(config, Config):
-            config = Config(
-                config.factories, mode=Mode(args.mode), profile=config.profile, clock=config.clock
-            )
+            config = copy.copy(config)  # all of it (clock, datastore, node core) but the mode
+            config.mode = Mode(args.mode)
         try:
             if len(args.roles) == 1:
                 SynchronousRunner(args.roles[0], config).run()

@@ -1,15 +1,10 @@
 """`SimClock`: simulated time for nodes, advanced in lockstep (docs/sim-time.md).
 
-A `snr.core.clock.NodeClock` whose nodes and loops take turns: the kernel
-knows it only through that interface.
-
-A node built from ``Config(..., clock=SimClock())`` reads its time from the
-clock. Nodes and ticking loops take *turns* in a fixed order, so the same run
-gives the same pages, and the clock jumps when nothing can act now. Who gets
-the clock next: a node with work (by role), else the turn waiting for the
-earliest instant, else nobody (a wall wait). Safety waits stay on the wall
-clock, so a stalled clock ends in a timeout, never a hang. docs/sim-time.md
-tells the whole story.
+A `snr.core.clock.NodeClock` whose nodes and ticking loops take *turns* in a
+fixed order, so the same run gives the same pages; time jumps when nothing can
+act now. Next to act: a node with work (by role), else the turn waiting for
+the earliest instant, else nobody (a wall wait). Safety waits stay on the wall
+clock: a stalled clock ends in a timeout, never a hang.
 """
 
 from __future__ import annotations
@@ -24,17 +19,13 @@ from snr.prelude.errors import ConfigError
 
 __all__ = ["LoopTurn", "NodeTurn", "SimClock", "Turn"]
 
-_POLL_S = 0.25
-"""How long a waiting thread sleeps before it looks again (only if no one wakes it)."""
-_LATE_S = 0.1
-"""A paced clock this far behind real time stops trying to catch up (a slow machine)."""
+_POLL_S = 0.25  # how long a waiting thread sleeps before it looks again, unwoken
+_LATE_S = 0.1  # a paced clock this far behind real time stops catching up
 _NS = 1_000_000_000
 
 
 class Turn:
     """One thread's place in a `SimClock`'s lockstep: a node's or a loop's.
-
-    Made by `SimClock.node_turn` and `SimClock.loop_turn`; students never use one.
 
     Example::
 
@@ -45,25 +36,18 @@ class Turn:
     def __init__(self, clock: SimClock, key: Tuple[str, str]) -> None:
         self.clock = clock
         self.key = key
-        self.waiting = True
-        """It gave the clock back (or has not had it yet) and waits for it."""
-        self.deadline_ns: Optional[int] = None
-        """The simulated instant it waits for; None: it waits for work (a node)."""
-        # Rung when the clock is handed over, or to make the thread look again.
-        # A C-level queue (SimpleQueue): the quickest hand-over between threads.
+        self.waiting = True  # it waits for the clock
+        self.deadline_ns: Optional[int] = None  # the instant it waits for; None: work (a node)
+        # Rung when the clock is handed over or to look again: the quickest hand-over.
         self.bell: queue.SimpleQueue[None] = queue.SimpleQueue()
 
 
 class NodeTurn(Turn):
     """A node's turn (a `snr.core.clock.NodeTurn`): an idle node gives the clock back.
 
-    Example (what `Node` does with a simulated clock)::
+    Example::
 
         turn = clock.node_turn("sim", node.queue, node.is_terminated)
-        node.queue.use_waiter(turn)
-        turn.begin()   # in node.loop(), before the components start
-        ...
-        turn.end()     # after the node has terminated
     """
 
     def __init__(self, clock: SimClock, role: str, tasks: Sized, stopping: Callable[[], bool]):
@@ -73,27 +57,21 @@ class NodeTurn(Turn):
         self.started = False
 
     def has_work(self) -> bool:
-        """True if the node has tasks to run, has not started (it starts in its
-        turn) or is stopping: a node told to stop (a loop failed, say) ends
-        before anyone moves the clock on, so it stops at the time it was told."""
+        """True if the node has tasks, has not started, or is stopping (at the time it was told)."""
         return not self.started or len(self.tasks) > 0 or self.stopping()
 
     def begin(self) -> None:
-        """Wait for the node's first turn (every node built with the clock is waited for)."""
+        """Wait for the node's first turn."""
         self.clock._await(self, self.stopping)
         self.started = True
 
     def wait(self, timeout_s: Optional[float]) -> None:
-        """The queue is empty: give the clock back until the node has work or stops.
-
-        ``timeout_s`` is not used: the node's idle wake-up only checks that it
-        should still run, and a stop wakes this wait at once.
-        """
+        """The queue is empty: give the clock back until the node has work or stops (no timeout)."""
         self.clock._give_back(self, None)
         self.clock._await(self, self.stopping)
 
     def woken(self) -> None:
-        """Nothing to do: the node reads no sockets in its idle wait on a simulated clock."""
+        """Nothing to do."""
 
     def wake(self) -> None:
         """A task arrived (or the node stops): let the clock hand the node its turn."""
@@ -109,11 +87,9 @@ class NodeTurn(Turn):
 class LoopTurn(Turn):
     """A loop's turn (a `snr.core.clock.LoopTurn`): a pass of ``loop()``, then a sleep.
 
-    Example (what `ThreadLoop` does on its thread)::
+    Example::
 
-        if turn.first_turn():
-            loop.loop()
-            turn.sleep_until(turn.now_s() + 0.1)   # True if the loop was stopped
+        turn = clock.loop_turn("sim", "sim_robot", stop_event)
     """
 
     def __init__(self, clock: SimClock, role: str, name: str, stop: threading.Event) -> None:
@@ -129,12 +105,7 @@ class LoopTurn(Turn):
         return self.clock._await(self, self.stop.is_set)
 
     def sleep_until(self, deadline_s: float) -> bool:
-        """Give the clock back until simulated ``deadline_s``; True if stopped first.
-
-        Example::
-
-            turn.sleep_until(turn.now_s() + 0.5)   # half a simulated second
-        """
+        """Give the clock back until simulated ``deadline_s``; True if stopped first."""
         deadline_ns = max(self.clock._now_ns, round(deadline_s * _NS))
         self.clock._give_back(self, deadline_ns)
         return not self.clock._await(self, self.stop.is_set)
@@ -158,8 +129,7 @@ class SimClock(NodeClock):
             (fixed, 0 by default, so a recording does not depend on the day).
 
     Calling the clock gives the simulated seconds since it was made. Build
-    every node of a run before running any: the clock waits for each
-    node's first turn.
+    every node of a run before running any.
 
     Example::
 
@@ -171,9 +141,8 @@ class SimClock(NodeClock):
 
     Attributes:
         turns: how many turns it has handed out.
-        jumps: how many times time jumped ahead to the next instant someone waited for.
-        wall_waits: quarter seconds of real time in which nobody could act
-            (waiting for a link or a stop); 0 in a run that only simulates.
+        jumps: how many times time jumped ahead.
+        wall_waits: quarter seconds of real time in which nobody could act.
         paced_waits: waits on the wall clock to keep to ``speed``.
     """
 
@@ -212,7 +181,7 @@ class SimClock(NodeClock):
         return self.epoch_s + self._now_ns / _NS
 
     def node_turn(self, role: str, tasks: Sized, stopping: Callable[[], bool]) -> NodeTurn:
-        """A turn for the node ``role`` (its queue ``tasks``); it waits for its first turn.
+        """A turn for the node ``role`` (its queue ``tasks``).
 
         Example::
 
@@ -226,9 +195,6 @@ class SimClock(NodeClock):
 
     def loop_turn(self, role: str, name: str, stop: threading.Event) -> LoopTurn:
         """A turn for loop ``name`` of node ``role``, due now; ``stop`` ends its waits.
-
-        Called on the node's thread as the loop starts, so the loop is in the
-        lockstep before the clock can move on.
 
         Example::
 
@@ -314,10 +280,8 @@ class SimClock(NodeClock):
             return  # nothing can act: wait for the outside world
         if due_ns > self._now_ns:
             if any(node.stopping() for node in self._nodes):
-                # A stopping node that gave up its place in line (it stops
-                # without the clock) still ends at the time it was told: the
-                # clock moves on once it has ended (`NodeTurn.end`).
-                return
+                return  # a stopping node ends at the time it was told: move on after
+
             if self.speed is not None and self._wall_delay_s(due_ns) > 0:
                 self._pacer = best  # it sleeps on the wall clock, then jumps
                 best.bell.put(None)
