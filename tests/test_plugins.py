@@ -11,7 +11,7 @@ from snr.std_mods.io import recording_formats
 __all__ = ["PluginsTest"]
 
 DECLARED = {
-    "snr.commands": ("convert", "demo", "docs", "graph", "lesson", "plot"),
+    "snr.commands": ("convert", "demo", "docs", "graph", "lesson", "plot", "router"),
     "snr.console_transports": ("zenoh",),
     "snr.console_commands": ("console_tools", "graph"),
     "snr.recording_formats": ("mcap",),
