@@ -32,11 +32,7 @@ from snr.std_mods.comms.comms_loop import (
     Link,
     normalize_keys,
 )
-from snr.std_mods.comms.handshake import (
-    FROM_ENVIRONMENT,
-    find_secret,
-    resolve_system,
-)
+from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret, resolve_system
 from snr.std_mods.comms.io_loop import SocketTransport
 
 if TYPE_CHECKING:  # multiprocessing costs ~14 ms to import; the caller made the pipe
@@ -46,6 +42,44 @@ __all__ = ["PipeLoop", "PipeLoopFactory", "PipeTransport"]
 
 _POLL_S = 0.25  # how often a bridge thread waiting on the pipe checks whether to stop
 _BRIDGE_BYTES = 256 * 1024
+
+
+class _CommsFactory(LoopFactory):
+    """What the pipe and sockets factories share: the settings of their links."""
+
+    def __init__(
+        self,
+        keys: Keys,
+        where: str,
+        name: str,
+        max_backlog_bytes: int,
+        dead_after_s: float,
+        system: Optional[str],
+        secret: Optional[str],
+    ) -> None:
+        super().__init__()
+        self.keys = normalize_keys(keys, where)
+        self.name = name
+        self.max_backlog_bytes = max_backlog_bytes
+        self.dead_after_s = dead_after_s
+        self.system = system
+        self.secret = secret
+
+
+class _FactoryLoop(CommsLoop):
+    """A comms loop built by a `_CommsFactory`: its settings, system and secret."""
+
+    def __init__(self, factory: _CommsFactory, parent: AbstractNode, where: str) -> None:
+        super().__init__(
+            factory,
+            parent,
+            factory.name,
+            factory.keys,
+            factory.max_backlog_bytes,
+            factory.dead_after_s,
+        )
+        self.system = resolve_system(factory.system, parent.config, where)
+        self.secret = find_secret(factory.secret, where)
 
 
 class PipeTransport(SocketTransport):
@@ -68,12 +102,11 @@ class PipeTransport(SocketTransport):
         sock = None if bridge else _as_socket(connection)
         self.bridged = sock is None
         if sock is None:
-            sock, far = socket.socketpair()
-            self._far = far
+            sock, self._far = socket.socketpair()
             self._stop = threading.Event()
             self._threads = [
-                threading.Thread(target=self._pipe_to_socket, name="snr-pipe-in", daemon=True),
-                threading.Thread(target=self._socket_to_pipe, name="snr-pipe-out", daemon=True),
+                threading.Thread(target=copy, name=f"snr-pipe-{name}", daemon=True)
+                for name, copy in (("in", self._pipe_to_socket), ("out", self._socket_to_pipe))
             ]
             for thread in self._threads:
                 thread.start()
@@ -94,7 +127,6 @@ class PipeTransport(SocketTransport):
             self._far.close()
         self.connection.close()
 
-    # -- the bridge, where the pipe is not a socket ---------------------------
     def _pipe_to_socket(self) -> None:
         try:
             while not self._stop.is_set():
@@ -110,10 +142,8 @@ class PipeTransport(SocketTransport):
 
     def _socket_to_pipe(self) -> None:
         try:
-            data = self._far.recv(_BRIDGE_BYTES)
-            while data:
+            while data := self._far.recv(_BRIDGE_BYTES):
                 self.connection.send_bytes(data)
-                data = self._far.recv(_BRIDGE_BYTES)
         except OSError:
             pass
 
@@ -132,13 +162,12 @@ def _as_socket(connection: Connection) -> Optional[socket.socket]:
         os.close(fd)
         return None
     if sock.type != socket.SOCK_STREAM:
-        sock.detach()
-        os.close(fd)
+        sock.close()
         return None
     return sock
 
 
-class PipeLoop(CommsLoop):
+class PipeLoop(_FactoryLoop):
     """Forwards pages over one end of a pipe; built by `PipeLoopFactory`.
 
     Example::
@@ -147,19 +176,10 @@ class PipeLoop(CommsLoop):
     """
 
     def __init__(self, factory: PipeLoopFactory, parent: AbstractNode) -> None:
-        super().__init__(
-            factory,
-            parent,
-            factory.name,
-            factory.keys,
-            factory.max_backlog_bytes,
-            factory.dead_after_s,
-        )
+        where = f"The pipe loop {factory.name!r} of node {parent.role!r}"
+        super().__init__(factory, parent, where)
         self.connection = factory.connection
         self.peer_name = factory.peer
-        where = f"The pipe loop {factory.name!r} of node {parent.role!r}"
-        self.system = resolve_system(factory.system, parent.config, where)
-        self.secret = find_secret(factory.secret, where)
         self.link: Optional[Link] = None
 
     def begin(self) -> None:
@@ -203,7 +223,7 @@ class PipeLoop(CommsLoop):
         )
 
 
-class PipeLoopFactory(LoopFactory):
+class PipeLoopFactory(_CommsFactory):
     """Builds a `PipeLoop` on one end of a ``multiprocessing.Pipe()``.
 
     Args:
@@ -236,7 +256,6 @@ class PipeLoopFactory(LoopFactory):
         system: Optional[str] = None,
         secret: Optional[str] = FROM_ENVIRONMENT,
     ) -> None:
-        super().__init__()
         if not all(hasattr(connection, m) for m in ("send_bytes", "recv_bytes", "poll")):
             raise ConfigError(
                 f"PipeLoopFactory got {connection!r} ({type(connection).__name__}) as its "
@@ -249,14 +268,17 @@ class PipeLoopFactory(LoopFactory):
                 "links talk both ways (each side says hello and sends beats). Use "
                 "`here, there = multiprocessing.Pipe()`, which is two-way."
             )
+        super().__init__(
+            keys,
+            "PipeLoopFactory",
+            name or "pipe_loop",
+            max_backlog_bytes,
+            dead_after_s,
+            system,
+            secret,
+        )
         self.connection: Any = connection
-        self.keys = normalize_keys(keys, "PipeLoopFactory")
-        self.name = name or "pipe_loop"
-        self.max_backlog_bytes = max_backlog_bytes
-        self.dead_after_s = dead_after_s
         self.peer = peer
-        self.system = system
-        self.secret = secret
 
     def get(self, parent: AbstractNode) -> PipeLoop:
         return PipeLoop(self, parent)
