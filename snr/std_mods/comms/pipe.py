@@ -1,9 +1,7 @@
 """Pipe comms: link two nodes run by `MultiProcRunner` on one machine (thesis 6.4.1).
 
-Each end of a ``multiprocessing.Pipe()`` goes to one role's config; the
-frames are TCP's (docs/wire-format.md), served by the node's I/O loop. A
-pipe cannot be reconnected: once its other end is closed in every process,
-the loop logs it and stops, and the node keeps running.
+The frames are TCP's (docs/wire-format.md). A pipe cannot reconnect: once its
+other end is closed, the loop logs it and stops, and the node keeps running.
 
 Example::
 
@@ -83,11 +81,11 @@ class _FactoryLoop(CommsLoop):
 
 
 class PipeTransport(SocketTransport):
-    """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``: a byte stream of frames.
+    """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``.
 
     On POSIX a two-way pipe is a socket pair, served like a TCP connection.
     Elsewhere (a Windows named pipe) a socket pair stands in for it, and two
-    small threads copy bytes between the two (``bridged`` is then True).
+    threads copy bytes between the two (``bridged`` is then True).
 
     Example::
 
@@ -230,14 +228,11 @@ class PipeLoopFactory(_CommsFactory):
         connection: this node's end of the pipe.
         keys: the data key (or list of keys) to forward to the other end.
         name: the component name (default ``"pipe_loop"``).
-        max_backlog_bytes: how much may wait for a slow peer before pages are dropped.
-        dead_after_s: seconds of silence after which the other end counts as lost.
+        max_backlog_bytes, dead_after_s, secret: as for `SocketsPair`.
         peer: what the logs call the other end (default ``"pipe"``).
-        system: the system both ends name (as for `SocketsPair`). Default
-            None, no check: only the program that made the pipe reaches it,
-            and 2021 code that writes pages with no hello keeps working.
-        secret: the secret both ends prove they know (as for `SocketsPair`;
-            default ``$SNR_SECRET`` or the secret file). None: none.
+        system: as for `SocketsPair`, but by default None, no check: only the
+            program that made the pipe reaches it, and 2021 code that writes
+            pages with no hello keeps working.
 
     Example::
 
