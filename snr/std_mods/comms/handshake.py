@@ -1,12 +1,8 @@
 """Who may link to a node: its system's name, and its secret (docs/comms.md, "Who may connect").
 
-Both are judged in the hello that starts every link (docs/wire-format.md,
-3.1 and 3.5). The system name (``system=``, default: the script's folder)
-stops accidents: a node of another team reached by a typo is refused. The
-secret (``SNR_SECRET``, ``secret=``, or ``python -m snr secret new``) stops
-malice: each side proves it knows it with an HMAC-SHA256 over the other
-side's fresh nonce, so the secret never crosses the wire and a recorded
-hello cannot be replayed.
+Both are judged in the hello that starts every link (docs/wire-format.md, 3.1
+and 3.5): each side proves it knows the secret with an HMAC-SHA256 over the
+other's fresh nonce, so the secret never crosses the wire.
 
 Example::
 
@@ -31,12 +27,10 @@ from snr.std_mods.codec import Hello, Proof, encode_hello, encode_proof
 
 __all__ = [
     "FROM_ENVIRONMENT",
-    "NONCE_BYTES",
     "SCRIPT_FOLDER",
     "SECRET_ENV_VAR",
     "Handshake",
     "Refused",
-    "default_system",
     "derived_word",
     "find_secret",
     "new_secret",
@@ -46,12 +40,7 @@ __all__ = [
 ]
 
 SCRIPT_FOLDER = "<the script's folder>"
-"""The default ``system=`` of comms factories: the config's ``name``, else the script's folder.
-
-Example::
-
-    SocketsPair(("localhost", 9000)).system   # '<the script's folder>' until the node starts
-"""
+"""The default ``system=`` of comms factories: the config's ``name``, else the script's folder."""
 
 FROM_ENVIRONMENT = "<SNR_SECRET or the secret file>"
 """The default ``secret=`` of comms factories: ``$SNR_SECRET``, else the secret file, else none."""
@@ -59,47 +48,29 @@ FROM_ENVIRONMENT = "<SNR_SECRET or the secret file>"
 SECRET_ENV_VAR = "SNR_SECRET"
 """The environment variable that holds a node's secret."""
 
-SECRET_FILE_ENV_VAR = "SNR_SECRET_FILE"
-"""The environment variable naming another secret file than the default one."""
-
-NONCE_BYTES = 32
-"""Random bytes in each side's nonce (sent as 64 lowercase hex digits)."""
-
-_SIDES = {"client": "server", "server": "client", "pipe": "pipe"}
-
-
-def default_system(config: Any = None) -> str:
-    """The system a node names when its comms were given no ``system=``.
-
-    The config's ``name`` if it has one, else the folder of the script that
-    runs, else the current folder's: a team's scripts in one folder agree.
-
-    Example::
-
-        default_system()   # 'team7' for python ~/team7/robot.py
-    """
-    name = getattr(config, "name", None)
-    if isinstance(name, str) and name:
-        return name
-    script = sys.argv[0] if sys.argv else ""
-    path = Path(script).resolve() if script and os.path.isfile(script) else Path.cwd()
-    folder = path.parent.name if path.is_file() else path.name
-    return folder or "snr"
+_NONCE_BYTES = 32  # sent as 64 lowercase hex digits
+_OTHER_SIDE = {"client": "server", "server": "client", "pipe": "pipe"}
 
 
 def resolve_system(system: Optional[str], config: Any, where: str) -> Optional[str]:
-    """The system a comms component names: ``system`` as given, or its default.
+    """The system a comms component names: ``system`` as given, or by default (`SCRIPT_FOLDER`)
+    the config's ``name``, else the folder of the script that runs, else the current folder's.
 
     Raises:
         ConfigError: ``system`` is not a non-empty string or None.
 
     Example::
 
-        resolve_system(SCRIPT_FOLDER, config, "SocketsPair")   # 'team7'
+        resolve_system(SCRIPT_FOLDER, config, "SocketsPair")   # 'team7' for ~/team7/robot.py
         resolve_system(None, config, "SocketsPair")            # None: names none
     """
     if system == SCRIPT_FOLDER:
-        return default_system(config)
+        name = getattr(config, "name", None)
+        if isinstance(name, str) and name:
+            return name
+        script = sys.argv[0] if sys.argv else ""
+        path = Path(script).resolve() if script and os.path.isfile(script) else Path.cwd()
+        return (path.parent.name if path.is_file() else path.name) or "snr"
     if system is None or (isinstance(system, str) and system):
         return system
     raise ConfigError(
@@ -115,7 +86,7 @@ def secret_file() -> Path:
 
         secret_file()   # PosixPath('/home/student/.config/snr/secret')
     """
-    named = os.environ.get(SECRET_FILE_ENV_VAR)
+    named = os.environ.get("SNR_SECRET_FILE")
     if named:
         return Path(named).expanduser()
     config_home = os.environ.get("XDG_CONFIG_HOME") or str(Path.home() / ".config")
@@ -144,8 +115,7 @@ def find_secret(secret: Optional[str], where: str) -> Optional[bytes]:
                 "the system the same), or secret=None for no authentication."
             )
         return secret.strip().encode("utf-8")
-    text = os.environ.get(SECRET_ENV_VAR)
-    source = f"${SECRET_ENV_VAR}"
+    text, source = os.environ.get(SECRET_ENV_VAR), f"${SECRET_ENV_VAR}"
     if text is None:
         path = secret_file()
         if not path.is_file():
@@ -167,10 +137,9 @@ def find_secret(secret: Optional[str], where: str) -> Optional[bytes]:
 
 
 def derived_word(secret: bytes, purpose: str) -> str:
-    """A word made from the secret for one ``purpose`` that does not give the secret away.
+    """A word made from the secret for one ``purpose`` (HMAC over ``snr-<purpose>``, in hex).
 
-    HMAC-SHA256 keyed with the secret over ``snr-<purpose>``, in hex: the
-    console's token, Zenoh's password.
+    It does not give the secret away: the console's token, Zenoh's password.
 
     Example::
 
@@ -234,7 +203,7 @@ class Handshake:
         self.side = side
         self.system = system
         self.secret = secret
-        self.nonce = secrets.token_hex(NONCE_BYTES) if secret is not None else None
+        self.nonce = None if secret is None else secrets.token_hex(_NONCE_BYTES)
         self.needed = system is not None or secret is not None
         self.peer_nonce: Optional[str] = None
         self.done = not self.needed
@@ -253,23 +222,21 @@ class Handshake:
         # A client trusts the address it was given to a server that names no
         # system; a server does not trust every program that reaches its port.
         if self.system is not None and hello.system != self.system:
-            if hello.system is None and self.side == "client":
-                pass
-            elif hello.system is None:
-                raise Refused(
-                    "system",
-                    "it names no system (an older SNR, or a program that sends a version 1 "
-                    f"hello) and this node belongs to system {self.system!r} "
-                    "(to let such nodes in, give this node system=None; see docs/comms.md)",
-                )
-            else:
+            if hello.system is not None:
                 raise Refused(
                     "system",
                     f"it belongs to system {hello.system!r:.60}, this node to system "
                     f"{self.system!r} (a wrong address? if it is one "
                     "of yours, give both sides the same system=...; see docs/comms.md)",
                 )
-        if self.secret is None:
+            if self.side != "client":
+                raise Refused(
+                    "system",
+                    "it names no system (an older SNR, or a program that sends a version 1 "
+                    f"hello) and this node belongs to system {self.system!r} "
+                    "(to let such nodes in, give this node system=None; see docs/comms.md)",
+                )
+        if self.secret is None or self.nonce is None:
             if hello.nonce is not None:
                 raise Refused(
                     "secret",
@@ -283,13 +250,12 @@ class Handshake:
             raise Refused(
                 "secret",
                 "it has no secret and this node has one: it cannot prove it belongs here "
-                f"(give it the same secret: ${SECRET_ENV_VAR} or the secret file; "
-                "see docs/comms.md)",
+                f"(give it the same secret: ${SECRET_ENV_VAR} or the secret file; see "
+                "docs/comms.md)",
             )
         if hello.nonce == self.nonce:
             raise Refused("secret", "it sent this node's own challenge back (a replay)")
         self.peer_nonce = hello.nonce
-        assert self.nonce is not None
         return encode_proof(proof_mac(self.secret, self.side, self.nonce, hello.nonce))
 
     def on_proof(self, proof: Proof) -> None:
@@ -300,7 +266,7 @@ class Handshake:
         """
         if self.secret is None or self.peer_nonce is None or self.nonce is None:
             raise Refused("order", "it sent a proof before its hello, or one nobody asked for")
-        expected = proof_mac(self.secret, _SIDES[self.side], self.peer_nonce, self.nonce)
+        expected = proof_mac(self.secret, _OTHER_SIDE[self.side], self.peer_nonce, self.nonce)
         if not hmac.compare_digest(expected, proof.mac):
             raise Refused(
                 "secret",

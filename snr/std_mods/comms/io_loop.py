@@ -1,12 +1,8 @@
-"""The socket transport: `SocketTransport` over TCP, and the `IOLoop` that serves every link.
+"""The node's one I/O thread, `IOLoop`, and the byte streams it serves, `Transport`.
 
-A link talks over a `Transport`: a non-blocking byte stream (a TCP socket, a
-pipe end). Every link of a node is served by the node's one `IOLoop`: a
-``selectors`` loop on one thread, ``snr-<role>-io``, that reads, writes and
-runs the links' timers, so hundreds of idle clients cost no more threads
-than one. On Linux the node's own thread reads the links while it is idle
-(the loop is its `snr.core.task_queue.IdleWaiter`); the *read role*, a lock,
-says which thread reads. Why and how: docs/design.md, "One I/O thread per node".
+One ``selectors`` loop on the thread ``snr-<role>-io`` serves every link of
+a node; on Linux the node's own thread reads the links while it is idle.
+Why and how: docs/design.md, "One I/O thread per node" and "Who reads a link".
 
 Example::
 
@@ -28,21 +24,9 @@ import socket
 import struct
 import threading
 import time
-from typing import (
-    TYPE_CHECKING,
-    Any,
-    Callable,
-    Deque,
-    Dict,
-    Iterator,
-    List,
-    Optional,
-    Protocol,
-    Tuple,
-)
+from typing import TYPE_CHECKING, Any, Callable, Iterator, Optional, Protocol
 
 from snr.core.node import Node
-from snr.core.task_queue import TaskQueue
 from snr.prelude import AbstractNode
 
 try:  # Linux and macOS say how many bytes wait unread; Windows has no fcntl
@@ -58,31 +42,17 @@ if TYPE_CHECKING:
 
 __all__ = ["IOLoop", "IOTimer", "SocketTransport", "Transport", "unread_bytes"]
 
-RECV_BYTES = 256 * 1024
-"""Size of the loop's one receive buffer, shared by all its links (the read role's holder reads)."""
-
-ROOM_CHECK_S = 0.015
-"""While a link has stopped reading because the node is behind, how often room is checked."""
-
-BUSY_READS_S = 0.05
-"""After the node's thread has been busy this long, the I/O thread reads its links too."""
-
-IDLE_CHECK_S = 0.25
-"""While the node's thread sleeps, how often the I/O thread looks whether it is busy again."""
-
-IDLE_STOP_S = 1.0
-"""After this long with no work for the node's thread, the I/O thread stops looking."""
-
-JOIN_TIMEOUT_S = 1.0
-"""How long the last `IOLoop.release` waits for the thread to end."""
-
-WRITE_DELAY_S = 0.001
-"""How long frames queued by another thread wait for it to write them before the loop does."""
+RECV_BYTES = 256 * 1024  # the loop's one receive buffer, shared by its links
+ROOM_CHECK_S = 0.015  # while links wait for room in the node's queue, how often it is checked
+BUSY_READS_S = 0.05  # once the node's thread has worked this long, the I/O thread reads too
+IDLE_CHECK_S = 0.25  # while the node's thread sleeps, how often the I/O thread looks at it
+IDLE_STOP_S = 1.0  # after this long with no work for the node, the I/O thread stops looking
+JOIN_TIMEOUT_S = 1.0  # how long the last release waits for the thread to end
+WRITE_DELAY_S = 0.001  # frames another thread queued wait this long for it, then the loop writes
 
 _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
-_READS = "reads"  # the selector key of the links' read set (the wake-up socket's is None)
-_HAS_EPOLL = hasattr(select, "epoll")
+_READS = "reads"  # the selector key of the gate (the wake-up socket's is None)
 
 
 class IOTimer:
@@ -107,18 +77,15 @@ class IOTimer:
 
 
 _registry_lock = threading.Lock()
-# id(node) -> (node, its loop). The node is kept so an id cannot be reused
-# by another node while the loop is registered.
-_registry: Dict[int, Tuple[AbstractNode, IOLoop]] = {}
+_registry: dict[AbstractNode, IOLoop] = {}  # each node's loop, while it has users
 
 
 class IOLoop:
     """One selector thread serving the sockets of every comms link of one node.
 
-    Only the loop's thread touches the selector; other threads ask it with
-    `call_soon`. The links are read by the holder of the *read role*: the
-    node's thread while it is idle (`wait`, `woken`), else the loop's thread.
-    Get it with `acquire` and give it back with `release`.
+    Only its thread touches the selector; other threads ask it with
+    `call_soon`. The holder of the *read role* (a lock) reads the links: the
+    node's thread while it is idle (`wait`, `woken`: its ``IdleWaiter``), else the loop's.
 
     Example::
 
@@ -128,10 +95,10 @@ class IOLoop:
 
     Attributes:
         node: the node whose links it serves.
-        buffer: the receive buffer links read into, and ``view``, a memoryview of it.
+        buffer: the receive buffer links read into (``view``: a memoryview of it).
     """
 
-    node_reads: bool = _HAS_EPOLL
+    node_reads: bool = hasattr(select, "epoll")
     """Let the node's thread read the links while it is idle (needs epoll: Linux)."""
 
     def __init__(self, node: AbstractNode) -> None:
@@ -141,48 +108,40 @@ class IOLoop:
         self.view = memoryview(self.buffer)
         self._users = 0
         self._selector = selectors.DefaultSelector()
-        self._handlers: Dict[Link, int] = {}  # every watched link: its events
-        self._calls: Deque[Callable[[], object]] = collections.deque()
-        self._timers: List[Tuple[float, int, IOTimer]] = []
+        self._handlers: dict[Link, int] = {}  # every watched link: its events
+        self._calls: collections.deque[Callable[[], object]] = collections.deque()
+        self._timers: list[tuple[float, int, IOTimer]] = []
         self._order = itertools.count()  # ties in the timer heap never compare IOTimers
-        self._waiting_for_room: List[Callable[[], None]] = []
-        self._to_write: Dict[Link, None] = {}  # write_soon's links, each once
-        self._room_timer: Optional[IOTimer] = None
-        self._stopping = False
+        self._waiting_for_room: list[Callable[[], None]] = []
+        self._to_write: dict[Link, None] = {}  # write_soon's links, each once
+        self._stopping = self._woken = False
         self._wake_r, self._wake_w = _wake_pair()
-        self._woken = False
         self._selector.register(self._wake_r, _READ, None)
         self._thread = threading.Thread(target=self._run, name=f"snr-{node.role}-io", daemon=True)
-        # With node reads, a link watched for reading is in `_reads` and
-        # `_node_poll` (epoll sets), not in the selector, which watches
-        # `_gate`: it holds `_reads` only while the I/O thread reads.
+        self._queue = node.queue if isinstance(node, Node) else None  # a mock node has none
+        # With node reads, links watched for reading are in the read set `_reads`
+        # and `_node_poll`; the selector watches `_gate`, which holds `_reads`
+        # only while the I/O thread is to read.
         self._reads: Any = None
-        self._gate: Any = None
-        self._node_poll: Any = None
-        self._readers: Dict[int, Link] = {}  # fd -> link, for `_reads`
+        self._readers: dict[int, Link] = {}  # fd -> link, for `_reads`
         self._role = threading.RLock()  # the read role: whoever holds it reads
-        self._node_waiting = False  # the node's thread holds the role in wait()
         self._role_wanted = False  # the loop's thread waits for the role: leave it
         self._waiter_installed = False  # the node waits on this loop when idle
-        self._node_ready: List[Tuple[int, int]] = []
+        self._node_ready: Optional[list[tuple[int, int]]] = None  # wait() took the role
         self._gate_lock = threading.Lock()  # opening and shutting the gate, and _node_idle
-        self._gate_open = False  # `_reads` is in `_gate`: the I/O thread reads
+        self._gate_open = True  # `_reads` is in `_gate` (until the node's thread first waits)
         self._node_idle = False  # the node's thread is in wait(): never open the gate
-        self._busy_since = 0.0  # when the node's thread last left wait()
-        self._work_at = 0.0  # when it last left wait() with work to do
+        self._busy_since = self._work_at = 0.0  # when the node last left wait() (with work)
         self._looking = False  # _check_busy is due (else it waits for the node's work)
-        self._queue = _queue_of(node)
         if self.node_reads:
-            self._reads = select.epoll()
-            self._gate = select.epoll()
+            self._reads, self._gate, self._node_poll, self._wake_only = [
+                select.epoll() for _ in range(4)
+            ]
             self._gate.register(self._reads.fileno(), select.EPOLLIN)
-            self._gate_open = True  # until the node's thread first waits
             self._selector.register(self._gate.fileno(), _READ, _READS)
             self._node_wake_r, self._node_wake_w = _wake_pair()
-            self._node_poll = select.epoll()
-            self._node_poll.register(self._node_wake_r.fileno(), select.EPOLLIN)
-            self._node_wake_only = select.epoll()  # while the loop's thread wants the role
-            self._node_wake_only.register(self._node_wake_r.fileno(), select.EPOLLIN)
+            for poll in (self._node_poll, self._wake_only):  # the latter while the role is wanted
+                poll.register(self._node_wake_r.fileno(), select.EPOLLIN)
 
     # -- sharing one loop per node ------------------------------------------
     @classmethod
@@ -194,12 +153,9 @@ class IOLoop:
             io = IOLoop.acquire(self.parent)   # in a comms component's start
         """
         with _registry_lock:
-            entry = _registry.get(id(node))
-            if entry is not None and entry[0] is node:
-                loop = entry[1]
-            else:
-                loop = cls(node)
-                _registry[id(node)] = (node, loop)
+            loop = _registry.get(node)
+            if loop is None:
+                loop = _registry[node] = cls(node)
                 loop._thread.start()
                 if loop._reads is not None and loop._queue is not None:
                     loop._waiter_installed = loop._queue.use_waiter(loop)
@@ -217,9 +173,8 @@ class IOLoop:
             self._users -= 1
             if self._users > 0:
                 return
-            entry = _registry.get(id(self.node))
-            if entry is not None and entry[1] is self:
-                del _registry[id(self.node)]
+            if _registry.get(self.node) is self:
+                del _registry[self.node]
         self.stop()
 
     def stop(self, timeout_s: float = JOIN_TIMEOUT_S) -> None:
@@ -229,29 +184,20 @@ class IOLoop:
             self._queue.stop_waiter(self)  # the node waits on its bell again
         self._stopping = True
         self._wake()
-        if self._thread.is_alive() and self._thread is not threading.current_thread():
-            self._thread.join(timeout_s)
-            if self._thread.is_alive():
+        thread = self._thread
+        if thread.is_alive() and thread is not threading.current_thread():
+            thread.join(timeout_s)
+            if thread.is_alive():
                 self.log.warning(
                     "The comms I/O thread of node %r did not stop within %.1f s.",
                     self.node.role,
                     timeout_s,
                 )
-                return
-        if self._reads is not None and not self._thread.is_alive():
-            for closable in (
-                self._node_poll,
-                self._node_wake_only,
-                self._gate,
-                self._reads,
-                self._node_wake_r,
-                self._node_wake_w,
-            ):
+        if self._reads is not None and not thread.is_alive():
+            for closable in (self._node_poll, self._wake_only, self._gate, self._reads):
                 closable.close()
-
-    def is_alive(self) -> bool:
-        """True while the loop's thread runs."""
-        return self._thread.is_alive()
+            self._node_wake_r.close()
+            self._node_wake_w.close()
 
     def in_loop_thread(self) -> bool:
         """True when called on the loop's own thread."""
@@ -270,10 +216,7 @@ class IOLoop:
             self._wake()
 
     def write_soon(self, link: Link) -> None:
-        """``link`` has frames queued by another thread than the loop's.
-
-        The node's thread writes them when it next goes idle (`wait`); the
-        loop's thread writes what still waits `WRITE_DELAY_S` later.
+        """``link`` has frames another thread queued: it writes them when idle, else the loop does.
 
         Example::
 
@@ -284,10 +227,9 @@ class IOLoop:
 
     def write_waiting(self) -> None:
         """Not the loop's thread: let every link given to `write_soon` write what waits."""
-        to_write = self._to_write
-        while to_write:
+        while self._to_write:
             try:
-                link = to_write.popitem()[0]
+                link = self._to_write.popitem()[0]
             except KeyError:  # emptied meanwhile
                 return
             try:
@@ -305,10 +247,11 @@ class IOLoop:
     # -- loop thread only ---------------------------------------------------
     def watch(self, handler: Link, events: int) -> None:
         """Serve ``handler`` for ``events`` (0: keep it, but select nothing for now)."""
-        old = self._handlers.get(handler, 0)
-        if old == events and handler in self._handlers:
+        old = self._handlers.get(handler)
+        if old == events:
             return
         self._handlers[handler] = events
+        old = old or 0
         if self._reads is not None:
             if (old ^ events) & _READ:  # reads go to the read set, not the selector
                 fd = handler.fileno()
@@ -319,13 +262,12 @@ class IOLoop:
                 else:
                     self._reads.unregister(fd)
                     self._node_poll.unregister(fd)
-                    self._readers.pop(fd, None)
+                    del self._readers[fd]
             old, events = old & _WRITE, events & _WRITE
-        if old:
-            if events:
-                self._selector.modify(handler, events, handler)
-            else:
-                self._selector.unregister(handler)
+        if old and events:
+            self._selector.modify(handler, events, handler)
+        elif old:
+            self._selector.unregister(handler)
         elif events:
             self._selector.register(handler, events, handler)
 
@@ -335,13 +277,12 @@ class IOLoop:
 
     def forget(self, handler: Link) -> None:
         """Stop serving ``handler`` (before its socket is closed)."""
-        if self._handlers.get(handler):
-            self.watch(handler, 0)
-        self._handlers.pop(handler, None)
+        self.watch(handler, 0)
+        del self._handlers[handler]
 
     @contextlib.contextmanager
     def read_role(self) -> Iterator[None]:
-        """Hold the read role (loop thread), e.g. to close a link's socket; wakes the node's thread.
+        """Hold the read role (loop thread), e.g. to close a link's socket.
 
         Example::
 
@@ -358,6 +299,32 @@ class IOLoop:
             self._role_wanted = False
             self._role.release()
 
+    def call_later(self, delay_s: float, callback: Callable[[], None]) -> IOTimer:
+        """Run ``callback`` on the loop's thread after ``delay_s`` seconds."""
+        timer = IOTimer(time.monotonic() + delay_s, callback)
+        heapq.heappush(self._timers, (timer.when, next(self._order), timer))
+        return timer
+
+    def when_room(self, callback: Callable[[], None]) -> None:
+        """Run ``callback`` once the node's queue is below its high-water mark."""
+        if not self._waiting_for_room:  # else a look is due
+            self.call_later(ROOM_CHECK_S, self._check_room)
+        self._waiting_for_room.append(callback)
+
+    def _check_room(self) -> None:
+        if not self.node.wait_for_room(0):
+            self.call_later(ROOM_CHECK_S, self._check_room)
+            return
+        waiting, self._waiting_for_room = self._waiting_for_room, []
+        for callback in waiting:
+            self._safely(callback)
+
+    def _safely(self, callback: Callable[[], object]) -> None:
+        try:
+            callback()
+        except Exception:  # a bug in one link must not stop every link of the node
+            self.log.exception("A comms I/O callback failed; the other links carry on")
+
     # -- the node's thread, while idle (the node's IdleWaiter) ---------------
     def wait(self, timeout_s: Optional[float]) -> None:
         """Node thread, its queue empty: write what waits, shut the gate, wait for work or bytes."""
@@ -365,7 +332,7 @@ class IOLoop:
             self.write_waiting()
         timeout = -1.0 if timeout_s is None else timeout_s
         if self._role_wanted:  # the loop's thread is closing a link: wait without reading
-            self._node_ready = _poll(self._node_wake_only, timeout)
+            _poll(self._wake_only, timeout)
             _drain(self._node_wake_r)
             return
         with self._gate_lock:
@@ -377,45 +344,45 @@ class IOLoop:
                     return
                 self._gate_open = False
         self._role.acquire()
-        self._node_waiting = True
         self._node_ready = _poll(self._node_poll, timeout)
 
     def woken(self) -> None:
         """Node thread, no longer marked sleeping: read what arrived, give the read role back."""
-        if not self._node_waiting:
+        ready, self._node_ready = self._node_ready, None
+        if ready is None:
             return
         try:
             wake_fd = self._node_wake_r.fileno()
-            ready = self._node_ready
-            if len(ready) != 1 or ready[0][0] == wake_fd:  # not just one link's bytes
-                ready = [event for event in ready if event[0] != wake_fd]
-                if len(ready) < len(self._node_ready):
-                    _drain(self._node_wake_r)
-            if ready:
-                self._read_ready(ready, on_node=True)
+            links = [event for event in ready if event[0] != wake_fd]
+            if len(links) < len(ready):
+                _drain(self._node_wake_r)
+            self._read_ready(links)
         except (OSError, ValueError):  # closed: the loop has stopped
             pass
         finally:
-            self._node_ready = []
-            self._node_waiting = False
             look = False
             with self._gate_lock:
                 self._busy_since = now = time.monotonic()
                 self._node_idle = False
                 if self._queue is not None and len(self._queue):
                     self._work_at = now
-                    look = not self._looking
-                    self._looking = True
+                    look, self._looking = not self._looking, True
             self._role.release()
             if look:  # the I/O thread had stopped looking (a long idle spell)
                 self.call_soon(self._check_busy)
 
-    def _check_busy(self) -> None:
-        """Loop thread: once the node's thread has worked `BUSY_READS_S`, open the gate and read.
+    def wake(self) -> None:
+        """End the node thread's idle wait (any thread; the queue rings it once per sleep)."""
+        try:
+            self._node_wake_w.send(b"\0")
+        except OSError:  # full (a wake-up is already waiting) or closed
+            pass
 
-        Runs every `BUSY_READS_S` while the node works, every `IDLE_CHECK_S`
-        while it sleeps, and stops after `IDLE_STOP_S` without work (`woken`
-        restarts it; the lock keeps the two from missing each other).
+    def _check_busy(self) -> None:
+        """Loop thread: open the gate once the node's thread has worked `BUSY_READS_S`.
+
+        Runs every `BUSY_READS_S` while the node works, every `IDLE_CHECK_S` while it
+        sleeps, and stops after `IDLE_STOP_S` without work until `woken` restarts it.
         """
         if not self._waiter_installed:  # the node waits on another's: the gate stays open
             self._looking = False
@@ -426,86 +393,24 @@ class IOLoop:
                 self._looking = False
                 return
             self._looking = True
+            if not (idle or self._gate_open or time.monotonic() - self._busy_since < BUSY_READS_S):
+                try:
+                    self._gate.register(self._reads.fileno(), select.EPOLLIN)
+                    self._gate_open = True
+                except (OSError, ValueError):  # closed: the loop is stopping
+                    pass
         self.call_later(IDLE_CHECK_S if idle else BUSY_READS_S, self._check_busy)
-        with self._gate_lock:
-            if self._node_idle or self._gate_open:
-                return
-            if time.monotonic() - self._busy_since < BUSY_READS_S:
-                return
-            try:
-                self._gate.register(self._reads.fileno(), select.EPOLLIN)
-            except (OSError, ValueError):  # closed: the loop is stopping
-                return
-            self._gate_open = True
 
-    def _look_if_busy(self) -> None:
-        """Loop thread, on a timer: start looking if the node's thread got work unseen."""
-        with self._gate_lock:
-            if self._looking or self._node_idle:
-                return
-            self._looking = True
-        self.call_later(BUSY_READS_S, self._check_busy)
-
-    def wake(self) -> None:
-        """End the node thread's idle wait (any thread; the queue rings it once per sleep)."""
-        try:
-            self._node_wake_w.send(b"\0")
-        except OSError:  # full (a wake-up is already waiting) or closed
-            pass
-
-    def _read_ready(self, ready: List[Tuple[int, int]], on_node: bool) -> None:
+    def _read_ready(self, ready: list[tuple[int, int]]) -> None:
         """Read every link with bytes (or an end) waiting; the caller holds the read role."""
-        readers = self._readers
         for fd, _ in ready:
-            handler = readers.get(fd)
-            if handler is None:  # forgotten meanwhile
-                continue
-            try:
-                handler.on_readable()
-            except Exception:  # a bug in one link must not stop every link
-                self.log.exception("A comms link's read failed; the other links carry on")
-                if on_node:
+            handler = self._readers.get(fd)
+            if handler is not None:  # else forgotten meanwhile
+                try:
+                    handler.on_readable()
+                except Exception:  # a bug in one link must not stop every link
+                    self.log.exception("A comms link's read failed; the other links carry on")
                     self.call_soon(handler.on_io_stop)
-                else:
-                    self._safely(handler.on_io_stop)
-
-    def _serve_reads(self) -> None:
-        """Loop thread: the read set has bytes, and the node's thread is busy."""
-        if not self._role.acquire(blocking=False):
-            return  # the node's thread took the role: it reads them
-        try:
-            self._read_ready(self._reads.poll(0), on_node=False)
-        finally:
-            self._role.release()
-
-    def call_later(self, delay_s: float, callback: Callable[[], None]) -> IOTimer:
-        """Run ``callback`` on the loop's thread after ``delay_s`` seconds."""
-        timer = IOTimer(time.monotonic() + delay_s, callback)
-        heapq.heappush(self._timers, (timer.when, next(self._order), timer))
-        return timer
-
-    def when_room(self, callback: Callable[[], None]) -> None:
-        """Run ``callback`` once the node's queue is below its high-water mark (a look a 15 ms)."""
-        self._waiting_for_room.append(callback)
-        if self._room_timer is None:
-            self._room_timer = self.call_later(ROOM_CHECK_S, self._check_room)
-
-    def _check_room(self) -> None:
-        self._room_timer = None
-        if not self._waiting_for_room:
-            return
-        if not self.node.wait_for_room(0):
-            self._room_timer = self.call_later(ROOM_CHECK_S, self._check_room)
-            return
-        waiting, self._waiting_for_room = self._waiting_for_room, []
-        for callback in waiting:
-            self._safely(callback)
-
-    def _safely(self, callback: Callable[[], object]) -> None:
-        try:
-            callback()
-        except Exception:  # a bug in one link must not stop every link of the node
-            self.log.exception("A comms I/O callback failed; the other links carry on")
 
     def _run(self) -> None:
         # This thread serves every link and stops reading a link by itself
@@ -527,20 +432,28 @@ class IOLoop:
                 for key, mask in select(timeout):
                     handler = key.data
                     if handler is None:
-                        self._drain_wake()
-                        continue
-                    if handler is _READS:
-                        self._serve_reads()
-                        continue
-                    # Inline rather than through _safely: this is every read's path.
-                    try:
-                        if mask & _READ:
-                            handler.on_readable()
-                        if mask & _WRITE and handlers.get(handler, 0) & _WRITE:
-                            handler.on_writable()
-                    except Exception:  # a bug in one link must not stop every link
-                        self.log.exception("A comms link's I/O failed; the other links carry on")
-                        self._safely(handler.on_io_stop)  # or it would be ready again at once
+                        # Drain, then clear the flag, then run the calls: a call_soon
+                        # that saw the flag set appended before it was cleared; one
+                        # that sees it cleared rings again. (Clearing first lost wake-ups.)
+                        _drain(self._wake_r)
+                        self._woken = False
+                    elif handler is _READS:  # the read set, while the node's thread is busy
+                        if self._role.acquire(blocking=False):  # else the node's thread reads
+                            try:
+                                self._read_ready(self._reads.poll(0))
+                            finally:
+                                self._role.release()
+                    else:  # not through _safely: this is every read's path
+                        try:
+                            if mask & _READ:
+                                handler.on_readable()
+                            if mask & _WRITE and handlers.get(handler, 0) & _WRITE:
+                                handler.on_writable()
+                        except Exception:  # a bug in one link must not stop every link
+                            self.log.exception(
+                                "A comms link's I/O failed; the other links carry on"
+                            )
+                            calls.append(handler.on_io_stop)  # or it would be ready again at once
                 while calls:
                     self._safely(calls.popleft())
                 if timers and timers[0][0] <= monotonic():
@@ -550,7 +463,7 @@ class IOLoop:
                         if not timer.cancelled:
                             self._safely(timer.callback)
                     if not self._looking and self._waiter_installed:
-                        self._look_if_busy()
+                        self._check_busy()  # the node's thread may have got work unseen
         except Exception:  # the selector itself failed: close every link, say so
             self.log.exception("The comms I/O loop of node %r failed", self.node.role)
         finally:
@@ -563,34 +476,21 @@ class IOLoop:
             self._wake_r.close()
             self._wake_w.close()
 
-    def _drain_wake(self) -> None:
-        # Drain first, then clear the flag, then (in _run) run the calls: a
-        # call_soon that saw the flag set appended before it was cleared; one
-        # that sees it cleared rings again. (Clearing first lost wake-ups.)
-        _drain(self._wake_r)
-        self._woken = False
 
-
-def _queue_of(node: AbstractNode) -> Optional[TaskQueue]:
-    """A `Node`'s task queue; None for another `AbstractNode` (a mock), which has none."""
-    return node.queue if isinstance(node, Node) else None
-
-
-def _wake_pair() -> Tuple[socket.socket, socket.socket]:
-    """A connected pair of non-blocking sockets: a byte written to one wakes a wait on the other."""
+def _wake_pair() -> tuple[socket.socket, socket.socket]:
+    """Two connected non-blocking sockets: a byte written to one wakes a wait on the other."""
     ends = socket.socketpair()
     for end in ends:
         end.setblocking(False)
     return ends
 
 
-def _poll(epoll: Any, timeout_s: float) -> List[Tuple[int, int]]:
+def _poll(epoll: Any, timeout_s: float) -> list[tuple[int, int]]:
     """``epoll.poll(timeout_s)``; nothing if it is closed (the loop has stopped)."""
     try:
-        ready: List[Tuple[int, int]] = epoll.poll(timeout_s)
+        return epoll.poll(timeout_s)  # type: ignore[no-any-return]
     except (OSError, ValueError):
         return []
-    return ready
 
 
 def _drain(sock: socket.socket) -> None:
@@ -602,14 +502,10 @@ def _drain(sock: socket.socket) -> None:
         pass
 
 
-# -- transports: what a link reads and writes ------------------------------
-
-
 class Transport(Protocol):
-    """A non-blocking byte stream to one peer that the node's `IOLoop` watches (a socket, a pipe).
+    """A non-blocking byte stream to one peer that the node's `IOLoop` watches.
 
-    The loop calls ``recv_into`` when ``fileno()`` is readable and ``send``
-    when it is writable; the node's thread may call ``send`` too.
+    Implement it to open a link over another kind of line (docs/comms.md).
 
     Example: `SocketTransport` below.
     """
@@ -636,8 +532,7 @@ class Transport(Protocol):
 def unread_bytes(fd: int) -> Optional[int]:
     """How many received bytes wait unread in the OS for ``fd``; None where it cannot say.
 
-    A socket or pipe that is not read keeps what arrives; a link whose node is
-    behind uses this to tell a peer that still talks from one that fell silent.
+    A paused link tells by it a peer that still talks from one that fell silent.
 
     Example::
 
@@ -646,10 +541,9 @@ def unread_bytes(fd: int) -> Optional[int]:
     if _FIONREAD is None:
         return None
     try:
-        answer = fcntl.ioctl(fd, _FIONREAD, b"\0\0\0\0")
+        return int(struct.unpack("i", fcntl.ioctl(fd, _FIONREAD, b"\0\0\0\0"))[0])
     except OSError:
         return None
-    return int(struct.unpack("i", answer)[0])
 
 
 class SocketTransport:
@@ -657,23 +551,27 @@ class SocketTransport:
 
     Example::
 
-        SocketTransport(socket.create_connection(("localhost", 9000)), "localhost:9000")
+        SocketTransport(socket.create_connection(("localhost", 9000)), "localhost:9000", 5.0)
     """
 
     def __init__(self, sock: socket.socket, peer: str, dead_after_s: float) -> None:
-        sock.setblocking(False)
-        sock.setsockopt(socket.IPPROTO_TCP, socket.TCP_NODELAY, 1)  # no Nagle: whole frames go
-        # A peer that vanished without a word (cable pulled) is noticed in
-        # ~10 s, and unacknowledged data (Wi-Fi out of range) is given up after
-        # dead_after_s, not 15 minutes (the options are Linux's).
-        sock.setsockopt(socket.SOL_SOCKET, socket.SO_KEEPALIVE, 1)
-        options = [("TCP_KEEPIDLE", 5), ("TCP_KEEPINTVL", 2), ("TCP_KEEPCNT", 3)]
-        for option, value in [*options, ("TCP_USER_TIMEOUT", int(dead_after_s * 1000))]:
+        # No Nagle; a peer that vanished (cable pulled) is noticed in ~10 s, and
+        # unacknowledged data given up after dead_after_s, not 15 minutes (Linux).
+        options = [
+            (socket.IPPROTO_TCP, "TCP_NODELAY", 1),
+            (socket.SOL_SOCKET, "SO_KEEPALIVE", 1),
+            (socket.IPPROTO_TCP, "TCP_KEEPIDLE", 5),
+            (socket.IPPROTO_TCP, "TCP_KEEPINTVL", 2),
+            (socket.IPPROTO_TCP, "TCP_KEEPCNT", 3),
+            (socket.IPPROTO_TCP, "TCP_USER_TIMEOUT", int(dead_after_s * 1000)),
+        ]
+        for level, option, value in options:
             if hasattr(socket, option):
                 try:
-                    sock.setsockopt(socket.IPPROTO_TCP, getattr(socket, option), value)
+                    sock.setsockopt(level, getattr(socket, option), value)
                 except OSError:
                     pass
+        sock.setblocking(False)
         self.sock = sock
         self.peer = peer
 

@@ -1,9 +1,7 @@
 """Pipe comms: link two nodes run by `MultiProcRunner` on one machine (thesis 6.4.1).
 
-Each end of a ``multiprocessing.Pipe()`` goes to one role's config; the
-frames are TCP's (docs/wire-format.md), served by the node's I/O loop. A
-pipe cannot be reconnected: once its other end is closed in every process,
-the loop logs it and stops, and the node keeps running.
+The frames are TCP's (docs/wire-format.md). A pipe cannot reconnect: once its
+other end is closed, the loop logs it and stops, and the node keeps running.
 
 Example::
 
@@ -32,11 +30,7 @@ from snr.std_mods.comms.comms_loop import (
     Link,
     normalize_keys,
 )
-from snr.std_mods.comms.handshake import (
-    FROM_ENVIRONMENT,
-    find_secret,
-    resolve_system,
-)
+from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret, resolve_system
 from snr.std_mods.comms.io_loop import SocketTransport
 
 if TYPE_CHECKING:  # multiprocessing costs ~14 ms to import; the caller made the pipe
@@ -48,12 +42,50 @@ _POLL_S = 0.25  # how often a bridge thread waiting on the pipe checks whether t
 _BRIDGE_BYTES = 256 * 1024
 
 
+class _CommsFactory(LoopFactory):
+    """What the pipe and sockets factories share: the settings of their links."""
+
+    def __init__(
+        self,
+        keys: Keys,
+        where: str,
+        name: str,
+        max_backlog_bytes: int,
+        dead_after_s: float,
+        system: Optional[str],
+        secret: Optional[str],
+    ) -> None:
+        super().__init__()
+        self.keys = normalize_keys(keys, where)
+        self.name = name
+        self.max_backlog_bytes = max_backlog_bytes
+        self.dead_after_s = dead_after_s
+        self.system = system
+        self.secret = secret
+
+
+class _FactoryLoop(CommsLoop):
+    """A comms loop built by a `_CommsFactory`: its settings, system and secret."""
+
+    def __init__(self, factory: _CommsFactory, parent: AbstractNode, where: str) -> None:
+        super().__init__(
+            factory,
+            parent,
+            factory.name,
+            factory.keys,
+            factory.max_backlog_bytes,
+            factory.dead_after_s,
+        )
+        self.system = resolve_system(factory.system, parent.config, where)
+        self.secret = find_secret(factory.secret, where)
+
+
 class PipeTransport(SocketTransport):
-    """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``: a byte stream of frames.
+    """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``.
 
     On POSIX a two-way pipe is a socket pair, served like a TCP connection.
     Elsewhere (a Windows named pipe) a socket pair stands in for it, and two
-    small threads copy bytes between the two (``bridged`` is then True).
+    threads copy bytes between the two (``bridged`` is then True).
 
     Example::
 
@@ -68,12 +100,11 @@ class PipeTransport(SocketTransport):
         sock = None if bridge else _as_socket(connection)
         self.bridged = sock is None
         if sock is None:
-            sock, far = socket.socketpair()
-            self._far = far
+            sock, self._far = socket.socketpair()
             self._stop = threading.Event()
             self._threads = [
-                threading.Thread(target=self._pipe_to_socket, name="snr-pipe-in", daemon=True),
-                threading.Thread(target=self._socket_to_pipe, name="snr-pipe-out", daemon=True),
+                threading.Thread(target=copy, name=f"snr-pipe-{name}", daemon=True)
+                for name, copy in (("in", self._pipe_to_socket), ("out", self._socket_to_pipe))
             ]
             for thread in self._threads:
                 thread.start()
@@ -94,7 +125,6 @@ class PipeTransport(SocketTransport):
             self._far.close()
         self.connection.close()
 
-    # -- the bridge, where the pipe is not a socket ---------------------------
     def _pipe_to_socket(self) -> None:
         try:
             while not self._stop.is_set():
@@ -110,10 +140,8 @@ class PipeTransport(SocketTransport):
 
     def _socket_to_pipe(self) -> None:
         try:
-            data = self._far.recv(_BRIDGE_BYTES)
-            while data:
+            while data := self._far.recv(_BRIDGE_BYTES):
                 self.connection.send_bytes(data)
-                data = self._far.recv(_BRIDGE_BYTES)
         except OSError:
             pass
 
@@ -132,13 +160,12 @@ def _as_socket(connection: Connection) -> Optional[socket.socket]:
         os.close(fd)
         return None
     if sock.type != socket.SOCK_STREAM:
-        sock.detach()
-        os.close(fd)
+        sock.close()
         return None
     return sock
 
 
-class PipeLoop(CommsLoop):
+class PipeLoop(_FactoryLoop):
     """Forwards pages over one end of a pipe; built by `PipeLoopFactory`.
 
     Example::
@@ -147,19 +174,10 @@ class PipeLoop(CommsLoop):
     """
 
     def __init__(self, factory: PipeLoopFactory, parent: AbstractNode) -> None:
-        super().__init__(
-            factory,
-            parent,
-            factory.name,
-            factory.keys,
-            factory.max_backlog_bytes,
-            factory.dead_after_s,
-        )
+        where = f"The pipe loop {factory.name!r} of node {parent.role!r}"
+        super().__init__(factory, parent, where)
         self.connection = factory.connection
         self.peer_name = factory.peer
-        where = f"The pipe loop {factory.name!r} of node {parent.role!r}"
-        self.system = resolve_system(factory.system, parent.config, where)
-        self.secret = find_secret(factory.secret, where)
         self.link: Optional[Link] = None
 
     def begin(self) -> None:
@@ -203,21 +221,18 @@ class PipeLoop(CommsLoop):
         )
 
 
-class PipeLoopFactory(LoopFactory):
+class PipeLoopFactory(_CommsFactory):
     """Builds a `PipeLoop` on one end of a ``multiprocessing.Pipe()``.
 
     Args:
         connection: this node's end of the pipe.
         keys: the data key (or list of keys) to forward to the other end.
         name: the component name (default ``"pipe_loop"``).
-        max_backlog_bytes: how much may wait for a slow peer before pages are dropped.
-        dead_after_s: seconds of silence after which the other end counts as lost.
+        max_backlog_bytes, dead_after_s, secret: as for `SocketsPair`.
         peer: what the logs call the other end (default ``"pipe"``).
-        system: the system both ends name (as for `SocketsPair`). Default
-            None, no check: only the program that made the pipe reaches it,
-            and 2021 code that writes pages with no hello keeps working.
-        secret: the secret both ends prove they know (as for `SocketsPair`;
-            default ``$SNR_SECRET`` or the secret file). None: none.
+        system: as for `SocketsPair`, but by default None, no check: only the
+            program that made the pipe reaches it, and 2021 code that writes
+            pages with no hello keeps working.
 
     Example::
 
@@ -236,7 +251,6 @@ class PipeLoopFactory(LoopFactory):
         system: Optional[str] = None,
         secret: Optional[str] = FROM_ENVIRONMENT,
     ) -> None:
-        super().__init__()
         if not all(hasattr(connection, m) for m in ("send_bytes", "recv_bytes", "poll")):
             raise ConfigError(
                 f"PipeLoopFactory got {connection!r} ({type(connection).__name__}) as its "
@@ -249,14 +263,17 @@ class PipeLoopFactory(LoopFactory):
                 "links talk both ways (each side says hello and sends beats). Use "
                 "`here, there = multiprocessing.Pipe()`, which is two-way."
             )
+        super().__init__(
+            keys,
+            "PipeLoopFactory",
+            name or "pipe_loop",
+            max_backlog_bytes,
+            dead_after_s,
+            system,
+            secret,
+        )
         self.connection: Any = connection
-        self.keys = normalize_keys(keys, "PipeLoopFactory")
-        self.name = name or "pipe_loop"
-        self.max_backlog_bytes = max_backlog_bytes
-        self.dead_after_s = dead_after_s
         self.peer = peer
-        self.system = system
-        self.secret = secret
 
     def get(self, parent: AbstractNode) -> PipeLoop:
         return PipeLoop(self, parent)

@@ -1,10 +1,8 @@
-"""TCP comms: `SocketsPair` and its server and client loops (thesis 5.1, 5.4.1).
+"""TCP comms: `SocketsPair` and its server and client loops (thesis 5.1, 5.4.1; docs/comms.md).
 
-One `SocketsPair` names a server address; its ``server()`` goes in one
-role's config and its ``client(keys)`` in another's (listing 5.3). The
-client connects (and reconnects, with backoff) and forwards the pages stored
-under its keys; the server stores what its clients send and forwards its own
-keys, if given, to every client. Who may connect: docs/comms.md.
+The client connects (and reconnects, with backoff) and forwards the pages
+stored under its keys; the server stores what its clients send and forwards
+its own keys, if given, to every client.
 
 Example::
 
@@ -24,30 +22,22 @@ import socket
 import time
 from typing import Optional, Tuple
 
-from snr.core import LoopFactory
 from snr.core.checks.os_errors import explain_os_error
 from snr.core.logs import LossReport
 from snr.prelude import AbstractNode, CommsError, ConfigError
 from snr.std_mods.comms.comms_loop import (
     DEFAULT_DEAD_AFTER_S,
     DEFAULT_MAX_BACKLOG_BYTES,
-    CommsLoop,
     Keys,
     Link,
     LinkState,
-    normalize_keys,
 )
-from snr.std_mods.comms.handshake import (
-    FROM_ENVIRONMENT,
-    SCRIPT_FOLDER,
-    find_secret,
-    resolve_system,
-)
+from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, SCRIPT_FOLDER
 from snr.std_mods.comms.io_loop import SocketTransport
+from snr.std_mods.comms.pipe import _CommsFactory, _FactoryLoop
 
 __all__ = [
     "DEFAULT_MAX_CONNECTIONS",
-    "SocketTransport",
     "SocketsClientFactory",
     "SocketsClientLoop",
     "SocketsPair",
@@ -74,8 +64,7 @@ def _listen(address: Address, role: str) -> socket.socket:
     """A listening socket on ``address``, or a CommsError saying what to do."""
     listener: Optional[socket.socket] = None
     try:
-        infos = socket.getaddrinfo(address[0], address[1], type=socket.SOCK_STREAM)
-        family, _, _, _, sockaddr = infos[0]
+        family, _, _, _, sockaddr = socket.getaddrinfo(*address, type=socket.SOCK_STREAM)[0]
         listener = socket.socket(family, socket.SOCK_STREAM)
         if os.name != "nt":  # lets a restarted server reuse the port at once
             listener.setsockopt(socket.SOL_SOCKET, socket.SO_REUSEADDR, 1)
@@ -97,34 +86,17 @@ def _listen(address: Address, role: str) -> socket.socket:
     return listener
 
 
-class _SocketsLoop(CommsLoop):
-    """What the sockets server and client share: their factory's settings, system, secret."""
-
-    def __init__(self, factory: _SocketsFactory, parent: AbstractNode, where: str) -> None:
-        super().__init__(
-            factory,
-            parent,
-            factory.name,
-            factory.keys,
-            factory.max_backlog_bytes,
-            factory.dead_after_s,
-        )
-        self.address = factory.address
-        self.system = resolve_system(factory.system, parent.config, where)
-        self.secret = find_secret(factory.secret, where)
-
-    def _open(self, sock: socket.socket, peer: str) -> Link:
-        return self.open_link(SocketTransport(sock, peer, self.dead_after_s))
+def _open(loop: _FactoryLoop, sock: socket.socket, peer: str) -> Link:
+    return loop.open_link(SocketTransport(sock, peer, loop.dead_after_s))
 
 
-class SocketsServerLoop(_SocketsLoop):
+class SocketsServerLoop(_FactoryLoop):
     """Accepts clients and links to each; built by ``SocketsPair.server()``.
 
     It listens as the node starts (a port in use stops the node with a
-    `CommsError`); its own thread accepts, the node's ``IOLoop`` serves the
-    links. At ``max_connections`` the oldest connection that has not said
-    hello makes room for a newcomer (counted in ``closed_silent``); when every
-    one has, the newcomer is closed (counted in ``refused``).
+    `CommsError`). At ``max_connections`` the oldest connection that has not
+    said hello makes room for a newcomer (counted in ``closed_silent``); when
+    every one has, the newcomer is closed (counted in ``refused``).
 
     Example::
 
@@ -138,25 +110,25 @@ class SocketsServerLoop(_SocketsLoop):
     def __init__(self, factory: SocketsServerFactory, parent: AbstractNode) -> None:
         where = f"The sockets server of node {parent.role!r} ({_describe(factory.address)})"
         super().__init__(factory, parent, where)
-        self.max_connections = factory.max_connections
+        self.address = factory.address
+        self.max_connections = cap = factory.max_connections
         self.refused = LossReport(
             self.log,
             "connections",
-            f"this server already has {factory.max_connections} clients, the most it takes, "
+            f"this server already has {cap} clients, the most it takes, "
             "and every one has said hello (SocketsPair(..., max_connections=N) changes that)",
             verb="Refused",
         )
         self.closed_silent = LossReport(
             self.log,
             "connections that had not said hello",
-            f"this server has {factory.max_connections} clients, the most it takes, and new "
+            f"this server has {cap} clients, the most it takes, and new "
             "ones came: the oldest that had not said hello made room for each, so a real node "
             "always gets in (SocketsPair(..., max_connections=N) changes the cap)",
             verb="Closed",
         )
         self._listener: Optional[socket.socket] = None
-        # halt() writes a byte to _stop_w, which ends the wait for a client.
-        self._stop_r: Optional[socket.socket] = None
+        self._stop_r: Optional[socket.socket] = None  # halt() writes to _stop_w: accepting ends
         self._stop_w: Optional[socket.socket] = None
 
     def begin(self) -> None:
@@ -171,8 +143,7 @@ class SocketsServerLoop(_SocketsLoop):
         if listener is None or stop is None:
             return
         try:
-            readable = select.select([listener, stop], [], [])[0]
-            if listener not in readable:  # halt(): stopping
+            if listener not in select.select([listener, stop], [], [])[0]:  # halt(): stopping
                 if not self.is_terminated():  # the stop was taken back (cancel_stop)
                     stop.recv(64)
                 return
@@ -195,7 +166,7 @@ class SocketsServerLoop(_SocketsLoop):
             return
         if self.refused.dropping:
             self.refused.recovered()
-        link = self._open(sock, _describe(peer[:2]))
+        link = _open(self, sock, _describe(peer[:2]))
         self.dbg("Accepted a connection from %s", link.transport.peer)
 
     def _make_room(self) -> bool:
@@ -221,10 +192,9 @@ class SocketsServerLoop(_SocketsLoop):
         )
 
     def on_link_lost(self, link: Link, reason: str) -> None:
-        level = logging.WARNING if link.went_silent else logging.INFO  # a silent death is news
         self.say(
             "Clients disconnected",
-            level,
+            logging.WARNING if link.went_silent else logging.INFO,  # a silent death is news
             "Client %s disconnected: %s. Still listening.",
             link.label,
             reason,
@@ -242,14 +212,12 @@ class SocketsServerLoop(_SocketsLoop):
     def terminate(self) -> None:
         """Close the listening socket and every link."""
         super().terminate()
-        if self._listener is not None:
-            self._listener.close()
-        for end in (self._stop_r, self._stop_w):
+        for end in (self._listener, self._stop_r, self._stop_w):
             if end is not None:
                 end.close()
 
 
-class SocketsClientLoop(_SocketsLoop):
+class SocketsClientLoop(_FactoryLoop):
     """Connects to a sockets server and keeps connecting; built by ``client()``.
 
     It retries with backoff (0.05 s, doubling, at most 1 s), back to 0.05 s
@@ -268,10 +236,10 @@ class SocketsClientLoop(_SocketsLoop):
     def __init__(self, factory: SocketsClientFactory, parent: AbstractNode) -> None:
         where = f"The sockets client of node {parent.role!r} (to {_describe(factory.address)})"
         super().__init__(factory, parent, where)
+        self.address = factory.address
         self.link: Optional[Link] = None
         self._retry_s = _FIRST_RETRY_S
-        self._waiting_reported = False
-        self._ever_connected = False
+        self._waiting_reported = self._ever_connected = False
         self._loss_reported = False  # the current outage has been logged
 
     def loop(self) -> None:
@@ -282,38 +250,41 @@ class SocketsClientLoop(_SocketsLoop):
                 link.wait_closed(None)  # it ends, or halt() closes it
                 return
             self.link = None
-            hello_at = link.hello_at
-            if hello_at is not None and time.monotonic() - hello_at >= _STABLE_S:
+            if link.hello_at is not None and time.monotonic() - link.hello_at >= _STABLE_S:
                 self._retry_s = _FIRST_RETRY_S  # it worked for a while: try again at once
             else:  # a server that accepts and then hangs up (e.g. full) is not hammered
                 self._back_off()
                 return
-        sock = self._connect()
-        if sock is None:
+        try:
+            sock = socket.create_connection(self.address, timeout=_CONNECT_TIMEOUT_S)
+        except OSError as error:
+            self._report_waiting(error.strerror or str(error))
+            self._back_off()
+            return
+        if sock.getsockname() == sock.getpeername():  # TCP "simultaneous open": no server
+            sock.close()
+            self._report_waiting("connected to itself")
             self._back_off()
             return
         if self.is_terminated():
             sock.close()
             return
         self._waiting_reported = False
-        self.link = self._open(sock, _describe(self.address))
+        self.link = _open(self, sock, _describe(self.address))
         self.dbg("TCP connection to %s made", _describe(self.address))
 
     def _back_off(self) -> None:
         self.wait_s(self._retry_s)
         self._retry_s = min(self._retry_s * 2, _MAX_RETRY_S)
 
-    def _connect(self) -> Optional[socket.socket]:
-        try:
-            sock = socket.create_connection(self.address, timeout=_CONNECT_TIMEOUT_S)
-        except OSError as error:
-            self._report_waiting(error.strerror or str(error))
-            return None
-        if sock.getsockname() == sock.getpeername():  # TCP "simultaneous open": no server
-            sock.close()
-            self._report_waiting("connected to itself")
-            return None
-        return sock
+    def _report_waiting(self, reason: str) -> None:
+        if not self._waiting_reported and not self._ever_connected:
+            self._waiting_reported = True
+            self.info(
+                "Waiting for the sockets server at %s (%s); retrying until it is up.",
+                _describe(self.address),
+                reason,
+            )
 
     def on_hello(self, link: Link) -> None:
         verb = "Reconnected" if self._ever_connected else "Connected"
@@ -327,15 +298,6 @@ class SocketsClientLoop(_SocketsLoop):
             link.peer_name,
             link.transport.peer,
         )
-
-    def _report_waiting(self, reason: str) -> None:
-        if not self._waiting_reported and not self._ever_connected:
-            self._waiting_reported = True
-            self.info(
-                "Waiting for the sockets server at %s (%s); retrying until it is up.",
-                _describe(self.address),
-                reason,
-            )
 
     def on_link_lost(self, link: Link, reason: str) -> None:
         if self._loss_reported and link.peer_role is None:  # no hello, outage already said
@@ -355,7 +317,7 @@ class SocketsClientLoop(_SocketsLoop):
         )
 
 
-class _SocketsFactory(LoopFactory):
+class _SocketsFactory(_CommsFactory):
     side = "side"  # "server" or "client": part of the default component name
 
     def __init__(
@@ -369,14 +331,10 @@ class _SocketsFactory(LoopFactory):
         system: Optional[str] = SCRIPT_FOLDER,
         secret: Optional[str] = FROM_ENVIRONMENT,
     ) -> None:
-        super().__init__()
-        self.system = system
-        self.secret = secret
         self.address = address
-        self.keys = normalize_keys(keys, f"{type(self).__name__} for {_describe(address)}")
-        self.name = name or f"sockets_{self.side}_{address[1]}"
-        self.max_backlog_bytes = max_backlog_bytes
-        self.dead_after_s = dead_after_s
+        where = f"{type(self).__name__} for {_describe(address)}"
+        name = name or f"sockets_{self.side}_{address[1]}"
+        super().__init__(keys, where, name, max_backlog_bytes, dead_after_s, system, secret)
         self.max_connections = max_connections
 
     def __repr__(self) -> str:  # never the secret: a repr may end up in a log
@@ -417,16 +375,15 @@ class SocketsPair:
     Args:
         server_tuple: ``(host, port)`` the server listens on and clients
             connect to, e.g. ``("192.168.1.10", 9000)`` or ``("localhost", 9000)``.
-        max_backlog_bytes: how much may wait for one slow peer before pages are
-            dropped (newest page per key kept; counted and logged).
+        max_backlog_bytes: how much may wait for one slow peer before pages
+            are dropped (the newest per key is kept; counted and logged).
         dead_after_s: seconds of silence after which a peer counts as lost.
         max_connections: how many clients the server takes at once (64).
-        system: the system both ends name in their hello; a peer of another
-            system, or of none, is refused. Default: the config's ``name``,
-            else the script's folder. None: no check (older SNR nodes).
-        secret: the secret both ends prove they know (docs/comms.md, "Who
-            may connect"). Default: ``$SNR_SECRET``, else the file of
-            ``python -m snr secret new``, else none. None: none.
+        system: the system both ends name; a peer of another, or of none, is
+            refused. Default: the config's ``name``, else the script's folder.
+            None: no check (older SNR nodes).
+        secret: the secret both ends prove they know (docs/comms.md, "Who may
+            connect"). Default: ``$SNR_SECRET``, else the secret file, else none.
 
     Example::
 
@@ -460,11 +417,7 @@ class SocketsPair:
                 '("localhost", 9000).'
             )
         self.server_tuple: Address = server_tuple
-        self.max_backlog_bytes = max_backlog_bytes
-        self.dead_after_s = dead_after_s
-        self.max_connections = max_connections
-        self.system = system
-        self.secret = secret
+        self._settings = (max_backlog_bytes, dead_after_s, max_connections, system, secret)
 
     def server(self, keys: Keys = None, name: Optional[str] = None) -> SocketsServerFactory:
         """The factory for the listening side; ``keys`` it forwards to clients.
@@ -474,16 +427,7 @@ class SocketsPair:
             sockets.server()                  # only receives
             sockets.server(["sensor_data"])   # also sends sensor_data to clients
         """
-        return SocketsServerFactory(
-            self.server_tuple,
-            keys,
-            name,
-            self.max_backlog_bytes,
-            self.dead_after_s,
-            self.max_connections,
-            self.system,
-            self.secret,
-        )
+        return SocketsServerFactory(self.server_tuple, keys, name, *self._settings)
 
     def client(self, keys: Keys = None, name: Optional[str] = None) -> SocketsClientFactory:
         """The factory for the connecting side; ``keys`` (one or a list) it forwards.
@@ -493,15 +437,7 @@ class SocketsPair:
             sockets.client(["controller_data"])
             sockets.client("controller_input")
         """
-        return SocketsClientFactory(
-            self.server_tuple,
-            keys,
-            name,
-            self.max_backlog_bytes,
-            self.dead_after_s,
-            system=self.system,
-            secret=self.secret,
-        )
+        return SocketsClientFactory(self.server_tuple, keys, name, *self._settings)
 
     def __repr__(self) -> str:
         return f"SocketsPair(server_tuple={self.server_tuple!r})"
