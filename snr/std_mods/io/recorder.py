@@ -1,9 +1,7 @@
 """`RecorderEndpointFactory`: write pages to disk as they are stored (``docs/recording.md``).
 
-JSON lines (a header line, then a page per line, each flushed as it is
-written), or a format an extra provides, chosen by the file's extension (MCAP
-for ``*.mcap``: `recording_formats`). Replay the file with
-`ReplayerLoopFactory` or read it with `PageReader`.
+JSON lines (a header, then a page per line), or a format an extra provides,
+chosen by the file's extension (MCAP: `recording_formats`).
 """
 
 from __future__ import annotations
@@ -50,8 +48,8 @@ class _LinesFile:
 class RecorderEndpoint(Endpoint):
     """Appends every page stored under its keys to the recording file.
 
-    The file opens when the node starts and closes when it stops. After a
-    hot reload the new endpoint goes on writing the same open file.
+    The file opens when the node starts and closes when it stops; after a hot
+    reload the new endpoint goes on writing the same open file.
 
     Example::
 
@@ -61,9 +59,9 @@ class RecorderEndpoint(Endpoint):
     def __init__(self, factory: RecorderEndpointFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
         self.recording = factory
-        # A reload builds the new endpoint before the old one terminates: the
-        # old one then knows to leave the file open.
-        factory.endpoint = self
+        factory.endpoint = (
+            self  # built before a reload ends the old one, which then leaves the file
+        )
         self._write_failed = False
         if factory.repeats is None:  # on the factory: a reload does not repeat the messages
             factory.repeats = RepeatFilter(self.log, first=1)
@@ -75,11 +73,7 @@ class RecorderEndpoint(Endpoint):
         self._open()
 
     def record_page(self, task: Task, key: TaskId) -> SomeTasks:
-        """Write the stored page as one line and flush it to the OS.
-
-        A page that cannot be written as a valid line (data JSON cannot
-        hold, a time that is not a number...) is logged and skipped.
-        """
+        """Write the stored page and flush it; one that cannot be written is logged and skipped."""
         page, recording = task.page(), self.recording
         if page is None:
             self.warn("A store_page task for %r carries %r, not a Page", task.name, task.val_list)
@@ -120,11 +114,7 @@ class RecorderEndpoint(Endpoint):
         self.info(f"Recorded {done} pages to {recording.path} ({skipped} skipped)")
 
     def _open(self) -> PageWriter:
-        """The recording, opened the first time as the factory's options say.
-
-        A JSON-lines file closed earlier (the recorder removed and added
-        again) is appended to; another format's file starts anew.
-        """
+        """The recording, opened the first time as the factory's options say."""
         r = self.recording
         if r.file is not None:
             return r.file
@@ -133,7 +123,7 @@ class RecorderEndpoint(Endpoint):
         if r.file_format != "jsonl":  # before any file is made or renamed
             fmt = recording_formats.get(r.file_format, what)
             fmt.require(what, compression=r.compression)
-        reopen = r.started and fmt is None
+        reopen = r.started and fmt is None  # closed and opened again: go on writing it
         if not reopen:
             r.path, r.kept = r._choose_path()
         try:
@@ -157,21 +147,16 @@ class RecorderEndpoint(Endpoint):
                 f"{error.strerror or error}. Check that the folder {folder!r} exists and that "
                 "you may write there, or choose another filename."
             ) from error
-        if not r.started:
-            self._say_where()
-        r.started = True
-        return r.file
-
-    def _say_where(self) -> None:
-        r = self.recording
         to = f"Recording {', '.join(r.keys)} to {r.path}"
-        if r.kept is not None:
+        if not r.started and r.kept is not None:
             self.info(f"{to}; the recording that was there is kept as {r.kept}")
-        elif r.path != r.filename:
+        elif not r.started and r.path != r.filename:
             self.warn(f"{to}: {r.filename} holds a recording that could not be renamed")
-        else:
+        elif not r.started:
             how = "appending" if r.append else "writing"
             self.info(f"{to} ({how}{'' if r.file_format == 'jsonl' else ' MCAP'})")
+        r.started = True
+        return r.file
 
     def _skip(self, page: Page, error: Exception) -> None:
         self.recording.pages_skipped += 1
@@ -217,21 +202,17 @@ class RecorderEndpointFactory(EndpointFactory):
     A recording already at ``filename`` is kept, renamed with the time it
     was last written (``dive-2026-11-24T23-59-01.jsonl``); a file that is not
     a recording is left alone and the node does not start (``ConfigError``).
-    Data JSON cannot hold is logged and skipped. See ``docs/recording.md``.
 
     Args:
         filename: the file to write.
         keys: the data keys to record (one key may be given as a string).
-        sync: also ``os.fsync`` every page (slower), so even a power cut
-            loses at most one page.
+        sync: also ``os.fsync`` every page (slower): a power cut loses one page at most.
         name: the endpoint's name (default ``"recorder"``).
         overwrite: replace whatever ``filename`` holds instead of keeping it.
-        append: add this run's pages to the end of ``filename``, after a
-            header line. JSON lines only.
+        append: add this run's pages to the end of ``filename`` (JSON lines only).
         file_format: ``"jsonl"`` or ``"mcap"``; by default ``"mcap"`` when
             ``filename`` ends in ``.mcap``, else ``"jsonl"``.
-        compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress the file in
-            chunks of about 1 MiB; ``None`` (default) flushes each page.
+        compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress chunks of about 1 MiB.
 
     Raises:
         ConfigError: no keys, both ``overwrite`` and ``append``, an unknown
@@ -246,8 +227,7 @@ class RecorderEndpointFactory(EndpointFactory):
         ]})
 
     Attributes:
-        path: the file being written (``filename``, unless the previous
-            recording could not be renamed: then a new name beside it).
+        path: the file written (a name beside ``filename`` if its recording could not be renamed).
         kept: where the previous recording was kept, or None.
         pages_written: pages written so far (kept across reloads).
         pages_skipped: pages that could not be written.
@@ -303,18 +283,14 @@ class RecorderEndpointFactory(EndpointFactory):
         self.kept: Optional[str] = None
         self.pages_written = 0
         self.pages_skipped = 0
-        # What lasts across reloads: the open file, and the endpoint writing it.
+        # What lasts across reloads: the open file, the endpoint writing it, the counts.
         self.repeats: Optional[RepeatFilter] = None
         self.started = False
         self.file: Optional[PageWriter] = None
         self.endpoint: Optional[RecorderEndpoint] = None
 
     def _choose_path(self) -> Tuple[str, Optional[str]]:
-        """The file to write, and where the previous recording went (None: nowhere).
-
-        Raises:
-            ConfigError: ``filename`` exists and is not a recording.
-        """
+        """The file to write, and where the previous recording went (None: nowhere)."""
         name = self.filename
         if self.overwrite or self.append or not os.path.isfile(name):
             return name, None

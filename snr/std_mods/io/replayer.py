@@ -114,8 +114,8 @@ class PageReader:
     """Reads the pages of a recording in order; iterate over it.
 
     A file in a format an extra provides (MCAP, known by its first bytes) is
-    read by that extra, "message N" standing for "line N". A line that is not
-    a page is logged with its number, kept in ``problems`` and skipped.
+    read by that extra ("message N" for "line N"). A line that is not a page
+    is logged with its number, kept in ``problems`` and skipped.
 
     Args:
         filename: a file written by `RecorderEndpointFactory`.
@@ -265,8 +265,8 @@ Item = TypeVar("Item")
 class ReplayLoop(ThreadLoop, Generic[Item]):
     """What both replayers share: step through a file, then stop.
 
-    A subclass gives ``items()`` and ``store``. The count of items replayed
-    is kept on the factory, so after a hot reload the replay goes on.
+    A subclass gives ``items()`` and ``store``. The count of items replayed is
+    kept on the factory: after a hot reload the replay goes on.
 
     Example: see `ReplayerLoop` and `TextReplayerLoop`.
     """
@@ -359,11 +359,10 @@ class _ReplayFactory(LoopFactory):
 class ReplayerLoop(ReplayLoop[RecordedPage]):
     """Stores the pages of a recording as recorded: key, data, origin and time.
 
-    Each origin's pages are stored in the order they were made
-    (`in_created_order`). With original timing each page waits as long after
-    the previous one as it was made after it, each origin on its own clock; a
-    page with no time, a gap over ``max_gap_s`` or a time going back is
-    stored at once (or after ``max_gap_s``) and logged with its line.
+    Each origin's pages go in the order they were made (`in_created_order`),
+    timed on that origin's clock unless ``fast``; a page with no time, a gap
+    over ``max_gap_s`` or a time going back is stored at once (or after
+    ``max_gap_s``) and logged with its line.
 
     Example::
 
@@ -441,12 +440,11 @@ def in_created_order(
 ) -> Iterator[RecordedPage]:
     """``recorded`` with each origin's pages in the order they were made (``created_at_s``).
 
-    A recording's lines can be out of order (the 2021 node handled the newest
-    task first). Each page takes the place in the file of one of its origin's
-    pages, so origins stay interleaved as recorded and their clocks are never
-    compared. Pages further apart than ``window`` lines, or on either side of
-    a clock jump (over ``max_jump_s`` either way), are not swapped; nor are
-    pages without a time.
+    The 2021 node handled the newest task first, so its recordings are out of
+    order. Each page takes the place of one of its origin's pages: origins stay
+    interleaved and their clocks are never compared. Pages more than ``window``
+    lines apart, on either side of a clock jump (over ``max_jump_s``), or
+    without a time are not swapped.
 
     Example::
 
@@ -483,12 +481,10 @@ class ReplayerLoopFactory(_ReplayFactory):
     Args:
         filename: a file written by `RecorderEndpointFactory`.
         fast: store the pages as fast as possible, not with their original spacing.
-        exit_when_done: stop the node after the last page (once the node has
-            handled what the pages caused), in every mode.
+        exit_when_done: stop the node after the last page, once it has handled what they caused.
         keys: replay only pages under these keys (default: all).
         name: the loop's name (default ``"replayer"``).
-        max_gap_s: with original timing, the longest wait between two pages
-            (`MAX_GAP_S`); a longer gap is cut to this and logged.
+        max_gap_s: the longest wait between two timed pages; a longer gap is cut and logged.
 
     Raises:
         ConfigError: ``max_gap_s`` is negative, not finite or too large.
