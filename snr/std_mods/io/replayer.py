@@ -276,7 +276,6 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         self.replay = factory
         self._items: Iterator[Tuple[float, Item]] = iter(())
         self._done_event = f"{self.name}_done"
-        self._exit_scheduled = False
         self._whole_file_replayed = False  # set on the loop's thread, read on the node's
         if factory.exit_when_done:
             self.task_handlers = {(TaskType.event, self._done_event): self.finish_node}
@@ -320,9 +319,8 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         replay = self.replay
         self.info(f"Replayed {replay.position} items from {replay.filename}{self.summary()}")
 
-    def _still_exit(self) -> None:
-        if self.replay.exit_when_done and not self._exit_scheduled:
-            self._exit_scheduled = True
+    def _still_exit(self) -> None:  # once: the loop stops after it
+        if self.replay.exit_when_done:
             self.schedule(tasks.event(self._done_event, [0]))
 
     def finish_node(self, task: Task, key: TaskId) -> SomeTasks:
