@@ -59,9 +59,7 @@ class RecorderEndpoint(Endpoint):
     def __init__(self, factory: RecorderEndpointFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
         self.recording = factory
-        factory.endpoint = (
-            self  # built before a reload ends the old one, which then leaves the file
-        )
+        factory.endpoint = self  # the old one, ended after a reload, then leaves the file open
         self._write_failed = False
         if factory.repeats is None:  # on the factory: a reload does not repeat the messages
             factory.repeats = RepeatFilter(self.log, first=1)

@@ -391,34 +391,41 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
     def _next_due(self, item: RecordedPage, previous: float, offsets: Dict[str, float]) -> float:
         """When ``item`` is due, given when the page before it was due."""
         page, max_gap = item.page, self.options.max_gap_s
-        at, key, after = f"{self.options.filename}:{item.line}:", repr(page.key), "stored right"
+        at = f"{self.options.filename}:{item.line}: the"
         if not item.timed:
-            text = f"{at} the page under {key} has no created_at_s: {after}"
-            return self._retimed("no time", text, previous)
+            return self._retimed(
+                "no time",
+                f"{at} page under {page.key!r} has no created_at_s: stored right after the "
+                "previous page.",
+                previous,
+            )
         # An origin's first page starts its clock; later ones follow it, within max_gap.
         offset = offsets.setdefault(page.origin, previous - page.created_at_s)
         gap = page.created_at_s + offset - previous
         if -max_gap <= gap <= max_gap:  # a little back (two nodes' clocks): no wait
             return previous + max(gap, 0.0)
         if gap > max_gap:
-            text = (
-                f"{at} the page under {key} was created {_seconds(gap)} s after the one "
-                f"before it: waiting {max_gap:g} s instead (max_gap_s)"
+            due = self._retimed(
+                "gap",
+                f"{at} page under {page.key!r} was created {_seconds(gap)} s after the one "
+                f"before it: waiting {max_gap:g} s instead (max_gap_s).",
+                previous + max_gap,
             )
-            due = self._retimed("gap", text, previous + max_gap)
         else:
-            text = f"{at} the time of the page under {key} goes back by {_seconds(-gap)} s: {after}"
-            due = self._retimed("back", text, previous)
+            due = self._retimed(
+                "back",
+                f"{at} time of the page under {page.key!r} goes back by {_seconds(-gap)} s: "
+                "stored right after the previous page.",
+                previous,
+            )
         offsets[page.origin] = due - page.created_at_s  # follow the clock from here
         return due
 
     def _retimed(self, kind: str, text: str, due: float) -> float:
         """Log (or count) a page not stored at its recorded time; returns ``due``."""
         self.options.retimed += 1
-        if kind != "gap":
-            text += " after the previous page"
         what = f"Replay timing of {self.options.filename} ({kind})"
-        self._timing.report(kind, what, logging.WARNING, text + ".")
+        self._timing.report(kind, what, logging.WARNING, text)
         return due
 
     def store(self, item: RecordedPage) -> None:
