@@ -14,8 +14,7 @@ __all__ = ["ListReplayerFactory", "ListReplayerLoop"]
 class ListReplayerLoop(ThreadLoop):
     """Stores each value under ``key`` in order, then stops.
 
-    The node runs on, unless the factory was made with ``exit_when_done=True``:
-    then the node stops once every value has been handled.
+    With ``exit_when_done=True`` it stops the node too, once every value has been handled.
 
     Example::
 
@@ -38,15 +37,15 @@ class ListReplayerLoop(ThreadLoop):
         self.exit_when_done = factory.exit_when_done
 
     def loop(self) -> None:
-        if self.index >= len(self.values):
-            self.set_terminate_flag("replayed every value")
-            if self.exit_when_done:
-                # A terminate task of normal priority waits its turn behind the
-                # values just stored, so every handler sees every value first.
-                self.schedule(Task(TaskType.terminate, f"{self.name} stored every value"))
+        if self.index < len(self.values):
+            self.store_data(self.key, self.values[self.index])
+            self.index += 1
             return
-        self.store_data(self.key, self.values[self.index])
-        self.index += 1
+        self.set_terminate_flag("replayed every value")
+        if self.exit_when_done:
+            # A terminate task of normal priority waits its turn behind the
+            # values just stored, so every handler sees every value first.
+            self.schedule(Task(TaskType.terminate, f"{self.name} stored every value"))
 
 
 class ListReplayerFactory(LoopFactory):
@@ -74,17 +73,14 @@ class ListReplayerFactory(LoopFactory):
     ) -> None:
         super().__init__()
         if not isinstance(key, str) or isinstance(values, str):
-            swapped = isinstance(values, str) and not isinstance(key, str)
+            why = (
+                "the values and the key are swapped: the list of values comes first."
+                if isinstance(values, str) and not isinstance(key, str)
+                else f"the values must be a list and the key a str, not "
+                f"{type(values).__name__} and {type(key).__name__}."
+            )
             raise ConfigError(
-                wrong_call(
-                    "ListReplayerFactory",
-                    ListReplayerFactory,
-                    (values, key),
-                    "the values and the key are swapped: the list of values comes first."
-                    if swapped
-                    else f"the values must be a list and the key a str, not "
-                    f"{type(values).__name__} and {type(key).__name__}.",
-                )
+                wrong_call("ListReplayerFactory", ListReplayerFactory, (values, key), why)
             )
         self.values = list(values)
         self.key = key

@@ -1,10 +1,7 @@
-"""`RecorderEndpointFactory`: write pages to disk as they are stored.
+"""`RecorderEndpointFactory`: write pages to disk as they are stored (``docs/recording.md``).
 
-JSON lines (``snr.std_mods.codec``: a header line, then a page per line), or
-a format an extra provides, chosen by the file's extension (MCAP for
-``*.mcap``: see `recording_formats`). Each page is flushed as it is written,
-so a killed process loses at most that page. Replay the file with
-`ReplayerLoopFactory` or read it with `PageReader`.
+JSON lines (a header, then a page per line), or a format an extra provides,
+chosen by the file's extension (MCAP: `recording_formats`).
 """
 
 from __future__ import annotations
@@ -13,14 +10,15 @@ import logging
 import os
 import sys
 import time
-from typing import IO, Any, Dict, List, Optional, Sequence, Tuple, Union
+from typing import IO, List, Optional, Sequence, Tuple, Union
 
 from snr.core import Endpoint, EndpointFactory
 from snr.core.logs import RepeatFilter
 from snr.prelude import AbstractNode, ConfigError, DataKey, Page, SomeTasks, Task, TaskId, TaskType
-from snr.std_mods.codec import PathLike, decode_line, header_line, is_header, page_to_line
+from snr.std_mods.codec import PathLike, header_line, is_header, page_to_line
 from snr.std_mods.io import recording_formats
 from snr.std_mods.io.recording_formats import PageWriter
+from snr.std_mods.io.replayer import _fields
 
 __all__ = ["FILE_FORMATS", "RecorderEndpoint", "RecorderEndpointFactory", "kept_name"]
 
@@ -34,11 +32,11 @@ _MAX_TIME = sys.float_info.max  # NaN, infinity and larger integers fail the com
 class _LinesFile:
     """A JSON-lines recording open for writing: a line per page, flushed at once."""
 
-    def __init__(self, file: IO[str], sync: bool) -> None:
+    def __init__(self, file: IO[bytes], sync: bool) -> None:
         self.file, self.sync = file, sync
 
     def write(self, page: Page, line: Optional[str] = None) -> None:
-        self.file.write(f"{line}\n")  # one write per page, so a kill cuts one line at most
+        self.file.write(f"{line}\n".encode())  # one write per page: a kill cuts one line at most
         self.file.flush()
         if self.sync:
             os.fsync(self.file.fileno())
@@ -50,8 +48,8 @@ class _LinesFile:
 class RecorderEndpoint(Endpoint):
     """Appends every page stored under its keys to the recording file.
 
-    The file opens when the node starts and closes when it stops. After a
-    hot reload the new endpoint goes on writing the same open file.
+    The file opens when the node starts and closes when it stops; after a hot
+    reload the new endpoint goes on writing the same open file.
 
     Example::
 
@@ -61,9 +59,7 @@ class RecorderEndpoint(Endpoint):
     def __init__(self, factory: RecorderEndpointFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
         self.recording = factory
-        # A reload builds the new endpoint before the old one terminates: the
-        # old one then knows to leave the file open.
-        factory.endpoint = self
+        factory.endpoint = self  # the old one, ended after a reload, then leaves the file open
         self._write_failed = False
         if factory.repeats is None:  # on the factory: a reload does not repeat the messages
             factory.repeats = RepeatFilter(self.log, first=1)
@@ -75,12 +71,7 @@ class RecorderEndpoint(Endpoint):
         self._open()
 
     def record_page(self, task: Task, key: TaskId) -> SomeTasks:
-        """Write the stored page as one line and flush it to the OS.
-
-        A page that cannot be written as a valid line (data JSON cannot
-        hold, nesting too deep, a time that is not a number) is logged with
-        its key and skipped, whatever the error: recording goes on.
-        """
+        """Write the stored page and flush it; one that cannot be written is logged and skipped."""
         page, recording = task.page(), self.recording
         if page is None:
             self.warn("A store_page task for %r carries %r, not a Page", task.name, task.val_list)
@@ -92,7 +83,7 @@ class RecorderEndpoint(Endpoint):
             self._skip(page, error)
             return None
         try:
-            self._open().write(page, line)
+            (recording.file or self._open()).write(page, line)
             recording.pages_written += 1
         except OSError as error:
             recording.pages_skipped += 1
@@ -109,59 +100,75 @@ class RecorderEndpoint(Endpoint):
     def terminate(self) -> None:
         """Close the file (every page is already flushed), unless a reload goes on with it."""
         self._repeats.flush()  # the counts of skipped pages not yet logged
-        recording = self.recording
-        if recording.endpoint is self and recording.close_file(self.log):
-            self.info(
-                "Recorded %d pages to %s (%d skipped)",
-                recording.pages_written,
-                recording.path,
-                recording.pages_skipped,
-            )
+        recording, file = self.recording, self.recording.file
+        if recording.endpoint is not self or file is None:
+            return
+        recording.file = None
+        try:
+            file.close()  # an MCAP file gets its index
+        except OSError as error:
+            self.err("Could not finish the recording %s: %s", recording.path, error)
+        done, skipped = recording.pages_written, recording.pages_skipped
+        self.info(f"Recorded {done} pages to {recording.path} ({skipped} skipped)")
 
     def _open(self) -> PageWriter:
-        first = self.recording.file is None and not self.recording.started
-        file = self.recording.open_file()
-        if first:
-            self._say_where()
-        return file
-
-    def _say_where(self) -> None:
-        recording, keys = self.recording, ", ".join(self.recording.keys)
-        if recording.kept is not None:
-            self.info(
-                "Recording %s to %s; the recording that was there is kept as %s",
-                keys,
-                recording.path,
-                recording.kept,
-            )
-        elif recording.path != recording.filename:
-            self.warn(
-                "Recording %s to %s: %s holds a recording that could not be renamed",
-                keys,
-                recording.path,
-                recording.filename,
-            )
-        else:
-            how = "appending" if recording.append else "writing"
-            how += "" if recording.file_format == "jsonl" else f" {recording.file_format.upper()}"
-            self.info("Recording %s to %s (%s)", keys, recording.path, how)
+        """The recording, opened the first time as the factory's options say."""
+        r = self.recording
+        if r.file is not None:
+            return r.file
+        what = f"{type(r).__name__}({r.filename!r})"
+        fmt = None
+        if r.file_format != "jsonl":  # before any file is made or renamed
+            fmt = recording_formats.get(r.file_format, what)
+            fmt.require(what, compression=r.compression)
+        reopen = r.started and fmt is None  # closed and opened again: go on writing it
+        if not reopen:
+            r.path, r.kept = r._choose_path()
+        try:
+            file = open(r.path, "ab" if reopen or r.append else "wb")  # noqa: SIM115 - kept open
+            try:
+                if fmt is not None:
+                    r.file = fmt.writer(file, r.compression, sync=r.sync)
+                else:
+                    if not reopen:  # a run cut short mid-line: keep its last line apart
+                        cut = r.append and not _ends_with_newline(r.path)
+                        file.write(b"\n" * cut + header_line().encode() + b"\n")
+                        file.flush()
+                    r.file = _LinesFile(file, r.sync)
+            except BaseException:
+                file.close()
+                raise
+        except OSError as error:
+            folder = os.path.dirname(os.path.abspath(r.path))
+            raise ConfigError(
+                f"{type(r).__name__} cannot open {r.path!r} for writing: "
+                f"{error.strerror or error}. Check that the folder {folder!r} exists and that "
+                "you may write there, or choose another filename."
+            ) from error
+        to = f"Recording {', '.join(r.keys)} to {r.path}"
+        if not r.started and r.kept is not None:
+            self.info(f"{to}; the recording that was there is kept as {r.kept}")
+        elif not r.started and r.path != r.filename:
+            self.warn(f"{to}: {r.filename} holds a recording that could not be renamed")
+        elif not r.started:
+            how = "appending" if r.append else "writing"
+            self.info(f"{to} ({how}{'' if r.file_format == 'jsonl' else ' MCAP'})")
+        r.started = True
+        return r.file
 
     def _skip(self, page: Page, error: Exception) -> None:
         self.recording.pages_skipped += 1
-        data_type = type(page.data).__name__
-        if str(error).startswith("Cannot"):
-            text = str(error)
-        else:
-            why = (
-                str(error) if isinstance(error, ValueError) else f"{type(error).__name__}: {error}"
-            )
+        text = str(error)
+        if not text.startswith("Cannot"):
+            why = text if isinstance(error, ValueError) else f"{type(error).__name__}: {error}"
             text = f"Cannot write the page stored under {page.key!r} to a recording: {why:.300}."
+        data_type = type(page.data).__name__
         self._repeats.report(
             (page.key, data_type, type(error).__name__),
             f"Pages under {page.key!r} not recorded ({data_type} data)",
             logging.ERROR,
-            "Did not record a page: %s Recording goes on; later pages like this one are counted.",
-            text,
+            f"Did not record a page: {text} Recording goes on; later pages like this one are "
+            "counted.",
         )
 
 
@@ -177,49 +184,37 @@ def _check_fields(page: Page) -> None:
 
 
 def kept_name(filename: PathLike, when_s: float) -> str:
-    """The name a previous recording is kept under: its time before the extension.
-
-    Args:
-        filename: the recording's file name.
-        when_s: when it was last written (``os.path.getmtime``), seconds since 1970.
+    """The name a previous recording is kept under: its local time before the extension.
 
     Example::
 
         kept_name("logs/dive.jsonl", 1795564741.0)   # 'logs/dive-2026-11-24T23-59-01.jsonl' (UTC)
     """
     stem, extension = os.path.splitext(os.fspath(filename))
-    stamp = time.strftime("%Y-%m-%dT%H-%M-%S", time.localtime(when_s))
-    return f"{stem}-{stamp}{extension}"
+    return f"{stem}-{time.strftime('%Y-%m-%dT%H-%M-%S', time.localtime(when_s))}{extension}"
 
 
 class RecorderEndpointFactory(EndpointFactory):
     """Builds a `RecorderEndpoint` that records ``keys`` into ``filename``.
 
     A recording already at ``filename`` is kept, renamed with the time it
-    was last written (``dive-2026-11-24T23-59-01.jsonl``), and the new run
-    goes to ``filename``; a file that is not a recording is left alone and
-    the node does not start (``ConfigError``). Data JSON cannot hold is
-    logged, naming its key and type, and skipped. See ``docs/recording.md``.
+    was last written (``dive-2026-11-24T23-59-01.jsonl``); a file that is not
+    a recording is left alone and the node does not start (``ConfigError``).
 
     Args:
         filename: the file to write.
         keys: the data keys to record (one key may be given as a string).
-        sync: also ``os.fsync`` every page, so even a power cut loses at most
-            one page (slower: every page waits for the disk).
+        sync: also ``os.fsync`` every page (slower): a power cut loses one page at most.
         name: the endpoint's name (default ``"recorder"``).
         overwrite: replace whatever ``filename`` holds instead of keeping it.
-        append: add this run's pages to the end of ``filename``, after a
-            header line. JSON lines only.
+        append: add this run's pages to the end of ``filename`` (JSON lines only).
         file_format: ``"jsonl"`` or ``"mcap"``; by default ``"mcap"`` when
-            ``filename`` ends in ``.mcap`` (``pip install 'snr-robotics[mcap]'``),
-            else ``"jsonl"`` (the thesis's format).
-        compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress the file in
-            chunks of about 1 MiB; ``None`` (default) flushes each page.
+            ``filename`` ends in ``.mcap``, else ``"jsonl"``.
+        compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress chunks of about 1 MiB.
 
     Raises:
         ConfigError: no keys, both ``overwrite`` and ``append``, an unknown
-            ``file_format`` or ``compression``, or ``append`` or ``compression``
-            where the format does not allow it.
+            ``file_format`` or ``compression``, or one the format does not allow.
 
     Example::
 
@@ -230,8 +225,7 @@ class RecorderEndpointFactory(EndpointFactory):
         ]})
 
     Attributes:
-        path: the file being written (``filename``, unless the previous
-            recording could not be renamed: then a new name beside it).
+        path: the file written (a name beside ``filename`` if its recording could not be renamed).
         kept: where the previous recording was kept, or None.
         pages_written: pages written so far (kept across reloads).
         pages_skipped: pages that could not be written.
@@ -269,7 +263,6 @@ class RecorderEndpointFactory(EndpointFactory):
                 f"{call}, file_format={file_format!r}): choose one of {FILE_FORMATS}, "
                 "or leave it out to go by the file's extension."
             )
-        self.file_format = file_format
         if file_format != "jsonl":  # the format's own options, checked by its extra
             recording_formats.get(file_format, f"{call})").check(call, compression, append)
         elif compression is not None:
@@ -278,6 +271,7 @@ class RecorderEndpointFactory(EndpointFactory):
                 f"{call}, compression={compression!r}): compression is for MCAP recordings, "
                 f"one of {compressions}."
             )
+        self.file_format = file_format
         self.compression = compression or "none"
         self.sync = sync
         self.name = name or "recorder"
@@ -287,103 +281,32 @@ class RecorderEndpointFactory(EndpointFactory):
         self.kept: Optional[str] = None
         self.pages_written = 0
         self.pages_skipped = 0
+        # What lasts across reloads: the open file, the endpoint writing it, the counts.
         self.repeats: Optional[RepeatFilter] = None
         self.started = False
-        self.file: Optional[PageWriter] = None  # open while the node runs, across reloads
+        self.file: Optional[PageWriter] = None
         self.endpoint: Optional[RecorderEndpoint] = None
 
-    def open_file(self) -> PageWriter:
-        """Open the recording (the first time as chosen above), or give the one already open.
-
-        After a reload the new endpoint gets the file still open. A JSON-lines
-        file closed earlier (the recorder removed and added again) is appended
-        to; another format's file (MCAP) cannot be, so a new one starts and the
-        closed one is kept.
-
-        Raises:
-            ConfigError: the file cannot be created (no such folder, no
-                permission), or it exists and is not a recording, or its
-                format needs a package that is not installed; the message
-                names the file and the fix.
-        """
-        if self.file is not None:
-            return self.file
-        other = None
-        if self.file_format != "jsonl":  # before any file is made or renamed
-            what = f"{type(self).__name__}({self.filename!r})"
-            other = recording_formats.get(self.file_format, what)
-            other.require(what, compression=self.compression)
-        elif self.started:
-            self.file = _LinesFile(self._open("a"), self.sync)
-            return self.file
-        self.path, self.kept = self._choose_path()
-        file = self._open("wb" if other else "a" if self.append else "w")
-        try:
-            if other is not None:
-                self.file = other.writer(file, self.compression, sync=self.sync)
-            else:
-                if self.append and not _ends_with_newline(self.path):
-                    file.write("\n")  # a run cut short mid-line: keep its last line apart
-                file.write(header_line() + "\n")
-                file.flush()
-                self.file = _LinesFile(file, self.sync)
-        except Exception as error:
-            file.close()
-            if isinstance(error, OSError):
-                raise self._cannot_write(error) from error
-            raise
-        self.started = True
-        return self.file
-
-    def close_file(self, log: logging.Logger) -> bool:
-        """Close the recording if it is open (an MCAP file gets its index); True if it was.
-
-        A failure to write the end of the file is logged, not raised.
-        """
-        file, self.file = self.file, None
-        if file is None:
-            return False
-        try:
-            file.close()
-        except OSError as error:
-            log.error("Could not finish the recording %s: %s", self.path, error)
-        return True
-
-    def _open(self, mode: str) -> IO[Any]:
-        try:  # kept open between pages (closed by close_file), hence no `with`
-            if "b" in mode:
-                return open(self.path, mode)
-            return open(self.path, mode, encoding="utf-8", newline="\n")
-        except OSError as error:
-            raise self._cannot_write(error) from error
-
     def _choose_path(self) -> Tuple[str, Optional[str]]:
-        """The file to write and where the previous recording went (None: nowhere)."""
-        if self.overwrite or self.append or not os.path.isfile(self.filename):
-            return self.filename, None
-        holds = _what_it_holds(self.filename)
-        if holds == "nothing":
-            return self.filename, None
+        """The file to write, and where the previous recording went (None: nowhere)."""
+        name = self.filename
+        if self.overwrite or self.append or not os.path.isfile(name):
+            return name, None
+        holds = _what_it_holds(name)
         if holds == "other":
             raise ConfigError(
-                f"{type(self).__name__} will not write to {self.filename!r}: the file exists "
+                f"{type(self).__name__} will not write to {name!r}: the file exists "
                 "and is not an SNR recording, so it is left as it is. Choose another "
                 "filename, or pass overwrite=True to replace it."
             )
-        kept = _free_name(kept_name(self.filename, os.path.getmtime(self.filename)))
+        if holds == "nothing":
+            return name, None
+        kept = _free_name(kept_name(name, os.path.getmtime(name)))
         try:
-            os.rename(self.filename, kept)
+            os.rename(name, kept)
         except OSError:  # e.g. open in another program on Windows: write beside it
-            return _free_name(kept_name(self.filename, time.time())), None
-        return self.filename, kept
-
-    def _cannot_write(self, error: OSError) -> ConfigError:
-        folder = os.path.dirname(os.path.abspath(self.path))
-        return ConfigError(
-            f"{type(self).__name__} cannot open {self.path!r} for writing: "
-            f"{error.strerror or error}. Check that the folder {folder!r} exists and "
-            "that you may write there, or choose another filename."
-        )
+            return _free_name(kept_name(name, time.time())), None
+        return name, kept
 
     def get(self, parent: AbstractNode) -> RecorderEndpoint:
         return RecorderEndpoint(self, parent)
@@ -404,22 +327,14 @@ def _what_it_holds(path: str) -> str:
     lines = [_fields(line) for line in start.split(b"\n") if line.strip()]
     if not lines:
         return "nothing"
-    first = lines[0]
-    if first is None:  # a first line cut short by the size limit, or not JSON at all
-        return "recording" if len(lines) == 1 and len(start) == _PEEK_BYTES else "other"
-    if not (is_header(first) and first.get("format") == "snr-pages") and "key" not in first:
+    first, whole = lines[0], len(start) < _PEEK_BYTES
+    if first is None:  # not JSON, or a first line cut short by the size limit
+        return "other" if whole or len(lines) > 1 else "recording"
+    if "key" not in first and not (is_header(first) and first.get("format") == "snr-pages"):
         return "other"
-    if len(start) < _PEEK_BYTES and all(f is not None and is_header(f) for f in lines):
+    if whole and all(f is not None and is_header(f) for f in lines):
         return "nothing"
     return "recording"
-
-
-def _fields(line: bytes) -> Optional[Dict[str, Any]]:
-    """The JSON object on ``line``, or None when it is not one."""
-    try:
-        return decode_line(line)
-    except Exception:
-        return None
 
 
 def _free_name(path: str) -> str:
@@ -436,8 +351,7 @@ def _ends_with_newline(path: str) -> bool:
     """True for an empty file or one whose last byte is a newline."""
     try:
         with open(path, "rb") as file:
-            return file.seek(0, os.SEEK_END) == 0 or (
-                file.seek(-1, os.SEEK_END) >= 0 and file.read(1) == b"\n"
-            )
+            file.seek(max(file.seek(0, os.SEEK_END) - 1, 0))
+            return file.read(1) in (b"", b"\n")
     except OSError:
         return True

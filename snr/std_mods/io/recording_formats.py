@@ -1,11 +1,9 @@
 """The extension point of the recorder and replayer: recording formats besides JSON lines.
 
-JSON lines (``snr.std_mods.codec``) is the kernel's own format. An extra adds
-another as an entry point of the group ``snr.recording_formats``
+An extra adds a format as an entry point of the group ``snr.recording_formats``
 (`snr.core.plugins`): its name is the file extension that chooses it, its
-object a `RecordingFormat`, a writer and a reader. MCAP
-(``snr.extras.viz.mcap_format``) is one. The recorder asks for a format by
-the file's name, the reader by the file's first bytes.
+object a `RecordingFormat`. MCAP (``snr.extras.viz.mcap_format``) is one. The
+recorder asks for a format by the file's name, the reader by its first bytes.
 
 Example::
 
@@ -69,7 +67,7 @@ class RecordingFormat(Protocol):
 
 
 def get(name: str, what: str) -> RecordingFormat:
-    """The recording format ``name`` (``"mcap"``), or a `ConfigError` saying what to install.
+    """The recording format ``name``, or a `ConfigError` saying what to install for ``what``.
 
     Example::
 
@@ -91,7 +89,7 @@ def format_of_name(filename: PathLike) -> str:
 
 
 def format_of_bytes(start: bytes) -> str:
-    """The format a file starting with ``start`` is in: a format whose magic it has, or ``"jsonl"``.
+    """The format whose magic ``start`` begins with, or ``"jsonl"``.
 
     Example::
 

@@ -1,11 +1,8 @@
-"""Replay recordings: pages written by the recorder, or plain text lines.
+"""Replay recordings: pages written by the recorder, or text lines (``docs/recording.md``).
 
-`PageReader` reads a recording back, page by page; `ReplayerLoopFactory`
-stores its pages into a node again, with their original spacing in time or
-as fast as possible. `TextReader` and `TextReplayerFactory` do the same for a
-text file, a page per line (e.g. a log of NMEA sentences from a GPS). A bad
-line is reported with its number and skipped; replay goes on. See
-``docs/recording.md``.
+`PageReader` reads a recording; `ReplayerLoopFactory` stores its pages into a
+node again, timed as recorded or fast. `TextReader` and `TextReplayerFactory`
+do the same for a text file, a page per line.
 """
 
 from __future__ import annotations
@@ -18,7 +15,10 @@ import sys
 import threading
 import time
 from collections import deque
+from contextlib import closing
+from itertools import islice
 from typing import (
+    Any,
     Deque,
     Dict,
     Generator,
@@ -70,12 +70,7 @@ DRAIN_ROUNDS = 100
 """How many times ``exit_when_done`` lets the queue go round before stopping."""
 
 MAX_GAP_S = 10.0
-"""Default longest wait between two replayed pages with original timing, in seconds.
-
-A longer gap is far more often a clock that jumped or a corrupt timestamp
-than a real pause, so the replayer waits this long instead and logs a
-warning naming the line. ``ReplayerLoopFactory(max_gap_s=...)`` changes it.
-"""
+"""Default longest wait between two timed pages, in seconds: a longer gap is likely a clock jump."""
 
 REORDER_WINDOW = 1000
 """How many pages ahead the replayer looks for an earlier-made page of the same origin."""
@@ -85,14 +80,7 @@ MAX_PROBLEMS = 100
 
 
 class RecordedPage(NamedTuple):
-    """A page read from a recording, with where it was and whether it had a time.
-
-    Attributes:
-        line: the line number in the file (the header is line 1); in an MCAP
-            file, the message number (the first message is 1).
-        page: the page.
-        timed: False when the line had no ``created_at_s`` (the page then
-            holds the time it was read).
+    """A page read from a recording, its line (MCAP: message) number, and whether it had a time.
 
     Example::
 
@@ -107,37 +95,37 @@ class RecordedPage(NamedTuple):
 
 def _check_readable(filename: str, what: str) -> None:
     if not os.path.isfile(filename):
-        folder = os.path.dirname(os.path.abspath(filename))
         raise ConfigError(
-            f"{what} cannot read {filename!r}: there is no such file (looked in {folder!r}). "
-            "Check the name, and that the program runs in the folder you expect "
-            f"(it runs in {os.getcwd()!r})."
+            f"{what} cannot read {filename!r}: there is no such file (looked in "
+            f"{os.path.dirname(os.path.abspath(filename))!r}). Check the name, and that the "
+            f"program runs in the folder you expect (it runs in {os.getcwd()!r})."
         )
+
+
+def _fields(line: bytes) -> Optional[Dict[str, Any]]:
+    """The JSON object on ``line``, or None when it is not one."""
+    try:
+        return decode_line(line)
+    except Exception:
+        return None
 
 
 class PageReader:
     """Reads the pages of a recording in order; iterate over it.
 
-    A file in another format an extra provides (MCAP: known by its first
-    bytes, whatever its name; ``pip install 'snr-robotics[mcap]'``) is read by
-    that extra, its messages taken as lines are ("message N" for "line N").
-    Any line that is not a valid page is logged with its line number, listed
-    in ``problems`` and skipped, a last line cut short included: the first
-    five in full, then a count every 5 s, and a summary with the total at the
-    end (``docs/recording.md``, "Reading").
+    A file in a format an extra provides (MCAP, known by its first bytes) is
+    read by that extra ("message N" for "line N"). A line that is not a page
+    is logged with its number, kept in ``problems`` and skipped.
 
     Args:
         filename: a file written by `RecorderEndpointFactory`.
 
     Raises:
-        ConfigError: the file does not exist, or is MCAP and the mcap
-            package is not installed.
-        WireFormatError: the file starts with the header of a newer SNR's
-            format, or of another format.
+        ConfigError: no such file, or its format's package is not installed.
+        WireFormatError: the file starts with the header of a newer SNR's format, or another.
 
     Attributes:
-        problems: the first `MAX_PROBLEMS` bad lines, each as
-            ``"file:line: reason"`` (MCAP: ``"file: message N: reason"``).
+        problems: the first `MAX_PROBLEMS` bad lines, each ``"file:line: reason"``.
         bad_lines: how many bad lines (or MCAP messages) were skipped in all.
         file_format: ``"jsonl"``, or the format an extra reads (``"mcap"``).
         is_mcap: True when the file is MCAP.
@@ -153,8 +141,6 @@ class PageReader:
         _check_readable(self.filename, "PageReader")
         self.problems: List[str] = []
         self.bad_lines = 0
-        self._bad_line_numbers: List[int] = []
-        self._repeats = RepeatFilter(_log, first=5)
         with open(self.filename, "rb") as file:
             first = file.readline()  # MCAP's magic ends with a newline too
         self.file_format = recording_formats.format_of_bytes(first)
@@ -165,112 +151,84 @@ class PageReader:
             self._format = recording_formats.get(self.file_format, what)
             self._format.require(what, "stream_reader")
             return
-        try:
-            fields = decode_line(first)
-        except Exception:  # not a header: reported as a bad line when read
-            return
-        if is_header(fields):
+        fields = _fields(first)  # not JSON: reported as a bad line when read
+        if fields is not None and is_header(fields):
             try:  # a newer format fails now, not halfway through a replay
                 check_header(fields)
             except WireFormatError as error:
                 raise WireFormatError(f"Cannot replay {self.filename!r}: {error}.") from error
 
     def __iter__(self) -> Iterator[Page]:
-        recorded_pages = self.recorded_pages()
-        try:
-            for recorded in recorded_pages:
-                yield recorded.page
-        finally:
-            recorded_pages.close()  # closes the file now, even if iteration stopped early
+        with closing(self.recorded_pages()) as recorded:  # the file closes if iteration stops
+            for item in recorded:
+                yield item.page
 
     def recorded_pages(self) -> Generator[RecordedPage, None, None]:
-        """The pages with their line numbers, and whether each line had a time.
-
-        Reading starts again at the top of the file on each call; the
-        counts of bad lines start again too.
+        """The pages with their line numbers; each call reads (and counts bad lines) anew.
 
         Example::
 
             for recorded in PageReader("dive.jsonl").recorded_pages():
                 print(f"line {recorded.line}: {recorded.page.data}")
         """
-        self.problems, self.bad_lines, self._bad_line_numbers = [], 0, []
-        # A corrupt file can hold thousands of bad lines: log the first few in full.
-        self._repeats = RepeatFilter(_log, first=5)
-        if self._format is None:
-            pages = self._read_lines()
-        else:
-            unit, name = self._format.unit, self.filename
-            pages = self._format.read_pages(
-                name, lambda n, why: self._report(n, f"{name}: {unit} {n}: {why}")
-            )
+        self.problems, self.bad_lines = [], 0
+        self._numbers: List[int] = []  # the first ten, for the summary
+        self._repeats = RepeatFilter(_log, first=5)  # a corrupt file may hold thousands
+        fmt, name = self._format, self.filename
+        unit = "line" if fmt is None else fmt.unit
+        pages = (
+            self._lines()
+            if fmt is None
+            else fmt.read_pages(name, lambda n, why: self._report(n, f"{name}: {unit} {n}: {why}"))
+        )
         try:
             for number, page, timed in pages:
                 yield RecordedPage(number, page, timed)
         finally:
-            close = getattr(pages, "close", None)
-            if close is not None:
-                close()  # the file, now, even if reading stopped early
-            self._summarise()
+            getattr(pages, "close", lambda: None)()  # the file, now
+            bad, units = self.bad_lines, unit if self.bad_lines == 1 else unit + "s"
+            shown = ", ".join(map(str, self._numbers)) + (", ..." if bad > 10 else "")
+            more = f", {bad - 5} more times than logged in full above" if bad > 5 else ""
+            if bad:
+                _log.warning(
+                    f"{name}: skipped {bad} bad {units} in all ({units} {shown}){more}; "
+                    f"every other {unit} was read."
+                )
 
-    def _read_lines(self) -> Iterator[Tuple[int, Page, bool]]:
+    def _lines(self) -> Iterator[Tuple[int, Page, bool]]:
         with open(self.filename, "rb") as file:
             for number, raw in enumerate(file, start=1):
-                parsed = self._parse(number, raw)
-                if parsed is not None:
-                    yield number, *parsed
-
-    def _summarise(self) -> None:
-        if not self.bad_lines:
-            return
-        shown = ", ".join(map(str, self._bad_line_numbers))
-        if self.bad_lines > len(self._bad_line_numbers):
-            shown += ", ..."
-        unlogged = self.bad_lines - min(self.bad_lines, self._repeats.first)
-        unit = "line" if self._format is None else self._format.unit
-        units = unit if self.bad_lines == 1 else unit + "s"
-        _log.warning(
-            "%s: skipped %d bad %s in all (%s %s)%s; every other %s was read.",
-            self.filename,
-            self.bad_lines,
-            units,
-            units,
-            shown,
-            f", {unlogged} more times than logged in full above" if unlogged else "",
-            unit,
-        )
-
-    def _parse(self, number: int, raw: bytes) -> Optional[Tuple[Page, bool]]:
-        try:
-            if not raw.strip():
-                return None
-            fields = decode_line(raw)
-            if is_header(fields):
-                check_header(fields)  # e.g. two recordings joined with `cat`
-                return None
-            return page_from_fields(fields), "created_at_s" in fields
-        except Exception as error:  # whatever a line holds, replay goes on
-            why = str(error) if isinstance(error, WireFormatError) else repr(error)[:200]
-            cut = "" if raw.endswith(b"\n") else " (cut short: the recorder stopped mid-line)"
-            self._report(number, f"{self.filename}:{number}: skipped a bad line{cut}: {why}")
-            return None
+                try:
+                    if not raw.strip():
+                        continue
+                    fields = decode_line(raw)
+                    if is_header(fields):
+                        check_header(fields)  # e.g. two recordings joined with `cat`
+                        continue
+                    page = page_from_fields(fields)
+                except Exception as error:  # whatever a line holds, replay goes on
+                    why = str(error) if isinstance(error, WireFormatError) else repr(error)[:200]
+                    where = f"{self.filename}:{number}: skipped a bad line"
+                    if not raw.endswith(b"\n"):
+                        where += " (cut short: the recorder stopped mid-line)"
+                    self._report(number, f"{where}: {why}")
+                    continue
+                yield number, page, "created_at_s" in fields
 
     def _report(self, number: int, problem: str) -> None:
-        self.bad_lines += 1
+        name, self.bad_lines = self.filename, self.bad_lines + 1
         if len(self.problems) < MAX_PROBLEMS:
             self.problems.append(problem)
-        if len(self._bad_line_numbers) < 10:
-            self._bad_line_numbers.append(number)
-        self._repeats.report(
-            self.filename, f"Bad lines in {self.filename}", logging.WARNING, "%s", problem
-        )
+        if len(self._numbers) < 10:
+            self._numbers.append(number)
+        self._repeats.report(name, f"Bad lines in {name}", logging.WARNING, problem)
 
 
 class TextReader:
     """Reads a text file line by line, without the line endings.
 
-    Lines that are not valid UTF-8 are reported with their line number and
-    kept, with the bad bytes replaced by ``\\ufffd``.
+    A line that is not valid UTF-8 is reported with its number and kept, the
+    bad bytes replaced by ``\\ufffd``.
 
     Example::
 
@@ -296,7 +254,7 @@ class TextReader:
                         "replayed with the bad bytes replaced"
                     )
                     self.problems.append(problem)
-                    _log.warning("%s", problem)
+                    _log.warning(problem)
                     line = raw.decode(self.encoding, errors="replace")
                 yield line
 
@@ -307,10 +265,8 @@ Item = TypeVar("Item")
 class ReplayLoop(ThreadLoop, Generic[Item]):
     """What both replayers share: step through a file, then stop.
 
-    Subclasses say how to read the file (``items``), how long to wait before
-    each item (``delay_s``) and how to store it (``store``). The count of
-    items replayed lives on the factory, so after a hot reload the replay
-    goes on where it was instead of starting over.
+    A subclass gives ``items()`` and ``store``. The count of items replayed is
+    kept on the factory: after a hot reload the replay goes on.
 
     Example: see `ReplayerLoop` and `TextReplayerLoop`.
     """
@@ -318,19 +274,14 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
     def __init__(self, factory: _ReplayFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
         self.replay = factory
-        self._items: Optional[Iterator[Item]] = None
+        self._items: Iterator[Tuple[float, Item]] = iter(())
         self._done_event = f"{self.name}_done"
-        self._exit_scheduled = False
         self._whole_file_replayed = False  # set on the loop's thread, read on the node's
         if factory.exit_when_done:
             self.task_handlers = {(TaskType.event, self._done_event): self.finish_node}
 
-    def items(self) -> Iterator[Item]:
-        """The items of the file, in order."""
-        raise NotImplementedError
-
-    def delay_s(self, item: Item) -> float:
-        """Seconds to wait before storing ``item``."""
+    def items(self) -> Iterator[Tuple[float, Item]]:
+        """``(seconds to wait, item)`` for each item after the first ``position``."""
         raise NotImplementedError
 
     def store(self, item: Item) -> None:
@@ -342,54 +293,34 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         return ""
 
     def setup(self) -> None:
-        try:
-            self._items = self.items()
-            for _ in range(self.replay.position):  # resume after a reload
-                if next(self._items, None) is None:
-                    break
-        except Exception:
-            self._still_exit()
-            raise
+        self._items = self.items()
 
     def loop(self) -> None:
-        assert self._items is not None  # set in setup()
         try:
-            item = next(self._items, None)
-            if item is None:
-                self._finished()
-                return
-            delay = self.delay_s(item)
-            if delay > 0 and self.wait_s(delay):
-                return  # the node is stopping; this item was not stored
-            self.store(item)
-            self.replay.position += 1
+            step = next(self._items, None)
+            if step is None:
+                self.set_terminate_flag("replayed the whole file")
+                if not self.replay.exit_when_done:
+                    self._say_replayed()
+                # Else finish_node says it on the node's thread, after what the
+                # items caused: the line then follows what they printed.
+                self._whole_file_replayed = True
+                self._still_exit()
+            elif not (step[0] > 0 and self.wait_s(step[0])):  # True: the node is stopping
+                self.store(step[1])
+                self.replay.position += 1
         except Exception:
             # Reported by the node like any loop's error. In DEPLOYED mode the
             # node keeps running without this loop: exit_when_done still stops it.
             self._still_exit()
             raise
 
-    def _finished(self) -> None:
-        self.set_terminate_flag("replayed the whole file")
-        if self.replay.exit_when_done:
-            # Said by finish_node on the node's thread, after the node has
-            # handled the items: the log line then follows what they printed.
-            self._whole_file_replayed = True
-            self._still_exit()
-        else:
-            self._say_replayed()
-
     def _say_replayed(self) -> None:
-        self.info(
-            "Replayed %d items from %s%s",
-            self.replay.position,
-            self.replay.filename,
-            self.summary(),
-        )
+        replay = self.replay
+        self.info(f"Replayed {replay.position} items from {replay.filename}{self.summary()}")
 
-    def _still_exit(self) -> None:
-        if self.replay.exit_when_done and not self._exit_scheduled:
-            self._exit_scheduled = True
+    def _still_exit(self) -> None:  # once: the loop stops after it
+        if self.replay.exit_when_done:
             self.schedule(tasks.event(self._done_event, [0]))
 
     def finish_node(self, task: Task, key: TaskId) -> SomeTasks:
@@ -401,7 +332,7 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         """
         rounds = task.val_list[0] if task.val_list else DRAIN_ROUNDS
         queue = getattr(self.parent, "queue", None)  # a real Node's task queue
-        if queue is not None and len(queue) > 0 and rounds < DRAIN_ROUNDS:
+        if queue and rounds < DRAIN_ROUNDS:
             return tasks.event(self._done_event, [rounds + 1])
         if self._whole_file_replayed:
             self._say_replayed()
@@ -409,10 +340,7 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
 
     def terminate(self) -> None:
         """Close the file if the replay stopped before its end."""
-        items, self._items = self._items, None
-        close = getattr(items, "close", None)
-        if close is not None:
-            close()
+        getattr(self._items, "close", lambda: None)()
 
 
 class _ReplayFactory(LoopFactory):
@@ -427,14 +355,12 @@ class _ReplayFactory(LoopFactory):
 
 
 class ReplayerLoop(ReplayLoop[RecordedPage]):
-    """Stores the pages of a recording, each with its key, data, origin and time.
+    """Stores the pages of a recording as recorded: key, data, origin and time.
 
-    Each origin's pages are stored in the order they were made, even where
-    the file's lines are out of order (see `in_created_order`). With original
-    timing each page waits as long after the previous one as it was created
-    after it, following each origin's clock on its own; a page with no time,
-    a gap over ``max_gap_s`` or a time going back is stored right away (or
-    after ``max_gap_s``) and logged with its line number.
+    Each origin's pages go in the order they were made (`in_created_order`),
+    timed on that origin's clock unless ``fast``; a page with no time, a gap
+    over ``max_gap_s`` or a time going back is stored at once (or after
+    ``max_gap_s``) and logged with its line.
 
     Example::
 
@@ -445,93 +371,72 @@ class ReplayerLoop(ReplayLoop[RecordedPage]):
         super().__init__(factory, parent)
         self.options = factory
         self.reader = PageReader(factory.filename)  # now: a missing file fails the build
-        self._due: Optional[float] = None  # when the previous page was due (monotonic)
-        # origin -> replay time minus created_at_s, so due = created_at_s + offset
-        self._offsets: Dict[str, float] = {}
         self._timing = RepeatFilter(_log, first=5)
 
-    def items(self) -> Iterator[RecordedPage]:
-        recorded_pages = self.reader.recorded_pages()
-        keys = None if self.options.keys is None else set(self.options.keys)
-        wanted = (r for r in recorded_pages if keys is None or r.page.key in keys)
-        try:
-            yield from in_created_order(wanted, max(self.options.max_gap_s, MAX_GAP_S))
-        finally:
-            recorded_pages.close()
+    def items(self) -> Iterator[Tuple[float, RecordedPage]]:
+        options, keys = self.options, self.options.keys
+        due: Optional[float] = None  # when the previous page was due (monotonic)
+        offsets: Dict[str, float] = {}  # origin -> replay time minus created_at_s
+        with closing(self.reader.recorded_pages()) as recorded:
+            wanted = (r for r in recorded if keys is None or r.page.key in keys)
+            ordered = in_created_order(wanted, max(options.max_gap_s, MAX_GAP_S))
+            for item in islice(ordered, options.position, None):
+                now = time.monotonic()
+                if options.fast or (due is None and not item.timed):
+                    due = now
+                else:  # the first page (also after a reload) is due now
+                    due = self._next_due(item, now if due is None else due, offsets)
+                yield due - now, item
 
-    def delay_s(self, item: RecordedPage) -> float:
-        if self.options.fast:
-            return 0.0
-        now = time.monotonic()
-        if self._due is None:  # the first page (also after a reload): stored now
-            self._due = now
-            if not item.timed:
-                return 0.0
-        self._due = self._next_due(item, self._due)
-        return self._due - now
-
-    def _next_due(self, item: RecordedPage, previous: float) -> float:
+    def _next_due(self, item: RecordedPage, previous: float, offsets: Dict[str, float]) -> float:
         """When ``item`` is due, given when the page before it was due."""
         page, max_gap = item.page, self.options.max_gap_s
+        at = f"{self.options.filename}:{item.line}: the"
         if not item.timed:
-            self._retimed(
+            return self._retimed(
                 "no time",
-                "%s:%d: the page under %r has no created_at_s: stored right after the "
+                f"{at} page under {page.key!r} has no created_at_s: stored right after the "
                 "previous page.",
-                item,
+                previous,
             )
-            return previous
-        offset = self._offsets.get(page.origin)
-        due = previous  # the first page from this origin: its clock starts here
-        if offset is not None:
-            gap = page.created_at_s + offset - previous
-            if 0.0 <= gap <= max_gap:
-                return previous + gap
-            if -max_gap <= gap < 0.0:  # a little back in time (clocks of two nodes): no wait
-                return previous
-            if gap > max_gap:
-                self._retimed(
-                    "gap",
-                    "%s:%d: the page under %r was created %s s after the one before it: "
-                    "waiting %g s instead (max_gap_s).",
-                    item,
-                    _seconds(gap),
-                    max_gap,
-                )
-                due = previous + max_gap
-            else:
-                self._retimed(
-                    "back",
-                    "%s:%d: the time of the page under %r goes back by %s s: stored right "
-                    "after the previous page.",
-                    item,
-                    _seconds(-gap) if gap == gap else "an unknown number of",
-                )
-        self._offsets[page.origin] = due - page.created_at_s  # follow the clock from here
+        # An origin's first page starts its clock; later ones follow it, within max_gap.
+        offset = offsets.setdefault(page.origin, previous - page.created_at_s)
+        gap = page.created_at_s + offset - previous
+        if -max_gap <= gap <= max_gap:  # a little back (two nodes' clocks): no wait
+            return previous + max(gap, 0.0)
+        if gap > max_gap:
+            due = self._retimed(
+                "gap",
+                f"{at} page under {page.key!r} was created {_seconds(gap)} s after the one "
+                f"before it: waiting {max_gap:g} s instead (max_gap_s).",
+                previous + max_gap,
+            )
+        else:
+            due = self._retimed(
+                "back",
+                f"{at} time of the page under {page.key!r} goes back by {_seconds(-gap)} s: "
+                "stored right after the previous page.",
+                previous,
+            )
+        offsets[page.origin] = due - page.created_at_s  # follow the clock from here
         return due
 
-    def _retimed(self, kind: str, msg: str, item: RecordedPage, *args: object) -> None:
+    def _retimed(self, kind: str, text: str, due: float) -> float:
+        """Log (or count) a page not stored at its recorded time; returns ``due``."""
         self.options.retimed += 1
-        filename = self.options.filename
-        self._timing.report(
-            kind,
-            f"Replay timing of {filename} ({kind})",
-            logging.WARNING,
-            msg,
-            filename,
-            item.line,
-            item.page.key,
-            *args,
-        )
+        what = f"Replay timing of {self.options.filename} ({kind})"
+        self._timing.report(kind, what, logging.WARNING, text)
+        return due
 
     def store(self, item: RecordedPage) -> None:
         self.store_page(item.page)  # the page as recorded: origin and created_at_s kept
 
     def summary(self) -> str:
-        self.options.bad_lines = bad = self.reader.bad_lines
+        options = self.options
+        options.bad_lines = bad = self.reader.bad_lines
         parts = [f"{bad} bad lines skipped"] if bad else []
-        if self.options.retimed:
-            parts.append(f"{self.options.retimed} pages not stored at their recorded time")
+        if options.retimed:
+            parts.append(f"{options.retimed} pages not stored at their recorded time")
         return f" ({'; '.join(parts)}; see the warnings above)" if parts else ""
 
 
@@ -540,13 +445,11 @@ def in_created_order(
 ) -> Iterator[RecordedPage]:
     """``recorded`` with each origin's pages in the order they were made (``created_at_s``).
 
-    A recording's lines can be out of order (the 2021 node handled the newest
-    task first). Each page takes the place in the file of one of its origin's
-    pages, so the origins stay interleaved as recorded and their clocks are
-    never compared. Pages further apart than ``window`` lines are not swapped,
-    and neither are pages on either side of a clock jump (more than
-    ``max_jump_s`` either way): those are timing problems, left to `ReplayerLoop`.
-    Pages without a time keep their places.
+    The 2021 node handled the newest task first, so its recordings are out of
+    order. Each page takes the place of one of its origin's pages: origins stay
+    interleaved and their clocks are never compared. Pages more than ``window``
+    lines apart, on either side of a clock jump (over ``max_jump_s``), or
+    without a time are not swapped.
 
     Example::
 
@@ -582,15 +485,11 @@ class ReplayerLoopFactory(_ReplayFactory):
 
     Args:
         filename: a file written by `RecorderEndpointFactory`.
-        fast: store the pages as fast as possible instead of with their
-            original spacing in time.
-        exit_when_done: stop the node after the last page (once the node has
-            handled what the pages caused), in every mode.
+        fast: store the pages as fast as possible, not with their original spacing.
+        exit_when_done: stop the node after the last page, once it has handled what they caused.
         keys: replay only pages under these keys (default: all).
         name: the loop's name (default ``"replayer"``).
-        max_gap_s: with original timing, the longest wait between two pages
-            (default `MAX_GAP_S`, 10 s); a longer gap in the recording is
-            cut to this and logged with its line number.
+        max_gap_s: the longest wait between two timed pages; a longer gap is cut and logged.
 
     Raises:
         ConfigError: ``max_gap_s`` is negative, not finite or too large.
@@ -605,8 +504,7 @@ class ReplayerLoopFactory(_ReplayFactory):
     Attributes:
         position: pages replayed so far (kept across reloads).
         bad_lines: bad lines skipped, known at the end of the file.
-        retimed: pages not stored at their recorded time (no time, a gap
-            over ``max_gap_s``, time going back).
+        retimed: pages not stored at their recorded time.
     """
 
     def __init__(
@@ -621,11 +519,8 @@ class ReplayerLoopFactory(_ReplayFactory):
         super().__init__(filename, exit_when_done, name or "replayer")
         self.fast = fast
         self.keys: Optional[List[DataKey]] = None if keys is None else list(keys)
-        if not (
-            isinstance(max_gap_s, (int, float))
-            and math.isfinite(max_gap_s)
-            and 0 <= max_gap_s <= threading.TIMEOUT_MAX
-        ):
+        # NaN fails the comparison, infinity is over TIMEOUT_MAX.
+        if not (isinstance(max_gap_s, (int, float)) and 0 <= max_gap_s <= threading.TIMEOUT_MAX):
             raise ConfigError(
                 f"ReplayerLoopFactory({self.filename!r}, max_gap_s={max_gap_s!r}): use a "
                 "number of seconds, 0 or more (e.g. 10.0)."
@@ -653,14 +548,11 @@ class TextReplayerLoop(ReplayLoop[str]):
         super().__init__(factory, parent)
         self.options = factory
         self.reader = TextReader(factory.filename, factory.encoding)
-        self._first = True
 
-    def items(self) -> Iterator[str]:
-        return iter(self.reader)
-
-    def delay_s(self, item: str) -> float:
-        first, self._first = self._first, False
-        return 0.0 if first else self.options.period_s
+    def items(self) -> Iterator[Tuple[float, str]]:
+        start, period = self.options.position, self.options.period_s
+        for number, line in islice(enumerate(self.reader), start, None):
+            yield (period if number > start else 0.0), line
 
     def store(self, item: str) -> None:
         self.store_data(self.options.key, item)
