@@ -1,7 +1,7 @@
 """What a node logs when a reload, a removal or a component's life-cycle call goes wrong.
 
-`snr.core.components.ComponentSet` never lets such a mistake stop the node; each message names the
-component, what failed and what happens now.
+`snr.core.components.ComponentSet` never lets such a mistake stop the node; each
+message names the component, what failed and what happens now.
 
 Example::
 
@@ -27,6 +27,8 @@ ReloadStage = Literal["source", "build", "none", "name", "restart", "start"]
 """Where a reload went wrong: the new ``source``, ``build`` (``none``: ``get()`` gave None;
 ``name``: a taken name), ``restart`` of the old one, ``start`` of the new one."""
 
+_KEEPS = "so the old version keeps running"
+
 
 def reload_refused(
     log: logging.Logger,
@@ -35,9 +37,7 @@ def reload_refused(
     error: Optional[BaseException] = None,
     new: Optional[AbstractComponent] = None,
 ) -> None:
-    """Log why reloading ``old`` went wrong at ``stage``, and what runs now.
-
-    ``new`` is the new component, for ``name`` and ``start``.
+    """Log why reloading ``old`` went wrong at ``stage`` (``new``: the new one), and what runs now.
 
     Example::
 
@@ -45,41 +45,26 @@ def reload_refused(
         # "DepthFactory.get (robot.py:20) returned None on reload, so the old
         #  version of 'depth' keeps running."
     """
+    name, text = old.name, ""
     if stage == "source" and error is not None:
-        log.error(
-            "Reloading %r failed while reading its new source, so the old version "
-            "keeps running:\n%s",
-            old.name,
-            reload_failure(error),
-        )
+        text = f"Reloading {name!r} failed while reading its new source, {_KEEPS}:\n"
+        text += reload_failure(error)
     elif stage == "build" and error is not None:
-        log.error(
-            "Rebuilding %r after its reload failed, so the old version keeps running:\n%s",
-            old.name,
-            error if isinstance(error, SNRError) else reload_failure(error),
-        )
+        why = error if isinstance(error, SNRError) else reload_failure(error)
+        text = f"Rebuilding {name!r} after its reload failed, {_KEEPS}:\n{why}"
     elif stage == "none":
-        log.error(
-            "%s returned None on reload, so the old version of %r keeps running.",
-            describe_callable(type(old.factory).get),
-            old.name,
-        )
+        get = describe_callable(type(old.factory).get)
+        text = f"{get} returned None on reload, so the old version of {name!r} keeps running."
     elif stage == "name" and new is not None:
-        log.error(
-            "Reloaded %r came back named %r, which another component has; the old "
-            "version keeps running.",
-            old.name,
-            new.name,
-        )
+        text = f"Reloaded {name!r} came back named {new.name!r}, which another component has; "
+        text += "the old version keeps running."
     elif stage == "restart" and error is not None:
-        log.error(
-            "%r could not be restarted after the failed reload: %s: %s",
-            old.name,
-            type(error).__name__,
-            error,
-        )
+        text = f"{name!r} could not be restarted after the failed reload: "
+        text += f"{type(error).__name__}: {error}"
     elif stage == "start" and new is not None:
-        log.error("Reloaded %r, but it failed to start: %s", new.name, error)
+        text = f"Reloaded {new.name!r}, but it failed to start: {error}"
+    if text:
+        log.error("%s", text)
 
 
 def not_found(log: logging.Logger, action: str, name: str, role: str, names: Iterable[str]) -> None:
@@ -92,14 +77,11 @@ def not_found(log: logging.Logger, action: str, name: str, role: str, names: Ite
     """
     if action in CORE_REFUSED and name == "node_core":
         log.error(CORE_REFUSED[action], name, role)
-        return
-    log.error(
-        "Cannot %s %r: node %r has no such component. It has: %s.",
-        action,
-        name,
-        role,
-        ", ".join(names),
-    )
+    else:
+        has = ", ".join(names)
+        log.error(
+            "Cannot %s %r: node %r has no such component. It has: %s.", action, name, role, has
+        )
 
 
 def still_running(
@@ -111,10 +93,8 @@ def still_running(
 
         still_running(node.log, sonar_loop, 1.0, reload=False)
     """
-    if reload:
-        log.error("%s", not_stopped_text(component, timeout_s, reload=True))
-    else:
-        log.warning("%s", not_stopped_text(component, timeout_s, reload=False))
+    level = logging.ERROR if reload else logging.WARNING
+    log.log(level, "%s", not_stopped_text(component, timeout_s, reload=reload))
 
 
 def call_failed(log: logging.Logger, component: AbstractComponent, what: str) -> None:
@@ -129,9 +109,5 @@ def call_failed(log: logging.Logger, component: AbstractComponent, what: str) ->
         except Exception:
             call_failed(node.log, component, "halt")
     """
-    log.exception(
-        "%s.%s() of component %r raised; carrying on",
-        type(component).__name__,
-        what,
-        component.name,
-    )
+    name = type(component).__name__
+    log.exception("%s.%s() of component %r raised; carrying on", name, what, component.name)

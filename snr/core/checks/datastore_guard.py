@@ -1,19 +1,11 @@
 """A node's datastore as its components see it: read-only, and saying so.
 
-A component sees its node's datastore as ``self.parent.datastore``. Writing
-into it directly (``self.parent.datastore["depth"] = 2.0``) would store a bare
-value where every reader expects a Page, from a thread that may not be the
-node's, and skip the ``process_data`` tasks the handlers of the key wait for;
-the mistake would then show far away, as ``'float' object has no attribute
-'data'`` in some other handler. So ``node.datastore`` is a live, read-only
-view of the node's own dict (``node.pages``) that refuses every change
-(``[k] = v``, ``del``, ``update``, ``pop``, ``clear``, ``setdefault``,
-``popitem``, ``|=``) at the line that tries it, and names ``store_data``.
-
-The node writes ``node.pages`` itself, a plain dict (or the `Datastore` the
-config names): the guard costs its hot path nothing (docs/design.md, "Only
-the node writes its datastore"). It reads the pages through the four methods
-of `Datastore` only, so it works the same over a student's datastore.
+A value written into ``self.parent.datastore`` directly would be a bare value
+where readers expect a Page, from a thread that may not be the node's, with no
+``process_data`` for the key's handlers. So ``node.datastore`` is a live,
+read-only view of the node's own ``node.pages`` that refuses every change at
+the line that tries it, naming ``store_data`` (docs/design.md, "Only the node
+writes its datastore"). It reads through `Datastore`'s four methods only.
 
 Example::
 
@@ -50,10 +42,6 @@ def _refused(what: str, names_key: bool = False) -> Callable[..., NoReturn]:
 class NodeDatastore(Mapping[DataKey, Page]):
     """A live, read-only view of a node's pages that refuses every change, naming store_data.
 
-    Attributes:
-        role: the node's role, for the message.
-        queue: the node's task queue, whose ``owner_thread`` is the node's thread.
-
     Example::
 
         store = NodeDatastore({}, "robot")
@@ -66,7 +54,7 @@ class NodeDatastore(Mapping[DataKey, Page]):
     def __init__(self, pages: Datastore, role: str, queue: Optional[TaskQueue] = None) -> None:
         self._pages = pages
         self.role = role
-        self.queue = queue  # its owner_thread is the node's thread once the node runs
+        self.queue = queue  # its owner_thread: the node's thread, once the node runs
 
     def __getitem__(self, key: DataKey) -> Page:
         page = self._pages.get(key)
@@ -96,7 +84,6 @@ class NodeDatastore(Mapping[DataKey, Page]):
         return pages
 
     def _refuse(self, what: str, key: Any = None) -> NoReturn:
-        """Raise the error for ``what``, said at the student's line."""
         name = "key" if key is None else repr(key)
         if self.queue is not None and threading.get_ident() == self.queue.owner_thread:
             how = (

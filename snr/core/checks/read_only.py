@@ -1,20 +1,12 @@
 """Read-only page data (DEBUG and TEST): a page's list or dict cannot be changed in place.
 
-A page's data is one object, shared by every handler of its key, the
-datastore and whoever stored it. A handler that appends to
-``task.val_list[0].data`` would change the page for all of them, in silence.
-So in DEBUG and TEST modes the node stores a read-only copy of the data:
-lists become `ReadOnlyList`, dicts `ReadOnlyDict`, nested ones too (tuples
-holding them are rebuilt). Both are subclasses, so they still equal, print,
-``isinstance``-check and serialise as the plain list or dict; only their
-changing methods refuse, at the student's line, with the fix: copy it first.
-
-Why once, at store, and not a copy per handler: ``docs/performance.md``,
-"Page data that cannot be changed in place". DEPLOYED passes data as it is: a
-program that ran in DEBUG without tripping this does not change page data.
-
-Other objects (a set, a NumPy array, a class of the student's) are passed as
-they are: JSON pages hold only lists and dicts.
+A page's data is one object, shared by every handler of its key and the
+datastore: changing it in place would change it for all of them, in silence.
+So outside DEPLOYED the node stores a read-only copy: lists become
+`ReadOnlyList`, dicts `ReadOnlyDict`, nested ones too. They still equal,
+print and serialise as the plain list or dict; their changing methods refuse,
+saying to copy first (docs/performance.md, "Page data that cannot be changed
+in place").
 
 Example::
 
@@ -85,12 +77,11 @@ class ReadOnlyList(List[Any]):
     __iadd__ = _refusing("list", "+=")
     __imul__ = _refusing("list", "*=")
 
+    # Pickled and copied as a plain list: a copy is the student's own to change.
     def __reduce__(self) -> Tuple[Any, ...]:
-        """Pickled and copied as a plain list: a copy is the student's own to change."""
         return (list, (list(self),))
 
     def __deepcopy__(self, memo: Dict[int, Any]) -> List[Any]:
-        """``copy.deepcopy(data)``: a plain list, its items deep-copied."""
         return [copy.deepcopy(item, memo) for item in self]
 
 
@@ -116,22 +107,16 @@ class ReadOnlyDict(Dict[Any, Any]):
     __ior__ = _refusing("dict", "|=")
 
     def __reduce__(self) -> Tuple[Any, ...]:
-        """Pickled and copied as a plain dict: a copy is the student's own to change."""
         return (dict, (dict(self),))
 
     def __deepcopy__(self, memo: Dict[int, Any]) -> Dict[Any, Any]:
-        """``copy.deepcopy(data)``: a plain dict, its values deep-copied."""
         return {key: copy.deepcopy(value, memo) for key, value in self.items()}
 
 
 def freeze(data: Any, key: DataKey, depth: int = 0) -> Any:
     """``data`` with every list and dict in it read-only (a copy), for page ``key``.
 
-    Values that cannot change (numbers, strings, None) and objects that are not
-    lists, dicts or tuples come back as they are, and so does whatever is nested
-    deeper than `MAX_DEPTH` (data that contains itself is endlessly deep). Nested
-    values' types are checked in C first (``issuperset(map(type, ...))``), so a flat
-    list of numbers costs one copy.
+    Anything else, and whatever is nested deeper than `MAX_DEPTH`, comes back as it is.
 
     Example::
 
@@ -143,7 +128,7 @@ def freeze(data: Any, key: DataKey, depth: int = 0) -> Any:
         return data
     frozen: Any
     if kind is list or kind is ReadOnlyList:
-        if _IMMUTABLE.issuperset(map(type, data)):  # (a flat list: one C copy)
+        if _IMMUTABLE.issuperset(map(type, data)):  # a flat list: checked and copied in C
             frozen = ReadOnlyList(data)
         else:
             frozen = ReadOnlyList([freeze(item, key, depth + 1) for item in data])

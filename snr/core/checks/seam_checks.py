@@ -1,23 +1,10 @@
 """A datastore or node core of the student's own, checked where it plugs in.
 
-``Config(datastore=MyDatastore, node_core=MyNodeCoreFactory())`` replaces
-the node's ``dict`` and its `NodeCoreEndpoint` (docs/assignments.md). A
-mistake in either would show far away: a ``get`` that returns the data
-instead of the page fails in some handler's ``page.data``; a core that does
-not handle ``terminate`` leaves a node that never stops. So the node checks
-them as it builds them, and says which method is missing or wrong:
-
-* `check_seam_args`: the config was given a class to make a datastore with,
-  and a factory for the core (not an instance, not a class);
-* `checked_datastore`: the datastore has the four methods of `Datastore`;
-  in DEBUG and TEST its answers are checked as they are given
-  (`CheckedDatastore`: a Page or None, keys that are strings, a length);
-* `checked_core`: the core is a component named ``node_core`` with a
-  ``store_page_handler``; in DEBUG and TEST what that returns is checked,
-  and a task the core does not handle is said once, in the log.
-
-SNR's own datastore (a ``dict``) and core pass through untouched: the
-default path pays nothing.
+``Config(datastore=..., node_core=...)`` replaces the node's ``dict`` and its
+`NodeCoreEndpoint` (docs/assignments.md). A mistake in either would show far
+away (``page.data`` on a bare value, a node that never stops), so the node
+checks them as it builds them and, in DEBUG and TEST, each answer they give.
+SNR's own datastore and core pass through untouched.
 
 Example::
 
@@ -93,10 +80,7 @@ def check_seam_args(datastore: Any, node_core: Any) -> None:
 
 
 def checked_datastore(make: Callable[[], Any], node: AbstractNode) -> Datastore:
-    """``make()``, the node's datastore, once it is known to have `Datastore`'s four methods.
-
-    In DEBUG and TEST a datastore other than ``dict`` comes wrapped in a
-    `CheckedDatastore`, which checks each answer.
+    """``make()``, once it has `Datastore`'s four methods (a `CheckedDatastore` but DEPLOYED).
 
     Raises:
         ConfigError: ``make()`` raised, or what it made lacks a method.
@@ -127,12 +111,7 @@ def checked_datastore(make: Callable[[], Any], node: AbstractNode) -> Datastore:
 
 
 class CheckedDatastore:
-    """A student's datastore, each answer checked to be of the kind a node expects.
-
-    Writes go straight through; ``get`` must give a `Page` (of the key
-    asked) or None, ``__iter__`` strings, ``__len__`` a number. A wrong
-    answer is a ComponentError that names the method and says what it should
-    have given. Used in DEBUG and TEST only.
+    """A student's datastore whose every answer is checked: a wrong one is a ComponentError.
 
     Example::
 
@@ -153,7 +132,7 @@ class CheckedDatastore:
         )
 
     def __setitem__(self, key: DataKey, page: Page) -> None:
-        self.store[key] = page
+        self.store[key] = page  # writes go straight through
 
     def get(self, key: DataKey) -> Optional[Page]:
         """The student's ``get(key)``, checked."""
@@ -218,10 +197,9 @@ def checked_core(core: Optional[AbstractComponent], factory: Any, node: Abstract
 
 
 class _CheckedStore:
-    """A node core's ``store_page_handler``, what it returns checked: None, or one ``process_data``.
+    """A node core's ``store_page_handler`` whose result is checked: None or a ``process_data``.
 
-    A callable object, not a function, so that a failure in it names the
-    student's method and line: ``__func__`` and ``__self__`` are the method's.
+    Its ``__func__`` and ``__self__`` are the method's: a failure names the student's line.
     """
 
     def __init__(self, handler: Any) -> None:

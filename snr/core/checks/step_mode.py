@@ -1,12 +1,10 @@
 """`StepMode`: pause a node, run its tasks one at a time, look around, resume.
 
-The debugger for event-driven code. After a console's ``pause`` the node runs
-only urgent tasks (a terminate, and the console's own commands: see
-`console_priority`); every other task waits, in order, and ``step`` runs the
-oldest through its handlers and says what they returned and what comes next.
-Loops keep running: their pages pile up under the queue's usual bound (the
-drop log then says the node is paused). The run loop asks ``paused`` once per
-batch and calls `run_paused` while it is true.
+After a console's ``pause`` the node runs only urgent tasks (a terminate, the
+console's own commands: `console_priority`); the rest wait in order, and
+``step`` runs the oldest through its handlers and says what they returned.
+Loops keep running (the drop log then says the node is paused). The run loop
+calls `run_paused` while ``paused``.
 
 Example::
 
@@ -43,14 +41,8 @@ _PAUSED_WHY = (
 
 @dataclass
 class Step:
-    """What one step did: the task, the handlers it went to, what they returned.
-
-    Attributes:
-        task: the task that ran, or None if the queue had none.
-        handlers: ``component.method`` of each handler it went to, in order.
-        returned: the tasks those handlers returned (now at the back of the queue).
-        next_tasks: the first few tasks waiting after it, urgent ones first.
-        waiting: how many tasks wait in the queue after it.
+    """What one step did: the task (None: none waited), its handlers (``component.method``),
+    the tasks they returned, the first few waiting next (urgent first) and how many wait.
 
     Example::
 
@@ -83,10 +75,7 @@ class StepMode:
 
     Example::
 
-        node.step_mode.paused      # False: the node runs freely
-
-    Attributes:
-        paused: True between `pause` and `resume`.
+        node.step_mode.paused      # True between pause() and resume()
     """
 
     def __init__(
