@@ -76,12 +76,8 @@ class NodeDatastore(Mapping[DataKey, Page]):
 
     def copy(self) -> Dict[DataKey, Page]:
         """A plain dict of the pages now, the caller's own to change."""
-        pages = {}
-        for key in list(self._pages):  # list(): the keys now, as the node may store more
-            page = self._pages.get(key)
-            if page is not None:
-                pages[key] = page
-        return pages
+        pages = self._pages  # list(): the keys now, as the node may store more
+        return {key: page for key in list(pages) if (page := pages.get(key)) is not None}
 
     def _refuse(self, what: str, key: Any = None) -> NoReturn:
         name = "key" if key is None else repr(key)

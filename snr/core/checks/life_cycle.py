@@ -1,8 +1,5 @@
 """A node or loop used out of turn, in words: run twice, started twice, a task without its page.
 
-`snr.core.node.Node` and `snr.core.loop.ThreadLoop` raise or log these; the
-words say what the state is and what to do instead.
-
 Example::
 
     raise ran_twice_error("robot", "terminated")

@@ -34,7 +34,6 @@ _IMMUTABLE = frozenset({int, float, str, bool, bytes, type(None), complex})
 
 def _refusing(kind: str, what: str, instead: str = "") -> Callable[..., NoReturn]:
     """A method that refuses ``what`` on a read-only ``kind``, saying to copy."""
-    copy_call = "list" if kind == "list" else "dict"
 
     def refuse(self: Any, *args: Any, **kwargs: Any) -> NoReturn:
         key = getattr(self, "key", "?")  # '?' for one made by hand, not by freeze
@@ -42,8 +41,8 @@ def _refusing(kind: str, what: str, instead: str = "") -> Callable[..., NoReturn
             f"The data of page {key!r} is read-only: {what} would change it for every "
             f"handler of {key!r} and for the datastore, which all share this one {kind}. "
             f"{instead}{'Otherwise c' if instead else 'C'}opy it and change the copy: "
-            f"mine = {copy_call}(task.val_list[0].data) in a handler, or "
-            f"mine = {copy_call}(self.get_data({key!r})) elsewhere; "
+            f"mine = {kind}(task.val_list[0].data) in a handler, or "
+            f"mine = {kind}(self.get_data({key!r})) elsewhere; "
             f"store_data({key!r}, mine) then shares it. DEBUG and TEST modes keep page "
             "data read-only; DEPLOYED does not check."
         )
@@ -127,11 +126,9 @@ def freeze(data: Any, key: DataKey, depth: int = 0) -> Any:
     if kind in _IMMUTABLE or depth > MAX_DEPTH:
         return data
     frozen: Any
-    if kind is list or kind is ReadOnlyList:
-        if _IMMUTABLE.issuperset(map(type, data)):  # a flat list: checked and copied in C
-            frozen = ReadOnlyList(data)
-        else:
-            frozen = ReadOnlyList([freeze(item, key, depth + 1) for item in data])
+    if kind is list or kind is ReadOnlyList:  # a flat one is checked and copied in C
+        flat = _IMMUTABLE.issuperset(map(type, data))
+        frozen = ReadOnlyList(data if flat else [freeze(item, key, depth + 1) for item in data])
     elif kind is dict or kind is ReadOnlyDict:
         if _IMMUTABLE.issuperset(map(type, data.values())):
             frozen = ReadOnlyDict(data)

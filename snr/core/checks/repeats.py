@@ -1,11 +1,4 @@
-"""`RepeatFilter`: a failure repeated over and over, logged in full a few times, then counted.
-
-Example::
-
-    repeats = RepeatFilter(log)
-    repeats.report(("parse", "ValueError"), "bad reading from the sonar",
-                   logging.WARNING, "Bad reading %r", reading)
-"""
+"""`RepeatFilter`: a failure repeated over and over, logged in full a few times, then counted."""
 
 from __future__ import annotations
 
@@ -17,10 +10,7 @@ __all__ = ["RepeatFilter"]
 
 
 class RepeatFilter:
-    """Logs the first few of a repeated message in full, then a count every few seconds.
-
-    Messages are grouped by a key (e.g. the handler and the error's type):
-    the first ``first`` of each are logged in full, then one count every ``every_s``.
+    """Logs the first ``first`` of each key's messages in full, then a count every ``every_s``.
 
     Example::
 

@@ -127,8 +127,7 @@ class CheckedDatastore:
     def _wrong(self, call: str, answer: Any, should: str) -> ComponentError:
         return ComponentError(
             f"{describe_class(type(self.store))}, the datastore: {call} returned "
-            f"{short_repr(answer)} "
-            f"({type(answer).__name__}); it should return {should} ({_SEE})."
+            f"{short_repr(answer)} ({type(answer).__name__}); it should return {should} ({_SEE})."
         )
 
     def __setitem__(self, key: DataKey, page: Page) -> None:
@@ -144,8 +143,7 @@ class CheckedDatastore:
 
     def __iter__(self) -> Iterator[DataKey]:
         keys: List[Any] = list(self.store)
-        odd = [key for key in keys if not isinstance(key, str)]
-        if odd or len(set(keys)) != len(keys):
+        if not all(isinstance(key, str) for key in keys) or len(set(keys)) != len(keys):
             raise self._wrong("iter()", keys, "each key that has a page (a str), once")
         return iter(keys)
 
@@ -163,8 +161,7 @@ def checked_core(core: Optional[AbstractComponent], factory: Any, node: Abstract
     """``core``, once it is known to be a node core; checked as it runs in DEBUG and TEST.
 
     Raises:
-        ConfigError: ``factory.get()`` gave None, or a component not named
-            ``node_core``, or one without a ``store_page_handler``.
+        ConfigError: ``factory.get()`` gave None, or no ``node_core`` with a ``store_page_handler``.
 
     Example::
 
@@ -181,16 +178,10 @@ def checked_core(core: Optional[AbstractComponent], factory: Any, node: Abstract
         )
     if node.mode is Mode.DEPLOYED or type(core).__module__ == "snr.core.node":
         return core  # SNR's own: as it is
-    handled = core.task_handlers
     for task_id, name, lost in CORE_TASKS:
-        if task_id not in handled:
-            node.log.warning(
-                "The node core %s handles no %s task: %s (%s).",
-                type(core).__name__,
-                name,
-                lost,
-                _SEE,
-            )
+        if task_id not in core.task_handlers:
+            warning = "The node core %s handles no %s task: %s (%s)."
+            node.log.warning(warning, type(core).__name__, name, lost, _SEE)
     # An instance attribute: the node reads core.store_page_handler after this.
     core.store_page_handler = _CheckedStore(core.store_page_handler)  # type: ignore[attr-defined]
     return core

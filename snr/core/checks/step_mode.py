@@ -92,8 +92,7 @@ class StepMode:
         self.paused = False
         self._requests: Deque[_StepRequest] = collections.deque()
         self._running_why = queue.loss.why
-        self._waits_at_pause = 0
-        self._drops_at_pause = 0
+        self._at_pause = (0, 0)  # the queue's waits and drops when paused
 
     def pause(self) -> None:
         """Hold every task but urgent ones after the current task (no-op if paused)."""
@@ -101,8 +100,7 @@ class StepMode:
             return
         self.paused = True
         self.runner.running = False  # run_queued returns after the task running now
-        self._waits_at_pause = self.queue.waits
-        self._drops_at_pause = self.queue.loss.total
+        self._at_pause = (self.queue.waits, self.queue.loss.total)
         self.queue.loss.why = _PAUSED_WHY
 
     def resume(self) -> None:
@@ -138,8 +136,8 @@ class StepMode:
 
             waits, dropped = node.step_mode.since_pause()   # (0, 0): nothing lost
         """
-        queue = self.queue
-        return queue.waits - self._waits_at_pause, queue.loss.total - self._drops_at_pause
+        waits, drops = self._at_pause
+        return self.queue.waits - waits, self.queue.loss.total - drops
 
     def run_paused(self, idle_s: Optional[float]) -> None:
         """One turn of the node's run loop while paused: urgent tasks, then a step, else sleep."""
@@ -197,8 +195,7 @@ class StepMode:
         return found
 
 
-def _handler_name(handler: Any, component: Any) -> str:
-    """``wanderer.steer``: the handler's component and method."""
+def _handler_name(handler: Any, component: Any) -> str:  # "wanderer.steer"
     name = getattr(handler, "__name__", repr(handler))
     owner = getattr(component, "name", None)
     return f"{owner}.{name}" if owner else name

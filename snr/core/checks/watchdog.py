@@ -67,7 +67,7 @@ _FOOTER = "(This shows once, in DEBUG mode only; node.watchdog = None turns the 
 
 
 class WatchedNode(Protocol):
-    """What the watchdog reads of its node: a `Node` (not imported: ``node.py`` imports this).
+    """What the watchdog reads of its node: a `Node` (not imported: it imports this).
 
     Example::
 
@@ -94,16 +94,12 @@ class Watchdog:
         node.watchdog.stuck_s = 0.5   # say it sooner (before node.loop())
 
     Attributes:
-        every_s: seconds between two looks at the node.
-        stuck_s: how long before a stuck handler, loop or flood is reported.
-        idle_s: how long before a node nothing can stop is reported.
+        every_s, stuck_s, idle_s, dozing_s: seconds between two looks; before a stuck
+            handler, loop or flood is reported; before a node nothing can stop is;
+            the longest an idle node goes unlooked at (it is looked at once it gets work).
         spin_hz: passes a second of a rate-less, storing loop that are reported.
-        dozing_s: the longest an idle node goes unlooked at (it is looked at
-            as soon as it gets work).
-        dozing: True while the watchdog sleeps until the node gets work
-            (`wake` then rings).
-        handler_stuck: True while the node's thread has been in one handler
-            call for at least one look.
+        dozing: True while the watchdog sleeps until the node gets work (`wake` rings).
+        handler_stuck: True while the node's thread is in the handler call of the last look.
         said: one line per report made so far, e.g. ``"handler Waiter.on_go"``.
     """
 
