@@ -39,10 +39,7 @@ class FailureReport:
 
         report = FailureReport("robot", Mode.TEST, log, node.set_terminate_flag)
         report.bad_result(5, handler, task)   # "Task handler ... returned 5 ..."
-
-    Attributes:
-        failure: the first error that stopped the node (DEBUG/TEST), or None.
-        repeats: the `RepeatFilter` that keeps repeated failures from flooding the log.
+        report.failure   # the first error, which stopped the node (DEBUG/TEST), or None
     """
 
     def __init__(

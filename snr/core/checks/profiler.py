@@ -92,14 +92,12 @@ class Profiler(AbstractProfiler):
         return sorted(rows, key=lambda row: row[2], reverse=True)
 
     def dump(self) -> str:
-        """The profile as text: thesis listing 5.2's table, one section per thread, each adding
-        up to 100% of the time since the node was made, then the added reports.
+        """Thesis listing 5.2's table, one section per thread (each adding up to 100% of the
+        time since the node was made), then the added reports.
 
         Example::
 
             print(node.profiler.dump())
-            # Times called,          Avg runtime, Task/Loop type,
-            # (share: of the 0.501 s since the node was made; each thread's lines add up ...)
             # node thread:
             #            1 x      8.383 us ->   0.002%: (store_page):snr.core.node
             #                              ->  99.998%: (outside handlers: the node's own ...)

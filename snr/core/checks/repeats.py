@@ -15,9 +15,7 @@ class RepeatFilter:
     Example::
 
         repeats = RepeatFilter(log)
-        for reading in readings:
-            repeats.report(("parse", "ValueError"), "bad reading from the sonar",
-                           logging.WARNING, "Bad reading %r", reading)
+        repeats.report(("parse", "ValueError"), "bad reading", logging.WARNING, "Bad %r", x)
         repeats.flush()   # a last summary for anything not yet counted aloud
     """
 
@@ -59,10 +57,6 @@ class RepeatFilter:
         )
         seen[1] = 0
         seen[2] = now
-
-    def count(self, key: Hashable) -> int:
-        """How many times ``key`` was reported in all."""
-        return int(self._seen.get(key, [0])[0])
 
     def flush(self) -> None:
         """Log the summary of every group with uncounted repeats (e.g. at shutdown)."""

@@ -123,16 +123,6 @@ def install_excepthook() -> None:
         sys.excepthook = snr_excepthook
 
 
-def verbose() -> bool:
-    """True when SNR's own frames were asked for: ``--verbose`` or ``SNR_VERBOSE=1``.
-
-    Example::
-
-        verbose()   # False for `python robot.py robot`
-    """
-    return os.environ.get(VERBOSE_ENV, "0") not in ("", "0") or "--verbose" in sys.argv
-
-
 def snr_excepthook(
     kind: Type[BaseException], error: BaseException, tb: Optional[TracebackType]
 ) -> None:
@@ -140,15 +130,11 @@ def snr_excepthook(
 
     Example::
 
-        sys.excepthook = snr_excepthook
-        # Traceback (most recent call last):
-        #   File "/home/student/rov/robot.py", line 4, in <module>
-        #     config = Config({"robot": [...]}, mode="deployed")
-        # ConfigError: Config(mode=...) got 'deployed'; use Mode.DEBUG, ...
-        # (SNR's own frames are left out: run with --verbose, or set SNR_VERBOSE=1, ...)
+        sys.excepthook = snr_excepthook   # Traceback ... robot.py ... ConfigError: ...
     """
     frames = [f for f in traceback.extract_tb(tb) if not f.filename.startswith(_SNR_DIR)]
-    if not isinstance(error, SNRError) or not frames or verbose():
+    verbose = os.environ.get(VERBOSE_ENV, "0") not in ("", "0") or "--verbose" in sys.argv
+    if not isinstance(error, SNRError) or not frames or verbose:
         sys.__excepthook__(kind, error, tb)
         return
     print("Traceback (most recent call last):", file=sys.stderr)

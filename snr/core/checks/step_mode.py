@@ -67,11 +67,8 @@ class _StepRequest:
 class StepMode:
     """Pauses its node's run loop; runs held tasks one at a time on request (node's thread).
 
-    Args:
-        queue: the node's task queue.
-        runner: the node's `HandlerRunner`.
-        lookup: a task's ``(handler, key, component, cell)`` entries.
-        stopping: True once the node is stopping.
+    ``lookup(task)`` gives a task's ``(handler, key, component, cell)`` entries,
+    ``stopping()`` True once the node is stopping.
 
     Example::
 

@@ -86,21 +86,18 @@ class WatchedNode(Protocol):
 class Watchdog:
     """Watches a running node from its own thread and says when it is stuck.
 
-    Args:
-        node: the node to watch (it calls `start` and `stop`).
-
     Example::
 
         node.watchdog.stuck_s = 0.5   # say it sooner (before node.loop())
 
     Attributes:
-        every_s, stuck_s, idle_s, dozing_s: seconds between two looks; before a stuck
-            handler, loop or flood is reported; before a node nothing can stop is;
-            the longest an idle node goes unlooked at (it is looked at once it gets work).
-        spin_hz: passes a second of a rate-less, storing loop that are reported.
-        dozing: True while the watchdog sleeps until the node gets work (`wake` rings).
-        handler_stuck: True while the node's thread is in the handler call of the last look.
-        said: one line per report made so far, e.g. ``"handler Waiter.on_go"``.
+        every_s, stuck_s, idle_s: seconds between looks; before a stuck handler, loop
+            or flood is said; before a node nothing can stop is.
+        dozing_s: the longest an idle node goes unlooked at, unless it gets work.
+        spin_hz: passes a second of a rate-less, storing loop that are said.
+        dozing: True while it sleeps until the node gets work (`wake` rings).
+        handler_stuck: True while the node's thread is in the last look's handler call.
+        said: a line per report so far, e.g. ``"handler Waiter.on_go"``.
     """
 
     every_s: float = 0.5
