@@ -16,6 +16,7 @@ Example::
 from __future__ import annotations
 
 import collections
+import itertools
 from dataclasses import dataclass, field
 from typing import Any, Callable, Deque, List, Optional, Tuple
 
@@ -26,12 +27,7 @@ from snr.prelude import AbstractNode, Task, TaskPriority, TaskType
 __all__ = ["MAX_STEPS", "Step", "StepMode", "console_priority"]
 
 MAX_STEPS = 100
-"""The most tasks one ``step N`` runs, and the most step requests waiting at once.
-
-Example::
-
-    node.step_mode.step(MAX_STEPS + 1, report)   # ValueError: at most 100
-"""
+"""The most tasks one ``step N`` runs, and the most step requests waiting at once."""
 
 _PAUSED_WHY = (
     "the node is paused (step mode): only `step` runs its tasks; type `resume` in the "
@@ -41,8 +37,8 @@ _PAUSED_WHY = (
 
 @dataclass
 class Step:
-    """What one step did: the task (None: none waited), its handlers (``component.method``),
-    the tasks they returned, the first few waiting next (urgent first) and how many wait.
+    """What one step did: the task (None: none waited), its handlers, what they returned,
+    the first few tasks next (urgent first) and how many wait.
 
     Example::
 
@@ -181,15 +177,9 @@ class StepMode:
 
             node.step_mode.next_tasks(1)   # [the task `step` would run], or []
         """
-        # By index: other threads may append meanwhile.
-        found: List[Task] = []
-        for lane in (self.queue.urgent, self.queue.normal):
-            for index in range(count - len(found)):
-                try:
-                    found.append(lane[index])
-                except IndexError:  # (only this thread takes tasks out)
-                    break
-        return found
+        # deque.copy() runs in C holding the GIL: a snapshot even while loops append.
+        lanes = (self.queue.urgent.copy(), self.queue.normal.copy())
+        return list(itertools.islice(itertools.chain(*lanes), count))
 
 
 def _handler_name(handler: Any, component: Any) -> str:  # "wanderer.steer"
