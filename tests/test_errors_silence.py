@@ -67,7 +67,7 @@ from snr import (
     TimeoutLoopFactory,
     tasks,
 )
-from snr.core.checks.top_level import snr_excepthook
+from snr.core.checks.runner_checks import snr_excepthook
 from snr.prelude import ComponentError, HandlerError, SNRError
 from snr.std_mods.utils.timeout import TimeoutLoop
 from tests.examples_support import ROOT

@@ -37,7 +37,7 @@ HEAVY = [
 FIRST_USE = [
     "snr.utils",
     "snr.prelude.abstract_errors",
-    "snr.core.checks.datastore_guard",
+    "snr.core.checks.read_only",
     "snr.core.checks.failures",
     "snr.core.checks.seam_checks",
     "snr.core.checks.step_mode",

@@ -18,7 +18,7 @@ from __future__ import annotations
 import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
-from snr.core.checks import component_log, explain
+from snr.core.checks import explain, life_cycle
 from snr.core.checks.handler_checks import check_burst_handlers
 from snr.core.dispatch import HandlerTable
 from snr.prelude.abstract import AbstractComponent, AbstractFactory, AbstractLoop, AbstractNode
@@ -122,7 +122,7 @@ class ComponentSet:
         """The component called ``name``; None, with the refusal logged, for node_core or none."""
         component = None if name == NODE_CORE_NAME else self.by_name.get(name)
         if component is None:
-            component_log.not_found(self.node.log, action, name, self.node.role, self.by_name)
+            life_cycle.not_found(self.node.log, action, name, self.node.role, self.by_name)
         return component
 
     def reload(self, name: ComponentName = "all") -> List[ComponentName]:
@@ -147,7 +147,7 @@ class ComponentSet:
         try:
             old.factory.reload()
         except Exception as error:
-            component_log.reload_refused(log, "source", old, error)
+            life_cycle.reload_refused(log, "source", old, error)
             return False
         if self.running and not self._stop_for_reload(old):
             return False
@@ -167,7 +167,7 @@ class ComponentSet:
             try:
                 self.start(new)
             except SNRError as error:
-                component_log.reload_refused(log, "start", old, error, new)
+                life_cycle.reload_refused(log, "start", old, error, new)
                 return False
         log.info("Reloaded %r", new.name)
         return True
@@ -177,7 +177,7 @@ class ComponentSet:
         self.stop(old)
         if not old.is_alive():
             return True
-        component_log.still_running(self.node.log, old, self.join_timeout_s, reload=True)
+        life_cycle.still_running(self.node.log, old, self.join_timeout_s, reload=True)
         if isinstance(old, AbstractLoop):
             old.cancel_stop()
         return False
@@ -187,13 +187,13 @@ class ComponentSet:
         try:
             new = self.build(old.factory)
         except Exception as error:
-            component_log.reload_refused(self.node.log, "build", old, error)
+            life_cycle.reload_refused(self.node.log, "build", old, error)
             return None
         if new is None:
-            component_log.reload_refused(self.node.log, "none", old)
+            life_cycle.reload_refused(self.node.log, "none", old)
             return None
         if new.name != old.name and new.name in self.by_name:
-            component_log.reload_refused(self.node.log, "name", old, new=new)
+            life_cycle.reload_refused(self.node.log, "name", old, new=new)
             return None
         return new
 
@@ -203,7 +203,7 @@ class ComponentSet:
         try:
             _start(old)
         except Exception as error:
-            component_log.reload_refused(self.node.log, "restart", old, error)
+            life_cycle.reload_refused(self.node.log, "restart", old, error)
 
     def start_all(self, keep_going: Callable[[], bool]) -> None:
         """Start every component in order while ``keep_going()`` says so."""
@@ -246,14 +246,14 @@ class ComponentSet:
 
     def _warn_if_alive(self, component: AbstractComponent) -> None:
         if component.is_alive():
-            component_log.still_running(self.node.log, component, self.join_timeout_s, reload=False)
+            life_cycle.still_running(self.node.log, component, self.join_timeout_s, reload=False)
 
     def call_safely(self, what: str, component: AbstractComponent) -> None:
         """Halt or terminate (``what``) ``component``; log (never raise) what goes wrong."""
         try:
             _halt(component) if what == "halt" else component.terminate()
         except Exception:
-            component_log.call_failed(self.node.log, component, what)
+            life_cycle.call_failed(self.node.log, component, what)
 
     def handlers_changed(self, component: AbstractComponent) -> None:
         """``component`` changed its ``task_handlers``: the table is stale.

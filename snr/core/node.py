@@ -111,8 +111,8 @@ class Node(AbstractNode):
 
     def __init__(self, role: Role, config: AbstractConfig) -> None:
         # Read second (snr/core/checks/); here, not on top, to keep `import snr` light:
-        from snr.core.checks.datastore_guard import NodeDatastore
         from snr.core.checks.failures import FailureReport
+        from snr.core.checks.read_only import NodeDatastore
         from snr.core.checks.seam_checks import checked_core, checked_datastore
         from snr.core.checks.step_mode import StepMode
 

@@ -245,7 +245,7 @@ class CliRunner(AbstractRunner):
         parser.add_argument("roles", nargs="+", metavar="ROLE", help=f"the role(s) to run: {known}")
         modes = [m.value for m in Mode]
         parser.add_argument("--mode", choices=modes, help="override the config's mode")
-        parser.add_argument("--verbose", action="store_true", help=argparse.SUPPRESS)  # top_level
+        parser.add_argument("--verbose", action="store_true", help=argparse.SUPPRESS)  # excepthook
         if len(self.argv) < 2:
             no_role_given(parser, prog, roles)  # usage, the roles and an example; exit status 2
         args = parser.parse_args(self.argv[1:])

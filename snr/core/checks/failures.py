@@ -1,8 +1,7 @@
 """What a node does with a failed handler or loop: says it, and stops (unless DEPLOYED).
 
-`snr.core.dispatch.HandlerRunner` hands each failure to the node's `FailureReport`; in DEPLOYED
-mode it is logged (repeats counted) and the node runs on. The words are
-`snr.core.checks.explain`'s.
+`snr.core.dispatch.HandlerRunner` hands each failure to the node's `FailureReport`,
+in the words of `snr.core.checks.explain`; DEPLOYED logs it (repeats counted) and runs on.
 
 Example::
 
@@ -34,20 +33,13 @@ __all__ = ["FailureReport"]
 class FailureReport:
     """Logs a node's failures in words; outside DEPLOYED mode the first one stops the node.
 
-    Args:
-        role: the node's role, for messages.
-        mode: DEBUG/TEST stop the node on the first failure; DEPLOYED logs.
-        log: the node's logger.
-        stop: called with a reason to stop the node (``Node.set_terminate_flag``).
+    ``stop(reason)`` stops the node (``Node.set_terminate_flag``).
 
     Example::
 
         report = FailureReport("robot", Mode.TEST, log, node.set_terminate_flag)
         report.bad_result(5, handler, task)   # "Task handler ... returned 5 ..."
-
-    Attributes:
-        failure: the first error that stopped the node (DEBUG/TEST), or None.
-        repeats: the `RepeatFilter` that keeps repeated failures from flooding the log.
+        report.failure   # the first error, which stopped the node (DEBUG/TEST), or None
     """
 
     def __init__(
@@ -77,7 +69,7 @@ class FailureReport:
         """
         deployed = self.mode is Mode.DEPLOYED
         failure = handler_failure(handler, task, component, error, deployed, run_size)
-        self.record(failure, (_func_of(handler), type(error)))
+        self.record(failure, (getattr(handler, "__func__", handler), type(error)))
 
     def bad_result(self, result: Any, handler: TaskHandler, task: Task) -> None:
         """Report a handler that returned ``result``, which is not a task or list of tasks.
@@ -86,7 +78,7 @@ class FailureReport:
 
             report.bad_result(5, motor.forward, task)
         """
-        self.record(bad_result_error(result, handler, task), _func_of(handler))
+        self.record(bad_result_error(result, handler, task), getattr(handler, "__func__", handler))
 
     def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
         """Report a loop's thread ending with ``error``; ``sys.exit()`` or Ctrl-C stops the node.
@@ -95,8 +87,7 @@ class FailureReport:
 
             report.loop_failed(sonar_loop, OSError("device gone"))
         """
-        deployed = self.mode is Mode.DEPLOYED
-        failure = loop_failure(loop, error, deployed)
+        failure = loop_failure(loop, error, self.mode is Mode.DEPLOYED)
         if isinstance(error, (SystemExit, KeyboardInterrupt)):
             self.log.warning("%s The node stops.", failure)
             what = "sys.exit()" if isinstance(error, SystemExit) else "Ctrl-C"
@@ -134,19 +125,14 @@ class FailureReport:
 
             report.report_slow(planner.plan, task, 0.4)   # "Task handler ... took 0.400 s"
         """
-        if self.mode is Mode.DEPLOYED:
-            return
-        func = _func_of(handler)
-        if func in self._slow_reported:
+        func = getattr(handler, "__func__", handler)  # one key for every instance's handler
+        if self.mode is Mode.DEPLOYED or func in self._slow_reported:
             return
         self._slow_reported.add(func)
-        if getattr(func, "__module__", "").startswith("snr."):
-            # SNR's own (a reload waiting for a goodbye): the advice is not the student's.
-            self.log.debug("%s", slow_handler_text(handler, task, took_s))
-            return
-        self.log.warning("%s", slow_handler_text(handler, task, took_s))
-
-
-def _func_of(handler: TaskHandler) -> Any:
-    """The function behind a bound method: one key for every instance's handler."""
-    return getattr(handler, "__func__", handler)
+        # SNR's own (a reload waiting for a goodbye): the advice is not the student's.
+        ours = getattr(func, "__module__", "").startswith("snr.")
+        self.log.log(
+            logging.DEBUG if ours else logging.WARNING,
+            "%s",
+            slow_handler_text(handler, task, took_s),
+        )

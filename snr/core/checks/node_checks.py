@@ -1,10 +1,8 @@
 """`NodeChecks`: wires the checks for silent mistakes into a node (not DEPLOYED).
 
-`check_component` (DEBUG and TEST) reads each student class when its first
-component is added; in DEBUG, `MissingKeyHints` (``node.key_hints``),
-`WiringChecks` (``node.wiring_checks``), the wiring check ``handlers_s`` after
-the start, and the `Watchdog` (``node.watchdog``). Setting one of those
-attributes to None before ``node.loop()`` turns it off.
+`check_component` (DEBUG and TEST) reads each student class as its first
+component is added; in DEBUG, ``node.key_hints``, ``node.wiring_checks`` and
+``node.watchdog`` are set (None before ``node.loop()`` turns one off).
 
 Example (what `Node` does)::
 
@@ -42,7 +40,7 @@ _PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
 
 
 class CheckedNode(WatchedNode, Protocol):
-    """What `NodeChecks` reads and sets of its node: a `Node` has all of it.
+    """What `NodeChecks` reads and sets of its node: a `Node`.
 
     Example::
 
@@ -60,14 +58,8 @@ class CheckedNode(WatchedNode, Protocol):
 
 
 class NodeChecks:
-    """Builds a node's checks for silent mistakes and starts and stops them with it.
-
-    Args:
-        node: the node to watch; its ``key_hints``, ``wiring_checks`` and
-            ``watchdog`` are set here (None outside DEBUG mode).
-        components: the node's `ComponentSet` (its handler table, its
-            ``check_added`` hook).
-        runner: the node's `HandlerRunner` (its ``on_unhandled`` hook).
+    """Builds a node's checks for silent mistakes, hooks them into its ``components``
+    (``check_added``) and ``runner`` (``on_unhandled``), and starts and stops them with it.
 
     Example::
 
@@ -80,11 +72,8 @@ class NodeChecks:
         self.components = components
         self._wiring_timer: Optional[threading.Timer] = None
         self._watching: Optional[Watchdog] = None
-        debug = node.mode is Mode.DEBUG
-        node.key_hints = None
-        node.wiring_checks = None
-        node.watchdog = None
-        if debug:
+        node.key_hints = node.wiring_checks = node.watchdog = None
+        if node.mode is Mode.DEBUG:
             hints = MissingKeyHints(
                 node.log, node.timer.current_s, role=node.role, on_its_way=self.page_on_its_way
             )
@@ -108,8 +97,8 @@ class NodeChecks:
             self._wiring_timer = timer
         self._watching = self.node.watchdog
         if self._watching is not None:
-            timer_threads = [self._wiring_timer] if self._wiring_timer is not None else []
-            self._watching.start(node_thread, timer_threads)
+            timers = [self._wiring_timer] if self._wiring_timer is not None else []
+            self._watching.start(node_thread, timers)
 
     def stop(self) -> None:
         """The node is stopping: cancel the wiring check, stop the watchdog."""

@@ -2,14 +2,6 @@
 
 Every component that listens, connects or opens a serial port words its failure
 with `explain_os_error` (docs/errors.md, 12).
-
-Example::
-
-    raise CommsError(explain_os_error(
-        error, action="listen", target=f"{host}:{port}",
-        who=f"The sockets server of node {role!r}",
-        setting="SocketsPair(server_tuple=(host, port))",
-    )) from error
 """
 
 from __future__ import annotations
@@ -137,11 +129,10 @@ def explain_os_error(
     setting: str = "",
     ports: Optional[Sequence[str]] = None,
 ) -> str:
-    """The message for an OSError of listening, connecting or opening a serial port.
+    """The message for an OSError of listening on, connecting to or opening ``target``.
 
-    ``target`` is ``"host:port"`` or a serial port, ``who`` the sentence's subject
-    (``"The sockets server of node 'urov'"``), ``setting`` where to change it
-    ("the config" if empty), ``ports`` the serial ports there are (None: unknown).
+    ``who`` is the sentence's subject, ``setting`` where to change it ("the config"
+    if empty), ``ports`` the serial ports there are (None: unknown).
 
     Example::
 

@@ -22,12 +22,6 @@ __all__ = ["Profiler"]
 
 Row = Tuple[str, int, float]  # (label, times_called, total_s)
 
-_LOOP_PREFIX = "Loop("  # the label of a loop's cell: Loop(name)
-_HEADER = "Times called,          Avg runtime, Task/Loop type,"  # thesis listing 5.2
-_COUNT_AND_AVG_WIDTH = len(f"{0:>12} x {0.0:>10.3f} us")  # where " -> share" starts
-_OUTSIDE_HANDLERS = "(outside handlers: the node's own work, waiting for tasks)"
-_OUTSIDE_LOOP = "(outside loop(): waiting between passes)"
-
 
 class Profiler(AbstractProfiler):
     """Counts and times handler runs (per task id and module) and loop passes.
@@ -66,15 +60,19 @@ class Profiler(AbstractProfiler):
 
     def loop_cell(self, name: ComponentName) -> StatsCell:
         """The cell of the loop called ``name``."""
-        return self.cell(f"{_LOOP_PREFIX}{name})")
+        return self.cell(f"Loop({name})")
 
     def log_task(self, task_id: TaskId, where: str, runtime_s: float) -> None:
         """Record one handler run (the node's thread)."""
-        _add(self.task_cell(task_id, where), runtime_s)
+        cell = self.task_cell(task_id, where)
+        cell[0] += 1
+        cell[1] += runtime_s
 
     def log_loop(self, name: ComponentName, runtime_s: float) -> None:
         """Record one pass of a loop (the loop's own thread)."""
-        _add(self.loop_cell(name), runtime_s)
+        cell = self.loop_cell(name)
+        cell[0] += 1
+        cell[1] += runtime_s
 
     def add_report(self, name: str, report: Callable[[], str]) -> None:
         """Add a section to `dump`: ``report()``'s text under ``name`` (a newer one replaces it).
@@ -94,35 +92,33 @@ class Profiler(AbstractProfiler):
         return sorted(rows, key=lambda row: row[2], reverse=True)
 
     def dump(self) -> str:
-        """The profile as text: one section per thread, each adding up to 100% of the time since
-        the node was made (thesis listing 5.2's table, per thread), then the added reports.
+        """Thesis listing 5.2's table, one section per thread (each adding up to 100% of the
+        time since the node was made), then the added reports.
 
         Example::
 
             print(node.profiler.dump())
-            # Times called,          Avg runtime, Task/Loop type,
-            # (share: of the 0.501 s since the node was made; each thread's lines add up ...)
             # node thread:
             #            1 x      8.383 us ->   0.002%: (store_page):snr.core.node
             #                              ->  99.998%: (outside handlers: the node's own ...)
-            # loop thread timeout_loop:
-            #            1 x 499281.445 us ->  99.739%: Loop(timeout_loop)
-            #                              ->   0.261%: (outside loop(): waiting between passes)
         """
         elapsed = max(time.perf_counter() - self._start_s, 1e-9)
         rows = self.rows()
-        handlers = [row for row in rows if not row[0].startswith(_LOOP_PREFIX)]
-        loops = [row for row in rows if row[0].startswith(_LOOP_PREFIX)]
         lines = [
-            _HEADER,
+            "Times called,          Avg runtime, Task/Loop type,",
             f"(share: of the {elapsed:.3f} s since the node was made; "
             "each thread's lines add up to 100%)",
             "node thread:",
-            *_section(handlers, elapsed, _OUTSIDE_HANDLERS),
+            *_section(
+                [row for row in rows if not row[0].startswith("Loop(")],
+                elapsed,
+                "(outside handlers: the node's own work, waiting for tasks)",
+            ),
         ]
-        for row in loops:
-            lines.append(f"loop thread {row[0][len(_LOOP_PREFIX) : -1]}:")
-            lines.extend(_section([row], elapsed, _OUTSIDE_LOOP))
+        for row in rows:
+            if row[0].startswith("Loop("):
+                lines.append(f"loop thread {row[0][5:-1]}:")
+                lines += _section([row], elapsed, "(outside loop(): waiting between passes)")
         with self._lock:
             reports = list(self._reports.items())
         for name, report in reports:
@@ -134,22 +130,15 @@ class Profiler(AbstractProfiler):
         return "\n".join(lines)
 
 
-def _add(cell: StatsCell, runtime_s: float) -> None:
-    cell[0] += 1
-    cell[1] += runtime_s
-
-
 def _section(rows: List[Row], elapsed_s: float, rest_label: str) -> List[str]:
     """One thread's rows, then the time outside them: shares adding up to 100% (unless nested)."""
-    lines: List[str] = []
-    busy_s = 0.0
-    for label, count, total in rows:
-        avg_us = total / count * 1e6
-        share = total / elapsed_s * 100
-        lines.append(f"{count:>12} x {avg_us:>10.3f} us -> {share:7.3f}%: {label}")
-        busy_s += total
+    lines = [
+        f"{count:>12} x {total / count * 1e6:>10.3f} us -> {total / elapsed_s * 100:7.3f}%: {label}"
+        for label, count, total in rows
+    ]
+    busy_s = sum(row[2] for row in rows)
     rest_share = max(0.0, elapsed_s - busy_s) / elapsed_s * 100
-    lines.append(f"{'':>{_COUNT_AND_AVG_WIDTH}} -> {rest_share:7.3f}%: {rest_label}")
+    lines.append(f"{'':>28} -> {rest_share:7.3f}%: {rest_label}")  # under the " -> " above
     if busy_s > elapsed_s:
         lines.append("(these add up to more than 100%: some ran inside others, so times nest)")
     return lines

@@ -1,11 +1,4 @@
-"""`RepeatFilter`: a failure repeated over and over, logged in full a few times, then counted.
-
-Example::
-
-    repeats = RepeatFilter(log)
-    repeats.report(("parse", "ValueError"), "bad reading from the sonar",
-                   logging.WARNING, "Bad reading %r", reading)
-"""
+"""`RepeatFilter`: a failure repeated over and over, logged in full a few times, then counted."""
 
 from __future__ import annotations
 
@@ -17,17 +10,12 @@ __all__ = ["RepeatFilter"]
 
 
 class RepeatFilter:
-    """Logs the first few of a repeated message in full, then a count every few seconds.
-
-    Messages are grouped by a key (e.g. the handler and the error's type):
-    the first ``first`` of each are logged in full, then one count every ``every_s``.
+    """Logs the first ``first`` of each key's messages in full, then a count every ``every_s``.
 
     Example::
 
         repeats = RepeatFilter(log)
-        for reading in readings:
-            repeats.report(("parse", "ValueError"), "bad reading from the sonar",
-                           logging.WARNING, "Bad reading %r", reading)
+        repeats.report(("parse", "ValueError"), "bad reading", logging.WARNING, "Bad %r", x)
         repeats.flush()   # a last summary for anything not yet counted aloud
     """
 
@@ -69,10 +57,6 @@ class RepeatFilter:
         )
         seen[1] = 0
         seen[2] = now
-
-    def count(self, key: Hashable) -> int:
-        """How many times ``key`` was reported in all."""
-        return int(self._seen.get(key, [0])[0])
 
     def flush(self) -> None:
         """Log the summary of every group with uncounted repeats (e.g. at shutdown)."""

@@ -1,9 +1,11 @@
-"""`runner_built` and `runner_ran`: a runner built and never run is said at exit.
+"""The program around its runner: a runner never run, no role given, an error nobody caught.
 
-And `no_role_given`: ``python robot.py`` without a role, answered with the roles.
-Only a runner built by ``__main__``'s own code is named: not in a
-``unittest.TestCase`` method, with pytest loaded, in DEPLOYED mode, or after an
-uncaught error (docs/errors.md, 15q).
+`runner_built` and `runner_ran`: a runner the program's own ``__main__`` code
+built and never ran is said at exit (not in a test, in DEPLOYED mode, or after
+an uncaught error: docs/errors.md, 15q). `no_role_given`: ``python robot.py``
+without a role, answered with the roles. `snr_excepthook`, set by ``import snr``
+unless a tool set its own: an `SNRError` nobody caught is printed with the
+student's frames only, unless ``--verbose`` or ``SNR_VERBOSE=1`` (16p).
 
 Example::
 
@@ -14,13 +16,23 @@ Example::
 from __future__ import annotations
 
 import atexit
+import os
 import sys
-from typing import Any, Dict, List, NoReturn, Sequence, Tuple
+import traceback
+from types import TracebackType
+from typing import Any, Dict, List, NoReturn, Optional, Sequence, Tuple, Type
 
 from snr.core.checks.student_code import frame_location, outside_runtime, source_block
-from snr.prelude import AbstractConfig, Mode
+from snr.prelude import AbstractConfig, Mode, SNRError
 
-__all__ = ["no_role_given", "runner_built", "runner_ran"]
+__all__ = [
+    "VERBOSE_ENV",
+    "install_excepthook",
+    "no_role_given",
+    "runner_built",
+    "runner_ran",
+    "snr_excepthook",
+]
 
 # id(runner) -> (runner, kept so its id is not reused; "robot.py:4 in <module>"; its line).
 _not_run: Dict[int, Tuple[object, str, str]] = {}
@@ -89,3 +101,43 @@ def no_role_given(parser: Any, prog: str, roles: Sequence[str]) -> NoReturn:
         file=sys.stderr,
     )
     raise SystemExit(2)
+
+
+VERBOSE_ENV = "SNR_VERBOSE"
+"""The environment variable that asks for SNR's frames in tracebacks."""
+
+_SNR_DIR = os.path.dirname(os.path.dirname(os.path.dirname(os.path.abspath(__file__)))) + os.sep
+_LEFT_OUT = (
+    f"(SNR's own frames are left out: run with --verbose, or set {VERBOSE_ENV}=1, to see them.)"
+)
+
+
+def install_excepthook() -> None:
+    """Make `snr_excepthook` Python's, unless someone else already replaced Python's own.
+
+    Example::
+
+        install_excepthook()
+    """
+    if sys.excepthook is sys.__excepthook__:
+        sys.excepthook = snr_excepthook
+
+
+def snr_excepthook(
+    kind: Type[BaseException], error: BaseException, tb: Optional[TracebackType]
+) -> None:
+    """Print an uncaught `SNRError` as the student's frames and its message; others as Python.
+
+    Example::
+
+        sys.excepthook = snr_excepthook   # Traceback ... robot.py ... ConfigError: ...
+    """
+    frames = [f for f in traceback.extract_tb(tb) if not f.filename.startswith(_SNR_DIR)]
+    verbose = os.environ.get(VERBOSE_ENV, "0") not in ("", "0") or "--verbose" in sys.argv
+    if not isinstance(error, SNRError) or not frames or verbose:
+        sys.__excepthook__(kind, error, tb)
+        return
+    print("Traceback (most recent call last):", file=sys.stderr)
+    print("".join(traceback.format_list(frames)), end="", file=sys.stderr)
+    print(f"{kind.__name__}: {error}", file=sys.stderr)
+    print(_LEFT_OUT, file=sys.stderr, flush=True)

@@ -1,23 +1,10 @@
 """A datastore or node core of the student's own, checked where it plugs in.
 
-``Config(datastore=MyDatastore, node_core=MyNodeCoreFactory())`` replaces
-the node's ``dict`` and its `NodeCoreEndpoint` (docs/assignments.md). A
-mistake in either would show far away: a ``get`` that returns the data
-instead of the page fails in some handler's ``page.data``; a core that does
-not handle ``terminate`` leaves a node that never stops. So the node checks
-them as it builds them, and says which method is missing or wrong:
-
-* `check_seam_args`: the config was given a class to make a datastore with,
-  and a factory for the core (not an instance, not a class);
-* `checked_datastore`: the datastore has the four methods of `Datastore`;
-  in DEBUG and TEST its answers are checked as they are given
-  (`CheckedDatastore`: a Page or None, keys that are strings, a length);
-* `checked_core`: the core is a component named ``node_core`` with a
-  ``store_page_handler``; in DEBUG and TEST what that returns is checked,
-  and a task the core does not handle is said once, in the log.
-
-SNR's own datastore (a ``dict``) and core pass through untouched: the
-default path pays nothing.
+``Config(datastore=..., node_core=...)`` replaces the node's ``dict`` and its
+`NodeCoreEndpoint` (docs/assignments.md). A mistake in either would show far
+away (``page.data`` on a bare value, a node that never stops), so the node
+checks them as it builds them and, in DEBUG and TEST, each answer they give.
+SNR's own datastore and core pass through untouched.
 
 Example::
 
@@ -93,10 +80,7 @@ def check_seam_args(datastore: Any, node_core: Any) -> None:
 
 
 def checked_datastore(make: Callable[[], Any], node: AbstractNode) -> Datastore:
-    """``make()``, the node's datastore, once it is known to have `Datastore`'s four methods.
-
-    In DEBUG and TEST a datastore other than ``dict`` comes wrapped in a
-    `CheckedDatastore`, which checks each answer.
+    """``make()``, once it has `Datastore`'s four methods (a `CheckedDatastore` but DEPLOYED).
 
     Raises:
         ConfigError: ``make()`` raised, or what it made lacks a method.
@@ -127,12 +111,7 @@ def checked_datastore(make: Callable[[], Any], node: AbstractNode) -> Datastore:
 
 
 class CheckedDatastore:
-    """A student's datastore, each answer checked to be of the kind a node expects.
-
-    Writes go straight through; ``get`` must give a `Page` (of the key
-    asked) or None, ``__iter__`` strings, ``__len__`` a number. A wrong
-    answer is a ComponentError that names the method and says what it should
-    have given. Used in DEBUG and TEST only.
+    """A student's datastore whose every answer is checked: a wrong one is a ComponentError.
 
     Example::
 
@@ -148,12 +127,11 @@ class CheckedDatastore:
     def _wrong(self, call: str, answer: Any, should: str) -> ComponentError:
         return ComponentError(
             f"{describe_class(type(self.store))}, the datastore: {call} returned "
-            f"{short_repr(answer)} "
-            f"({type(answer).__name__}); it should return {should} ({_SEE})."
+            f"{short_repr(answer)} ({type(answer).__name__}); it should return {should} ({_SEE})."
         )
 
     def __setitem__(self, key: DataKey, page: Page) -> None:
-        self.store[key] = page
+        self.store[key] = page  # writes go straight through
 
     def get(self, key: DataKey) -> Optional[Page]:
         """The student's ``get(key)``, checked."""
@@ -165,8 +143,7 @@ class CheckedDatastore:
 
     def __iter__(self) -> Iterator[DataKey]:
         keys: List[Any] = list(self.store)
-        odd = [key for key in keys if not isinstance(key, str)]
-        if odd or len(set(keys)) != len(keys):
+        if not all(isinstance(key, str) for key in keys) or len(set(keys)) != len(keys):
             raise self._wrong("iter()", keys, "each key that has a page (a str), once")
         return iter(keys)
 
@@ -184,8 +161,7 @@ def checked_core(core: Optional[AbstractComponent], factory: Any, node: Abstract
     """``core``, once it is known to be a node core; checked as it runs in DEBUG and TEST.
 
     Raises:
-        ConfigError: ``factory.get()`` gave None, or a component not named
-            ``node_core``, or one without a ``store_page_handler``.
+        ConfigError: ``factory.get()`` gave None, or no ``node_core`` with a ``store_page_handler``.
 
     Example::
 
@@ -202,26 +178,19 @@ def checked_core(core: Optional[AbstractComponent], factory: Any, node: Abstract
         )
     if node.mode is Mode.DEPLOYED or type(core).__module__ == "snr.core.node":
         return core  # SNR's own: as it is
-    handled = core.task_handlers
     for task_id, name, lost in CORE_TASKS:
-        if task_id not in handled:
-            node.log.warning(
-                "The node core %s handles no %s task: %s (%s).",
-                type(core).__name__,
-                name,
-                lost,
-                _SEE,
-            )
+        if task_id not in core.task_handlers:
+            warning = "The node core %s handles no %s task: %s (%s)."
+            node.log.warning(warning, type(core).__name__, name, lost, _SEE)
     # An instance attribute: the node reads core.store_page_handler after this.
     core.store_page_handler = _CheckedStore(core.store_page_handler)  # type: ignore[attr-defined]
     return core
 
 
 class _CheckedStore:
-    """A node core's ``store_page_handler``, what it returns checked: None, or one ``process_data``.
+    """A node core's ``store_page_handler`` whose result is checked: None or a ``process_data``.
 
-    A callable object, not a function, so that a failure in it names the
-    student's method and line: ``__func__`` and ``__self__`` are the method's.
+    Its ``__func__`` and ``__self__`` are the method's: a failure names the student's line.
     """
 
     def __init__(self, handler: Any) -> None:

@@ -1,12 +1,10 @@
 """`StepMode`: pause a node, run its tasks one at a time, look around, resume.
 
-The debugger for event-driven code. After a console's ``pause`` the node runs
-only urgent tasks (a terminate, and the console's own commands: see
-`console_priority`); every other task waits, in order, and ``step`` runs the
-oldest through its handlers and says what they returned and what comes next.
-Loops keep running: their pages pile up under the queue's usual bound (the
-drop log then says the node is paused). The run loop asks ``paused`` once per
-batch and calls `run_paused` while it is true.
+After a console's ``pause`` the node runs only urgent tasks (a terminate, the
+console's own commands: `console_priority`); the rest wait in order, and
+``step`` runs the oldest through its handlers and says what they returned.
+Loops keep running (the drop log then says the node is paused). The run loop
+calls `run_paused` while ``paused``.
 
 Example::
 
@@ -18,6 +16,7 @@ Example::
 from __future__ import annotations
 
 import collections
+import itertools
 from dataclasses import dataclass, field
 from typing import Any, Callable, Deque, List, Optional, Tuple
 
@@ -28,12 +27,7 @@ from snr.prelude import AbstractNode, Task, TaskPriority, TaskType
 __all__ = ["MAX_STEPS", "Step", "StepMode", "console_priority"]
 
 MAX_STEPS = 100
-"""The most tasks one ``step N`` runs, and the most step requests waiting at once.
-
-Example::
-
-    node.step_mode.step(MAX_STEPS + 1, report)   # ValueError: at most 100
-"""
+"""The most tasks one ``step N`` runs, and the most step requests waiting at once."""
 
 _PAUSED_WHY = (
     "the node is paused (step mode): only `step` runs its tasks; type `resume` in the "
@@ -43,14 +37,8 @@ _PAUSED_WHY = (
 
 @dataclass
 class Step:
-    """What one step did: the task, the handlers it went to, what they returned.
-
-    Attributes:
-        task: the task that ran, or None if the queue had none.
-        handlers: ``component.method`` of each handler it went to, in order.
-        returned: the tasks those handlers returned (now at the back of the queue).
-        next_tasks: the first few tasks waiting after it, urgent ones first.
-        waiting: how many tasks wait in the queue after it.
+    """What one step did: the task (None: none waited), its handlers, what they returned,
+    the first few tasks next (urgent first) and how many wait.
 
     Example::
 
@@ -75,18 +63,12 @@ class _StepRequest:
 class StepMode:
     """Pauses its node's run loop; runs held tasks one at a time on request (node's thread).
 
-    Args:
-        queue: the node's task queue.
-        runner: the node's `HandlerRunner`.
-        lookup: a task's ``(handler, key, component, cell)`` entries.
-        stopping: True once the node is stopping.
+    ``lookup(task)`` gives a task's ``(handler, key, component, cell)`` entries,
+    ``stopping()`` True once the node is stopping.
 
     Example::
 
-        node.step_mode.paused      # False: the node runs freely
-
-    Attributes:
-        paused: True between `pause` and `resume`.
+        node.step_mode.paused      # True between pause() and resume()
     """
 
     def __init__(
@@ -103,8 +85,7 @@ class StepMode:
         self.paused = False
         self._requests: Deque[_StepRequest] = collections.deque()
         self._running_why = queue.loss.why
-        self._waits_at_pause = 0
-        self._drops_at_pause = 0
+        self._at_pause = (0, 0)  # the queue's waits and drops when paused
 
     def pause(self) -> None:
         """Hold every task but urgent ones after the current task (no-op if paused)."""
@@ -112,8 +93,7 @@ class StepMode:
             return
         self.paused = True
         self.runner.running = False  # run_queued returns after the task running now
-        self._waits_at_pause = self.queue.waits
-        self._drops_at_pause = self.queue.loss.total
+        self._at_pause = (self.queue.waits, self.queue.loss.total)
         self.queue.loss.why = _PAUSED_WHY
 
     def resume(self) -> None:
@@ -149,8 +129,8 @@ class StepMode:
 
             waits, dropped = node.step_mode.since_pause()   # (0, 0): nothing lost
         """
-        queue = self.queue
-        return queue.waits - self._waits_at_pause, queue.loss.total - self._drops_at_pause
+        waits, drops = self._at_pause
+        return self.queue.waits - waits, self.queue.loss.total - drops
 
     def run_paused(self, idle_s: Optional[float]) -> None:
         """One turn of the node's run loop while paused: urgent tasks, then a step, else sleep."""
@@ -197,19 +177,12 @@ class StepMode:
 
             node.step_mode.next_tasks(1)   # [the task `step` would run], or []
         """
-        # By index: other threads may append meanwhile.
-        found: List[Task] = []
-        for lane in (self.queue.urgent, self.queue.normal):
-            for index in range(count - len(found)):
-                try:
-                    found.append(lane[index])
-                except IndexError:  # (only this thread takes tasks out)
-                    break
-        return found
+        # deque.copy() runs in C holding the GIL: a snapshot even while loops append.
+        lanes = (self.queue.urgent.copy(), self.queue.normal.copy())
+        return list(itertools.islice(itertools.chain(*lanes), count))
 
 
-def _handler_name(handler: Any, component: Any) -> str:
-    """``wanderer.steer``: the handler's component and method."""
+def _handler_name(handler: Any, component: Any) -> str:  # "wanderer.steer"
     name = getattr(handler, "__name__", repr(handler))
     owner = getattr(component, "name", None)
     return f"{owner}.{name}" if owner else name
