@@ -280,7 +280,12 @@ class Node(AbstractNode):
         return [(entry[0], entry[1]) for entry in self._lookup(task)]
 
     def is_handled(self, task_type: TaskType, name: str) -> bool:
-        """True if some handler would run now for a task with this type and name."""
+        """True if some handler would run now for a task with this type and name.
+
+        Example::
+
+            node.is_handled(TaskType.process_data, "depth_m")   # a filter waits for it?
+        """
         table = self._table().table
         return (task_type, name) in table or task_type in table
 
@@ -328,12 +333,24 @@ class Node(AbstractNode):
         self.queue.schedule(t)
 
     def schedule_first(self, tasks: List[Task]) -> None:
-        """Queue ``tasks`` first in line, in their order; the node's own thread only."""
+        """Queue ``tasks`` first in line, in their order; the node's own thread only.
+
+        Example (the node core putting back the pages of a burst it splits)::
+
+            node.schedule_first([node.store_page_task(page) for page in rest])
+        """
         self._check_owner_thread("schedule_first")
         self.queue.normal.extendleft(reversed(tasks))
 
     def wait_for_room(self, timeout_s: float) -> bool:
-        """Wait (up to ``timeout_s``) for room in the queue; True once there is."""
+        """Wait (up to ``timeout_s``) for room in the queue; True once there is.
+
+        Example (a socket reader that stops reading while the node is behind)::
+
+            while not node.wait_for_room(0.25):
+                if closing:
+                    return
+        """
         return self.queue.wait_for_room(timeout_s)
 
     def store_page_task(self, page: Page) -> Task:

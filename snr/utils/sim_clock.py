@@ -105,7 +105,12 @@ class LoopTurn(Turn):
         return self.clock._await(self, self.stop.is_set)
 
     def sleep_until(self, deadline_s: float) -> bool:
-        """Give the clock back until simulated ``deadline_s``; True if stopped first."""
+        """Give the clock back until simulated ``deadline_s``; True if stopped first.
+
+        Example::
+
+            turn.sleep_until(turn.now_s() + 0.5)   # half a simulated second
+        """
         deadline_ns = max(self.clock._now_ns, round(deadline_s * _NS))
         self.clock._give_back(self, deadline_ns)
         return not self.clock._await(self, self.stop.is_set)
