@@ -1,7 +1,9 @@
 """Layer 1 of SNR: the runtime (nodes, components, factories, runners).
 
-The package gives each module's ``__all__``; ``from snr.core import *`` works
-as in the 2021 release (thesis listing A.1).
+The package gives what its modules below export (each module's ``__all__``),
+so a name is listed once, in the module that defines it; the names for
+students are chosen in ``snr/__init__.py``. ``from snr.core import *`` works
+as in the 2021 release (thesis listing A.1 gets ``MovingAvgFilter`` from it).
 
 Example::
 

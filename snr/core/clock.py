@@ -1,7 +1,8 @@
 """`NodeClock`: the time a node and its loops run on; the wall's by default.
 
-The one extension point for time, `Config(clock=...)`: the wall hands out no
-turns; `snr.utils.sim_clock.SimClock` (docs/sim-time.md) makes nodes and loops take turns.
+The one extension point for time: `Config(clock=...)` hands its clock to every
+node built from it. The wall hands out no turns; `snr.utils.sim_clock.SimClock`
+(docs/sim-time.md) makes nodes and loops take turns.
 """
 
 from __future__ import annotations
@@ -67,7 +68,10 @@ class LoopTurn(Protocol):
 
 
 class NodeClock:
-    """The wall clock, and what every clock gives: seconds (call it), page stamps, turns.
+    """The wall clock, and what every clock gives a node: seconds, stamps, turns.
+
+    Calling it gives seconds; ``stamp()`` a page's ``created_at_s``; the wall
+    hands out no turns (None).
 
     Example::
 

@@ -1,7 +1,8 @@
 """`Component`: what `Endpoint` and `ThreadLoop` share.
 
 A component belongs to one node (its ``parent``), has a unique ``name`` there,
-remembers its ``factory``, and talks to the node only through tasks and pages.
+remembers the ``factory`` that built it, and registers ``task_handlers``. It
+talks to the rest of the node only through tasks and pages.
 """
 
 from __future__ import annotations
@@ -91,6 +92,7 @@ class Component(AbstractComponent):
     def _handlers_changed(self) -> None:
         self.parent.handlers_changed(self)
 
+    # -- life cycle hooks (documented no-ops: override what you need) -------
     def begin(self) -> None:
         """Runs once when the node starts; override to start things up."""
 
@@ -103,6 +105,7 @@ class Component(AbstractComponent):
     def join(self, timeout_s: Optional[float] = None) -> None:
         """Wait for the component's threads to end (endpoints have none)."""
 
+    # -- talking to the node ------------------------------------------------
     def schedule(self, t: SomeTasks) -> None:
         """Queue tasks on the node; safe from any thread.
 
@@ -155,6 +158,7 @@ class Component(AbstractComponent):
         """The newest data under ``key``, or None. Read-only; any thread."""
         return self.parent.get_data(key)
 
+    # -- logging (``self.warn("bad value %s", value)``) ----------------------
     def dbg(self, msg: str, *args: Any) -> None:
         """Log a debug message, e.g. ``self.dbg("got %s", value)``."""
         self.log.debug(msg, *args)
@@ -178,8 +182,9 @@ class Component(AbstractComponent):
     if not TYPE_CHECKING:  # hidden from mypy, which would let any misspelt attribute pass
 
         def __getattr__(self, attribute: str) -> Any:
-            # Only reached when normal lookup fails: explain's words say whether
-            # super().__init__ was forgotten.
+            # Only reached when normal lookup fails. Before Component.__init__ has
+            # run, every missing attribute means "super().__init__ was forgotten":
+            # say so instead of a bare AttributeError deep inside SNR.
             raise explain.used_before_init(self, attribute)
 
     def __repr__(self) -> str:

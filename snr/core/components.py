@@ -1,8 +1,9 @@
 """`ComponentSet`: a node's endpoints and loops, and their life cycle.
 
-It builds, adds, removes, hot-reloads, starts and stops components on the
-node's thread, and keeps the node's handler table in step. A reload that fails
-keeps the old component running and logs why.
+It builds, adds, removes, hot-reloads, starts and stops components and keeps
+the node's handler table in step, on the node's thread. A reload that fails
+keeps the old component running and logs why with the file and line; a loop
+that does not stop in ``join_timeout_s`` is not reloaded (two would run).
 
 Example::
 
@@ -59,8 +60,11 @@ class ComponentSet:
         self.running = False
         self.table_stale = True
         self._none_told: Set[Any] = set()  # factories' get() already said to return None
+        #: Called with each component before it is added (set by the node in DEBUG
+        #: and TEST mode to read the student's class; see `check_component`).
         self.check_added: Optional[Callable[[AbstractComponent], None]] = None
 
+    # -- building ----------------------------------------------------------
     def build(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
         """``factory.get(node)``, with any mistake in it explained.
 
@@ -85,6 +89,7 @@ class ComponentSet:
             raise explain.wrong_get_result_error(factory, component)
         return component
 
+    # -- adding and removing ------------------------------------------------
     def add(self, component: AbstractComponent, start: bool = True) -> None:
         """Add ``component`` last; it begins at once if the set is running.
 
@@ -108,7 +113,10 @@ class ComponentSet:
             self.start(component)
 
     def remove(self, name: ComponentName) -> None:
-        """Halt, join, terminate and forget the component called ``name`` (never ``node_core``)."""
+        """Halt, join, terminate and forget the component called ``name``.
+
+        The node's core (``node_core``) is never removed: the refusal is logged.
+        """
         component = self._find("remove component", name)
         if component is None:
             return
@@ -125,10 +133,12 @@ class ComponentSet:
             life_cycle.not_found(self.node.log, action, name, self.node.role, self.by_name)
         return component
 
+    # -- hot reload ---------------------------------------------------------
     def reload(self, name: ComponentName = "all") -> List[ComponentName]:
-        """Reload the source of one component (or ``"all"``, never ``node_core``) and rebuild it.
+        """Reload the source of one component (or ``"all"``) and rebuild it.
 
-        Returns the names of the rebuilt components; one that fails keeps running.
+        Returns the names of the rebuilt components; one that fails keeps
+        running and the log says why. ``node_core`` is never reloaded.
 
         Example::
 
@@ -205,6 +215,7 @@ class ComponentSet:
         except Exception as error:
             life_cycle.reload_refused(self.node.log, "restart", old, error)
 
+    # -- starting and stopping ----------------------------------------------
     def start_all(self, keep_going: Callable[[], bool]) -> None:
         """Start every component in order while ``keep_going()`` says so."""
         self.running = True
@@ -255,8 +266,9 @@ class ComponentSet:
         except Exception:
             life_cycle.call_failed(self.node.log, component, what)
 
+    # -- the handler table ----------------------------------------------------
     def handlers_changed(self, component: AbstractComponent) -> None:
-        """``component`` changed its ``task_handlers``: the table is stale.
+        """``component`` changed its ``task_handlers``: rebuild the table before the next task.
 
         Raises:
             ComponentError: a burst handler of the component lost its task handler.
@@ -266,7 +278,7 @@ class ComponentSet:
             check_burst_handlers(component)
 
     def refresh_table(self) -> None:
-        """Rebuild the table from the components."""
+        """Rebuild the table from the components, with every change made since it was built."""
         self.table.rebuild(self.by_name.values())
         self.table_stale = False
 

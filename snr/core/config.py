@@ -21,10 +21,14 @@ class Config(AbstractConfig):
         factories: for every role, the factories of its components.
         mode: ``Mode.DEBUG`` (default), ``Mode.TEST`` or ``Mode.DEPLOYED``.
         profile: time every handler; defaults to on in DEBUG mode only.
-        clock: a `SimClock` for simulated time (docs/simulator.md); None: the wall's.
-        datastore: what makes each node's `Datastore` (None: ``dict``).
-        node_core: the factory of each node's core endpoint, a `NodeCore`
-            (None: ``NodeCoreFactory()``). docs/assignments.md writes either.
+        clock: a `SimClock` to run every node built from this config in
+            simulated time (docs/simulator.md); None (the default): the wall clock.
+        datastore: what makes each node's `Datastore`, called with no
+            arguments: None (the default) is ``dict``, SNR's own; or a class
+            of your own.
+        node_core: the factory of each node's core endpoint (a `NodeCore`):
+            None (the default) is ``NodeCoreFactory()``, SNR's own.
+            docs/assignments.md: writing either yourself.
 
     Example::
 

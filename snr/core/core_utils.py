@@ -1,6 +1,8 @@
 """The 2021 module path that thesis listing A.2 imports from.
 
-New code imports the class by name: ``from snr import MovingAvgFilter``.
+Listing A.2 writes ``from snr.core.core_utils import moving_avg_filter`` and
+then ``moving_avg_filter.MovingAvgFilter(...)``; this module makes that line
+work. New code imports the class by name: ``from snr import MovingAvgFilter``.
 
 Example::
 

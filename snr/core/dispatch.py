@@ -1,10 +1,13 @@
 """The node's dispatch: which handlers run for a task, and running them.
 
 `HandlerTable` answers thesis 4.4.1's two-phase match (``(type, name)``, then
-``type``) ahead of time, so a task needs one or two dict look-ups however many
-components the node has. `HandlerRunner` is the one place where SNR calls a
-student's handler. docs/design.md ("Dispatch: a handler table, not a scan")
-tells the rest, bursts included.
+``type``) ahead of time for every registered task id, so a task needs one or
+two dict look-ups however many components the node has. `HandlerRunner` is the
+one place where SNR calls a student's task handler: it stores a
+``store_page`` task's page first, runs the handlers in component order (timed
+unless DEPLOYED without a profiler), queues what they return and hands a
+failure to the node's `snr.core.checks.failures.FailureReport`. docs/design.md
+("Dispatch: a handler table, not a scan") tells the rest, bursts included.
 
 Example::
 
@@ -54,7 +57,9 @@ def _nothing() -> None:
 
 
 class HandlerMap(Dict[TaskId, TaskHandler]):
-    """A ``task_handlers`` dict that checks its entries and reports changes to the node.
+    """A ``task_handlers`` dict that checks its entries and reports changes.
+
+    So the node hears of ``self.task_handlers[id] = f`` as of ``= {...}``.
 
     Example::
 
@@ -109,7 +114,9 @@ class HandlerMap(Dict[TaskId, TaskHandler]):
 
 
 class HandlerTable:
-    """Precomputed two-phase matches for every registered task id, with profiler cells.
+    """Precomputed two-phase matches for every registered task id.
+
+    Each entry carries its handler's profiler cell.
 
     Example::
 
@@ -122,6 +129,9 @@ class HandlerTable:
         self.table: Dict[TaskId, List[Entry]] = {}
         #: ``(TaskType.store_page, key)`` -> the burst handler of the one
         #: component that handles those tasks, if it has one. Refilled in place.
+        #: ``(TaskType.store_page, key)`` -> the burst handler for a run of those
+        #: tasks, where one component alone handles them and declares one
+        #: (`AbstractComponent.burst_handlers`). Refilled in place, as ``table``.
         self.bursts: Dict[TaskId, BurstEntry] = {}
         self.profiler = profiler
 
@@ -146,7 +156,8 @@ class HandlerTable:
     def add(self, component: AbstractComponent) -> None:
         """Extend the table for a component added after all the others.
 
-        Never raises: it runs between two tasks, where nothing could report it.
+        Never raises for a student's mistake: it runs between two tasks, where
+        nothing could report it. `check_burst_handlers` refuses those earlier.
         """
         handlers = component.task_handlers
         table = self.table
@@ -159,10 +170,13 @@ class HandlerTable:
             entry: Entry = (handler, key, component, self._cell(handler, key))
             table.setdefault(key, []).append(entry)
             if isinstance(key, TaskType):  # it also serves its type's other specific ids
+                # Fallback: this type-level handler also serves every specific
+                # id of its type that this component did not register itself.
                 for specific in [k for k in table if isinstance(k, tuple) and k[0] is key]:
                     if specific not in handlers:
                         table[specific].append(entry)
-        # Only this component's ids changed (a type-level store_page handler: all).
+        # Only the ids this component handles can have changed (a type-level
+        # store_page handler joins every specific id of that type).
         self._find_bursts(table if _STORE_PAGE in handlers else handlers)
 
     def _find_bursts(self, keys: Iterable[TaskId]) -> None:
@@ -201,11 +215,12 @@ class HandlerRunner:
         runner.failures.failure   # the HandlerError/LoopError that stopped the node, or None
 
     Attributes:
-        running: False once the node is stopping or pausing (`run_queued` returns).
+        running: False once the node is stopping or pausing: `run_queued`
+            returns after the current task.
         slow_handler_s: handlers slower than this are reported (not in DEPLOYED).
         on_unhandled: None, or (DEBUG) called with each event no handler matched.
         store_page: the node core's `store_page_handler`, run before a
-            ``store_page`` task's handlers (set by the node).
+            ``store_page`` task's handlers.
     """
 
     def __init__(
@@ -222,13 +237,16 @@ class HandlerRunner:
         self.running = True
         self.timed = timed
         self.slow_handler_s = slow_handler_s
+        #: Called with an event that no handler matched (set by a DEBUG node).
         self.on_unhandled: Optional[Callable[[Task], None]] = None
+        #: Stores a store_page task's page before its handlers (set by the node).
         self.store_page: Optional[TaskHandler] = None
 
     def run_queued(self, max_tasks: int = 100_000) -> None:
         """Run queued tasks until the queue is empty, the node stops, or ``max_tasks`` ran.
 
-        Urgent tasks first, then oldest first; what handlers return is queued.
+        Urgent tasks first, then oldest first: each task's handlers run in
+        component order and what they return is queued. The node's hot path.
 
         Example::
 
@@ -251,6 +269,8 @@ class HandlerRunner:
                 self.store_first(task)  # the node core's part, before any handler
                 # A burst starts only from the normal lane (a paused node and
                 # `execute_task` run urgent tasks one at a time).
+                # A run for a burst handler starts only from the normal lane: a
+                # paused node runs urgent tasks one at a time, `execute_task` one task.
                 if bursts and lane is normal and normal and normal[0].name == task.name:
                     burst = bursts.get((_STORE_PAGE, task.name))
                     if burst is not None and normal[0].type is _STORE_PAGE:
@@ -286,14 +306,17 @@ class HandlerRunner:
                 return
 
     def run_burst(self, first: Task, burst: BurstEntry) -> None:
-        """Run ``burst``'s handler in one call for ``first`` and the tasks like it behind it.
+        """Run ``burst``'s handler for ``first`` and the run of tasks like it behind it.
 
-        Those are the ``store_page`` tasks under its key at the head of the
-        queue (at most `_MAX_BURST`), each page stored first.
+        ``first`` and the ``store_page`` tasks under its key at the head of
+        the queue (at most `_MAX_BURST`), each page stored first, go to the
+        burst handler in one call; its result is queued as a handler's is.
 
-        Example::
+        Example (what `run_queued` does when the table has a burst handler)::
 
-            runner.run_burst(task, components.table.bursts[(TaskType.store_page, "depth")])
+            burst = components.table.bursts.get((TaskType.store_page, "depth"))
+            if burst is not None:
+                runner.run_burst(task, burst)   # task and the "depth" pages behind it
         """
         handler, component, cell = burst
         normal = self.queue.normal
@@ -347,6 +370,8 @@ class HandlerRunner:
 
     def store_first(self, task: Task) -> Optional[Task]:
         """For a ``store_page`` task: store its page now, queue and return what follows.
+
+        A page that cannot be stored is reported as a handler's failure.
 
         Example::
 

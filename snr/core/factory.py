@@ -1,6 +1,8 @@
-"""Factories: build components for a node and reload their source code (thesis 6.2.10).
+"""Factories: build components for a node and reload their source code.
 
-State kept on the factory survives a reload.
+A config lists factories, not components, which must not start before their
+node runs (thesis 6.2.10). A factory keeps its component's modules to reload
+them; state kept on the factory survives the reload.
 """
 
 from __future__ import annotations
@@ -51,7 +53,11 @@ class Factory(AbstractFactory):
         raise NotImplementedError  # replaced by every subclass (checked in __init__)
 
     def reload(self) -> None:
-        """Reload every module in ``reload_targets``; raises what the import raises."""
+        """Reload every module in ``reload_targets`` from its source file.
+
+        Raises whatever the import raises (e.g. ``SyntaxError``): the node then
+        keeps the old component running and reports the error.
+        """
         fresh: List[ModuleType] = []
         for module in self.reload_targets:
             current = sys.modules.get(module.__name__, module)
@@ -59,6 +65,8 @@ class Factory(AbstractFactory):
         self.reload_targets = fresh
 
     # Modules cannot be pickled: their names go to processes started with "spawn".
+    # Modules cannot be pickled; send their names instead so configs can be
+    # passed to processes started with "spawn" (MultiProcRunner on macOS).
     def __getstate__(self) -> Dict[str, Any]:
         state = dict(self.__dict__)
         state["reload_targets"] = [m.__name__ for m in self.reload_targets]

@@ -1,8 +1,9 @@
 """Logging set-up: readable lines on stderr unless the program set its own.
 
-A node logs to ``snr.<role>``, a component to ``snr.<role>.<component>``::
+Every node logs to ``snr.<role>`` and every component to
+``snr.<role>.<component>``, so one call quiets a whole node::
 
-    node.log.setLevel(logging.WARNING)   # quiets a whole node
+    node.log.setLevel(logging.WARNING)
 """
 
 from __future__ import annotations
@@ -30,12 +31,16 @@ def level_for_mode(mode: Mode) -> int:
 
 
 def ensure_log_handler() -> None:
-    """Give the ``snr`` logger SNR's own stderr handler (once), which steps aside for the program's.
+    """Give the ``snr`` logger SNR's own stderr handler, once per process.
+
+    It writes a line only while the program has set no handler of its own,
+    so ``logging.basicConfig`` gets each line once, formatted its way.
 
     Example::
 
         ensure_log_handler()          # what every Node does
-        logging.basicConfig(level=logging.INFO)   # from now on, lines are printed its way
+        logging.basicConfig(level=logging.INFO)
+        logging.getLogger("snr.urov").warning("Depth sensor silent")   # printed once
     """
     snr_log = logging.getLogger(_ROOT)
     if any(isinstance(handler, _DefaultHandler) for handler in snr_log.handlers):
@@ -46,7 +51,10 @@ def ensure_log_handler() -> None:
 
 
 class _DefaultHandler(logging.StreamHandler):  # type: ignore[type-arg]
-    """SNR's stderr handler: it steps aside, line by line, for any handler the program set."""
+    """SNR's stderr handler: it steps aside for any handler the program set.
+
+    It decides line by line: logging may be configured later.
+    """
 
     def handle(self, record: logging.LogRecord) -> bool:
         if _another_handler_takes(record, self):

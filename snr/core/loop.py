@@ -38,8 +38,10 @@ class ThreadLoop(Component, AbstractLoop):
 
     Write ``loop()`` and, if needed, ``setup()``, ``halt()`` and ``terminate()``.
     ``loop()`` runs again and again on the loop's own thread, at most
-    ``max_tick_rate_hz`` times a second (0: no limit: it must block on I/O);
-    it may use only ``schedule``, ``store_data``, ``get_page`` and ``get_data``.
+    ``max_tick_rate_hz`` times a second (0: no limit: it must block on I/O).
+    From the thread use only the thread-safe ``schedule``, ``store_data``,
+    ``get_page`` and ``get_data``. On a `SimClock`, a loop with a tick rate
+    takes turns with its node (docs/sim-time.md).
 
     Example::
 
@@ -75,12 +77,16 @@ class ThreadLoop(Component, AbstractLoop):
         self._stop_event = threading.Event()
         # Held while the loop may run, released to stop it: a wait on a lock
         # hands the GIL back to the node sooner than one on the Event.
+        # Held while the loop may run; released to stop it. Waiting on a lock,
+        # not the Event, hands the GIL back to the node sooner after each pass.
         self._running_lock = threading.Lock()
         self._running_lock.acquire()
         self._thread: Optional[threading.Thread] = None
 
     def setup(self) -> None:
-        """Runs once on the loop's thread; what it stores is there for the first ``loop()``.
+        """Runs once on the loop's thread before the first ``loop()``.
+
+        What it stores is in the datastore by the first ``loop()``.
 
         Example::
 
@@ -91,6 +97,7 @@ class ThreadLoop(Component, AbstractLoop):
     def loop(self) -> None:
         """One pass of the work; override this (required)."""
 
+    # -- stopping -----------------------------------------------------------
     def set_terminate_flag(self, reason: str = "") -> None:
         """Stop this loop after the current pass (the node keeps running).
 
@@ -114,7 +121,11 @@ class ThreadLoop(Component, AbstractLoop):
         return self._stop_event.is_set()
 
     def wait_s(self, seconds: float) -> bool:
-        """Sleep up to ``seconds`` (use it, not ``time.sleep``); True if the loop was stopped."""
+        """Sleep up to ``seconds``, waking early when the loop is stopped.
+
+        Use it instead of ``time.sleep`` inside ``loop()`` so shutdown is quick.
+        Returns True if the loop was stopped while waiting.
+        """
         turn = self._clock_turn
         if turn is not None and threading.current_thread() is self._thread:
             return turn.sleep_until(turn.now_s() + seconds)
@@ -123,6 +134,7 @@ class ThreadLoop(Component, AbstractLoop):
             return True
         return False
 
+    # -- driven by the node -------------------------------------------------
     def start_thread(self) -> None:
         """Called by the node: ``begin()``, then ``setup()`` and ``loop()`` on a new thread.
 
@@ -137,6 +149,8 @@ class ThreadLoop(Component, AbstractLoop):
         self.state = LoopState.RUNNING
         if self.max_tick_rate_hz > 0 or self.follows_clock:
             # On the node's thread: a clock with turns cannot move on before it is in line.
+            # Registered here, on the node's thread, so a clock with turns cannot
+            # move on before the new thread is in line: the run stays the same.
             clock = clock_of(self.parent.config)
             self._clock_turn = clock.loop_turn(self.parent.role, self.name, self._stop_event)
         self._thread = threading.Thread(
@@ -147,7 +161,7 @@ class ThreadLoop(Component, AbstractLoop):
     def cancel_stop(self) -> None:
         """Take back a request to stop, if the thread still runs: the loop carries on.
 
-        Example (a loop that would not stop to be reloaded)::
+        Example (what the node does when a loop would not stop to be reloaded)::
 
             loop.cancel_stop()
         """
@@ -186,7 +200,11 @@ class ThreadLoop(Component, AbstractLoop):
         return running_line(self.thread_id) if self.is_alive() else ""
 
     def _wait_for_setup_tasks(self, timeout_s: float = 1.0) -> None:
-        """Wait until the node has handled what ``setup()`` stored (thesis listing A.4)."""
+        """Let the node handle what ``setup()`` stored before the first ``loop()``.
+
+        A ``loop()`` reading it at once (thesis listing A.4) must find it: the
+        node handles tasks in order, so the wait is for a marker task behind them.
+        """
         turn = self._clock_turn
         if turn is not None:
             turn.sleep_until(turn.now_s())
@@ -212,6 +230,8 @@ class ThreadLoop(Component, AbstractLoop):
             if type(self).setup is not ThreadLoop.setup:
                 self._wait_for_setup_tasks()
             # A stored page reaches the node once this thread blocks: so little after loop().
+            # A stored page reaches the node only once this thread blocks and
+            # lets go of the GIL: so little between loop() and the wait.
             running, rate_hz = self._running_lock, self.max_tick_rate_hz
             first_s, ticks = (0.0 if turn is None else turn.now_s()), 0
             while not stop.is_set():
@@ -232,6 +252,7 @@ class ThreadLoop(Component, AbstractLoop):
                 if stopped:
                     break
         except BaseException as error:  # sys.exit() and Ctrl-C too: never silently
+            # sys.exit() and Ctrl-C too: they would end this thread silently.
             self.parent.loop_failed(self, error)
         finally:
             self.state = LoopState.STOPPED

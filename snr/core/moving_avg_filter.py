@@ -1,4 +1,9 @@
-"""`MovingAvgFilter`: the mean of the last few samples, in ``snr.core`` for listing A.1."""
+"""`MovingAvgFilter`: the mean of the last few samples (the state of listing A.1).
+
+It lives in the runtime layer, as it did in 2021 (listing A.1 finds it with
+``from snr.core import *``); the endpoint and factory that use it are in
+`snr.std_mods.filters.moving_average`.
+"""
 
 from __future__ import annotations
 
@@ -8,7 +13,10 @@ __all__ = ["MovingAvgFilter"]
 
 
 class MovingAvgFilter:
-    """The mean of the last ``maxlen`` samples of a deque (a factory's: it survives a reload).
+    """The mean of the last ``maxlen`` samples of a deque.
+
+    The deque is passed in, not made here, so a factory can own it and a
+    rebuilt endpoint (after a hot reload) keeps the samples.
 
     Example::
 

@@ -1,10 +1,19 @@
 """`Node`: one running program on one device (thesis 4.2, 6.3.1).
 
-A node owns a task queue, a datastore of pages and its components; the thread
-that calls :meth:`Node.loop` alone writes the datastore and runs handlers. Its
-core endpoint (``node_core``) stores pages and manages components (thesis
-4.3.2). `ComponentSet`, `HandlerRunner` and the DEBUG ``NodeChecks`` do the rest
-(docs/design.md).
+A node owns a task queue, a datastore of pages and its components. The thread
+that calls :meth:`Node.loop` alone writes the datastore and runs handlers; loop
+threads use the thread-safe ``schedule``, ``store_data`` and ``get_page``.
+The node core endpoint (``node_core``) stores pages and manages components
+(thesis 4.3.2); ``Config(datastore=..., node_core=...)`` can replace both
+(docs/assignments.md). Three helpers do the rest (docs/design.md)::
+
+    Node ──► ComponentSet   build, add, remove, reload, start and stop components;
+      │                     keep the HandlerTable in step with them
+      ├────► HandlerRunner  run a task's handlers, time them, queue what they
+      │                     return; its FailureReport (checks/failures.py) puts
+      │                     failures into words
+      └────► NodeChecks     wire in the checks for silent mistakes (key hints,
+                            wiring checks, watchdog: DEBUG mode)
 """
 
 from __future__ import annotations
@@ -89,16 +98,20 @@ class Node(AbstractNode):
         node.is_terminated()  # True
 
     Attributes:
-        datastore: the newest page for each data key, read-only.
-        pages: the `Datastore` behind it, which only the node writes.
+        datastore: the newest page for each data key, read-only (get_page reads it).
+        pages: the `Datastore` behind it (a dict unless the config names
+            another), which only the node writes.
         queue: the task queue (bounded: see `TaskQueue`).
         components: every endpoint and loop by name, in start order.
         state: the `NodeState`.
         terminate_reason: why the node stopped, once it has.
-        step_mode: the `snr.core.checks.step_mode.StepMode` a console pauses it with.
-        key_hints, wiring_checks, watchdog: DEBUG: the checks for silent
-            mistakes (snr/core/checks/); set one to None before ``loop()`` to
-            switch it off.
+        key_hints: DEBUG: the `MissingKeyHints` (a data key read, never stored).
+        wiring_checks: DEBUG: the `snr.core.checks.wiring_checks.WiringChecks`
+            (events nothing handles, handlers nothing reaches).
+        step_mode: the `snr.core.checks.step_mode.StepMode` a console uses to
+            pause and step the node.
+        watchdog: DEBUG: the `snr.core.checks.watchdog.Watchdog` that says when
+            the node is stuck (set it to None before ``loop()`` to switch it off).
     """
 
     key_hints: Optional[MissingKeyHints]
@@ -129,6 +142,8 @@ class Node(AbstractNode):
         self.timer = Timer(clock)
         self._page_time: Callable[[], float] = clock.stamp
         self.queue = TaskQueue(high_water=self.max_queued_tasks, log=self.log)
+        # Config(datastore=...): dict, or a student's. Written by the node alone;
+        # components see it read-only:
         self.pages: Datastore = checked_datastore(config.datastore, self)
         self.datastore: Mapping[DataKey, Page] = NodeDatastore(self.pages, role, self.queue)
         self.state = NodeState.CREATED
@@ -141,8 +156,9 @@ class Node(AbstractNode):
         timed = self.profiler is not None or self.mode is not Mode.DEPLOYED
         self._runner = HandlerRunner(self.queue, self._components, self._failures, timed)
         self.step_mode = StepMode(self.queue, self._runner, self._lookup, self.is_terminated)
-        # NodeChecks sets key_hints, wiring_checks and watchdog in DEBUG mode and
-        # reads each component's class in DEBUG and TEST; DEPLOYED does not load it.
+        # The checks for silent mistakes (snr/core/checks/, read second): NodeChecks
+        # sets key_hints, wiring_checks and watchdog in DEBUG mode, and reads each
+        # component's class in DEBUG and TEST. A DEPLOYED node does not load them.
         self.key_hints = self.wiring_checks = self.watchdog = None
         self._checks: Optional[NodeChecks] = None
         if self.mode is not Mode.DEPLOYED:
@@ -163,6 +179,7 @@ class Node(AbstractNode):
             component = self.build_component(factory)
             if component is not None:
                 self.add_component(component, start=False)
+        # Built: in line for its first turn, if its clock hands out turns.
         self._clock_turn = clock.node_turn(role, self.queue, self.is_terminated)
         if self._clock_turn is not None:
             self.queue.use_waiter(self._clock_turn)
@@ -185,6 +202,9 @@ class Node(AbstractNode):
     def slow_handler_s(self, seconds: float) -> None:
         self._runner.slow_handler_s = seconds
 
+    # ------------------------------------------------------------------
+    # Control flow (thesis listing 6.1)
+    # ------------------------------------------------------------------
     def loop(self) -> None:
         """Begin every component, then run tasks until the node terminates.
 
@@ -220,9 +240,11 @@ class Node(AbstractNode):
             raise self._failures.failure
 
     def check_wiring(self) -> None:
-        """In DEBUG mode, warn about handlers of misspelled-looking keys, or that can never run.
+        """In DEBUG mode, warn about handlers of data keys that look misspelled.
 
-        Runs by itself a few seconds after the node starts.
+        Runs once by itself a few seconds after the node starts; also about
+        handlers that can never run (see
+        `snr.core.checks.wiring_checks.WiringChecks.check_never_ran`).
         """
         if self._checks is not None:
             self._checks.check_wiring()
@@ -242,7 +264,8 @@ class Node(AbstractNode):
     def terminate(self) -> None:
         """Halt, join and terminate every component, newest first. Idempotent.
 
-        While the node runs, only its thread may call it (others: ``set_terminate_flag``).
+        Only the node's thread may call it while the node runs; other threads
+        use ``set_terminate_flag`` or schedule ``tasks.terminate(reason)``.
         """
         if self.state in (NodeState.TERMINATING, NodeState.TERMINATED):
             return
@@ -260,6 +283,9 @@ class Node(AbstractNode):
         self.state = NodeState.TERMINATED
         self.log.info("Node %r terminated: %s", self.role, self.terminate_reason)
 
+    # ------------------------------------------------------------------
+    # Task execution (thesis listing 6.2)
+    # ------------------------------------------------------------------
     def _run_tasks(self) -> None:
         queue = self.queue
         run_queued = self._runner.run_queued
@@ -317,13 +343,17 @@ class Node(AbstractNode):
         self._runner.run_queued(max_tasks=1)
 
     def loop_failed(self, loop: AbstractLoop, error: BaseException) -> None:
-        """``loop``'s thread ended with ``error``: reported as a handler's failure is.
+        """``loop``'s thread ended with ``error``: a failure, reported as a handler's is.
 
         In DEBUG and TEST mode the node stops and ``loop()`` raises a
-        `LoopError`; DEPLOYED logs it (``sys.exit()`` and Ctrl-C stop it in every mode).
+        `LoopError`; DEPLOYED logs it. ``sys.exit()`` or Ctrl-C in a loop stop
+        the node in every mode. Called by the loop's thread as it ends.
         """
         self._failures.loop_failed(loop, error)
 
+    # ------------------------------------------------------------------
+    # Scheduling (thesis listing 6.3)
+    # ------------------------------------------------------------------
     def schedule(self, t: SomeTasks) -> None:
         """Queue a task or a list of tasks; safe from any thread.
 
@@ -343,7 +373,7 @@ class Node(AbstractNode):
         self.queue.normal.extendleft(reversed(tasks))
 
     def wait_for_room(self, timeout_s: float) -> bool:
-        """Wait (up to ``timeout_s``) for room in the queue; True once there is.
+        """Wait (up to ``timeout_s``) until the queue is below its high-water mark.
 
         Example (a socket reader that stops reading while the node is behind)::
 
@@ -361,6 +391,9 @@ class Node(AbstractNode):
         """A task that stores ``data`` under ``key`` when it runs (thesis: ``task_store_data``)."""
         return Task(_STORE_PAGE, key, [self.page(key, data, process)])
 
+    # ------------------------------------------------------------------
+    # Datastore (thesis listing 6.4)
+    # ------------------------------------------------------------------
     def page(self, key: DataKey, data: Any, process: bool = True) -> Page:
         """A new page from this node, stamped with the node's clock (wall or `SimClock`).
 
@@ -410,6 +443,9 @@ class Node(AbstractNode):
         self._check_owner_thread("write_page")
         self.pages[page.key] = self._core.frozen(page)
 
+    # ------------------------------------------------------------------
+    # Components (the work is done by ComponentSet)
+    # ------------------------------------------------------------------
     def build_component(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
         """``factory.get(self)``, with any mistake in ``get()`` explained.
 
@@ -462,13 +498,20 @@ class Node(AbstractNode):
 class NodeCore(Endpoint):
     """What a node needs of its core endpoint: the interface of `Config(node_core=...)`.
 
-    SNR's own is `NodeCoreEndpoint`; one of yours (docs/assignments.md, lesson
-    6) extends this class and must store pages (`store_page_handler`, called
-    for each ``store_page`` task before its handlers), store the bursts of
-    ``tasks.store_pages(pages)`` in order, and handle ``terminate``,
-    ``reload``, ``ADD_COMPONENT`` and ``REMOVE_COMPONENT`` with the parent's
-    methods. This class is named ``node_core`` and handles SNR's own two
-    events (``CAUGHT_UP``, ``CHECK_WIRING``).
+    SNR's own is `NodeCoreEndpoint`; one of your own (the course's
+    docs/assignments.md, lesson 6) extends this class, and must:
+
+    * store pages: `store_page_handler`, which the node calls for each
+      ``store_page`` task before that task's handlers;
+    * handle ``tasks.store_pages(pages)``, a burst of pages (from another node,
+      over comms) to store in order, each as its own ``store_page`` task would;
+    * handle ``terminate`` (stop the node: ``parent.set_terminate_flag``),
+      ``reload`` (``parent.reload_component``) and the ``ADD_COMPONENT`` and
+      ``REMOVE_COMPONENT`` events (``parent.build_component``,
+      ``parent.add_component``, ``parent.remove_component``).
+
+    This class names itself ``node_core`` and handles SNR's own two events
+    (``CAUGHT_UP``, ``CHECK_WIRING``); add your handlers to ``task_handlers``.
 
     Example::
 
@@ -499,10 +542,11 @@ class NodeCore(Endpoint):
 
     @abstractmethod
     def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Put the task's page in ``pages``; return its ``process_data`` task, if asked.
+        """Put the task's page in ``pages``; then return its ``process_data`` task, if asked.
 
-        That is ``Task(TaskType.process_data, page.key, [page])`` when
-        ``page.process`` is true and some handler waits for it, else None.
+        The run loop calls it for every ``store_page`` task before the task's
+        handlers. Returns ``Task(TaskType.process_data, page.key, [page])``
+        when ``page.process`` is true and some handler waits for it, else None.
 
         Example::
 
@@ -523,7 +567,11 @@ class NodeCore(Endpoint):
         return None
 
     def check_wiring_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Run the link checks (functions) the task carries, or else the node's own check."""
+        """Look for wiring mistakes: the node's own check, or the checks it carries.
+
+        Comms send it with a link's check (a function) in ``val_list``, to run
+        on the node's thread; without one, the node checks its handlers' keys.
+        """
         checks = [value for value in task.val_list if callable(value)]
         if not checks:
             self.parent.check_wiring()
@@ -563,24 +611,28 @@ class NodeCoreEndpoint(NodeCore):
         if self.freeze is not None:  # DEBUG, TEST (DEPLOYED pays only this test)
             page.data = self.freeze(page.data, page.key)
         self.pages[page.key] = page
+        # Its process_data task only if some handler waits for it.
         if page.process and self.parent.is_handled(_PROCESS_DATA, page.key):
             return Task(_PROCESS_DATA, page.key, [page])
         return None
 
     def store_pages_handler(self, task: Task, key: TaskId) -> SomeTasks:
-        """Store a burst of pages (`tasks.store_pages`) in order, as a task a page would.
+        """Store a burst of pages (`tasks.store_pages`) in order, in one handler call.
 
-        From the first page that must be fixed or explained, or whose key other
-        handlers store too, the rest go back first in line, a task each.
+        As one ``store_page`` task a page would. From the first page whose key
+        other handlers store too, the rest go back first in line, a task each.
         """
         node, pages, freeze = self.parent, self.pages, self.freeze
         processed: List[Task] = []
         wanted: Dict[DataKey, bool] = {}  # per key, asked once a burst: is it processed?
         burst = task.val_list
         for index, page in enumerate(burst):
+            # Page by page from here when the usual handler must explain or fix
+            # the page, or when a handler besides this core stores its key.
             if not (isinstance(page, Page) and page.origin) or (
                 page.key not in wanted and node.is_handled(_STORE_PAGE, page.key)
             ):
+                # One store_page task each, first in line, in order.
                 rest = [Task(_STORE_PAGE, str(getattr(p, "key", "")), [p]) for p in burst[index:]]
                 node.schedule_first(rest)
                 break

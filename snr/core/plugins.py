@@ -1,12 +1,14 @@
 """Extension points: how the kernel finds what an extra provides, by group and name.
 
-An extra declares what it provides as an entry point in ``pyproject.toml``
-(as gpiozero's pin factories), and the kernel asks for it with `load`::
+The kernel never imports an extra: an extra declares what it provides as an
+entry point in ``pyproject.toml`` (as gpiozero's pin factories)::
 
     [project.entry-points."snr.recording_formats"]
     mcap = "snr.extras.viz.mcap_format:MCAP"
 
-docs/design.md ("Extras and extension points") lists the `GROUPS`.
+and the kernel asks for it with `load` when it is needed (after editing them,
+``pip install -e .`` again). The groups, `GROUPS`, are in docs/design.md
+("Extras and extension points").
 
 Example::
 

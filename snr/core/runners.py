@@ -130,7 +130,10 @@ class SynchronousRunner(AbstractRunner):
 
 
 class TestRunner(AbstractRunner):
-    """Runs one node in the calling thread (its errors propagate), stopping it after ``timeout_s``.
+    """Runs one node in the calling thread, stopping it after ``timeout_s``.
+
+    The node's exceptions reach the caller; a node still running at the limit
+    is stopped, and ``timed_out`` says so.
 
     Example::
 

@@ -1,11 +1,29 @@
-"""`TaskQueue`: the tasks waiting for a node's thread.
+"""`TaskQueue`: the thread-safe queue between loops and the node's thread.
 
-Two FIFO lanes, ``urgent`` (terminate) and ``normal``; ``deque.append`` and
-``popleft`` are atomic in CPython, so producers never take a lock. An idle node
-sleeps in `TaskQueue.wait` on a bell, or on an `IdleWaiter`, and producers
-ring only while it sleeps. Above a high-water mark, other threads wait
-(backpressure), then drop what they offer, counted and logged. docs/design.md
-("The queue", "How an idle node waits") tells the whole story.
+Two deques: ``urgent`` for high-priority tasks (terminate) and ``normal`` for
+the rest, each FIFO. ``deque.append``/``popleft`` are atomic in CPython, so
+producers never take a lock.
+
+**How an idle node waits.** When its queue is empty, the node's thread sleeps
+in `TaskQueue.wait` (until a task comes or it stops), and producers wake it only while it
+sleeps: an idle node uses no CPU, and a busy one pays nothing for waking.
+What it sleeps on is the queue's *bell*, a ``queue.SimpleQueue`` (a blocking
+get with a timeout), unless something else was installed with `use_waiter`:
+an `IdleWaiter`, the one way to change how an idle node waits. SNR has three:
+a `SimClock`'s turn (an idle node gives the clock back), the socket comms'
+I/O loop and Zenoh's idle reader (an idle node reads its links itself, so a
+page that arrives needs no hand-off from another thread).
+
+The queue is bounded by a *high-water mark* (``high_water``, 10,000 tasks by
+default). A task offered by another thread (a loop's ``store_data``) while the
+normal lane is above it waits until the node has worked the lane down to the
+*low-water mark* (half the high one): a loop that produces faster than the
+node can handle is slowed to the node's pace (backpressure). If the node does
+not catch up within ``max_wait_s`` (1 s) the waiting task is dropped, counted
+and logged (at most once a second, with numbers), so a stuck node can never
+fill the memory. Tasks the node's own handlers return never wait (the node
+would wait on itself) and urgent tasks (terminate) never wait or drop.
+Readers of sockets ask `wait_for_room(0)` and stop reading instead of waiting.
 """
 
 from __future__ import annotations
@@ -30,13 +48,28 @@ __all__ = ["IdleWaiter", "TaskQueue"]
 class IdleWaiter(Protocol):
     """What a node's thread sleeps on while its queue is empty, instead of the bell.
 
-    The one extension point for how an idle node waits (`TaskQueue.use_waiter`).
-    The queue calls ``wait``, then ``woken``, on the node's thread; producers
-    call ``wake`` (any thread), only while the node sleeps.
+    The one extension point for how an idle node waits (see `TaskQueue.use_waiter`).
+    The queue calls ``wait`` while it counts the node as sleeping, then
+    ``woken`` once it no longer does, on the node's thread; producers call
+    ``wake`` (any thread), only while the node sleeps.
 
-    Example (SNR has three: a `SimClock`'s turn, the socket I/O loop, Zenoh's reader)::
+    Example (a waiter that sleeps on an Event, as the bell does)::
 
-        node.queue.use_waiter(io_loop)   # io_loop has wait, woken and wake
+        class EventWaiter:
+            def __init__(self) -> None:
+                self.event = threading.Event()
+
+            def wait(self, timeout_s: Optional[float]) -> None:
+                self.event.wait(timeout_s)
+                self.event.clear()
+
+            def woken(self) -> None:
+                pass
+
+            def wake(self) -> None:
+                self.event.set()
+
+        node.queue.use_waiter(EventWaiter())
     """
 
     def wait(self, timeout_s: Optional[float]) -> None:
@@ -65,14 +98,18 @@ class TaskQueue(AbstractTaskQueue):
         queue.get().name      # 'a'
 
     Attributes:
-        normal: the FIFO lane of ordinary tasks.
+        normal: the FIFO lane of ordinary tasks (the node pops from it).
         urgent: the lane of high-priority tasks, served first.
-        owner_thread: the node's thread id; tasks it schedules never wait.
-        holds_back: ids of threads that never wait here (see `never_wait`).
+        owner_thread: the consuming thread's id (set by the node as it
+            starts); tasks it schedules itself never wait.
+        holds_back: ids of other threads that never wait here because they
+            hold back on their own (a socket I/O thread stops reading); see
+            `never_wait`.
         waits: how many times a producer had to wait for space.
-        waits_by_thread: the same per thread id (the watchdog names a flooding loop).
-        waited_at: per thread id, the caller's frame outside SNR and its line
-            at the last wait (the watchdog shows it).
+        waits_by_thread: the same, for each thread id that had to wait (the
+            watchdog names a loop that floods the queue with it).
+        waited_at: for each thread id that had to wait, the caller's frame
+            outside SNR and its line at the last wait (the watchdog shows it).
         sleeping: True while the node's thread sleeps in `wait` (any thread may look).
         waiter: the `IdleWaiter` the node sleeps on instead of the bell, or None.
     """
@@ -108,7 +145,10 @@ class TaskQueue(AbstractTaskQueue):
         self._closed = threading.Event()
 
     def put(self, task: Task) -> None:
-        """Queue one task from any thread (another than the node's may wait, or drop it).
+        """Queue one task. Any thread; what `schedule` does with a single `Task`.
+
+        From a thread other than the node's, this may wait while the queue is
+        above its high-water mark, and drop the task if it stays there.
 
         Example::
 
@@ -124,7 +164,11 @@ class TaskQueue(AbstractTaskQueue):
             self._ring()
 
     def schedule(self, t: SomeTasks) -> None:
-        """Queue a task, a list of tasks, or nothing (None), as `put` does."""
+        """Queue a task, a list of tasks, or nothing (None). Any thread.
+
+        From a thread other than the node's, this may wait while the queue is
+        above its high-water mark, and drop the task if it stays there.
+        """
         if t is None:
             return
         if isinstance(t, Task):
@@ -163,19 +207,24 @@ class TaskQueue(AbstractTaskQueue):
         return True
 
     def _drain(self, timeout_s: float) -> bool:
-        """Wait up to ``timeout_s`` for the low-water mark (or `close`); False on timeout."""
+        """Wait up to ``timeout_s`` until the normal lane is down to the low-water mark.
+
+        False on timeout; True once it is there, or when `close` ends the wait.
+        """
         deadline = time.monotonic() + timeout_s
         while len(self.normal) > self.low_water:
             left = deadline - time.monotonic()
             if left <= 0:
                 return False
             # Poll: the node works the lane down without a word, paying nothing.
+            # Poll: the node works the lane down without a word to producers,
+            # so its hot path pays nothing. close() ends the wait at once.
             if self._closed.wait(min(left, 0.005)):
                 return True
         return True
 
     def _count_wait(self, me: int) -> None:
-        """Count a producer's wait and remember where it waits."""
+        """Count a producer's wait and remember where it waits (slow path: the queue is full)."""
         self.waits += 1
         if len(self.waits_by_thread) >= 100:  # threads come and go; keep these bounded
             self.waits_by_thread.clear()
@@ -188,8 +237,10 @@ class TaskQueue(AbstractTaskQueue):
     def never_wait(self, thread_id: int) -> None:
         """Let ``thread_id``'s tasks in at once, whatever the queue's length.
 
-        For a thread that holds back by itself (a socket I/O thread stops
-        reading): making it wait would stall every link it serves.
+        For a thread that serves many producers and holds back by itself when
+        the queue is full (a socket I/O thread stops reading): making it wait
+        would stall every link it serves. Its tasks still count towards the
+        high-water mark the others see.
 
         Example::
 
@@ -198,10 +249,11 @@ class TaskQueue(AbstractTaskQueue):
         self.holds_back.add(thread_id)
 
     def wait_for_room(self, timeout_s: float) -> bool:
-        """Wait up to ``timeout_s`` for room below the high-water mark; False on timeout.
+        """Wait up to ``timeout_s`` until the normal lane is below the high-water mark.
 
-        For producers that can hold back, such as a socket reader. True too
-        when the node is stopping.
+        For producers that can hold back without losing anything, such as a
+        socket reader (unread bytes stay in the OS, and TCP slows the sender).
+        True once there is room (or the node is stopping); False on timeout.
 
         Example::
 
@@ -228,8 +280,12 @@ class TaskQueue(AbstractTaskQueue):
         """Sleep on ``waiter`` from now on instead of the bell; True if it now does.
 
         One waiter at a time, the first to ask: False if another is installed
-        (a refused comms reads on a thread of its own). Call it from the node's
-        thread, or before the node runs; a sleep in progress is ended.
+        (a node on a `SimClock` sleeps on its turn; a node with sockets and
+        Zenoh sleeps on whichever comms started first). A comms refused here
+        reads its links on a thread of its own and queues what it reads,
+        which is always correct, only a hand-off slower. Call it from the
+        node's thread, or before the node runs; a sleep on the bell in
+        progress is ended, so no wake-up is lost.
 
         Example (what the socket comms' I/O loop does as it starts)::
 
@@ -243,7 +299,9 @@ class TaskQueue(AbstractTaskQueue):
         return True
 
     def stop_waiter(self, waiter: IdleWaiter) -> None:
-        """Sleep on the bell again if ``waiter`` is the one installed; a sleep on it ends.
+        """Sleep on the bell again if ``waiter`` is the one installed (else nothing changes).
+
+        A sleep on ``waiter`` in progress is ended, so no wake-up is lost.
 
         Example::
 
@@ -264,6 +322,8 @@ class TaskQueue(AbstractTaskQueue):
         self.sleeping = True
         try:
             # Look again now that producers ring: one may have appended just before.
+            # Check again now that producers will ring: one may have appended
+            # just before it saw us sleeping.
             if self.urgent or (self.normal and not urgent_only):
                 return
             if waiter is not None:
@@ -276,6 +336,8 @@ class TaskQueue(AbstractTaskQueue):
         finally:
             self.sleeping = False
             if waiter is not None:  # once no producer rings for this sleep any more
+                # Reading what woke it queues tasks: done once no producer
+                # rings for this sleep any more.
                 waiter.woken()
 
     def wake(self) -> None:

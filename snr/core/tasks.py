@@ -68,6 +68,9 @@ def store_page(page: Page) -> Task:
 def store_pages(pages: List[Page]) -> Task:
     """One task that stores ``pages`` in order, as one `store_page` task each would.
 
+    For pages that arrive together (a comms link's read): handlers see the
+    same as for one task a page.
+
     Example::
 
         node.schedule(tasks.store_pages([page_a, page_b]))

@@ -1,6 +1,7 @@
 """The interfaces of SNR (thesis 6.2.4-6.2.10) as abstract base classes.
 
-Students subclass ``Endpoint``, ``ThreadLoop`` and their factories instead.
+Students subclass ``Endpoint``, ``ThreadLoop`` and their factories instead;
+these let SNR's parts depend on interfaces and annotate ``parent: AbstractNode``.
 
 Example::
 
@@ -61,6 +62,7 @@ class _FriendlyABCMeta(ABCMeta):
             >>> print(inspect.signature(snr.TimeoutLoopFactory))
             (seconds: 'float' = 0.0, ms: 'float' = 0.0, name: 'Optional[str]' = None) -> None
         """
+        # mypy warns about __init__ on an instance; here it is the class: sound.
         init = inspect.signature(cls.__init__)  # type: ignore[misc]
         parameters = list(init.parameters.values())[1:]  # drop self
         return init.replace(parameters=parameters, return_annotation=None)
@@ -73,11 +75,16 @@ class _FriendlyABC(metaclass=_FriendlyABCMeta):
 
 
 def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
-    """`snr.prelude.abstract_errors.explain_abstract_error`, loaded only when called.
+    """Re-word Python's "Can't instantiate abstract class" TypeError, or None.
+
+    For abstract classes that are not SNR's own, e.g. a student's ``Sensor(ABC)``.
 
     Example::
 
-        raise (explain_abstract_error(error) or error) from error   # a TypeError
+        try:
+            component = factory.get(node)
+        except TypeError as error:
+            raise (explain_abstract_error(error) or error) from error
     """
     from snr.prelude import abstract_errors
 
@@ -132,13 +139,14 @@ class AbstractTaskQueue(_FriendlyABC):
 
 
 class Datastore(Protocol):
-    """What a node keeps its pages in: the four methods of a ``dict`` the node uses.
+    """What a node keeps its pages in: the newest page under each key (thesis 4.2, 6.3.1).
 
-    SNR's own is a ``dict``; a class of yours can take its place
-    (docs/assignments.md, lesson 5).
+    The four methods of a ``dict`` the node uses (SNR's own *is* a ``dict``);
+    a class of yours with them can take its place (docs/assignments.md, lesson 5).
 
     Example::
 
+        store = dict()                 # SNR's own; or MyDatastore()
         store["depth"] = page          # the node core stores a page
         store.get("depth")             # that page; None for a key never stored
         list(store), len(store)        # ["depth"], 1: the keys, first stored first
@@ -168,7 +176,8 @@ class AbstractNode(_FriendlyABC):
         components: every endpoint and loop, by name, in start order.
         log: the node's logger (``logging.Logger``).
         profiler: the profiler, or None when profiling is off.
-        datastore: the newest page for each data key, read-only.
+        datastore: the newest page for each data key, read-only (only the
+            node writes it): read with ``get_page``, store with ``store_data``.
 
     Example::
 
@@ -249,6 +258,7 @@ class AbstractNode(_FriendlyABC):
         """
         return True
 
+    # -- what components tell their node (called by SNR, not by students) --
     def handlers_changed(self, component: AbstractComponent) -> None:
         """``component`` changed its ``task_handlers``: look them up again before the next task.
 
@@ -401,7 +411,10 @@ class AbstractLoop(AbstractComponent):
         """True once this loop has been asked to stop."""
 
     def where_running(self) -> str:
-        """The line the loop's thread runs now (where it blocks), e.g. ``sensor.py:12``; or ""."""
+        """The line the loop's thread is running now, e.g. ``sensor.py:12 `read()```.
+
+        Used to say where a loop that will not stop is blocked; "" if unknown.
+        """
         return ""
 
     def start_thread(self) -> None:
@@ -416,10 +429,12 @@ class AbstractLoop(AbstractComponent):
     def cancel_stop(self) -> None:
         """Take back a request to stop: the loop carries on (a reload was refused).
 
-        Example::
+        Example (a loop that did not stop in time to be reloaded)::
 
+            loop.set_terminate_flag("reloading")
+            loop.join(1.0)
             if loop.is_alive():
-                loop.cancel_stop()   # it did not stop in time: the old version runs on
+                loop.cancel_stop()   # the old version keeps running
         """
 
 

@@ -1,4 +1,14 @@
-"""Why a class cannot be built: the methods it lacks, in words (thesis 7.3), loaded only then."""
+"""Why a class cannot be built: the methods it lacks, in words (thesis 7.3).
+
+Instead of Python's "Can't instantiate abstract class X with abstract methods
+halt", SNR's interfaces raise the ComponentError made here (loaded only then).
+
+Example::
+
+    missing_methods_error(HalfEndpoint)
+    # Cannot create HalfEndpoint (robot.py:5): it lacks these methods that
+    # AbstractEndpoint requires: halt, terminate. Easiest fix: subclass ...
+"""
 
 from __future__ import annotations
 

@@ -1,6 +1,7 @@
 """How to install SNR and its extras: the one place that writes the ``pip`` lines.
 
-SNR is published as ``snr-robotics`` (``snr`` on the index is another project).
+SNR is published as ``snr-robotics`` (``snr`` on the index is another project)
+and imported as ``snr``.
 
 Example::
 

@@ -1,4 +1,9 @@
-"""`JsonDataclass`: dataclasses-json's methods, imported on first use (it is slow to import)."""
+"""`JsonDataclass`: dataclasses-json's methods, imported on first use.
+
+dataclasses-json is slow to import and only ``serialize()``/``deserialize()``
+need it (the wire format is plain ``json``), so ``Page`` and ``Task`` get its
+mixin's methods from this base, which imports it on first use.
+"""
 
 from __future__ import annotations
 
@@ -29,7 +34,10 @@ def _mixin() -> Any:
 
 
 class JsonDataclass:
-    """A drop-in for ``dataclasses_json.DataClassJsonMixin`` that imports it on first use.
+    """Base of a dataclass with dataclasses-json's methods, loaded lazily.
+
+    A drop-in for ``dataclasses_json.DataClassJsonMixin`` (its methods call the
+    mixin's); once loaded, ``isinstance(obj, DataClassJsonMixin)`` is true.
 
     Example::
 

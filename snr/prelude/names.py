@@ -2,10 +2,12 @@
 
 Students mostly meet these names in annotations::
 
+    from snr import DataKey, TaskId, SomeTasks, TaskType
+
     def on_depth(self, task: Task, key: TaskId) -> SomeTasks: ...
 
-Aliases that mention `Task`, `Page` or the ABCs use dotted names in strings:
-this bottom layer imports nothing of the package.
+Aliases that mention `Task`, `Page` or the ABCs are full dotted names in strings:
+this module, the bottom layer, imports nothing of the package.
 """
 
 from __future__ import annotations
@@ -62,6 +64,8 @@ class TaskType(enum.Enum):
     terminate = "terminate"
 
     # Members are singletons: identity hashing is correct, and twice as fast as Enum's.
+    # Members are singletons, so identity hashing is correct, and it is twice
+    # as fast as Enum's hash-by-name: every task dispatch hashes a TaskType.
     __hash__ = object.__hash__
 
     def __repr__(self) -> str:

@@ -21,6 +21,9 @@ _PREVIEW_CHARS = 1000  # str(page) shows a game pad's buttons, not a camera fram
 class Page(JsonDataclass):
     """A value stored under a key, stamped with where and when it was made.
 
+    The newest page for each key stays in the datastore; endpoints usually
+    store one with ``self.store_data(key, data)``.
+
     Attributes:
         key: the data key, e.g. ``"depth_m"``.
         data: the value (JSON-able if it is to cross between nodes).
@@ -51,6 +54,8 @@ class Page(JsonDataclass):
                 part JSON cannot hold is, e.g. ``data['pose'][2] is a set``.
         """
         # dataclasses-json would write a set as a list and NaN as NaN (not JSON).
+        # dataclasses-json would write a set as a list and NaN as NaN (not
+        # JSON): refuse what pages sent between nodes may not hold, as they are.
         check_serializable(self.key, self.data)
         try:
             return self.to_json()
@@ -59,6 +64,8 @@ class Page(JsonDataclass):
 
     def __bool__(self) -> bool:
         """Always True (a page exists); warns, once per line, when its data is false.
+
+        ``if page:`` never tests the page's value; ``is not None`` tests for a page.
 
         Example::
 
@@ -86,7 +93,9 @@ class Page(JsonDataclass):
         return cls.from_json(text)
 
     def __str__(self) -> str:
-        """The page in one short line: key, data (cut short), origin and age.
+        """The page in one short line: key, data, origin and age.
+
+        Long data is cut short with ``...``; ``repr(page)`` shows it whole.
 
         Example::
 
@@ -100,7 +109,11 @@ class Page(JsonDataclass):
 
 
 def _age_text(created_at_s: float, now_s: float) -> str:
-    """How long before ``now_s`` a page was made, in words (``"0.3 s ago"``), or its date."""
+    """How long before ``now_s`` a page was made, in words: ``"0.3 s ago"``.
+
+    A page up to a minute ahead says so (two machines' clocks differ); one
+    older than a day, or further ahead, shows its date.
+    """
     try:
         age = now_s - created_at_s
     except TypeError:  # not a number: say what it is rather than fail to print

@@ -1,6 +1,8 @@
-"""Pointing at the student's code, not SNR's runtime: where a class or a call is.
+"""Pointing at the student's code, not SNR's: where a class or a call is; a value cut short.
 
-What the prelude's messages need; `snr.core.checks.student_code` has the rest.
+What the prelude's own messages need; the rest is `snr.core.checks.student_code`
+and `snr.core.checks.error_text`, read second. Frames of SNR's runtime
+(``snr/core``, ``snr/prelude``) are skipped.
 
 Example::
 
@@ -102,6 +104,7 @@ def frame_name(frame: FrameType) -> str:
     name: Optional[str] = getattr(code, "co_qualname", None)  # Python 3.11+
     if name is None:
         # Before 3.11: the class of `self` (or `cls`), as co_qualname would.
+        # Before 3.11: add the class of `self` (or `cls`), as co_qualname would.
         owner = frame.f_locals.get("self", frame.f_locals.get("cls"))
         owner_class = owner if isinstance(owner, type) else type(owner)
         name = code.co_name

@@ -14,7 +14,10 @@ __all__ = ["Task", "format_task"]
 
 @dataclass(slots=True)
 class Task(JsonDataclass):
-    """An ephemeral event handed to every endpoint that registered for it (see ``snr.tasks``).
+    """An ephemeral event handed to every endpoint that registered for it.
+
+    Its id is ``(type, name)``; ``val_list`` carries values for the handlers
+    (build tasks with ``snr.tasks``).
 
     Example::
 
@@ -58,7 +61,10 @@ class Task(JsonDataclass):
         return cls.from_json(text)
 
     def __str__(self) -> str:
-        """The task in one line, as thesis figure 5.4 prints it: `format_task`."""
+        """The task in one line, as thesis figure 5.4 prints it: `format_task`.
+
+        ``repr(task)`` shows every field in full, for debugging.
+        """
         return format_task(self)
 
 
@@ -69,7 +75,8 @@ ValuesShown = Literal["all", "data", "none"]
 def format_task(task: Union[Task, TaskId], values: ValuesShown = "all") -> str:
     """A task (or a task id) in one line: the one way SNR prints tasks.
 
-    ``values="data"`` shows only a page's data, ``"none"`` only the id.
+    Pages show in their short form; ``values="data"`` shows only a page's
+    data, ``"none"`` only the id.
 
     Example::
 
