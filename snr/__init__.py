@@ -172,7 +172,7 @@ __all__ += ["World", "ZenohCommsFactory", "read_recording", "tasks"]
 
 
 def _set_excepthook() -> None:
-    """An SNR error a student's call raises shows their frames, not SNR's (errors.md 16p)."""
+    """An SNR error a student's own call raises shows their frames, not SNR's (errors.md 16p)."""
     from snr.core.checks.runner_checks import install_excepthook
 
     install_excepthook()

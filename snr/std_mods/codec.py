@@ -118,11 +118,15 @@ class _Refused(Exception):
 
 
 class _OutOfRange(Exception):
-    """A number a double cannot hold, such as ``1e999`` (a ValueError would be json's)."""
+    """A number a double cannot hold, such as ``1e999`` (not a ValueError, json's verdicts)."""
 
 
 def _suspect(text: bytes, depth: int = MAX_DEPTH) -> bool:
-    """True when JSON text may hold a lone surrogate (``\\ud800``) or nest over ``depth``."""
+    """True when JSON text may hold a lone surrogate (``\\ud800``) or nest over ``depth``.
+
+    Text shorter than ``2 * depth`` cannot nest that deep; brackets in strings
+    count too (then the decoded value shows that all is well).
+    """
     return b"\\ud" in text or (
         len(text) > 2 * depth and text.count(b"[") + text.count(b"{") > depth
     )
@@ -156,8 +160,10 @@ def _problem(value: Any, limit: int = MAX_DEPTH) -> Optional[str]:
 class JsonBackend(Protocol):
     """What an entry point of `BACKEND_GROUP` makes: json's results, faster, or a step aside.
 
-    Its class raises ImportError (the message: the pip line) when a package it
-    needs is missing. Where it steps aside, json writes, reads and refuses.
+    The entry point names a class that raises ImportError, its message the
+    pip line, when a package it needs is missing. Wherever a backend steps
+    aside the codec uses json, which also gives every verdict and message, so
+    the bytes written and the input rejected are the same with any backend.
 
     Example::
 
@@ -169,14 +175,23 @@ class JsonBackend(Protocol):
     """
 
     def dumps(self, value: Any) -> Optional[bytes]:
-        """json's bytes (compact, ASCII), or None: at least for nesting over 99 or ``\\ud800``."""
+        """json's bytes for ``value`` (compact, ASCII), or None to let json write it.
+
+        None at least where json's bytes nest more than ``MAX_DEPTH - 1`` deep
+        or hold a lone surrogate (``\\ud800``): the codec does not look again.
+        """
 
     def loads(self, raw: Text) -> Any:
         """The value `load_json` reads from ``raw``, or ValueError to let json read it."""
 
 
 class _DefaultOnFirstUse:
-    """The backend until first used: reading entry points costs ~13 ms, not paid at import."""
+    """The backend until the first value is read or written: then the default is chosen.
+
+    Finding the installed backends reads the packages' entry points
+    (``importlib.metadata``, about 13 ms), so importing the codec does not:
+    ``from snr import *`` and a program that sends no page never pay it.
+    """
 
     def dumps(self, value: Any) -> Optional[bytes]:
         use_backend()
@@ -213,11 +228,11 @@ def _load_backend(name: str) -> JsonBackend:
 
 
 def available_backends() -> Tuple[str, ...]:
-    """The JSON backends installed here.
+    """The JSON backends that can be used here: ``("json", "orjson")`` or ``("json",)``.
 
     Example::
 
-        available_backends()   # ('json', 'orjson') after pip install 'snr-robotics[fast]'
+        "orjson" in available_backends()   # True after pip install 'snr-robotics[fast]'
     """
     usable = ["json"]
     for name in plugins.names(BACKEND_GROUP):
@@ -240,11 +255,15 @@ def backend() -> str:
 
 
 def use_backend(name: Optional[str] = None) -> str:
-    """Choose the JSON backend (only the speed differs); returns the one now in use.
+    """Choose the JSON backend; returns the one now in use.
 
-    ``name``: ``"json"``, a backend of `BACKEND_GROUP`, or None for the
-    default: ``SNR_JSON`` if set, else the first installed. ValueError for an
-    unknown name or a backend not installed.
+    Args:
+        name: ``"json"`` (the standard library), a backend of `BACKEND_GROUP`
+            (``"orjson"``), or None for the default: ``SNR_JSON`` if set, else
+            the first backend installed, else json. Only the speed differs.
+
+    Raises:
+        ValueError: an unknown name, or a backend asked for but not installed.
 
     Example::
 
@@ -358,7 +377,7 @@ def _dump(value: Any, depth: int = MAX_DEPTH) -> bytes:
 
 
 def load_object(raw: Text) -> Dict[str, Any]:
-    """`load_json` for a body or line that must be a JSON object.
+    """Like `load_json`, for a body or line that must be a JSON object.
 
     Example::
 
@@ -371,7 +390,10 @@ def load_object(raw: Text) -> Dict[str, Any]:
 
 
 def dump_json(obj: Mapping[str, Any], what: str = "it") -> bytes:
-    """``obj`` as compact ASCII JSON (small fixed objects, not pages), or NotSerializableError.
+    """``obj`` as compact, ASCII-only JSON bytes (for small fixed objects, not pages).
+
+    Raises:
+        NotSerializableError: something in it JSON cannot hold.
 
     Example::
 
@@ -393,7 +415,10 @@ def _refusing(value: Any, key: str, data: Any, to: str) -> bytes:
 
 
 def data_json(key: str, data: Any, to: str) -> bytes:
-    """A page's ``data`` alone as JSON bytes (serial lines), refused as `page_json` does.
+    """A page's ``data`` alone as JSON bytes, refused as `page_json` refuses it.
+
+    For formats that send the data without the page (a serial link's plain
+    lines, a board's compact lines).
 
     Example::
 
@@ -405,11 +430,16 @@ def data_json(key: str, data: Any, to: str) -> bytes:
 def page_json(
     page: Page, head: Optional[Mapping[str, Any]] = None, to: str = "to another node"
 ) -> bytes:
-    """``page`` as one JSON object: ``head``'s fields (``{"v": 1, ...}``), then the page's.
+    """``page`` as one JSON object: ``head``'s fields, then the page's fields.
+
+    Args:
+        page: the page.
+        head: fields written first, e.g. ``{"v": 1, "kind": "page"}`` for a frame.
+        to: where it is going, for the error message.
 
     Raises:
-        NotSerializableError: the data is not JSON (a set, NaN, a lone
-            surrogate, too deep), naming the key, the part, the fix and ``to``.
+        NotSerializableError: the data is not JSON (a set, an object, NaN,
+            a lone surrogate, too deep), naming the key, the part and the fix.
 
     Example::
 
@@ -428,14 +458,21 @@ _TAILS = (b',"process":false}', b',"process":true}')
 
 
 class PageEncoder:
-    """`page_json` with ``head`` and ``to`` given once: a link's encoder, the same bytes, faster.
+    """`page_json` with the leading fields and the destination given once: a link's encoder.
 
-    The JSON around the data and the time is written once per key and origin
-    (up to 1,024 pairs) and kept: a page costs the JSON of its data and time.
+    A node sends pages under a few keys, each from one origin, again and
+    again: the JSON around the data and the time (the head, the key, the
+    origin) is written once per key and origin and kept (up to 1,024
+    pairs). A page then costs the JSON of its data and time and a
+    join. The bytes and the refusals are `page_json`'s.
+
+    Args:
+        head: fields written before the page's, e.g. ``{"v": 1, "kind": "page"}``.
+        to: where the pages go, for the error message.
 
     Example::
 
-        encode = PageEncoder({"v": 1, "kind": "page"}, to="to another node")
+        encode = PageEncoder({"v": 1, "kind": "page"})
         encode(Page("x", 1.5, "robot", 0.5))
         # b'{"v":1,"kind":"page","key":"x","data":1.5,"origin":"robot","created_at_s":0.5,...}'
     """
@@ -487,11 +524,17 @@ def _bad_type(name: str, value: Any, expected: str) -> WireFormatError:
 def page_from_fields(
     fields: Mapping[str, Any], default_origin: Optional[str] = "", now_s: Optional[float] = None
 ) -> Page:
-    """The page a decoded JSON object describes; WireFormatError names a bad or missing field.
+    """The page a decoded JSON object describes.
 
-    ``key`` and ``data`` are required. A missing ``origin`` becomes
-    ``default_origin``, ``created_at_s`` ``now_s`` (or now), ``process`` true.
-    With ``default_origin=None`` (frames) origin and time are required.
+    ``key`` (not empty) and ``data`` are required; other fields are ignored.
+    A missing ``origin`` becomes ``default_origin``, a missing
+    ``created_at_s`` ``now_s`` (or the current time), a missing ``process``
+    true. With ``default_origin=None`` (frames) origin and time are required
+    and origin must not be empty.
+
+    Raises:
+        WireFormatError: a field is missing, empty or of the wrong type; the
+            message names it.
 
     Example::
 
@@ -547,9 +590,11 @@ def page_from_fields(
 class Hello:
     """The first frame on a link: who is on the other end.
 
-    ``beat_s``: how often it promises a `Beat` on a quiet link (None: no
-    promise); ``bye``: it understands `Bye`; ``system``: its system (None in
-    a version 1 hello); ``nonce``: its challenge if it has a secret.
+    ``beat_s``: how often the sender promises a sign of life (a `Beat`) while
+    it has nothing else to send, None for no promise (older nodes). ``bye``:
+    it understands a `Bye` frame. ``system``: the system it belongs to (None
+    in a version 1 hello), ``nonce``: its challenge, 64 hex digits from a node
+    with a secret, else None.
 
     Example::
 
@@ -613,7 +658,11 @@ def _frame(body: bytes, what: str) -> bytes:
 
 
 def encode_page(page: Page) -> bytes:
-    """One frame carrying ``page``; NotSerializableError as `page_json`, or when too big.
+    """One frame carrying ``page``.
+
+    Raises:
+        NotSerializableError: the data is not JSON (a set, a custom object,
+            NaN, ...), naming the key and the type, or the frame is too big.
 
     Example::
 
@@ -639,7 +688,8 @@ def encode_hello(
 ) -> bytes:
     """The hello frame a node sends first on every link (the fields: `Hello`).
 
-    With a ``system`` or a ``nonce`` it is a version 2 hello, else version 1.
+    With a ``system`` or a ``nonce`` it is a version 2 hello; without
+    either, the version 1 hello older nodes know.
 
     Example::
 
@@ -728,11 +778,13 @@ def _field(obj: Dict[str, Any], kind: str, name: str, default: Any = None) -> An
 
 
 def decode_body(body: bytes) -> Message:
-    """The `Message` in a frame's body (after the header).
+    """The `Page`, `Hello`, `Beat`, `Bye` or `Proof` in a frame's body (after the header).
 
     Raises:
-        WireFormatError: not strict JSON, not an object, another version, an
-            unknown kind, a missing or mistyped field: the message says which.
+        WireFormatError: the body is not strict JSON, not an object, has
+            another version, an unknown kind, or a missing or mistyped field.
+            The message says which; a link logs it and drops the frame (a bad
+            frame before the peer's hello ends the link instead).
 
     Example::
 
@@ -802,7 +854,8 @@ def _too_long(length: int, limit: int) -> WireFormatError:
 class FrameDecoder:
     """Cuts a byte stream into frame bodies, however the bytes arrive.
 
-    Give every chunk to `cut_frames`, or `feed` it and take the bodies with
+    A ``recv`` may return half a frame or several: give every chunk to
+    `cut_frames` (the links do), or `feed` it and take the bodies with
     `next_frame` until it returns None.
 
     Example::
@@ -828,7 +881,12 @@ class FrameDecoder:
             self._error = error
 
     def next_frame(self) -> Optional[bytes]:
-        """The next whole body fed, or None; WireFormatError for a length over the maximum."""
+        """The next whole body fed, or None until more bytes arrive.
+
+        Raises:
+            WireFormatError: the length header is over the maximum frame size.
+                The stream cannot be trusted after that: reset the connection.
+        """
         if self._bodies:
             return self._bodies.pop(0)
         if self._error is not None:
@@ -838,7 +896,9 @@ class FrameDecoder:
     def cut_frames(self, data: bytes, bodies: List[bytes]) -> None:
         """Add ``data`` and append every whole body now available to ``bodies``, in order.
 
-        WireFormatError for a length over the maximum (``bodies`` holds the frames before it).
+        Raises:
+            WireFormatError: a length header is over the maximum frame size;
+                ``bodies`` holds the whole frames before it. Reset the connection.
 
         Example::
 
@@ -920,7 +980,11 @@ def is_header(fields: Mapping[str, Any]) -> bool:
 
 
 def check_header(fields: Mapping[str, Any]) -> None:
-    """WireFormatError unless the header names an SNR page stream of a version this SNR reads.
+    """Check a header's format name and version.
+
+    Raises:
+        WireFormatError: not an SNR page stream, a version that is not a
+            whole number, or a newer version than this SNR can read.
 
     Example::
 
@@ -944,7 +1008,11 @@ def check_header(fields: Mapping[str, Any]) -> None:
 def page_from_line(
     line: Text, default_origin: str = "", now_s: Optional[float] = None
 ) -> Optional[Page]:
-    """The page a line holds, or None for a header line; WireFormatError says what is wrong.
+    """The page a line holds, or None for a (valid) header line.
+
+    Raises:
+        WireFormatError: the line is malformed, or is a header of another
+            format or a newer version; the message says which.
 
     Example::
 

@@ -32,7 +32,11 @@ __all__ = ["CliRunner", "MultiProcRunner"]
 
 
 def _watch_parent(role: Role, link: Connection, node: Node) -> None:
-    """Stop ``node`` when its parent writes a reason to the pipe, or dies (EOF, even on SIGKILL)."""
+    """Stop ``node`` when its parent asks to, or when the parent dies (a thread's target).
+
+    The parent writes a reason to the child's pipe; if it dies (even by SIGKILL)
+    the OS closes the pipe and the child reads EOF: every OS, every start method.
+    """
     try:
         reason = link.recv_bytes().decode("utf-8", "replace")
     except (EOFError, OSError):
@@ -120,8 +124,8 @@ class MultiProcRunner(AbstractMultiRunner):
     def run(self) -> None:
         """Start every role's process and wait for all of them to end.
 
-        Ctrl-C (which prints `INTERRUPTED_MESSAGE`) and SIGTERM stop every child
-        and return normally (see `stopped_by`).
+        Ctrl-C prints `INTERRUPTED_MESSAGE`; Ctrl-C and SIGTERM then stop every
+        child and return normally (see `stopped_by`).
         """
         import multiprocessing  # lazily: see _start_method
 
@@ -173,7 +177,11 @@ class MultiProcRunner(AbstractMultiRunner):
 
     @staticmethod
     def _wait(procs: Sequence[Any], requested: List[str]) -> None:
-        """Wait until every child has ended or a signal was noted (by the handlers, not raised)."""
+        """Wait until every child has ended or a signal asked the parent to stop.
+
+        The signal handlers only note the signal: an exception raised inside
+        a wait for a child could lose that child's exit status.
+        """
         from multiprocessing.connection import wait
 
         while not requested:

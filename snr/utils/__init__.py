@@ -55,7 +55,7 @@ _LAZY = {
 
 
 def __getattr__(name: str) -> Any:
-    """Import ``SNRTestCase`` or the memory link on first use."""
+    """Import ``SNRTestCase`` (with ``unittest``) or the memory link (with comms) on first use."""
     if name in _LAZY:
         globals()[name] = value = getattr(importlib.import_module(_LAZY[name]), name)
         return value

@@ -79,9 +79,11 @@ def fail(testcase: Optional[unittest.TestCase], message: str) -> None:
 class Expector(Generic[K]):
     """Expects each task id (or other key) a given number of times, in any order.
 
-    The key type can be written out, ``Expector[str]({"beep": 2}, self)``.
-    Keys it does not expect are counted in ``others`` (up to ``MAX_OTHERS``),
-    so a failure can say what was seen instead.
+    The key type can be written out, ``Expector[str]({"beep": 2}, self)``;
+    it is inferred from the expectations otherwise.
+
+    Keys it does not expect are counted in ``others``, so a failure can say
+    what was seen instead.
 
     Example::
 
@@ -123,7 +125,10 @@ class Expector(Generic[K]):
             return all(self.counts[k] >= n for k, n in self.expectations.items())
 
     def problems(self) -> List[str]:
-        """One line per expectation not met exactly, naming the closest key seen instead."""
+        """One line per expectation not met exactly (empty when all are).
+
+        A key seen too few times names the closest key seen instead, if any.
+        """
         with self._lock:
             return [
                 f"{_format(k)}: expected {n}, saw {self.counts[k]}"
@@ -224,9 +229,9 @@ class OrderedExpector(Expector[K]):
 
 
 class MultiProcExpector(Expector[K]):
-    """An `Expector` whose counts are in shared memory, for nodes in other processes.
+    """An `Expector` whose counts are shared between processes.
 
-    Create it before starting the processes.
+    Create it before starting the processes; the counts are in shared memory.
 
     Example::
 

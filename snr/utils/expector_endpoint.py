@@ -16,9 +16,10 @@ __all__ = [
 
 
 class ExpectorEndpoint(Endpoint):
-    """Counts every task the expector watches (others of their types too, for the failure message).
+    """Registers a handler for every id the expector watches and counts them.
 
-    With ``exit_when_satisfied`` it stops the node once every expectation is met.
+    With ``exit_when_satisfied`` it stops the node once every expectation is
+    met; other tasks of the same types are told too, for the failure message.
 
     Example::
 

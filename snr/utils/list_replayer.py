@@ -14,7 +14,8 @@ __all__ = ["ListReplayerFactory", "ListReplayerLoop"]
 class ListReplayerLoop(ThreadLoop):
     """Stores each value under ``key`` in order, then stops.
 
-    With ``exit_when_done=True`` it stops the node too, once every value has been handled.
+    The node runs on, unless the factory was made with ``exit_when_done=True``:
+    then the node stops once every value has been handled.
 
     Example::
 

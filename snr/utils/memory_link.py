@@ -37,7 +37,9 @@ __all__ = [
 
 
 class MemoryTransport(SocketTransport):
-    """One end of an in-memory byte stream, a `SocketTransport`; made by `memory_transport_pair`.
+    """One end of an in-memory byte stream, as a link ``Transport``.
+
+    Made in pairs by `memory_transport_pair`; it acts as a TCP `SocketTransport`.
 
     Example::
 
@@ -56,7 +58,9 @@ class MemoryTransport(SocketTransport):
 def memory_transport_pair(
     names: Tuple[str, str] = ("memory-a", "memory-b"),
 ) -> Tuple[MemoryTransport, MemoryTransport]:
-    """Two connected `MemoryTransport` ends; each one's ``peer`` names the other.
+    """Two connected `MemoryTransport` ends (as trio's ``memory_stream_pair``).
+
+    Each end's ``peer`` is the name of the *other* end, for log messages.
 
     Example::
 
@@ -68,7 +72,9 @@ def memory_transport_pair(
 
 
 class MemoryLinkLoop(PipeLoop):
-    """A `PipeLoop` on one end of a `MemoryLinkPair` that logs a lost peer as a network link does.
+    """Forwards pages over one end of a `MemoryLinkPair`; built by `MemoryLinkFactory`.
+
+    A `PipeLoop` that logs a lost peer as a network link does ("Lost the link to ...").
 
     Example::
 
@@ -80,7 +86,10 @@ class MemoryLinkLoop(PipeLoop):
 
 
 class MemoryLinkFactory(PipeLoopFactory):
-    """Builds a `MemoryLinkLoop` on one end of a `MemoryLinkPair`, for one node once.
+    """Builds a `MemoryLinkLoop` on one end of a `MemoryLinkPair` (made by the pair).
+
+    Each end serves one node once: a second ``get`` (a second node, or a
+    reload) raises ConfigError, since the first loop owns the end.
 
     Example::
 
@@ -91,7 +100,11 @@ class MemoryLinkFactory(PipeLoopFactory):
     _taken = False
 
     def take_transport(self) -> Connection:
-        """The end this factory holds; ConfigError if an earlier loop took it."""
+        """The end this factory holds, once.
+
+        Raises:
+            ConfigError: it was already taken by an earlier loop.
+        """
         if self._taken:
             raise ConfigError(
                 f"The memory link {self.name!r} was already used by a node; each end of a "
@@ -106,7 +119,11 @@ class MemoryLinkFactory(PipeLoopFactory):
 
 
 class MemoryLinkPair:
-    """Two comms components linked in memory (``max_backlog_bytes``, ``dead_after_s``: a link's).
+    """Two comms components linked in memory, for two nodes of one process.
+
+    Args:
+        max_backlog_bytes: how much may wait for a slow peer before pages are dropped.
+        dead_after_s: seconds of silence after which the other end counts as lost.
 
     Example::
 
@@ -141,7 +158,10 @@ class MemoryLinkPair:
         )
 
     def cut(self) -> None:
-        """Break the link both ways with no goodbye: each side logs a lost link, as in a crash."""
+        """Break the connection both ways at once: each side reads end of stream.
+
+        No goodbye is sent: each side logs a lost link, as when a peer crashes.
+        """
         for end in self._ends:
             try:  # shut the socket down through a second descriptor of it
                 with socket.socket(fileno=os.dup(end.fileno())) as sock:
@@ -150,6 +170,9 @@ class MemoryLinkPair:
                 pass
 
     def close(self) -> None:
-        """Close both ends once the nodes have stopped, e.g. ``self.addCleanup(pair.close)``."""
+        """Close both ends, used or not (a link closes its own end when its node stops).
+
+        Call it once the nodes have stopped, e.g. ``self.addCleanup(pair.close)``.
+        """
         for end in self._ends:
             end.close()

@@ -27,6 +27,8 @@ _NS = 1_000_000_000
 class Turn:
     """One thread's place in a `SimClock`'s lockstep: a node's or a loop's.
 
+    Made by `SimClock.node_turn` and `SimClock.loop_turn`; students never use one.
+
     Example::
 
         turn = clock.loop_turn("sim", "sim_robot", stop_event)
@@ -45,9 +47,13 @@ class Turn:
 class NodeTurn(Turn):
     """A node's turn (a `snr.core.clock.NodeTurn`): an idle node gives the clock back.
 
-    Example::
+    Example (what `Node` does with a simulated clock)::
 
         turn = clock.node_turn("sim", node.queue, node.is_terminated)
+        node.queue.use_waiter(turn)
+        turn.begin()   # in node.loop(), before the components start
+        ...
+        turn.end()     # after the node has terminated
     """
 
     def __init__(self, clock: SimClock, role: str, tasks: Sized, stopping: Callable[[], bool]):
@@ -57,21 +63,27 @@ class NodeTurn(Turn):
         self.started = False
 
     def has_work(self) -> bool:
-        """True if the node has tasks, has not started, or is stopping (at the time it was told)."""
+        """True if the node has tasks to run, has not started (it starts in its
+        turn) or is stopping: a node told to stop (a loop failed, say) ends
+        before anyone moves the clock on, so it stops at the time it was told."""
         return not self.started or len(self.tasks) > 0 or self.stopping()
 
     def begin(self) -> None:
-        """Wait for the node's first turn."""
+        """Wait for the node's first turn (every node built with the clock is waited for)."""
         self.clock._await(self, self.stopping)
         self.started = True
 
     def wait(self, timeout_s: Optional[float]) -> None:
-        """The queue is empty: give the clock back until the node has work or stops (no timeout)."""
+        """The queue is empty: give the clock back until the node has work or stops.
+
+        ``timeout_s`` is not used: the node's idle wake-up only checks that it
+        should still run, and a stop wakes this wait at once.
+        """
         self.clock._give_back(self, None)
         self.clock._await(self, self.stopping)
 
     def woken(self) -> None:
-        """Nothing to do."""
+        """Nothing to do: the node reads no sockets in its idle wait on a simulated clock."""
 
     def wake(self) -> None:
         """A task arrived (or the node stops): let the clock hand the node its turn."""
@@ -87,9 +99,11 @@ class NodeTurn(Turn):
 class LoopTurn(Turn):
     """A loop's turn (a `snr.core.clock.LoopTurn`): a pass of ``loop()``, then a sleep.
 
-    Example::
+    Example (what `ThreadLoop` does on its thread)::
 
-        turn = clock.loop_turn("sim", "sim_robot", stop_event)
+        if turn.first_turn():
+            loop.loop()
+            turn.sleep_until(turn.now_s() + 0.1)   # True if the loop was stopped
     """
 
     def __init__(self, clock: SimClock, role: str, name: str, stop: threading.Event) -> None:
@@ -134,7 +148,8 @@ class SimClock(NodeClock):
             (fixed, 0 by default, so a recording does not depend on the day).
 
     Calling the clock gives the simulated seconds since it was made. Build
-    every node of a run before running any.
+    every node of a run before running any: the clock waits for each
+    node's first turn.
 
     Example::
 
@@ -146,8 +161,9 @@ class SimClock(NodeClock):
 
     Attributes:
         turns: how many turns it has handed out.
-        jumps: how many times time jumped ahead.
-        wall_waits: quarter seconds of real time in which nobody could act.
+        jumps: how many times time jumped ahead to the next instant someone waited for.
+        wall_waits: quarter seconds of real time in which nobody could act
+            (waiting for a link or a stop); 0 in a run that only simulates.
         paced_waits: waits on the wall clock to keep to ``speed``.
     """
 
@@ -186,7 +202,7 @@ class SimClock(NodeClock):
         return self.epoch_s + self._now_ns / _NS
 
     def node_turn(self, role: str, tasks: Sized, stopping: Callable[[], bool]) -> NodeTurn:
-        """A turn for the node ``role`` (its queue ``tasks``).
+        """A turn for the node ``role`` (its queue ``tasks``); it waits for its first turn.
 
         Example::
 
@@ -200,6 +216,9 @@ class SimClock(NodeClock):
 
     def loop_turn(self, role: str, name: str, stop: threading.Event) -> LoopTurn:
         """A turn for loop ``name`` of node ``role``, due now; ``stop`` ends its waits.
+
+        Called on the node's thread as the loop starts, so the loop is in the
+        lockstep before the clock can move on.
 
         Example::
 

@@ -22,7 +22,9 @@ __unittest = True
 
 
 class SNRTestCase(unittest.TestCase):
-    """A TestCase (unittest or pytest) that can run a node, expect tasks and make temp files.
+    """A TestCase that can run a node, expect tasks and make temp files.
+
+    Works with ``python -m unittest`` and with pytest.
 
     Example (thesis listing A.3)::
 
@@ -61,15 +63,29 @@ class SNRTestCase(unittest.TestCase):
         timeout_s: Optional[float] = None,
         expect_timeout: bool = False,
     ) -> Node:
-        """Build a node of role ``self.role`` from ``factories``, run it until it stops, return it.
+        """Build a node from ``factories``, run it until it stops, and return it.
 
-        A node still running after ``timeout_s`` (None: ``self.timeout_s``)
-        fails the test, unless ``expect_timeout`` says that is the point
-        (docs/utilities.md, "Ending a node under test").
+        The node must stop by itself; one still running after ``timeout_s``
+        fails the test (docs/utilities.md, "Ending a node under test").
+
+        Args:
+            factories: the components of the node (its role is ``self.role``).
+            mode: the node's mode (TEST: failures stop the node and fail the test).
+            timeout_s: the time limit in seconds; None for ``self.timeout_s``.
+            expect_timeout: run until the time limit on purpose (the test
+                fails if the node stopped before it).
+
+        Returns:
+            The stopped node, to inspect its datastore.
 
         Example::
 
-            node = self.run_test_node([ListReplayerFactory([1, 2], "in"), ...])
+            with self.expector({(TaskType.store_page, "out"): 4}) as expector:
+                node = self.run_test_node([
+                    ListReplayerFactory([0, 1, 2, 4], "in"),
+                    MovingAvgFilterFactory("in", "out", 2),
+                    ExpectorEndpointFactory(expector, exit_when_satisfied=True),
+                ])
             self.run_test_node([DummyEndpointFactory()], timeout_s=0.2, expect_timeout=True)
         """
         limit = self.timeout_s if timeout_s is None else timeout_s
@@ -101,9 +117,14 @@ class SNRTestCase(unittest.TestCase):
         filename: Optional[str] = None,
         overwrite: bool = False,
     ) -> TempFile:
-        """A `TempFile` path (``file`` + ``suffix``) in a fresh temp folder removed after the test.
+        """A file's path in a fresh temp folder, removed after the test.
 
-        The 2021 call ``temp_file(filename, overwrite, cleanup)`` still works.
+        ``temp_file(suffix="", contents=None)`` names the file ``file`` +
+        ``suffix``; the 2021 call ``temp_file(filename, overwrite, cleanup)``
+        still works (docs/utilities.md).
+
+        Returns:
+            A `TempFile` (a ``str`` path with helpers).
 
         Example::
 

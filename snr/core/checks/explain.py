@@ -468,7 +468,8 @@ def warn_get_returned_none(
 ) -> None:
     """A ``get()`` returned None: refuse one that never returns a value, else warn once.
 
-    At run time None is the documented "add nothing"; ``told`` holds the ``get``s named."""
+    At run time None is the documented "add nothing"; ``told`` holds the ``get``s named.
+    """
     get = type(factory).get
     if _returns(get) == []:
         raise ComponentError(

@@ -33,13 +33,20 @@ __all__ = ["FailureReport"]
 class FailureReport:
     """Logs a node's failures in words; outside DEPLOYED mode the first one stops the node.
 
-    ``stop(reason)`` stops the node (``Node.set_terminate_flag``).
+    Args:
+        role: the node's role, for messages.
+        mode: DEBUG/TEST stop the node on the first failure; DEPLOYED logs.
+        log: the node's logger.
+        stop: called with a reason to stop the node (``Node.set_terminate_flag``).
 
     Example::
 
         report = FailureReport("robot", Mode.TEST, log, node.set_terminate_flag)
         report.bad_result(5, handler, task)   # "Task handler ... returned 5 ..."
-        report.failure   # the first error, which stopped the node (DEBUG/TEST), or None
+
+    Attributes:
+        failure: the first error that stopped the node (DEBUG/TEST), or None.
+        repeats: the `RepeatFilter` that keeps repeated failures from flooding the log.
     """
 
     def __init__(

@@ -40,7 +40,7 @@ _PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
 
 
 class CheckedNode(WatchedNode, Protocol):
-    """What `NodeChecks` reads and sets of its node: a `Node`.
+    """What `NodeChecks` reads and sets of its node: a `Node` has all of it.
 
     Example::
 
@@ -58,8 +58,14 @@ class CheckedNode(WatchedNode, Protocol):
 
 
 class NodeChecks:
-    """Builds a node's checks for silent mistakes, hooks them into its ``components``
-    (``check_added``) and ``runner`` (``on_unhandled``), and starts and stops them with it.
+    """Builds a node's checks for silent mistakes and starts and stops them with it.
+
+    Args:
+        node: the node to watch; its ``key_hints``, ``wiring_checks`` and
+            ``watchdog`` are set here (None outside DEBUG mode).
+        components: the node's `ComponentSet` (its handler table, its
+            ``check_added`` hook).
+        runner: the node's `HandlerRunner` (its ``on_unhandled`` hook).
 
     Example::
 

@@ -129,10 +129,11 @@ def explain_os_error(
     setting: str = "",
     ports: Optional[Sequence[str]] = None,
 ) -> str:
-    """The message for an OSError of listening on, connecting to or opening ``target``.
+    """The message for an OSError of listening, connecting or opening a serial port.
 
-    ``who`` is the sentence's subject, ``setting`` where to change it ("the config"
-    if empty), ``ports`` the serial ports there are (None: unknown).
+    ``target`` is ``"host:port"`` or a serial port, ``who`` the sentence's subject
+    (``"The sockets server of node 'urov'"``), ``setting`` where to change it
+    ("the config" if empty), ``ports`` the serial ports there are (None: unknown).
 
     Example::
 

@@ -92,15 +92,20 @@ class Profiler(AbstractProfiler):
         return sorted(rows, key=lambda row: row[2], reverse=True)
 
     def dump(self) -> str:
-        """Thesis listing 5.2's table, one section per thread (each adding up to 100% of the
-        time since the node was made), then the added reports.
+        """The profile as text: one section per thread, each adding up to 100% of the time since
+        the node was made (thesis listing 5.2's table, per thread), then the added reports.
 
         Example::
 
             print(node.profiler.dump())
+            # Times called,          Avg runtime, Task/Loop type,
+            # (share: of the 0.501 s since the node was made; each thread's lines add up ...)
             # node thread:
             #            1 x      8.383 us ->   0.002%: (store_page):snr.core.node
             #                              ->  99.998%: (outside handlers: the node's own ...)
+            # loop thread timeout_loop:
+            #            1 x 499281.445 us ->  99.739%: Loop(timeout_loop)
+            #                              ->   0.261%: (outside loop(): waiting between passes)
         """
         elapsed = max(time.perf_counter() - self._start_s, 1e-9)
         rows = self.rows()

@@ -117,7 +117,11 @@ class ReadOnlyDict(Dict[Any, Any]):
 def freeze(data: Any, key: DataKey, depth: int = 0) -> Any:
     """``data`` with every list and dict in it read-only (a copy), for page ``key``.
 
-    Anything else, and whatever is nested deeper than `MAX_DEPTH`, comes back as it is.
+    Values that cannot change (numbers, strings, None) and objects that are not
+    lists, dicts or tuples come back as they are, and so does whatever is nested
+    deeper than `MAX_DEPTH` (data that contains itself is endlessly deep). Nested
+    values' types are checked in C first (``issuperset(map(type, ...))``), so a flat
+    list of numbers costs one copy.
 
     Example::
 

@@ -10,12 +10,17 @@ __all__ = ["RepeatFilter"]
 
 
 class RepeatFilter:
-    """Logs the first ``first`` of each key's messages in full, then a count every ``every_s``.
+    """Logs the first few of a repeated message in full, then a count every few seconds.
+
+    Messages are grouped by a key (e.g. the handler and the error's type):
+    the first ``first`` of each are logged in full, then one count every ``every_s``.
 
     Example::
 
         repeats = RepeatFilter(log)
-        repeats.report(("parse", "ValueError"), "bad reading", logging.WARNING, "Bad %r", x)
+        for reading in readings:
+            repeats.report(("parse", "ValueError"), "bad reading from the sonar",
+                           logging.WARNING, "Bad reading %r", reading)
         repeats.flush()   # a last summary for anything not yet counted aloud
     """
 

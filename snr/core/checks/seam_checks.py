@@ -80,7 +80,10 @@ def check_seam_args(datastore: Any, node_core: Any) -> None:
 
 
 def checked_datastore(make: Callable[[], Any], node: AbstractNode) -> Datastore:
-    """``make()``, once it has `Datastore`'s four methods (a `CheckedDatastore` but DEPLOYED).
+    """``make()``, the node's datastore, once it is known to have `Datastore`'s four methods.
+
+    In DEBUG and TEST a datastore other than ``dict`` comes wrapped in a
+    `CheckedDatastore`, which checks each answer.
 
     Raises:
         ConfigError: ``make()`` raised, or what it made lacks a method.
@@ -111,7 +114,12 @@ def checked_datastore(make: Callable[[], Any], node: AbstractNode) -> Datastore:
 
 
 class CheckedDatastore:
-    """A student's datastore whose every answer is checked: a wrong one is a ComponentError.
+    """A student's datastore, each answer checked to be of the kind a node expects.
+
+    Writes go straight through; ``get`` must give a `Page` (of the key
+    asked) or None, ``__iter__`` strings, ``__len__`` a number. A wrong
+    answer is a ComponentError that names the method and says what it should
+    have given. Used in DEBUG and TEST only.
 
     Example::
 
@@ -161,7 +169,8 @@ def checked_core(core: Optional[AbstractComponent], factory: Any, node: Abstract
     """``core``, once it is known to be a node core; checked as it runs in DEBUG and TEST.
 
     Raises:
-        ConfigError: ``factory.get()`` gave None, or no ``node_core`` with a ``store_page_handler``.
+        ConfigError: ``factory.get()`` gave None, or a component not named
+            ``node_core``, or one without a ``store_page_handler``.
 
     Example::
 
@@ -188,9 +197,10 @@ def checked_core(core: Optional[AbstractComponent], factory: Any, node: Abstract
 
 
 class _CheckedStore:
-    """A node core's ``store_page_handler`` whose result is checked: None or a ``process_data``.
+    """A node core's ``store_page_handler``, what it returns checked: None, or one ``process_data``.
 
-    Its ``__func__`` and ``__self__`` are the method's: a failure names the student's line.
+    A callable object, not a function, so that a failure in it names the
+    student's method and line: ``__func__`` and ``__self__`` are the method's.
     """
 
     def __init__(self, handler: Any) -> None:

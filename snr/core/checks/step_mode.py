@@ -37,8 +37,14 @@ _PAUSED_WHY = (
 
 @dataclass
 class Step:
-    """What one step did: the task (None: none waited), its handlers, what they returned,
-    the first few tasks next (urgent first) and how many wait.
+    """What one step did: the task, the handlers it went to, what they returned.
+
+    Attributes:
+        task: the task that ran, or None if the queue had none.
+        handlers: ``component.method`` of each handler it went to, in order.
+        returned: the tasks those handlers returned (now at the back of the queue).
+        next_tasks: the first few tasks waiting after it, urgent ones first.
+        waiting: how many tasks wait in the queue after it.
 
     Example::
 
@@ -63,12 +69,18 @@ class _StepRequest:
 class StepMode:
     """Pauses its node's run loop; runs held tasks one at a time on request (node's thread).
 
-    ``lookup(task)`` gives a task's ``(handler, key, component, cell)`` entries,
-    ``stopping()`` True once the node is stopping.
+    Args:
+        queue: the node's task queue.
+        runner: the node's `HandlerRunner`.
+        lookup: a task's ``(handler, key, component, cell)`` entries.
+        stopping: True once the node is stopping.
 
     Example::
 
-        node.step_mode.paused      # True between pause() and resume()
+        node.step_mode.paused      # False: the node runs freely
+
+    Attributes:
+        paused: True between `pause` and `resume`.
     """
 
     def __init__(

@@ -205,8 +205,9 @@ _PARSE_LOCK = threading.Lock()
 def parse_source(text: str) -> ast.Module:
     """``ast.parse(text)``, one thread at a time.
 
-    On CPython 3.11.7 two parses at once (two nodes in one process) can fail with
-    ``SystemError: AST constructor recursion depth mismatch``.
+    Two nodes in one process may read a student's source at once, and on
+    CPython 3.11.7 two parses at once can fail with ``SystemError: AST
+    constructor recursion depth mismatch``.
 
     Example::
 

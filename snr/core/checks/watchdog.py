@@ -67,7 +67,7 @@ _FOOTER = "(This shows once, in DEBUG mode only; node.watchdog = None turns the 
 
 
 class WatchedNode(Protocol):
-    """What the watchdog reads of its node: a `Node` (not imported: it imports this).
+    """What the watchdog reads of its node: a `Node` (not imported: ``node.py`` imports this).
 
     Example::
 
@@ -86,18 +86,25 @@ class WatchedNode(Protocol):
 class Watchdog:
     """Watches a running node from its own thread and says when it is stuck.
 
+    Args:
+        node: the node to watch (it calls `start` and `stop`).
+
     Example::
 
         node.watchdog.stuck_s = 0.5   # say it sooner (before node.loop())
 
     Attributes:
-        every_s, stuck_s, idle_s: seconds between looks; before a stuck handler, loop
-            or flood is said; before a node nothing can stop is.
-        dozing_s: the longest an idle node goes unlooked at, unless it gets work.
-        spin_hz: passes a second of a rate-less, storing loop that are said.
-        dozing: True while it sleeps until the node gets work (`wake` rings).
-        handler_stuck: True while the node's thread is in the last look's handler call.
-        said: a line per report so far, e.g. ``"handler Waiter.on_go"``.
+        every_s: seconds between two looks at the node (0.5).
+        dozing_s: the longest an idle node goes unlooked at (20 s; it is
+            looked at as soon as it gets work).
+        stuck_s: how long before a stuck handler, loop or flood is reported (2 s).
+        idle_s: how long before a node nothing can stop is reported (3 s).
+        spin_hz: passes a second at which a loop with no rate that stores or
+            schedules is reported (1,000; rule 3b).
+        dozing: True while it sleeps until the node gets work (`wake` then rings).
+        handler_stuck: True while the node's thread has been in one handler
+            call for at least one look.
+        said: one line per report made so far, e.g. ``"handler Waiter.on_go"``.
     """
 
     every_s: float = 0.5
@@ -191,7 +198,7 @@ class Watchdog:
         return self.dozing_s
 
     def check(self) -> None:
-        """Look at the node once: sample its threads' stacks and apply the rules."""
+        """Look at the node once: sample its threads' stacks and apply the four rules."""
         now = time.monotonic()
         frames = sys._current_frames()
         loops = [c for c in list(self.node.components.values()) if isinstance(c, ThreadLoop)]

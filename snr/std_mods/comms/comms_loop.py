@@ -130,7 +130,7 @@ def normalize_keys(keys: Keys, where: str) -> Tuple[str, ...]:
 class CommsLoop(ThreadLoop):
     """Base of the comms components: forwards the pages stored under ``keys`` over its links.
 
-    Subclasses open links (``open_link``) from ``begin()`` or ``loop()``; a
+    Subclasses open links (``open_link``) from ``begin()`` or ``loop()``. A
     page goes to every open link but the one it came from and its origin's.
 
     Example::
@@ -139,10 +139,11 @@ class CommsLoop(ThreadLoop):
 
     Attributes:
         keys: the data keys forwarded to peers.
-        links: the links not yet closed (a tuple, replaced on change).
+        links: the links not yet closed (read-only tuple, replaced on change).
         closed_totals: the counters of the closed links, added up.
         dead_after_s: a peer that promised beats and is silent this long is lost.
-        beat_s: how often a quiet link beats (``dead_after_s / 4``, at most 1 s).
+        beat_s: how often a quiet link sends a beat (a quarter of
+            ``dead_after_s``, at most 1 s); promised in the hello.
     """
 
     hello_timeout_s: float = 5.0
@@ -209,9 +210,12 @@ class CommsLoop(ThreadLoop):
             parent.profiler.add_report(name, self.stats_text)
 
     def forward_burst(self, run: List[Task]) -> SomeTasks:
-        """`forward_page` for a run of pages under one key: to one open link in one go.
+        """`forward_page` for a run of stored pages under one key, queued in one go.
 
-        Example (the node calls it)::
+        With one open link and no received page to keep from echoing back
+        (the usual pair), the frames go to its outbox together; else page by page.
+
+        Example (the node calls it; a test may too)::
 
             comms.forward_burst([tasks.store_page(page) for page in pages])
         """
@@ -331,11 +335,12 @@ class CommsLoop(ThreadLoop):
         self.schedule(tasks.event(COMMS_CONNECTED, [self.name, link.transport.peer]))
 
     def on_refused(self, link: Link, refusal: Refused) -> None:
-        """A peer was refused (I/O thread): count it, log it once per (host, role, why).
+        """A peer was refused (I/O thread): log it once per peer (host, role, why), count it.
 
-        Example (the log)::
+        Example (what the log says)::
 
-            Refused client 'topside' at 10.0.0.7:51234 (this node: ...): it belongs to ...
+            Refused client 'topside' at 10.0.0.7:51234 (this node: 'urov', system 'team7'):
+            it belongs to system 'team3', ...
         """
         key = (link.transport.peer.rsplit(":", 1)[0], link.peer_role or "", refusal.kind)
         with self._links_lock:
@@ -377,7 +382,11 @@ class CommsLoop(ThreadLoop):
     def say(
         self, what: str, level: int, msg: str, *args: Any, news: Optional[RateLimitedLog] = None
     ) -> None:
-        """Log news of links in full, unless ``what`` floods (`RateLimitedLog`: 20 in 10 s).
+        """Log news of links (connects, hellos, losses) in full, unless it comes in a flood.
+
+        ``what`` names the kind of news: up to 20 lines of a kind in 10 s are
+        logged in full, then they are counted and the count is logged every
+        10 s (`RateLimitedLog`; ``news`` is another such log, e.g. the bad frames').
 
         Example::
 
@@ -392,7 +401,7 @@ class CommsLoop(ThreadLoop):
             io.call_soon(lambda: io.call_later(_NEWS_TICK_S, self._tick_news))
 
     def _tick_news(self) -> None:
-        """I/O thread: say the counts whose window has passed; again soon while some wait."""
+        """I/O thread: say what a flood left counted; again soon while news may be pending."""
         io = self.io_loop
         with self._news_lock:  # (say looks at _news_ticking under it, after counting)
             waiting = [news.tick() for news in (self.news, self.bad_frame_news, self.refusal_news)]
@@ -427,11 +436,12 @@ class CommsLoop(ThreadLoop):
         return decode_body(body)
 
     def stats(self) -> List[Dict[str, Any]]:
-        """The counters of every open link (`Link.stats`).
+        """The counters of every open link (see `Link.stats`).
 
         Example::
 
-            comms.stats()[0]["dropped_by_key"]   # {'depth': 3}
+            for link in comms.stats():
+                print(link["peer"], link["dropped"], link["dropped_by_key"])
         """
         return [link.stats() for link in self.links]
 
@@ -440,7 +450,9 @@ class CommsLoop(ThreadLoop):
 
         Example::
 
-            print(comms.stats_text())   # "1 link\n  'receiver' at ...: sent 1,204, ..."
+            print(comms.stats_text())
+            # 1 link
+            #   'receiver' at 127.0.0.1:9000 (open): sent 1,204, received 0, dropped 0, ...
         """
         links = self.stats()
         lines = [f"{len(links)} link{'s' if len(links) != 1 else ''}"]
@@ -513,8 +525,12 @@ class _Entry:
 class Outbox:
     """Frames waiting to be written to one peer, oldest first; bounded, newest per key wins.
 
-    Every link queues here (the policy: docs/design.md, "One outbox for every
-    link"). One lock: frames leave in order and whole, from any thread.
+    Every link queues here: TCP, pipe and serial (docs/design.md, "One outbox
+    for every link"). A frame that does not fit pushes out the oldest frame
+    waiting under its own key, else the oldest of the key with the most
+    waiting; frames with no key are never pushed out. ``put`` never blocks.
+    Every change and write happens under one lock, so frames leave in order
+    and whole, from any thread.
 
     Example::
 
@@ -523,7 +539,10 @@ class Outbox:
             ...  # ask the writer to call outbox.write_to(sock.send)
 
     Attributes:
-        dropped: frames pushed out so far; ``dropped_by_key``: the same, per data key.
+        max_bytes: how many bytes of frames may wait.
+        loss: where drops are reported (the numbers, at most once a second).
+        dropped: frames pushed out so far.
+        dropped_by_key: the same, per data key.
         last_sent_at: when bytes last went to the peer (``time.monotonic()``).
     """
 
@@ -546,7 +565,9 @@ class Outbox:
     ) -> str:
         """Queue ``frame``, or with ``write`` and nothing waiting, write it at once.
 
-        Returns `SENT`, `FIRST` (wake the writer), `QUEUED` or `CLOSED`.
+        Returns `SENT`, `FIRST` (queued into an empty outbox: wake the
+        writer), `QUEUED` or `CLOSED`. The rest of a frame written in part
+        waits first in line.
 
         Example::
 
@@ -771,7 +792,13 @@ def shown_role(role: str) -> str:
 
 
 class LinkState(enum.Enum):
-    """Where a link is in its life (the moves: docs/design.md, "A link's states").
+    """Where a link is in its life: one value (the moves: docs/design.md, "A link's states").
+
+    HELLO (the handshake: no page either way; a node with no system and no
+    secret starts OPEN) → OPEN (pages, beats) → CLOSING (``close()``: writing
+    what waits, then a bye) → DRAINING (half-closed, reading the last bytes)
+    → CLOSED (transport closed, the `CommsLoop` told); ENDING when aborted or
+    its end was found on the node's thread, finished on the I/O thread.
 
     Example::
 
@@ -792,7 +819,13 @@ _ENDED = (LinkState.ENDING, LinkState.CLOSED)  # no more reading or writing
 
 
 class Link:
-    """One live connection to one peer, served by the node's `IOLoop` (docs/design.md).
+    """One live connection to one peer, served by the node's `IOLoop` (no thread of its own).
+
+    The loop reads the transport, cuts frames and hands pages to the
+    `CommsLoop`, and writes the outbox when the transport has room. The link
+    beats when quiet, ends when the peer goes, falls silent (wire format 3.3)
+    or sends a bad length, and reads nothing while the node's queue is over
+    its high-water mark (``_held``; docs/design.md, "One I/O thread per node").
 
     Example::
 
@@ -802,11 +835,14 @@ class Link:
         link.close()              # flush, then end the connection
 
     Attributes:
-        pages_sent, pages_received: pages queued for the peer, and arrived.
-        keys_received: DEBUG: keys that arrived (for ``link_hints.py``), else None.
+        pages_sent: pages handed to the transport or queued for it.
+        pages_received: pages that arrived.
+        keys_received: in DEBUG mode, the keys of the pages that arrived (up to
+            1,000, for ``link_hints.py``); None otherwise.
         went_silent: the link was closed because the peer fell silent.
         refusal: why the peer was refused (`Refused`), or None.
         peer_said_bye: the peer sent a bye: the end that follows is orderly.
+        loss: the `LossReport` of pages dropped because the peer fell behind.
     """
 
     flush_timeout_s: float = 1.0
@@ -855,7 +891,7 @@ class Link:
 
     @property
     def label(self) -> str:
-        """The peer for log lines: ``'receiver' at 127.0.0.1:9000``."""
+        """The peer for log lines: ``"'receiver' at 127.0.0.1:9000"``."""
         return (
             f"{self.peer_name} at {self.transport.peer}" if self.peer_role else self.transport.peer
         )
@@ -881,7 +917,9 @@ class Link:
     def send(self, frame: bytes, key: Optional[DataKey] = None) -> bool:
         """Send or queue a page's ``frame`` (node thread); False if the link is not open.
 
-        A frame after a pause, or a reply, goes at once; one right behind another waits for it.
+        A frame right behind another waits to leave with it in one write; a
+        frame after a pause goes at once, and so does a reply. When the
+        outbox is full, older frames make room (see `Outbox`).
 
         Example::
 
@@ -1057,8 +1095,13 @@ class Link:
     def _next_look_s(self) -> float:
         """Seconds until the first deadline: a beat owed, a silence or hello limit.
 
-        Beats are looked at on a grid of quarter beats, the same for every link,
-        so one wake-up beats for every quiet link (300 idle clients: 4 a second).
+        A quarter beat while pages are held or dropped (their counts move
+        without a frame), or when the deadline has passed. The look for a
+        beat is on a grid of quarter beats, the same for every link of the
+        node: it comes at the last grid point before the beat is due (the beat
+        goes a little early, never late), so one wake-up of the I/O thread
+        beats for every quiet link at once (a server with 300 idle clients
+        wakes about 4 times a second, not 300).
         """
         if self._held or self.loss.dropping:
             return self._tick_s

@@ -137,9 +137,10 @@ def find_secret(secret: Optional[str], where: str) -> Optional[bytes]:
 
 
 def derived_word(secret: bytes, purpose: str) -> str:
-    """A word made from the secret for one ``purpose`` (HMAC over ``snr-<purpose>``, in hex).
+    """A word made from the secret for one ``purpose`` that does not give the secret away.
 
-    It does not give the secret away: the console's token, Zenoh's password.
+    HMAC-SHA256 keyed with the secret over ``snr-<purpose>``, in hex: the
+    console's token, Zenoh's password.
 
     Example::
 

@@ -83,9 +83,11 @@ _registry: dict[AbstractNode, IOLoop] = {}  # each node's loop, while it has use
 class IOLoop:
     """One selector thread serving the sockets of every comms link of one node.
 
-    Only its thread touches the selector; other threads ask it with
-    `call_soon`. The holder of the *read role* (a lock) reads the links: the
-    node's thread while it is idle (`wait`, `woken`: its ``IdleWaiter``), else the loop's.
+    Only the loop's thread touches the selector; other threads ask it with
+    `call_soon`. The links are read by the holder of the *read role*: the
+    node's thread while it is idle (`wait`, `woken`), else the loop's thread.
+    A comms component gets its node's loop with `acquire` and gives it back
+    with `release`.
 
     Example::
 
@@ -95,7 +97,7 @@ class IOLoop:
 
     Attributes:
         node: the node whose links it serves.
-        buffer: the receive buffer links read into (``view``: a memoryview of it).
+        buffer: the receive buffer links read into, and ``view``, a memoryview of it.
     """
 
     node_reads: bool = hasattr(select, "epoll")
@@ -216,7 +218,10 @@ class IOLoop:
             self._wake()
 
     def write_soon(self, link: Link) -> None:
-        """``link`` has frames another thread queued: it writes them when idle, else the loop does.
+        """``link`` has frames queued by another thread than the loop's.
+
+        The node's thread writes them when it next goes idle (`wait`); the
+        loop's thread writes what still waits `WRITE_DELAY_S` later.
 
         Example::
 
@@ -284,6 +289,8 @@ class IOLoop:
     def read_role(self) -> Iterator[None]:
         """Hold the read role (loop thread), e.g. to close a link's socket.
 
+        If the node's thread holds it (idle in `wait`), it is woken to give it back.
+
         Example::
 
             with io.read_role():
@@ -306,7 +313,7 @@ class IOLoop:
         return timer
 
     def when_room(self, callback: Callable[[], None]) -> None:
-        """Run ``callback`` once the node's queue is below its high-water mark."""
+        """Run ``callback`` once the node's queue is below its high-water mark (a look a 15 ms)."""
         if not self._waiting_for_room:  # else a look is due
             self.call_later(ROOM_CHECK_S, self._check_room)
         self._waiting_for_room.append(callback)
@@ -379,10 +386,11 @@ class IOLoop:
             pass
 
     def _check_busy(self) -> None:
-        """Loop thread: open the gate once the node's thread has worked `BUSY_READS_S`.
+        """Loop thread: once the node's thread has worked `BUSY_READS_S`, open the gate and read.
 
-        Runs every `BUSY_READS_S` while the node works, every `IDLE_CHECK_S` while it
-        sleeps, and stops after `IDLE_STOP_S` without work until `woken` restarts it.
+        Runs every `BUSY_READS_S` while the node works, every `IDLE_CHECK_S`
+        while it sleeps, and stops after `IDLE_STOP_S` without work (`woken`
+        restarts it; the lock keeps the two from missing each other).
         """
         if not self._waiter_installed:  # the node waits on another's: the gate stays open
             self._looking = False
@@ -503,9 +511,11 @@ def _drain(sock: socket.socket) -> None:
 
 
 class Transport(Protocol):
-    """A non-blocking byte stream to one peer that the node's `IOLoop` watches.
+    """A non-blocking byte stream to one peer that the node's `IOLoop` watches (a socket, a pipe).
 
-    Implement it to open a link over another kind of line (docs/comms.md).
+    The loop calls ``recv_into`` when ``fileno()`` is readable (the node's
+    thread does while it is idle) and ``send`` when it is writable; the
+    node's thread may call ``send`` too.
 
     Example: `SocketTransport` below.
     """
@@ -532,7 +542,8 @@ class Transport(Protocol):
 def unread_bytes(fd: int) -> Optional[int]:
     """How many received bytes wait unread in the OS for ``fd``; None where it cannot say.
 
-    A paused link tells by it a peer that still talks from one that fell silent.
+    A socket or pipe that is not read keeps what arrives; a link whose node is
+    behind uses this to tell a peer that still talks from one that fell silent.
 
     Example::
 

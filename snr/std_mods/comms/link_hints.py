@@ -32,7 +32,7 @@ def watch_link(comms: CommsLoop, link: Link) -> None:
 
     Example::
 
-        watch_link(self, link)   # in CommsLoop, at the peer's hello
+        watch_link(self, link)   # in CommsLoop, when the peer's hello arrives
     """
     node, io = comms.parent, comms.io_loop
     if not isinstance(node, Node) or node.key_hints is None or io is None:

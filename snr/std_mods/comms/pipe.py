@@ -81,11 +81,11 @@ class _FactoryLoop(CommsLoop):
 
 
 class PipeTransport(SocketTransport):
-    """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``.
+    """One end of a ``multiprocessing.Pipe()`` as a link ``Transport``: a byte stream of frames.
 
     On POSIX a two-way pipe is a socket pair, served like a TCP connection.
     Elsewhere (a Windows named pipe) a socket pair stands in for it, and two
-    threads copy bytes between the two (``bridged`` is then True).
+    small threads copy bytes between the two (``bridged`` is then True).
 
     Example::
 
@@ -228,11 +228,14 @@ class PipeLoopFactory(_CommsFactory):
         connection: this node's end of the pipe.
         keys: the data key (or list of keys) to forward to the other end.
         name: the component name (default ``"pipe_loop"``).
-        max_backlog_bytes, dead_after_s, secret: as for `SocketsPair`.
+        max_backlog_bytes: how much may wait for a slow peer before pages are dropped.
+        dead_after_s: seconds of silence after which the other end counts as lost.
         peer: what the logs call the other end (default ``"pipe"``).
-        system: as for `SocketsPair`, but by default None, no check: only the
-            program that made the pipe reaches it, and 2021 code that writes
-            pages with no hello keeps working.
+        system: the system both ends name (as for `SocketsPair`). Default
+            None, no check: only the program that made the pipe reaches it,
+            and 2021 code that writes pages with no hello keeps working.
+        secret: the secret both ends prove they know (as for `SocketsPair`;
+            default ``$SNR_SECRET`` or the secret file). None: none.
 
     Example::
 

@@ -17,10 +17,11 @@ __all__ = ["RateLimitedLog"]
 class RateLimitedLog:
     """Logs news in full unless it comes in a flood; then counts it, one line a window.
 
-    Lines of one kind (``what``) are logged in full while no more than
-    ``burst`` came in the last ``window_s`` seconds; past that they are
-    counted, and `tick` (call it every second or so) logs how many once the
-    window has passed. Safe to call from any thread.
+    For news that is welcome one by one but not a thousand times a second,
+    such as a client connecting: lines of one kind (``what``) are logged in
+    full while no more than ``burst`` came in the last ``window_s`` seconds;
+    past that they are counted, and ``tick()`` (call it every second or so)
+    logs how many, once a window. Safe to call from any thread.
 
     Example::
 
@@ -46,7 +47,10 @@ class RateLimitedLog:
         self._unsaid: Dict[str, List[Any]] = {}  # what -> [count, since, level]
 
     def report(self, what: str, level: int, msg: str, *args: Any) -> bool:
-        """Log ``msg % args``, or count it under ``what``; True if counted (`tick` later)."""
+        """Log ``msg % args`` in full, or count it under ``what`` if they come too fast.
+
+        Returns True if it was counted: a `tick` must then come after the window.
+        """
         with self._lock:
             now = self._clock()
             shown = self._shown.setdefault(what, collections.deque())

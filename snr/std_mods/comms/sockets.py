@@ -94,9 +94,10 @@ class SocketsServerLoop(_FactoryLoop):
     """Accepts clients and links to each; built by ``SocketsPair.server()``.
 
     It listens as the node starts (a port in use stops the node with a
-    `CommsError`). At ``max_connections`` the oldest connection that has not
-    said hello makes room for a newcomer (counted in ``closed_silent``); when
-    every one has, the newcomer is closed (counted in ``refused``).
+    `CommsError`); its own thread accepts, the node's ``IOLoop`` serves the
+    links. At ``max_connections`` the oldest connection that has not said
+    hello makes room for a newcomer (counted in ``closed_silent``); when every
+    one has, the newcomer is closed (counted in ``refused``).
 
     Example::
 
@@ -375,15 +376,16 @@ class SocketsPair:
     Args:
         server_tuple: ``(host, port)`` the server listens on and clients
             connect to, e.g. ``("192.168.1.10", 9000)`` or ``("localhost", 9000)``.
-        max_backlog_bytes: how much may wait for one slow peer before pages
-            are dropped (the newest per key is kept; counted and logged).
+        max_backlog_bytes: how much may wait for one slow peer before pages are
+            dropped (newest page per key kept; counted and logged).
         dead_after_s: seconds of silence after which a peer counts as lost.
         max_connections: how many clients the server takes at once (64).
-        system: the system both ends name; a peer of another, or of none, is
-            refused. Default: the config's ``name``, else the script's folder.
-            None: no check (older SNR nodes).
-        secret: the secret both ends prove they know (docs/comms.md, "Who may
-            connect"). Default: ``$SNR_SECRET``, else the secret file, else none.
+        system: the system both ends name in their hello; a peer of another
+            system, or of none, is refused. Default: the config's ``name``,
+            else the script's folder. None: no check (older SNR nodes).
+        secret: the secret both ends prove they know (docs/comms.md, "Who
+            may connect"). Default: ``$SNR_SECRET``, else the file of
+            ``python -m snr secret new``, else none. None: none.
 
     Example::
 

@@ -127,8 +127,9 @@ COMMANDS: Dict[str, CommandHelp] = {}
 def command(usage: str, summary: str, details: str = "") -> Callable[[_Run], _Run]:
     """Register the decorated function as the console command named by ``usage``'s first word.
 
-    The one way to add a command, the kernel's or an extra's: raise
-    `CommandFailed` to refuse; set ``processor.follow_up`` to the tasks it asks for.
+    The one way to add a command, for the kernel's and for an extra's: raise
+    `CommandFailed` for a reply that says what is wrong; set
+    ``processor.follow_up`` to the tasks the command asks for.
 
     Example::
 
@@ -152,8 +153,8 @@ _extras_loaded = False
 def load_extra_commands() -> None:
     """Register the commands of every extra named in the entry point group ``snr.console_commands``.
 
-    Consoles call it when they start; it loads once. An extra that cannot be
-    imported is skipped with a warning.
+    Safe to call again; an extra that cannot be imported is skipped (its
+    commands stay unknown). Consoles call it when they start.
 
     Example::
 
@@ -209,9 +210,10 @@ _REFUSALS = {
 class CommandProcessorEndpoint(Endpoint):
     """Runs console command lines in a task handler and replies to the console.
 
-    Consoles add one for themselves (`CommandReceiverFactory`) and schedule
-    ``Task(TaskType.event, <its task name>, [line, session])``. A failing
-    command is reported to the console and logged; it never stops the node.
+    Its consoles schedule ``Task(TaskType.event, <its task name>, [line,
+    session])``; you do not build it yourself: `CommandReceiverFactory` and
+    `LocalConsoleFactory` add one to the node. A failing command is reported
+    to the console and logged; it never stops the node.
 
     Attributes:
         session: the console of the command being run (None in `execute`).
@@ -268,7 +270,10 @@ class CommandProcessorEndpoint(Endpoint):
                 kept.close()
 
     def execute(self, line: str) -> Reply:
-        """Run one command line now and return the reply, on the node's thread."""
+        """Run one command line now and return the reply (on the node's thread).
+
+        Tasks the command asks for (e.g. ``task event go``) are scheduled.
+        """
         reply, follow_up = self._run(line)
         self.schedule(follow_up)
         return reply or Reply(Status.OK, "")

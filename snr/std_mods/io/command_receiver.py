@@ -113,10 +113,11 @@ _REPORTS = {
 
 
 class ConsoleLoop(ThreadLoop):
-    """Base of the consoles: adds a command processor at ``begin`` and submits lines to it.
+    """Base of the consoles: adds a processor at ``begin`` and submits lines to it.
 
-    Subclasses read lines and call ``self.submit(line, session)``. Each console
-    has its own processor, so several consoles never run one command twice.
+    Subclasses read lines (in ``loop()`` or threads of their own) and call
+    ``self.submit(line, session)``. Each console adds its own processor, so
+    several consoles never run one command twice.
 
     Example::
 
@@ -135,7 +136,11 @@ class ConsoleLoop(ThreadLoop):
         self.command_task_name = f"console_command:{name}"
 
     def begin(self) -> None:
-        """Queue the processor's add task, before any command this loop can submit."""
+        """Ask the node to add this console's processor (if it has none yet).
+
+        The add task is queued before any command this loop can submit, so
+        the processor exists by the time the first command runs.
+        """
         if self.processor_name not in self.parent.components:
             factory = CommandProcessorFactory(
                 self.processor_name, self.command_task_name, console=self.name
@@ -143,7 +148,11 @@ class ConsoleLoop(ThreadLoop):
             self.schedule(tasks.add_component(factory))
 
     def submit(self, line: str, session: ConsoleSession) -> None:
-        """Queue a command line (urgent while the node is paused); the reply goes to ``session``."""
+        """Queue a command line; the processor replies to ``session``.
+
+        While the node is paused (``pause``) the command is urgent, so it
+        runs although the node's other tasks wait.
+        """
         priority = console_priority(self.parent)
         self.schedule(Task(TaskType.event, self.command_task_name, [line, session], priority))
 
@@ -161,12 +170,14 @@ class ConsoleLoop(ThreadLoop):
 
 
 class _TokenThrottle:
-    """Wrong tokens from one address make it wait longer and longer before its next try.
+    """Wrong tokens from one address make it wait longer and longer before the next try.
 
-    After n wrong tokens in a row, its next token is checked only after
-    ``first_delay_s * 2 ** (n - 1)`` s (at most ``max_delay_s``). A right token,
-    or ``forget_after_s`` without a wrong one, starts afresh. The longest-quiet
-    addresses are forgotten, so a flood from many addresses costs bounded memory.
+    After the n-th wrong token in a row, the address's next token is checked
+    only after ``first_delay_s * 2 ** (n - 1)`` seconds (at most
+    ``max_delay_s``); earlier tries are refused unchecked. A right token, or
+    ``forget_after_s`` without a wrong one, starts the address afresh. At
+    most ``max_addresses`` are remembered (the longest-quiet is forgotten),
+    so a flood from many addresses costs bounded memory.
     """
 
     def __init__(
@@ -210,10 +221,11 @@ class _Gone(Exception):
 
 
 class _RemoteConsole(ConsoleSession):
-    """One TCP console and its thread: read a line, have it answered, write the reply, repeat.
+    """One TCP console, served by a thread of the receiver's while it is connected.
 
-    Lines sent ahead wait in the socket, so a flood of commands costs the node
-    nothing. Replies (and goodbyes from other threads) reach the thread through `send`.
+    The thread reads a line, has it answered, writes the reply, and only then
+    reads the next: lines sent ahead wait in the socket, so a flood of
+    commands costs the node nothing. Replies reach the thread through `send`.
     """
 
     def __init__(
@@ -234,7 +246,7 @@ class _RemoteConsole(ConsoleSession):
         self.replies.put(reply)
 
     def interrupt(self, goodbye: Reply) -> None:
-        """Have the console's thread write ``goodbye`` at once, whatever it waits for."""
+        """Have the console's thread write ``goodbye`` (a BYE) at once, whatever it waits for."""
         self.send(goodbye)
         _shut(self.sock, socket.SHUT_RD)  # ends a wait in recv()
 
@@ -271,7 +283,11 @@ class _RemoteConsole(ConsoleSession):
         return self.replies.get()
 
     def write(self, reply: Reply) -> bool:
-        """Send ``reply``; False after a bye; `_Gone` if the console takes none of it."""
+        """Send ``reply``; False when it says bye.
+
+        Raises:
+            _Gone: the console took none of it for `_SEND_TIMEOUT_S`.
+        """
         data = memoryview(reply.encode())
         self.sock.settimeout(_SEND_TIMEOUT_S)
         while data:
@@ -301,9 +317,11 @@ def _shut(sock: Optional[socket.socket], how: int) -> None:
 class CommandReceiverLoop(ConsoleLoop):
     """Accepts console connections over TCP; each console's thread submits its commands.
 
-    Built by `CommandReceiverFactory`; it listens from ``begin()`` (so a port in
-    use is reported at start-up). Its limits are in docs/console.md, "Several
-    consoles"; each refusal is said to the console and logged (repeats are counted).
+    Built by `CommandReceiverFactory`; it listens from ``begin()`` (so a port
+    in use is reported at start-up). Its limits (`MAX_CONSOLES`,
+    `MAX_WAITING_CONSOLES`, the time limits, wrong tokens, consoles that do
+    not read) are in docs/console.md, "Several consoles"; each refusal is
+    said to the console and logged (repeats are counted).
 
     Example::
 
@@ -389,7 +407,11 @@ class CommandReceiverLoop(ConsoleLoop):
             pass
 
     def terminate(self) -> None:
-        """Say goodbye to every console (one short deadline for all), then close all sockets."""
+        """Say goodbye to every console, then close all sockets.
+
+        The goodbyes share one short deadline, so consoles that do not read
+        cannot hold up the node's shutdown.
+        """
         goodbye = Reply(Status.BYE, f"Node {self.parent.role!r} is stopping.")
         with self._lock:
             consoles = list(self._sessions)
@@ -524,21 +546,26 @@ class CommandReceiverLoop(ConsoleLoop):
 
 
 class CommandReceiverFactory(LoopFactory):
-    """Lets consoles control this node over TCP (``snr-console HOST:PORT``).
+    """Lets consoles control this node over TCP (thesis 6.4.3).
 
-    Adds a `CommandReceiverLoop`, which adds a `CommandProcessorEndpoint` when it begins.
+    Adds a `CommandReceiverLoop` and, when it begins, a
+    `CommandProcessorEndpoint` that runs the commands. Connect with
+    ``snr-console HOST:PORT``.
 
     Args:
         host: address to listen on. The default, ``"127.0.0.1"``, accepts
             consoles on this machine only. Any other address needs a token.
         port: TCP port; ``0`` lets the system pick a free one (see `address`).
-        token: shared secret consoles must present; defaults to
-            ``$SNR_CONSOLE_TOKEN``, else a word made from the node's secret
-            (see `default_token`), else none.
+        token: shared secret consoles must present; defaults to the
+            ``SNR_CONSOLE_TOKEN`` environment variable, else a word made from
+            the node's secret (``SNR_SECRET`` or the secret file; see
+            `default_token`), else none.
         name: the loop's component name.
-        auth_timeout_s: seconds a console may take to give its token.
+        auth_timeout_s: seconds a console may take to give its token
+            (default `DEFAULT_AUTH_TIMEOUT_S`, 5 s).
         idle_timeout_s: seconds a console may send no command before it is
-            disconnected; None never disconnects an idle console.
+            disconnected (default `DEFAULT_IDLE_TIMEOUT_S`, 10 minutes);
+            None never disconnects an idle console.
 
     Raises:
         ConfigError: a non-loopback host without a token, a malformed token,
@@ -548,6 +575,7 @@ class CommandReceiverFactory(LoopFactory):
 
         CommandReceiverFactory()                                # 127.0.0.1:9123
         CommandReceiverFactory(host="0.0.0.0", token="long-random-word")
+        CommandReceiverFactory(idle_timeout_s=60)               # close idle consoles sooner
     """
 
     def __init__(
@@ -585,7 +613,9 @@ class CommandReceiverFactory(LoopFactory):
         return CommandReceiverLoop(self, parent)
 
     def wait_until_listening(self, timeout_s: float = 5.0) -> Tuple[str, int]:
-        """The ``(host, port)`` the receiver listens on, once it does (handy with ``port=0``).
+        """The ``(host, port)`` the receiver listens on, once it does.
+
+        Handy with ``port=0`` in tests: start the node in a thread, then ask.
 
         Raises:
             CommsError: the receiver was not listening within ``timeout_s``.

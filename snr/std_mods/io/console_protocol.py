@@ -64,7 +64,11 @@ SECRET_TOKEN_PURPOSE = "console-token"
 
 
 def default_token(token: Optional[str], where: str) -> Optional[str]:
-    """``token``, else ``$SNR_CONSOLE_TOKEN``, else a word made from the node's secret, else None.
+    """The console token of a node or console that was given ``token`` (None: the default).
+
+    ``token`` if given, else ``$SNR_CONSOLE_TOKEN`` if set, else a word made
+    from the node's secret (``$SNR_SECRET`` or the secret file), else None:
+    no token (docs/console.md, "Security").
 
     Raises:
         ConfigError: the secret is empty or its file cannot be read.
@@ -72,6 +76,7 @@ def default_token(token: Optional[str], where: str) -> Optional[str]:
     Example::
 
         default_token("s3cret-word", "CommandReceiverFactory")   # 's3cret-word'
+        default_token(None, "CommandReceiverFactory")   # None, or '9a1e...' with $SNR_SECRET
     """
     if token is not None:
         return token
@@ -85,11 +90,18 @@ def default_token(token: Optional[str], where: str) -> Optional[str]:
 
 
 class Status(enum.Enum):
-    """What kind of reply a frame is: ``hello``/``auth`` greet, ``bye`` ends.
+    """What kind of reply a frame is.
 
     Example::
 
         Reply(Status.ERROR, "Unknown command 'relaod'.")
+
+    Members:
+        HELLO: greeting after connecting; commands may follow.
+        AUTH: greeting of a node that needs a token: send ``auth <token>`` first.
+        OK: the command worked; the text says what happened.
+        ERROR: the command was refused or failed; the text says why.
+        BYE: the node closes the connection after this frame.
     """
 
     HELLO = "hello"
@@ -122,10 +134,12 @@ class Reply:
 
 
 class ConsoleSession(ABC):
-    """Where a command's replies go: one console the node is talking to.
+    """One console the node is talking to: where a command's reply goes.
 
-    The command processor calls ``send`` on the node's thread, so it must be
-    quick and never block or raise, even when the console has gone.
+    A console loop hands each command line to the node with its session; the
+    `CommandProcessorEndpoint` runs the command on the node's thread and calls
+    ``session.send(reply)``, so ``send`` must be quick and never block or
+    raise, even when the console has gone.
 
     Example::
 
@@ -140,7 +154,10 @@ class ConsoleSession(ABC):
 
 
 class ReplyDecoder:
-    """Turns the bytes a console receives into `Reply` frames, keeping partial ones.
+    """Turns the bytes a console receives into `Reply` frames.
+
+    Feed it whatever ``recv`` returned; it keeps partial frames until the rest
+    arrives.
 
     Example::
 
@@ -157,7 +174,8 @@ class ReplyDecoder:
         """Every reply completed by ``data``.
 
         Raises:
-            WireFormatError: the bytes are not this protocol.
+            WireFormatError: the bytes are not this protocol (wrong header,
+                unknown status, oversized frame, or text that is not UTF-8).
         """
         self._buffer += data
         replies: List[Reply] = []
@@ -208,7 +226,7 @@ def _bad_header(header: bytes) -> str:
 
 
 class LineReader:
-    """Cuts the bytes a console sends into request lines.
+    """Cuts the bytes a console sends into request lines, as the protocol says.
 
     A line longer than `MAX_LINE_BYTES` is dropped up to its newline, and a
     line that is not UTF-8 is not run: each gets an ``error`` reply instead.
@@ -263,7 +281,9 @@ _json_decoder = json.JSONDecoder()
 def parse_values(text: str) -> List[Any]:
     """Values typed after a task's name: JSON literals where they parse, else words.
 
-    Nothing is ever evaluated as Python.
+    Nothing is ever evaluated as Python: ``1`` is a number, ``[1, 2]`` a list,
+    ``"a b"`` one string with a space, ``true``/``null`` are True/None, and
+    any other word (``A``, ``3abc``) is a string.
 
     Example::
 
@@ -298,6 +318,7 @@ def parse_address(text: str, default_host: str = "127.0.0.1") -> Tuple[str, int]
     Example::
 
         parse_address("robot.local:9123")   # ('robot.local', 9123)
+        parse_address("9123")               # ('127.0.0.1', 9123)
     """
     host, _, port_text = text.strip().rpartition(":")
     host = host.strip("[]") or default_host
@@ -310,7 +331,9 @@ def parse_address(text: str, default_host: str = "127.0.0.1") -> Tuple[str, int]
 
 
 def is_loopback(host: str) -> bool:
-    """True when ``host`` is reachable only from this machine (``""`` and ``"0.0.0.0"`` are not).
+    """True when ``host`` is reachable only from this machine.
+
+    ``""`` and ``"0.0.0.0"`` mean every network interface, so they are not.
 
     Example::
 
@@ -333,7 +356,9 @@ def check_listen_policy(host: str, token: Optional[str]) -> None:
 
     Example::
 
-        check_listen_policy("0.0.0.0", "s3cret-word")  # fine; without the token: ConfigError
+        check_listen_policy("127.0.0.1", None)         # fine
+        check_listen_policy("0.0.0.0", None)           # ConfigError
+        check_listen_policy("0.0.0.0", "s3cret-word")  # fine
     """
     if token is not None and (not token or len(token) > 256 or any(c.isspace() for c in token)):
         raise ConfigError(

@@ -71,7 +71,12 @@ class RecorderEndpoint(Endpoint):
         self._open()
 
     def record_page(self, task: Task, key: TaskId) -> SomeTasks:
-        """Write the stored page and flush it; one that cannot be written is logged and skipped."""
+        """Write the stored page as one line and flush it to the OS.
+
+        A page that cannot be written as a valid line (data JSON cannot
+        hold, nesting too deep, a time that is not a number) is logged with
+        its key and skipped, whatever the error: recording goes on.
+        """
         page, recording = task.page(), self.recording
         if page is None:
             self.warn("A store_page task for %r carries %r, not a Page", task.name, task.val_list)
@@ -186,6 +191,10 @@ def _check_fields(page: Page) -> None:
 def kept_name(filename: PathLike, when_s: float) -> str:
     """The name a previous recording is kept under: its local time before the extension.
 
+    Args:
+        filename: the recording's file name.
+        when_s: when it was last written (``os.path.getmtime``), seconds since 1970.
+
     Example::
 
         kept_name("logs/dive.jsonl", 1795564741.0)   # 'logs/dive-2026-11-24T23-59-01.jsonl' (UTC)
@@ -198,23 +207,30 @@ class RecorderEndpointFactory(EndpointFactory):
     """Builds a `RecorderEndpoint` that records ``keys`` into ``filename``.
 
     A recording already at ``filename`` is kept, renamed with the time it
-    was last written (``dive-2026-11-24T23-59-01.jsonl``); a file that is not
-    a recording is left alone and the node does not start (``ConfigError``).
+    was last written (``dive-2026-11-24T23-59-01.jsonl``), and the new run
+    goes to ``filename``; a file that is not a recording is left alone and
+    the node does not start (``ConfigError``). Data JSON cannot hold is
+    logged, naming its key and type, and skipped. See ``docs/recording.md``.
 
     Args:
         filename: the file to write.
         keys: the data keys to record (one key may be given as a string).
-        sync: also ``os.fsync`` every page (slower): a power cut loses one page at most.
+        sync: also ``os.fsync`` every page, so even a power cut loses at most
+            one page (slower: every page waits for the disk).
         name: the endpoint's name (default ``"recorder"``).
         overwrite: replace whatever ``filename`` holds instead of keeping it.
-        append: add this run's pages to the end of ``filename`` (JSON lines only).
+        append: add this run's pages to the end of ``filename``, after a
+            header line. JSON lines only.
         file_format: ``"jsonl"`` or ``"mcap"``; by default ``"mcap"`` when
-            ``filename`` ends in ``.mcap``, else ``"jsonl"``.
-        compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress chunks of about 1 MiB.
+            ``filename`` ends in ``.mcap`` (``pip install 'snr-robotics[mcap]'``),
+            else ``"jsonl"`` (the thesis's format).
+        compression: MCAP only: ``"zstd"`` or ``"lz4"`` compress the file in
+            chunks of about 1 MiB; ``None`` (default) flushes each page.
 
     Raises:
         ConfigError: no keys, both ``overwrite`` and ``append``, an unknown
-            ``file_format`` or ``compression``, or one the format does not allow.
+            ``file_format`` or ``compression``, or ``append`` or ``compression``
+            where the format does not allow it.
 
     Example::
 
@@ -225,7 +241,8 @@ class RecorderEndpointFactory(EndpointFactory):
         ]})
 
     Attributes:
-        path: the file written (a name beside ``filename`` if its recording could not be renamed).
+        path: the file being written (``filename``, unless the previous
+            recording could not be renamed: then a new name beside it).
         kept: where the previous recording was kept, or None.
         pages_written: pages written so far (kept across reloads).
         pages_skipped: pages that could not be written.

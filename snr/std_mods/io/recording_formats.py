@@ -89,7 +89,7 @@ def format_of_name(filename: PathLike) -> str:
 
 
 def format_of_bytes(start: bytes) -> str:
-    """The format whose magic ``start`` begins with, or ``"jsonl"``.
+    """The format a file starting with ``start`` is in: a format whose magic it has, or ``"jsonl"``.
 
     Example::
 

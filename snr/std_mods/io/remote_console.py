@@ -69,8 +69,9 @@ _Client = TypeVar("_Client", bound="ConsoleClient")
 class ConsoleClient(ABC):
     """The console's core: sends command lines, prints replies, runs the program.
 
-    It reaches nodes through a transport's abstract methods: `RemoteConsole`
-    over TCP, ``ZenohConsole`` (``snr.extras.zenoh.console``) over Zenoh.
+    It reaches nodes through a transport's methods (docs/console.md, "How the
+    console is built"): `RemoteConsole` over TCP, ``ZenohConsole``
+    (``snr.extras.zenoh.console``) over Zenoh.
 
     Example::
 
@@ -78,7 +79,9 @@ class ConsoleClient(ABC):
             print(console.send("list endpoints").text)
 
     Args:
-        token: the node's token, if it needs one (default: as `default_token`).
+        token: the shared token, if the node needs one (default: the
+            ``SNR_CONSOLE_TOKEN`` environment variable, else a word made from
+            the secret, ``SNR_SECRET`` or the secret file, as the node makes it).
         timeout_s: how long to wait to connect, and for each reply.
     """
 
@@ -96,11 +99,19 @@ class ConsoleClient(ABC):
 
     @abstractmethod
     def connect(self) -> Reply:
-        """Reach the node(s); the greeting. Raises `ConsoleConnectionError` saying why not."""
+        """Reach the node(s); returns the greeting.
+
+        Raises:
+            ConsoleConnectionError: no node answered, or it turned the console away.
+        """
 
     @abstractmethod
     def ask(self, line: str, timeout_s: float) -> Reply:
-        """Send one checked line; its reply (several nodes': one), or `ConsoleConnectionError`."""
+        """Send one checked line, wait at most ``timeout_s``; its reply (several nodes': one).
+
+        Raises:
+            ConsoleConnectionError: the node went away, or no reply came in time.
+        """
 
     @abstractmethod
     def close(self) -> None:
@@ -118,7 +129,12 @@ class ConsoleClient(ABC):
     @classmethod
     @abstractmethod
     def from_arguments(cls, args: argparse.Namespace) -> ConsoleClient:
-        """The client the parsed command line describes; ValueError for a malformed option."""
+        """The client the parsed command line describes (not connected yet).
+
+        Raises:
+            ValueError: an option is malformed (a usage error).
+            SNRError: the transport cannot be set up (e.g. its library is missing).
+        """
 
     # -- the core -------------------------------------------------------------------
     def _accept(self, greeting: Reply, node: str) -> Reply:
@@ -161,9 +177,10 @@ class ConsoleClient(ABC):
         )
 
     def stream(self, line: str, output: IO[str], replies: Optional[int] = None) -> int:
-        """Send ``line`` (an ``echo KEY``) again and again, printing each reply; an exit code.
+        """Send ``line`` (an ``echo KEY``) again and again, printing each reply, until Ctrl-C.
 
-        Stops on Ctrl-C, after ``replies`` replies, an error reply, or a bye.
+        Stops early after ``replies`` replies, on an error reply, or when the
+        node says bye. Returns an exit code, like `run_command`.
 
         Example::
 
@@ -198,9 +215,10 @@ class ConsoleClient(ABC):
         read_line: Optional[Callable[[str], str]] = None,
         output: Optional[IO[str]] = None,
     ) -> int:
-        """Read commands until ``quit``, end of input, or the node says bye; an exit code.
+        """Read commands until ``quit``, end of input, or the node says bye.
 
-        ``read_line(prompt)`` defaults to ``input`` (with readline if there is one).
+        ``read_line(prompt)`` defaults to ``input`` (with readline if there is
+        one). Returns an exit code.
         """
         out = output if output is not None else sys.stdout
         if read_line is None:
@@ -226,7 +244,14 @@ class ConsoleClient(ABC):
         return EXIT_OK
 
     def run_command(self, line: str, output: IO[str]) -> int:
-        """Send ``line``, print the reply; an exit code (``echo KEY`` streams)."""
+        """Send ``line``, print the reply; an exit code for this command.
+
+        ``echo KEY`` (without a count) streams: it is sent again and again,
+        each reply printed, until Ctrl-C (see `stream`).
+
+        Raises:
+            ConsoleConnectionError: the node went away.
+        """
         words = line.split()
         if len(words) == 2 and words[0].lower() == "echo":
             return self.stream(line, output)
@@ -250,7 +275,9 @@ class ConsoleClient(ABC):
         err: Optional[IO[str]] = None,
         prog: str = "snr-console",
     ) -> int:
-        """Connect, then run ``commands`` or what stdin gives; the exit code.
+        """Connect, then run ``commands``, or what stdin gives (typed, or piped); the exit code.
+
+        ``prog`` begins each error message: the name of the command that was typed.
 
         Example::
 
@@ -291,7 +318,9 @@ class ConsoleClient(ABC):
 
 
 class RemoteConsole(ConsoleClient):
-    """The console over TCP: a client of a node's `CommandReceiverFactory` (``snr-console``).
+    """The console over TCP: a client of a node's `CommandReceiverFactory`.
+
+    Use it as a program (``snr-console``), or from Python, e.g. in a test.
 
     Example::
 
@@ -321,11 +350,16 @@ class RemoteConsole(ConsoleClient):
 
     @property
     def where(self) -> str:
-        """``"host:port"``."""
+        """``"host:port"``, for messages and the prompt."""
         return f"{self.host}:{self.port}"
 
     def connect(self) -> Reply:
-        """Connect (and give the token if asked); the greeting, or `ConsoleConnectionError`."""
+        """Connect (and present the token if asked); returns the node's greeting.
+
+        Raises:
+            ConsoleConnectionError: refused, unreachable, wrong token, or not
+                an SNR console at that address. The message says what to try.
+        """
         try:
             self._sock = socket.create_connection((self.host, self.port), self.timeout_s)
         except OSError as error:
@@ -421,7 +455,7 @@ class RemoteConsole(ConsoleClient):
 
     @classmethod
     def add_arguments(cls, parser: argparse.ArgumentParser, prog: str) -> None:
-        """``[HOST:PORT]``, and how to reach a node over Zenoh instead."""
+        """``[HOST:PORT]``, and the help's words on reaching a node over Zenoh instead."""
         parser.description = (
             "Send commands to a running SNR node (one with a CommandReceiverFactory)."
         )
@@ -440,7 +474,11 @@ class RemoteConsole(ConsoleClient):
 
     @classmethod
     def from_arguments(cls, args: argparse.Namespace) -> RemoteConsole:
-        """The console to ``args.address``; ValueError if it is not ``HOST:PORT``."""
+        """The console to ``args.address``.
+
+        Raises:
+            ValueError: the address is not ``HOST:PORT``.
+        """
         host, port = parse_address(args.address)
         return cls(host, port, args.token, args.timeout)
 
@@ -480,9 +518,10 @@ def main(
     stderr: Optional[IO[str]] = None,
     prog: str = "snr-console",
 ) -> int:
-    """``snr-console``: over TCP, or over Zenoh with ``--zenoh``; the exit code.
+    """``snr-console``: over TCP, or over Zenoh with ``--zenoh``; returns the exit code.
 
-    ``prog`` names the command in its usage and messages (``snr console`` for ``python -m snr``).
+    ``prog`` is the command's name in its usage and messages: ``python -m snr
+    console`` passes ``"snr console"``, so its help shows what was typed.
 
     Example::
 

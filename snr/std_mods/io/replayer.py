@@ -80,7 +80,14 @@ MAX_PROBLEMS = 100
 
 
 class RecordedPage(NamedTuple):
-    """A page read from a recording, its line (MCAP: message) number, and whether it had a time.
+    """A page read from a recording, with where it was and whether it had a time.
+
+    Attributes:
+        line: the line number in the file (the header is line 1); in an MCAP
+            file, the message number (the first message is 1).
+        page: the page.
+        timed: False when the line had no ``created_at_s`` (the page then
+            holds the time it was read).
 
     Example::
 
@@ -113,19 +120,26 @@ def _fields(line: bytes) -> Optional[Dict[str, Any]]:
 class PageReader:
     """Reads the pages of a recording in order; iterate over it.
 
-    A file in a format an extra provides (MCAP, known by its first bytes) is
-    read by that extra ("message N" for "line N"). A line that is not a page
-    is logged with its number, kept in ``problems`` and skipped.
+    A file in another format an extra provides (MCAP: known by its first
+    bytes, whatever its name; ``pip install 'snr-robotics[mcap]'``) is read by
+    that extra, its messages taken as lines are ("message N" for "line N").
+    Any line that is not a valid page is logged with its line number, listed
+    in ``problems`` and skipped, a last line cut short included: the first
+    five in full, then a count every 5 s, and a summary with the total at the
+    end (``docs/recording.md``, "Reading").
 
     Args:
         filename: a file written by `RecorderEndpointFactory`.
 
     Raises:
-        ConfigError: no such file, or its format's package is not installed.
-        WireFormatError: the file starts with the header of a newer SNR's format, or another.
+        ConfigError: the file does not exist, or is MCAP and the mcap
+            package is not installed.
+        WireFormatError: the file starts with the header of a newer SNR's
+            format, or of another format.
 
     Attributes:
-        problems: the first `MAX_PROBLEMS` bad lines, each ``"file:line: reason"``.
+        problems: the first `MAX_PROBLEMS` bad lines, each as
+            ``"file:line: reason"`` (MCAP: ``"file: message N: reason"``).
         bad_lines: how many bad lines (or MCAP messages) were skipped in all.
         file_format: ``"jsonl"``, or the format an extra reads (``"mcap"``).
         is_mcap: True when the file is MCAP.
@@ -164,7 +178,10 @@ class PageReader:
                 yield item.page
 
     def recorded_pages(self) -> Generator[RecordedPage, None, None]:
-        """The pages with their line numbers; each call reads (and counts bad lines) anew.
+        """The pages with their line numbers, and whether each line had a time.
+
+        Reading starts again at the top of the file on each call; the
+        counts of bad lines start again too.
 
         Example::
 
@@ -227,8 +244,8 @@ class PageReader:
 class TextReader:
     """Reads a text file line by line, without the line endings.
 
-    A line that is not valid UTF-8 is reported with its number and kept, the
-    bad bytes replaced by ``\\ufffd``.
+    Lines that are not valid UTF-8 are reported with their line number and
+    kept, with the bad bytes replaced by ``\\ufffd``.
 
     Example::
 
@@ -265,8 +282,10 @@ Item = TypeVar("Item")
 class ReplayLoop(ThreadLoop, Generic[Item]):
     """What both replayers share: step through a file, then stop.
 
-    A subclass gives ``items()`` and ``store``. The count of items replayed is
-    kept on the factory: after a hot reload the replay goes on.
+    Subclasses say how to read the file (``items``), how long to wait before
+    each item (``delay_s``) and how to store it (``store``). The count of
+    items replayed lives on the factory, so after a hot reload the replay
+    goes on where it was instead of starting over.
 
     Example: see `ReplayerLoop` and `TextReplayerLoop`.
     """
@@ -355,12 +374,14 @@ class _ReplayFactory(LoopFactory):
 
 
 class ReplayerLoop(ReplayLoop[RecordedPage]):
-    """Stores the pages of a recording as recorded: key, data, origin and time.
+    """Stores the pages of a recording, each with its key, data, origin and time.
 
-    Each origin's pages go in the order they were made (`in_created_order`),
-    timed on that origin's clock unless ``fast``; a page with no time, a gap
-    over ``max_gap_s`` or a time going back is stored at once (or after
-    ``max_gap_s``) and logged with its line.
+    Each origin's pages are stored in the order they were made, even where
+    the file's lines are out of order (see `in_created_order`). With original
+    timing each page waits as long after the previous one as it was created
+    after it, following each origin's clock on its own; a page with no time,
+    a gap over ``max_gap_s`` or a time going back is stored right away (or
+    after ``max_gap_s``) and logged with its line number.
 
     Example::
 
@@ -445,11 +466,13 @@ def in_created_order(
 ) -> Iterator[RecordedPage]:
     """``recorded`` with each origin's pages in the order they were made (``created_at_s``).
 
-    The 2021 node handled the newest task first, so its recordings are out of
-    order. Each page takes the place of one of its origin's pages: origins stay
-    interleaved and their clocks are never compared. Pages more than ``window``
-    lines apart, on either side of a clock jump (over ``max_jump_s``), or
-    without a time are not swapped.
+    A recording's lines can be out of order (the 2021 node handled the newest
+    task first). Each page takes the place in the file of one of its origin's
+    pages, so the origins stay interleaved as recorded and their clocks are
+    never compared. Pages further apart than ``window`` lines are not swapped,
+    and neither are pages on either side of a clock jump (more than
+    ``max_jump_s`` either way): those are timing problems, left to `ReplayerLoop`.
+    Pages without a time keep their places.
 
     Example::
 
@@ -485,11 +508,15 @@ class ReplayerLoopFactory(_ReplayFactory):
 
     Args:
         filename: a file written by `RecorderEndpointFactory`.
-        fast: store the pages as fast as possible, not with their original spacing.
-        exit_when_done: stop the node after the last page, once it has handled what they caused.
+        fast: store the pages as fast as possible instead of with their
+            original spacing in time.
+        exit_when_done: stop the node after the last page (once the node has
+            handled what the pages caused), in every mode.
         keys: replay only pages under these keys (default: all).
         name: the loop's name (default ``"replayer"``).
-        max_gap_s: the longest wait between two timed pages; a longer gap is cut and logged.
+        max_gap_s: with original timing, the longest wait between two pages
+            (default `MAX_GAP_S`, 10 s); a longer gap in the recording is
+            cut to this and logged with its line number.
 
     Raises:
         ConfigError: ``max_gap_s`` is negative, not finite or too large.
@@ -504,7 +531,8 @@ class ReplayerLoopFactory(_ReplayFactory):
     Attributes:
         position: pages replayed so far (kept across reloads).
         bad_lines: bad lines skipped, known at the end of the file.
-        retimed: pages not stored at their recorded time.
+        retimed: pages not stored at their recorded time (no time, a gap
+            over ``max_gap_s``, time going back).
     """
 
     def __init__(
