@@ -42,7 +42,7 @@ class SNRTestCase(unittest.TestCase):
     """The role of nodes built by ``get_config`` and ``run_test_node``."""
 
     timeout_s: float = 2.0
-    """The default time limit of ``run_test_node``, in seconds."""
+    """The default time limit of ``run_test_node``, in seconds (set more on a slow test class)."""
 
     def expector(self, expectations: Mapping[K, int]) -> Expector[K]:
         """An `Expector` that fails this test when unmet."""
