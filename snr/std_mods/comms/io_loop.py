@@ -24,7 +24,7 @@ import socket
 import struct
 import threading
 import time
-from typing import TYPE_CHECKING, Any, Callable, Iterator, Optional, Protocol
+from typing import Any, Callable, Iterator, Optional, Protocol
 
 from snr.core.node import Node
 from snr.prelude import AbstractNode
@@ -37,10 +37,7 @@ try:  # Linux and macOS say how many bytes wait unread; Windows has no fcntl
 except ImportError:
     _FIONREAD = None
 
-if TYPE_CHECKING:
-    from snr.std_mods.comms.comms_loop import Link
-
-__all__ = ["IOLoop", "IOTimer", "SocketTransport", "Transport", "unread_bytes"]
+__all__ = ["IOLoop", "IOTimer", "Served", "SocketTransport", "Transport", "unread_bytes"]
 
 RECV_BYTES = 256 * 1024  # the loop's one receive buffer, shared by its links
 ROOM_CHECK_S = 0.015  # while links wait for room in the node's queue, how often it is checked
@@ -53,6 +50,30 @@ WRITE_DELAY_S = 0.001  # frames another thread queued wait this long for it, the
 _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
 _READS = "reads"  # the selector key of the gate (the wake-up socket's is None)
+
+
+class Served(Protocol):
+    """What the I/O loop calls on what it serves: a `snr.std_mods.comms.comms_loop.Link`.
+
+    Example::
+
+        io.watch(link, selectors.EVENT_READ)   # link.on_readable() when bytes come
+    """
+
+    def fileno(self) -> int:
+        """The socket (or pipe) to watch."""
+
+    def on_readable(self) -> None:
+        """Read what came (the loop's thread, or the idle node's)."""
+
+    def on_writable(self) -> None:
+        """Write what waits, now that the socket has room (the loop's thread)."""
+
+    def write_waiting(self) -> None:
+        """Write what waits, from another thread than the loop's (`IOLoop.write_soon`)."""
+
+    def on_io_stop(self) -> None:
+        """Its reading or writing raised: end it (the loop's thread)."""
 
 
 class IOTimer:
@@ -110,12 +131,12 @@ class IOLoop:
         self.view = memoryview(self.buffer)
         self._users = 0
         self._selector = selectors.DefaultSelector()
-        self._handlers: dict[Link, int] = {}  # every watched link: its events
+        self._handlers: dict[Served, int] = {}  # every watched link: its events
         self._calls: collections.deque[Callable[[], object]] = collections.deque()
         self._timers: list[tuple[float, int, IOTimer]] = []
         self._order = itertools.count()  # ties in the timer heap never compare IOTimers
         self._waiting_for_room: list[Callable[[], None]] = []
-        self._to_write: dict[Link, None] = {}  # write_soon's links, each once
+        self._to_write: dict[Served, None] = {}  # write_soon's links, each once
         self._stopping = self._woken = False
         self._wake_r, self._wake_w = _wake_pair()
         self._selector.register(self._wake_r, _READ, None)
@@ -125,7 +146,7 @@ class IOLoop:
         # and `_node_poll`; the selector watches `_gate`, which holds `_reads`
         # only while the I/O thread is to read.
         self._reads: Any = None
-        self._readers: dict[int, Link] = {}  # fd -> link, for `_reads`
+        self._readers: dict[int, Served] = {}  # fd -> link, for `_reads`
         self._role = threading.RLock()  # the read role: whoever holds it reads
         self._role_wanted = False  # the loop's thread waits for the role: leave it
         self._waiter_installed = False  # the node waits on this loop when idle
@@ -217,7 +238,7 @@ class IOLoop:
         if not self._woken:
             self._wake()
 
-    def write_soon(self, link: Link) -> None:
+    def write_soon(self, link: Served) -> None:
         """``link`` has frames queued by another thread than the loop's.
 
         The node's thread writes them when it next goes idle (`wait`); the
@@ -250,7 +271,7 @@ class IOLoop:
             pass
 
     # -- loop thread only ---------------------------------------------------
-    def watch(self, handler: Link, events: int) -> None:
+    def watch(self, handler: Served, events: int) -> None:
         """Serve ``handler`` for ``events`` (0: keep it, but select nothing for now)."""
         old = self._handlers.get(handler)
         if old == events:
@@ -276,11 +297,11 @@ class IOLoop:
         elif events:
             self._selector.register(handler, events, handler)
 
-    def events(self, handler: Link) -> int:
+    def events(self, handler: Served) -> int:
         """The events ``handler`` is watched for (0 if none or not watched)."""
         return self._handlers.get(handler, 0)
 
-    def forget(self, handler: Link) -> None:
+    def forget(self, handler: Served) -> None:
         """Stop serving ``handler`` (before its socket is closed)."""
         self.watch(handler, 0)
         del self._handlers[handler]
