@@ -5,12 +5,17 @@ Everything a student needs is here::
     from snr import *
 
 That gives ``__all__`` below: what the listings, tutorial and examples use, and
-the 2021 release's names; the rest is imported from its own module, e.g.
-``from snr.std_mods.comms import SocketsServerFactory``. ``python -m snr docs``
-opens the guide and API reference, offline.
+the 2021 release's names. The rest is imported from its own module, e.g.
+``from snr.std_mods.comms import SocketsServerFactory``.
 
-``import snr`` is kept light: the names in ``_LAZY`` are imported the first
-time one is used (``from snr import *`` imports them all).
+``python -m snr docs`` builds and opens the guide and API reference, offline;
+``python -m snr demo`` runs the thesis's underwater vehicle.
+
+``import snr`` is kept light: the ready-made components (``snr.std_mods``),
+the extras (``snr.extras``: Zenoh, serial, controller, simulator...),
+the testing utilities (``snr.utils``, ``SNRTestCase`` with ``unittest``)
+and the 2021 names are imported the first time one is used;
+``from snr import *`` imports everything it names.
 """
 
 # The one list of the public names (docs/design.md, "The public names"): to add

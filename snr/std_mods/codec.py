@@ -1,8 +1,23 @@
-"""The wire format (docs/wire-format.md): pages as strict JSON, in frames and in lines.
+"""The wire format: pages as strict JSON, in frames between nodes and in lines on disk.
 
-The standard library's ``json`` does the work; a faster `JsonBackend` from an
-extra may do part of it. Nothing is unpickled or evaluated: a bad frame can
-only be *wrong*, never harmful.
+Every page that leaves or enters a node is written and read here
+(docs/wire-format.md): comms *frames* (a 4-byte big-endian length, then a
+JSON object with ``"v"`` and a ``"kind"``: ``hello``, ``proof``, ``page``,
+``beat`` or ``bye``), and the lines of recordings and serial links (a header
+line, then one page per line). One set of rules:
+
+* **Written:** compact JSON, ASCII only (``\\uXXXX``), fields in a fixed order.
+* **Refused when writing** (`NotSerializableError`, naming the key and the
+  part of the data): what JSON cannot hold, NaN and infinity, lone
+  surrogates, nesting deeper than `MAX_DEPTH`.
+* **Rejected when reading** (`WireFormatError`, saying why): text that is not
+  UTF-8 or not JSON, ``NaN``, ``1e999``, lone surrogates, nesting deeper than
+  `MAX_DEPTH`, pages with missing or wrongly typed fields. Nothing is
+  unpickled or evaluated: a bad frame can only be *wrong*, never harmful.
+
+The standard library's ``json`` does the work. A faster `JsonBackend` from an
+extra may do part of it (``snr.extras.orjson``: ``pip install
+'snr-robotics[fast]'``, used when installed; ``SNR_JSON=json`` turns it off).
 
 Example::
 

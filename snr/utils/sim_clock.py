@@ -1,10 +1,15 @@
 """`SimClock`: simulated time for nodes, advanced in lockstep (docs/sim-time.md).
 
-A `snr.core.clock.NodeClock` whose nodes and ticking loops take *turns* in a
-fixed order, so the same run gives the same pages; time jumps when nothing can
-act now. Next to act: a node with work (by role), else the turn waiting for
-the earliest instant, else nobody (a wall wait). Safety waits stay on the wall
-clock: a stalled clock ends in a timeout, never a hang.
+A `snr.core.clock.NodeClock` whose nodes and loops take turns: the kernel
+knows it only through that interface.
+
+A node built from ``Config(..., clock=SimClock())`` reads its time from the
+clock. Nodes and ticking loops take *turns* in a fixed order, so the same run
+gives the same pages, and the clock jumps when nothing can act now. Who gets
+the clock next: a node with work (by role), else the turn waiting for the
+earliest instant, else nobody (a wall wait). Safety waits stay on the wall
+clock, so a stalled clock ends in a timeout, never a hang. docs/sim-time.md
+tells the whole story.
 """
 
 from __future__ import annotations

@@ -1,7 +1,12 @@
 """`check_component`: read a student's component class once for silent mistakes.
 
-What it finds, and which are errors and which DEBUG warnings: docs/errors.md, 15.
-A class whose source cannot be read is checked only for what its ``__init__`` set.
+The node reads each student class once, when its first component is added
+(docs/errors.md, 15): a name SNR uses (``self.state`` in a loop, ``self.wait_s =
+0.5``), a near miss of a name SNR reads (``self.task_handler``) and an ``async
+def`` hook are errors in DEBUG and TEST; work built and dropped, a hook's
+return nobody reads and a hook SNR never calls (``def terminte``) are DEBUG
+warnings. A class whose source cannot be read is checked only for what its
+``__init__`` set.
 
 Example::
 

@@ -2,6 +2,14 @@
 
 Every component that listens, connects or opens a serial port words its failure
 with `explain_os_error` (docs/errors.md, 12).
+
+Example::
+
+    raise CommsError(explain_os_error(
+        error, action="listen", target=f"{host}:{port}",
+        who=f"The sockets server of node {role!r}",
+        setting="SocketsPair(server_tuple=(host, port))",
+    )) from error
 """
 
 from __future__ import annotations

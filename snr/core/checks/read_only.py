@@ -2,10 +2,24 @@
 
 ``node.datastore`` (`NodeDatastore`) is a live view of the node's ``node.pages``
 that refuses every change, naming ``store_data`` (docs/design.md, "Only the
-node writes its datastore"). Outside DEPLOYED the node stores a read-only copy
-of each page's data (`freeze`), shared by every handler of its key: it equals,
-prints and serialises as the plain list or dict, but refuses to change, saying
-to copy it first (docs/performance.md, "Page data that cannot be changed in place").
+node writes its datastore").
+
+Read-only page data (DEBUG and TEST): a page's list or dict cannot be changed
+in place. A page's data is one object, shared by every handler of its key, the
+datastore and whoever stored it. A handler that appends to
+``task.val_list[0].data`` would change the page for all of them, in silence.
+So in DEBUG and TEST modes the node stores a read-only copy of the data:
+lists become `ReadOnlyList`, dicts `ReadOnlyDict`, nested ones too (tuples
+holding them are rebuilt). Both are subclasses, so they still equal, print,
+``isinstance``-check and serialise as the plain list or dict; only their
+changing methods refuse, at the student's line, with the fix: copy it first.
+
+Why once, at store, and not a copy per handler: ``docs/performance.md``,
+"Page data that cannot be changed in place". DEPLOYED passes data as it is: a
+program that ran in DEBUG without tripping this does not change page data.
+
+Other objects (a set, a NumPy array, a class of the student's) are passed as
+they are: JSON pages hold only lists and dicts.
 
 Example::
 

@@ -1,10 +1,23 @@
 """A datastore or node core of the student's own, checked where it plugs in.
 
-``Config(datastore=..., node_core=...)`` replaces the node's ``dict`` and its
-`NodeCoreEndpoint` (docs/assignments.md). A mistake in either would show far
-away (``page.data`` on a bare value, a node that never stops), so the node
-checks them as it builds them and, in DEBUG and TEST, each answer they give.
-SNR's own datastore and core pass through untouched.
+``Config(datastore=MyDatastore, node_core=MyNodeCoreFactory())`` replaces
+the node's ``dict`` and its `NodeCoreEndpoint` (docs/assignments.md). A
+mistake in either would show far away: a ``get`` that returns the data
+instead of the page fails in some handler's ``page.data``; a core that does
+not handle ``terminate`` leaves a node that never stops. So the node checks
+them as it builds them, and says which method is missing or wrong:
+
+* `check_seam_args`: the config was given a class to make a datastore with,
+  and a factory for the core (not an instance, not a class);
+* `checked_datastore`: the datastore has the four methods of `Datastore`;
+  in DEBUG and TEST its answers are checked as they are given
+  (`CheckedDatastore`: a Page or None, keys that are strings, a length);
+* `checked_core`: the core is a component named ``node_core`` with a
+  ``store_page_handler``; in DEBUG and TEST what that returns is checked,
+  and a task the core does not handle is said once, in the log.
+
+SNR's own datastore (a ``dict``) and core pass through untouched: the
+default path pays nothing.
 
 Example::
 

@@ -1,10 +1,25 @@
 """`Watchdog`: in DEBUG mode, says why a node is stuck when nothing else would.
 
-A daemon thread samples the stacks of the node's thread and its loops' threads
-and warns, once each, naming the line and the rule broken: a handler that does
-not return, a ``loop()`` in a ``while`` of its own, a loop flooding the queue or
-spinning with no rate, a node nothing can stop (docs/design.md, "The watchdog";
-docs/errors.md, 17). While the node idles it dozes until the node gets work.
+Some mistakes hang a node without a word. A daemon thread samples the stacks of
+the node's thread and its loops' threads every ``every_s`` and says, once each,
+as a warning, with the line it is on and the rule it breaks (docs/design.md,
+"The watchdog"; docs/errors.md, 17):
+
+1. a handler that has not returned after ``stuck_s``;
+2. a student's ``loop()`` inside a ``while`` of its own for ``stuck_s``
+   (one long blocking call, e.g. ``accept()``, is not reported);
+3. a student's loop that had to wait for room while the node was behind for
+   ``stuck_s`` (a queue a tenth full, or a wait since the last look, counts as
+   behind for ``FLOOD_GRACE_S``); 3b. a loop with no ``max_tick_rate_hz`` whose
+   ``loop()`` stores or schedules, running ``spin_hz`` passes a second for
+   ``2 * stuck_s`` (the profiler's counts);
+4. a node with an empty queue, no handler running, no loop alive and no other
+   thread for ``idle_s``: only Ctrl+C can end it.
+
+A look that finds nothing to watch makes the next one wait ``stuck_s``; if
+besides the node's thread sleeps with an empty queue and no student's loop
+runs, the watchdog sleeps until the node gets work (an idle node is not stuck),
+or ``dozing_s`` at most.
 
 Example::
 

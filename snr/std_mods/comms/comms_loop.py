@@ -1,8 +1,12 @@
 """`CommsLoop`, `Link`, `Outbox`: how a node forwards pages by key to its peers.
 
-A `CommsLoop` (thesis 6.4.1) sends the pages stored under its keys over its
-links and stores what they receive; the sockets and pipe loops differ only
-in how they open links (docs/design.md, "A page's trip").
+A `CommsLoop` (thesis 6.4.1) forwards every page stored under its keys to
+each open `Link` (one connection to one peer, over a `Transport` of
+``io_loop.py``) and stores every page a link receives, with its origin and
+time. A link queues frames in its `Outbox` and has no thread of its own: the
+node's one `IOLoop` reads and writes it. `SocketsServerLoop`,
+`SocketsClientLoop` and `PipeLoop` differ only in how they open their links
+(a page's whole trip: docs/design.md).
 
 Example::
 

@@ -1,8 +1,12 @@
 """Who may link to a node: its system's name, and its secret (docs/comms.md, "Who may connect").
 
-Both are judged in the hello that starts every link (docs/wire-format.md, 3.1
-and 3.5): each side proves it knows the secret with an HMAC-SHA256 over the
-other's fresh nonce, so the secret never crosses the wire.
+Both are judged in the hello that starts every link (docs/wire-format.md,
+3.1 and 3.5). The system name (``system=``, default: the script's folder)
+stops accidents: a node of another team reached by a typo is refused. The
+secret (``SNR_SECRET``, ``secret=``, or ``python -m snr secret new``) stops
+malice: each side proves it knows it with an HMAC-SHA256 over the other
+side's fresh nonce, so the secret never crosses the wire and a recorded
+hello cannot be replayed.
 
 Example::
 

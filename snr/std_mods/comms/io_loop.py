@@ -1,8 +1,12 @@
-"""The node's one I/O thread, `IOLoop`, and the byte streams it serves, `Transport`.
+"""The socket transport: `SocketTransport` over TCP, and the `IOLoop` that serves every link.
 
-One ``selectors`` loop on the thread ``snr-<role>-io`` serves every link of
-a node; on Linux the node's own thread reads the links while it is idle.
-Why and how: docs/design.md, "One I/O thread per node" and "Who reads a link".
+A link talks over a `Transport`: a non-blocking byte stream (a TCP socket, a
+pipe end). Every link of a node is served by the node's one `IOLoop`: a
+``selectors`` loop on one thread, ``snr-<role>-io``, that reads, writes and
+runs the links' timers, so hundreds of idle clients cost no more threads
+than one. On Linux the node's own thread reads the links while it is idle
+(the loop is its `snr.core.task_queue.IdleWaiter`); the *read role*, a lock,
+says which thread reads. Why and how: docs/design.md, "One I/O thread per node".
 
 Example::
 

@@ -1,13 +1,19 @@
 """The console's commands: their registry, `COMMANDS`, and `CommandProcessorEndpoint`.
 
-A console turns each line typed into a command task; this endpoint runs the
-command in a task handler, on the node's thread, and hands the reply to the
-line's `ConsoleSession` (thesis 6.4.3). `command` registers a command: the
-kernel's below, an extra's in a module named in the entry point group
-``snr.console_commands`` (docs/console.md, "How the console is built").
+A console (remote over TCP, local on stdin, or over Zenoh) never touches the
+node itself: it turns each line the user typed into a command task, and this
+endpoint runs the command in a task handler, on the node's thread, then hands
+the reply to the console's `ConsoleSession` (thesis 6.4.3).
+
+A command is a name, a help line and a function: `command` registers one in
+`COMMANDS`. The kernel's commands are registered here; extras register theirs
+the same way, in the modules the entry point group ``snr.console_commands``
+names (step mode's, ``echo``, ``hz``, ``graph``), which `load_extra_commands`
+loads when a console starts.
 
 Example::
 
+    COMMANDS["dump"].usage                 # 'dump profiler|datastore [KEY|PREFIX*]'
     processor.execute("task event beep")   # Reply(Status.OK, "Scheduled ...")
 """
 
