@@ -311,3 +311,19 @@ class TestRouterCommand(unittest.TestCase):
         self.assertIn(f"\n{user}:{password}\n", out.getvalue())
         self.assertIn(f'password: "{password}"', out.getvalue())
         self.assertNotIn("horse", out.getvalue())
+
+
+class TestRouterWithoutZenoh(unittest.TestCase):
+    def test_the_router_says_how_to_install_zenoh(self) -> None:
+        import argparse
+        import io
+        import sys
+
+        from snr.extras.zenoh import router as router_command
+
+        args = argparse.Namespace(listen=None, seconds=0.0, zenohd=False)
+        said = io.StringIO()
+        with mock.patch.dict(sys.modules, {"zenoh": None}), mock.patch("sys.stderr", said):
+            self.assertEqual(router_command.run(args, io.StringIO()), 1)
+        self.assertIn("a router needs the Zenoh library: pip install", said.getvalue())
+        self.assertIn("[zenoh]", said.getvalue())

@@ -23,8 +23,9 @@ import sys
 import time
 from typing import IO, Any, Optional
 
-from snr.extras.zenoh.comms import _zenoh_module, zenoh_config, zenoh_credentials
-from snr.prelude import SNRError
+from snr.extras.zenoh.comms import zenoh_config, zenoh_credentials
+from snr.prelude import ConfigError
+from snr.prelude.install import install_hint
 from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret
 
 __all__ = ["add_arguments", "run"]
@@ -65,11 +66,18 @@ def run(args: argparse.Namespace, out: Optional[IO[str]] = None) -> int:
     out = out or sys.stdout
     try:
         secret = find_secret(FROM_ENVIRONMENT, "python -m snr router")
-        if args.zenohd:
-            return _print_zenohd_settings(secret, out)
-        zenoh = _zenoh_module()  # says how to install it when it is missing
-    except SNRError as error:
+    except ConfigError as error:  # an empty secret, an unreadable secret file
         print(f"snr router: {error}", file=sys.stderr)
+        return 1
+    if args.zenohd:
+        return _print_zenohd_settings(secret, out)
+    try:
+        import zenoh
+    except ImportError:
+        print(
+            f"snr router: a router needs the Zenoh library: {install_hint('zenoh')}",
+            file=sys.stderr,
+        )
         return 1
     listen = list(args.listen or [DEFAULT_LISTEN])
     try:
