@@ -59,6 +59,29 @@ class Session:
         self.session.put(f"snr/{SYSTEM}/cmd", json.dumps({"data": data}).encode())
 
 
+def only_the_friend_talks(test: unittest.TestCase, endpoint: str, commands: CounterFactory) -> None:
+    """Sessions with the secret, another one and none at ``endpoint``: only the first talks.
+
+    The friend hears the node and is heard by it: the link is up, the others have had
+    as long to link, and only then do they all put (each its own numbers).
+    """
+    friend = Session(test, endpoint, SECRET.encode())
+    wrong = Session(test, endpoint, b"a guess")
+    stranger = Session(test, endpoint, None)
+    test.assertTrue(wait_until(lambda: len(friend.heard) > 5, 10.0), "the friend hears")
+    deadline = time.monotonic() + 1.0
+    while time.monotonic() < deadline:
+        friend.put(1)
+        wrong.put(2)
+        stranger.put(3)
+        time.sleep(0.05)
+    test.assertTrue(wait_until(lambda: 1 in commands.seen, 5.0), "the node hears the friend")
+    time.sleep(0.3)
+    test.assertEqual(set(commands.seen), {1}, "only the friend's pages were stored")
+    test.assertEqual(wrong.heard, [], "a session with another secret hears nothing")
+    test.assertEqual(stranger.heard, [], "a session without a secret hears nothing")
+
+
 @unittest.skipUnless(HAVE_ZENOH, reason("zenoh"))
 class TestZenohSecret(CommsFaultTest):
     def test_only_a_session_with_the_secret_hears_the_system_or_speaks_into_it(self) -> None:
@@ -76,23 +99,7 @@ class TestZenohSecret(CommsFaultTest):
         nodes = self.run_nodes(config, ["robot"])
         self.addCleanup(nodes.stop)
 
-        friend = Session(self, endpoint, SECRET.encode())
-        wrong = Session(self, endpoint, b"a guess")
-        stranger = Session(self, endpoint, None)
-        # The friend hears the node and is heard by it: the link is up, the others have had
-        # as long to link, and only now do they all put (each its own numbers).
-        self.assertTrue(wait_until(lambda: len(friend.heard) > 5, 10.0), "the friend hears")
-        deadline = time.monotonic() + 1.0
-        while time.monotonic() < deadline:
-            friend.put(1)
-            wrong.put(2)
-            stranger.put(3)
-            time.sleep(0.05)
-        self.assertTrue(wait_until(lambda: 1 in commands.seen, 5.0), "the node hears the friend")
-        time.sleep(0.3)
-        self.assertEqual(set(commands.seen), {1}, "only the friend's pages were stored")
-        self.assertEqual(wrong.heard, [], "a session with another secret hears nothing")
-        self.assertEqual(stranger.heard, [], "a session without a secret hears nothing")
+        only_the_friend_talks(self, endpoint, commands)
 
     def test_the_password_file_is_private_and_holds_no_secret(self) -> None:
         config = zenoh_config(scouting=False, secret=SECRET.encode())
@@ -136,21 +143,7 @@ class TestZenohRouterSecret(CommsFaultTest):
     def test_a_router_with_the_secret_forwards_only_between_sessions_with_it(self) -> None:
         endpoint = self.start_router(SECRET.encode())
         commands, _ = self.client_node(endpoint)
-        friend = Session(self, endpoint, SECRET.encode())
-        wrong = Session(self, endpoint, b"a guess")
-        stranger = Session(self, endpoint, None)
-        self.assertTrue(wait_until(lambda: len(friend.heard) > 5, 10.0), "the friend hears")
-        deadline = time.monotonic() + 1.0
-        while time.monotonic() < deadline:
-            friend.put(1)
-            wrong.put(2)
-            stranger.put(3)
-            time.sleep(0.05)
-        self.assertTrue(wait_until(lambda: 1 in commands.seen, 5.0), "the robot hears the friend")
-        time.sleep(0.3)
-        self.assertEqual(set(commands.seen), {1}, "only the friend's pages were stored")
-        self.assertEqual(wrong.heard, [], "a session with another secret hears nothing")
-        self.assertEqual(stranger.heard, [], "a session without a secret hears nothing")
+        only_the_friend_talks(self, endpoint, commands)
 
     def test_a_router_without_the_secret_refuses_the_node_and_the_node_says_why(self) -> None:
         endpoint = self.start_router(None)
