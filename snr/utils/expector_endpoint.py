@@ -2,10 +2,10 @@
 
 from __future__ import annotations
 
-from typing import Any, Dict, Optional
+from typing import Any, Optional
 
 from snr.core import Endpoint, EndpointFactory, tasks
-from snr.prelude import AbstractNode, SomeTasks, Task, TaskHandler, TaskId
+from snr.prelude import AbstractNode, SomeTasks, Task, TaskId
 from snr.utils.expector import Expector
 
 __all__ = [
@@ -38,10 +38,10 @@ class ExpectorEndpoint(Endpoint):
         self.exit_when_satisfied = exit_when_satisfied
         expected = expector.task_ids()
         # the same type, any other name: observed; the ids expected: counted
-        handlers: Dict[TaskId, TaskHandler] = {
-            k[0]: self.observe for k in expected if isinstance(k, tuple)
+        self.task_handlers = {
+            **{k[0]: self.observe for k in expected if isinstance(k, tuple)},
+            **{key: self.expect for key in expected},
         }
-        self.task_handlers = {**handlers, **{key: self.expect for key in expected}}
 
     def observe(self, task: Task, key: TaskId) -> SomeTasks:
         """Tell the expector about a task it does not expect (for its failure message)."""

@@ -53,7 +53,7 @@ class MockNode(AbstractNode):
         self.datastore: DataDict = {}
         self.scheduled: List[Task] = []
         self.terminate_reason: Optional[str] = None
-        self._timer = Timer(clock) if clock is not None else Timer()
+        self._timer = Timer(clock or time.perf_counter)
 
     def loop(self) -> None:
         """Does nothing: a mock node has no event loop."""

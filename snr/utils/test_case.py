@@ -151,9 +151,9 @@ class SNRTestCase(unittest.TestCase):
                 suffix = name
             else:
                 filename = name
-        if filename is not None and suffix is not None:
+        elif filename is not None and suffix is not None:
             raise TypeError("temp_file() takes suffix= or filename=, not both.")
-        basename = filename if filename else f"file{suffix or ''}"
+        basename = filename or f"file{suffix or ''}"
         parts = basename.replace("\\", "/").split("/")
         if os.path.isabs(basename) or ".." in parts:
             raise ValueError(
@@ -164,8 +164,7 @@ class SNRTestCase(unittest.TestCase):
         if cleanup:
             self.addCleanup(shutil.rmtree, folder, True)
         path = os.path.join(folder, basename)
-        if len(parts) > 1:
-            os.makedirs(os.path.dirname(path), exist_ok=True)
+        os.makedirs(os.path.dirname(path), exist_ok=True)  # for a name like "logs/run.jsonl"
         if contents is not None:
             with open(path, "w", encoding="utf-8") as f:
                 f.write(contents)
