@@ -170,15 +170,11 @@ def check_config_args(config_class: Any, factories: Any, mode: Any, clock: Any) 
         check_config_args(Config, [MyFactory()], Mode.DEBUG, None)   # ConfigError: ... a dict
     """
     if isinstance(factories, (list, tuple)):
-        raise ConfigError(
-            wrong_call(
-                "Config",
-                config_class,
-                (factories,),
-                "a Config needs a dict from each role to its list of factories, not "
-                'the list alone: Config({"robot": [...]}).',
-            )
+        problem = (
+            "a Config needs a dict from each role to its list of factories, not "
+            'the list alone: Config({"robot": [...]}).'
         )
+        raise ConfigError(wrong_call("Config", config_class, (factories,), problem))
     if not isinstance(factories, Mapping):
         raise ConfigError(
             f"Config(factories=...) got {type(factories).__name__}; it needs a dict "
@@ -236,14 +232,8 @@ def check_runner_args(runner_class: Any, role: Any, config: Any) -> None:
         check_runner_args(SynchronousRunner, config, "robot")   # ConfigError: ... swapped
     """
     if not isinstance(role, str) and isinstance(config, str):
-        raise ConfigError(
-            wrong_call(
-                "SynchronousRunner",
-                runner_class,
-                (role, config),
-                "the role and the config are swapped: the role comes first.",
-            )
-        )
+        problem = "the role and the config are swapped: the role comes first."
+        raise ConfigError(wrong_call("SynchronousRunner", runner_class, (role, config), problem))
 
 
 def check_cli_args(runner_class: Any, components_or_config: Any, argv: Any) -> None:
@@ -254,18 +244,13 @@ def check_cli_args(runner_class: Any, components_or_config: Any, argv: Any) -> N
         check_cli_args(CliRunner, components, sys.argv)   # fine
         check_cli_args(CliRunner, "urov", sys.argv)       # ConfigError: ... reads the role ...
     """
-    if isinstance(components_or_config, str):
-        raise ConfigError(
-            wrong_call(
-                "CliRunner",
-                runner_class,
-                (components_or_config, argv),
-                f"the first argument is the role {components_or_config!r}, but "
-                "CliRunner takes the components (or a Config) and reads the role "
-                "from the command line: `python robot.py "
-                f"{components_or_config}`.",
-            )
+    role = components_or_config
+    if isinstance(role, str):
+        problem = (
+            f"the first argument is the role {role!r}, but CliRunner takes the components "
+            f"(or a Config) and reads the role from the command line: `python robot.py {role}`."
         )
+        raise ConfigError(wrong_call("CliRunner", runner_class, (role, argv), problem))
 
 
 def no_sim_clock_across_processes(config: AbstractConfig) -> None:

@@ -29,10 +29,6 @@ from snr.prelude import AbstractComponent, ComponentError, TaskId, TaskType
 
 __all__ = ["async_text", "check_burst_handlers", "check_entry", "check_handler", "check_task_id"]
 
-_STORE_PAGE = TaskType.store_page
-
-_TASK_TYPE_NAMES = [t.name for t in TaskType]
-
 
 def check_task_id(key: Any, owner_class: type = object) -> None:
     """Raise a ComponentError unless ``key`` is a TaskType or (TaskType, str).
@@ -42,21 +38,16 @@ def check_task_id(key: Any, owner_class: type = object) -> None:
         check_task_id((TaskType.event, "go"))   # fine
         check_task_id("go")                     # ComponentError explaining why
     """
-    if isinstance(key, TaskType):
-        return
-    if (
-        isinstance(key, tuple)
-        and len(key) == 2
-        and isinstance(key[0], TaskType)
-        and isinstance(key[1], str)
+    pair = isinstance(key, tuple) and len(key) == 2
+    if isinstance(key, TaskType) or (
+        pair and isinstance(key[0], TaskType) and isinstance(key[1], str)
     ):
         return
-    owner = describe_class(owner_class)
     hint = ""
-    if isinstance(key, tuple) and len(key) == 2 and isinstance(key[1], TaskType):
+    if pair and isinstance(key[1], TaskType):
         hint = f" Put the TaskType first: ({key[1]!r}, {key[0]!r})."
     elif isinstance(key, str):
-        guess = closest_match(key, _TASK_TYPE_NAMES)
+        guess = closest_match(key, TaskType.__members__)
         if guess is not None:
             hint = f" Did you mean TaskType.{guess}?"
         else:
@@ -66,7 +57,8 @@ def check_task_id(key: Any, owner_class: type = object) -> None:
                 f"use (TaskType.event, {key!r})."
             )
     raise ComponentError(
-        f"{owner} registers a task handler under {key!r} ({type(key).__name__}), "
+        f"{describe_class(owner_class)} registers a task handler under {key!r} "
+        f"({type(key).__name__}), "
         "but task_handlers keys must be a TaskType, such as TaskType.terminate, or "
         f"a (TaskType, str) pair, such as (TaskType.store_page, 'depth').{hint}"
     )
@@ -126,7 +118,8 @@ def check_handler(handler: Any, key: TaskId, owner_class: type = object) -> None
         name = getattr(handler, "__name__", "handler")
         self_ = "self, " if hasattr(handler, "__self__") else ""
         params = [param_text(p) for p in signature.parameters.values()]
-        params = ["self", *params] if self_ else params
+        if self_:
+            params.insert(0, "self")
         code_line = "\n" + def_block(handler) if code is not None else ""
         raise ComponentError(
             f"Task handler {where} for {key!r} is written as "
@@ -169,17 +162,17 @@ def check_burst_handlers(component: AbstractComponent) -> None:
 
         check_burst_handlers(comms)   # fine: returns None
     """
-    handlers = component.task_handlers
+    owner = type(component)
     for key in component.burst_handlers:
-        if not isinstance(key, tuple) or key[0] is not _STORE_PAGE:
+        if not isinstance(key, tuple) or key[0] is not TaskType.store_page:
             raise ComponentError(
-                f"{describe_class(type(component))} has a burst handler for {key!r}; "
+                f"{describe_class(owner)} has a burst handler for {key!r}; "
                 "burst handlers are for pages under one key only: "
                 "(TaskType.store_page, 'the_key')."
             )
-        if key not in handlers:
+        if key not in component.task_handlers:
             raise ComponentError(
-                f"{describe_class(type(component))} has a burst handler for {key!r} "
+                f"{describe_class(owner)} has a burst handler for {key!r} "
                 "but no handler for it in task_handlers. Add one there too: it runs "
                 "when a page under that key comes alone."
             )

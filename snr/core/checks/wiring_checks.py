@@ -17,7 +17,7 @@ Example::
 from __future__ import annotations
 
 import logging
-from typing import Iterator, Mapping, Set, Tuple
+from typing import Mapping, Set, Tuple
 
 from snr.core.checks.error_text import closest_key, short_repr
 from snr.core.checks.student_code import describe_callable
@@ -88,15 +88,13 @@ class WiringChecks:
         ):
             return
         self._reported.add((TaskType.event, name))
-        values: object = task.val_list
-        shown = f"values {short_repr(values, 80)}" if values else "no values"
+        shown = f"values {short_repr(task.val_list, 80)}" if task.val_list else "no values"
         self.log.warning(
             f"Nothing on node {self.role!r} handles the event {name!r} ({shown}), so it was "
             f"dropped. {self._why_unhandled(name)} {_FOOTER}"
         )
 
     def _why_unhandled(self, name: str) -> str:
-        events = sorted(self._event_names())
         if name in _BUILDER_OF:
             return (
                 f"tasks.event({name!r}) makes an event called {name!r}, not a {name} "
@@ -111,6 +109,14 @@ class WiringChecks:
                 f"self.store_data({name!r}, value) in a loop, or return "
                 f"self.store_data_task({name!r}, value) from a handler."
             )
+        events = sorted(
+            key[1]
+            for key in self.table.table
+            if isinstance(key, tuple)
+            and key[0] is TaskType.event
+            and not key[1].startswith("snr_")
+            and key[1] not in _CORE_EVENTS
+        )
         guess = closest_key(name, events)
         listened = ", ".join(repr(e) for e in events) or "none"
         if guess is not None:
@@ -124,53 +130,37 @@ class WiringChecks:
             f"(TaskType.event, {name!r}) in task_handlers."
         )
 
-    def _event_names(self) -> Iterator[str]:
-        for key in self.table.table:
-            if (
-                isinstance(key, tuple)
-                and key[0] is TaskType.event
-                and not key[1].startswith("snr_")
-                and key[1] not in _CORE_EVENTS
-            ):
-                yield key[1]
-
     def check_never_ran(self) -> None:
         """Warn about handlers that have not run and cannot: an event that is a data key, a
         process_data handler of pages stored with ``process=False``."""
-        for handler, task_id in self._never_ran():
-            if not isinstance(task_id, tuple) or (task_id in self._reported):
-                continue
-            kind, key = task_id
-            page = self.datastore.get(key)
-            if page is None:
-                continue
-            if kind is TaskType.event:
-                text = (
-                    f"{describe_callable(handler)} handles the event {key!r}, but {key!r} "
-                    "is a data key: data is stored, not announced, so this handler never "
-                    f"runs. Register it as (TaskType.store_page, {key!r}) to run on every "
-                    "page stored under it."
-                )
-            elif kind is TaskType.process_data and not page.process:
-                text = (
-                    f"{describe_callable(handler)} handles process_data for {key!r}, but "
-                    f"the pages under {key!r} are stored with process=False, which skips "
-                    "process_data, so this handler never runs. Store them with "
-                    f"process=True (the default), or register (TaskType.store_page, {key!r})."
-                )
-            else:
-                continue
-            self._reported.add(task_id)
-            self.log.warning(f"{text} {_FOOTER}")
-
-    def _never_ran(self) -> Iterator[Tuple[object, object]]:
-        seen: Set[object] = set()
+        # Each handler once, under the id it was registered for (a type-level handler
+        # also sits in the lists of its type's specific ids).
         for task_id, entries in list(self.table.table.items()):
-            for entry in entries:
-                handler, registered, _, cell = entry
-                if registered == task_id and cell[0] == 0 and id(entry) not in seen:
-                    seen.add(id(entry))
-                    yield handler, registered
+            for handler, registered, _, cell in entries:
+                if registered != task_id or cell[0] or not isinstance(task_id, tuple):
+                    continue
+                kind, key = task_id
+                page = self.datastore.get(key)
+                if page is None or task_id in self._reported:
+                    continue
+                if kind is TaskType.event:
+                    text = (
+                        f"{describe_callable(handler)} handles the event {key!r}, but {key!r} "
+                        "is a data key: data is stored, not announced, so this handler never "
+                        f"runs. Register it as (TaskType.store_page, {key!r}) to run on every "
+                        "page stored under it."
+                    )
+                elif kind is TaskType.process_data and not page.process:
+                    text = (
+                        f"{describe_callable(handler)} handles process_data for {key!r}, but "
+                        f"the pages under {key!r} are stored with process=False, which skips "
+                        "process_data, so this handler never runs. Store them with "
+                        f"process=True (the default), or register (TaskType.store_page, {key!r})."
+                    )
+                else:
+                    continue
+                self._reported.add(task_id)
+                self.log.warning(f"{text} {_FOOTER}")
 
 
 # Events handled by the node core: not names a student would mean.
