@@ -32,7 +32,7 @@ import socket
 import statistics
 import time
 from multiprocessing.connection import Connection
-from typing import Any, Dict, List, Optional, Tuple
+from typing import Any, Callable, Dict, List, Optional, Tuple
 
 from bench_comms import (
     SAFETY_S,
@@ -98,20 +98,31 @@ def measure(
     return shares
 
 
-def measure_snr(mode: Optional[Mode], seconds: float, settle: float) -> Threads:
+def measure_pair(
+    start: Callable[[Processes], Dict[int, str]], seconds: float, settle: float
+) -> Threads:
+    """Start a server and a client (``start`` gives their pids and roles), then measure them."""
     procs = Processes()
     try:
-        pair = SocketsPair(server_tuple=("127.0.0.1", free_port()))
-        pids = {}
-        for role, comms in (("server", pair.server()), ("client", pair.client())):
-            pid = procs.start(run_node, (role, [comms, AnnouncerFactory(procs.writer)], mode))
-            pids[pid] = role
+        pids = start(procs)
         reports = procs.wait_for("connected", n=2)
     except BaseException:
         procs.close(stop=True)
         raise
     named = sorted((pids[pid], pid, names) for pid, names in reports)
     return measure(procs, named, seconds, settle)
+
+
+def measure_snr(mode: Optional[Mode], seconds: float, settle: float) -> Threads:
+    def start(procs: Processes) -> Dict[int, str]:
+        pair = SocketsPair(server_tuple=("127.0.0.1", free_port()))
+        pids = {}
+        for role, comms in (("server", pair.server()), ("client", pair.client())):
+            pid = procs.start(run_node, (role, [comms, AnnouncerFactory(procs.writer)], mode))
+            pids[pid] = role
+        return pids
+
+    return measure_pair(start, seconds, settle)
 
 
 # -- the baselines -------------------------------------------------------------------
@@ -167,17 +178,13 @@ def zmq_peer(port: int, serve: bool, report: Connection) -> None:
 
 
 def measure_peers(target: Any, seconds: float, settle: float) -> Threads:
-    procs = Processes()
-    try:
+    def start(procs: Processes) -> Dict[int, str]:
         port = free_port()
         pids = {procs.start(target, (port, True, procs.writer)): "server"}
         pids[procs.start(target, (port, False, procs.writer))] = "client"
-        reports = procs.wait_for("connected", n=2)
-    except BaseException:
-        procs.close(stop=True)
-        raise
-    named = sorted((pids[pid], pid, names) for pid, names in reports)
-    return measure(procs, named, seconds, settle)
+        return pids
+
+    return measure_pair(start, seconds, settle)
 
 
 # -- summing up ----------------------------------------------------------------------
