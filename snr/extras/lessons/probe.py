@@ -59,7 +59,7 @@ from snr import (
     tasks,
 )
 from snr.core import TestRunner
-from snr.extras.lessons.grading import Check, SubmissionError
+from snr.extras.lessons.grading import Check, SubmissionError, _line_in
 from snr.std_mods.comms import COMMS_CONNECTED
 from snr.utils import MemoryLinkPair
 
@@ -87,10 +87,10 @@ SEED = 5
 SENT = 200
 """Pages the other node sends over comms, under ``count``: 0, 1, 2, ..."""
 MANY = 300
+"""Keys stored once each, ``k000`` to ``k299``, after the script."""
 BURST = 50
 """Pages under ``burst`` (0, 1, 2, ...) from node ``other`` stored as one ``store_pages``
 event, as a comms component hands over what it read at once."""
-"""Keys stored once each, ``k000`` to ``k299``, after the script."""
 UNKNOWN = "never_stored"
 """A key no page is ever stored under."""
 ADDED = "probe_added"
@@ -168,8 +168,6 @@ def error_check(error: BaseException, path: Path, when: str) -> Check:
 
         error_check(ZeroDivisionError("division by zero"), Path("mine.py"), "storing a page")
     """
-    from snr.extras.lessons.grading import _line_in
-
     said = error
     while said.__cause__ is not None:  # a failed handler: what it raised, and why
         said = said.__cause__
@@ -513,7 +511,10 @@ def over_comms(
     errors: List[BaseException] = []
     try:
         nodes = [
-            Node("receiver", Config(factories, Mode.TEST, None, None, datastore, node_core)),
+            Node(
+                "receiver",
+                Config(factories, Mode.TEST, datastore=datastore, node_core=node_core),
+            ),
             Node("sender", Config(factories, Mode.TEST)),
         ]
     except Exception as error:
@@ -548,7 +549,12 @@ def over_comms(
 
 
 def stop(nodes: List[Node], threads: List[threading.Thread]) -> None:
-    """Ask each node to stop, and wait (3 s at most) for their threads."""
+    """Ask each node to stop, and wait (3 s at most) for their threads.
+
+    Example::
+
+        stop([receiver, sender], threads)    # the threads running their loop()s
+    """
     for node in nodes:
         node.set_terminate_flag("the grade is over")
     deadline = time.monotonic() + 3.0

@@ -27,7 +27,7 @@ import math
 import os
 from pathlib import Path
 from types import ModuleType
-from typing import Any, Callable, Deque, Dict, Mapping, Optional, Sequence, Tuple, Union
+from typing import Any, Callable, Deque, Dict, Iterator, Mapping, Optional, Sequence, Tuple, Union
 
 from snr.extras.controller.keyboard import KeyboardJoystick
 from snr.extras.sim.sensors import BUMP, ODOMETRY, RANGE, SCAN, TRUE_POSE
@@ -274,30 +274,32 @@ def window_closed(pygame: Any, keyboard: KeyboardJoystick) -> bool:
     return closed
 
 
-def _draw_rays(
-    pygame: Any, surface: Any, view: WorldView, pose: Tuple[float, float, float], reading: Any
-) -> None:
-    """A line from the robot to what each range ray sees."""
+def _ray_ends(
+    pose: Tuple[float, float, float], reading: Any
+) -> Iterator[Tuple[float, Tuple[float, float]]]:
+    """Each ray of a ``range``-shaped page: its distance and where it ends (none if no page)."""
     if not isinstance(reading, dict):
         return
     x, y, theta = pose
     for angle, distance in zip(reading.get("angles_deg", []), reading.get("ranges_m", [])):
         heading = theta + math.radians(angle)
-        end = (x + distance * math.cos(heading), y + distance * math.sin(heading))
-        pygame.draw.line(surface, RAY, view.to_px(x, y), view.to_px(*end), 1)
+        yield distance, (x + distance * math.cos(heading), y + distance * math.sin(heading))
+
+
+def _draw_rays(
+    pygame: Any, surface: Any, view: WorldView, pose: Tuple[float, float, float], reading: Any
+) -> None:
+    """A line from the robot to what each range ray sees."""
+    for _, end in _ray_ends(pose, reading):
+        pygame.draw.line(surface, RAY, view.to_px(pose[0], pose[1]), view.to_px(*end), 1)
 
 
 def _draw_echoes(
     pygame: Any, surface: Any, view: WorldView, pose: Tuple[float, float, float], scan: Any
 ) -> None:
     """A dot where each ray of a lidar's scan saw something (0.0: no echo, no dot)."""
-    if not isinstance(scan, dict):
-        return
-    x, y, theta = pose
-    for angle, distance in zip(scan.get("angles_deg", []), scan.get("ranges_m", [])):
+    for distance, end in _ray_ends(pose, scan):
         if distance > 0:
-            heading = theta + math.radians(angle)
-            end = (x + distance * math.cos(heading), y + distance * math.sin(heading))
             pygame.draw.circle(surface, RAY, view.to_px(*end), 2)
 
 

@@ -37,7 +37,7 @@ from snr.extras.lessons.grading import (
 from snr.extras.lessons.l01_wall_follower.grader import MARGIN_M, SECONDS, TARGET_M, course_checks
 from snr.extras.lessons.l03_scan_follower.solution import ROBOT, make_world
 
-__all__ = ["HINTS", "KEYS", "MARGIN_M", "SECONDS", "TARGET_M", "grade"]
+__all__ = ["HINTS", "KEYS", "MARGIN_M", "SECONDS", "TARGET_M", "drop_in_check", "grade"]
 
 KEYS = ["scan", "bump"]
 """The sensor pages the endpoint handles."""
