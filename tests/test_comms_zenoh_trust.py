@@ -9,10 +9,13 @@ the Zenoh extra is not installed.
 
 from __future__ import annotations
 
+import argparse
 import importlib.util
+import io
 import json
 import os
 import stat
+import sys
 import threading
 import time
 import unittest
@@ -20,6 +23,7 @@ from typing import Any, List, Optional, Tuple
 from unittest import mock
 
 from snr import Config, Mode, TimeoutLoopFactory
+from snr.extras.zenoh import router as router_command
 from tests.helpers import free_port, wait_until
 from tests.optional import reason
 from tests.quiet import capture_test_logs
@@ -252,26 +256,20 @@ def _greets(console: Any) -> bool:
     return True
 
 
-if __name__ == "__main__":
-    unittest.main()
-
-
 @unittest.skipUnless(HAVE_ZENOH, reason("zenoh"))
 class TestRouterCommand(unittest.TestCase):
     """``python -m snr router``: a classroom's router, linking only sessions with the secret."""
 
     def test_the_router_links_a_client_with_the_secret_and_refuses_one_without(self) -> None:
-        import argparse
-        import io
-
-        from snr.extras.zenoh import router as router_command
-
         endpoint = f"tcp/127.0.0.1:{free_port()}"
         out = io.StringIO()
-        with mock.patch.dict(os.environ, {"SNR_SECRET": SECRET}):
-            args = argparse.Namespace(listen=[endpoint], seconds=4.0, zenohd=False)
-            serving = threading.Thread(target=router_command.run, args=(args, out))
-            serving.start()
+        # The secret stays set until the test ends: the router's thread reads it when it starts.
+        secret_set = mock.patch.dict(os.environ, {"SNR_SECRET": SECRET})
+        secret_set.start()
+        self.addCleanup(secret_set.stop)
+        args = argparse.Namespace(listen=[endpoint], seconds=4.0, zenohd=False)
+        serving = threading.Thread(target=router_command.run, args=(args, out))
+        serving.start()
         self.addCleanup(serving.join, 10.0)
         self.assertTrue(wait_until(lambda: "listening on" in out.getvalue(), 5.0), out.getvalue())
         self.assertIn("only nodes with this computer's secret link to it", out.getvalue())
@@ -291,11 +289,6 @@ class TestRouterCommand(unittest.TestCase):
         self.assertTrue(out.getvalue().endswith("Zenoh router stopped.\n"), out.getvalue())
 
     def test_zenohd_settings_hold_the_password_made_from_the_secret_not_the_secret(self) -> None:
-        import argparse
-        import io
-
-        from snr.extras.zenoh import router as router_command
-
         out = io.StringIO()
         with mock.patch.dict(os.environ, {"SNR_SECRET": SECRET}):
             args = argparse.Namespace(listen=None, seconds=None, zenohd=True)
@@ -308,15 +301,13 @@ class TestRouterCommand(unittest.TestCase):
 
 class TestRouterWithoutZenoh(unittest.TestCase):
     def test_the_router_says_how_to_install_zenoh(self) -> None:
-        import argparse
-        import io
-        import sys
-
-        from snr.extras.zenoh import router as router_command
-
         args = argparse.Namespace(listen=None, seconds=0.0, zenohd=False)
         said = io.StringIO()
         with mock.patch.dict(sys.modules, {"zenoh": None}), mock.patch("sys.stderr", said):
             self.assertEqual(router_command.run(args, io.StringIO()), 1)
         self.assertIn("a router needs the Zenoh library: pip install", said.getvalue())
         self.assertIn("[zenoh]", said.getvalue())
+
+
+if __name__ == "__main__":
+    unittest.main()

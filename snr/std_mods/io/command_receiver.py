@@ -510,7 +510,8 @@ class CommandReceiverLoop(ConsoleLoop):
                 f"in {wait_s:.1f} s (each wrong token doubles the wait, up to "
                 f"{self._throttle.max_delay_s:g} s).",
             )
-        if word == "auth" and tokens_match(str(self.factory.token), given.strip()):
+        token = self.factory.token  # never None here: without one, `greet` lets consoles in
+        if word == "auth" and token is not None and tokens_match(token, given.strip()):
             self._throttle.succeeded(host)
             return self._let_in(console)
         if word == "auth":
