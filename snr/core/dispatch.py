@@ -137,8 +137,6 @@ class HandlerTable:
 
     def __init__(self, profiler: Optional[AbstractProfiler] = None) -> None:
         self.table: Dict[TaskId, List[Entry]] = {}
-        #: ``(TaskType.store_page, key)`` -> the burst handler of the one
-        #: component that handles those tasks, if it has one. Refilled in place.
         #: ``(TaskType.store_page, key)`` -> the burst handler for a run of those
         #: tasks, where one component alone handles them and declares one
         #: (`AbstractComponent.burst_handlers`). Refilled in place, as ``table``.
@@ -179,7 +177,7 @@ class HandlerTable:
         for key, handler in handlers.items():
             entry: Entry = (handler, key, component, self._cell(handler, key))
             table.setdefault(key, []).append(entry)
-            if isinstance(key, TaskType):  # it also serves its type's other specific ids
+            if isinstance(key, TaskType):
                 # Fallback: this type-level handler also serves every specific
                 # id of its type that this component did not register itself.
                 for specific in [k for k in table if isinstance(k, tuple) and k[0] is key]:
@@ -296,8 +294,6 @@ class HandlerRunner:
                 components.refresh_table()
             if task.type is _STORE_PAGE:
                 self.store_first(task)  # the node core's part, before any handler
-                # A burst starts only from the normal lane (a paused node and
-                # `execute_task` run urgent tasks one at a time).
                 # A run for a burst handler starts only from the normal lane: a
                 # paused node runs urgent tasks one at a time, `execute_task` one task.
                 if bursts and lane is normal and normal and normal[0].name == task.name:

@@ -64,7 +64,6 @@ class Factory(AbstractFactory):
             fresh.append(importlib.reload(current))
         self.reload_targets = fresh
 
-    # Modules cannot be pickled: their names go to processes started with "spawn".
     # Modules cannot be pickled; send their names instead so configs can be
     # passed to processes started with "spawn" (MultiProcRunner on macOS).
     def __getstate__(self) -> Dict[str, Any]:

@@ -75,8 +75,6 @@ class ThreadLoop(Component, AbstractLoop):
         self._clock_turn: Optional[LoopTurn] = None  # on a clock with turns
         self.terminate_reason = ""
         self._stop_event = threading.Event()
-        # Held while the loop may run, released to stop it: a wait on a lock
-        # hands the GIL back to the node sooner than one on the Event.
         # Held while the loop may run; released to stop it. Waiting on a lock,
         # not the Event, hands the GIL back to the node sooner after each pass.
         self._running_lock = threading.Lock()
@@ -148,7 +146,6 @@ class ThreadLoop(Component, AbstractLoop):
         self.begin()
         self.state = LoopState.RUNNING
         if self.max_tick_rate_hz > 0 or self.follows_clock:
-            # On the node's thread: a clock with turns cannot move on before it is in line.
             # Registered here, on the node's thread, so a clock with turns cannot
             # move on before the new thread is in line: the run stays the same.
             clock = clock_of(self.parent.config)
@@ -229,7 +226,6 @@ class ThreadLoop(Component, AbstractLoop):
             self.setup()
             if type(self).setup is not ThreadLoop.setup:
                 self._wait_for_setup_tasks()
-            # A stored page reaches the node once this thread blocks: so little after loop().
             # A stored page reaches the node only once this thread blocks and
             # lets go of the GIL: so little between loop() and the wait.
             running, rate_hz = self._running_lock, self.max_tick_rate_hz
@@ -251,7 +247,7 @@ class ThreadLoop(Component, AbstractLoop):
                     cell[1] += ended - started
                 if stopped:
                     break
-        except BaseException as error:  # sys.exit() and Ctrl-C too: never silently
+        except BaseException as error:
             # sys.exit() and Ctrl-C too: they would end this thread silently.
             self.parent.loop_failed(self, error)
         finally:

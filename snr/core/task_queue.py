@@ -216,7 +216,6 @@ class TaskQueue(AbstractTaskQueue):
             left = deadline - time.monotonic()
             if left <= 0:
                 return False
-            # Poll: the node works the lane down without a word, paying nothing.
             # Poll: the node works the lane down without a word to producers,
             # so its hot path pays nothing. close() ends the wait at once.
             if self._closed.wait(min(left, 0.005)):
@@ -321,7 +320,6 @@ class TaskQueue(AbstractTaskQueue):
         self._rung = False
         self.sleeping = True
         try:
-            # Look again now that producers ring: one may have appended just before.
             # Check again now that producers will ring: one may have appended
             # just before it saw us sleeping.
             if self.urgent or (self.normal and not urgent_only):
@@ -335,7 +333,7 @@ class TaskQueue(AbstractTaskQueue):
                 pass
         finally:
             self.sleeping = False
-            if waiter is not None:  # once no producer rings for this sleep any more
+            if waiter is not None:
                 # Reading what woke it queues tasks: done once no producer
                 # rings for this sleep any more.
                 waiter.woken()

@@ -63,7 +63,6 @@ class TaskType(enum.Enum):
     reload = "reload"
     terminate = "terminate"
 
-    # Members are singletons: identity hashing is correct, and twice as fast as Enum's.
     # Members are singletons, so identity hashing is correct, and it is twice
     # as fast as Enum's hash-by-name: every task dispatch hashes a TaskType.
     __hash__ = object.__hash__

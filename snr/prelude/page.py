@@ -53,7 +53,6 @@ class Page(JsonDataclass):
             NotSerializableError: naming the key and where in the data the
                 part JSON cannot hold is, e.g. ``data['pose'][2] is a set``.
         """
-        # dataclasses-json would write a set as a list and NaN as NaN (not JSON).
         # dataclasses-json would write a set as a list and NaN as NaN (not
         # JSON): refuse what pages sent between nodes may not hold, as they are.
         check_serializable(self.key, self.data)

@@ -103,7 +103,6 @@ def frame_name(frame: FrameType) -> str:
     code = frame.f_code
     name: Optional[str] = getattr(code, "co_qualname", None)  # Python 3.11+
     if name is None:
-        # Before 3.11: the class of `self` (or `cls`), as co_qualname would.
         # Before 3.11: add the class of `self` (or `cls`), as co_qualname would.
         owner = frame.f_locals.get("self", frame.f_locals.get("cls"))
         owner_class = owner if isinstance(owner, type) else type(owner)
