@@ -20,7 +20,6 @@ from snr.utils.expector_endpoint import (
 )
 from snr.utils.list_replayer import ListReplayerFactory, ListReplayerLoop
 from snr.utils.mock_node import MockNode
-from snr.utils.sim_clock import SimClock
 from snr.utils.temp_file import TempFile
 
 if TYPE_CHECKING:
@@ -41,7 +40,6 @@ __all__ = [
     "MultiProcExpector",
     "OrderedExpector",
     "SNRTestCase",
-    "SimClock",
     "TempFile",
     "memory_transport_pair",
 ]
