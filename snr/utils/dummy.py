@@ -22,16 +22,10 @@ class DummyEndpoint(Endpoint):
         DummyEndpointFactory("placeholder", [(TaskType.event, "ping")])
     """
 
-    def __init__(
-        self,
-        factory: EndpointFactory,
-        parent: AbstractNode,
-        name: str,
-        task_ids: Sequence[TaskId],
-    ) -> None:
-        super().__init__(factory, parent, name)
+    def __init__(self, factory: DummyEndpointFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, factory.name)
         self.calls = 0
-        self.task_handlers = {task_id: self.count for task_id in task_ids}
+        self.task_handlers = dict.fromkeys(factory.task_ids, self.count)
 
     def count(self, task: Task, key: TaskId) -> SomeTasks:
         """Count the task."""
@@ -56,6 +50,6 @@ class DummyEndpointFactory(EndpointFactory):
         self.built: List[DummyEndpoint] = []
 
     def get(self, parent: AbstractNode) -> DummyEndpoint:
-        endpoint = DummyEndpoint(self, parent, self.name, self.task_ids)
+        endpoint = DummyEndpoint(self, parent)
         self.built.append(endpoint)
         return endpoint

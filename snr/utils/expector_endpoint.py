@@ -26,17 +26,11 @@ class ExpectorEndpoint(Endpoint):
         ExpectorEndpointFactory(expector, exit_when_satisfied=True).get(node)
     """
 
-    def __init__(
-        self,
-        factory: ExpectorEndpointFactory,
-        parent: AbstractNode,
-        expector: Expector[Any],
-        exit_when_satisfied: bool,
-    ) -> None:
+    def __init__(self, factory: ExpectorEndpointFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
-        self.expector = expector
-        self.exit_when_satisfied = exit_when_satisfied
-        expected = expector.task_ids()
+        self.expector = factory.expector
+        self.exit_when_satisfied = factory.exit_when_satisfied
+        expected = self.expector.task_ids()
         # the same type, any other name: observed; the ids expected: counted
         self.task_handlers = {
             **{k[0]: self.observe for k in expected if isinstance(k, tuple)},
@@ -81,7 +75,7 @@ class ExpectorEndpointFactory(EndpointFactory):
         self.name = name or "expector_endpoint"
 
     def get(self, parent: AbstractNode) -> ExpectorEndpoint:
-        return ExpectorEndpoint(self, parent, self.expector, self.exit_when_satisfied)
+        return ExpectorEndpoint(self, parent)
 
 
 ExpecterEndpointFactory = ExpectorEndpointFactory

@@ -22,18 +22,12 @@ class ListReplayerLoop(ThreadLoop):
         ListReplayerFactory([0, 1, 2, 4], "input_data")
     """
 
-    def __init__(
-        self,
-        factory: ListReplayerFactory,
-        parent: AbstractNode,
-        values: Sequence[Any],
-        key: DataKey,
-        period_s: float,
-    ) -> None:
+    def __init__(self, factory: ListReplayerFactory, parent: AbstractNode) -> None:
+        period_s = factory.period_s
         rate = 1.0 / period_s if period_s > 0 else 0.0
         super().__init__(factory, parent, factory.name, max_tick_rate_hz=rate)
-        self.values = list(values)
-        self.key = key
+        self.values = factory.values
+        self.key = factory.key
         self.index = 0
         self.exit_when_done = factory.exit_when_done
 
@@ -90,4 +84,4 @@ class ListReplayerFactory(LoopFactory):
         self.exit_when_done = exit_when_done
 
     def get(self, parent: AbstractNode) -> ListReplayerLoop:
-        return ListReplayerLoop(self, parent, self.values, self.key, self.period_s)
+        return ListReplayerLoop(self, parent)

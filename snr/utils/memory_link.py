@@ -31,36 +31,18 @@ __all__ = [
     "MemoryLinkFactory",
     "MemoryLinkLoop",
     "MemoryLinkPair",
-    "MemoryTransport",
     "memory_transport_pair",
 ]
 
 
-class MemoryTransport(SocketTransport):
-    """One end of an in-memory byte stream, as a link ``Transport``.
-
-    Made in pairs by `memory_transport_pair`; it acts as a TCP `SocketTransport`.
-
-    Example::
-
-        here, there = memory_transport_pair()
-        here.send(b"abc")          # 3
-        buffer = bytearray(8)
-        there.recv_into(buffer)    # 3: buffer starts with b"abc"
-    """
-
-    def __init__(self, sock: socket.socket, peer: str) -> None:
-        sock.setblocking(False)  # like every transport the I/O loop serves
-        self.sock = sock
-        self.peer = peer
-
-
 def memory_transport_pair(
     names: Tuple[str, str] = ("memory-a", "memory-b"),
-) -> Tuple[MemoryTransport, MemoryTransport]:
-    """Two connected `MemoryTransport` ends (as trio's ``memory_stream_pair``).
+) -> Tuple[SocketTransport, SocketTransport]:
+    """Two connected in-memory transport ends (as trio's ``memory_stream_pair``).
 
-    Each end's ``peer`` is the name of the *other* end, for log messages.
+    A local socket pair, served as a TCP `SocketTransport` is (the TCP
+    options do not apply and are skipped). Each end's ``peer`` is the name of
+    the *other* end, for log messages.
 
     Example::
 
@@ -68,7 +50,10 @@ def memory_transport_pair(
         link = comms_loop.open_link(here)   # a CommsLoop of your own
     """
     first, second = socket.socketpair()
-    return MemoryTransport(first, names[1]), MemoryTransport(second, names[0])
+    return (
+        SocketTransport(first, names[1], DEFAULT_DEAD_AFTER_S),
+        SocketTransport(second, names[0], DEFAULT_DEAD_AFTER_S),
+    )
 
 
 class MemoryLinkLoop(PipeLoop):

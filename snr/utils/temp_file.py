@@ -47,9 +47,6 @@ class TempFile(str):
         """The file's path, as a plain ``str``."""
         return str.__str__(self)
 
-    def __fspath__(self) -> str:
-        return self.path
-
     def __reduce__(self) -> Tuple[Any, ...]:
         # sent to another process as the plain path: the test case stays here
         return (str, (self.path,))

@@ -100,19 +100,11 @@ class KalmanFilterEndpoint(Endpoint):
         KalmanFilterFactory("depth_raw", "depth", 1e-4, 0.05**2)
     """
 
-    def __init__(
-        self,
-        factory: KalmanFilterFactory,
-        parent: AbstractNode,
-        name: str,
-        input: DataKey,
-        output: DataKey,
-        filter: KalmanFilter,
-    ) -> None:
-        super().__init__(factory, parent, name)
-        self.input = input
-        self.output = output
-        self.filter = filter
+    def __init__(self, factory: KalmanFilterFactory, parent: AbstractNode) -> None:
+        super().__init__(factory, parent, factory.name)
+        self.input = factory.input
+        self.output = factory.output
+        self.filter = factory.filter
         self.task_handlers = {(TaskType.store_page, self.input): self.update_filter}
 
     def update_filter(self, task: Task, key: TaskId) -> SomeTasks:
@@ -164,4 +156,4 @@ class KalmanFilterFactory(EndpointFactory):
         self.filter = KalmanFilter(
             old.process_variance, old.measurement_variance, old.estimate, old.variance
         )
-        return KalmanFilterEndpoint(self, parent, self.name, self.input, self.output, self.filter)
+        return KalmanFilterEndpoint(self, parent)

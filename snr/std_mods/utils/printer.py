@@ -21,16 +21,10 @@ class PrinterEndpoint(Endpoint):
         (store_page, 'depth'): [Page 'depth' = 2.5 from 'robot' (0.0 s ago)]
     """
 
-    def __init__(
-        self,
-        factory: PrinterEndpointFactory,
-        parent: AbstractNode,
-        task_ids: List[TaskId],
-        stream: Optional[TextIO],
-    ) -> None:
+    def __init__(self, factory: PrinterEndpointFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
-        self.stream = stream
-        self.task_handlers = {task_id: self.print_task for task_id in task_ids}
+        self.stream = factory.stream
+        self.task_handlers = dict.fromkeys(factory.task_ids, self.print_task)
 
     def print_task(self, task: Task, key: TaskId) -> SomeTasks:
         """Print ``task`` on one line."""
@@ -61,4 +55,4 @@ class PrinterEndpointFactory(EndpointFactory):
         self.name = name or "printer_endpoint"
 
     def get(self, parent: AbstractNode) -> PrinterEndpoint:
-        return PrinterEndpoint(self, parent, self.task_ids, self.stream)
+        return PrinterEndpoint(self, parent)

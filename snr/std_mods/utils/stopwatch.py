@@ -20,16 +20,10 @@ class StopwatchEndpoint(Endpoint):
         # after the run: times[0] is when the node handled terminate
     """
 
-    def __init__(
-        self,
-        factory: StopwatchEndpointFactory,
-        parent: AbstractNode,
-        times: List[float],
-        task_ids: List[TaskId],
-    ) -> None:
+    def __init__(self, factory: StopwatchEndpointFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
-        self.times = times
-        self.task_handlers = {task_id: self.record for task_id in task_ids}
+        self.times = factory.times
+        self.task_handlers = dict.fromkeys(factory.task_ids, self.record)
 
     def record(self, task: Task, key: TaskId) -> SomeTasks:
         """Note the node time at which ``task`` was handled."""
@@ -54,4 +48,4 @@ class StopwatchEndpointFactory(EndpointFactory):
         self.name = name or "stopwatch_endpoint"
 
     def get(self, parent: AbstractNode) -> StopwatchEndpoint:
-        return StopwatchEndpoint(self, parent, self.times, self.task_ids)
+        return StopwatchEndpoint(self, parent)
