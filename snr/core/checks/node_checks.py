@@ -14,7 +14,7 @@ Example (what `Node` does)::
 from __future__ import annotations
 
 import threading
-from typing import List, Mapping, Optional, Protocol, Set, Tuple
+from typing import List, Mapping, Optional, Protocol, Tuple
 
 from snr.core import tasks
 from snr.core.checks.class_checks import check_component
@@ -83,7 +83,8 @@ class NodeChecks:
             hints = MissingKeyHints(
                 node.log, node.timer.current_s, role=node.role, on_its_way=self.page_on_its_way
             )
-            hints.expected_keys = self.handled_keys
+            # The keys some handler waits for: reading them early is no mistake.
+            hints.expected_keys = lambda: {key for key, _ in self.page_handlers()}
             node.key_hints = hints
             node.wiring_checks = WiringChecks(node.log, node.role, components.table, node.datastore)
             runner.on_unhandled = node.wiring_checks.unhandled
@@ -130,10 +131,6 @@ class NodeChecks:
                 if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
                     handled.append((task_id[1], handler))
         return handled
-
-    def handled_keys(self) -> Set[DataKey]:
-        """The data keys some handler waits for: reading them early is no mistake."""
-        return {key for key, _ in self.page_handlers()}
 
     def page_on_its_way(self, key: DataKey) -> bool:
         """True if ``key``'s page is queued, or the node's thread is stuck in a handler."""
