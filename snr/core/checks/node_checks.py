@@ -13,6 +13,7 @@ Example (what `Node` does)::
 
 from __future__ import annotations
 
+import functools
 import threading
 from typing import List, Mapping, Optional, Protocol, Tuple
 
@@ -25,7 +26,6 @@ from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerRunner
 from snr.core.timer import Timer
 from snr.prelude import (
-    AbstractComponent,
     DataKey,
     Mode,
     Page,
@@ -90,7 +90,9 @@ class NodeChecks:
             runner.on_unhandled = node.wiring_checks.unhandled
             node.watchdog = Watchdog(node)
         if node.mode is not Mode.DEPLOYED:
-            components.check_added = self.check_component
+            # A name SNR uses raises; in DEBUG, work that can have no effect is logged once.
+            warn = self._warn_once if node.mode is Mode.DEBUG else None
+            components.check_added = functools.partial(check_component, warn=warn)
 
     def start(self, node_thread: int) -> None:
         """The node's thread starts running tasks: set the wiring check, start the watchdog."""
@@ -138,11 +140,6 @@ class NodeChecks:
         if watchdog is not None and watchdog.handler_stuck:
             return True
         return key in queued_page_keys(self.node.queue)
-
-    def check_component(self, component: AbstractComponent) -> None:
-        """A name SNR uses raises; in DEBUG, work that can have no effect is logged once."""
-        warn = self._warn_once if self.node.mode is Mode.DEBUG else None
-        check_component(component, warn)
 
     def _warn_once(self, message: str) -> None:
         self.node.log.warning("%s\n(Said once per class, in DEBUG mode only.)", message)
