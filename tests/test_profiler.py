@@ -78,8 +78,8 @@ class TestProfileShares(unittest.TestCase):
     def test_times_that_nest_are_said_to_add_up_to_more(self) -> None:
         """Two handler rows longer than the whole run: one must have run inside the other."""
         profiler = Profiler()
-        profiler.log_task((TaskType.event, "outer"), "robot", 1000.0)
-        profiler.log_task((TaskType.event, "inner"), "robot", 900.0)
+        profiler.task_cell((TaskType.event, "outer"), "robot")[:] = [1, 1000.0]
+        profiler.task_cell((TaskType.event, "inner"), "robot")[:] = [1, 900.0]
         dump = profiler.dump()
         self.assertIn("add up to more than 100%: some ran inside others", dump)
         self.assertIn("->   0.000%: (outside handlers", dump)  # never a negative share

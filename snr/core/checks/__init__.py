@@ -3,8 +3,8 @@
 The core calls in at a few places ("check this", "word that failure"); the how is here:
 
 * ``explain.py``: the words of the errors a node raises or logs;
-* ``failures.py``, ``repeats.py``: a failed handler or loop logged (repeats
-  counted); outside DEPLOYED the first failure stops the node;
+* ``failures.py``, ``repeats.py``: a failed handler or loop in words, logged
+  (repeats counted); outside DEPLOYED the first failure stops the node;
 * ``life_cycle.py``: reloads, removals, a node run twice;
 * ``call_checks.py``, ``handler_checks.py``: wrong arguments and wrong
   ``task_handlers`` entries, refused where they are written;
@@ -26,7 +26,7 @@ The package imports none of them; none of them imports `snr.core.node`.
 Example::
 
     from snr.core.checks.watchdog import Watchdog
-    from snr.core.checks.explain import slow_handler_text
+    from snr.core.checks.explain import wrong_thread_error
 """
 
 from typing import List

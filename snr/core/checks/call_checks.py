@@ -28,20 +28,20 @@ from snr.prelude import (
     ConfigError,
     HandlerError,
     Mode,
+    Page,
     Task,
 )
 
 __all__ = [
-    "bad_data_key",
     "bad_reload_target",
     "check_cli_args",
     "check_config_args",
     "check_factory_class",
+    "check_page_args",
     "check_role",
     "check_runner_args",
     "check_schedule_args",
     "no_sim_clock_across_processes",
-    "page_as_data",
     "param_text",
     "values_not_a_list",
     "wrong_call",
@@ -126,39 +126,31 @@ def values_not_a_list(name: str, values: Any) -> str:
     )
 
 
-def bad_data_key(key: Any, data: Any) -> str:
-    """The message for storing under a key that is not a str (often key and data swapped).
+def check_page_args(key: Any, data: Any) -> None:
+    """Raise a `ComponentError` for a data key that is not a str, or a whole `Page` as data.
 
     Example::
 
-        bad_data_key(21.5, "temperature")
-        # Data stored under the key 21.5 at robot.py:9 in Thermometer.loop: a data key ...
+        check_page_args("depth_m", 3.2)   # fine: returns None
+        check_page_args(21.5, "depth_m")  # ComponentError: ... the key and the data look swapped
     """
-    shown = short_repr(key, 40)
-    fix = "Write store_data(key, data) with a key such as 'depth_m'."
-    if isinstance(data, str):
-        fix = f"The key and the data look swapped: write store_data({data!r}, {shown})."
-    return (
-        f"Data stored under the key {shown} at {_call_site()}: a data key must be a str, and "
-        f"{shown} is a {type(key).__name__} (the data is {short_repr(data, 40)}). {fix}"
-    )
-
-
-def page_as_data(key: Any) -> str:
-    """The message for storing a whole `Page` as the data of another page.
-
-    Example::
-
-        page_as_data("depth")
-        # Data stored under 'depth' at robot.py:9 in Smoother.smooth is a whole Page ...
-    """
-    return (
-        f"Data stored under {key!r} at {_call_site()} is a whole Page (as a handler "
-        "gets it in task.val_list), so readers of "
-        f"{key!r} would get a Page inside a Page. Store its value, page.data "
-        "(e.g. task.val_list[0].data), or pass the page on as it is with "
-        "tasks.store_page(page)."
-    )
+    if not isinstance(key, str):
+        shown = short_repr(key, 40)
+        fix = "Write store_data(key, data) with a key such as 'depth_m'."
+        if isinstance(data, str):
+            fix = f"The key and the data look swapped: write store_data({data!r}, {shown})."
+        raise ComponentError(
+            f"Data stored under the key {shown} at {_call_site()}: a data key must be a str, "
+            f"and {shown} is a {type(key).__name__} (the data is {short_repr(data, 40)}). {fix}"
+        )
+    if data.__class__ is Page:
+        raise ComponentError(
+            f"Data stored under {key!r} at {_call_site()} is a whole Page (as a handler "
+            "gets it in task.val_list), so readers of "
+            f"{key!r} would get a Page inside a Page. Store its value, page.data "
+            "(e.g. task.val_list[0].data), or pass the page on as it is with "
+            "tasks.store_page(page)."
+        )
 
 
 def check_config_args(config_class: Any, factories: Any, mode: Any, clock: Any) -> None:

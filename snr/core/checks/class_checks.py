@@ -17,7 +17,7 @@ from __future__ import annotations
 
 import ast
 import inspect
-from typing import Any, Callable, Dict, Iterator, List, NamedTuple, Optional, Set, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Optional, Set, Tuple
 
 from snr.core.checks.error_text import closest_match
 from snr.core.checks.handler_checks import async_text
@@ -112,7 +112,7 @@ def check_component(
     if first_time:
         if len(_checked) >= 1000:
             _checked.clear()
-        _checked[cls] = [m for source in _sources(cls) for m in _read_class(source, kind, names)]
+        _checked[cls] = [m for c, tree in _sources(cls) for m in _read_class(c, tree, kind, names)]
     for message, is_error in _checked[cls]:
         if is_error:
             raise ComponentError(message)
@@ -158,30 +158,21 @@ def _collision(cls: type, name: str, what: str, where: str) -> str:
     )
 
 
-class _Source(NamedTuple):
-    """One of the student's classes, with its file and its syntax tree."""
-
-    cls: type
-    filename: str
-    tree: ast.ClassDef
-
-
-def _sources(cls: type) -> Iterator[_Source]:
-    """The student's classes among ``cls`` and its bases whose source can be read."""
+def _sources(cls: type) -> Iterator[Tuple[type, ast.ClassDef]]:
+    """The student's classes among ``cls`` and its bases whose source can be read, with it."""
     for base in cls.__mro__:
         tree = None if is_snr(base) or base is object else source_node(base)
-        filename = inspect.getsourcefile(base) if isinstance(tree, ast.ClassDef) else None
-        if isinstance(tree, ast.ClassDef) and filename is not None:
-            yield _Source(base, filename, tree)
+        if isinstance(tree, ast.ClassDef) and inspect.getsourcefile(base) is not None:
+            yield base, tree
 
 
-def _at(source: _Source, method: str, line: int) -> str:
-    """A line of ``method`` as a `source_block`, on a line of its own."""
-    return "\n" + source_block(source.filename, line, f"{source.cls.__name__}.{method}")
+def _at(cls: type, method: str, line: int) -> str:
+    """A line of ``cls``'s ``method`` as a `source_block`, on a line of its own."""
+    return "\n" + source_block(inspect.getsourcefile(cls) or "", line, f"{cls.__name__}.{method}")
 
 
-def _methods(source: _Source) -> List[ast.FunctionDef]:
-    return [item for item in source.tree.body if isinstance(item, ast.FunctionDef)]
+def _methods(tree: ast.ClassDef) -> List[ast.FunctionDef]:
+    return [item for item in tree.body if isinstance(item, ast.FunctionDef)]
 
 
 def _is_self(node: ast.AST) -> bool:
@@ -198,29 +189,31 @@ def _attributes_set(node: ast.AST) -> List[ast.Attribute]:
 
 def _assignment(cls: type, attr: str) -> str:
     """The line of the student's class that assigns ``self.attr``, as a block, or ""."""
-    for source in _sources(cls):
-        for method in _methods(source):
+    for owner, tree in _sources(cls):
+        for method in _methods(tree):
             for node in walk_own(method):
                 for target in _attributes_set(node):
                     if target.attr == attr:
-                        return _at(source, method.name, target.lineno)
+                        return _at(owner, method.name, target.lineno)
     return ""
 
 
-def _read_class(source: _Source, kind: type, names: Dict[str, str]) -> List[Tuple[str, bool]]:
+def _read_class(
+    cls: type, tree: ast.ClassDef, kind: type, names: Dict[str, str]
+) -> List[Tuple[str, bool]]:
     """(message, is_error) for every mistake in one of the student's classes: errors first."""
-    cls, hooks = source.cls, _HOOKS[kind]
+    hooks = _HOOKS[kind]
     errors: List[str] = []
     dropped: List[str] = []
     ignored: List[str] = []
-    for method in _methods(source):
+    for method in _methods(tree):
         name = method.name
         if name in names and name not in hooks:
-            errors.append(_collision(cls, name, names[name], _at(source, name, method.lineno)))
+            errors.append(_collision(cls, name, names[name], _at(cls, name, method.lineno)))
         for node in walk_own(method):
             for target in _attributes_set(node):
                 if target.attr in names and _is_self(target.value):
-                    where = _at(source, name, target.lineno)
+                    where = _at(cls, name, target.lineno)
                     errors.append(_collision(cls, target.attr, names[target.attr], where))
             if isinstance(node, ast.Expr) and isinstance(node.value, ast.Call):
                 built, code = _built(node.value.func), ast.unparse(node.value)
@@ -235,7 +228,7 @@ def _read_class(source: _Source, kind: type, names: Dict[str, str]) -> List[Tupl
                         use = f"`return {code}` (from a handler) or {use}"
                 dropped.append(
                     f"{cls.__name__}.{name} builds {what}, `{code}`, and drops it: nothing "
-                    f"happens until it is {until}. Write {use}.{_at(source, name, node.lineno)}"
+                    f"happens until it is {until}. Write {use}.{_at(cls, name, node.lineno)}"
                 )
             if isinstance(node, ast.Return) and name in hooks and node.value is not None:
                 if isinstance(node.value, ast.Constant) and node.value.value is None:
@@ -244,9 +237,9 @@ def _read_class(source: _Source, kind: type, names: Dict[str, str]) -> List[Tupl
                 ignored.append(
                     f"{cls.__name__}.{name}() returns `{code}`, but SNR does not use what "
                     f"{name}() returns: it is dropped. To run a task, schedule it: "
-                    f"`self.schedule({code})`.{_at(source, name, node.lineno)}"
+                    f"`self.schedule({code})`.{_at(cls, name, node.lineno)}"
                 )
-    warnings = dropped + ignored + list(_uncalled_hooks(source, kind))
+    warnings = dropped + ignored + list(_uncalled_hooks(cls, tree, kind))
     return [(e, True) for e in errors] + [(w, False) for w in warnings]
 
 
@@ -267,20 +260,20 @@ def _built(func: ast.expr) -> Optional[str]:
     return None
 
 
-def _uncalled_hooks(source: _Source, kind: type) -> Iterator[str]:
+def _uncalled_hooks(cls: type, tree: ast.ClassDef, kind: type) -> Iterator[str]:
     hooks = _HOOKS[kind]
     # Every x.name, bare name and string in the class: the methods it calls or registers.
     used: Set[Any] = set()
-    for node in ast.walk(source.tree):
+    for node in ast.walk(tree):
         used.add(
             getattr(node, "attr", None) or getattr(node, "id", None) or getattr(node, "value", None)
         )
-    for method in _methods(source):
+    for method in _methods(tree):
         name = method.name
         if name.startswith("_") or name in hooks or name in used:
             continue
-        said = f"{source.cls.__name__}.{name}() is never called:"
-        where = _at(source, name, method.lineno)
+        said = f"{cls.__name__}.{name}() is never called:"
+        where = _at(cls, name, method.lineno)
         if kind is Endpoint and name == "setup":
             fix = "SNR calls begin() when the node starts: rename it to begin."
             yield f"{said} an Endpoint has no setup(). {fix}{where}"

@@ -1,9 +1,11 @@
 """How the node puts a student's mistakes into words (docs/errors.md shows each).
 
+A failed handler or loop is worded by `snr.core.checks.failures.FailureReport`.
+
 Example::
 
-    slow_handler_text(motor.forward, tasks.event("forward"), 0.5)
-    # "Task handler Motor.forward (robot.py:14) took 0.500 s handling (event, 'forward'). ..."
+    raise wrong_thread_error("robot", "write_page")
+    # ThreadSafetyError: write_page() was called on node 'robot' from thread ...
 """
 
 from __future__ import annotations
@@ -14,20 +16,17 @@ import logging
 import threading
 from typing import Any, List, NoReturn, Optional, Set
 
-from snr.core.checks.call_checks import bad_data_key, page_as_data, wrong_call
+from snr.core.checks.call_checks import check_page_args, wrong_call
 from snr.core.checks.error_text import PAGE_IN_A_HANDLER, exception_text, short_repr
 from snr.core.checks.student_code import (
     caller_block,
     caller_location,
-    code_name,
     code_of,
     def_block,
     describe_callable,
     describe_class,
     failure_frames,
     is_runtime_file,
-    short_path,
-    source_block,
     source_node,
     walk_own,
 )
@@ -35,146 +34,20 @@ from snr.prelude import (
     AbstractComponent,
     AbstractConfig,
     AbstractFactory,
-    AbstractLoop,
     AbstractNode,
     ComponentError,
     ConfigError,
-    HandlerError,
-    LoopError,
     MissingSuperInitError,
-    Page,
-    SNRError,
-    Task,
-    TaskHandler,
     ThreadSafetyError,
 )
 from snr.prelude.abstract import explain_abstract_error  # loads abstract_errors when used
-from snr.prelude.task import format_task
 
-__all__ = ["CORE_REFUSED", "bad_result_error", "check_component_args", "check_loop_class"]
-__all__ += ["check_node_args", "check_page_args", "component_without_init"]
-__all__ += ["factory_without_init", "handler_failure", "handlers_before_init", "log_name_taken"]
-__all__ += ["loop_failure", "name_taken_error", "not_stopped_text", "raise_get_failure"]
-__all__ += ["page_hint", "reload_failure", "returning_lines", "slow_handler_text"]
-__all__ += ["start_failure", "used_before_init", "warn_get_returned_none"]
-__all__ += ["wrong_get_result_error", "wrong_thread_error"]
-
-
-def _fix(error: BaseException, deployed: bool, what: str, kept: str, fix: str) -> str:
-    """The last line of a failure: the node goes on (DEPLOYED), or how to fix ``what``."""
-    if deployed:
-        return f"The node keeps running{kept}."
-    if isinstance(error, SNRError):
-        return f"Fix the {what} as the message above says."
-    return fix
-
-
-def handler_failure(
-    handler: TaskHandler,
-    task: Task,
-    component: Optional[AbstractComponent],
-    error: Exception,
-    deployed: bool,
-    run_size: int = 1,
-) -> HandlerError:
-    """The HandlerError for ``handler`` raising ``error`` on ``task`` (first of ``run_size``).
-
-    Example::
-
-        handler_failure(endpoint.on_depth, task, endpoint, ZeroDivisionError(), False)
-        # Task handler Depth.on_depth (robot.py:30) of endpoint 'depth' raised ...
-    """
-    where = ""
-    if component is not None:
-        kind = "loop" if isinstance(component, AbstractLoop) else "endpoint"
-        where = f" of {kind} {component.name!r}"
-    handling = f"the task {format_task(task, values='none')}"
-    if run_size > 1:
-        handling = f"a run of {run_size} tasks given to it at once, the first being {handling}"
-    values: object = task.val_list  # a task built by hand may hold anything
-    if isinstance(values, list) and len(values) == 1 and isinstance(values[0], Page):
-        carrying = (
-            f"carrying the page {values[0].key!r} with data {short_repr(values[0].data, 200)}"
-        )
-    else:
-        carrying = f"with values {short_repr(values, 200)}"
-    if not isinstance(values, list):
-        carrying += (
-            f". Its val_list is {short_repr(values, 60)} ({type(values).__name__}), not a list: "
-            "whoever built the task must pass the values in a list, e.g. "
-            f"Task(TaskType.{task.type.name}, {task.name!r}, [value])"
-        )
-    fix = _fix(
-        error,
-        deployed,
-        "handler",
-        "",
-        "Fix the handler, or catch the error in it if it can happen in normal use "
-        "(in Mode.DEPLOYED the node logs it and keeps running).",
-    )
-    failure = HandlerError(
-        f"Task handler {describe_callable(handler)}{where} raised "
-        f"{page_hint(error, exception_text(error))}\nwhile handling {handling} {carrying}."
-        f"{failure_frames(error)}\n{fix}"
-    )
-    failure.__cause__ = error
-    return failure
-
-
-def _bad_result_hint(result: Any) -> str:
-    """A hint for the likely slip behind a bad return value (or "")."""
-    items = result if isinstance(result, (list, tuple)) else []
-    if isinstance(result, tuple) and all(isinstance(t, Task) for t in items):
-        return " Return a list, [task1, task2], not a tuple."
-    if isinstance(result, Page):
-        return " To store a page, return tasks.store_page(page)."
-    if isinstance(result, bool):
-        return " Return None when there is nothing to do."
-    if inspect.isgenerator(result):
-        return " A handler cannot yield its tasks: return them in a list."
-    if any(t is None for t in items):
-        return " Leave None out of the list."
-    if any(isinstance(t, (list, tuple)) for t in items):
-        return " Return one flat list of Tasks (join lists with + or extend)."
-    return ""
-
-
-def bad_result_error(result: Any, handler: TaskHandler, task: Task) -> HandlerError:
-    """The HandlerError for a handler that returned something other than tasks, at its return.
-
-    Example::
-
-        bad_result_error(42, doubler.double, task)
-        # Task handler Doubler.double returned 42 (int) at robot.py:12 while handling ...
-        #   File "/home/student/rov/robot.py", line 12, in Doubler.double (defined at line 11)
-        #     return task.val_list[0].data * 2
-    """
-    fix = (
-        f"A handler must return a Task, a list of Tasks, or None.{_bad_result_hint(result)} "
-        "To store a value, return self.store_data_task(key, value); to announce "
-        "something, return tasks.event('name', [value])."
-    )
-    returned = f"returned {short_repr(result)} ({type(result).__name__})"
-    if isinstance(result, list):
-        index, bad = next((i, t) for i, t in enumerate(result) if not isinstance(t, Task))
-        returned = (
-            f"returned a list whose item {index} is {short_repr(bad)} ({type(bad).__name__}),"
-            " not a Task,"
-        )
-    handling = f"while handling {format_task(task, values='none')}"
-    code, lines = code_of(handler), returning_lines(handler, result)
-    if code is None or not lines:
-        return HandlerError(
-            f"Task handler {describe_callable(handler)} {returned} {handling}. {fix}"
-        )
-    name = code_name(code, getattr(handler, "__qualname__", code.co_name))
-    short = short_path(code.co_filename)
-    at = f"at {short}:{lines[0]}"
-    if len(lines) > 1:  # the source cannot tell which: show each
-        at = f"at one of its returns, {short}:{', '.join(str(n) for n in lines)},"
-    context = f" (defined at line {code.co_firstlineno})"
-    blocks = "\n".join(source_block(code.co_filename, n, name, context) for n in lines)
-    return HandlerError(f"Task handler {name} {returned} {at} {handling}.\n{blocks}\n{fix}")
+# check_page_args is call_checks' (it names the student's call): named here for the node.
+__all__ = ["check_component_args", "check_loop_class", "check_node_args", "check_page_args"]
+__all__ += ["component_without_init", "factory_without_init", "handlers_before_init"]
+__all__ += ["log_name_taken", "name_taken_error", "page_hint", "raise_get_failure"]
+__all__ += ["reload_failure", "returning_lines", "start_failure", "used_before_init"]
+__all__ += ["warn_get_returned_none", "wrong_get_result_error", "wrong_thread_error"]
 
 
 def _returns(func: Any) -> Optional[List[ast.Return]]:
@@ -248,45 +121,6 @@ def page_hint(error: BaseException, text: str, in_a_loop: bool = False) -> str:
     return text
 
 
-def slow_handler_text(handler: TaskHandler, task: Task, took_s: float) -> str:
-    """The warning for a handler that held the node's thread too long."""
-    return (
-        f"Task handler {describe_callable(handler)} took {took_s:.3f} s handling "
-        f"{format_task(task, values='none')}. While it runs the node can run no other task. "
-        "Move slow or blocking work (time.sleep, waiting for a device) into a ThreadLoop, "
-        "and let the handler only read and store data."
-    )
-
-
-def loop_failure(loop: AbstractLoop, error: BaseException, deployed: bool) -> LoopError:
-    """The LoopError for ``loop``'s thread ending with ``error`` (``sys.exit()`` and Ctrl-C too)."""
-    what = page_hint(error, exception_text(error), in_a_loop=True)
-    if isinstance(error, SystemExit):
-        what = f"sys.exit({'' if error.code is None else repr(error.code)})"
-        fix = (
-            "sys.exit() in a loop ends only the loop's thread, not the program. To stop "
-            "this loop, call self.set_terminate_flag('why'); to stop the node, "
-            "self.schedule(tasks.terminate('why'))."
-        )
-    elif isinstance(error, KeyboardInterrupt):
-        fix = "Ctrl-C stops the whole node; a loop need not catch or raise it."
-    else:
-        fix = _fix(
-            error,
-            deployed,
-            "loop",
-            " without this loop",
-            "Fix loop() (or setup()), or catch the error there if it can happen in "
-            "normal use (in Mode.DEPLOYED the node keeps running without the loop).",
-        )
-    failure = LoopError(
-        f"Loop {loop.name!r} ({describe_class(type(loop))}) stopped: it raised {what}"
-        f"{failure_frames(error)}\n{fix}"
-    )
-    failure.__cause__ = error
-    return failure
-
-
 def reload_failure(error: BaseException) -> str:
     """Where a reload went wrong: a SyntaxError's file and line, else the student's frames.
 
@@ -299,20 +133,6 @@ def reload_failure(error: BaseException) -> str:
         shown = f"\n    {line}" if line else ""
         return f"{error.filename}:{error.lineno}: SyntaxError: {error.msg}{shown}"
     return f"{exception_text(error)}{failure_frames(error)}"
-
-
-def check_page_args(key: Any, data: Any) -> None:
-    """Raise a `ComponentError` for a data key that is not a str, or a whole `Page` as data.
-
-    Example::
-
-        check_page_args("depth_m", 3.2)   # fine: returns None
-        check_page_args(21.5, "depth_m")  # ComponentError: ... the key and the data look swapped
-    """
-    if not isinstance(key, str):
-        raise ComponentError(bad_data_key(key, data))
-    if data.__class__ is Page:
-        raise ComponentError(page_as_data(key))
 
 
 def check_component_args(component_class: type, factory: Any, parent: Any, name: Any) -> None:
@@ -524,48 +344,6 @@ def name_taken_error(role: str, component: Any, other: Any) -> ConfigError:
         f"Node {role!r} already has a component named {name!r} "
         f"({describe_class(type(other))}); {describe_class(type(component))} wants the "
         "same name. Give each component a unique name (e.g. pass a name to its factory)."
-    )
-
-
-CORE_REFUSED = {
-    "remove component": (
-        "Refused to remove %r from node %r: it is the node's own core, which "
-        "stores every page, adds, removes and reloads components, and stops the "
-        "node on a terminate task; without it the node would run on deaf. To stop "
-        "the node, schedule a terminate task (or type `exit` in a console)."
-    ),
-    "reload": (
-        "Refused to reload %r in node %r: it is the node's own core and runs this "
-        "very reload (and every store, add, remove and terminate); SNR's own code "
-        "is not reloaded while the node runs. Restart the node to load a new SNR."
-    ),
-}
-"""The log messages (name, role) for removing or reloading ``node_core``.
-
-Example::
-
-    log.error(CORE_REFUSED["reload"], "node_core", node.role)
-"""
-
-
-def not_stopped_text(component: AbstractComponent, timeout_s: float, reload: bool) -> str:
-    """The log message for a loop still running ``timeout_s`` after it was asked to stop."""
-    where = component.where_running() if isinstance(component, AbstractLoop) else ""
-    advice = (
-        "Make loop() return often: give reads a timeout and wait with self.wait_s(seconds) "
-        "instead of time.sleep(), so the loop notices when it should stop."
-    )
-    if reload:
-        return (
-            f"Cannot reload loop {component.name!r}: it did not stop within "
-            f"{timeout_s:.1f} s of being asked{f' (it is at {where})' if where else ''}, and "
-            "a new copy would run beside it. Reload refused; the old version keeps "
-            f"running. {advice}"
-        )
-    return (
-        f"Loop {component.name!r} did not stop within {timeout_s:.1f} s of being asked"
-        f"{f': it is at {where}' if where else ''}. Its terminate() runs now anyway, while "
-        f"its thread is still going (the thread ends with the program). {advice}"
     )
 
 

@@ -15,9 +15,9 @@ from __future__ import annotations
 import logging
 from typing import Iterable, Literal, Optional
 
-from snr.core.checks.explain import CORE_REFUSED, not_stopped_text, reload_failure
+from snr.core.checks.explain import reload_failure
 from snr.core.checks.student_code import describe_callable
-from snr.prelude.abstract import AbstractComponent
+from snr.prelude.abstract import AbstractComponent, AbstractLoop
 from snr.prelude.errors import NodeStateError, SNRError
 
 __all__ = [
@@ -108,6 +108,22 @@ def reload_refused(
         log.error("%s", text)
 
 
+# What not_found logs (name, role) for removing or reloading the node's own core.
+_CORE_REFUSED = {
+    "remove component": (
+        "Refused to remove %r from node %r: it is the node's own core, which "
+        "stores every page, adds, removes and reloads components, and stops the "
+        "node on a terminate task; without it the node would run on deaf. To stop "
+        "the node, schedule a terminate task (or type `exit` in a console)."
+    ),
+    "reload": (
+        "Refused to reload %r in node %r: it is the node's own core and runs this "
+        "very reload (and every store, add, remove and terminate); SNR's own code "
+        "is not reloaded while the node runs. Restart the node to load a new SNR."
+    ),
+}
+
+
 def not_found(log: logging.Logger, action: str, name: str, role: str, names: Iterable[str]) -> None:
     """Log that node ``role`` cannot ``action`` the component ``name``: its core, or none.
 
@@ -116,8 +132,8 @@ def not_found(log: logging.Logger, action: str, name: str, role: str, names: Ite
         not_found(node.log, "reload", "depht", "robot", ["depth"])
         # "Cannot reload 'depht': node 'robot' has no such component. It has: depth."
     """
-    if action in CORE_REFUSED and name == "node_core":
-        log.error(CORE_REFUSED[action], name, role)
+    if action in _CORE_REFUSED and name == "node_core":
+        log.error(_CORE_REFUSED[action], name, role)
     else:
         has = ", ".join(names)
         log.error(
@@ -128,14 +144,30 @@ def not_found(log: logging.Logger, action: str, name: str, role: str, names: Ite
 def still_running(
     log: logging.Logger, component: AbstractComponent, timeout_s: float, reload: bool
 ) -> None:
-    """Log that ``component``'s thread did not stop within ``timeout_s`` (see `not_stopped_text`).
+    """Log that ``component``'s thread did not stop within ``timeout_s`` (reloading, or stopping).
 
     Example::
 
         still_running(node.log, sonar_loop, 1.0, reload=False)
     """
-    level = logging.ERROR if reload else logging.WARNING
-    log.log(level, "%s", not_stopped_text(component, timeout_s, reload=reload))
+    where = component.where_running() if isinstance(component, AbstractLoop) else ""
+    advice = (
+        "Make loop() return often: give reads a timeout and wait with self.wait_s(seconds) "
+        "instead of time.sleep(), so the loop notices when it should stop."
+    )
+    if reload:
+        log.error(
+            f"Cannot reload loop {component.name!r}: it did not stop within "
+            f"{timeout_s:.1f} s of being asked{f' (it is at {where})' if where else ''}, and "
+            "a new copy would run beside it. Reload refused; the old version keeps "
+            f"running. {advice}"
+        )
+        return
+    log.warning(
+        f"Loop {component.name!r} did not stop within {timeout_s:.1f} s of being asked"
+        f"{f': it is at {where}' if where else ''}. Its terminate() runs now anyway, while "
+        f"its thread is still going (the thread ends with the program). {advice}"
+    )
 
 
 def call_failed(log: logging.Logger, component: AbstractComponent, what: str) -> None:

@@ -13,8 +13,9 @@ Example (what `Node` does)::
 
 from __future__ import annotations
 
+import functools
 import threading
-from typing import List, Mapping, Optional, Protocol, Set, Tuple
+from typing import List, Mapping, Optional, Protocol, Tuple
 
 from snr.core import tasks
 from snr.core.checks.class_checks import check_component
@@ -25,7 +26,6 @@ from snr.core.components import ComponentSet
 from snr.core.dispatch import HandlerRunner
 from snr.core.timer import Timer
 from snr.prelude import (
-    AbstractComponent,
     DataKey,
     Mode,
     Page,
@@ -83,13 +83,16 @@ class NodeChecks:
             hints = MissingKeyHints(
                 node.log, node.timer.current_s, role=node.role, on_its_way=self.page_on_its_way
             )
-            hints.expected_keys = self.handled_keys
+            # The keys some handler waits for: reading them early is no mistake.
+            hints.expected_keys = lambda: {key for key, _ in self.page_handlers()}
             node.key_hints = hints
             node.wiring_checks = WiringChecks(node.log, node.role, components.table, node.datastore)
             runner.on_unhandled = node.wiring_checks.unhandled
             node.watchdog = Watchdog(node)
         if node.mode is not Mode.DEPLOYED:
-            components.check_added = self.check_component
+            # A name SNR uses raises; in DEBUG, work that can have no effect is logged once.
+            warn = self._warn_once if node.mode is Mode.DEBUG else None
+            components.check_added = functools.partial(check_component, warn=warn)
 
     def start(self, node_thread: int) -> None:
         """The node's thread starts running tasks: set the wiring check, start the watchdog."""
@@ -131,21 +134,12 @@ class NodeChecks:
                     handled.append((task_id[1], handler))
         return handled
 
-    def handled_keys(self) -> Set[DataKey]:
-        """The data keys some handler waits for: reading them early is no mistake."""
-        return {key for key, _ in self.page_handlers()}
-
     def page_on_its_way(self, key: DataKey) -> bool:
         """True if ``key``'s page is queued, or the node's thread is stuck in a handler."""
         watchdog = self._watching
         if watchdog is not None and watchdog.handler_stuck:
             return True
         return key in queued_page_keys(self.node.queue)
-
-    def check_component(self, component: AbstractComponent) -> None:
-        """A name SNR uses raises; in DEBUG, work that can have no effect is logged once."""
-        warn = self._warn_once if self.node.mode is Mode.DEBUG else None
-        check_component(component, warn)
 
     def _warn_once(self, message: str) -> None:
         self.node.log.warning("%s\n(Said once per class, in DEBUG mode only.)", message)

@@ -62,18 +62,6 @@ class Profiler(AbstractProfiler):
         """The cell of the loop called ``name``."""
         return self.cell(f"Loop({name})")
 
-    def log_task(self, task_id: TaskId, where: str, runtime_s: float) -> None:
-        """Record one handler run (the node's thread)."""
-        cell = self.task_cell(task_id, where)
-        cell[0] += 1
-        cell[1] += runtime_s
-
-    def log_loop(self, name: ComponentName, runtime_s: float) -> None:
-        """Record one pass of a loop (the loop's own thread)."""
-        cell = self.loop_cell(name)
-        cell[0] += 1
-        cell[1] += runtime_s
-
     def add_report(self, name: str, report: Callable[[], str]) -> None:
         """Add a section to `dump`: ``report()``'s text under ``name`` (a newer one replaces it).
 

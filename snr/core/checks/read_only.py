@@ -167,7 +167,23 @@ def _refused(what: str, names_key: bool = False) -> Callable[..., NoReturn]:
 
     def refuse(self: NodeDatastore, *args: Any, **kwargs: Any) -> NoReturn:
         key = args[0] if names_key and args else None
-        self._refuse(what.format(key=repr(key)), key)
+        name = "key" if key is None else repr(key)
+        if self.queue is not None and threading.get_ident() == self.queue.owner_thread:
+            how = (
+                f"call self.store_data({name}, value), or return "
+                f"self.store_data_task({name}, value) from a handler"
+            )
+        else:  # a loop's thread, or before the node runs
+            how = (
+                f"call self.store_data({name}, value); from a loop's thread it is also the "
+                "thread-safe way, as it hands the page to the node's thread"
+            )
+        raise DatastoreWriteError(
+            f"Only node {self.role!r} writes its datastore, so {what.format(key=repr(key))} at "
+            f"{caller_location()} was refused: the node keeps a Page (data, time, origin) "
+            f"under each key and tells the key's handlers. To store a value, {how}. "
+            f"Read it back with self.get_data({name})."
+        )
 
     refuse.__doc__ = "Refused: the node alone writes its datastore."
     return refuse
@@ -212,25 +228,6 @@ class NodeDatastore(Mapping[DataKey, Page]):
         """A plain dict of the pages now, the caller's own to change."""
         pages = self._pages  # list(): the keys now, as the node may store more
         return {key: page for key in list(pages) if (page := pages.get(key)) is not None}
-
-    def _refuse(self, what: str, key: Any = None) -> NoReturn:
-        name = "key" if key is None else repr(key)
-        if self.queue is not None and threading.get_ident() == self.queue.owner_thread:
-            how = (
-                f"call self.store_data({name}, value), or return "
-                f"self.store_data_task({name}, value) from a handler"
-            )
-        else:  # a loop's thread, or before the node runs
-            how = (
-                f"call self.store_data({name}, value); from a loop's thread it is also the "
-                "thread-safe way, as it hands the page to the node's thread"
-            )
-        raise DatastoreWriteError(
-            f"Only node {self.role!r} writes its datastore, so {what} at "
-            f"{caller_location()} was refused: the node keeps a Page (data, time, origin) "
-            f"under each key and tells the key's handlers. To store a value, {how}. "
-            f"Read it back with self.get_data({name})."
-        )
 
     # Every way to change a dict; "{key}": the key given, in the message.
     __setitem__ = _refused("datastore[{key}] = value", names_key=True)
