@@ -22,6 +22,7 @@ from snr.core.checks import explain, life_cycle
 from snr.core.checks.explain import wrong_thread_error
 from snr.core.checks.handler_checks import check_burst_handlers
 from snr.core.dispatch import HandlerTable
+from snr.core.task_queue import TaskQueue
 from snr.prelude.abstract import AbstractComponent, AbstractFactory, AbstractLoop, AbstractNode
 from snr.prelude.errors import SNRError
 from snr.prelude.names import ComponentName
@@ -51,6 +52,7 @@ class ComponentSet(AbstractNode):
         check_added: DEBUG and TEST: reads each component's class as it is added.
     """
 
+    queue: TaskQueue  # whose owner_thread is the node's, once it runs
     join_timeout_s: float = 1.0
     """How long stopping waits for each loop's thread (1 s)."""
 
@@ -59,7 +61,6 @@ class ComponentSet(AbstractNode):
         self.components: Dict[ComponentName, AbstractComponent] = {}
         self.running = False
         self.table_stale = True
-        self._thread_id: Optional[int] = None  # the node's thread, once it runs
         self._none_told: Set[Any] = set()  # factories' get() already said to return None
         #: Called with each component before it is added (set by the node in DEBUG
         #: and TEST mode to read the student's class; see `check_component`).
@@ -259,7 +260,7 @@ class ComponentSet(AbstractNode):
 
     def _check_owner_thread(self, method: str) -> None:
         """While the components run, only the node's thread may call ``method``."""
-        if self.running and threading.get_ident() != self._thread_id:
+        if self.running and threading.get_ident() != self.queue.owner_thread:
             raise wrong_thread_error(self.role, method)
 
     # -- the handler table ----------------------------------------------------

@@ -204,9 +204,9 @@ class Node(ComponentSet):
         if self.state is not NodeState.CREATED:
             raise life_cycle.ran_twice_error(self.role, self.state.value)
         self.state = NodeState.RUNNING
-        self._thread_id = self.queue.owner_thread = threading.get_ident()
+        self.queue.owner_thread = threading.get_ident()
         if self._checks is not None:
-            self._checks.start(self._thread_id)
+            self._checks.start(self.queue.owner_thread)
         try:
             if self._clock_turn is not None:
                 self._clock_turn.begin()
