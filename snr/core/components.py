@@ -1,27 +1,28 @@
-"""`ComponentSet`: a node's endpoints and loops, and their life cycle.
+"""`ComponentSet`: the part of a `Node` that holds its endpoints and loops.
 
-It builds, adds, removes, hot-reloads, starts and stops components and keeps
-the node's handler table in step, on the node's thread. A reload that fails
-keeps the old component running and logs why with the file and line; a loop
-that does not stop in ``join_timeout_s`` is not reloaded (two would run).
+`Node` inherits it: building, adding, removing, hot-reloading, starting and
+stopping components, and keeping the node's handler table in step, on the
+node's thread. A reload that fails keeps the old component running and logs
+why with the file and line; a loop that does not stop in ``join_timeout_s``
+is not reloaded (two would run).
 
 Example::
 
-    components = ComponentSet(node, HandlerTable(), join_timeout_s=1.0)
-    components.add(components.build(factory))
-    components.start_all()
-    ...
-    components.shutdown()
+    node.add_component(node.build_component(factory))
+    node.reload_component("depth_filter")   # ['depth_filter'] if rebuilt
 """
 
 from __future__ import annotations
 
+import threading
 import time
 from typing import Any, Callable, Dict, List, Optional, Set
 
 from snr.core.checks import explain, life_cycle
+from snr.core.checks.explain import wrong_thread_error
 from snr.core.checks.handler_checks import check_burst_handlers
 from snr.core.dispatch import HandlerTable
+from snr.core.task_queue import TaskQueue
 from snr.prelude.abstract import AbstractComponent, AbstractFactory, AbstractLoop, AbstractNode
 from snr.prelude.errors import SNRError
 from snr.prelude.names import ComponentName
@@ -32,31 +33,32 @@ NODE_CORE_NAME = "node_core"
 """The component name of every node's core endpoint (`NodeCoreEndpoint`)."""
 
 
-class ComponentSet:
-    """The components of one node, in start order, and the table of their handlers.
+class ComponentSet(AbstractNode):
+    """A node's components, in start order, and the table of their handlers (`Node` is one).
 
     Args:
-        node: the node they belong to (for its role and log).
         table: the handler table to keep in step.
-        join_timeout_s: how long stopping waits for a loop's thread.
 
     Example::
 
-        components.add(endpoint)          # begins it too if the set is running
-        components.reload("depth_filter") # ['depth_filter'] if rebuilt
+        node.add_component(endpoint)          # begins it too if the node is running
+        node.reload_component("depth_filter") # ['depth_filter'] if rebuilt
 
     Attributes:
-        by_name: the components by name, in start order (the node's ``components``).
+        components: the components by name, in start order.
         table: the `HandlerTable`; `refresh_table` it while ``table_stale``.
-        running: True between `start_all` and `shutdown`.
+        running: True between starting the components and `Node.terminate`:
+            only the node's thread may change them then.
         check_added: DEBUG and TEST: reads each component's class as it is added.
     """
 
-    def __init__(self, node: AbstractNode, table: HandlerTable, join_timeout_s: float) -> None:
-        self.node = node
+    queue: TaskQueue  # whose owner_thread is the node's, once it runs
+    join_timeout_s: float = 1.0
+    """How long stopping waits for each loop's thread (1 s)."""
+
+    def __init__(self, table: HandlerTable) -> None:
         self.table = table
-        self.join_timeout_s = join_timeout_s
-        self.by_name: Dict[ComponentName, AbstractComponent] = {}
+        self.components: Dict[ComponentName, AbstractComponent] = {}
         self.running = False
         self.table_stale = True
         self._none_told: Set[Any] = set()  # factories' get() already said to return None
@@ -64,9 +66,9 @@ class ComponentSet:
         #: and TEST mode to read the student's class; see `check_component`).
         self.check_added: Optional[Callable[[AbstractComponent], None]] = None
 
-    # -- building ----------------------------------------------------------
-    def build(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
-        """``factory.get(node)``, with any mistake in it explained.
+    # -- building, adding and removing -------------------------------------
+    def build_component(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
+        """``factory.get(self)``, with any mistake in ``get()`` explained.
 
         Raises:
             ComponentError: ``get()`` raised, or returned something that is not a
@@ -76,27 +78,28 @@ class ComponentSet:
             raise explain.factory_without_init(factory)
         component: Any  # get() is typed, but a student's get() may return anything
         try:
-            component = factory.get(self.node)
+            component = factory.get(self)
         except SNRError:
             raise
         except Exception as error:
-            explain.raise_get_failure(factory, error, self.node.role)
+            explain.raise_get_failure(factory, error, self.role)
         if component is None:
-            role, log = self.node.role, self.node.log
-            explain.warn_get_returned_none(factory, role, self.running, self._none_told, log)
+            explain.warn_get_returned_none(
+                factory, self.role, self.running, self._none_told, self.log
+            )
             return None
         if not isinstance(component, AbstractComponent):
             raise explain.wrong_get_result_error(factory, component)
         return component
 
-    # -- adding and removing ------------------------------------------------
-    def add(self, component: AbstractComponent, start: bool = True) -> None:
-        """Add ``component`` last; it begins at once if the set is running.
+    def add_component(self, component: AbstractComponent, start: bool = True) -> None:
+        """Add a component last; it begins at once if the node is running.
 
         Raises:
-            ComponentError: the component skipped ``super().__init__``.
+            ComponentError: the component is broken (e.g. missed super().__init__).
             ConfigError: another component already has its name.
         """
+        self._check_owner_thread("add_component")
         if not hasattr(component, "name") or (
             not hasattr(component, "_task_handlers") and not hasattr(component, "parent")
         ):
@@ -104,48 +107,50 @@ class ComponentSet:
         if self.check_added is not None:
             self.check_added(component)
         check_burst_handlers(component)
-        other = self.by_name.get(component.name)
+        other = self.components.get(component.name)
         if other is not None:
-            raise explain.name_taken_error(self.node.role, component, other)
-        self.by_name[component.name] = component
+            raise explain.name_taken_error(self.role, component, other)
+        self.components[component.name] = component
         self.table_stale = True  # the table is rebuilt before the next task
         if start and self.running:
-            self.start(component)
+            self._start(component)
 
-    def remove(self, name: ComponentName) -> None:
+    def remove_component(self, name: ComponentName) -> None:
         """Halt, join, terminate and forget the component called ``name``.
 
         The node's core (``node_core``) is never removed: the refusal is logged.
         """
+        self._check_owner_thread("remove_component")
         component = self._find("remove component", name)
         if component is None:
             return
-        del self.by_name[name]
-        self.stop(component)
+        del self.components[name]
+        self._stop(component)
         self._warn_if_alive(component)
-        self.call_safely("terminate", component)
+        self._call_safely("terminate", component)
         self.table_stale = True
 
     def _find(self, action: str, name: ComponentName) -> Optional[AbstractComponent]:
         """The component called ``name``; None, with the refusal logged, for node_core or none."""
-        component = None if name == NODE_CORE_NAME else self.by_name.get(name)
+        component = None if name == NODE_CORE_NAME else self.components.get(name)
         if component is None:
-            life_cycle.not_found(self.node.log, action, name, self.node.role, self.by_name)
+            life_cycle.not_found(self.log, action, name, self.role, self.components)
         return component
 
     # -- hot reload ---------------------------------------------------------
-    def reload(self, name: ComponentName = "all") -> List[ComponentName]:
+    def reload_component(self, name: ComponentName = "all") -> List[ComponentName]:
         """Reload the source of one component (or ``"all"``) and rebuild it.
 
-        Returns the names of the rebuilt components; one that fails keeps
-        running and the log says why. ``node_core`` is never reloaded.
+        A reload that fails leaves the old component running and logs why.
+        Returns the names of the rebuilt components; ``node_core`` is never reloaded.
 
         Example::
 
-            components.reload("depth_filter")   # ['depth_filter']
+            node.reload_component("depth_filter")   # ['depth_filter']
         """
+        self._check_owner_thread("reload_component")
         if name == "all":
-            named = self.by_name.items()
+            named = self.components.items()
             targets = [c for n, c in named if c.factory.reload_targets and n != NODE_CORE_NAME]
         else:
             component = self._find("reload", name)
@@ -153,83 +158,70 @@ class ComponentSet:
         return [old.name for old in targets if self._reload_one(old)]
 
     def _reload_one(self, old: AbstractComponent) -> bool:
-        log = self.node.log
+        log = self.log
         try:
             old.factory.reload()
         except Exception as error:
             life_cycle.reload_refused(log, "source", old, error)
             return False
-        if self.running and not self._stop_for_reload(old):
-            return False
+        if self.running:  # halt it and wait for its thread; it resumes if it will not stop
+            self._stop(old)
+            if old.is_alive():
+                life_cycle.still_running(log, old, self.join_timeout_s, reload=True)
+                if isinstance(old, AbstractLoop):
+                    old.cancel_stop()
+                return False
         new = self._build_replacement(old)
         if new is None:
-            self._resume(old)
+            if self.running:
+                try:
+                    _start(old)
+                except Exception as error:
+                    life_cycle.reload_refused(log, "restart", old, error)
             return False
-        self.call_safely("terminate", old)
+        self._call_safely("terminate", old)
         items = [
             (new.name if n == old.name else n, new if c is old else c)
-            for n, c in self.by_name.items()
+            for n, c in self.components.items()
         ]
-        self.by_name.clear()  # refilled in place: the node's `components` is this dict
-        self.by_name.update(items)
+        self.components.clear()  # refilled in place: others may hold this dict
+        self.components.update(items)
         self.table_stale = True
         if self.running:
             try:
-                self.start(new)
+                self._start(new)
             except SNRError as error:
                 life_cycle.reload_refused(log, "start", old, error, new)
                 return False
         log.info("Reloaded %r", new.name)
         return True
 
-    def _stop_for_reload(self, old: AbstractComponent) -> bool:
-        """Halt ``old`` and wait for its thread; False (and it resumes) if it will not stop."""
-        self.stop(old)
-        if not old.is_alive():
-            return True
-        life_cycle.still_running(self.node.log, old, self.join_timeout_s, reload=True)
-        if isinstance(old, AbstractLoop):
-            old.cancel_stop()
-        return False
-
     def _build_replacement(self, old: AbstractComponent) -> Optional[AbstractComponent]:
         """A new component from ``old``'s factory, or None (logged) if that fails."""
         try:
-            new = self.build(old.factory)
+            new = self.build_component(old.factory)
         except Exception as error:
-            life_cycle.reload_refused(self.node.log, "build", old, error)
+            life_cycle.reload_refused(self.log, "build", old, error)
             return None
         if new is None:
-            life_cycle.reload_refused(self.node.log, "none", old)
+            life_cycle.reload_refused(self.log, "none", old)
             return None
-        if new.name != old.name and new.name in self.by_name:
-            life_cycle.reload_refused(self.node.log, "name", old, new=new)
+        if new.name != old.name and new.name in self.components:
+            life_cycle.reload_refused(self.log, "name", old, new=new)
             return None
         return new
 
-    def _resume(self, old: AbstractComponent) -> None:
-        if not self.running:
-            return
-        try:
-            _start(old)
-        except Exception as error:
-            life_cycle.reload_refused(self.node.log, "restart", old, error)
-
     # -- starting and stopping ----------------------------------------------
-    def start_all(self, keep_going: Callable[[], bool]) -> None:
+    def _start_all(self, keep_going: Callable[[], bool]) -> None:
         """Start every component in order while ``keep_going()`` says so."""
         self.running = True
-        for component in list(self.by_name.values()):
+        for component in list(self.components.values()):
             if not keep_going():
                 break
-            self.start(component)
+            self._start(component)
 
-    def start(self, component: AbstractComponent) -> None:
-        """Begin ``component`` (a loop also starts its thread).
-
-        Raises:
-            ComponentError: its ``begin()`` raised; the message shows where.
-        """
+    def _start(self, component: AbstractComponent) -> None:
+        """Begin ``component`` (a loop starts its thread); a ComponentError says where it raised."""
         try:
             _start(component)
         except SNRError:
@@ -237,49 +229,54 @@ class ComponentSet:
         except Exception as error:
             raise explain.start_failure(component, error) from error
 
-    def stop(self, component: AbstractComponent) -> None:
+    def _stop(self, component: AbstractComponent) -> None:
         """Halt ``component`` and wait (up to ``join_timeout_s``) for its thread."""
-        self.call_safely("halt", component)
+        self._call_safely("halt", component)
         component.join(self.join_timeout_s)
 
-    def shutdown(self) -> None:
+    def _shutdown(self) -> None:
         """Halt every component (newest first), join their threads, then terminate them."""
         self.running = False
-        components = list(self.by_name.values())[::-1]
+        components = list(self.components.values())[::-1]
         for component in components:
-            self.call_safely("halt", component)
+            self._call_safely("halt", component)
         deadline = time.monotonic() + self.join_timeout_s
         for component in components:
             component.join(max(0.0, deadline - time.monotonic()))
         for component in components:
             self._warn_if_alive(component)
-            self.call_safely("terminate", component)
+            self._call_safely("terminate", component)
 
     def _warn_if_alive(self, component: AbstractComponent) -> None:
         if component.is_alive():
-            life_cycle.still_running(self.node.log, component, self.join_timeout_s, reload=False)
+            life_cycle.still_running(self.log, component, self.join_timeout_s, reload=False)
 
-    def call_safely(self, what: str, component: AbstractComponent) -> None:
+    def _call_safely(self, what: str, component: AbstractComponent) -> None:
         """Halt or terminate (``what``) ``component``; log (never raise) what goes wrong."""
         try:
             _halt(component) if what == "halt" else component.terminate()
         except Exception:
-            life_cycle.call_failed(self.node.log, component, what)
+            life_cycle.call_failed(self.log, component, what)
+
+    def _check_owner_thread(self, method: str) -> None:
+        """While the components run, only the node's thread may call ``method``."""
+        if self.running and threading.get_ident() != self.queue.owner_thread:
+            raise wrong_thread_error(self.role, method)
 
     # -- the handler table ----------------------------------------------------
     def handlers_changed(self, component: AbstractComponent) -> None:
-        """``component`` changed its ``task_handlers``: rebuild the table before the next task.
+        """``component`` changed its ``task_handlers``: the table is rebuilt before the next task.
 
         Raises:
             ComponentError: a burst handler of the component lost its task handler.
         """
-        if self.by_name.get(component.name) is component:
+        if self.components.get(component.name) is component:
             self.table_stale = True
             check_burst_handlers(component)
 
     def refresh_table(self) -> None:
         """Rebuild the table from the components, with every change made since it was built."""
-        self.table.rebuild(self.by_name.values())
+        self.table.rebuild(self.components.values())
         self.table_stale = False
 
 
