@@ -27,6 +27,7 @@ from typing import (
     Iterable,
     List,
     Optional,
+    Protocol,
     Tuple,
     cast,
 )
@@ -43,10 +44,9 @@ from snr.prelude.task import Task
 
 if TYPE_CHECKING:
     from snr.core.checks.failures import FailureReport
-    from snr.core.components import ComponentSet
     from snr.core.task_queue import TaskQueue
 
-__all__ = ["BurstEntry", "Entry", "HandlerMap", "HandlerRunner", "HandlerTable"]
+__all__ = ["BurstEntry", "Entry", "HandlerMap", "HandlerRunner", "HandlerTable", "Handlers"]
 __all__ += ["check_burst_handlers", "check_handler", "check_task_id"]
 
 Entry = Tuple[TaskHandler, TaskId, AbstractComponent, StatsCell]
@@ -208,13 +208,31 @@ class HandlerTable:
         return self.profiler.task_cell(key, getattr(handler, "__module__", None) or "?")
 
 
+class Handlers(Protocol):
+    """What the runner reads of the node's components: their handler table, kept current.
+
+    The node's `snr.core.components.ComponentSet` is one; the runner needs no more of it.
+
+    Example::
+
+        if components.table_stale:   # a component was added, removed or changed
+            components.refresh_table()
+        entries = components.table.table.get(task.id(), [])
+    """
+
+    table: HandlerTable
+    table_stale: bool
+
+    def refresh_table(self) -> None:
+        """Rebuild ``table`` from the components, with every change made since."""
+
+
 class HandlerRunner:
     """Runs handlers, queues their tasks, and hands failures to the node's failure report.
 
     Args:
         queue: where tasks come from and returned tasks go.
-        components: the node, a `snr.core.components.ComponentSet`: its handler
-            ``table``, rebuilt with ``refresh_table()`` while ``table_stale``.
+        components: the node's components, as `Handlers` (their handler table).
         failures: the node's `snr.core.checks.failures.FailureReport`.
         timed: time every handler (DEBUG/TEST, or a profiler is on).
 
@@ -235,7 +253,7 @@ class HandlerRunner:
     def __init__(
         self,
         queue: TaskQueue,
-        components: ComponentSet,
+        components: Handlers,
         failures: FailureReport,
         timed: bool = True,
         slow_handler_s: float = 0.1,
