@@ -485,13 +485,12 @@ class ReplayerLoopFactory(LoopFactory):
             for line, page, timed in islice(ordered, self.position, None):
                 now = time.monotonic()
                 previous, why = now if due is None else due, ""  # the first page is due now
-                at = f"{self.filename}:{line}: the"
                 if self.fast or (due is None and not timed):
                     due = now
                 elif not timed:
                     due, why = previous, "no time"
                     text = (
-                        f"{at} page under {page.key!r} has no created_at_s: stored right after "
+                        f"page under {page.key!r} has no created_at_s: stored right after "
                         "the previous page."
                     )
                 else:  # an origin's first page starts its clock; later ones follow it
@@ -501,19 +500,20 @@ class ReplayerLoopFactory(LoopFactory):
                     if gap > max_gap:
                         due, why = previous + max_gap, "gap"
                         text = (
-                            f"{at} page under {page.key!r} was created {_seconds(gap)} s after "
+                            f"page under {page.key!r} was created {_seconds(gap)} s after "
                             f"the one before it: waiting {max_gap:g} s instead (max_gap_s)."
                         )
                     elif gap < -max_gap:
                         due, why = previous, "back"
                         text = (
-                            f"{at} time of the page under {page.key!r} goes back by "
+                            f"time of the page under {page.key!r} goes back by "
                             f"{_seconds(-gap)} s: stored right after the previous page."
                         )
                     if why:  # follow the clock from here
                         offsets[page.origin] = due - page.created_at_s
                 if why:
                     self.retimed += 1
+                    text = f"{self.filename}:{line}: the {text}"
                     warn(why, f"Replay timing of {self.filename} ({why})", logging.WARNING, text)
                 yield due - now, page
         self.bad_lines = reader.bad_lines
