@@ -294,7 +294,6 @@ class ReplayerLoop(ThreadLoop):
         self.replay = factory
         self._items = factory.items()  # now: a missing file fails the build
         self._done_event = f"{self.name}_done"
-        self._whole_file_replayed = False  # set on the loop's thread, read on the node's
         if factory.exit_when_done:
             self.task_handlers = {(TaskType.event, self._done_event): self.finish_node}
 
@@ -303,19 +302,17 @@ class ReplayerLoop(ThreadLoop):
             step = next(self._items, None)
             if step is None:
                 self.set_terminate_flag("replayed the whole file")
-                if not self.replay.exit_when_done:
+                if self.replay.exit_when_done:  # finish_node says it, after what they printed
+                    self._schedule_exit(True)
+                else:
                     self._say_replayed()
-                # Else finish_node says it on the node's thread, after what the
-                # items caused: the line then follows what they printed.
-                self._whole_file_replayed = True
-                self._still_exit()
             elif not (step[0] > 0 and self.wait_s(step[0])):  # True: the node is stopping
                 self.store(step[1])
                 self.replay.position += 1
         except Exception:
             # Reported by the node like any loop's error. In DEPLOYED mode the
             # node keeps running without this loop: exit_when_done still stops it.
-            self._still_exit()
+            self._schedule_exit(False)
             raise
 
     def store(self, item: Union[Page, Tuple[DataKey, str]]) -> None:
@@ -333,9 +330,9 @@ class ReplayerLoop(ThreadLoop):
         more = f" ({'; '.join(parts)}; see the warnings above)" if parts else ""
         self.info(f"Replayed {replay.position} items from {replay.filename}{more}")
 
-    def _still_exit(self) -> None:  # once: the loop stops after it
+    def _schedule_exit(self, replayed: bool) -> None:  # once: the loop stops after it
         if self.replay.exit_when_done:
-            self.schedule(tasks.event(self._done_event, [0]))
+            self.schedule(tasks.event(self._done_event, [0, replayed]))
 
     def finish_node(self, task: Task, key: TaskId) -> SomeTasks:
         """Stop the node once it has handled what the replayed items caused.
@@ -344,11 +341,11 @@ class ReplayerLoop(ThreadLoop):
         (the pages' ``process_data`` tasks and what they trigger), at most
         ``DRAIN_ROUNDS`` times, so nothing replayed is cut off by the stop.
         """
-        rounds = task.val_list[0] if task.val_list else DRAIN_ROUNDS
+        rounds, replayed = task.val_list or (DRAIN_ROUNDS, False)
         queue = getattr(self.parent, "queue", None)  # a real Node's task queue
         if queue and rounds < DRAIN_ROUNDS:
-            return tasks.event(self._done_event, [rounds + 1])
-        if self._whole_file_replayed:
+            return tasks.event(self._done_event, [rounds + 1, replayed])
+        if replayed:  # the whole file, not a failed loop
             self._say_replayed()
         return tasks.terminate(f"replayed {self.replay.filename}")
 
