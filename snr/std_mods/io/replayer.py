@@ -480,9 +480,12 @@ class ReplayerLoopFactory(LoopFactory):
             wanted = (r for r in recorded if keys is None or r.page.key in keys)
             ordered = in_created_order(wanted, max(max_gap, MAX_GAP_S))
             for line, page, timed in islice(ordered, self.position, None):
+                if self.fast:
+                    yield 0.0, page
+                    continue
                 now = time.monotonic()
                 previous, why = now if due is None else due, ""  # the first page is due now
-                if self.fast or (due is None and not timed):
+                if due is None and not timed:
                     due = now
                 elif not timed:
                     due, why = previous, "no time"
