@@ -336,6 +336,15 @@ class TestTextReplayer(SNRTestCase):
             self.assertEqual(list(reader), ["ok", "bad \ufffd byte"])
         self.assertIn(".txt:2:", reader.problems[0])
 
+    def test_a_text_replay_resumes_where_it_was_after_a_reload(self) -> None:
+        path = self.temp_file(".txt", "a\nb\nc\n")
+        factory = TextReplayerFactory(path, "line", exit_when_done=True)
+        factory.position = 2  # what a reload keeps on the factory
+        collected = PageCollectorFactory(["line"])
+        run_role("t", [factory, collected])
+        self.assertEqual(collected.data(), ["c"])
+        self.assertEqual(factory.position, 3)
+
     def test_period_spaces_the_lines(self) -> None:
         path = self.temp_file(".txt", "a\nb\nc\n")
         collected = PageCollectorFactory(["line"])

@@ -78,8 +78,7 @@ class RecorderEndpoint(Endpoint):
         its key and skipped, whatever the error: recording goes on.
         """
         page, recording = task.page(), self.recording
-        if page is None:
-            self.warn("A store_page task for %r carries %r, not a Page", task.name, task.val_list)
+        if page is None:  # the node has said so (NOT_A_PAGE)
             return None
         try:
             _check_fields(page)

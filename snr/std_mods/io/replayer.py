@@ -22,7 +22,6 @@ from typing import (
     Deque,
     Dict,
     Generator,
-    Generic,
     Iterable,
     Iterator,
     List,
@@ -30,7 +29,7 @@ from typing import (
     Optional,
     Sequence,
     Tuple,
-    TypeVar,
+    Union,
 )
 
 from snr.core import LoopFactory, ThreadLoop, tasks
@@ -55,7 +54,6 @@ __all__ = [
     "PageReader",
     "REORDER_WINDOW",
     "RecordedPage",
-    "ReplayLoop",
     "ReplayerLoop",
     "ReplayerLoopFactory",
     "TextReader",
@@ -123,10 +121,8 @@ class PageReader:
     A file in another format an extra provides (MCAP: known by its first
     bytes, whatever its name; ``pip install 'snr-robotics[mcap]'``) is read by
     that extra, its messages taken as lines are ("message N" for "line N").
-    Any line that is not a valid page is logged with its line number, listed
-    in ``problems`` and skipped, a last line cut short included: the first
-    five in full, then a count every 5 s, and a summary with the total at the
-    end (``docs/recording.md``, "Reading").
+    A line that is not a valid page is logged with its number, listed in
+    ``problems`` and skipped (``docs/recording.md``, "Reading").
 
     Args:
         filename: a file written by `RecorderEndpointFactory`.
@@ -276,71 +272,67 @@ class TextReader:
                 yield line
 
 
-Item = TypeVar("Item")
+class ReplayerLoop(ThreadLoop):
+    """Stores the pages of a recording (or a text file's lines), each after its wait, then stops.
 
+    Each origin's pages are stored in the order they were made, even where
+    the file's lines are out of order (see `in_created_order`). With original
+    timing each page waits as long after the previous one as it was created
+    after it, following each origin's clock on its own; a page with no time,
+    a gap over ``max_gap_s`` or a time going back is stored right away (or
+    after ``max_gap_s``) and logged with its line number. The factory says
+    what to store and when (``items``); the count of items replayed lives on
+    it, so after a hot reload the replay goes on where it was.
 
-class ReplayLoop(ThreadLoop, Generic[Item]):
-    """What both replayers share: step through a file, then stop.
+    Example::
 
-    Subclasses say how to read the file (``items``), how long to wait before
-    each item (``delay_s``) and how to store it (``store``). The count of
-    items replayed lives on the factory, so after a hot reload the replay
-    goes on where it was instead of starting over.
-
-    Example: see `ReplayerLoop` and `TextReplayerLoop`.
+        ReplayerLoopFactory("dive.jsonl", fast=True, exit_when_done=True)
     """
 
-    def __init__(self, factory: _ReplayFactory, parent: AbstractNode) -> None:
+    def __init__(self, factory: ReplayerLoopFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
         self.replay = factory
-        self._items: Iterator[Tuple[float, Item]] = iter(())
+        self._items = factory.items()  # now: a missing file fails the build
         self._done_event = f"{self.name}_done"
-        self._whole_file_replayed = False  # set on the loop's thread, read on the node's
         if factory.exit_when_done:
             self.task_handlers = {(TaskType.event, self._done_event): self.finish_node}
-
-    def items(self) -> Iterator[Tuple[float, Item]]:
-        """``(seconds to wait, item)`` for each item after the first ``position``."""
-        raise NotImplementedError
-
-    def store(self, item: Item) -> None:
-        """Store ``item`` in the node."""
-        raise NotImplementedError
-
-    def summary(self) -> str:
-        """What went wrong with the file, for the last log line ("" if nothing)."""
-        return ""
-
-    def setup(self) -> None:
-        self._items = self.items()
 
     def loop(self) -> None:
         try:
             step = next(self._items, None)
             if step is None:
                 self.set_terminate_flag("replayed the whole file")
-                if not self.replay.exit_when_done:
+                if self.replay.exit_when_done:  # finish_node says it, after what they printed
+                    self._schedule_exit(True)
+                else:
                     self._say_replayed()
-                # Else finish_node says it on the node's thread, after what the
-                # items caused: the line then follows what they printed.
-                self._whole_file_replayed = True
-                self._still_exit()
             elif not (step[0] > 0 and self.wait_s(step[0])):  # True: the node is stopping
                 self.store(step[1])
                 self.replay.position += 1
         except Exception:
             # Reported by the node like any loop's error. In DEPLOYED mode the
             # node keeps running without this loop: exit_when_done still stops it.
-            self._still_exit()
+            self._schedule_exit(False)
             raise
 
-    def _say_replayed(self) -> None:
-        replay = self.replay
-        self.info(f"Replayed {replay.position} items from {replay.filename}{self.summary()}")
+    def store(self, item: Union[Page, Tuple[DataKey, str]]) -> None:
+        """Store one item: a recorded page as it was made, or a text line as ``(key, line)``."""
+        if isinstance(item, Page):
+            self.store_page(item)  # origin and created_at_s as recorded
+        else:
+            self.store_data(*item)
 
-    def _still_exit(self) -> None:  # once: the loop stops after it
+    def _say_replayed(self) -> None:
+        replay, bad = self.replay, self.replay.bad_lines
+        parts = [f"{bad} bad lines skipped"] if bad else []
+        if replay.retimed:
+            parts.append(f"{replay.retimed} pages not stored at their recorded time")
+        more = f" ({'; '.join(parts)}; see the warnings above)" if parts else ""
+        self.info(f"Replayed {replay.position} items from {replay.filename}{more}")
+
+    def _schedule_exit(self, replayed: bool) -> None:  # once: the loop stops after it
         if self.replay.exit_when_done:
-            self.schedule(tasks.event(self._done_event, [0]))
+            self.schedule(tasks.event(self._done_event, [0, replayed]))
 
     def finish_node(self, task: Task, key: TaskId) -> SomeTasks:
         """Stop the node once it has handled what the replayed items caused.
@@ -349,11 +341,11 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         (the pages' ``process_data`` tasks and what they trigger), at most
         ``DRAIN_ROUNDS`` times, so nothing replayed is cut off by the stop.
         """
-        rounds = task.val_list[0] if task.val_list else DRAIN_ROUNDS
+        rounds, replayed = task.val_list or (DRAIN_ROUNDS, False)
         queue = getattr(self.parent, "queue", None)  # a real Node's task queue
         if queue and rounds < DRAIN_ROUNDS:
-            return tasks.event(self._done_event, [rounds + 1])
-        if self._whole_file_replayed:
+            return tasks.event(self._done_event, [rounds + 1, replayed])
+        if replayed:  # the whole file, not a failed loop
             self._say_replayed()
         return tasks.terminate(f"replayed {self.replay.filename}")
 
@@ -362,103 +354,11 @@ class ReplayLoop(ThreadLoop, Generic[Item]):
         getattr(self._items, "close", lambda: None)()
 
 
-class _ReplayFactory(LoopFactory):
-    """Options shared by both replayer factories (the position survives reload)."""
+TextReplayerLoop = ReplayerLoop
+"""The loop a `TextReplayerFactory` builds: a `ReplayerLoop` storing lines.
 
-    def __init__(self, filename: PathLike, exit_when_done: bool, name: str) -> None:
-        super().__init__(sys.modules[__name__])
-        self.filename = os.fspath(filename)
-        self.exit_when_done = exit_when_done
-        self.name = name
-        self.position = 0
-
-
-class ReplayerLoop(ReplayLoop[RecordedPage]):
-    """Stores the pages of a recording, each with its key, data, origin and time.
-
-    Each origin's pages are stored in the order they were made, even where
-    the file's lines are out of order (see `in_created_order`). With original
-    timing each page waits as long after the previous one as it was created
-    after it, following each origin's clock on its own; a page with no time,
-    a gap over ``max_gap_s`` or a time going back is stored right away (or
-    after ``max_gap_s``) and logged with its line number.
-
-    Example::
-
-        ReplayerLoopFactory("dive.jsonl", fast=True, exit_when_done=True)
-    """
-
-    def __init__(self, factory: ReplayerLoopFactory, parent: AbstractNode) -> None:
-        super().__init__(factory, parent)
-        self.options = factory
-        self.reader = PageReader(factory.filename)  # now: a missing file fails the build
-        self._timing = RepeatFilter(_log, first=5)
-
-    def items(self) -> Iterator[Tuple[float, RecordedPage]]:
-        options, keys = self.options, self.options.keys
-        due: Optional[float] = None  # when the previous page was due (monotonic)
-        offsets: Dict[str, float] = {}  # origin -> replay time minus created_at_s
-        with closing(self.reader.recorded_pages()) as recorded:
-            wanted = (r for r in recorded if keys is None or r.page.key in keys)
-            ordered = in_created_order(wanted, max(options.max_gap_s, MAX_GAP_S))
-            for item in islice(ordered, options.position, None):
-                now = time.monotonic()
-                if options.fast or (due is None and not item.timed):
-                    due = now
-                else:  # the first page (also after a reload) is due now
-                    due = self._next_due(item, now if due is None else due, offsets)
-                yield due - now, item
-
-    def _next_due(self, item: RecordedPage, previous: float, offsets: Dict[str, float]) -> float:
-        """When ``item`` is due, given when the page before it was due."""
-        page, max_gap = item.page, self.options.max_gap_s
-        at = f"{self.options.filename}:{item.line}: the"
-        if not item.timed:
-            return self._retimed(
-                "no time",
-                f"{at} page under {page.key!r} has no created_at_s: stored right after the "
-                "previous page.",
-                previous,
-            )
-        # An origin's first page starts its clock; later ones follow it, within max_gap.
-        offset = offsets.setdefault(page.origin, previous - page.created_at_s)
-        gap = page.created_at_s + offset - previous
-        if -max_gap <= gap <= max_gap:  # a little back (two nodes' clocks): no wait
-            return previous + max(gap, 0.0)
-        if gap > max_gap:
-            due = self._retimed(
-                "gap",
-                f"{at} page under {page.key!r} was created {_seconds(gap)} s after the one "
-                f"before it: waiting {max_gap:g} s instead (max_gap_s).",
-                previous + max_gap,
-            )
-        else:
-            due = self._retimed(
-                "back",
-                f"{at} time of the page under {page.key!r} goes back by {_seconds(-gap)} s: "
-                "stored right after the previous page.",
-                previous,
-            )
-        offsets[page.origin] = due - page.created_at_s  # follow the clock from here
-        return due
-
-    def _retimed(self, kind: str, text: str, due: float) -> float:
-        """Log (or count) a page not stored at its recorded time; returns ``due``."""
-        self.options.retimed += 1
-        what = f"Replay timing of {self.options.filename} ({kind})"
-        self._timing.report(kind, what, logging.WARNING, text)
-        return due
-
-    def store(self, item: RecordedPage) -> None:
-        self.store_page(item.page)  # the page as recorded: origin and created_at_s kept
-
-    def summary(self) -> str:
-        options = self.options
-        options.bad_lines = bad = self.reader.bad_lines
-        parts = [f"{bad} bad lines skipped"] if bad else []
-        if options.retimed:
-            parts.append(f"{options.retimed} pages not stored at their recorded time")
-        return f" ({'; '.join(parts)}; see the warnings above)" if parts else ""
+Example: ``TextReplayerFactory("gps_log.txt", "nmea", period_s=0.1)``.
+"""
 
 
 def in_created_order(
@@ -503,7 +403,7 @@ def _seconds(value: float) -> str:
     return f"{value:.3g}" if math.isfinite(value) else "an unbounded number of"
 
 
-class ReplayerLoopFactory(_ReplayFactory):
+class ReplayerLoopFactory(LoopFactory):
     """Builds a `ReplayerLoop` that replays a recording into the node.
 
     Args:
@@ -544,7 +444,10 @@ class ReplayerLoopFactory(_ReplayFactory):
         name: Optional[str] = None,
         max_gap_s: float = MAX_GAP_S,
     ) -> None:
-        super().__init__(filename, exit_when_done, name or "replayer")
+        super().__init__(sys.modules[__name__])
+        self.filename = os.fspath(filename)
+        self.exit_when_done = exit_when_done
+        self.name = name or "replayer"
         self.fast = fast
         self.keys: Optional[List[DataKey]] = None if keys is None else list(keys)
         # NaN fails the comparison, infinity is over TIMEOUT_MAX.
@@ -554,8 +457,66 @@ class ReplayerLoopFactory(_ReplayFactory):
                 "number of seconds, 0 or more (e.g. 10.0)."
             )
         self.max_gap_s = float(max_gap_s)
+        self.position = 0
         self.bad_lines = 0
         self.retimed = 0
+
+    def items(self) -> Iterator[Tuple[float, Any]]:
+        """``(seconds to wait, item)`` for each item after the first ``position``.
+
+        The file opens now, so a missing one fails when the node is built.
+
+        Example::
+
+            wait_s, page = next(ReplayerLoopFactory("dive.jsonl").items())
+        """
+        return self._timed(PageReader(self.filename))
+
+    def _timed(self, reader: PageReader) -> Iterator[Tuple[float, Page]]:
+        keys, max_gap, warn = self.keys, self.max_gap_s, RepeatFilter(_log, first=5).report
+        due: Optional[float] = None  # when the previous page was due (monotonic)
+        offsets: Dict[str, float] = {}  # origin -> replay time minus created_at_s
+        with closing(reader.recorded_pages()) as recorded:
+            wanted = (r for r in recorded if keys is None or r.page.key in keys)
+            ordered = in_created_order(wanted, max(max_gap, MAX_GAP_S))
+            for line, page, timed in islice(ordered, self.position, None):
+                if self.fast:
+                    yield 0.0, page
+                    continue
+                now = time.monotonic()
+                previous, why = now if due is None else due, ""  # the first page is due now
+                if due is None and not timed:
+                    due = now
+                elif not timed:
+                    due, why = previous, "no time"
+                    text = (
+                        f"page under {page.key!r} has no created_at_s: stored right after "
+                        "the previous page."
+                    )
+                else:  # an origin's first page starts its clock; later ones follow it
+                    offset = offsets.setdefault(page.origin, previous - page.created_at_s)
+                    gap = page.created_at_s + offset - previous
+                    due = previous + max(gap, 0.0)  # a little back (two nodes' clocks): no wait
+                    if gap > max_gap:
+                        due, why = previous + max_gap, "gap"
+                        text = (
+                            f"page under {page.key!r} was created {_seconds(gap)} s after "
+                            f"the one before it: waiting {max_gap:g} s instead (max_gap_s)."
+                        )
+                    elif gap < -max_gap:
+                        due, why = previous, "back"
+                        text = (
+                            f"time of the page under {page.key!r} goes back by "
+                            f"{_seconds(-gap)} s: stored right after the previous page."
+                        )
+                    if why:  # follow the clock from here
+                        offsets[page.origin] = due - page.created_at_s
+                if why:
+                    self.retimed += 1
+                    text = f"{self.filename}:{line}: the {text}"
+                    warn(why, f"Replay timing of {self.filename} ({why})", logging.WARNING, text)
+                yield due - now, page
+        self.bad_lines = reader.bad_lines
 
     def get(self, parent: AbstractNode) -> ReplayerLoop:
         return ReplayerLoop(self, parent)
@@ -564,30 +525,8 @@ class ReplayerLoopFactory(_ReplayFactory):
         return f"ReplayerLoopFactory({self.filename!r}, fast={self.fast})"
 
 
-class TextReplayerLoop(ReplayLoop[str]):
-    """Stores each line of a text file as data under one key, ``period_s`` apart.
-
-    Example::
-
-        TextReplayerFactory("gps_log.txt", "nmea", period_s=0.1)
-    """
-
-    def __init__(self, factory: TextReplayerFactory, parent: AbstractNode) -> None:
-        super().__init__(factory, parent)
-        self.options = factory
-        self.reader = TextReader(factory.filename, factory.encoding)
-
-    def items(self) -> Iterator[Tuple[float, str]]:
-        start, period = self.options.position, self.options.period_s
-        for number, line in islice(enumerate(self.reader), start, None):
-            yield (period if number > start else 0.0), line
-
-    def store(self, item: str) -> None:
-        self.store_data(self.options.key, item)
-
-
-class TextReplayerFactory(_ReplayFactory):
-    """Builds a `TextReplayerLoop`: one page per line of a text file.
+class TextReplayerFactory(ReplayerLoopFactory):
+    """Builds a `ReplayerLoop` that stores one page per line of a text file.
 
     Args:
         filename: the text file.
@@ -611,15 +550,16 @@ class TextReplayerFactory(_ReplayFactory):
         encoding: str = "utf-8",
         name: Optional[str] = None,
     ) -> None:
-        super().__init__(filename, exit_when_done, name or "text_replayer")
+        super().__init__(filename, exit_when_done=exit_when_done, name=name or "text_replayer")
         if period_s < 0:
             raise ConfigError(f"TextReplayerFactory(period_s={period_s}): use 0 or more seconds.")
         self.key = key
         self.period_s = period_s
         self.encoding = encoding
 
-    def get(self, parent: AbstractNode) -> TextReplayerLoop:
-        return TextReplayerLoop(self, parent)
+    def items(self) -> Iterator[Tuple[float, Any]]:
+        lines = islice(TextReader(self.filename, self.encoding), self.position, None)
+        return ((self.period_s if n else 0.0, (self.key, line)) for n, line in enumerate(lines))
 
     def __repr__(self) -> str:
         return f"TextReplayerFactory({self.filename!r}, {self.key!r})"
