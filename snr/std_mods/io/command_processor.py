@@ -104,7 +104,11 @@ _previews = _ValueRepr(_PREVIEW_CHARS, 3, 12)  # a short preview, cheap even for
 _whole_values = _ValueRepr(REPLY_BUDGET_CHARS, 8, 2000)  # one value in full, up to a reply
 
 Answer = Union[str, Reply, None]
-"""What a command returns: the text of an OK reply, a reply, or None: it replies later."""
+"""What a command returns: the text of an OK reply, a reply, or None: it replies later.
+
+A command whose reply comes after a while returns ``Reply(Status.WAIT, "2")``
+at once: the console then waits 2 s longer for the reply (docs/console.md).
+"""
 _Run = Callable[["CommandProcessorEndpoint", str], Answer]  # a command's function
 
 

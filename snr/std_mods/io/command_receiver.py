@@ -255,8 +255,8 @@ class _RemoteConsole(ConsoleSession):
         why = "closed"
         try:
             reply = self.receiver.greet(self)
-            while self.write(reply):
-                reply = self.next_reply()
+            while self.write(reply):  # after a WAIT, the command's reply itself
+                reply = self.replies.get() if reply.status is Status.WAIT else self.next_reply()
         except _Gone as gone:
             why = str(gone)
         except OSError:  # reset or broken pipe

@@ -102,6 +102,8 @@ class Status(enum.Enum):
         OK: the command worked; the text says what happened.
         ERROR: the command was refused or failed; the text says why.
         BYE: the node closes the connection after this frame.
+        WAIT: not the reply yet: it comes within the seconds the text gives
+            (a command that measures for a while); the reply frame follows.
     """
 
     HELLO = "hello"
@@ -109,6 +111,7 @@ class Status(enum.Enum):
     OK = "ok"
     ERROR = "error"
     BYE = "bye"
+    WAIT = "wait"
 
 
 @dataclass(frozen=True)
@@ -139,7 +142,8 @@ class ConsoleSession(ABC):
     A console loop hands each command line to the node with its session; the
     `CommandProcessorEndpoint` runs the command on the node's thread and calls
     ``session.send(reply)``, so ``send`` must be quick and never block or
-    raise, even when the console has gone.
+    raise, even when the console has gone. A transport that cannot pass on
+    a ``WAIT`` (a late reply's notice) ignores it.
 
     Example::
 

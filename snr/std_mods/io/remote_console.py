@@ -62,7 +62,6 @@ EXIT_INTERRUPTED = 130
 """Exit code: Ctrl-C while waiting for the node (the shell's convention)."""
 
 _LEAVE_WORDS = ("quit", "q")
-_HZ_DEFAULT_WINDOW_S = 2.0  # `hz KEY` replies after this long (snr.extras.console_tools)
 _Client = TypeVar("_Client", bound="ConsoleClient")
 
 
@@ -158,14 +157,7 @@ class ConsoleClient(ABC):
             raise ValueError(f"A console command may be at most {MAX_LINE_BYTES} bytes long.")
         if not self.is_connected():
             raise self._not_connected()
-        timeout_s = self.timeout_s  # `hz KEY W` replies after W s
-        words = line.lower().split()
-        if words[:1] == ["hz"]:
-            try:
-                timeout_s += max(0.0, float(words[2]) if len(words) == 3 else _HZ_DEFAULT_WINDOW_S)
-            except ValueError:  # the node refuses it at once
-                pass
-        reply = self.ask(line, timeout_s)
+        reply = self.ask(line, self.timeout_s)
         if reply.status is Status.BYE:
             self.close()
         return reply
@@ -407,7 +399,11 @@ class RemoteConsole(ConsoleClient):
     def _receive(self, wait_s: float) -> Reply:
         sock = self._connected()
         sock.settimeout(wait_s)
-        while not self._ready:
+        while not self._ready or self._ready[0].status is Status.WAIT:
+            if self._ready:  # a late reply: the node says how many seconds more it takes
+                wait_s += float(self._ready.pop(0).text)
+                sock.settimeout(wait_s)
+                continue
             try:
                 data = sock.recv(65536)
             except socket.timeout:
