@@ -313,8 +313,14 @@ class CommandProcessorEndpoint(Endpoint):
             )
         if isinstance(answer, str):
             answer = Reply(Status.OK, answer)
-        if answer is not None:
-            answer = Reply(answer.status, _bounded(answer.text))
+        if answer is not None and len(answer.text) > REPLY_BUDGET_CHARS:
+            cut = len(answer.text) - REPLY_BUDGET_CHARS
+            answer = Reply(
+                answer.status,
+                answer.text[:REPLY_BUDGET_CHARS]
+                + f"\n... (reply cut: {cut:,} more characters; ask for "
+                "less, e.g. `dump datastore KEY` for one key)",
+            )
         return answer, self.follow_up
 
     def full_node(self, command: str) -> Node:
@@ -720,16 +726,6 @@ def _list_datastore(role: str, datastore: Mapping[str, Page], prefix: str) -> st
             break
         lines.append(line)
     return "\n".join(lines)
-
-
-def _bounded(text: str) -> str:
-    """``text``, cut to `REPLY_BUDGET_CHARS` with a note when longer."""
-    if len(text) <= REPLY_BUDGET_CHARS:
-        return text
-    return text[:REPLY_BUDGET_CHARS] + (
-        f"\n... (reply cut: {len(text) - REPLY_BUDGET_CHARS:,} more characters; ask for "
-        "less, e.g. `dump datastore KEY` for one key)"
-    )
 
 
 class _ErrorCollector(logging.Handler):

@@ -172,7 +172,6 @@ class ReplyDecoder:
 
     def __init__(self) -> None:
         self._buffer = bytearray()
-        self._header: Optional[Tuple[Status, int]] = None
 
     def feed(self, data: bytes) -> List[Reply]:
         """Every reply completed by ``data``.
@@ -183,21 +182,18 @@ class ReplyDecoder:
         """
         self._buffer += data
         replies: List[Reply] = []
-        while True:
-            if self._header is None:
-                newline = self._buffer.find(b"\n", 0, _MAX_HEADER_BYTES + 1)
-                if newline < 0 and len(self._buffer) > _MAX_HEADER_BYTES:
-                    raise WireFormatError(_bad_header(bytes(self._buffer)))
-                if newline < 0:
-                    return replies
-                self._header = _parse_header(bytes(self._buffer[:newline]))
-                del self._buffer[: newline + 1]
-            status, length = self._header
-            if len(self._buffer) < length:
+        while True:  # a frame's header is read again until its body is all there
+            newline = self._buffer.find(b"\n", 0, _MAX_HEADER_BYTES + 1)
+            if newline < 0 and len(self._buffer) > _MAX_HEADER_BYTES:
+                raise WireFormatError(_bad_header(bytes(self._buffer)))
+            if newline < 0:
                 return replies
-            body = bytes(self._buffer[:length])
-            del self._buffer[:length]
-            self._header = None
+            status, length = _parse_header(bytes(self._buffer[:newline]))
+            end = newline + 1 + length
+            if len(self._buffer) < end:
+                return replies
+            body = bytes(self._buffer[newline + 1 : end])
+            del self._buffer[:end]
             try:
                 replies.append(Reply(status, body.decode("utf-8")))
             except UnicodeDecodeError as error:

@@ -17,7 +17,18 @@ from __future__ import annotations
 import socket
 import sys
 from abc import ABC, abstractmethod
-from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequence, Type, TypeVar
+from typing import (
+    IO,
+    TYPE_CHECKING,
+    Callable,
+    Iterable,
+    Iterator,
+    List,
+    Optional,
+    Sequence,
+    Type,
+    TypeVar,
+)
 
 from snr.core import plugins
 from snr.core.checks.os_errors import explain_os_error
@@ -217,23 +228,7 @@ class ConsoleClient(ABC):
             _enable_line_editing()
             read_line = input
         say(out, "Type 'quit' or Ctrl-D to leave (the node keeps running).")
-        while self.is_connected():
-            try:
-                line = read_line(f"{self.where}> ").strip()
-            except EOFError:
-                out.write("\n")  # so the shell's prompt starts on a new line
-                return EXIT_OK
-            except KeyboardInterrupt:
-                say(out, "\n(Ctrl-C) Type 'quit' to leave.")
-                continue
-            if line.lower() in _LEAVE_WORDS:
-                return EXIT_OK
-            if not line:
-                continue
-            code = self.run_command(line, out)
-            if not self.is_connected():
-                return code
-        return EXIT_OK
+        return self._run_lines(_typed_lines(read_line, f"{self.where}> ", out), out, typed=True)
 
     def run_command(self, line: str, output: IO[str]) -> int:
         """Send ``line``, print the reply; an exit code for this command.
@@ -295,18 +290,21 @@ class ConsoleClient(ABC):
         finally:
             self.close()
 
-    def _run_lines(self, lines: Iterable[str], out: IO[str]) -> int:
-        """Run commands from ``-c`` or a pipe; the exit code of the worst one."""
+    def _run_lines(self, lines: Iterable[str], out: IO[str], typed: bool = False) -> int:
+        """Run commands until ``quit`` or the node leaves; the exit code of the worst one.
+
+        ``typed`` (at the prompt): 0, or the last one's when the node left.
+        """
         worst = EXIT_OK
         for line in lines:
-            if not line:
-                continue
             if line.lower() in _LEAVE_WORDS:
                 break
-            worst = max(worst, self.run_command(line, out))
-            if not self.is_connected():
-                break
-        return worst
+            if line:
+                code = self.run_command(line, out)
+                worst = max(worst, code)
+                if not self.is_connected():
+                    return code if typed else worst
+        return EXIT_OK if typed else worst
 
 
 class RemoteConsole(ConsoleClient):
@@ -489,6 +487,18 @@ def say(output: IO[str], text: str) -> None:
     if text:
         output.write(text + "\n")
         output.flush()
+
+
+def _typed_lines(read_line: Callable[[str], str], prompt: str, out: IO[str]) -> Iterator[str]:
+    """The lines typed at ``prompt`` until end of input; Ctrl-C only says how to leave."""
+    while True:
+        try:
+            yield read_line(prompt).strip()
+        except EOFError:
+            out.write("\n")  # so the shell's prompt starts on a new line
+            return
+        except KeyboardInterrupt:
+            say(out, "\n(Ctrl-C) Type 'quit' to leave.")
 
 
 def _enable_line_editing() -> None:
