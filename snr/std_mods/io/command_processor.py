@@ -516,11 +516,10 @@ def _list(p: CommandProcessorEndpoint, args: str) -> Answer:
     lines = [f"Components of node {p.parent.role!r} ({len(components)}):"]
     width = max(map(len, components), default=0)
     for name, component in components.items():
-        line = f"  {name:<{width}}  endpoint  {type(component).__name__}"
+        kind, state = "endpoint", ""
         if isinstance(component, ThreadLoop):
-            line = (
-                f"  {name:<{width}}  loop      {type(component).__name__} ({component.state.value})"
-            )
+            kind, state = "loop    ", f" ({component.state.value})"
+        line = f"  {name:<{width}}  {kind}  {type(component).__name__}{state}"
         modules = [m.__name__ for m in component.factory.reload_targets]
         lines.append(line + (f"  reloads: {', '.join(modules)}" if modules else ""))
     return "\n".join(lines)

@@ -271,7 +271,7 @@ class _RemoteConsole(ConsoleSession):
     def next_reply(self) -> Reply:
         """The reply to the next request line (a goodbye from elsewhere goes first)."""
         receiver = self.receiver
-        auth_s, idle_s = receiver.auth_timeout_s, receiver.idle_timeout_s
+        auth_s, idle_s = receiver.factory.auth_timeout_s, receiver.factory.idle_timeout_s
         while self.replies.empty():
             request = self.lines.next_request()
             if isinstance(request, Reply):
@@ -356,8 +356,6 @@ class CommandReceiverLoop(ConsoleLoop):
 
     def __init__(self, factory: CommandReceiverFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
-        self.auth_timeout_s = factory.auth_timeout_s
-        self.idle_timeout_s = factory.idle_timeout_s
         self._listener: Optional[socket.socket] = None
         self._selector: Optional[selectors.BaseSelector] = None  # the listener, the wake-up
         self._wake_in: Optional[socket.socket] = None  # with _wake_out: halt() ends a wait
