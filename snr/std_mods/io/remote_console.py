@@ -537,7 +537,6 @@ def main(
     import argparse  # here, not at the top: only the snr-console command parses arguments
 
     words = list(sys.argv[1:] if argv is None else argv)
-    out = stdout if stdout is not None else sys.stdout
     err = stderr if stderr is not None else sys.stderr
     client: Type[ConsoleClient] = RemoteConsole
     if any(word == "--zenoh" or word.startswith("--zenoh=") for word in words):
@@ -572,4 +571,4 @@ def main(
     except SNRError as error:  # e.g. the transport's library is not installed
         say(err, f"{prog}: {error}")
         return EXIT_CONNECTION
-    return console.run(args.command, stdin, out, err, prog)
+    return console.run(args.command, stdin, stdout, err, prog)
