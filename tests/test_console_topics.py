@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import io
 import re
+import socket
 import threading
 import unittest
 from typing import List
@@ -28,7 +29,7 @@ from snr.extras.console_tools.watches import watches_of
 from snr.std_mods.io.command_processor import CommandProcessorEndpoint, CommandProcessorFactory
 from snr.std_mods.io.console_protocol import Status
 from snr.utils.mock_node import MockNode
-from tests.console_helpers import NodeInThread
+from tests.console_helpers import NodeInThread, read_replies
 from tests.helpers import free_port, wait_until
 
 
@@ -134,6 +135,16 @@ class ConsoleTopicsTest(unittest.TestCase):
                 reply = console.send("hz depth 0.3")
                 nothing = console.send("hz nothing 0.1")
                 refused = console.send("hz depth 100")
+            # The reply comes after the window; a `wait` frame says so first, so a
+            # console waits that much longer than its own timeout.
+            with running.console(timeout_s=1.0) as quick:
+                late = quick.send("hz nothing 1.2")
+            with socket.create_connection((running.host, running.port), 5.0) as sock:
+                sock.sendall(b"hz nothing 0.1\n")
+                frames = read_replies(sock, 3)
+        self.assertIn("nothing: no page in 1.2 s.", late.text)
+        self.assertEqual([f.status for f in frames], [Status.HELLO, Status.WAIT, Status.OK])
+        self.assertEqual(frames[1].text, "0.1")
         self.assertEqual(reply.status, Status.OK)
         match = re.fullmatch(
             r"depth: ([\d.]+) Hz over 0\.3 s \((\d+) pages\); period mean ([\d.]+) ms, "

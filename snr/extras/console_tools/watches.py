@@ -56,7 +56,7 @@ ECHO_MAX_PAGES = 100
 """The most pages one ``echo`` reply carries, and waits between two ``echo`` of a console."""
 
 HZ_DEFAULT_WINDOW_S = 2.0
-"""How long ``hz KEY`` counts pages when no window is given (``snr-console`` waits as long)."""
+"""How long ``hz KEY`` counts pages when no window is given (its ``wait`` reply says so)."""
 
 HZ_MAX_WINDOW_S = 60.0
 """The longest window ``hz`` accepts (a reply waits that long)."""
@@ -102,7 +102,7 @@ def _hz(p: CommandProcessorEndpoint, args: str) -> Answer:
     if len(words) == 2:
         window_s = number_argument(words[1], "hz", "WINDOW_S", 0.1, HZ_MAX_WINDOW_S, float)
     watches_of(p).hz(words[0], window_s, _console(p))
-    return None
+    return Reply(Status.WAIT, f"{window_s:g}")  # the console waits as long more for the reply
 
 
 def _console(p: CommandProcessorEndpoint) -> ConsoleSession:

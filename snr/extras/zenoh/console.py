@@ -98,6 +98,8 @@ class _QueryReply(ConsoleSession):
         self.query: Any = query
 
     def send(self, reply: Reply) -> None:
+        if reply.status is Status.WAIT:  # a query's time is fixed when it is sent
+            return
         query, self.query = self.query, None
         if query is not None:
             self.owner.answer(query, reply)

@@ -104,7 +104,11 @@ _previews = _ValueRepr(_PREVIEW_CHARS, 3, 12)  # a short preview, cheap even for
 _whole_values = _ValueRepr(REPLY_BUDGET_CHARS, 8, 2000)  # one value in full, up to a reply
 
 Answer = Union[str, Reply, None]
-"""What a command returns: the text of an OK reply, a reply, or None: it replies later."""
+"""What a command returns: the text of an OK reply, a reply, or None: it replies later.
+
+A command whose reply comes after a while returns ``Reply(Status.WAIT, "2")``
+at once: the console then waits 2 s longer for the reply (docs/console.md).
+"""
 _Run = Callable[["CommandProcessorEndpoint", str], Answer]  # a command's function
 
 
@@ -309,8 +313,14 @@ class CommandProcessorEndpoint(Endpoint):
             )
         if isinstance(answer, str):
             answer = Reply(Status.OK, answer)
-        if answer is not None:
-            answer = Reply(answer.status, _bounded(answer.text))
+        if answer is not None and len(answer.text) > REPLY_BUDGET_CHARS:
+            cut = len(answer.text) - REPLY_BUDGET_CHARS
+            answer = Reply(
+                answer.status,
+                answer.text[:REPLY_BUDGET_CHARS]
+                + f"\n... (reply cut: {cut:,} more characters; ask for "
+                "less, e.g. `dump datastore KEY` for one key)",
+            )
         return answer, self.follow_up
 
     def full_node(self, command: str) -> Node:
@@ -506,11 +516,10 @@ def _list(p: CommandProcessorEndpoint, args: str) -> Answer:
     lines = [f"Components of node {p.parent.role!r} ({len(components)}):"]
     width = max(map(len, components), default=0)
     for name, component in components.items():
-        line = f"  {name:<{width}}  endpoint  {type(component).__name__}"
+        kind, state = "endpoint", ""
         if isinstance(component, ThreadLoop):
-            line = (
-                f"  {name:<{width}}  loop      {type(component).__name__} ({component.state.value})"
-            )
+            kind, state = "loop    ", f" ({component.state.value})"
+        line = f"  {name:<{width}}  {kind}  {type(component).__name__}{state}"
         modules = [m.__name__ for m in component.factory.reload_targets]
         lines.append(line + (f"  reloads: {', '.join(modules)}" if modules else ""))
     return "\n".join(lines)
@@ -716,16 +725,6 @@ def _list_datastore(role: str, datastore: Mapping[str, Page], prefix: str) -> st
             break
         lines.append(line)
     return "\n".join(lines)
-
-
-def _bounded(text: str) -> str:
-    """``text``, cut to `REPLY_BUDGET_CHARS` with a note when longer."""
-    if len(text) <= REPLY_BUDGET_CHARS:
-        return text
-    return text[:REPLY_BUDGET_CHARS] + (
-        f"\n... (reply cut: {len(text) - REPLY_BUDGET_CHARS:,} more characters; ask for "
-        "less, e.g. `dump datastore KEY` for one key)"
-    )
 
 
 class _ErrorCollector(logging.Handler):

@@ -102,6 +102,8 @@ class Status(enum.Enum):
         OK: the command worked; the text says what happened.
         ERROR: the command was refused or failed; the text says why.
         BYE: the node closes the connection after this frame.
+        WAIT: not the reply yet: it comes within the seconds the text gives
+            (a command that measures for a while); the reply frame follows.
     """
 
     HELLO = "hello"
@@ -109,6 +111,7 @@ class Status(enum.Enum):
     OK = "ok"
     ERROR = "error"
     BYE = "bye"
+    WAIT = "wait"
 
 
 @dataclass(frozen=True)
@@ -139,7 +142,8 @@ class ConsoleSession(ABC):
     A console loop hands each command line to the node with its session; the
     `CommandProcessorEndpoint` runs the command on the node's thread and calls
     ``session.send(reply)``, so ``send`` must be quick and never block or
-    raise, even when the console has gone.
+    raise, even when the console has gone. A transport that cannot pass on
+    a ``WAIT`` (a late reply's notice) ignores it.
 
     Example::
 
@@ -168,7 +172,6 @@ class ReplyDecoder:
 
     def __init__(self) -> None:
         self._buffer = bytearray()
-        self._header: Optional[Tuple[Status, int]] = None
 
     def feed(self, data: bytes) -> List[Reply]:
         """Every reply completed by ``data``.
@@ -179,21 +182,18 @@ class ReplyDecoder:
         """
         self._buffer += data
         replies: List[Reply] = []
-        while True:
-            if self._header is None:
-                newline = self._buffer.find(b"\n", 0, _MAX_HEADER_BYTES + 1)
-                if newline < 0 and len(self._buffer) > _MAX_HEADER_BYTES:
-                    raise WireFormatError(_bad_header(bytes(self._buffer)))
-                if newline < 0:
-                    return replies
-                self._header = _parse_header(bytes(self._buffer[:newline]))
-                del self._buffer[: newline + 1]
-            status, length = self._header
-            if len(self._buffer) < length:
+        while True:  # a frame's header is read again until its body is all there
+            newline = self._buffer.find(b"\n", 0, _MAX_HEADER_BYTES + 1)
+            if newline < 0 and len(self._buffer) > _MAX_HEADER_BYTES:
+                raise WireFormatError(_bad_header(bytes(self._buffer)))
+            if newline < 0:
                 return replies
-            body = bytes(self._buffer[:length])
-            del self._buffer[:length]
-            self._header = None
+            status, length = _parse_header(bytes(self._buffer[:newline]))
+            end = newline + 1 + length
+            if len(self._buffer) < end:
+                return replies
+            body = bytes(self._buffer[newline + 1 : end])
+            del self._buffer[:end]
             try:
                 replies.append(Reply(status, body.decode("utf-8")))
             except UnicodeDecodeError as error:

@@ -17,7 +17,18 @@ from __future__ import annotations
 import socket
 import sys
 from abc import ABC, abstractmethod
-from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequence, Type, TypeVar
+from typing import (
+    IO,
+    TYPE_CHECKING,
+    Callable,
+    Iterable,
+    Iterator,
+    List,
+    Optional,
+    Sequence,
+    Type,
+    TypeVar,
+)
 
 from snr.core import plugins
 from snr.core.checks.os_errors import explain_os_error
@@ -62,7 +73,6 @@ EXIT_INTERRUPTED = 130
 """Exit code: Ctrl-C while waiting for the node (the shell's convention)."""
 
 _LEAVE_WORDS = ("quit", "q")
-_HZ_DEFAULT_WINDOW_S = 2.0  # `hz KEY` replies after this long (snr.extras.console_tools)
 _Client = TypeVar("_Client", bound="ConsoleClient")
 
 
@@ -158,14 +168,7 @@ class ConsoleClient(ABC):
             raise ValueError(f"A console command may be at most {MAX_LINE_BYTES} bytes long.")
         if not self.is_connected():
             raise self._not_connected()
-        timeout_s = self.timeout_s  # `hz KEY W` replies after W s
-        words = line.lower().split()
-        if words[:1] == ["hz"]:
-            try:
-                timeout_s += max(0.0, float(words[2]) if len(words) == 3 else _HZ_DEFAULT_WINDOW_S)
-            except ValueError:  # the node refuses it at once
-                pass
-        reply = self.ask(line, timeout_s)
+        reply = self.ask(line, self.timeout_s)
         if reply.status is Status.BYE:
             self.close()
         return reply
@@ -225,23 +228,7 @@ class ConsoleClient(ABC):
             _enable_line_editing()
             read_line = input
         say(out, "Type 'quit' or Ctrl-D to leave (the node keeps running).")
-        while self.is_connected():
-            try:
-                line = read_line(f"{self.where}> ").strip()
-            except EOFError:
-                out.write("\n")  # so the shell's prompt starts on a new line
-                return EXIT_OK
-            except KeyboardInterrupt:
-                say(out, "\n(Ctrl-C) Type 'quit' to leave.")
-                continue
-            if line.lower() in _LEAVE_WORDS:
-                return EXIT_OK
-            if not line:
-                continue
-            code = self.run_command(line, out)
-            if not self.is_connected():
-                return code
-        return EXIT_OK
+        return self._run_lines(_typed_lines(read_line, f"{self.where}> ", out), out, typed=True)
 
     def run_command(self, line: str, output: IO[str]) -> int:
         """Send ``line``, print the reply; an exit code for this command.
@@ -303,18 +290,21 @@ class ConsoleClient(ABC):
         finally:
             self.close()
 
-    def _run_lines(self, lines: Iterable[str], out: IO[str]) -> int:
-        """Run commands from ``-c`` or a pipe; the exit code of the worst one."""
+    def _run_lines(self, lines: Iterable[str], out: IO[str], typed: bool = False) -> int:
+        """Run commands until ``quit`` or the node leaves; the exit code of the worst one.
+
+        ``typed`` (at the prompt): 0, or the last one's when the node left.
+        """
         worst = EXIT_OK
         for line in lines:
-            if not line:
-                continue
             if line.lower() in _LEAVE_WORDS:
                 break
-            worst = max(worst, self.run_command(line, out))
-            if not self.is_connected():
-                break
-        return worst
+            if line:
+                code = self.run_command(line, out)
+                worst = max(worst, code)
+                if not self.is_connected():
+                    return code if typed else worst
+        return EXIT_OK if typed else worst
 
 
 class RemoteConsole(ConsoleClient):
@@ -407,7 +397,11 @@ class RemoteConsole(ConsoleClient):
     def _receive(self, wait_s: float) -> Reply:
         sock = self._connected()
         sock.settimeout(wait_s)
-        while not self._ready:
+        while not self._ready or self._ready[0].status is Status.WAIT:
+            if self._ready:  # a late reply: the node says how many seconds more it takes
+                wait_s += float(self._ready.pop(0).text)
+                sock.settimeout(wait_s)
+                continue
             try:
                 data = sock.recv(65536)
             except socket.timeout:
@@ -495,6 +489,18 @@ def say(output: IO[str], text: str) -> None:
         output.flush()
 
 
+def _typed_lines(read_line: Callable[[str], str], prompt: str, out: IO[str]) -> Iterator[str]:
+    """The lines typed at ``prompt`` until end of input; Ctrl-C only says how to leave."""
+    while True:
+        try:
+            yield read_line(prompt).strip()
+        except EOFError:
+            out.write("\n")  # so the shell's prompt starts on a new line
+            return
+        except KeyboardInterrupt:
+            say(out, "\n(Ctrl-C) Type 'quit' to leave.")
+
+
 def _enable_line_editing() -> None:
     """Line editing, history and Tab completion where readline exists."""
     try:
@@ -531,7 +537,6 @@ def main(
     import argparse  # here, not at the top: only the snr-console command parses arguments
 
     words = list(sys.argv[1:] if argv is None else argv)
-    out = stdout if stdout is not None else sys.stdout
     err = stderr if stderr is not None else sys.stderr
     client: Type[ConsoleClient] = RemoteConsole
     if any(word == "--zenoh" or word.startswith("--zenoh=") for word in words):
@@ -566,4 +571,4 @@ def main(
     except SNRError as error:  # e.g. the transport's library is not installed
         say(err, f"{prog}: {error}")
         return EXIT_CONNECTION
-    return console.run(args.command, stdin, out, err, prog)
+    return console.run(args.command, stdin, stdout, err, prog)
