@@ -99,6 +99,97 @@ class TestZenohConsole(unittest.TestCase):
 
 
 @needs("zenoh")
+class TestZenohConsoleLateReply(unittest.TestCase):
+    """A late reply (``hz``) over Zenoh: its ``wait`` reply lengthens the console's own wait.
+
+    The event ``block`` keeps the node's thread in a handler until the test
+    ends (at most 10 s): a node that is there but silent.
+    """
+
+    def setUp(self) -> None:
+        import snr.extras.console_tools.watches  # noqa: F401  (the node's `hz`)
+        from snr.extras.zenoh.console import ZenohConsole, ZenohConsoleFactory
+
+        capture_test_logs(self, "snr")
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        self.release = threading.Event()
+        blocker = RecorderFactory("blocker", [(TaskType.event, "block")], [], self.block)
+        factories = [
+            ZenohConsoleFactory(SYSTEM, listen=[endpoint], scouting=False),
+            blocker,
+            TimeoutLoopFactory(seconds=15),
+        ]
+        self.nodes = LocalNodes(Config({"urov": factories}, mode=Mode.TEST), ["urov"])
+        self.addCleanup(self.nodes.stop)
+        self.addCleanup(self.release.set)  # (cleanups run last first: before the stop)
+        self.console = ZenohConsole(
+            SYSTEM, "urov", connect=[endpoint], scouting=False, timeout_s=1.0
+        )
+        self.addCleanup(self.console.close)
+        self.console.connect()
+
+    def block(self, task: Task, key: TaskId) -> SomeTasks:
+        self.release.wait(10.0)
+        return None
+
+    def test_hz_with_a_window_longer_than_the_timeout_gets_its_reply(self) -> None:
+        from snr.std_mods.io.console_protocol import Status
+
+        started = time.monotonic()
+        reply = self.console.send("hz depth 1.5")
+        self.assertIs(reply.status, Status.OK, reply.text)
+        self.assertIn("depth: no page in 1.5 s.", reply.text)
+        self.assertGreater(time.monotonic() - started, 1.4)
+        self.assertIs(self.console.send("list endpoints").status, Status.OK, "and the next one")
+
+    def test_a_silent_node_is_given_up_after_the_timeout(self) -> None:
+        from snr.std_mods.io.console_protocol import ConsoleConnectionError, Status
+
+        self.assertIs(self.console.send("task event block").status, Status.OK)
+        started = time.monotonic()
+        with self.assertRaisesRegex(ConsoleConnectionError, "No node 'urov' .* within 1 s"):
+            self.console.send("stats")
+        self.assertLess(time.monotonic() - started, 3.0, "the console's timeout, not the query's")
+
+
+@needs("zenoh")
+class TestZenohConsoleBadWait(unittest.TestCase):
+    """A ``wait`` reply that is not a number up to MAX_WAIT_S is not this protocol."""
+
+    def test_a_console_refuses_a_wait_that_is_too_long_or_not_a_number(self) -> None:
+        import zenoh
+
+        from snr.extras.zenoh.comms import zenoh_config
+        from snr.extras.zenoh.console import ZenohConsole, console_key
+        from snr.std_mods.io.console_protocol import ConsoleConnectionError, Reply, Status
+
+        endpoint = f"tcp/127.0.0.1:{free_port()}"
+        key = console_key(SYSTEM, "odd")
+        session = zenoh.open(zenoh_config("peer", [], [endpoint], False, secret=None))
+        self.addCleanup(session.close)
+
+        def on_query(query: zenoh.Query) -> None:  # a greeting, else a wait of the line's text
+            line = query.payload.to_bytes().decode() if query.payload is not None else ""
+            status = Status.WAIT if line else Status.HELLO
+            query.reply(key, Reply(status, line or "Connected to 'odd'.").encode())
+            query.drop()
+
+        queryable = session.declare_queryable(key, on_query)
+        self.addCleanup(queryable.undeclare)
+        for seconds in ("61", "soon"):
+            console = ZenohConsole(
+                SYSTEM, "odd", connect=[endpoint], scouting=False, token="", timeout_s=2.0
+            )
+            self.addCleanup(console.close)
+            console.connect()
+            with self.assertRaisesRegex(
+                ConsoleConnectionError, f"lab/odd: A wait reply announced '{seconds}' seconds"
+            ):
+                console.send(seconds)
+            self.assertFalse(console.is_connected(), seconds)
+
+
+@needs("zenoh")
 class TestZenohConsoleEveryNode(unittest.TestCase):
     """Two nodes; a console whose role is "*" reaches both, but only to read.
 

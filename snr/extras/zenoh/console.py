@@ -26,6 +26,8 @@ Example::
 from __future__ import annotations
 
 import argparse
+import math
+import queue
 import sys
 import threading
 import time
@@ -40,12 +42,13 @@ from snr.extras.zenoh.comms import (
     meet_endpoints,
     zenoh_config,
 )
-from snr.prelude import AbstractNode, CommsError
+from snr.prelude import AbstractNode, CommsError, WireFormatError
 from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret
 from snr.std_mods.io.command_processor import COMMANDS
 from snr.std_mods.io.command_receiver import ConsoleLoop
 from snr.std_mods.io.console_protocol import (
     MAX_LINE_BYTES,
+    MAX_WAIT_S,
     TOKEN_ENV_VAR,
     ConsoleConnectionError,
     ConsoleSession,
@@ -91,19 +94,22 @@ def console_key(system: str, role: str) -> str:
 
 
 class _QueryReply(ConsoleSession):
-    """Where one command's reply goes: the query it came in (answered once, then finished)."""
+    """Where one command's reply goes: the query it came in (a ``WAIT`` first, if late)."""
 
     def __init__(self, owner: ZenohConsoleLoop, query: Any) -> None:
         self.owner = owner
         self.query: Any = query
 
     def send(self, reply: Reply) -> None:
-        if reply.status is Status.WAIT:  # a query's time is fixed when it is sent
+        query = self.query
+        if query is None:
             return
-        query, self.query = self.query, None
-        if query is not None:
-            self.owner.answer(query, reply)
-            self.owner.answered()
+        if reply.status is Status.WAIT:  # a reply of the same query; it stays open for the real one
+            self.owner.answer(query, reply, last=False)
+            return
+        self.query = None
+        self.owner.answer(query, reply)
+        self.owner.answered()
 
 
 class ZenohConsoleLoop(ConsoleLoop):
@@ -199,11 +205,12 @@ class ZenohConsoleLoop(ConsoleLoop):
             return
         self.submit(line, _QueryReply(self, query))
 
-    def answer(self, query: Any, reply: Reply) -> None:
-        """Reply to ``query`` and finish it (any thread); a console that gave up is let be."""
+    def answer(self, query: Any, reply: Reply, last: bool = True) -> None:
+        """Reply to ``query``, then finish it if ``last`` (any thread); a gone console is let be."""
         try:
             query.reply(self.key, reply.encode())
-            query.drop()  # finished: the console stops waiting for more replies
+            if last:
+                query.drop()  # finished: the console stops waiting for more replies
         except Exception:  # the console gave up waiting, or the session closed
             pass
 
@@ -262,7 +269,7 @@ class ZenohConsole(ConsoleClient):
 
     A transport of the console's core, `ConsoleClient`: it talks like
     ``RemoteConsole`` (``send``, ``stream``, ``interact``); each command is one
-    Zenoh query, its reply one reply frame.
+    Zenoh query, its reply one reply frame (after a ``wait`` one, if it comes late).
 
     The role may be a pattern: ``"*"`` (the default) reaches every node of
     the system. Then only the read-only `EVERY_NODE_COMMANDS` are sent, and
@@ -419,10 +426,39 @@ class ZenohConsole(ConsoleClient):
         """One query for ``line``: the node's reply, or every node's, labelled (``"*"``)."""
         if self.every_node:
             return self._ask_every_node(line, timeout_s)
-        by_role = self._answers(line, timeout_s)
-        if not by_role:
-            raise self._nobody_answered(timeout_s)
-        return next(iter(by_role.values()))
+        return self._ask_one_node(line, timeout_s)
+
+    def _ask_one_node(self, line: str, timeout_s: float) -> Reply:
+        """The node's reply to ``line``, read as it comes: ``timeout_s``, plus what a WAIT says.
+
+        A query's own timeout is fixed when it is sent, so the query may
+        last ``timeout_s`` + `MAX_WAIT_S`; this console keeps its own
+        deadline, so a silent node is given up after ``timeout_s``.
+        """
+        answers: queue.Queue[Any] = queue.Queue()  # Zenoh's replies; None: the query ended
+        handler = self.zenoh.handlers.Callback(answers.put, lambda: answers.put(None))
+        consolidation = self.zenoh.ConsolidationMode.NONE  # pass the WAIT on, not just the last
+        key = console_key(self.system, self.role)
+        self._get(key, line, timeout_s + MAX_WAIT_S, handler, consolidation=consolidation)
+        deadline, waited_s = time.monotonic() + timeout_s, timeout_s
+        while True:
+            try:
+                answer = answers.get(timeout=max(0.0, deadline - time.monotonic()))
+            except queue.Empty:
+                answer = None
+            if answer is None:
+                raise self._nobody_answered(waited_s)
+            try:
+                sample = answer.ok  # None: an error reply, which this protocol never sends
+                replies = [] if sample is None else ReplyDecoder().feed(sample.payload.to_bytes())
+                if replies and replies[0].status is Status.WAIT:
+                    seconds = _announced_wait_s(replies[0].text)
+                    deadline, waited_s = deadline + seconds, waited_s + seconds
+                elif replies:
+                    return replies[0]
+            except WireFormatError as error:  # as the TCP console does
+                self.close()
+                raise ConsoleConnectionError(f"{self.where}: {error}") from None
 
     def _ask_every_node(self, line: str, timeout_s: float) -> Reply:
         """Send a read-only command to every node the role matches; their replies, labelled."""
@@ -549,11 +585,14 @@ class ZenohConsole(ConsoleClient):
         )
 
     def _replies(self, key: str, line: str, timeout_s: float) -> List[Any]:
+        return [reply.ok for reply in self._get(key, line, timeout_s) if reply.ok is not None]
+
+    def _get(self, key: str, line: str, timeout_s: float, handler: Any = None, **how: Any) -> Any:
+        """Send ``line`` as a query on ``key`` (with the token); Zenoh's handler of its replies."""
         token = self.token.encode("utf-8") if self.token else None
-        answers = self.session.get(
-            key, payload=line.encode("utf-8"), attachment=token, timeout=timeout_s
+        return self.session.get(
+            key, handler, payload=line.encode("utf-8"), attachment=token, timeout=timeout_s, **how
         )
-        return [reply.ok for reply in answers if reply.ok is not None]
 
     def close(self) -> None:
         """Close the Zenoh session (the node keeps running). Safe to call twice."""
@@ -662,6 +701,28 @@ def _labelled(by_role: Dict[str, Reply], notes: Optional[Dict[str, str]] = None)
     statuses = {reply.status for reply in by_role.values()}
     status = next(iter(statuses)) if len(statuses) == 1 else Status.ERROR
     return Reply(status, "\n".join(parts))
+
+
+def _announced_wait_s(text: str) -> float:
+    """The seconds a ``WAIT`` reply announces.
+
+    Raises:
+        WireFormatError: ``text`` is not a number from 0 to `MAX_WAIT_S`.
+
+    Example::
+
+        _announced_wait_s("1.5")   # 1.5
+    """
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = math.nan  # refused below, with the text
+    if not 0.0 <= seconds <= MAX_WAIT_S:  # NaN too
+        raise WireFormatError(
+            f"A wait reply announced {text[:40]!r} seconds; a node announces a number from 0 "
+            f"to {MAX_WAIT_S:g}. Is the node running another version of SNR?"
+        )
+    return seconds
 
 
 def _refusal(text: str) -> str:

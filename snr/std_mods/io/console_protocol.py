@@ -24,6 +24,7 @@ __all__ = [
     "DEFAULT_CONSOLE_PORT",
     "MAX_LINE_BYTES",
     "MAX_REPLY_BYTES",
+    "MAX_WAIT_S",
     "PROTOCOL",
     "SECRET_TOKEN_PURPOSE",
     "TOKEN_ENV_VAR",
@@ -52,6 +53,9 @@ MAX_LINE_BYTES = 4096
 
 MAX_REPLY_BYTES = 1 << 20
 """Longest reply body the node sends; longer replies are cut with a note."""
+
+MAX_WAIT_S = 60.0
+"""The longest wait a reply may announce (a ``WAIT`` frame's seconds); more is not this protocol."""
 
 _MAX_HEADER_BYTES = 64
 _TRUNCATION_ROOM = 256  # the "(reply cut)" note added to a reply at the limit
