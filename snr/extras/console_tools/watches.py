@@ -37,7 +37,7 @@ from snr.std_mods.io.command_processor import (
     number_argument,
     preview,
 )
-from snr.std_mods.io.console_protocol import ConsoleSession, Reply, Status
+from snr.std_mods.io.console_protocol import MAX_WAIT_S, ConsoleSession, Reply, Status
 
 __all__ = [
     "ECHO_DEFAULT_PAGES",
@@ -58,7 +58,7 @@ ECHO_MAX_PAGES = 100
 HZ_DEFAULT_WINDOW_S = 2.0
 """How long ``hz KEY`` counts pages when no window is given (its ``wait`` reply says so)."""
 
-HZ_MAX_WINDOW_S = 60.0
+HZ_MAX_WINDOW_S = MAX_WAIT_S
 """The longest window ``hz`` accepts (a reply waits that long)."""
 
 MAX_WATCHES = 32

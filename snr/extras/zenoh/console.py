@@ -26,7 +26,6 @@ Example::
 from __future__ import annotations
 
 import argparse
-import math
 import queue
 import sys
 import threading
@@ -55,6 +54,7 @@ from snr.std_mods.io.console_protocol import (
     Reply,
     ReplyDecoder,
     Status,
+    announced_wait_s,
     default_token,
     tokens_match,
 )
@@ -452,7 +452,7 @@ class ZenohConsole(ConsoleClient):
                 sample = answer.ok  # None: an error reply, which this protocol never sends
                 replies = [] if sample is None else ReplyDecoder().feed(sample.payload.to_bytes())
                 if replies and replies[0].status is Status.WAIT:
-                    seconds = _announced_wait_s(replies[0].text)
+                    seconds = announced_wait_s(replies[0].text)
                     deadline, waited_s = deadline + seconds, waited_s + seconds
                 elif replies:
                     return replies[0]
@@ -701,28 +701,6 @@ def _labelled(by_role: Dict[str, Reply], notes: Optional[Dict[str, str]] = None)
     statuses = {reply.status for reply in by_role.values()}
     status = next(iter(statuses)) if len(statuses) == 1 else Status.ERROR
     return Reply(status, "\n".join(parts))
-
-
-def _announced_wait_s(text: str) -> float:
-    """The seconds a ``WAIT`` reply announces.
-
-    Raises:
-        WireFormatError: ``text`` is not a number from 0 to `MAX_WAIT_S`.
-
-    Example::
-
-        _announced_wait_s("1.5")   # 1.5
-    """
-    try:
-        seconds = float(text)
-    except ValueError:
-        seconds = math.nan  # refused below, with the text
-    if not 0.0 <= seconds <= MAX_WAIT_S:  # NaN too
-        raise WireFormatError(
-            f"A wait reply announced {text[:40]!r} seconds; a node announces a number from 0 "
-            f"to {MAX_WAIT_S:g}. Is the node running another version of SNR?"
-        )
-    return seconds
 
 
 def _refusal(text: str) -> str:

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import enum
 import json
+import math
 import os
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
@@ -34,6 +35,7 @@ __all__ = [
     "Reply",
     "ReplyDecoder",
     "Status",
+    "announced_wait_s",
     "check_listen_policy",
     "default_token",
     "is_loopback",
@@ -392,3 +394,25 @@ def tokens_match(expected: str, given: str) -> bool:
     import hmac  # here, not at the top: it loads OpenSSL, and only tokens need it
 
     return hmac.compare_digest(expected.encode("utf-8"), given.encode("utf-8"))
+
+
+def announced_wait_s(text: str) -> float:
+    """The seconds a ``WAIT`` reply announces (both console transports read it here).
+
+    Raises:
+        WireFormatError: ``text`` is not a number from 0 to `MAX_WAIT_S`.
+
+    Example::
+
+        announced_wait_s("1.5")   # 1.5
+    """
+    try:
+        seconds = float(text)
+    except ValueError:
+        seconds = math.nan  # refused below, with the text
+    if not 0.0 <= seconds <= MAX_WAIT_S:  # NaN too
+        raise WireFormatError(
+            f"A wait reply announced {text[:40]!r} seconds; a node announces a number from 0 "
+            f"to {MAX_WAIT_S:g}. Is the node running another version of SNR?"
+        )
+    return seconds

@@ -42,6 +42,7 @@ from snr.std_mods.io.console_protocol import (
     Reply,
     ReplyDecoder,
     Status,
+    announced_wait_s,
     default_token,
     parse_address,
 )
@@ -398,12 +399,14 @@ class RemoteConsole(ConsoleClient):
         sock = self._connected()
         sock.settimeout(wait_s)
         while not self._ready or self._ready[0].status is Status.WAIT:
-            if self._ready:  # a late reply: the node says how many seconds more it takes
-                wait_s += float(self._ready.pop(0).text)
-                sock.settimeout(wait_s)
-                continue
             try:
+                if self._ready:  # a late reply: the node says how many seconds more it takes
+                    wait_s += announced_wait_s(self._ready.pop(0).text)
+                    sock.settimeout(wait_s)
+                    continue
                 data = sock.recv(65536)
+                if data:
+                    self._ready.extend(self._decoder.feed(data))
             except socket.timeout:
                 raise ConsoleConnectionError(
                     f"No reply from the node at {self.where} within {wait_s:g} s. "
@@ -412,13 +415,11 @@ class RemoteConsole(ConsoleClient):
                 ) from None
             except OSError as error:
                 raise self._lost(error) from None
-            if not data:
-                raise self._lost(None)
-            try:
-                self._ready.extend(self._decoder.feed(data))
             except WireFormatError as error:
                 self.close()
                 raise ConsoleConnectionError(f"{self.where}: {error}") from None
+            if not data:
+                raise self._lost(None)
         reply = self._ready.pop(0)
         if reply.status is Status.BYE:
             self.close()
