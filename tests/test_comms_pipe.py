@@ -66,7 +66,8 @@ class TestPipeComms(unittest.TestCase):
         config = Config(
             {
                 "stays": [PipeLoopFactory(here, "a"), TimeoutLoopFactory(seconds=5)],
-                "leaves": [PipeLoopFactory(there, "b"), TimeoutLoopFactory(seconds=0.05)],
+                # Long enough for the hello on a busy machine: a goodbye before it is a fault.
+                "leaves": [PipeLoopFactory(there, "b"), TimeoutLoopFactory(seconds=0.5)],
             },
             mode=Mode.TEST,
         )
@@ -76,7 +77,7 @@ class TestPipeComms(unittest.TestCase):
         thread = threading.Thread(target=stays.loop)
         with self.assertLogs("snr.stays", "INFO") as logs:
             thread.start()
-            leaves.loop()  # stops after 0.05 s, says goodbye and closes its end of the pipe
+            leaves.loop()  # stops after 0.5 s, says goodbye and closes its end of the pipe
             deadline = time.monotonic() + 3
             while pipe_loop.is_alive() and time.monotonic() < deadline:
                 time.sleep(0.02)
