@@ -467,19 +467,8 @@ def page_json(
     return _refusing(fields, key, data, to)
 
 
-_MAX_ENVELOPES = 1024  # the (key, origin) pairs a PageEncoder keeps; when full it starts again
-_PAGE_FIELDS = frozenset(("key", "data", "origin", "created_at_s", "process"))
-_TAILS = (b',"process":false}', b',"process":true}')
-
-
 class PageEncoder:
     """`page_json` with the leading fields and the destination given once: a link's encoder.
-
-    A node sends pages under a few keys, each from one origin, again and
-    again: the JSON around the data and the time (the head, the key, the
-    origin) is written once per key and origin and kept (up to 1,024
-    pairs). A page then costs the JSON of its data and time and a
-    join. The bytes and the refusals are `page_json`'s.
 
     Args:
         head: fields written before the page's, e.g. ``{"v": 1, "kind": "page"}``.
@@ -495,39 +484,10 @@ class PageEncoder:
     def __init__(self, head: Mapping[str, Any], to: str = "to another node") -> None:
         self.head = dict(head)
         self.to = to
-        # (key, origin) -> the JSON before the data, and between it and the time;
-        # None where page_json must decide (a head naming a page field, a bad key)
-        self._envelopes: Dict[Tuple[str, str], Optional[Tuple[bytes, bytes]]] = {}
 
     def __call__(self, page: Page) -> bytes:
         """The page's JSON; raises `NotSerializableError` as `page_json` does."""
-        key, origin, process = page.key, page.origin, page.process
-        if type(key) is str and type(origin) is str and type(process) is bool:
-            try:
-                envelope = self._envelopes[(key, origin)]
-            except KeyError:
-                envelope = self._learn(key, origin)
-            if envelope is not None:
-                try:
-                    data = _dump(page.data, _DATA_DEPTH)
-                    created = _dump(page.created_at_s, _DATA_DEPTH)
-                    return b"".join((envelope[0], data, envelope[1], created, _TAILS[process]))
-                except _Refused:  # page_json says why
-                    pass
         return page_json(page, self.head, self.to)
-
-    def _learn(self, key: str, origin: str) -> Optional[Tuple[bytes, bytes]]:
-        if len(self._envelopes) >= _MAX_ENVELOPES:
-            self._envelopes.clear()
-        envelope: Optional[Tuple[bytes, bytes]] = None
-        if _PAGE_FIELDS.isdisjoint(self.head):  # else the fields' order is page_json's to say
-            try:
-                before = _dump({**self.head, "key": key})[:-1] + b',"data":'  # without its "}"
-                envelope = (before, b',"origin":' + _dump(origin) + b',"created_at_s":')
-            except _Refused:  # e.g. a lone surrogate in the key: page_json says why
-                pass
-        self._envelopes[(key, origin)] = envelope
-        return envelope
 
 
 def _bad_type(name: str, value: Any, expected: str) -> WireFormatError:
