@@ -121,9 +121,10 @@ PathLike = Union[str, "os.PathLike[str]"]
 Text = Union[bytes, bytearray, memoryview, str]
 """What the readers take: UTF-8 bytes, or text already decoded."""
 
+_DATA_DEPTH = MAX_DEPTH - 1  # the page object itself is one level
 _LONE_SURROGATE = re.compile("[\ud800-\udfff]")
 _TOO_DEEP = f"it nests arrays and objects more than {MAX_DEPTH} deep"
-_DATA_TOO_DEEP = f"data nests lists and dicts more than {MAX_DEPTH - 1} deep"  # in a page
+_DATA_TOO_DEEP = f"data nests lists and dicts more than {_DATA_DEPTH} deep"
 _HEADER = struct.Struct(">I")
 
 
@@ -135,26 +136,26 @@ class _OutOfRange(Exception):
     """A number a double cannot hold, such as ``1e999`` (not a ValueError, json's verdicts)."""
 
 
-def _suspect(text: bytes) -> bool:
-    """True when JSON text may hold a lone surrogate (``\\ud800``) or nest over `MAX_DEPTH`.
+def _suspect(text: bytes, depth: int = MAX_DEPTH) -> bool:
+    """True when JSON text may hold a lone surrogate (``\\ud800``) or nest over ``depth``.
 
-    Text shorter than ``2 * MAX_DEPTH`` cannot nest that deep; brackets in
-    strings count too (then the decoded value shows that all is well).
+    Text shorter than ``2 * depth`` cannot nest that deep; brackets in strings
+    count too (then the decoded value shows that all is well).
     """
     return b"\\ud" in text or (
-        len(text) > 2 * MAX_DEPTH and text.count(b"[") + text.count(b"{") > MAX_DEPTH
+        len(text) > 2 * depth and text.count(b"[") + text.count(b"{") > depth
     )
 
 
-def _problem(value: Any) -> Optional[str]:
-    """Why a decoded JSON value breaks SNR's rules (nested over `MAX_DEPTH`, a lone surrogate).
+def _problem(value: Any, limit: int = MAX_DEPTH) -> Optional[str]:
+    """Why a decoded JSON value breaks SNR's rules (nested over ``limit``, a lone surrogate).
 
     Example: ``_problem(["\\ud800"])`` names the lone surrogate; None if all is well.
     """
     stack = [(value, 1)]  # (a value, how deep it is)
     while stack:
         node, depth = stack.pop()
-        if depth > MAX_DEPTH:
+        if depth > limit:
             return _TOO_DEEP
         items: Any = node if type(node) is list else (node,)
         if type(node) is dict:
@@ -209,11 +210,13 @@ class _DefaultOnFirstUse:
 
     def dumps(self, value: Any) -> Optional[bytes]:
         use_backend()
-        return None  # json writes the first value: the same bytes
+        return None if _fast is None else _fast.dumps(value)
 
     def loads(self, raw: Text) -> Any:
         use_backend()
-        raise ValueError("json reads the first value")
+        if _fast is None:
+            raise ValueError("json reads it")
+        return _fast.loads(raw)
 
 
 _fast: Optional[JsonBackend] = _DefaultOnFirstUse()  # the backend in use; None: json alone
@@ -357,20 +360,27 @@ def load_json(raw: Text) -> Any:
     return value
 
 
-def _dump(value: Any) -> bytes:
-    """``value`` as compact ASCII JSON nesting at most `MAX_DEPTH` deep; `_Refused` says why not."""
+def _dump(value: Any, depth: int = MAX_DEPTH) -> bytes:
+    """``value`` as compact ASCII JSON nesting at most ``depth`` deep; `_Refused` says why not.
+
+    Numbers are written with their ``repr``, as json writes them, without json's encoder.
+    """
     out = None if _fast is None else _fast.dumps(value)
     if out is not None:
         return out
+    kind = type(value)
+    # value - value is NaN for NaN and infinity, which json refuses
+    if kind is float and value - value == 0.0:
+        return float.__repr__(value).encode("ascii")
     try:
-        out = _ENCODER.encode(value).encode("ascii")
+        out = (int.__repr__(value) if kind is int else _ENCODER.encode(value)).encode("ascii")
     except (TypeError, ValueError) as error:  # not JSON, NaN, 4,300 digits, contains itself
         raise _Refused(str(error)) from None
     except RecursionError:
         raise _Refused(_DATA_TOO_DEEP) from None
-    if _suspect(out):  # json writes lone surrogates (\ud800), and nests as deep as it can
+    if _suspect(out, depth):  # json writes lone surrogates (\ud800), and nests as deep as it can
         try:
-            problem = _problem(json.loads(out))
+            problem = _problem(json.loads(out), depth)
         except RecursionError:
             problem = _TOO_DEEP
         if problem is not None:
@@ -457,8 +467,19 @@ def page_json(
     return _refusing(fields, key, data, to)
 
 
+_MAX_ENVELOPES = 1024  # the (key, origin) pairs a PageEncoder keeps; when full it starts again
+_PAGE_FIELDS = frozenset(("key", "data", "origin", "created_at_s", "process"))
+_TAILS = (b',"process":false}', b',"process":true}')
+
+
 class PageEncoder:
     """`page_json` with the leading fields and the destination given once: a link's encoder.
+
+    A node sends pages under a few keys, each from one origin, again and
+    again: the JSON around the data and the time (the head, the key, the
+    origin) is written once per key and origin and kept (up to 1,024
+    pairs). A page then costs the JSON of its data and time and a
+    join. The bytes and the refusals are `page_json`'s.
 
     Args:
         head: fields written before the page's, e.g. ``{"v": 1, "kind": "page"}``.
@@ -474,10 +495,39 @@ class PageEncoder:
     def __init__(self, head: Mapping[str, Any], to: str = "to another node") -> None:
         self.head = dict(head)
         self.to = to
+        # (key, origin) -> the JSON before the data, and between it and the time;
+        # None where page_json must decide (a head naming a page field, a bad key)
+        self._envelopes: Dict[Tuple[str, str], Optional[Tuple[bytes, bytes]]] = {}
 
     def __call__(self, page: Page) -> bytes:
         """The page's JSON; raises `NotSerializableError` as `page_json` does."""
+        key, origin, process = page.key, page.origin, page.process
+        if type(key) is str and type(origin) is str and type(process) is bool:
+            try:
+                envelope = self._envelopes[(key, origin)]
+            except KeyError:
+                envelope = self._learn(key, origin)
+            if envelope is not None:
+                try:
+                    data = _dump(page.data, _DATA_DEPTH)
+                    created = _dump(page.created_at_s, _DATA_DEPTH)
+                    return b"".join((envelope[0], data, envelope[1], created, _TAILS[process]))
+                except _Refused:  # page_json says why
+                    pass
         return page_json(page, self.head, self.to)
+
+    def _learn(self, key: str, origin: str) -> Optional[Tuple[bytes, bytes]]:
+        if len(self._envelopes) >= _MAX_ENVELOPES:
+            self._envelopes.clear()
+        envelope: Optional[Tuple[bytes, bytes]] = None
+        if _PAGE_FIELDS.isdisjoint(self.head):  # else the fields' order is page_json's to say
+            try:
+                before = _dump({**self.head, "key": key})[:-1] + b',"data":'  # without its "}"
+                envelope = (before, b',"origin":' + _dump(origin) + b',"created_at_s":')
+            except _Refused:  # e.g. a lone surrogate in the key: page_json says why
+                pass
+        self._envelopes[(key, origin)] = envelope
+        return envelope
 
 
 def _bad_type(name: str, value: Any, expected: str) -> WireFormatError:
@@ -609,7 +659,7 @@ class Bye:
 Message = Union[Page, Hello, Beat, Bye, Proof]
 """What a frame carries: a `Page`, a `Hello`, a `Beat`, a `Bye` or a `Proof`."""
 
-_PAGE_HEAD = {"v": WIRE_VERSION, "kind": "page"}
+_page_body = PageEncoder({"v": WIRE_VERSION, "kind": "page"})
 
 
 def _frame(body: bytes, what: str) -> bytes:
@@ -634,7 +684,7 @@ def encode_page(page: Page) -> bytes:
         encode_page(Page("x", [1, 2], "robot", 1.5))
         # b'\\x00\\x00\\x00a{"v":1,"kind":"page","key":"x","data":[1,2],...}'
     """
-    body = page_json(page, _PAGE_HEAD)
+    body = _page_body(page)
     if len(body) > MAX_FRAME_BYTES:  # the message is only built when it is needed
         _frame(body, f"the page under key {page.key!r}")  # raises
     return _HEADER.pack(len(body)) + body
@@ -689,6 +739,10 @@ def encode_proof(mac: str) -> bytes:
     return _encode({"v": HELLO_VERSION, "kind": "proof", "mac": mac}, "the proof frame")
 
 
+_BEAT_FRAME = _frame(b'{"v":1,"kind":"beat"}', "a beat")
+_BYE_FRAME = _frame(b'{"v":1,"kind":"bye"}', "a bye")
+
+
 def encode_beat() -> bytes:
     """The beat frame: a sign of life on a quiet link (``{"v":1,"kind":"beat"}``).
 
@@ -696,7 +750,7 @@ def encode_beat() -> bytes:
 
         encode_beat()   # b'\\x00\\x00\\x00\\x15{"v":1,"kind":"beat"}'
     """
-    return b'\x00\x00\x00\x15{"v":1,"kind":"beat"}'
+    return _BEAT_FRAME
 
 
 def encode_bye() -> bytes:
@@ -706,7 +760,7 @@ def encode_bye() -> bytes:
 
         encode_bye()   # b'\\x00\\x00\\x00\\x14{"v":1,"kind":"bye"}'
     """
-    return b'\x00\x00\x00\x14{"v":1,"kind":"bye"}'
+    return _BYE_FRAME
 
 
 _HEX_DIGITS = 64  # a nonce (32 random bytes) and an HMAC-SHA256 are both this long in hex
@@ -909,6 +963,9 @@ def header_line() -> str:
     return _ENCODER.encode({"format": FORMAT_NAME, "version": FORMAT_VERSION})  # no backend needed
 
 
+_line_encoder = PageEncoder({}, to="to a recording or serial link")
+
+
 def page_to_line(page: Page) -> str:
     """One page as one line of JSON (without the newline); refused as `page_json` refuses it.
 
@@ -917,7 +974,7 @@ def page_to_line(page: Page) -> str:
         page_to_line(Page("x", [1, 2], "robot", 0.5))
         # '{"key":"x","data":[1,2],"origin":"robot","created_at_s":0.5,"process":true}'
     """
-    return page_json(page, to="to a recording or serial link").decode("ascii")
+    return _line_encoder(page).decode("ascii")
 
 
 decode_line = load_object
