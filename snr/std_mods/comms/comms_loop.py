@@ -288,7 +288,12 @@ class CommsLoop(ThreadLoop):
             self.err("%s The page was dropped; the node keeps running.", error)
 
     def deliver(self, link: Link, pages: List[Page]) -> None:
-        """Store pages a link received (on the thread that read them; the queue has room)."""
+        """Store pages a link received (on the thread that read them; the queue has room).
+
+        Example (what a `Link` does with the pages of one read)::
+
+            self.owner.deliver(self, pages)
+        """
         forwarded = self._forwarded
         if forwarded:
             for page in pages:
