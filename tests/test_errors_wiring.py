@@ -35,7 +35,6 @@ from snr import (
 from snr.core import MissingKeyHints
 from snr.core.checks.explain import returning_lines
 from snr.prelude import ComponentError, HandlerError, MissingSuperInitError
-from snr.std_mods.comms.link_hints import watch_link
 from tests.helpers import FactoryOf, free_port
 from tests.quiet import capture_test_logs
 
@@ -376,6 +375,6 @@ class TestKeysAcrossALink(SNRTestCase):
             node = Node("urov", Config({"urov": [pair.client("depth")]}, mode=mode))
             link: Any = SimpleNamespace(keys_received=None)
             comms: Any = node.components["sockets_client_" + str(pair.server_tuple[1])]
-            watch_link(comms, link)
+            comms.watch_link(link)
             self.assertIsNone(link.keys_received, mode)  # nothing is noted, no timer is set
             self.assertIsNone(node.key_hints)

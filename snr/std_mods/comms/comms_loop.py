@@ -22,13 +22,14 @@ from __future__ import annotations
 
 import collections
 import enum
+import functools
 import logging
 import selectors
 import threading
 import time
 from typing import Any, Callable, Deque, Dict, List, Optional, Sequence, Set, Tuple, Union
 
-from snr.core import ThreadLoop, tasks
+from snr.core import Node, ThreadLoop, tasks
 from snr.core.logs import LossReport
 from snr.prelude import (
     AbstractFactory,
@@ -41,6 +42,7 @@ from snr.prelude import (
     Page,
     SomeTasks,
     Task,
+    TaskHandler,
     TaskId,
     TaskType,
     WireFormatError,
@@ -59,7 +61,6 @@ from snr.std_mods.codec import (
 )
 from snr.std_mods.comms.handshake import Handshake, Refused
 from snr.std_mods.comms.io_loop import IOLoop, IOTimer, Transport, unread_bytes
-from snr.std_mods.comms.link_hints import watch_link
 from snr.std_mods.comms.rate_limited_log import RateLimitedLog
 
 __all__ = [
@@ -99,6 +100,7 @@ DEFAULT_DEAD_AFTER_S = 4.0
 """Seconds of silence after which a peer that promised beats counts as lost."""
 
 _STORE_PAGE = TaskType.store_page
+_PAGE_TASKS = (_STORE_PAGE, TaskType.process_data)
 _NEWS_TICK_S = 0.5  # while news is counted, how often the counts are looked at
 _MAX_REFUSED_NOTED = 10_000  # refused peers remembered (so each is logged once)
 
@@ -157,7 +159,7 @@ class CommsLoop(ThreadLoop):
     """After drops, a link logs "Recovered" once nothing was dropped for this long."""
 
     checks_keys_per_link = True
-    """In DEBUG mode its keys are checked once a link is up (link_hints.py), not at start."""
+    """In DEBUG mode its keys are checked once a link is up (`check_link`), not at start."""
 
     side: str = "pipe"
     """Which end of its links it is: ``"server"``, ``"client"`` or ``"pipe"`` (in the proofs)."""
@@ -286,7 +288,12 @@ class CommsLoop(ThreadLoop):
             self.err("%s The page was dropped; the node keeps running.", error)
 
     def deliver(self, link: Link, pages: List[Page]) -> None:
-        """Store pages a link received (on the thread that read them; the queue has room)."""
+        """Store pages a link received (on the thread that read them; the queue has room).
+
+        Example (what a `Link` does with the pages of one read)::
+
+            self.owner.deliver(self, pages)
+        """
         forwarded = self._forwarded
         if forwarded:
             for page in pages:
@@ -429,6 +436,68 @@ class CommsLoop(ThreadLoop):
             self.say("Links ended", logging.INFO, "The link to %s ended: %s.", link.label, reason)
         else:
             self.say("Links lost", logging.WARNING, "Lost the link to %s: %s.", link.label, reason)
+
+    def watch_link(self, link: Link) -> None:
+        """In DEBUG mode, have `check_link` look at ``link``'s keys a while after its hello.
+
+        The robot forwards ``"sensr_data"`` and the topside handles
+        ``"sensor_data"``: nothing is shown and nothing is said (thesis listing
+        5.1). So ``node.key_hints.link_s`` after a link's hello (I/O thread),
+        the keys are compared with what was stored and received.
+
+        Example::
+
+            self.owner.watch_link(self)   # what a Link does when the peer's hello arrives
+        """
+        node, io = self.parent, self.io_loop
+        if not isinstance(node, Node) or node.key_hints is None or io is None:
+            return
+        if link.keys_received is None:
+            link.keys_received = set()  # from now on the link notes what arrives
+
+        def ask() -> None:  # on the I/O thread: hand the check to the node's thread
+            if not link.is_closed() and not self.is_terminated():
+                check = functools.partial(self.check_link, link)
+                self.schedule(tasks.event(tasks.CHECK_WIRING, [check]))
+
+        io.call_later(node.key_hints.link_s, ask)
+
+    def check_link(self, link: Link) -> None:
+        """On the node's thread: report keys that should have crossed ``link`` by now.
+
+        The keys received over every link to the same peer count together (listing
+        5.1 has two); while one is younger than the delay, its own check comes later.
+
+        Example::
+
+            comms.check_link(link)   # see MissingKeyHints.check_link for the messages
+        """
+        node = self.parent
+        if not isinstance(node, Node) or node.key_hints is None or link.is_closed():
+            return
+        if node.components.get(self.name) is not self:
+            return  # removed or reloaded since
+        hints = node.key_hints
+        handled: List[Tuple[DataKey, TaskHandler]] = []
+        peer_links: List[Link] = []
+        for component in list(node.components.values()):
+            if isinstance(component, CommsLoop):  # its keys are checked as sent, not wanted
+                peer_links += [
+                    other for other in component.links if other.peer_role == link.peer_role
+                ]
+                continue
+            for task_id, handler in list(component.task_handlers.items()):
+                if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
+                    handled.append((task_id[1], handler))
+        now = time.monotonic()
+        received: Set[DataKey] = set()
+        for other in peer_links:
+            if not other.is_closed() and now - other.opened_at < hints.link_s:
+                handled = []  # a newer link to the same node: its own check comes later
+            received.update(other.keys_received or ())
+        places = sorted({other.transport.peer for other in peer_links} | {link.transport.peer})
+        peer = f"node {link.peer_name} at {' and '.join(places)}"
+        hints.check_link(repr(self.name), peer, self.keys, handled, node.datastore, received)
 
     def decode_message(self, body: bytes) -> Message:
         """The message in one frame's body (`decode_body`); the pipe accepts 2021 pages too.
@@ -842,7 +911,7 @@ class Link:
         pages_sent: pages handed to the transport or queued for it.
         pages_received: pages that arrived.
         keys_received: in DEBUG mode, the keys of the pages that arrived (up to
-            1,000, for ``link_hints.py``); None otherwise.
+            1,000, for `CommsLoop.check_link`); None otherwise.
         went_silent: the link was closed because the peer fell silent.
         refusal: why the peer was refused (`Refused`), or None.
         peer_said_bye: the peer sent a bye: the end that follows is orderly.
@@ -1100,12 +1169,9 @@ class Link:
         """Seconds until the first deadline: a beat owed, a silence or hello limit.
 
         A quarter beat while pages are held or dropped (their counts move
-        without a frame), or when the deadline has passed. The look for a
-        beat is on a grid of quarter beats, the same for every link of the
-        node: it comes at the last grid point before the beat is due (the beat
-        goes a little early, never late), so one wake-up of the I/O thread
-        beats for every quiet link at once (a server with 300 idle clients
-        wakes about 4 times a second, not 300).
+        without a frame), or when the deadline has passed. A beat is looked
+        for on the node's grid of quarter beats (docs/design.md: one wake-up
+        beats for every quiet link).
         """
         if self._held or self.loss.dropping:
             return self._tick_s
@@ -1169,108 +1235,94 @@ class Link:
 
     # -- reading (whoever holds the I/O loop's read role)
     def on_readable(self) -> None:
-        """Read what arrived, cut it into frames, hand the pages on."""
+        """Read what arrived, cut it into frames, decode them, hand the pages to the `CommsLoop`.
+
+        The I/O thread calls it, or the idle node's thread; ending and pausing
+        are the I/O thread's. A bad length header loses the stream: the frames
+        before it count, then the connection is reset.
+        """
         try:
-            self._read()
+            if self.state in _ENDED or self._held:
+                return
+            try:
+                count = self.transport.recv_into(self.io.buffer)
+            except BlockingIOError:
+                return
+            except OSError as error:
+                self._end(f"{type(error).__name__}: {error}")
+                return
+            decoder = self._decoder
+            if not count:
+                if decoder.pending_bytes():
+                    self._bad_frame(
+                        WireFormatError(
+                            "the connection ended in the middle of a frame "
+                            f"({decoder.pending_bytes()} bytes of it arrived)"
+                        )
+                    )
+                self._end("the peer closed the connection")
+                return
+            self._answer_due = True
+            bodies: List[bytes] = []
+            reset = None
+            view = self.io.view[:count]
+            beat = count == len(_BEAT) and view == _BEAT and not decoder.pending_bytes()
+            if beat:  # an idle link's lone beat: a sign of life, nothing to decode
+                self._heard_frame = True
+            else:
+                try:
+                    decoder.cut_frames(view.tobytes(), bodies)
+                except WireFormatError as error:  # a bad length: the stream is lost
+                    reset = error
+            # A sign of life is a whole frame (wire format 3.3), or 16 KiB more
+            # of one still arriving (a trickle adds up too slowly).
+            if beat or bodies or self._progress + count >= _PROGRESS_BYTES:
+                self.last_heard = now = time.monotonic()
+                if not bodies:
+                    self._progress_at = now
+                self._sent_when_heard = self.pages_sent
+                self._progress = 0
+            else:
+                self._progress += count
+            pages: List[Page] = []
+            decode = self.owner.decode_message
+            for body in bodies:
+                try:
+                    message = decode(body)
+                except WireFormatError as error:
+                    if self.state is _HELLO:  # before the handshake ends, a bad frame ends it
+                        self._refuse(Refused("order", f"a bad frame before its hello: {error}"))
+                        return
+                    self._bad_frame(error)
+                    continue
+                except Exception as error:  # a bug in decoding: say so, and lose no other frame
+                    self.owner.log.exception("Decoding a frame from %s failed", self.label)
+                    self._bad_frame(WireFormatError(f"it could not be decoded ({error!r:.80})"))
+                    continue
+                if message.__class__ is Page and self.state is not _HELLO:
+                    pages.append(message)
+                else:
+                    self._on_message(message)
+                    if self.state in _ENDED:  # refused: nothing more it sent is looked at
+                        return
+            if reset is not None:
+                self._bad_frame(reset, resetting=True)
+            if pages:
+                self._heard_frame = True
+                self.pages_received += len(pages)
+                noted = self.keys_received
+                if noted is not None and len(noted) < _MAX_KEYS_NOTED:
+                    noted.update([page.key for page in pages])
+                if self.owner.parent.wait_for_room(0):
+                    self.owner.deliver(self, pages)
+                else:  # the node is behind: keep these, read no more until it has room
+                    self._held = pages
+                    self.io.call_soon(self._stop_reading)
+            if reset is not None:
+                self._end(f"reset after a bad frame ({reset})")
         except Exception as error:  # a bug must not kill the node silently
             self.owner.log.exception("Link to %s failed", self.label)
             self._end(f"unexpected {type(error).__name__}: {error}")
-
-    def _read(self) -> None:
-        # The I/O thread, or the idle node's: ending and pausing are the I/O thread's.
-        if self.state in _ENDED or self._held:
-            return
-        try:
-            count = self.transport.recv_into(self.io.buffer)
-        except BlockingIOError:
-            return
-        except OSError as error:
-            self._end(f"{type(error).__name__}: {error}")
-            return
-        decoder = self._decoder
-        if not count:
-            if decoder.pending_bytes():
-                self._bad_frame(
-                    WireFormatError(
-                        "the connection ended in the middle of a frame "
-                        f"({decoder.pending_bytes()} bytes of it arrived)"
-                    )
-                )
-            self._end("the peer closed the connection")
-            return
-        self._answer_due = True
-        if count == len(_BEAT) and self.io.view[:count] == _BEAT and not decoder.pending_bytes():
-            self._heard_frame = True  # a lone beat (an idle link): nothing to decode
-            self._heard(time.monotonic())
-            return
-        bodies: List[bytes] = []
-        pages: List[Page] = []
-        try:
-            decoder.cut_frames(self.io.view[:count].tobytes(), bodies)
-        except WireFormatError as error:  # a bad length: the stream is lost
-            self._decode_bodies(bodies, pages)
-            self._bad_frame(error, resetting=True)
-            self._deliver(pages)
-            self._end(f"reset after a bad frame ({error})")
-            return
-        if bodies:  # a sign of life is a whole frame (wire format 3.3)...
-            self._heard(time.monotonic())
-        else:  # ...or 16 KiB more of one still arriving; a trickle adds up too slowly
-            self._progress += count
-            if self._progress >= _PROGRESS_BYTES:
-                self._progress_at = now = time.monotonic()
-                self._heard(now)
-        self._decode_bodies(bodies, pages)
-        if pages and self.state not in _ENDED:  # (a refused peer's pages are not stored)
-            self._heard_frame = True
-            self._deliver(pages)
-
-    def _heard(self, now: float) -> None:
-        self.last_heard = now
-        self._sent_when_heard = self.pages_sent
-        self._progress = 0
-
-    def _decode_bodies(self, bodies: List[bytes], pages: List[Page]) -> None:
-        """Decode each frame body: pages go to ``pages``, hellos and byes are acted on."""
-        decode = self.owner.decode_message
-        for body in bodies:
-            try:
-                message = decode(body)
-            except WireFormatError as error:
-                if self.state is _HELLO:  # before the handshake ends, a bad frame ends it
-                    self._refuse(Refused("order", f"a bad frame before its hello: {error}"))
-                    return
-                self._bad_frame(error)
-                continue
-            except Exception as error:  # a bug in decoding: say so, and lose no other frame
-                self.owner.log.exception("Decoding a frame from %s failed", self.label)
-                self._bad_frame(WireFormatError(f"it could not be decoded ({error!r:.80})"))
-                continue
-            if message.__class__ is Page and self.state is not _HELLO:
-                pages.append(message)
-            else:
-                self._on_message(message)
-                if self.state in _ENDED:  # refused: nothing more it sent is looked at
-                    pages.clear()
-                    return
-
-    def _deliver(self, pages: List[Page]) -> None:
-        if not pages:
-            return
-        self.pages_received += len(pages)
-        noted = self.keys_received
-        if noted is not None and len(noted) < _MAX_KEYS_NOTED:
-            noted.update([page.key for page in pages])
-        if self._held or not self.owner.parent.wait_for_room(0):
-            # The node is behind: keep these, read no more until it has room.
-            first = not self._held
-            self._held.extend(pages)
-            if first and self.io.in_loop_thread():
-                self._stop_reading()
-            elif first:
-                self.io.call_soon(self._stop_reading)
-            return
-        self.owner.deliver(self, pages)
 
     def _stop_reading(self) -> None:
         if self.state not in _ENDED:
@@ -1373,7 +1425,7 @@ class Link:
             self.owner.announce(self)
         self.io.call_soon(self._look_again)  # beats are owed from now on
         self.owner.on_hello(self)
-        watch_link(self.owner, self)
+        self.owner.watch_link(self)
 
     def _refuse(self, refusal: Refused) -> None:
         """The peer may not link here: say why (once per peer), count it, close, store nothing."""
