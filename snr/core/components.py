@@ -47,8 +47,6 @@ class ComponentSet(AbstractNode):
     Attributes:
         components: the components by name, in start order.
         table: the `HandlerTable`; `refresh_table` it while ``table_stale``.
-        running: True between starting the components and `Node.terminate`:
-            only the node's thread may change them then.
         check_added: DEBUG and TEST: reads each component's class as it is added.
     """
 
@@ -59,12 +57,20 @@ class ComponentSet(AbstractNode):
     def __init__(self, table: HandlerTable) -> None:
         self.table = table
         self.components: Dict[ComponentName, AbstractComponent] = {}
-        self.running = False
         self.table_stale = True
         self._none_told: Set[Any] = set()  # factories' get() already said to return None
         #: Called with each component before it is added (set by the node in DEBUG
         #: and TEST mode to read the student's class; see `check_component`).
         self.check_added: Optional[Callable[[AbstractComponent], None]] = None
+
+    @property
+    def running(self) -> bool:
+        """True while the node runs (`Node`: its state is RUNNING).
+
+        Only the node's thread may change the components then.
+        Example: ``node.add_component(endpoint)`` begins it at once if ``node.running``.
+        """
+        raise NotImplementedError
 
     # -- building, adding and removing -------------------------------------
     def build_component(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
@@ -214,7 +220,6 @@ class ComponentSet(AbstractNode):
     # -- starting and stopping ----------------------------------------------
     def _start_all(self, keep_going: Callable[[], bool]) -> None:
         """Start every component in order while ``keep_going()`` says so."""
-        self.running = True
         for component in list(self.components.values()):
             if not keep_going():
                 break
@@ -236,7 +241,6 @@ class ComponentSet(AbstractNode):
 
     def _shutdown(self) -> None:
         """Halt every component (newest first), join their threads, then terminate them."""
-        self.running = False
         components = list(self.components.values())[::-1]
         for component in components:
             self._call_safely("halt", component)

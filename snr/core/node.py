@@ -193,6 +193,11 @@ class Node(ComponentSet):
     # ------------------------------------------------------------------
     # Control flow (thesis listing 6.1)
     # ------------------------------------------------------------------
+    @property
+    def running(self) -> bool:
+        """True from `loop` until the node starts terminating: its state is RUNNING."""
+        return self.state is NodeState.RUNNING
+
     def loop(self) -> None:
         """Begin every component, then run tasks until the node terminates.
 
