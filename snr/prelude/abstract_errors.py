@@ -16,22 +16,12 @@ import builtins
 import re
 from typing import Any, Dict, List, Optional
 
-from snr.prelude.abstract import AbstractComponent, AbstractEndpoint, AbstractFactory, AbstractLoop
 from snr.prelude.errors import ComponentError
 from snr.prelude.student_code import describe_class, frame_location
 
 __all__ = ["explain_abstract_error", "missing_methods_error"]
 
 _SNR_INTERFACES = "snr.prelude.abstract"
-
-
-def _interface_of(cls: type) -> Optional[type]:
-    for base in (AbstractLoop, AbstractEndpoint, AbstractComponent, AbstractFactory):
-        if issubclass(cls, base):
-            return base
-    return None
-
-
 _EASY_FIX = {
     "AbstractLoop": (
         "subclass snr.ThreadLoop instead of AbstractLoop: it runs loop() on its own "
@@ -63,11 +53,16 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
         # Cannot create HalfEndpoint (robot.py:5): it lacks these methods that
         # AbstractEndpoint requires: halt, terminate. Easiest fix: subclass ...
     """
+    # The nearest of SNR's interfaces that cls subclasses: AbstractLoop before AbstractComponent.
+    interface = next(
+        (b for b in cls.__mro__ if b.__module__ == _SNR_INTERFACES and b.__name__ in _EASY_FIX),
+        None,
+    )
     by_requirer: Dict[type, List[str]] = {}
     for name in sorted(getattr(cls, "__abstractmethods__", ())):
         requirer = _requirer_of(cls, name)
         if requirer.__module__ == _SNR_INTERFACES:  # one of SNR's: name the one cls subclasses
-            requirer = _interface_of(cls) or requirer
+            requirer = interface or requirer
         by_requirer.setdefault(requirer, []).append(name)
     lacks = "; and ".join(
         f"that {requirer.__name__} requires: {', '.join(names)}"
@@ -75,9 +70,8 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
     )
     fixes = []
     for requirer, names in by_requirer.items():
-        interface = _interface_of(requirer)
-        if interface is not None and requirer.__module__ == _SNR_INTERFACES:
-            fixes.append("Easiest fix: " + _EASY_FIX[interface.__name__] + " Or add them.")
+        if requirer is interface:
+            fixes.append("Easiest fix: " + _EASY_FIX[requirer.__name__] + " Or add them.")
         else:
             fixes.append(
                 f"Add {', '.join(names)} to {cls.__name__}, with the same arguments as "

@@ -6,13 +6,13 @@ import math
 import time
 import warnings
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Dict
 
 from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import DataKey
 from snr.prelude.not_serializable import check_serializable, not_serializable_error
 
-__all__ = ["Page", "preview"]
+__all__ = ["DataDict", "Page", "preview"]
 
 _PREVIEW_CHARS = 1000  # str(page) shows a game pad's buttons, not a camera frame
 
@@ -105,6 +105,10 @@ class Page(JsonDataclass):
         """
         age = _age_text(self.created_at_s, time.time())
         return f"Page {self.key!r} = {preview(self.data)} from {self.origin!r} ({age})"
+
+
+DataDict = Dict[DataKey, Page]
+"""A node's datastore: the newest page for every data key."""
 
 
 def _age_text(created_at_s: float, now_s: float) -> str:
