@@ -49,13 +49,6 @@ def _scalar_hint(value: Any) -> Optional[str]:
     return None
 
 
-def _key_hint(key: Any) -> Optional[str]:
-    if not isinstance(key, _JSON_SCALARS):
-        return _KEY_HINT
-    hint = _scalar_hint(key)
-    return _KEY_HINT if hint is _NUMBER_HINT else hint
-
-
 def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optional[_Found]:
     """The first part of ``value`` JSON cannot hold, as (path, part, hint), or None."""
     if isinstance(value, _JSON_SCALARS):
@@ -69,9 +62,10 @@ def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optio
     try:
         pairs = value.items() if isinstance(value, dict) else enumerate(value)
         for key, item in pairs:
-            hint = _key_hint(key) if isinstance(value, dict) else None
-            if hint is not None:
-                return path, key, hint
+            if isinstance(value, dict):  # a key JSON cannot hold; a NaN key gets the key hint
+                hint = _scalar_hint(key) if isinstance(key, _JSON_SCALARS) else _KEY_HINT
+                if hint is not None:
+                    return path, key, _KEY_HINT if hint is _NUMBER_HINT else hint
             found = _find(item, f"{path}[{key!r}]", open_containers, depth + 1)
             if found is not None:
                 return found

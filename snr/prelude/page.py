@@ -2,7 +2,6 @@
 
 from __future__ import annotations
 
-import math
 import time
 import warnings
 from dataclasses import dataclass
@@ -119,22 +118,14 @@ def _age_text(created_at_s: float, now_s: float) -> str:
     """
     try:
         age = now_s - created_at_s
-    except TypeError:  # not a number: say what it is rather than fail to print
-        age = math.nan
-    if not math.isfinite(age):
+        made = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(created_at_s))
+    except (TypeError, OverflowError, OSError, ValueError):  # not a time: say what it is
         return f"created_at_s={created_at_s!r}"
-    if -0.05 <= age < 60:
-        return f"{max(age, 0.0):.1f} s ago"
-    if 60 <= age < 3600:
-        return f"{age / 60:.1f} min ago"
-    if 3600 <= age < 86400:
-        return f"{age / 3600:.1f} h ago"
+    for below, unit_s, unit in ((60, 1, "s"), (3600, 60, "min"), (86400, 3600, "h")):
+        if -0.05 <= age < below:
+            return f"{max(age, 0.0) / unit_s:.1f} {unit} ago"
     if -60 < age < 0:
         return f"{-age:.1f} s in the future: the clocks differ"
-    try:
-        made = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(created_at_s))
-    except (OverflowError, OSError, ValueError):
-        return f"created_at_s={created_at_s!r}"
     return f"made {made} UTC"
 
 

@@ -90,11 +90,7 @@ TaskScheduler = Callable[[SomeTasks], None]
 """Something that queues tasks on a node, such as ``endpoint.schedule``."""
 
 
-ValuesShown = Literal["all", "data", "none"]
-"""How much of a task `format_task` shows: every value, a page's data only, or none."""
-
-
-def format_task(task: Union[Task, TaskId], values: ValuesShown = "all") -> str:
+def format_task(task: Union[Task, TaskId], values: Literal["all", "data", "none"] = "all") -> str:
     """A task (or a task id) in one line: the one way SNR prints tasks.
 
     Pages show in their short form; ``values="data"`` shows only a page's
