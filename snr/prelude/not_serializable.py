@@ -74,18 +74,15 @@ def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optio
         open_containers.discard(id(value))
 
 
-_TYPE_HINTS = (
-    ((set, frozenset), "Send a list instead: list(value), or sorted(value) for a stable order."),
-    ((bytes, bytearray), "Send text or numbers instead: value.hex(), or list(value)."),
-    (enum.Enum, "Send value.name or value.value instead."),
-    (complex, "Send [value.real, value.imag] instead."),
-)
-
-
 def _type_hint(value: Any) -> str:
-    hint = next((hint for kinds, hint in _TYPE_HINTS if isinstance(value, kinds)), None)
-    if hint is not None:
-        return hint
+    if isinstance(value, (set, frozenset)):
+        return "Send a list instead: list(value), or sorted(value) for a stable order."
+    if isinstance(value, (bytes, bytearray)):
+        return "Send text or numbers instead: value.hex(), or list(value)."
+    if isinstance(value, enum.Enum):
+        return "Send value.name or value.value instead."
+    if isinstance(value, complex):
+        return "Send [value.real, value.imag] instead."
     if hasattr(value, "tolist"):
         return "Convert it with value.tolist() (numpy arrays and numbers)."
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
@@ -94,12 +91,12 @@ def _type_hint(value: Any) -> str:
 
 
 def not_serializable_error(
-    key: str, data: Any, where: str = "", to: str = "to another node", reason: str = ""
+    key: str, data: Any, to: str = "to another node", reason: str = ""
 ) -> NotSerializableError:
     """A NotSerializableError naming the key, the path inside the data and the type.
 
-    ``where`` adds context (``" by component 'x'"``), ``to`` where the page was
-    going; ``reason`` says what is wrong when no single part is to blame.
+    ``to`` says where the page was going; ``reason`` what is wrong when no single
+    part is to blame.
 
     Example::
 
@@ -113,12 +110,12 @@ def not_serializable_error(
         what = f"{type(bad).__name__} ({short_repr(bad, 60)})"
         why = f"{path} {has} a {what}, which JSON cannot hold. {hint}"
     return NotSerializableError(
-        f"Cannot send the page stored under {key!r}{where} {to}: {why} Data sent between "
+        f"Cannot send the page stored under {key!r} {to}: {why} Data sent between "
         "nodes may only hold dicts, lists, tuples, str, int, float, bool and None."
     )
 
 
-def check_serializable(key: str, data: Any, to: str = "to another node") -> None:
+def check_serializable(key: str, data: Any) -> None:
     """Raise `not_serializable_error`'s error unless ``data`` is plain JSON (no set, no NaN).
 
     Example::
@@ -127,4 +124,4 @@ def check_serializable(key: str, data: Any, to: str = "to another node") -> None
         check_serializable("pose", {"x": {1.0}})   # NotSerializableError: data['x'] is a set
     """
     if _find(data, "data", set(), 0) is not None:
-        raise not_serializable_error(key, data, to=to)
+        raise not_serializable_error(key, data)

@@ -10,10 +10,9 @@ from typing import Any, Dict
 from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import DataKey
 from snr.prelude.not_serializable import check_serializable, not_serializable_error
+from snr.prelude.student_code import short_repr
 
 __all__ = ["DataDict", "Page", "preview"]
-
-_PREVIEW_CHARS = 1000  # str(page) shows a game pad's buttons, not a camera frame
 
 
 @dataclass(slots=True)
@@ -137,7 +136,4 @@ def preview(data: Any) -> str:
         preview(list(range(5)))      # '[0, 1, 2, 3, 4]'
         len(preview(bytes(10_000)))  # 1000, ending in '...'
     """
-    text = repr(data)
-    if len(text) > _PREVIEW_CHARS:
-        text = text[: _PREVIEW_CHARS - 3] + "..."
-    return text
+    return short_repr(data, 1000, "...")  # a game pad's buttons, not a camera frame
