@@ -13,9 +13,9 @@ from typing import TYPE_CHECKING, Any, Optional, Sequence
 from snr.core.checks import explain
 from snr.core.dispatch import HandlerMap
 from snr.prelude.abstract import AbstractComponent, AbstractFactory, AbstractNode
-from snr.prelude.names import ComponentName, DataKey, SomeTasks, TaskHandlerMap
+from snr.prelude.names import ComponentName, DataKey
 from snr.prelude.page import Page
-from snr.prelude.task import Task
+from snr.prelude.task import SomeTasks, Task, TaskHandlerMap
 
 __all__ = ["Component"]
 

@@ -39,8 +39,8 @@ from snr.core.checks.handler_checks import (
     check_task_id,
 )
 from snr.prelude.abstract import AbstractComponent, AbstractProfiler
-from snr.prelude.names import BurstHandler, StatsCell, TaskHandler, TaskHandlerMap, TaskId, TaskType
-from snr.prelude.task import Task
+from snr.prelude.names import StatsCell, TaskId, TaskType
+from snr.prelude.task import BurstHandler, Task, TaskHandler, TaskHandlerMap
 
 if TYPE_CHECKING:
     from snr.core.checks.failures import FailureReport

@@ -44,18 +44,9 @@ from snr.prelude.abstract import (
     AbstractNode,
     Datastore,
 )
-from snr.prelude.names import (
-    DataKey,
-    Mode,
-    Role,
-    SomeTasks,
-    TaskHandler,
-    TaskHandlerMap,
-    TaskId,
-    TaskType,
-)
+from snr.prelude.names import DataKey, Mode, Role, TaskId, TaskType
 from snr.prelude.page import Page
-from snr.prelude.task import Task
+from snr.prelude.task import SomeTasks, Task, TaskHandler, TaskHandlerMap
 
 if TYPE_CHECKING:  # DEBUG helpers, imported when a node turns them on (see __init__)
     from snr.core.checks.key_hints import MissingKeyHints

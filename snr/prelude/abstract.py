@@ -16,30 +16,16 @@ import inspect
 import logging
 from abc import ABCMeta, abstractmethod
 from types import MappingProxyType, ModuleType
-from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Protocol
+from typing import Any, Callable, Dict, Iterator, List, Mapping, Optional, Protocol, Sequence
 
-from snr.prelude.errors import ComponentError
-from snr.prelude.names import (
-    BurstHandler,
-    ComponentName,
-    DataKey,
-    Mode,
-    Role,
-    SomeTasks,
-    StatsCell,
-    TaskHandler,
-    TaskHandlerMap,
-    TaskId,
-    TaskType,
-)
+from snr.prelude.names import ComponentName, DataKey, Mode, Role, StatsCell, TaskId, TaskType
 from snr.prelude.page import Page
 from snr.prelude.student_code import caller_location
-from snr.prelude.task import Task
+from snr.prelude.task import BurstHandler, SomeTasks, Task, TaskHandler, TaskHandlerMap
 
 __all__ = ["AbstractComponent", "AbstractConfig", "AbstractEndpoint", "AbstractFactory"]
 __all__ += ["AbstractLoop", "AbstractMultiRunner", "AbstractNode", "AbstractProfiler"]
-__all__ += ["AbstractRunner", "AbstractTaskQueue", "explain_abstract_error"]
-__all__ += ["Datastore"]
+__all__ += ["AbstractRunner", "AbstractTaskQueue", "ComponentsByRole", "Datastore"]
 
 
 class _FriendlyABCMeta(ABCMeta):
@@ -72,23 +58,6 @@ class _FriendlyABC(metaclass=_FriendlyABCMeta):
     """Base of SNR's interfaces: an ``abc.ABC`` with friendlier errors."""
 
     __slots__ = ()
-
-
-def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
-    """Re-word Python's "Can't instantiate abstract class" TypeError, or None.
-
-    For abstract classes that are not SNR's own, e.g. a student's ``Sensor(ABC)``.
-
-    Example::
-
-        try:
-            component = factory.get(node)
-        except TypeError as error:
-            raise (explain_abstract_error(error) or error) from error
-    """
-    from snr.prelude import abstract_errors
-
-    return abstract_errors.explain_abstract_error(error)
 
 
 class AbstractProfiler(_FriendlyABC):
@@ -457,6 +426,10 @@ class AbstractFactory(_FriendlyABC):
     @abstractmethod
     def reload(self) -> None:
         """Re-read the source of ``reload_targets`` (``importlib.reload``)."""
+
+
+ComponentsByRole = Dict[Role, Sequence[AbstractFactory]]
+"""A whole system: for every role, the factories that build its components."""
 
 
 class AbstractConfig(_FriendlyABC):

@@ -12,26 +12,15 @@ Example::
 
 from __future__ import annotations
 
-import builtins
 import re
 from typing import Any, Dict, List, Optional
 
-from snr.prelude.abstract import AbstractComponent, AbstractEndpoint, AbstractFactory, AbstractLoop
 from snr.prelude.errors import ComponentError
 from snr.prelude.student_code import describe_class, frame_location
 
 __all__ = ["explain_abstract_error", "missing_methods_error"]
 
 _SNR_INTERFACES = "snr.prelude.abstract"
-
-
-def _interface_of(cls: type) -> Optional[type]:
-    for base in (AbstractLoop, AbstractEndpoint, AbstractComponent, AbstractFactory):
-        if issubclass(cls, base):
-            return base
-    return None
-
-
 _EASY_FIX = {
     "AbstractLoop": (
         "subclass snr.ThreadLoop instead of AbstractLoop: it runs loop() on its own "
@@ -63,21 +52,26 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
         # Cannot create HalfEndpoint (robot.py:5): it lacks these methods that
         # AbstractEndpoint requires: halt, terminate. Easiest fix: subclass ...
     """
+    # The nearest of SNR's interfaces that cls subclasses: AbstractLoop before AbstractComponent.
+    interface = next(
+        (b for b in cls.__mro__ if b.__module__ == _SNR_INTERFACES and b.__name__ in _EASY_FIX),
+        None,
+    )
     by_requirer: Dict[type, List[str]] = {}
     for name in sorted(getattr(cls, "__abstractmethods__", ())):
-        requirer = _requirer_of(cls, name)
+        # the nearest base class that declares the method abstract
+        declares = (
+            b for b in cls.__mro__[1:] if getattr(vars(b).get(name), "__isabstractmethod__", 0)
+        )
+        requirer = next(declares, cls)
         if requirer.__module__ == _SNR_INTERFACES:  # one of SNR's: name the one cls subclasses
-            requirer = _interface_of(cls) or requirer
+            requirer = interface or requirer
         by_requirer.setdefault(requirer, []).append(name)
-    lacks = "; and ".join(
-        f"that {requirer.__name__} requires: {', '.join(names)}"
-        for requirer, names in by_requirer.items()
-    )
-    fixes = []
+    lacks, fixes = [], []
     for requirer, names in by_requirer.items():
-        interface = _interface_of(requirer)
-        if interface is not None and requirer.__module__ == _SNR_INTERFACES:
-            fixes.append("Easiest fix: " + _EASY_FIX[interface.__name__] + " Or add them.")
+        lacks.append(f"that {requirer.__name__} requires: {', '.join(names)}")
+        if requirer is interface:
+            fixes.append("Easiest fix: " + _EASY_FIX[requirer.__name__] + " Or add them.")
         else:
             fixes.append(
                 f"Add {', '.join(names)} to {cls.__name__}, with the same arguments as "
@@ -85,20 +79,9 @@ def missing_methods_error(cls: type, created_at: str = "") -> ComponentError:
             )
     where = f" (It was being created at {created_at}.)" if created_at else ""
     return ComponentError(
-        f"Cannot create {describe_class(cls)}: it lacks these methods {lacks}. "
+        f"Cannot create {describe_class(cls)}: it lacks these methods {'; and '.join(lacks)}. "
         f"{' '.join(fixes)}{where}"
     )
-
-
-def _requirer_of(cls: type, method: str) -> type:
-    """The nearest base class that declares ``method`` abstract."""
-    for base in cls.__mro__[1:]:
-        if getattr(base.__dict__.get(method), "__isabstractmethod__", False):
-            return base
-    return cls
-
-
-_ABSTRACT_TEXT = re.compile(r"Can't instantiate abstract class (\w+)")
 
 
 def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
@@ -111,7 +94,7 @@ def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
         except TypeError as error:
             raise (explain_abstract_error(error) or error) from error
     """
-    match = _ABSTRACT_TEXT.search(str(error))
+    match = re.search(r"Can't instantiate abstract class (\w+)", str(error))
     if match is None:
         return None
     name = match.group(1)
@@ -122,7 +105,7 @@ def explain_abstract_error(error: TypeError) -> Optional[ComponentError]:
     created_at = ""
     if tb is not None:  # the frame that called the class: look the name up there
         frame = tb.tb_frame
-        cls = frame.f_locals.get(name, frame.f_globals.get(name, getattr(builtins, name, None)))
+        cls = frame.f_locals.get(name, frame.f_globals.get(name))
         created_at = frame_location(frame, tb.tb_lineno)
     if not isinstance(cls, type) or not getattr(cls, "__abstractmethods__", None):
         where = f" (It was being created at {created_at}.)" if created_at else ""

@@ -7,6 +7,7 @@ mixin's methods from this base, which imports it on first use.
 
 from __future__ import annotations
 
+import functools
 import sys
 from typing import TYPE_CHECKING, Any, Dict, Type, TypeVar, cast
 
@@ -19,18 +20,13 @@ __all__ = ["JsonDataclass"]
 _J = TypeVar("_J", bound="JsonDataclass")
 
 
-_MIXIN: Any = None
-
-
+@functools.cache  # import and register once
 def _mixin() -> Any:
-    """``dataclasses_json.DataClassJsonMixin``, imported (once) on demand."""
-    global _MIXIN
-    if _MIXIN is None:
-        from dataclasses_json import DataClassJsonMixin
+    """``dataclasses_json.DataClassJsonMixin``, imported on demand."""
+    from dataclasses_json import DataClassJsonMixin
 
-        DataClassJsonMixin.register(JsonDataclass)
-        _MIXIN = DataClassJsonMixin
-    return _MIXIN
+    DataClassJsonMixin.register(JsonDataclass)
+    return DataClassJsonMixin
 
 
 class JsonDataclass:

@@ -6,23 +6,17 @@ Students mostly meet these names in annotations::
 
     def on_depth(self, task: Task, key: TaskId) -> SomeTasks: ...
 
-Aliases that mention `Task`, `Page` or the ABCs are full dotted names in strings:
-this module, the bottom layer, imports nothing of the package.
+This module, the bottom layer, imports nothing of the package: an alias that
+names `Task`, `Page` or `AbstractFactory` (`SomeTasks`...) stands beside that class.
 """
 
 from __future__ import annotations
 
 import enum
-from typing import TYPE_CHECKING, Callable, Dict, List, Sequence, Tuple, Union
+from typing import List, Tuple, Union
 
-if TYPE_CHECKING:  # pragma: no cover - only for the type checker
-    import snr.prelude.abstract
-    import snr.prelude.page
-    import snr.prelude.task
-
-__all__ = ["BurstHandler", "ComponentName", "ComponentsByRole", "DataDict", "DataKey", "Mode"]
-__all__ += ["Role", "SomeTasks", "StatsCell", "TaskHandler", "TaskHandlerMap", "TaskId", "TaskName"]
-__all__ += ["TaskPriority", "TaskScheduler", "TaskType"]
+__all__ = ["ComponentName", "DataKey", "Mode", "Role", "StatsCell", "TaskId", "TaskName"]
+__all__ += ["TaskPriority", "TaskType"]
 
 DataKey = str
 """The name a page is stored under in a node's datastore, e.g. ``"depth_m"``."""
@@ -106,28 +100,6 @@ class Mode(enum.Enum):
 TaskId = Union[TaskType, Tuple[TaskType, TaskName]]
 """How a handler is registered: ``(TaskType.store_page, "depth")`` for one
 task name, or a bare ``TaskType.terminate`` for every task of that type."""
-
-SomeTasks = Union["snr.prelude.task.Task", List["snr.prelude.task.Task"], None]
-"""What a task handler returns: one task, a list of tasks, or ``None``."""
-
-TaskHandler = Callable[["snr.prelude.task.Task", TaskId], SomeTasks]
-"""A handler: ``def handler(self, task: Task, key: TaskId) -> SomeTasks``."""
-
-TaskHandlerMap = Dict[TaskId, TaskHandler]
-"""An endpoint's ``task_handlers``: which handler runs for which task id."""
-
-BurstHandler = Callable[[List["snr.prelude.task.Task"]], SomeTasks]
-"""A handler for a run of ``store_page`` tasks under one key, in one call (see
-`AbstractComponent.burst_handlers`): ``def forward_burst(self, run) -> SomeTasks``."""
-
-TaskScheduler = Callable[[SomeTasks], None]
-"""Something that queues tasks on a node, such as ``endpoint.schedule``."""
-
-DataDict = Dict[DataKey, "snr.prelude.page.Page"]
-"""A node's datastore: the newest page for every data key."""
-
-ComponentsByRole = Dict[Role, Sequence["snr.prelude.abstract.AbstractFactory"]]
-"""A whole system: for every role, the factories that build its components."""
 
 StatsCell = List[float]
 """A profiler's tally for one handler or loop: ``[times_called, total_seconds]``.

@@ -49,13 +49,6 @@ def _scalar_hint(value: Any) -> Optional[str]:
     return None
 
 
-def _key_hint(key: Any) -> Optional[str]:
-    if not isinstance(key, _JSON_SCALARS):
-        return _KEY_HINT
-    hint = _scalar_hint(key)
-    return _KEY_HINT if hint is _NUMBER_HINT else hint
-
-
 def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optional[_Found]:
     """The first part of ``value`` JSON cannot hold, as (path, part, hint), or None."""
     if isinstance(value, _JSON_SCALARS):
@@ -69,9 +62,10 @@ def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optio
     try:
         pairs = value.items() if isinstance(value, dict) else enumerate(value)
         for key, item in pairs:
-            hint = _key_hint(key) if isinstance(value, dict) else None
-            if hint is not None:
-                return path, key, hint
+            if isinstance(value, dict):  # a key JSON cannot hold; a NaN key gets the key hint
+                hint = _scalar_hint(key) if isinstance(key, _JSON_SCALARS) else _KEY_HINT
+                if hint is not None:
+                    return path, key, _KEY_HINT if hint is _NUMBER_HINT else hint
             found = _find(item, f"{path}[{key!r}]", open_containers, depth + 1)
             if found is not None:
                 return found
@@ -80,18 +74,15 @@ def _find(value: Any, path: str, open_containers: Set[int], depth: int) -> Optio
         open_containers.discard(id(value))
 
 
-_TYPE_HINTS = (
-    ((set, frozenset), "Send a list instead: list(value), or sorted(value) for a stable order."),
-    ((bytes, bytearray), "Send text or numbers instead: value.hex(), or list(value)."),
-    (enum.Enum, "Send value.name or value.value instead."),
-    (complex, "Send [value.real, value.imag] instead."),
-)
-
-
 def _type_hint(value: Any) -> str:
-    hint = next((hint for kinds, hint in _TYPE_HINTS if isinstance(value, kinds)), None)
-    if hint is not None:
-        return hint
+    if isinstance(value, (set, frozenset)):
+        return "Send a list instead: list(value), or sorted(value) for a stable order."
+    if isinstance(value, (bytes, bytearray)):
+        return "Send text or numbers instead: value.hex(), or list(value)."
+    if isinstance(value, enum.Enum):
+        return "Send value.name or value.value instead."
+    if isinstance(value, complex):
+        return "Send [value.real, value.imag] instead."
     if hasattr(value, "tolist"):
         return "Convert it with value.tolist() (numpy arrays and numbers)."
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
@@ -100,12 +91,12 @@ def _type_hint(value: Any) -> str:
 
 
 def not_serializable_error(
-    key: str, data: Any, where: str = "", to: str = "to another node", reason: str = ""
+    key: str, data: Any, to: str = "to another node", reason: str = ""
 ) -> NotSerializableError:
     """A NotSerializableError naming the key, the path inside the data and the type.
 
-    ``where`` adds context (``" by component 'x'"``), ``to`` where the page was
-    going; ``reason`` says what is wrong when no single part is to blame.
+    ``to`` says where the page was going; ``reason`` what is wrong when no single
+    part is to blame.
 
     Example::
 
@@ -119,12 +110,12 @@ def not_serializable_error(
         what = f"{type(bad).__name__} ({short_repr(bad, 60)})"
         why = f"{path} {has} a {what}, which JSON cannot hold. {hint}"
     return NotSerializableError(
-        f"Cannot send the page stored under {key!r}{where} {to}: {why} Data sent between "
+        f"Cannot send the page stored under {key!r} {to}: {why} Data sent between "
         "nodes may only hold dicts, lists, tuples, str, int, float, bool and None."
     )
 
 
-def check_serializable(key: str, data: Any, to: str = "to another node") -> None:
+def check_serializable(key: str, data: Any) -> None:
     """Raise `not_serializable_error`'s error unless ``data`` is plain JSON (no set, no NaN).
 
     Example::
@@ -133,4 +124,4 @@ def check_serializable(key: str, data: Any, to: str = "to another node") -> None
         check_serializable("pose", {"x": {1.0}})   # NotSerializableError: data['x'] is a set
     """
     if _find(data, "data", set(), 0) is not None:
-        raise not_serializable_error(key, data, to=to)
+        raise not_serializable_error(key, data)

@@ -2,19 +2,17 @@
 
 from __future__ import annotations
 
-import math
 import time
 import warnings
 from dataclasses import dataclass
-from typing import Any
+from typing import Any, Dict
 
 from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import DataKey
 from snr.prelude.not_serializable import check_serializable, not_serializable_error
+from snr.prelude.student_code import short_repr
 
-__all__ = ["Page", "preview"]
-
-_PREVIEW_CHARS = 1000  # str(page) shows a game pad's buttons, not a camera frame
+__all__ = ["DataDict", "Page", "preview"]
 
 
 @dataclass(slots=True)
@@ -107,6 +105,10 @@ class Page(JsonDataclass):
         return f"Page {self.key!r} = {preview(self.data)} from {self.origin!r} ({age})"
 
 
+DataDict = Dict[DataKey, Page]
+"""A node's datastore: the newest page for every data key."""
+
+
 def _age_text(created_at_s: float, now_s: float) -> str:
     """How long before ``now_s`` a page was made, in words: ``"0.3 s ago"``.
 
@@ -115,22 +117,14 @@ def _age_text(created_at_s: float, now_s: float) -> str:
     """
     try:
         age = now_s - created_at_s
-    except TypeError:  # not a number: say what it is rather than fail to print
-        age = math.nan
-    if not math.isfinite(age):
+        made = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(created_at_s))
+    except (TypeError, OverflowError, OSError, ValueError):  # not a time: say what it is
         return f"created_at_s={created_at_s!r}"
-    if -0.05 <= age < 60:
-        return f"{max(age, 0.0):.1f} s ago"
-    if 60 <= age < 3600:
-        return f"{age / 60:.1f} min ago"
-    if 3600 <= age < 86400:
-        return f"{age / 3600:.1f} h ago"
+    for below, unit_s, unit in ((60, 1, "s"), (3600, 60, "min"), (86400, 3600, "h")):
+        if -0.05 <= age < below:
+            return f"{max(age, 0.0) / unit_s:.1f} {unit} ago"
     if -60 < age < 0:
         return f"{-age:.1f} s in the future: the clocks differ"
-    try:
-        made = time.strftime("%Y-%m-%d %H:%M:%S", time.gmtime(created_at_s))
-    except (OverflowError, OSError, ValueError):
-        return f"created_at_s={created_at_s!r}"
     return f"made {made} UTC"
 
 
@@ -142,7 +136,4 @@ def preview(data: Any) -> str:
         preview(list(range(5)))      # '[0, 1, 2, 3, 4]'
         len(preview(bytes(10_000)))  # 1000, ending in '...'
     """
-    text = repr(data)
-    if len(text) > _PREVIEW_CHARS:
-        text = text[: _PREVIEW_CHARS - 3] + "..."
-    return text
+    return short_repr(data, 1000, "...")  # a game pad's buttons, not a camera frame

@@ -123,8 +123,8 @@ def caller_location(skip: int = 1) -> str:
     return "<unknown place>" if frame is None else frame_location(frame)
 
 
-def short_repr(value: Any, limit: int = 120) -> str:
-    """``repr(value)``, cut to ``limit`` characters so messages stay readable.
+def short_repr(value: Any, limit: int = 120, end: str = "…") -> str:
+    """``repr(value)``, cut to ``limit`` characters (ending in ``end``) so messages stay readable.
 
     Example::
 
@@ -134,4 +134,4 @@ def short_repr(value: Any, limit: int = 120) -> str:
         text = repr(value)
     except Exception as error:  # a broken __repr__ must not hide the real error
         return f"<{type(value).__name__} whose repr() raised {type(error).__name__}>"
-    return text if len(text) <= limit else text[: limit - 1] + "…"
+    return text if len(text) <= limit else text[: limit - len(end)] + end

@@ -1,15 +1,20 @@
-"""`Task`: one unit of work flowing through a node's queue (thesis 4.3.1)."""
+"""`Task`: one unit of work flowing through a node's queue (thesis 4.3.1).
+
+Beside it, the aliases that name it: `SomeTasks`, `TaskHandler`, `TaskHandlerMap`,
+`BurstHandler` and `TaskScheduler` (thesis 6.2.2).
+"""
 
 from __future__ import annotations
 
 from dataclasses import dataclass, field
-from typing import Any, List, Literal, Optional, Tuple, Union
+from typing import Any, Callable, Dict, List, Literal, Optional, Tuple, Union
 
 from snr.prelude.json_dataclass import JsonDataclass
 from snr.prelude.names import TaskId, TaskName, TaskPriority, TaskType
 from snr.prelude.page import Page, preview
 
-__all__ = ["Task", "format_task"]
+__all__ = ["BurstHandler", "SomeTasks", "Task", "TaskHandler", "TaskHandlerMap", "TaskScheduler"]
+__all__ += ["format_task"]
 
 
 @dataclass(slots=True)
@@ -68,11 +73,24 @@ class Task(JsonDataclass):
         return format_task(self)
 
 
-ValuesShown = Literal["all", "data", "none"]
-"""How much of a task `format_task` shows: every value, a page's data only, or none."""
+SomeTasks = Union[Task, List[Task], None]
+"""What a task handler returns: one task, a list of tasks, or ``None``."""
+
+TaskHandler = Callable[[Task, TaskId], SomeTasks]
+"""A handler: ``def handler(self, task: Task, key: TaskId) -> SomeTasks``."""
+
+TaskHandlerMap = Dict[TaskId, TaskHandler]
+"""An endpoint's ``task_handlers``: which handler runs for which task id."""
+
+BurstHandler = Callable[[List[Task]], SomeTasks]
+"""A handler for a run of ``store_page`` tasks under one key, in one call (see
+`AbstractComponent.burst_handlers`): ``def forward_burst(self, run) -> SomeTasks``."""
+
+TaskScheduler = Callable[[SomeTasks], None]
+"""Something that queues tasks on a node, such as ``endpoint.schedule``."""
 
 
-def format_task(task: Union[Task, TaskId], values: ValuesShown = "all") -> str:
+def format_task(task: Union[Task, TaskId], values: Literal["all", "data", "none"] = "all") -> str:
     """A task (or a task id) in one line: the one way SNR prints tasks.
 
     Pages show in their short form; ``values="data"`` shows only a page's

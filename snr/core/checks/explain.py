@@ -40,7 +40,6 @@ from snr.prelude import (
     MissingSuperInitError,
     ThreadSafetyError,
 )
-from snr.prelude.abstract import explain_abstract_error  # loads abstract_errors when used
 
 # check_page_args is call_checks' (it names the student's call): named here for the node.
 __all__ = ["check_component_args", "check_loop_class", "check_node_args", "check_page_args"]
@@ -258,6 +257,8 @@ def raise_get_failure(factory: AbstractFactory, error: Exception, role: str) -> 
             raise_get_failure(factory, error, node.role)
     """
     if isinstance(error, TypeError):
+        from snr.prelude.abstract_errors import explain_abstract_error  # loaded only now
+
         explained = explain_abstract_error(error) or _wrong_get_signature(factory, error)
         if explained is not None:
             raise explained from None

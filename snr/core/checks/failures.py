@@ -31,9 +31,9 @@ from snr.core.checks.student_code import (
 )
 from snr.prelude.abstract import AbstractComponent, AbstractLoop
 from snr.prelude.errors import HandlerError, LoopError, SNRError
-from snr.prelude.names import Mode, TaskHandler
+from snr.prelude.names import Mode
 from snr.prelude.page import Page
-from snr.prelude.task import Task, format_task
+from snr.prelude.task import Task, TaskHandler, format_task
 
 __all__ = ["FailureReport"]
 
