@@ -5,7 +5,8 @@ that calls :meth:`Node.loop` alone writes the datastore and runs handlers; loop
 threads use the thread-safe ``schedule``, ``store_data`` and ``get_page``.
 The node core endpoint (``node_core``) stores pages and manages components
 (thesis 4.3.2); ``Config(datastore=..., node_core=...)`` can replace both
-(docs/assignments.md). The rest (docs/design.md)::
+(docs/assignments.md). The node is a `ComponentSet`, and two helpers do the rest
+(docs/design.md)::
 
     Node is a ComponentSet  build, add, remove, reload, start and stop components;
       │                     keep the HandlerTable in step with them
@@ -152,7 +153,7 @@ class Node(ComponentSet):
         if self.mode is not Mode.DEPLOYED:
             from snr.core.checks.node_checks import NodeChecks
 
-            self._checks = NodeChecks(self, self, self._runner)
+            self._checks = NodeChecks(self, self._runner)
         factory = config.node_core or NodeCoreFactory()
         core: NodeCore = checked_core(self.build_component(factory), factory, self)
         self._core = core
