@@ -692,6 +692,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
         add_arguments(argparse.ArgumentParser())
     """
+    parser.description = (
+        "Build SNR's documentation, the guide and the API reference, as HTML "
+        "(only if a page or the code changed since the last build), then open it in a "
+        "browser, to read offline; --serve serves it on http://127.0.0.1 instead."
+    )
     parser.add_argument(
         "--build-only",
         action="store_true",

@@ -21,7 +21,30 @@ from snr.extras.graph.render import render
 from snr.extras.graph.script import config_from_script
 from snr.prelude import SNRError
 
-__all__ = ["console_graph", "run"]
+__all__ = ["add_arguments", "console_graph", "run"]
+
+
+def add_arguments(parser: argparse.ArgumentParser) -> None:
+    """Add the options of ``python -m snr graph`` to ``parser``.
+
+    Example::
+
+        add_arguments(argparse.ArgumentParser(prog="snr graph"))
+    """
+    parser.description = (
+        "Draw the nodes, components, data keys and links of the system FILE "
+        "would run. FILE runs until it starts an SNR runner; the runner hands over its "
+        "config instead of starting nodes. Keys read but never stored, or stored but "
+        "never read, are marked (!)."
+    )
+    parser.usage = "snr graph FILE [--role ROLE] [--format {mermaid,dot,text}] [-- ARGS...]"
+    parser.add_argument("file", metavar="FILE", help="the program, e.g. main.py")
+    parser.add_argument(
+        "--role", action="append", default=None, help="draw only this role (repeatable)"
+    )
+    parser.add_argument(
+        "--format", choices=["mermaid", "dot", "text"], default="mermaid", help="default mermaid"
+    )
 
 
 def run(args: argparse.Namespace) -> int:

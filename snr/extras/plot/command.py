@@ -100,6 +100,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
         add_arguments(sub.add_parser("plot"))
     """
+    parser.description = (
+        "Draw the pages of each KEY in a recording (JSON lines or MCAP) "
+        "over time: one subplot per key, each number in its data a line. Writes a PNG "
+        f"file, no screen needed (needs {install_hint('plot')})."
+    )
     parser.add_argument("recording", help="a recording: JSON lines or MCAP")
     parser.add_argument("keys", metavar="KEY", nargs="+", help="a key to draw (one subplot each)")
     parser.add_argument(

@@ -132,6 +132,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
         add_arguments(sub.add_parser("convert"))
     """
+    parser.description = (
+        "Convert a recording of pages: JSON lines to MCAP, or MCAP to JSON "
+        "lines. The source's format is read from its first bytes, the target's from its "
+        "name (*.mcap: MCAP, anything else: JSON lines)."
+    )
     parser.add_argument("source", help="a recording: JSON lines or MCAP")
     parser.add_argument("target", help="the file to write: *.mcap for MCAP, else JSON lines")
     parser.add_argument(

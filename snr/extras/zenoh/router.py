@@ -40,6 +40,11 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
 
         add_arguments(argparse.ArgumentParser())
     """
+    parser.description = (
+        "A Zenoh router that nodes in mode='client' connect to where multicast "
+        "is blocked; with a secret, only nodes with the same secret link to it. --zenohd "
+        f"prints what zenohd needs instead (needs {install_hint('zenoh')})."
+    )
     parser.add_argument(
         "--listen",
         action="append",
