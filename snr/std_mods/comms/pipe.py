@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 import socket
 import threading
-from typing import TYPE_CHECKING, Any, List, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, ConfigError, WireFormatError
@@ -96,7 +96,6 @@ class PipeTransport(SocketTransport):
     def __init__(self, connection: Connection, peer: str = "pipe", bridge: bool = False) -> None:
         self.connection = connection
         self.peer = peer
-        self._threads: List[threading.Thread] = []
         sock = None if bridge else _as_socket(connection)
         self.bridged = sock is None
         if sock is None:
@@ -117,7 +116,7 @@ class PipeTransport(SocketTransport):
     def close(self) -> None:
         """Close this end of the pipe (and stop the copying threads, if any)."""
         self.sock.close()
-        if self._threads:
+        if self.bridged:
             self._stop.set()
             for thread in self._threads:
                 if thread is not threading.current_thread():
