@@ -86,10 +86,6 @@ def _listen(address: Address, role: str) -> socket.socket:
     return listener
 
 
-def _open(loop: _FactoryLoop, sock: socket.socket, peer: str) -> Link:
-    return loop.open_link(SocketTransport(sock, peer, loop.dead_after_s))
-
-
 class SocketsServerLoop(_FactoryLoop):
     """Accepts clients and links to each; built by ``SocketsPair.server()``.
 
@@ -138,9 +134,7 @@ class SocketsServerLoop(_FactoryLoop):
 
     def loop(self) -> None:
         """Wait for a client (or the stop) and accept it."""
-        if not self._sockets:
-            return
-        listener, stop, _ = self._sockets
+        listener, stop, _ = self._sockets  # (made by begin(), before the first loop())
         try:
             if listener not in select.select([listener, stop], [], [])[0]:  # halt(): stopping
                 if not self.is_terminated():  # the stop was taken back (cancel_stop)
@@ -177,7 +171,7 @@ class SocketsServerLoop(_FactoryLoop):
             self.closed_silent.dropped()
         if self.refused.dropping:
             self.refused.recovered()
-        link = _open(self, sock, _describe(peer[:2]))
+        link = self.open_link(SocketTransport(sock, _describe(peer[:2]), self.dead_after_s))
         self.dbg("Accepted a connection from %s", link.transport.peer)
 
     def on_hello(self, link: Link) -> None:
@@ -271,7 +265,9 @@ class SocketsClientLoop(_FactoryLoop):
             sock.close()
             return
         self._waiting_reported = False
-        self.link = _open(self, sock, _describe(self.address))
+        self.link = self.open_link(
+            SocketTransport(sock, _describe(self.address), self.dead_after_s)
+        )
         self.dbg("TCP connection to %s made", _describe(self.address))
 
     def _back_off(self) -> None:
