@@ -134,7 +134,7 @@ class SocketsServerLoop(_FactoryLoop):
 
     def loop(self) -> None:
         """Wait for a client (or the stop) and accept it."""
-        listener, stop, _ = self._sockets  # (made by begin(), before the first loop())
+        listener, stop, _ = self._sockets
         try:
             if listener not in select.select([listener, stop], [], [])[0]:  # halt(): stopping
                 if not self.is_terminated():  # the stop was taken back (cancel_stop)
@@ -393,7 +393,7 @@ class SocketsPair:
         secret: Optional[str] = FROM_ENVIRONMENT,
     ) -> None:
         well_formed = isinstance(server_tuple, tuple) and len(server_tuple) == 2
-        host, port = server_tuple if well_formed else ("", 0)  # ("", 0) fails the check
+        host, port = server_tuple if well_formed else ("", 0)
         if not isinstance(host, str) or type(port) is not int or not 0 < port < 65536:
             raise ConfigError(
                 f"SocketsPair(server_tuple={server_tuple!r}) needs a (host, port) tuple: "
