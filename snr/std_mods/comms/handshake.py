@@ -73,8 +73,8 @@ def resolve_system(system: Optional[str], config: Any, where: str) -> Optional[s
         if isinstance(name, str) and name:
             return name
         script = sys.argv[0] if sys.argv else ""
-        path = Path(script).resolve() if script and os.path.isfile(script) else Path.cwd()
-        return (path.parent.name if path.is_file() else path.name) or "snr"
+        folder = Path(script).resolve().parent if os.path.isfile(script) else Path.cwd()
+        return folder.name or "snr"
     if system is None or (isinstance(system, str) and system):
         return system
     raise ConfigError(

@@ -17,7 +17,7 @@ from __future__ import annotations
 import os
 import socket
 import threading
-from typing import TYPE_CHECKING, Any, List, Optional
+from typing import TYPE_CHECKING, Any, Optional
 
 from snr.core import LoopFactory
 from snr.prelude import AbstractNode, ConfigError, WireFormatError
@@ -96,20 +96,19 @@ class PipeTransport(SocketTransport):
     def __init__(self, connection: Connection, peer: str = "pipe", bridge: bool = False) -> None:
         self.connection = connection
         self.peer = peer
-        self._threads: List[threading.Thread] = []
         sock = None if bridge else _as_socket(connection)
         self.bridged = sock is None
         if sock is None:
             sock, self._far = socket.socketpair()
-            self._stop = threading.Event()
+        sock.setblocking(False)
+        self.sock = sock
+        if self.bridged:  # they copy until close() closes self.sock
             self._threads = [
                 threading.Thread(target=copy, name=f"snr-pipe-{name}", daemon=True)
                 for name, copy in (("in", self._pipe_to_socket), ("out", self._socket_to_pipe))
             ]
             for thread in self._threads:
                 thread.start()
-        sock.setblocking(False)
-        self.sock = sock
 
     def end_writing(self) -> None:
         """Nothing: the other process may still use its end, so the pipe stays as it is."""
@@ -117,8 +116,7 @@ class PipeTransport(SocketTransport):
     def close(self) -> None:
         """Close this end of the pipe (and stop the copying threads, if any)."""
         self.sock.close()
-        if self._threads:
-            self._stop.set()
+        if self.bridged:
             for thread in self._threads:
                 if thread is not threading.current_thread():
                     thread.join(_POLL_S * 2)
@@ -127,7 +125,7 @@ class PipeTransport(SocketTransport):
 
     def _pipe_to_socket(self) -> None:
         try:
-            while not self._stop.is_set():
+            while self.sock.fileno() != -1:
                 if self.connection.poll(_POLL_S):
                     self._far.sendall(self.connection.recv_bytes())
         except (EOFError, OSError):

@@ -86,10 +86,6 @@ def _listen(address: Address, role: str) -> socket.socket:
     return listener
 
 
-def _open(loop: _FactoryLoop, sock: socket.socket, peer: str) -> Link:
-    return loop.open_link(SocketTransport(sock, peer, loop.dead_after_s))
-
-
 class SocketsServerLoop(_FactoryLoop):
     """Accepts clients and links to each; built by ``SocketsPair.server()``.
 
@@ -128,21 +124,17 @@ class SocketsServerLoop(_FactoryLoop):
             "always gets in (SocketsPair(..., max_connections=N) changes the cap)",
             verb="Closed",
         )
-        self._listener: Optional[socket.socket] = None
-        self._stop_r: Optional[socket.socket] = None  # halt() writes to _stop_w: accepting ends
-        self._stop_w: Optional[socket.socket] = None
+        # The listener, and a socket pair: halt() writes to the second, and accepting ends.
+        self._sockets: Tuple[socket.socket, ...] = ()
 
     def begin(self) -> None:
         """Start listening (on the node's thread, so errors stop the node)."""
-        self._listener = _listen(self.address, self.parent.role)
-        self._stop_r, self._stop_w = socket.socketpair()
+        self._sockets = (_listen(self.address, self.parent.role), *socket.socketpair())
         self.info("Listening for sockets clients on %s", _describe(self.address))
 
     def loop(self) -> None:
         """Wait for a client (or the stop) and accept it."""
-        listener, stop = self._listener, self._stop_r
-        if listener is None or stop is None:
-            return
+        listener, stop, _ = self._sockets
         try:
             if listener not in select.select([listener, stop], [], [])[0]:  # halt(): stopping
                 if not self.is_terminated():  # the stop was taken back (cancel_stop)
@@ -160,28 +152,27 @@ class SocketsServerLoop(_FactoryLoop):
             sock.close()
             return
         ended = (LinkState.ENDING, LinkState.CLOSED)  # aborted links go in a moment
-        taken = sum(1 for link in self.links if link.state not in ended)
-        if taken >= self.max_connections and not self._make_room():
-            sock.close()  # the client sees the connection end and retries later
-            self.refused.dropped()
-            return
+        if sum(1 for link in self.links if link.state not in ended) >= self.max_connections:
+            # Full: the oldest connection with no hello (or no proof yet) makes room.
+            silent = [
+                link
+                for link in self.links
+                if link.state is LinkState.HELLO
+                or (link.peer_role is None and link.state is LinkState.OPEN)
+            ]
+            if not silent:
+                sock.close()  # the client sees the connection end and retries later
+                self.refused.dropped()
+                return
+            silent[0].abort(
+                f"it had not said hello in {time.monotonic() - silent[0].opened_at:.1f} s and "
+                f"the server, full ({self.max_connections} clients), made room for a new one"
+            )
+            self.closed_silent.dropped()
         if self.refused.dropping:
             self.refused.recovered()
-        link = _open(self, sock, _describe(peer[:2]))
+        link = self.open_link(SocketTransport(sock, _describe(peer[:2]), self.dead_after_s))
         self.dbg("Accepted a connection from %s", link.transport.peer)
-
-    def _make_room(self) -> bool:
-        """Close the oldest connection that has not said hello; False if every one has."""
-        for link in self.links:
-            unproven = link.state is LinkState.HELLO  # no hello, or no proof yet
-            if unproven or (link.peer_role is None and link.state is LinkState.OPEN):
-                link.abort(
-                    f"it had not said hello in {time.monotonic() - link.opened_at:.1f} s and "
-                    f"the server, full ({self.max_connections} clients), made room for a new one"
-                )
-                self.closed_silent.dropped()
-                return True
-        return False
 
     def on_hello(self, link: Link) -> None:
         self.say(
@@ -203,9 +194,9 @@ class SocketsServerLoop(_FactoryLoop):
 
     def halt(self) -> None:
         """Stop accepting, then flush and close every client link."""
-        if self._stop_w is not None:
+        if self._sockets:
             try:
-                self._stop_w.send(b"\0")  # ends the wait for a client
+                self._sockets[2].send(b"\0")  # ends the wait for a client
             except OSError:
                 pass
         super().halt()
@@ -213,9 +204,8 @@ class SocketsServerLoop(_FactoryLoop):
     def terminate(self) -> None:
         """Close the listening socket and every link."""
         super().terminate()
-        for end in (self._listener, self._stop_r, self._stop_w):
-            if end is not None:
-                end.close()
+        for end in self._sockets:
+            end.close()
 
 
 class SocketsClientLoop(_FactoryLoop):
@@ -258,34 +248,31 @@ class SocketsClientLoop(_FactoryLoop):
                 return
         try:
             sock = socket.create_connection(self.address, timeout=_CONNECT_TIMEOUT_S)
+            if sock.getsockname() == sock.getpeername():  # TCP "simultaneous open": no server
+                sock.close()
+                raise ConnectionRefusedError(0, "connected to itself")
         except OSError as error:
-            self._report_waiting(error.strerror or str(error))
-            self._back_off()
-            return
-        if sock.getsockname() == sock.getpeername():  # TCP "simultaneous open": no server
-            sock.close()
-            self._report_waiting("connected to itself")
+            if not self._waiting_reported and not self._ever_connected:
+                self._waiting_reported = True
+                self.info(
+                    "Waiting for the sockets server at %s (%s); retrying until it is up.",
+                    _describe(self.address),
+                    error.strerror or str(error),
+                )
             self._back_off()
             return
         if self.is_terminated():
             sock.close()
             return
         self._waiting_reported = False
-        self.link = _open(self, sock, _describe(self.address))
+        self.link = self.open_link(
+            SocketTransport(sock, _describe(self.address), self.dead_after_s)
+        )
         self.dbg("TCP connection to %s made", _describe(self.address))
 
     def _back_off(self) -> None:
         self.wait_s(self._retry_s)
         self._retry_s = min(self._retry_s * 2, _MAX_RETRY_S)
-
-    def _report_waiting(self, reason: str) -> None:
-        if not self._waiting_reported and not self._ever_connected:
-            self._waiting_reported = True
-            self.info(
-                "Waiting for the sockets server at %s (%s); retrying until it is up.",
-                _describe(self.address),
-                reason,
-            )
 
     def on_hello(self, link: Link) -> None:
         verb = "Reconnected" if self._ever_connected else "Connected"
@@ -405,35 +392,17 @@ class SocketsPair:
         system: Optional[str] = SCRIPT_FOLDER,
         secret: Optional[str] = FROM_ENVIRONMENT,
     ) -> None:
-        if (
-            not isinstance(server_tuple, tuple)
-            or len(server_tuple) != 2
-            or not isinstance(server_tuple[0], str)
-            or isinstance(server_tuple[1], bool)
-            or not isinstance(server_tuple[1], int)
-            or not 0 < server_tuple[1] < 65536
-        ):
+        well_formed = isinstance(server_tuple, tuple) and len(server_tuple) == 2
+        host, port = server_tuple if well_formed else ("", 0)
+        if not isinstance(host, str) or type(port) is not int or not 0 < port < 65536:
             raise ConfigError(
                 f"SocketsPair(server_tuple={server_tuple!r}) needs a (host, port) tuple: "
                 "a host name or IP address string and a port from 1 to 65535, e.g. "
                 '("localhost", 9000).'
             )
         self.server_tuple: Address = server_tuple
-        self.max_backlog_bytes = max_backlog_bytes
-        self.dead_after_s = dead_after_s
-        self.max_connections = max_connections
-        self.system = system
-        self.secret = secret
-
-    def _settings(self) -> Tuple[int, float, int, Optional[str], Optional[str]]:
-        """What both sides are built with, besides the address, keys and name."""
-        return (
-            self.max_backlog_bytes,
-            self.dead_after_s,
-            self.max_connections,
-            self.system,
-            self.secret,
-        )
+        # What both sides are built with, besides the address, keys and name.
+        self._settings = (max_backlog_bytes, dead_after_s, max_connections, system, secret)
 
     def server(self, keys: Keys = None, name: Optional[str] = None) -> SocketsServerFactory:
         """The factory for the listening side; ``keys`` it forwards to clients.
@@ -443,7 +412,7 @@ class SocketsPair:
             sockets.server()                  # only receives
             sockets.server(["sensor_data"])   # also sends sensor_data to clients
         """
-        return SocketsServerFactory(self.server_tuple, keys, name, *self._settings())
+        return SocketsServerFactory(self.server_tuple, keys, name, *self._settings)
 
     def client(self, keys: Keys = None, name: Optional[str] = None) -> SocketsClientFactory:
         """The factory for the connecting side; ``keys`` (one or a list) it forwards.
@@ -453,7 +422,7 @@ class SocketsPair:
             sockets.client(["controller_data"])
             sockets.client("controller_input")
         """
-        return SocketsClientFactory(self.server_tuple, keys, name, *self._settings())
+        return SocketsClientFactory(self.server_tuple, keys, name, *self._settings)
 
     def __repr__(self) -> str:
         return f"SocketsPair(server_tuple={self.server_tuple!r})"
