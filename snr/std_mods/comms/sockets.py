@@ -401,8 +401,21 @@ class SocketsPair:
                 '("localhost", 9000).'
             )
         self.server_tuple: Address = server_tuple
-        # What both sides are built with, besides the address, keys and name.
-        self._settings = (max_backlog_bytes, dead_after_s, max_connections, system, secret)
+        self.max_backlog_bytes = max_backlog_bytes
+        self.dead_after_s = dead_after_s
+        self.max_connections = max_connections
+        self.system = system
+        self.secret = secret
+
+    def _settings(self) -> Tuple[int, float, int, Optional[str], Optional[str]]:
+        """What both sides are built with, besides the address, keys and name."""
+        return (
+            self.max_backlog_bytes,
+            self.dead_after_s,
+            self.max_connections,
+            self.system,
+            self.secret,
+        )
 
     def server(self, keys: Keys = None, name: Optional[str] = None) -> SocketsServerFactory:
         """The factory for the listening side; ``keys`` it forwards to clients.
@@ -412,7 +425,7 @@ class SocketsPair:
             sockets.server()                  # only receives
             sockets.server(["sensor_data"])   # also sends sensor_data to clients
         """
-        return SocketsServerFactory(self.server_tuple, keys, name, *self._settings)
+        return SocketsServerFactory(self.server_tuple, keys, name, *self._settings())
 
     def client(self, keys: Keys = None, name: Optional[str] = None) -> SocketsClientFactory:
         """The factory for the connecting side; ``keys`` (one or a list) it forwards.
@@ -422,7 +435,7 @@ class SocketsPair:
             sockets.client(["controller_data"])
             sockets.client("controller_input")
         """
-        return SocketsClientFactory(self.server_tuple, keys, name, *self._settings)
+        return SocketsClientFactory(self.server_tuple, keys, name, *self._settings())
 
     def __repr__(self) -> str:
         return f"SocketsPair(server_tuple={self.server_tuple!r})"
