@@ -89,7 +89,7 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
     )
     from snr.extras.plot import read_recording
     from snr.extras.serial import SerialLinkFactory
-    from snr.extras.sim import SimClock, SimRobotFactory, SimViewFactory, World
+    from snr.extras.sim import SimRobotFactory, SimViewFactory, World
     from snr.extras.viz import FoxgloveBridgeFactory
     from snr.extras.zenoh import ZenohCommsFactory
     from snr.std_mods.comms import (
@@ -117,6 +117,7 @@ if TYPE_CHECKING:  # loaded on first use (_LAZY); these lines let type checkers 
         ListReplayerFactory,
         MultiProcExpector,
         OrderedExpector,
+        SimClock,
     )
     from snr.utils.test_case import SNRTestCase
 
@@ -135,7 +136,7 @@ _LAZY: Dict[str, str] = {
     ),
     "snr.extras.plot": "read_recording",
     "snr.extras.serial": "SerialLinkFactory",
-    "snr.extras.sim": "SimClock SimRobotFactory SimViewFactory World",
+    "snr.extras.sim": "SimRobotFactory SimViewFactory World",
     "snr.extras.viz": "FoxgloveBridgeFactory",
     "snr.extras.zenoh": "ZenohCommsFactory",
     "snr.std_mods.comms": "COMMS_CONNECTED COMMS_DISCONNECTED PipeLoopFactory SocketsPair",
@@ -145,7 +146,7 @@ _LAZY: Dict[str, str] = {
     "snr.std_mods.utils": "PrinterEndpointFactory StopwatchEndpointFactory TimeoutLoopFactory",
     "snr.utils": (
         "ExpecterEndpointFactory Expector ExpectorEndpointFactory ListReplayerFactory "
-        "MultiProcExpector OrderedExpector"
+        "MultiProcExpector OrderedExpector SimClock"
     ),
     "snr.utils.test_case": "SNRTestCase",
 }

@@ -1,8 +1,8 @@
 """`NodeClock`: the time a node and its loops run on; the wall's by default.
 
 The one extension point for time: `Config(clock=...)` hands its clock to every
-node built from it. The wall hands out no turns; `snr.SimClock` (the simulator
-extra's, docs/sim-time.md) makes nodes and loops take turns.
+node built from it. The wall hands out no turns; `snr.utils.sim_clock.SimClock`
+(docs/sim-time.md) makes nodes and loops take turns.
 """
 
 from __future__ import annotations

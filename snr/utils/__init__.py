@@ -20,6 +20,7 @@ from snr.utils.expector_endpoint import (
 )
 from snr.utils.list_replayer import ListReplayerFactory, ListReplayerLoop
 from snr.utils.mock_node import MockNode
+from snr.utils.sim_clock import SimClock
 from snr.utils.temp_file import TempFile
 
 if TYPE_CHECKING:
@@ -40,6 +41,7 @@ __all__ = [
     "MultiProcExpector",
     "OrderedExpector",
     "SNRTestCase",
+    "SimClock",
     "TempFile",
     "memory_transport_pair",
 ]

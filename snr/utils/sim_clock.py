@@ -1,8 +1,7 @@
 """`SimClock`: simulated time for nodes, advanced in lockstep (docs/sim-time.md).
 
 A `snr.core.clock.NodeClock` whose nodes and loops take turns: the kernel
-knows it only through that interface (`Config(clock=...)`, `clock_of`). It
-is the simulator extra's; students write `snr.SimClock`.
+knows it only through that interface.
 
 A node built from ``Config(..., clock=SimClock())`` reads its time from the
 clock. Nodes and ticking loops take *turns* in a fixed order, so the same run
