@@ -531,6 +531,22 @@ class TestTheExtensionPoint(BackendCase):
                 self.assertIsNone(fast.dumps(data))
 
     @unittest.skipUnless("orjson" in BACKENDS, reason("orjson"))
+    def test_the_orjson_backend_writes_a_dict_of_names_and_scalars_as_json_does(self) -> None:
+        from snr.extras.orjson import OrjsonBackend
+
+        fast = OrjsonBackend()
+        written = [{"seq": 1, "value": 0.5}, {"on": True, "off": None, "name": "a\tb"}, {}]
+        written += [{"big": 1e300, "zero": -0.0, "negative": -7}]
+        for data in written:
+            with self.subTest(data=data):
+                self.assertEqual(fast.dumps(data), json.dumps(data, separators=(",", ":")).encode())
+        stepped_aside = [{"x": 1e-5}, {"x": math.inf}, {"é": 1}, {"x": "é"}, {"x": "\x7f"}]
+        stepped_aside += [{"x": 2**70}, {1: 2}]
+        for data in stepped_aside:
+            with self.subTest(data=repr(data)):
+                self.assertIsNone(fast.dumps(data))
+
+    @unittest.skipUnless("orjson" in BACKENDS, reason("orjson"))
     def test_a_backend_not_installed_names_the_pip_line(self) -> None:
         from snr.extras import orjson as extra
 

@@ -26,7 +26,7 @@ Example::
 
 from __future__ import annotations
 
-from typing import Any, Iterable, Optional, Union
+from typing import Any, Dict, Iterable, Optional, Union
 
 from snr.prelude.install import install_hint
 from snr.std_mods.codec import MAX_DEPTH
@@ -43,6 +43,30 @@ _JSON_SCALARS = frozenset((str, int, float, bool, type(None)))
 _STR = frozenset((str,))
 _SMALL = 16  # items in a list or dict `_alike` looks at; longer ones, searching is faster
 _DIGITS_TO_ZERO = bytes.maketrans(b"123456789", b"000000000")  # a run of 19 digits: one search
+
+
+def _names_and_scalars(value: Dict[Any, Any]) -> bool:
+    """True when orjson writes the dict ``value`` (or a dict subclass) as json does; one pass.
+
+    The shape of most pages' data (``{"seq": 1, "value": 0.5}``): ASCII text
+    without DEL for keys, and for values what `_alike` accepts of scalars.
+    Anything else (a nested list, a key that is not text) is False: `_alike`
+    then looks. Example: ``_names_and_scalars({"seq": 1, "value": 0.5})`` is True.
+    """
+    for key, item in value.items():
+        if type(key) is not str or not key.isascii() or "\x7f" in key:
+            return False
+        kind = type(item)
+        if kind is float:
+            # item - item is NaN for NaN and infinity
+            if item - item != 0.0 or (-1e-4 < item < 1e-4 and item != 0.0):
+                return False
+        elif kind is str:
+            if not item.isascii() or "\x7f" in item:
+                return False
+        elif kind is not int and kind is not bool and item is not None:
+            return False
+    return True
 
 
 def _alike(values: Iterable[Any], levels: int) -> bool:
@@ -142,14 +166,17 @@ class OrjsonBackend:
     def dumps(self, value: Any) -> Optional[bytes]:
         """orjson's bytes for ``value`` where they are json's, else None.
 
-        A number, a name or a small list or dict of them (`_alike`, two deep)
-        is written as it is; other data of exact JSON types, nested at most
+        A number, a name or a small list or dict of them (`_alike`, two deep;
+        a dict of names and scalars in one pass, `_names_and_scalars`) is
+        written as it is; other data of exact JSON types, nested at most
         ``MAX_DEPTH - 1`` deep (`_plain`), is written and its bytes are
         searched (`_as_json_writes`). orjson refuses lone surrogates itself.
         """
         if type(value) is float and value - value == 0.0 and not -1e-4 < value < 1e-4:
             return _orjson.dumps(value)  # type: ignore[no-any-return]  # every page's time
         try:
+            if isinstance(value, dict) and len(value) <= _SMALL and _names_and_scalars(value):
+                return _orjson.dumps(value)  # type: ignore[no-any-return]  # most pages' data
             if _alike((value,), 2):
                 return _orjson.dumps(value)  # type: ignore[no-any-return]
             if _plain(value, 2):  # None for data nesting over MAX_DEPTH - 1: json decides
