@@ -503,6 +503,19 @@ class TestReplayNeverStopsOnData(SNRTestCase):
         self.assertFalse(runner.timed_out, "exit_when_done did not stop the DEPLOYED node")
         self.assertEqual(replayed.data(), list(range(bad + 1)))
 
+    def test_a_done_event_scheduled_by_hand_with_only_its_rounds_stops_the_node(self) -> None:
+        path = self.temp_file(".jsonl")
+        write_lines(path, [HEADER] + [page_line("n", i, 5.0 * i) for i in range(3)])  # 10 s
+        factory = ReplayerLoopFactory(path, exit_when_done=True)
+        node = Node("sim", Config({"sim": [factory]}, mode=Mode.TEST))
+        for val_list in ([replayer.DRAIN_ROUNDS], [0]):
+            node.schedule(tasks.event("replayer_done", val_list))  # [rounds] alone, by hand
+        started = time.monotonic()
+        with self.assertNoLogs("snr.sim", "WARNING"):
+            node.loop()
+        self.assertEqual(node.terminate_reason, f"replayed {path}")
+        self.assertLess(time.monotonic() - started, 5.0, "the replay ran on to its end")
+
     def test_exit_when_done_fires_in_deployed_mode_when_the_loop_fails(self) -> None:
         path = self.temp_file(".jsonl")
         write_lines(path, [HEADER] + [page_line("n", i, 1.0) for i in range(3)])
