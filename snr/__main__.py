@@ -47,7 +47,7 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
         epilog="Run 'snr COMMAND --help' for a command's options.",
     )
     parser.add_argument(
-        "--version", action="store_true", help="print the installed version and exit"
+        "--version", action=_PrintVersion, help="print the installed version and exit"
     )
     sub = parser.add_subparsers(dest="command", metavar="COMMAND", title="commands")
     parsers = {name: sub.add_parser(name, help=words) for name, words in _COMMANDS.items()}
@@ -81,17 +81,11 @@ def main(argv: Optional[Sequence[str]] = None) -> int:
             command.add_arguments(parsers[words[0]])
     args = parser.parse_args(words)
     args.file_args = file_args
-    if args.version:
-        # Loaded only when asked: importlib.metadata costs more than all of `import snr`.
-        from importlib.metadata import PackageNotFoundError, version
-
-        try:  # what pip installed; a checkout on sys.path alone has no metadata
-            print(f"{DISTRIBUTION} {version(DISTRIBUTION)}")
-        except PackageNotFoundError:
-            print(f"{DISTRIBUTION} {snr.__version__}")
-        return 0
     if command is not None:
-        return int(command.run(args))
+        try:
+            return int(command.run(args))
+        except argparse.ArgumentError as error:  # options that do not go together
+            parsers[words[0]].error(str(error))  # prints the usage, exits with status 2
     if args.command == "version":
         print(snr.__version__)
         return 0
@@ -125,6 +119,39 @@ def _new_secret(force: bool) -> int:
         "place on every computer of your team: nodes with it link only to each other."
     )
     return 0
+
+
+class _PrintVersion(argparse.Action):
+    """``snr --version``: prints e.g. ``snr-robotics 0.1.0`` and exits with 0.
+
+    An action, so it answers while parsing, whatever follows it.
+
+    Example::
+
+        parser.add_argument("--version", action=_PrintVersion, help="print the version")
+    """
+
+    def __init__(self, option_strings: Sequence[str], dest: str, help: str) -> None:
+        super().__init__(option_strings, dest, nargs=0, help=help)
+
+    def __call__(self, parser: argparse.ArgumentParser, *args: object) -> None:
+        print(f"{DISTRIBUTION} {_installed_version()}")
+        parser.exit()
+
+
+def _installed_version() -> str:
+    """The version pip installed (the distribution's metadata), e.g. ``"0.1.0"``.
+
+    It is ``snr.__version__``, which the build reads; a checkout put on
+    ``sys.path`` without installing it has no metadata, and gives its own.
+    """
+    # Loaded only when asked: importlib.metadata costs more than all of `import snr`.
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version(DISTRIBUTION)
+    except PackageNotFoundError:
+        return snr.__version__
 
 
 if __name__ == "__main__":

@@ -13,6 +13,7 @@ import re
 import unittest
 from typing import Callable, Dict, List, Sequence, Tuple
 
+import snr
 import snr.console
 from snr.__main__ import main as snr_main
 
@@ -139,6 +140,33 @@ class TestEveryCommandSaysWhatItDoes(unittest.TestCase):
         grade = snr_help("lesson", "grade")
         self.assertIn("--solution", grade)
         self.assertIn("One file: each check, passed or failed", description(grade))
+
+
+class TestUsageAnswersWhileParsing(unittest.TestCase):
+    """``--version`` and wrong option pairs end the program before any command runs."""
+
+    def test_version_answers_whatever_follows_it(self) -> None:
+        expected = f"snr-robotics {snr.__version__}\n"
+        for argv in (["--version"], ["--version", "graph"], ["--version", "demo", "--sim"]):
+            with self.subTest(argv=argv):
+                self.assertEqual(run(snr_main, argv), (0, expected, ""))
+
+    def test_version_exits_during_parsing(self) -> None:
+        with contextlib.redirect_stdout(io.StringIO()), self.assertRaises(SystemExit) as stop:
+            snr_main(["--version"])
+        self.assertEqual(stop.exception.code, 0)
+
+    def test_demo_options_that_do_not_go_together_are_usage_errors(self) -> None:
+        wrong = {
+            ("--sim", "--view"): "--view watches the UROV demo; it does not go with --sim",
+            ("--frames", "out"): "--frames goes with --sim",
+        }
+        for options, message in wrong.items():
+            with self.subTest(options=options):
+                code, out, err = run(snr_main, ["demo", *options])
+                self.assertEqual((code, out), (2, ""), err)
+                self.assertTrue(err.startswith("usage: snr demo "), err)
+                self.assertTrue(err.endswith(f"snr demo: error: {message}\n"), err)
 
 
 if __name__ == "__main__":

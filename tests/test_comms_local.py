@@ -2,11 +2,13 @@
 
 from __future__ import annotations
 
+import enum
 import socket
 import threading
 import time
 import unittest
 from typing import Any, List, Optional, Sequence
+from unittest import mock
 
 from snr import (
     COMMS_CONNECTED,
@@ -216,12 +218,38 @@ class TestLocalSockets(SNRTestCase):
         self.assertPage(page, "controller_data", named, origin="input_device")
 
 
+class TestServerSockets(SNRTestCase):
+    def test_the_listener_is_closed_when_the_stop_pair_cannot_be_made(self) -> None:
+        server = SocketsPair(server_tuple=("127.0.0.1", free_port())).server().get(self.mock_node())
+        too_many = OSError(24, "Too many open files")
+        with mock.patch("socket.socketpair", side_effect=too_many), self.assertRaises(OSError):
+            server.begin()
+        listener = server._listener
+        assert listener is not None, "begin() made the listener before the pair"
+        server.terminate()
+        self.assertEqual(listener.fileno(), -1, "terminate() left the listener open")
+
+
 class TestConfigErrors(unittest.TestCase):
     def test_bad_server_tuple(self) -> None:
-        for bad in [("localhost",), ("localhost", "9000"), ("localhost", 0), ["h", 1], None]:
+        bads = [
+            ("localhost",),
+            ("localhost", "9000"),
+            ("localhost", 0),
+            ("h", True),
+            ["h", 1],
+            None,
+        ]
+        for bad in bads:
             with self.subTest(bad=bad), self.assertRaises(ConfigError) as ctx:
                 SocketsPair(server_tuple=bad)  # type: ignore[arg-type]
             self.assertIn("(host, port)", str(ctx.exception))
+
+    def test_an_int_enum_port_is_a_port(self) -> None:
+        class Port(enum.IntEnum):
+            ROBOT = 9000
+
+        self.assertEqual(SocketsPair(server_tuple=("localhost", Port.ROBOT)).server_tuple[1], 9000)
 
     def test_bad_keys(self) -> None:
         pair = SocketsPair(server_tuple=("localhost", 9000))

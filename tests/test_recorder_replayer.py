@@ -22,6 +22,7 @@ from snr import (
     ListReplayerFactory,
     Mode,
     MovingAvgFilterFactory,
+    Node,
     Page,
     RecorderEndpointFactory,
     ReplayerLoopFactory,
@@ -32,11 +33,12 @@ from snr import (
     TaskType,
     tasks,
 )
-from snr.core import TestRunner
+from snr.core import NodeCore, TestRunner
 from snr.prelude import ConfigError, WireFormatError
 from snr.std_mods import codec
 from snr.std_mods.io import PageReader, TextReader, TextReplayerFactory, replayer
 from snr.std_mods.io.replayer import MAX_GAP_S, MAX_PROBLEMS
+from tests.helpers import StopWhenFactory
 from tests.page_collector import PageCollectorFactory
 
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
@@ -157,7 +159,42 @@ class ReloadAtFactory(EndpointFactory):
         return ReloadAt(self, parent)
 
 
+class SilentCore(NodeCore):
+    """A student's node core that drops a store_page task without a Page, saying nothing."""
+
+    def store_page_handler(self, task: Task, key: TaskId) -> SomeTasks:
+        page = task.page()
+        if page is not None:
+            self.pages[page.key] = page
+        return None
+
+
+class SilentCoreFactory(EndpointFactory):
+    def get(self, parent: AbstractNode) -> SilentCore:
+        core = SilentCore(self, parent)
+        core.task_handlers[TaskType.terminate] = lambda task, key: parent.set_terminate_flag("stop")
+        return core
+
+
 class TestRecorder(SNRTestCase):
+    def test_a_store_page_task_without_a_page_is_said_whatever_the_node_core(self) -> None:
+        path = self.temp_file(".jsonl")
+        stop = StopWhenFactory((TaskType.store_page, "k"))
+        robot = [RecorderEndpointFactory(path, ["k"]), stop]
+        config = Config({"robot": robot}, mode=Mode.DEPLOYED, node_core=SilentCoreFactory())
+        node = Node("robot", config)
+        node.schedule(Task(TaskType.store_page, "k", ["not a page"]))
+        with self.assertLogs("snr.robot", "WARNING") as logs:
+            node.loop()
+        self.assertEqual(
+            logs.output,
+            [
+                "WARNING:snr.robot.recorder:A store_page task for 'k' carries "
+                "['not a page'], not a Page"
+            ],
+        )
+        self.assertEqual(list(PageReader(path)), [])
+
     def test_data_json_cannot_hold_is_reported_and_skipped(self) -> None:
         path = self.temp_file(".jsonl")
         values: List[object] = [1, {1, 2}, 2, object(), {3}, 3]
@@ -465,6 +502,19 @@ class TestReplayNeverStopsOnData(SNRTestCase):
             runner.run()
         self.assertFalse(runner.timed_out, "exit_when_done did not stop the DEPLOYED node")
         self.assertEqual(replayed.data(), list(range(bad + 1)))
+
+    def test_a_done_event_scheduled_by_hand_with_only_its_rounds_stops_the_node(self) -> None:
+        path = self.temp_file(".jsonl")
+        write_lines(path, [HEADER] + [page_line("n", i, 5.0 * i) for i in range(3)])  # 10 s
+        factory = ReplayerLoopFactory(path, exit_when_done=True)
+        node = Node("sim", Config({"sim": [factory]}, mode=Mode.TEST))
+        for val_list in ([replayer.DRAIN_ROUNDS], [0]):
+            node.schedule(tasks.event("replayer_done", val_list))  # [rounds] alone, by hand
+        started = time.monotonic()
+        with self.assertNoLogs("snr.sim", "WARNING"):
+            node.loop()
+        self.assertEqual(node.terminate_reason, f"replayed {path}")
+        self.assertLess(time.monotonic() - started, 5.0, "the replay ran on to its end")
 
     def test_exit_when_done_fires_in_deployed_mode_when_the_loop_fails(self) -> None:
         path = self.temp_file(".jsonl")

@@ -1,13 +1,29 @@
 """`TaskQueue`: the thread-safe queue between loops and the node's thread.
 
-Two FIFO deques, ``urgent`` (terminate) and ``normal``; ``deque.append`` and
-``popleft`` are atomic in CPython, so producers never take a lock. An idle
-node sleeps in `TaskQueue.wait` on the queue's bell, or on the `IdleWaiter`
-installed with `use_waiter`, and producers ring only while it sleeps. The
-queue is bounded: above ``high_water`` another thread's task waits for the
-node to work the lane down to half, and is dropped (counted, logged) after
-``max_wait_s``; the node's own tasks and urgent ones never wait. docs/design.md
-tells why ("How an idle node waits", "The queue").
+Two deques: ``urgent`` for high-priority tasks (terminate) and ``normal`` for
+the rest, each FIFO. ``deque.append``/``popleft`` are atomic in CPython, so
+producers never take a lock.
+
+**How an idle node waits.** When its queue is empty, the node's thread sleeps
+in `TaskQueue.wait` (until a task comes or it stops), and producers wake it only while it
+sleeps: an idle node uses no CPU, and a busy one pays nothing for waking.
+What it sleeps on is the queue's *bell*, a ``queue.SimpleQueue`` (a blocking
+get with a timeout), unless something else was installed with `use_waiter`:
+an `IdleWaiter`, the one way to change how an idle node waits. SNR has three:
+a `SimClock`'s turn (an idle node gives the clock back), the socket comms'
+I/O loop and Zenoh's idle reader (an idle node reads its links itself, so a
+page that arrives needs no hand-off from another thread).
+
+The queue is bounded by a *high-water mark* (``high_water``, 10,000 tasks by
+default). A task offered by another thread (a loop's ``store_data``) while the
+normal lane is above it waits until the node has worked the lane down to the
+*low-water mark* (half the high one): a loop that produces faster than the
+node can handle is slowed to the node's pace (backpressure). If the node does
+not catch up within ``max_wait_s`` (1 s) the waiting task is dropped, counted
+and logged (at most once a second, with numbers), so a stuck node can never
+fill the memory. Tasks the node's own handlers return never wait (the node
+would wait on itself) and urgent tasks (terminate) never wait or drop.
+Readers of sockets ask `wait_for_room(0)` and stop reading instead of waiting.
 """
 
 from __future__ import annotations

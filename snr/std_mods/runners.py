@@ -64,6 +64,19 @@ def _run_role(
     SynchronousRunner(role, config, announce_interrupt=False, on_node=watch).run()
 
 
+def _start_method(requested: Optional[str]) -> str:
+    """The start method to use: ``requested``, else fork where it is safe, else spawn."""
+    import multiprocessing  # lazily: it is slow to import and most programs run one node
+
+    if requested is not None:
+        return requested
+    # fork is fast and pickles nothing, but forking a process with threads can deadlock.
+    methods = multiprocessing.get_all_start_methods()
+    if "fork" in methods and threading.active_count() == 1:
+        return "fork"
+    return "spawn"
+
+
 def _set_handlers(sigint: Any, sigterm: Any) -> None:
     """Set SIGINT's and SIGTERM's handlers (main thread only)."""
     for signum, handler in ((signal.SIGINT, sigint), (signal.SIGTERM, sigterm)):
@@ -115,12 +128,9 @@ class MultiProcRunner(AbstractMultiRunner):
         Ctrl-C prints `INTERRUPTED_MESSAGE`; Ctrl-C and SIGTERM then stop every
         child and return normally (see `stopped_by`).
         """
-        import multiprocessing  # lazily: it is slow to import and most programs run one node
-        from multiprocessing.connection import wait
+        import multiprocessing  # lazily: see _start_method
 
-        # fork is fast and pickles nothing, but forking a process with threads can deadlock.
-        fork = "fork" in multiprocessing.get_all_start_methods() and threading.active_count() == 1
-        method = self.start_method or ("fork" if fork else "spawn")
+        method = _start_method(self.start_method)
         ctx: Any = multiprocessing.get_context(method)
         self.stopped_by = None
         pipes = [ctx.Pipe(duplex=False) for _ in self.roles]
@@ -147,12 +157,7 @@ class MultiProcRunner(AbstractMultiRunner):
                     proc.start()
                 if main:  # after forking, so children keep the default actions
                     _set_handlers(note if previous[0] is signal.default_int_handler else None, note)
-                # The handlers only note a signal (seen here within 0.1 s): an exception
-                # raised inside a wait for a child could lose that child's exit status.
-                running = procs
-                while running and not requested:
-                    wait([proc.sentinel for proc in running], timeout=0.1)
-                    running = [proc for proc in running if proc.exitcode is None]
+                self._wait(procs, requested)
             except KeyboardInterrupt:  # Ctrl-C while the children were starting
                 requested.append("SIGINT")
             if requested:
@@ -161,26 +166,50 @@ class MultiProcRunner(AbstractMultiRunner):
                     print(INTERRUPTED_MESSAGE, flush=True)
                 if main:  # a second Ctrl-C must not break off the bounded wait
                     _set_handlers(signal.SIG_IGN, signal.SIG_IGN)
-                why = f"parent asked to stop ({self.stopped_by})".encode()
-                for writer in writers:
-                    with contextlib.suppress(OSError):  # OSError: that child has already gone
-                        writer.send_bytes(why)
-                deadline = time.monotonic() + self.join_timeout_s
-                for proc in procs:
-                    if proc.pid is not None:  # started
-                        proc.join(max(0.0, deadline - time.monotonic()))
+                self._stop_children(procs, writers, f"parent asked to stop ({self.stopped_by})")
         finally:
-            for proc in procs:  # terminate, then kill, any child still running
-                for stop in (proc.terminate, proc.kill):
-                    if proc.is_alive():
-                        stop()
-                        proc.join(self.join_timeout_s)
+            self._reap(procs)
             for reader, writer in pipes:  # the children had their own copies
                 reader.close()
                 writer.close()
             if main:
                 _set_handlers(*previous)
         self.exitcodes = [proc.exitcode for proc in procs]
+
+    @staticmethod
+    def _wait(procs: Sequence[Any], requested: List[str]) -> None:
+        """Wait until every child has ended or a signal asked the parent to stop.
+
+        The signal handlers only note the signal: an exception raised inside
+        a wait for a child could lose that child's exit status.
+        """
+        from multiprocessing.connection import wait
+
+        while not requested:
+            running = [proc.sentinel for proc in procs if proc.exitcode is None]
+            if not running:
+                return
+            wait(running, timeout=0.1)  # a noted signal is seen within 0.1 s
+
+    def _stop_children(self, procs: Sequence[Any], writers: Sequence[Connection], why: str) -> None:
+        """Ask each child to stop (through its pipe), then wait for all, within the join timeout."""
+        for writer in writers:
+            with contextlib.suppress(OSError):  # OSError: that child has already gone
+                writer.send_bytes(why.encode("utf-8"))
+        deadline = time.monotonic() + self.join_timeout_s
+        for proc in procs:
+            if proc.pid is not None:  # started
+                proc.join(max(0.0, deadline - time.monotonic()))
+
+    def _reap(self, procs: Sequence[Any]) -> None:
+        """Terminate, then kill, any child still running; never leave one behind."""
+        for proc in procs:
+            if proc.is_alive():
+                proc.terminate()
+                proc.join(self.join_timeout_s)
+            if proc.is_alive():
+                proc.kill()
+                proc.join(self.join_timeout_s)
 
 
 class CliRunner(AbstractRunner):

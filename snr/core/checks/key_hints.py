@@ -1,6 +1,12 @@
 """`MissingKeyHints`: one log hint per data key that is read but never stored.
 
-The class says when and how (docs/errors.md, 9).
+``get_data`` returns None for a key nothing has stored, both before its first
+page and when the key is misspelt; in DEBUG mode the node tells this helper of
+each miss (docs/errors.md, 9). After ``typo_s`` a key spelled almost like a
+stored one gets a warning, after ``missing_s`` any key still missing an info
+line; once per key, and the search runs at most every ``CHECK_EVERY_S``. A key
+some handler on the node waits for is expected, not misspelt, and a key whose
+page is late (``on_its_way``: queued, or behind a stuck handler) waits.
 
 Example::
 

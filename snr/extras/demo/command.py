@@ -55,8 +55,6 @@ def add_arguments(parser: argparse.ArgumentParser) -> None:
         default=None,
         help="with --sim: write PNG frames to DIR instead of opening a window",
     )
-    # `run` checks how the options combine: a wrong pair is a usage error (status 2).
-    parser.set_defaults(usage_error=parser.error)
 
 
 def run(args: argparse.Namespace) -> int:
@@ -66,10 +64,14 @@ def run(args: argparse.Namespace) -> int:
 
         run(argparse.Namespace(seconds=2.0, verbose=False, sim=True, frames=None, view=False))
     """
+    # A wrong pair of options is a usage error: `python -m snr` prints it with
+    # the usage and exits with status 2, as argparse does for its own.
     if args.sim and args.view:
-        args.usage_error("--view watches the UROV demo; it does not go with --sim")
+        raise argparse.ArgumentError(
+            None, "--view watches the UROV demo; it does not go with --sim"
+        )
     if not args.sim and args.frames is not None:
-        args.usage_error("--frames goes with --sim")
+        raise argparse.ArgumentError(None, "--frames goes with --sim")
     if args.sim:
         return run_sim_demo(args.seconds, verbose=args.verbose, frames_dir=args.frames)
     view_port = args.view_port if args.view else None

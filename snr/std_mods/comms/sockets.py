@@ -124,17 +124,23 @@ class SocketsServerLoop(_FactoryLoop):
             "always gets in (SocketsPair(..., max_connections=N) changes the cap)",
             verb="Closed",
         )
-        # The listener, and a socket pair: halt() writes to the second, and accepting ends.
-        self._sockets: Tuple[socket.socket, ...] = ()
+        self._listener: Optional[socket.socket] = None
+        self._stop_r: Optional[socket.socket] = None  # halt() writes to _stop_w: accepting ends
+        self._stop_w: Optional[socket.socket] = None
 
     def begin(self) -> None:
         """Start listening (on the node's thread, so errors stop the node)."""
-        self._sockets = (_listen(self.address, self.parent.role), *socket.socketpair())
+        # Each socket is stored as soon as made, so terminate() closes it even if
+        # the next one fails (e.g. socketpair() with too many files open).
+        self._listener = _listen(self.address, self.parent.role)
+        self._stop_r, self._stop_w = socket.socketpair()
         self.info("Listening for sockets clients on %s", _describe(self.address))
 
     def loop(self) -> None:
         """Wait for a client (or the stop) and accept it."""
-        listener, stop, _ = self._sockets
+        listener, stop = self._listener, self._stop_r
+        if listener is None or stop is None:
+            return
         try:
             if listener not in select.select([listener, stop], [], [])[0]:  # halt(): stopping
                 if not self.is_terminated():  # the stop was taken back (cancel_stop)
@@ -194,9 +200,9 @@ class SocketsServerLoop(_FactoryLoop):
 
     def halt(self) -> None:
         """Stop accepting, then flush and close every client link."""
-        if self._sockets:
+        if self._stop_w is not None:
             try:
-                self._sockets[2].send(b"\0")  # ends the wait for a client
+                self._stop_w.send(b"\0")  # ends the wait for a client
             except OSError:
                 pass
         super().halt()
@@ -204,8 +210,9 @@ class SocketsServerLoop(_FactoryLoop):
     def terminate(self) -> None:
         """Close the listening socket and every link."""
         super().terminate()
-        for end in self._sockets:
-            end.close()
+        for end in (self._listener, self._stop_r, self._stop_w):
+            if end is not None:
+                end.close()
 
 
 class SocketsClientLoop(_FactoryLoop):
@@ -394,7 +401,13 @@ class SocketsPair:
     ) -> None:
         well_formed = isinstance(server_tuple, tuple) and len(server_tuple) == 2
         host, port = server_tuple if well_formed else ("", 0)
-        if not isinstance(host, str) or type(port) is not int or not 0 < port < 65536:
+        # Any int but a bool, so an IntEnum of the robot's ports is a port too.
+        if (
+            not isinstance(host, str)
+            or isinstance(port, bool)
+            or not isinstance(port, int)
+            or not 0 < port < 65536
+        ):
             raise ConfigError(
                 f"SocketsPair(server_tuple={server_tuple!r}) needs a (host, port) tuple: "
                 "a host name or IP address string and a port from 1 to 65535, e.g. "

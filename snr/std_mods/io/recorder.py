@@ -78,7 +78,8 @@ class RecorderEndpoint(Endpoint):
         its key and skipped, whatever the error: recording goes on.
         """
         page, recording = task.page(), self.recording
-        if page is None:  # the node has said so (NOT_A_PAGE)
+        if page is None:  # SNR's node core says so too, but a student's may not
+            self.warn("A store_page task for %r carries %r, not a Page", task.name, task.val_list)
             return None
         try:
             _check_fields(page)

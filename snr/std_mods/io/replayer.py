@@ -121,8 +121,10 @@ class PageReader:
     A file in another format an extra provides (MCAP: known by its first
     bytes, whatever its name; ``pip install 'snr-robotics[mcap]'``) is read by
     that extra, its messages taken as lines are ("message N" for "line N").
-    A line that is not a valid page is logged with its number, listed in
-    ``problems`` and skipped (``docs/recording.md``, "Reading").
+    Any line that is not a valid page is logged with its line number, listed
+    in ``problems`` and skipped, a last line cut short included: the first
+    five in full, then a count every 5 s, and a summary with the total at the
+    end (``docs/recording.md``, "Reading").
 
     Args:
         filename: a file written by `RecorderEndpointFactory`.
@@ -273,7 +275,7 @@ class TextReader:
 
 
 class ReplayerLoop(ThreadLoop):
-    """Stores the pages of a recording (or a text file's lines), each after its wait, then stops.
+    """Stores the pages of a recording, each with its key, data, origin and time; or text lines.
 
     Each origin's pages are stored in the order they were made, even where
     the file's lines are out of order (see `in_created_order`). With original
@@ -341,7 +343,9 @@ class ReplayerLoop(ThreadLoop):
         (the pages' ``process_data`` tasks and what they trigger), at most
         ``DRAIN_ROUNDS`` times, so nothing replayed is cut off by the stop.
         """
-        rounds, replayed = task.val_list or (DRAIN_ROUNDS, False)
+        # [rounds, whole file replayed] from the loop; [rounds] or [] by hand, as before.
+        rounds = task.val_list[0] if task.val_list else DRAIN_ROUNDS
+        replayed = len(task.val_list) > 1 and bool(task.val_list[1])
         queue = getattr(self.parent, "queue", None)  # a real Node's task queue
         if queue and rounds < DRAIN_ROUNDS:
             return tasks.event(self._done_event, [rounds + 1, replayed])
@@ -355,9 +359,13 @@ class ReplayerLoop(ThreadLoop):
 
 
 TextReplayerLoop = ReplayerLoop
-"""The loop a `TextReplayerFactory` builds: a `ReplayerLoop` storing lines.
+"""Stores each line of a text file as data under one key, ``period_s`` apart.
 
-Example: ``TextReplayerFactory("gps_log.txt", "nmea", period_s=0.1)``.
+The `ReplayerLoop` a `TextReplayerFactory` builds, its items text lines.
+
+Example::
+
+    TextReplayerFactory("gps_log.txt", "nmea", period_s=0.1)
 """
 
 
@@ -526,7 +534,7 @@ class ReplayerLoopFactory(LoopFactory):
 
 
 class TextReplayerFactory(ReplayerLoopFactory):
-    """Builds a `ReplayerLoop` that stores one page per line of a text file.
+    """Builds a `TextReplayerLoop`: one page per line of a text file.
 
     Args:
         filename: the text file.
