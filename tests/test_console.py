@@ -370,31 +370,6 @@ class TestRemoteConsoleProgram(unittest.TestCase):
         self.assertEqual(code, EXIT_CONNECTION)
         self.assertIn("the connection was refused", err.getvalue())
 
-    def test_a_wait_that_is_not_this_protocol_ends_the_session_with_why(self) -> None:
-        # A peer that announces a wait no SNR node announces: a clear error, not a hang.
-        with socket.socket() as server:
-            server.bind(("127.0.0.1", 0))
-            server.listen(1)
-            port = server.getsockname()[1]
-
-            def peer() -> None:
-                conn, _ = server.accept()
-                with conn:
-                    conn.sendall(Reply(Status.HELLO, "Connected to node 'fake'.").encode())
-                    conn.recv(100)
-                    conn.sendall(Reply(Status.WAIT, "61").encode())
-                    conn.recv(100)  # until the console closes
-
-            thread = threading.Thread(target=peer, daemon=True)
-            thread.start()
-            console = RemoteConsole("127.0.0.1", port, timeout_s=2)
-            console.connect()
-            with self.assertRaises(ConsoleConnectionError) as caught:
-                console.send("hz depth")
-            thread.join(5)
-        self.assertIn("A wait reply announced '61' seconds", str(caught.exception))
-        self.assertFalse(console.is_connected())
-
     def test_bad_address_is_a_usage_error(self) -> None:
         err = io.StringIO()
         self.assertEqual(main(["not-an-address"], stderr=err), EXIT_USAGE)

@@ -26,7 +26,11 @@ from snr import (
     ThreadLoop,
 )
 from snr.extras.console_tools.watches import watches_of
-from snr.std_mods.io.command_processor import CommandProcessorEndpoint, CommandProcessorFactory
+from snr.std_mods.io.command_processor import (
+    COMMANDS,
+    CommandProcessorEndpoint,
+    CommandProcessorFactory,
+)
 from snr.std_mods.io.console_protocol import Status
 from snr.utils.mock_node import MockNode
 from tests.console_helpers import NodeInThread, read_replies
@@ -135,16 +139,18 @@ class ConsoleTopicsTest(unittest.TestCase):
                 reply = console.send("hz depth 0.3")
                 nothing = console.send("hz nothing 0.1")
                 refused = console.send("hz depth 100")
-            # The reply comes after the window; a `wait` frame says so first, so a
-            # console waits that much longer than its own timeout.
+            # The reply comes after the window, which `hz` declares in COMMANDS:
+            # a console waits that much longer than its own timeout.
             with running.console(timeout_s=1.0) as quick:
                 late = quick.send("hz nothing 1.2")
+            # On the wire, still one reply frame per request line.
             with socket.create_connection((running.host, running.port), 5.0) as sock:
-                sock.sendall(b"hz nothing 0.1\n")
+                sock.sendall(b"hz nothing 0.1\nhelp hz\n")
                 frames = read_replies(sock, 3)
         self.assertIn("nothing: no page in 1.2 s.", late.text)
-        self.assertEqual([f.status for f in frames], [Status.HELLO, Status.WAIT, Status.OK])
-        self.assertEqual(frames[1].text, "0.1")
+        self.assertEqual([f.status for f in frames], [Status.HELLO, Status.OK, Status.OK])
+        self.assertTrue(frames[1].text.startswith("nothing: no page in 0.1 s."), frames[1].text)
+        self.assertTrue(frames[2].text.startswith("hz KEY [WINDOW_S]"), frames[2].text)
         self.assertEqual(reply.status, Status.OK)
         match = re.fullmatch(
             r"depth: ([\d.]+) Hz over 0\.3 s \((\d+) pages\); period mean ([\d.]+) ms, "
@@ -160,6 +166,20 @@ class ConsoleTopicsTest(unittest.TestCase):
         self.assertIn("nothing: no page in 0.1 s.", nothing.text)
         self.assertEqual(refused.status, Status.ERROR)
         self.assertNotIn((TaskType.store_page, "depth"), processor.task_handlers)
+
+    def test_hz_declares_that_its_reply_comes_after_its_window(self) -> None:
+        after = COMMANDS["hz"].reply_after_s
+        assert after is not None
+        words: List[List[str]] = [
+            ["depth"],
+            ["depth", "1.5"],
+            ["depth", "100"],
+            ["depth", "soon"],
+            [],
+            ["a", "1", "2"],
+        ]
+        self.assertEqual([after(w) for w in words], [2.0, 1.5, 0.0, 0.0, 0.0, 0.0])
+        self.assertIsNone(COMMANDS["stats"].reply_after_s, "a command that replies at once")
 
     def test_snr_console_streams_echo_until_stopped(self) -> None:
         with NodeInThread([CounterFactory()]) as running:

@@ -38,7 +38,7 @@ class _LocalSession(ConsoleSession):
         self._lock = threading.Lock()
 
     def send(self, reply: Reply) -> None:
-        if reply.text and reply.status is not Status.WAIT:  # a WAIT only tells a console to wait
+        if reply.text:
             with self._lock:
                 try:
                     self.output.write(reply.text + "\n")

@@ -37,7 +37,7 @@ from snr.std_mods.io.command_processor import (
     number_argument,
     preview,
 )
-from snr.std_mods.io.console_protocol import MAX_WAIT_S, ConsoleSession, Reply, Status
+from snr.std_mods.io.console_protocol import ConsoleSession, Reply, Status
 
 __all__ = [
     "ECHO_DEFAULT_PAGES",
@@ -56,9 +56,9 @@ ECHO_MAX_PAGES = 100
 """The most pages one ``echo`` reply carries, and waits between two ``echo`` of a console."""
 
 HZ_DEFAULT_WINDOW_S = 2.0
-"""How long ``hz KEY`` counts pages when no window is given (its ``wait`` reply says so)."""
+"""How long ``hz KEY`` counts pages when no window is given (``snr-console`` waits as long)."""
 
-HZ_MAX_WINDOW_S = MAX_WAIT_S
+HZ_MAX_WINDOW_S = 60.0
 """The longest window ``hz`` accepts (a reply waits that long)."""
 
 MAX_WATCHES = 32
@@ -86,12 +86,23 @@ def _echo(p: CommandProcessorEndpoint, args: str) -> Answer:
     return watches_of(p).echo(words[0], wanted, _console(p))
 
 
+def _hz_reply_after_s(words: List[str]) -> float:
+    """How long ``hz``'s reply takes: its window (0 if the node refuses the words at once)."""
+    if len(words) != 2:
+        return HZ_DEFAULT_WINDOW_S if len(words) == 1 else 0.0
+    try:
+        return number_argument(words[1], "hz", "WINDOW_S", 0.1, HZ_MAX_WINDOW_S, float)
+    except CommandFailed:
+        return 0.0
+
+
 @command(
     "hz KEY [WINDOW_S]",
     "Measure how often KEY is stored, and the jitter of the time between pages.",
     f"Counts pages for WINDOW_S seconds (default {HZ_DEFAULT_WINDOW_S:g}, at most "
     f"{HZ_MAX_WINDOW_S:g}), then replies with\nthe rate and the period's mean, min, max "
     "and standard deviation, timed when\nthis node stores each page.",
+    reply_after_s=_hz_reply_after_s,
 )
 def _hz(p: CommandProcessorEndpoint, args: str) -> Answer:
     """``hz KEY [WINDOW_S]``: the rate and jitter of KEY (the reply comes after the window)."""
@@ -102,7 +113,7 @@ def _hz(p: CommandProcessorEndpoint, args: str) -> Answer:
     if len(words) == 2:
         window_s = number_argument(words[1], "hz", "WINDOW_S", 0.1, HZ_MAX_WINDOW_S, float)
     watches_of(p).hz(words[0], window_s, _console(p))
-    return Reply(Status.WAIT, f"{window_s:g}")  # the console waits as long more for the reply
+    return None
 
 
 def _console(p: CommandProcessorEndpoint) -> ConsoleSession:

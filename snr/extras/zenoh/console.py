@@ -26,7 +26,6 @@ Example::
 from __future__ import annotations
 
 import argparse
-import queue
 import sys
 import threading
 import time
@@ -41,20 +40,18 @@ from snr.extras.zenoh.comms import (
     meet_endpoints,
     zenoh_config,
 )
-from snr.prelude import AbstractNode, CommsError, WireFormatError
+from snr.prelude import AbstractNode, CommsError
 from snr.std_mods.comms.handshake import FROM_ENVIRONMENT, find_secret
 from snr.std_mods.io.command_processor import COMMANDS
 from snr.std_mods.io.command_receiver import ConsoleLoop
 from snr.std_mods.io.console_protocol import (
     MAX_LINE_BYTES,
-    MAX_WAIT_S,
     TOKEN_ENV_VAR,
     ConsoleConnectionError,
     ConsoleSession,
     Reply,
     ReplyDecoder,
     Status,
-    announced_wait_s,
     default_token,
     tokens_match,
 )
@@ -94,22 +91,17 @@ def console_key(system: str, role: str) -> str:
 
 
 class _QueryReply(ConsoleSession):
-    """Where one command's reply goes: the query it came in (a ``WAIT`` first, if late)."""
+    """Where one command's reply goes: the query it came in (answered once, then finished)."""
 
     def __init__(self, owner: ZenohConsoleLoop, query: Any) -> None:
         self.owner = owner
         self.query: Any = query
 
     def send(self, reply: Reply) -> None:
-        query = self.query
-        if query is None:
-            return
-        if reply.status is Status.WAIT:  # a reply of the same query; it stays open for the real one
-            self.owner.answer(query, reply, last=False)
-            return
-        self.query = None
-        self.owner.answer(query, reply)
-        self.owner.answered()
+        query, self.query = self.query, None
+        if query is not None:
+            self.owner.answer(query, reply)
+            self.owner.answered()
 
 
 class ZenohConsoleLoop(ConsoleLoop):
@@ -205,12 +197,11 @@ class ZenohConsoleLoop(ConsoleLoop):
             return
         self.submit(line, _QueryReply(self, query))
 
-    def answer(self, query: Any, reply: Reply, last: bool = True) -> None:
-        """Reply to ``query``, then finish it if ``last`` (any thread); a gone console is let be."""
+    def answer(self, query: Any, reply: Reply) -> None:
+        """Reply to ``query`` and finish it (any thread); a console that gave up is let be."""
         try:
             query.reply(self.key, reply.encode())
-            if last:
-                query.drop()  # finished: the console stops waiting for more replies
+            query.drop()  # finished: the console stops waiting for more replies
         except Exception:  # the console gave up waiting, or the session closed
             pass
 
@@ -269,7 +260,7 @@ class ZenohConsole(ConsoleClient):
 
     A transport of the console's core, `ConsoleClient`: it talks like
     ``RemoteConsole`` (``send``, ``stream``, ``interact``); each command is one
-    Zenoh query, its reply one reply frame (after a ``wait`` one, if it comes late).
+    Zenoh query, its reply one reply frame.
 
     The role may be a pattern: ``"*"`` (the default) reaches every node of
     the system. Then only the read-only `EVERY_NODE_COMMANDS` are sent, and
@@ -426,39 +417,10 @@ class ZenohConsole(ConsoleClient):
         """One query for ``line``: the node's reply, or every node's, labelled (``"*"``)."""
         if self.every_node:
             return self._ask_every_node(line, timeout_s)
-        return self._ask_one_node(line, timeout_s)
-
-    def _ask_one_node(self, line: str, timeout_s: float) -> Reply:
-        """The node's reply to ``line``, read as it comes: ``timeout_s``, plus what a WAIT says.
-
-        A query's own timeout is fixed when it is sent, so the query may
-        last ``timeout_s`` + `MAX_WAIT_S`; this console keeps its own
-        deadline, so a silent node is given up after ``timeout_s``.
-        """
-        answers: queue.Queue[Any] = queue.Queue()  # Zenoh's replies; None: the query ended
-        handler = self.zenoh.handlers.Callback(answers.put, lambda: answers.put(None))
-        consolidation = self.zenoh.ConsolidationMode.NONE  # pass the WAIT on, not just the last
-        key = console_key(self.system, self.role)
-        self._get(key, line, timeout_s + MAX_WAIT_S, handler, consolidation=consolidation)
-        deadline, waited_s = time.monotonic() + timeout_s, timeout_s
-        while True:
-            try:
-                answer = answers.get(timeout=max(0.0, deadline - time.monotonic()))
-            except queue.Empty:
-                answer = None
-            if answer is None:
-                raise self._nobody_answered(waited_s)
-            try:
-                sample = answer.ok  # None: an error reply, which this protocol never sends
-                replies = [] if sample is None else ReplyDecoder().feed(sample.payload.to_bytes())
-                if replies and replies[0].status is Status.WAIT:
-                    seconds = announced_wait_s(replies[0].text)
-                    deadline, waited_s = deadline + seconds, waited_s + seconds
-                elif replies:
-                    return replies[0]
-            except WireFormatError as error:  # as the TCP console does
-                self.close()
-                raise ConsoleConnectionError(f"{self.where}: {error}") from None
+        by_role = self._answers(line, timeout_s)
+        if not by_role:
+            raise self._nobody_answered(timeout_s)
+        return next(iter(by_role.values()))
 
     def _ask_every_node(self, line: str, timeout_s: float) -> Reply:
         """Send a read-only command to every node the role matches; their replies, labelled."""
@@ -585,14 +547,11 @@ class ZenohConsole(ConsoleClient):
         )
 
     def _replies(self, key: str, line: str, timeout_s: float) -> List[Any]:
-        return [reply.ok for reply in self._get(key, line, timeout_s) if reply.ok is not None]
-
-    def _get(self, key: str, line: str, timeout_s: float, handler: Any = None, **how: Any) -> Any:
-        """Send ``line`` as a query on ``key`` (with the token); Zenoh's handler of its replies."""
         token = self.token.encode("utf-8") if self.token else None
-        return self.session.get(
-            key, handler, payload=line.encode("utf-8"), attachment=token, timeout=timeout_s, **how
+        answers = self.session.get(
+            key, payload=line.encode("utf-8"), attachment=token, timeout=timeout_s
         )
+        return [reply.ok for reply in answers if reply.ok is not None]
 
     def close(self) -> None:
         """Close the Zenoh session (the node keeps running). Safe to call twice."""

@@ -104,12 +104,9 @@ _previews = _ValueRepr(_PREVIEW_CHARS, 3, 12)  # a short preview, cheap even for
 _whole_values = _ValueRepr(REPLY_BUDGET_CHARS, 8, 2000)  # one value in full, up to a reply
 
 Answer = Union[str, Reply, None]
-"""What a command returns: the text of an OK reply, a reply, or None: it replies later.
-
-A command whose reply comes after a while returns ``Reply(Status.WAIT, "2")``
-at once: the console then waits 2 s longer for the reply (docs/console.md).
-"""
+"""What a command returns: the text of an OK reply, a reply, or None: it replies later."""
 _Run = Callable[["CommandProcessorEndpoint", str], Answer]  # a command's function
+_ReplyAfter = Callable[[List[str]], float]  # the words after its name -> seconds its reply may take
 
 
 @dataclass(frozen=True)
@@ -117,7 +114,10 @@ class CommandHelp:
     """One console command: how to type it, what it does (for ``help``), and what runs it.
 
     ``run(processor, args)`` runs on the node's thread with the words typed
-    after the command's name, and returns an `Answer`.
+    after the command's name, and returns an `Answer`. ``reply_after_s(words)``,
+    if given, is how many seconds the reply to those words may take on top of
+    a console's timeout (``hz``'s window): consoles, which share this
+    registry, wait that much longer for it.
 
     Example::
 
@@ -128,28 +128,37 @@ class CommandHelp:
     summary: str
     details: str = ""
     run: Optional[_Run] = None
+    reply_after_s: Optional[_ReplyAfter] = None
 
 
 COMMANDS: Dict[str, CommandHelp] = {}
 """Every console command by name, in the order ``help`` lists them (see `command`)."""
 
 
-def command(usage: str, summary: str, details: str = "") -> Callable[[_Run], _Run]:
+def command(
+    usage: str, summary: str, details: str = "", reply_after_s: Optional[_ReplyAfter] = None
+) -> Callable[[_Run], _Run]:
     """Register the decorated function as the console command named by ``usage``'s first word.
 
     The one way to add a command, for the kernel's and for an extra's: raise
     `CommandFailed` for a reply that says what is wrong; set
-    ``processor.follow_up`` to the tasks the command asks for.
+    ``processor.follow_up`` to the tasks the command asks for. A command that
+    replies after a while gives ``reply_after_s``: from the words typed after
+    its name, the seconds its reply may take beyond a console's timeout.
 
     Example::
 
         @command("ping", "Answer pong.")
         def ping(processor: CommandProcessorEndpoint, args: str) -> Answer:
             return "pong"
+
+        @command("hz KEY", "Count KEY's pages for 2 s.", reply_after_s=lambda words: 2.0)
+        def hz(processor: CommandProcessorEndpoint, args: str) -> Answer:
+            ...   # the reply is sent 2 s later; a console waits its timeout + 2 s
     """
 
     def register(run: _Run) -> _Run:
-        COMMANDS[usage.split()[0]] = CommandHelp(usage, summary, details, run)
+        COMMANDS[usage.split()[0]] = CommandHelp(usage, summary, details, run, reply_after_s)
         if "help" in COMMANDS:  # `help` stays last
             COMMANDS["help"] = COMMANDS.pop("help")
         return run

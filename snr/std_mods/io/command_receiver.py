@@ -252,55 +252,31 @@ class _RemoteConsole(ConsoleSession):
 
     def serve(self) -> None:
         """The console's thread: greet, then answer line after line until a BYE or a hang-up."""
-        receiver, why = self.receiver, "closed"
+        why = "closed"
         try:
-            if receiver.factory.token is None:
-                reply = receiver._let_in(self)
-            else:
-                receiver.dbg("Console %s connected", self.peer)
-                reply = Reply(Status.AUTH, "This node needs a console token: send `auth <token>`.")
-            while self.write(reply):  # after a WAIT, the command's reply itself
-                reply = self.replies.get() if reply.status is Status.WAIT else self.next_reply()
+            reply = self.receiver.greet(self)
+            while self.write(reply):
+                reply = self.next_reply()
         except _Gone as gone:
             why = str(gone)
         except OSError:  # reset or broken pipe
             why = "connection lost"
         finally:
-            receiver.forget(self, why)
+            self.receiver.forget(self, why)
 
     def next_reply(self) -> Reply:
         """The reply to the next request line (a goodbye from elsewhere goes first)."""
-        receiver = self.receiver
-        auth_s, idle_s = receiver.factory.auth_timeout_s, receiver.factory.idle_timeout_s
         while self.replies.empty():
             request = self.lines.next_request()
             if isinstance(request, Reply):
                 return request  # a line that cannot be run
-            if request is not None and not self.authenticated:
-                return receiver._authenticate(self, request)
-            if request:
-                receiver.submit(request, self)
-                return self.replies.get()
             if request is not None:
-                return Reply(Status.OK, "")
-            if not self.authenticated:  # the time left to give the token
-                idle_s = max(0.001, self.connected_at + auth_s - time.monotonic())
-            self.sock.settimeout(idle_s)
+                return self.receiver.answer(self, request)
+            self.sock.settimeout(self.receiver.time_left_s(self))
             try:
                 data = self.sock.recv(_READ_CHUNK)
             except socket.timeout:
-                if not self.authenticated:
-                    return receiver._bye(
-                        "no token",
-                        f"Console {self.peer} gave no token within {auth_s:g} s; disconnected it.",
-                        f"No console token within {auth_s:g} s: disconnected.",
-                    )
-                return receiver._bye(
-                    "idle",
-                    f"Console {self.peer} sent no command for {idle_s:g} s; disconnected it.",
-                    "Closed this console after "
-                    f"{idle_s:g} s without a command. Connect again to carry on.",
-                )
+                return self.receiver.timed_out(self)
             if not data and self.replies.empty():
                 raise _Gone("disconnected")
             self.lines.feed(data)
@@ -467,6 +443,13 @@ class CommandReceiverLoop(ConsoleLoop):
         name = f"snr-{self.parent.role}-{self.name}-consoles"
         threading.Thread(target=console.serve, name=name, daemon=True).start()
 
+    def greet(self, console: _RemoteConsole) -> Reply:
+        """The first reply: a request for the token, or the greeting."""
+        if self.factory.token is None:
+            return self._let_in(console)
+        self.dbg("Console %s connected", console.peer)
+        return Reply(Status.AUTH, "This node needs a console token: send `auth <token>`.")
+
     def _let_in(self, console: _RemoteConsole) -> Reply:
         """The greeting, or a BYE if `MAX_CONSOLES` are connected."""
         with self._lock:
@@ -481,6 +464,36 @@ class CommandReceiverLoop(ConsoleLoop):
             )
         self.info("Console %s connected", console.peer)
         return Reply(Status.HELLO, self.greeting())
+
+    def answer(self, console: _RemoteConsole, line: str) -> Reply:
+        """Check the token, or run the command and wait for its reply."""
+        if not console.authenticated:
+            return self._authenticate(console, line)
+        if not line:
+            return Reply(Status.OK, "")
+        self.submit(line, console)
+        return console.replies.get()
+
+    def time_left_s(self, console: _RemoteConsole) -> Optional[float]:
+        """How long ``console`` may still send nothing (None: for ever)."""
+        if not console.authenticated:
+            return max(0.001, console.connected_at + self.factory.auth_timeout_s - time.monotonic())
+        return self.factory.idle_timeout_s
+
+    def timed_out(self, console: _RemoteConsole) -> Reply:
+        """The goodbye of a console that gave no token, or no command, in time."""
+        auth_s, idle_s = self.factory.auth_timeout_s, self.factory.idle_timeout_s
+        if not console.authenticated:
+            return self._bye(
+                "no token",
+                f"Console {console.peer} gave no token within {auth_s:g} s; disconnected it.",
+                f"No console token within {auth_s:g} s: disconnected.",
+            )
+        return self._bye(
+            "idle",
+            f"Console {console.peer} sent no command for {idle_s:g} s; disconnected it.",
+            f"Closed this console after {idle_s:g} s without a command. Connect again to carry on.",
+        )
 
     def _authenticate(self, console: _RemoteConsole, line: str) -> Reply:
         word, _, given = line.partition(" ")

@@ -12,7 +12,6 @@ from __future__ import annotations
 
 import enum
 import json
-import math
 import os
 from abc import ABC, abstractmethod
 from dataclasses import dataclass
@@ -25,7 +24,6 @@ __all__ = [
     "DEFAULT_CONSOLE_PORT",
     "MAX_LINE_BYTES",
     "MAX_REPLY_BYTES",
-    "MAX_WAIT_S",
     "PROTOCOL",
     "SECRET_TOKEN_PURPOSE",
     "TOKEN_ENV_VAR",
@@ -35,7 +33,6 @@ __all__ = [
     "Reply",
     "ReplyDecoder",
     "Status",
-    "announced_wait_s",
     "check_listen_policy",
     "default_token",
     "is_loopback",
@@ -55,9 +52,6 @@ MAX_LINE_BYTES = 4096
 
 MAX_REPLY_BYTES = 1 << 20
 """Longest reply body the node sends; longer replies are cut with a note."""
-
-MAX_WAIT_S = 60.0
-"""The longest wait a reply may announce (a ``WAIT`` frame's seconds); more is not this protocol."""
 
 _MAX_HEADER_BYTES = 64
 _TRUNCATION_ROOM = 256  # the "(reply cut)" note added to a reply at the limit
@@ -108,8 +102,6 @@ class Status(enum.Enum):
         OK: the command worked; the text says what happened.
         ERROR: the command was refused or failed; the text says why.
         BYE: the node closes the connection after this frame.
-        WAIT: not the reply yet: it comes within the seconds the text gives
-            (a command that measures for a while); the reply frame follows.
     """
 
     HELLO = "hello"
@@ -117,7 +109,6 @@ class Status(enum.Enum):
     OK = "ok"
     ERROR = "error"
     BYE = "bye"
-    WAIT = "wait"
 
 
 @dataclass(frozen=True)
@@ -148,8 +139,7 @@ class ConsoleSession(ABC):
     A console loop hands each command line to the node with its session; the
     `CommandProcessorEndpoint` runs the command on the node's thread and calls
     ``session.send(reply)``, so ``send`` must be quick and never block or
-    raise, even when the console has gone. A transport that cannot pass on
-    a ``WAIT`` (a late reply's notice) ignores it.
+    raise, even when the console has gone.
 
     Example::
 
@@ -394,25 +384,3 @@ def tokens_match(expected: str, given: str) -> bool:
     import hmac  # here, not at the top: it loads OpenSSL, and only tokens need it
 
     return hmac.compare_digest(expected.encode("utf-8"), given.encode("utf-8"))
-
-
-def announced_wait_s(text: str) -> float:
-    """The seconds a ``WAIT`` reply announces (both console transports read it here).
-
-    Raises:
-        WireFormatError: ``text`` is not a number from 0 to `MAX_WAIT_S`.
-
-    Example::
-
-        announced_wait_s("1.5")   # 1.5
-    """
-    try:
-        seconds = float(text)
-    except ValueError:
-        seconds = math.nan  # refused below, with the text
-    if not 0.0 <= seconds <= MAX_WAIT_S:  # NaN too
-        raise WireFormatError(
-            f"A wait reply announced {text[:40]!r} seconds; a node announces a number from 0 "
-            f"to {MAX_WAIT_S:g}. Is the node running another version of SNR?"
-        )
-    return seconds

@@ -17,18 +17,7 @@ from __future__ import annotations
 import socket
 import sys
 from abc import ABC, abstractmethod
-from typing import (
-    IO,
-    TYPE_CHECKING,
-    Callable,
-    Iterable,
-    Iterator,
-    List,
-    Optional,
-    Sequence,
-    Type,
-    TypeVar,
-)
+from typing import IO, TYPE_CHECKING, Callable, Iterable, List, Optional, Sequence, Type, TypeVar
 
 from snr.core import plugins
 from snr.core.checks.os_errors import explain_os_error
@@ -42,7 +31,6 @@ from snr.std_mods.io.console_protocol import (
     Reply,
     ReplyDecoder,
     Status,
-    announced_wait_s,
     default_token,
     parse_address,
 )
@@ -169,7 +157,7 @@ class ConsoleClient(ABC):
             raise ValueError(f"A console command may be at most {MAX_LINE_BYTES} bytes long.")
         if not self.is_connected():
             raise self._not_connected()
-        reply = self.ask(line, self.timeout_s)
+        reply = self.ask(line, self.timeout_s + _reply_after_s(line))
         if reply.status is Status.BYE:
             self.close()
         return reply
@@ -229,7 +217,23 @@ class ConsoleClient(ABC):
             _enable_line_editing()
             read_line = input
         say(out, "Type 'quit' or Ctrl-D to leave (the node keeps running).")
-        return self._run_lines(_typed_lines(read_line, f"{self.where}> ", out), out, typed=True)
+        while self.is_connected():
+            try:
+                line = read_line(f"{self.where}> ").strip()
+            except EOFError:
+                out.write("\n")  # so the shell's prompt starts on a new line
+                return EXIT_OK
+            except KeyboardInterrupt:
+                say(out, "\n(Ctrl-C) Type 'quit' to leave.")
+                continue
+            if line.lower() in _LEAVE_WORDS:
+                return EXIT_OK
+            if not line:
+                continue
+            code = self.run_command(line, out)
+            if not self.is_connected():
+                return code
+        return EXIT_OK
 
     def run_command(self, line: str, output: IO[str]) -> int:
         """Send ``line``, print the reply; an exit code for this command.
@@ -291,21 +295,18 @@ class ConsoleClient(ABC):
         finally:
             self.close()
 
-    def _run_lines(self, lines: Iterable[str], out: IO[str], typed: bool = False) -> int:
-        """Run commands until ``quit`` or the node leaves; the exit code of the worst one.
-
-        ``typed`` (at the prompt): 0, or the last one's when the node left.
-        """
+    def _run_lines(self, lines: Iterable[str], out: IO[str]) -> int:
+        """Run commands from ``-c`` or a pipe; the exit code of the worst one."""
         worst = EXIT_OK
         for line in lines:
+            if not line:
+                continue
             if line.lower() in _LEAVE_WORDS:
                 break
-            if line:
-                code = self.run_command(line, out)
-                worst = max(worst, code)
-                if not self.is_connected():
-                    return code if typed else worst
-        return EXIT_OK if typed else worst
+            worst = max(worst, self.run_command(line, out))
+            if not self.is_connected():
+                break
+        return worst
 
 
 class RemoteConsole(ConsoleClient):
@@ -398,15 +399,9 @@ class RemoteConsole(ConsoleClient):
     def _receive(self, wait_s: float) -> Reply:
         sock = self._connected()
         sock.settimeout(wait_s)
-        while not self._ready or self._ready[0].status is Status.WAIT:
+        while not self._ready:
             try:
-                if self._ready:  # a late reply: the node says how many seconds more it takes
-                    wait_s += announced_wait_s(self._ready.pop(0).text)
-                    sock.settimeout(wait_s)
-                    continue
                 data = sock.recv(65536)
-                if data:
-                    self._ready.extend(self._decoder.feed(data))
             except socket.timeout:
                 raise ConsoleConnectionError(
                     f"No reply from the node at {self.where} within {wait_s:g} s. "
@@ -415,11 +410,13 @@ class RemoteConsole(ConsoleClient):
                 ) from None
             except OSError as error:
                 raise self._lost(error) from None
+            if not data:
+                raise self._lost(None)
+            try:
+                self._ready.extend(self._decoder.feed(data))
             except WireFormatError as error:
                 self.close()
                 raise ConsoleConnectionError(f"{self.where}: {error}") from None
-            if not data:
-                raise self._lost(None)
         reply = self._ready.pop(0)
         if reply.status is Status.BYE:
             self.close()
@@ -490,16 +487,17 @@ def say(output: IO[str], text: str) -> None:
         output.flush()
 
 
-def _typed_lines(read_line: Callable[[str], str], prompt: str, out: IO[str]) -> Iterator[str]:
-    """The lines typed at ``prompt`` until end of input; Ctrl-C only says how to leave."""
-    while True:
-        try:
-            yield read_line(prompt).strip()
-        except EOFError:
-            out.write("\n")  # so the shell's prompt starts on a new line
-            return
-        except KeyboardInterrupt:
-            say(out, "\n(Ctrl-C) Type 'quit' to leave.")
+def _reply_after_s(line: str) -> float:
+    """How much longer than the timeout ``line``'s reply may take, as its command declares.
+
+    Most commands declare nothing (0); ``hz`` its window. The node and the
+    console read the same `COMMANDS`, so the wire carries no wait.
+    """
+    name, *words = line.split() or [""]
+    entry = COMMANDS.get(name.lower())
+    if entry is None or entry.reply_after_s is None:
+        return 0.0
+    return max(0.0, entry.reply_after_s(words))
 
 
 def _enable_line_editing() -> None:
