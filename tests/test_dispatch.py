@@ -259,7 +259,7 @@ class TestBursts(SNRTestCase):
         self.assertEqual(log[0], ("many", [0, 1, 2, 3, 4], 4), "every page stored first")
         self.assertEqual(log[1], ("one", 5))
         self.assertEqual([d for kind, d in log[2:] if kind == "processed"], [0, 1, 2, 3, 4, 5])
-        cell = node.table.table[(SP, "x")][0][3]
+        cell = node._components.table.table[(SP, "x")][0][3]
         self.assertEqual(cell[0], 6, "timed as one call a task")
 
     def test_an_urgent_page_never_starts_a_run(self) -> None:

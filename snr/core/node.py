@@ -5,10 +5,9 @@ that calls :meth:`Node.loop` alone writes the datastore and runs handlers; loop
 threads use the thread-safe ``schedule``, ``store_data`` and ``get_page``.
 The node core endpoint (``node_core``) stores pages and manages components
 (thesis 4.3.2); ``Config(datastore=..., node_core=...)`` can replace both
-(docs/assignments.md). The node is a `ComponentSet`, and two helpers do the rest
-(docs/design.md)::
+(docs/assignments.md). Three helpers do the rest (docs/design.md)::
 
-    Node is a ComponentSet  build, add, remove, reload, start and stop components;
+    Node ──► ComponentSet   build, add, remove, reload, start and stop components;
       │                     keep the HandlerTable in step with them
       ├────► HandlerRunner  run a task's handlers, time them, queue what they
       │                     return; its FailureReport (checks/failures.py) puts
@@ -28,7 +27,7 @@ from typing import TYPE_CHECKING, Any, Callable, Dict, List, Mapping, Optional
 
 from snr.core import tasks
 from snr.core.checks import life_cycle
-from snr.core.checks.explain import check_node_args, check_page_args
+from snr.core.checks.explain import check_node_args, check_page_args, wrong_thread_error
 from snr.core.clock import clock_of
 from snr.core.components import NODE_CORE_NAME, ComponentSet
 from snr.core.dispatch import HandlerRunner, HandlerTable
@@ -45,7 +44,7 @@ from snr.prelude.abstract import (
     AbstractNode,
     Datastore,
 )
-from snr.prelude.names import DataKey, Mode, Role, TaskId, TaskType
+from snr.prelude.names import ComponentName, DataKey, Mode, Role, TaskId, TaskType
 from snr.prelude.page import Page
 from snr.prelude.task import SomeTasks, Task, TaskHandler, TaskHandlerMap
 
@@ -75,7 +74,7 @@ class NodeState(enum.Enum):
     TERMINATED = "terminated"
 
 
-class Node(ComponentSet):
+class Node(AbstractNode):
     """Builds its components from the config's factories for ``role`` and runs them.
 
     Args:
@@ -140,10 +139,11 @@ class Node(ComponentSet):
         self.state = NodeState.CREATED
         self.terminate_reason: Optional[str] = None
         self._stop_requested = False
-        super().__init__(HandlerTable(self.profiler))
+        self._components = ComponentSet(self, HandlerTable(self.profiler), join_timeout_s=1.0)
+        self.components = self._components.by_name
         self._failures = FailureReport(role, self.mode, self.log, self.set_terminate_flag)
         timed = self.profiler is not None or self.mode is not Mode.DEPLOYED
-        self._runner = HandlerRunner(self.queue, self, self._failures, timed)
+        self._runner = HandlerRunner(self.queue, self._components, self._failures, timed)
         self.step_mode = StepMode(self.queue, self._runner, self._lookup, self.is_terminated)
         # The checks for silent mistakes (snr/core/checks/, read second): NodeChecks
         # sets key_hints, wiring_checks and watchdog in DEBUG mode, and reads each
@@ -153,7 +153,7 @@ class Node(ComponentSet):
         if self.mode is not Mode.DEPLOYED:
             from snr.core.checks.node_checks import NodeChecks
 
-            self._checks = NodeChecks(self, self._runner)
+            self._checks = NodeChecks(self, self._components, self._runner)
         factory = config.node_core or NodeCoreFactory()
         core: NodeCore = checked_core(self.build_component(factory), factory, self)
         self._core = core
@@ -174,6 +174,15 @@ class Node(ComponentSet):
             self.queue.use_waiter(self._clock_turn)
 
     @property
+    def join_timeout_s(self) -> float:
+        """How long stopping waits for each loop's thread (1 s)."""
+        return self._components.join_timeout_s
+
+    @join_timeout_s.setter
+    def join_timeout_s(self, seconds: float) -> None:
+        self._components.join_timeout_s = seconds
+
+    @property
     def slow_handler_s(self) -> float:
         """In DEBUG/TEST mode, handlers slower than this (0.1 s) are reported."""
         return self._runner.slow_handler_s
@@ -185,11 +194,6 @@ class Node(ComponentSet):
     # ------------------------------------------------------------------
     # Control flow (thesis listing 6.1)
     # ------------------------------------------------------------------
-    @property
-    def running(self) -> bool:
-        """True from `loop` until the node starts terminating: its state is RUNNING."""
-        return self.state is NodeState.RUNNING
-
     def loop(self) -> None:
         """Begin every component, then run tasks until the node terminates.
 
@@ -207,7 +211,7 @@ class Node(ComponentSet):
         try:
             if self._clock_turn is not None:
                 self._clock_turn.begin()
-            self._start_all(lambda: not self._stop_requested)
+            self._components.start_all(lambda: not self._stop_requested)
             self._run_tasks()
         except KeyboardInterrupt:
             self.set_terminate_flag("interrupted by user (Ctrl-C)")
@@ -260,7 +264,7 @@ class Node(ComponentSet):
         self.state = NodeState.TERMINATING
         if self._checks is not None:  # stopping loops and waiting for them is no mistake
             self._checks.stop()
-        self._shutdown()
+        self._components.shutdown()
         self._failures.repeats.flush()
         dropped = self.queue.clear()
         if dropped:
@@ -304,9 +308,9 @@ class Node(ComponentSet):
         return self._table().lookup(task.type, task.name)
 
     def _table(self) -> HandlerTable:
-        if self.table_stale:
-            self.refresh_table()
-        return self.table
+        if self._components.table_stale:
+            self._components.refresh_table()
+        return self._components.table
 
     def handle_task(self, handler: TaskHandler, task: Task, key: TaskId) -> Optional[List[Task]]:
         """Run one handler with timing and error reporting; its tasks as a list."""
@@ -427,6 +431,54 @@ class Node(ComponentSet):
         """
         self._check_owner_thread("write_page")
         self.pages[page.key] = self._core.frozen(page)
+
+    # ------------------------------------------------------------------
+    # Components (the work is done by ComponentSet)
+    # ------------------------------------------------------------------
+    def build_component(self, factory: AbstractFactory) -> Optional[AbstractComponent]:
+        """``factory.get(self)``, with any mistake in ``get()`` explained.
+
+        Raises:
+            ComponentError: ``get()`` raised or returned something that is not
+                a component.
+        """
+        return self._components.build(factory)
+
+    def add_component(self, component: AbstractComponent, start: bool = True) -> None:
+        """Add a component; it begins at once if the node is running.
+
+        Raises:
+            ComponentError: the component is broken (e.g. missed super().__init__).
+            ConfigError: another component already has its name.
+        """
+        self._check_owner_thread("add_component")
+        self._components.add(component, start)
+
+    def remove_component(self, name: ComponentName) -> None:
+        """Halt, join, terminate and forget the component called ``name``."""
+        self._check_owner_thread("remove_component")
+        self._components.remove(name)
+
+    def reload_component(self, name: ComponentName = "all") -> List[ComponentName]:
+        """Reload the source of one component (or ``"all"``) and rebuild it.
+
+        A reload that fails leaves the old component running and logs why.
+        Returns the names of the rebuilt components.
+        """
+        self._check_owner_thread("reload_component")
+        return self._components.reload(name)
+
+    def handlers_changed(self, component: AbstractComponent) -> None:
+        """``component`` changed its ``task_handlers``: the table is rebuilt before the next task.
+
+        Raises:
+            ComponentError: a burst handler of the component lost its task handler.
+        """
+        self._components.handlers_changed(component)
+
+    def _check_owner_thread(self, method: str) -> None:
+        if self.state is NodeState.RUNNING and threading.get_ident() != self.queue.owner_thread:
+            raise wrong_thread_error(self.role, method)
 
     def __repr__(self) -> str:
         return f"<Node {self.role!r} {self.state.value}, {len(self.components)} components>"

@@ -6,7 +6,7 @@ component is added; in DEBUG, ``node.key_hints``, ``node.wiring_checks`` and
 
 Example (what `Node` does)::
 
-    self._checks = NodeChecks(self, runner)               # in __init__
+    self._checks = NodeChecks(self, components, runner)   # in __init__
     self._checks.start(threading.get_ident())             # as loop() starts
     self._checks.stop()                                   # in terminate()
 """
@@ -15,17 +15,17 @@ from __future__ import annotations
 
 import functools
 import threading
-from typing import Callable, List, Mapping, Optional, Protocol, Tuple
+from typing import List, Mapping, Optional, Protocol, Tuple
 
 from snr.core import tasks
 from snr.core.checks.class_checks import check_component
 from snr.core.checks.key_hints import MissingKeyHints
 from snr.core.checks.watchdog import Watchdog, WatchedNode, queued_page_keys
 from snr.core.checks.wiring_checks import WiringChecks
-from snr.core.dispatch import HandlerRunner, HandlerTable
+from snr.core.components import ComponentSet
+from snr.core.dispatch import HandlerRunner
 from snr.core.timer import Timer
 from snr.prelude import (
-    AbstractComponent,
     DataKey,
     Mode,
     Page,
@@ -40,7 +40,7 @@ _PAGE_TASKS = (TaskType.store_page, TaskType.process_data)
 
 
 class CheckedNode(WatchedNode, Protocol):
-    """What `NodeChecks` reads and sets of its node: a `Node` (a ``ComponentSet``) has all of it.
+    """What `NodeChecks` reads and sets of its node: a `Node` has all of it.
 
     Example::
 
@@ -52,8 +52,6 @@ class CheckedNode(WatchedNode, Protocol):
     timer: Timer
     wiring_checks: Optional[WiringChecks]
     watchdog: Optional[Watchdog]
-    table: HandlerTable
-    check_added: Optional[Callable[[AbstractComponent], None]]
 
     def schedule(self, t: SomeTasks) -> None:
         """Queue a task or a list of tasks; safe from any thread."""
@@ -64,18 +62,20 @@ class NodeChecks:
 
     Args:
         node: the node to watch; its ``key_hints``, ``wiring_checks`` and
-            ``watchdog`` are set here (None outside DEBUG mode), and its
-            ``check_added`` hook; its handler ``table`` is read.
+            ``watchdog`` are set here (None outside DEBUG mode).
+        components: the node's `ComponentSet` (its handler table, its
+            ``check_added`` hook).
         runner: the node's `HandlerRunner` (its ``on_unhandled`` hook).
 
     Example::
 
-        checks = NodeChecks(node, runner)
+        checks = NodeChecks(node, components, runner)
         node.key_hints is not None   # True in DEBUG mode
     """
 
-    def __init__(self, node: CheckedNode, runner: HandlerRunner) -> None:
+    def __init__(self, node: CheckedNode, components: ComponentSet, runner: HandlerRunner) -> None:
         self.node = node
+        self.components = components
         self._wiring_timer: Optional[threading.Timer] = None
         self._watching: Optional[Watchdog] = None
         node.key_hints = node.wiring_checks = node.watchdog = None
@@ -86,13 +86,13 @@ class NodeChecks:
             # The keys some handler waits for: reading them early is no mistake.
             hints.expected_keys = lambda: {key for key, _ in self.page_handlers()}
             node.key_hints = hints
-            node.wiring_checks = WiringChecks(node.log, node.role, node.table, node.datastore)
+            node.wiring_checks = WiringChecks(node.log, node.role, components.table, node.datastore)
             runner.on_unhandled = node.wiring_checks.unhandled
             node.watchdog = Watchdog(node)
         if node.mode is not Mode.DEPLOYED:
             # A name SNR uses raises; in DEBUG, work that can have no effect is logged once.
             warn = self._warn_once if node.mode is Mode.DEBUG else None
-            node.check_added = functools.partial(check_component, warn=warn)
+            components.check_added = functools.partial(check_component, warn=warn)
 
     def start(self, node_thread: int) -> None:
         """The node's thread starts running tasks: set the wiring check, start the watchdog."""
@@ -128,7 +128,7 @@ class NodeChecks:
     def page_handlers(self) -> List[Tuple[DataKey, TaskHandler]]:
         """(key, handler) for every handler registered for one data key's pages."""
         handled: List[Tuple[DataKey, TaskHandler]] = []
-        for entries in list(self.node.table.table.values()):
+        for entries in list(self.components.table.table.values()):
             for handler, task_id, _, _ in entries:
                 if isinstance(task_id, tuple) and task_id[0] in _PAGE_TASKS:
                     handled.append((task_id[1], handler))
