@@ -389,6 +389,17 @@ class TestTextReplayer(SNRTestCase):
         self.assertEqual(collected.data(), ["a", "b", "c"])
         self.assertGreaterEqual(collected.arrived_s[-1] - collected.arrived_s[0], 0.045)
 
+    def test_a_text_replay_is_a_text_replayer_loop_with_only_text_options(self) -> None:
+        path = self.temp_file(".txt", "a\n")
+        factory = TextReplayerFactory(path, "line", exit_when_done=True)
+        for recording_only in ("fast", "keys", "max_gap_s", "retimed", "bad_lines"):
+            self.assertFalse(hasattr(factory, recording_only), recording_only)
+        runner = TestRunner("t", Config({"t": [factory]}, mode=Mode.TEST), 5.0)
+        runner.run()
+        assert runner.node is not None
+        loop = runner.node.components["text_replayer"]
+        self.assertEqual(type(loop).__name__, "TextReplayerLoop")  # its messages name it
+
 
 class TestPageObjects(SNRTestCase):
     def test_pages_are_the_dataclass_students_know(self) -> None:
@@ -614,6 +625,52 @@ class TestTimedReplayOfAbsurdTimes(SNRTestCase):
         self.assertEqual(factory.retimed, 0)
         self.assertLess(took, 2.0)  # 0.09 s recorded; clamping every switch would take 2.25 s
         self.assertGreaterEqual(replayed.arrived_s[-1] - replayed.arrived_s[0], 0.06)
+
+    def test_each_page_waits_as_recorded_or_as_retimed(self) -> None:
+        path = self.temp_file(".jsonl")
+        lines = [
+            page_line("n", 0, 1000.0),  # line 2: due now
+            page_line("n", 1, 1000.02),
+            page_line("n", 2, 1e10),  # line 4: a gap over max_gap_s
+            page_line("n", 3, 1000.04),  # line 5: back
+            '{"key":"n","data":4}',  # line 6: no time
+            page_line("n", 5, 1000.06),
+            page_line("n", 6, 5.0, origin="urov"),  # another origin starts its own clock
+            page_line("n", 7, 5.01, origin="urov"),
+        ]
+        write_lines(path, [HEADER, *lines])
+        factory = ReplayerLoopFactory(path, max_gap_s=0.05)
+        clock = mock.Mock(monotonic=mock.Mock(return_value=100.0))  # the replayer's time only
+        with mock.patch.object(replayer, "time", clock):
+            with self.assertLogs("snr.replay", "WARNING") as logs:
+                steps = list(factory.items())
+        self.assertEqual([page.data for _, page in steps], list(range(8)))
+        # The clock stands still, so each wait is counted from the first page:
+        # +0.02, +0.05 (cut to max_gap_s), +0 (back), +0 (no time), +0.02, +0 (urov's first), +0.01.
+        waits = [round(wait_s, 6) for wait_s, _ in steps]
+        self.assertEqual(waits, [0.0, 0.02, 0.07, 0.07, 0.07, 0.09, 0.09, 0.1])
+        self.assertEqual(factory.retimed, 3)
+        summary = " (3 pages not stored at their recorded time; see the warnings above)"
+        self.assertEqual(factory.summary(), summary)
+        text = "\n".join(logs.output)
+        self.assertIn(
+            ".jsonl:4: the page under 'n' was created 1e+10 s after the one before it: "
+            "waiting 0.05 s instead (max_gap_s).",
+            text,
+        )
+        self.assertIn(
+            ".jsonl:5: the time of the page under 'n' goes back by 1e+10 s: "
+            "stored right after the previous page.",
+            text,
+        )
+        self.assertIn(
+            ".jsonl:6: the page under 'n' has no created_at_s: stored right after "
+            "the previous page.",
+            text,
+        )
+        fast = ReplayerLoopFactory(path, fast=True)
+        self.assertEqual([wait_s for wait_s, _ in fast.items()], [0.0] * 8)
+        self.assertEqual(fast.retimed, 0)
 
     def test_max_gap_must_be_a_sane_number_of_seconds(self) -> None:
         self.assertEqual(ReplayerLoopFactory("x.jsonl").max_gap_s, MAX_GAP_S)

@@ -291,7 +291,7 @@ class ReplayerLoop(ThreadLoop):
         ReplayerLoopFactory("dive.jsonl", fast=True, exit_when_done=True)
     """
 
-    def __init__(self, factory: ReplayerLoopFactory, parent: AbstractNode) -> None:
+    def __init__(self, factory: _ReplayFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, factory.name)
         self.replay = factory
         self._items = factory.items()  # now: a missing file fails the build
@@ -325,12 +325,8 @@ class ReplayerLoop(ThreadLoop):
             self.store_data(*item)
 
     def _say_replayed(self) -> None:
-        replay, bad = self.replay, self.replay.bad_lines
-        parts = [f"{bad} bad lines skipped"] if bad else []
-        if replay.retimed:
-            parts.append(f"{replay.retimed} pages not stored at their recorded time")
-        more = f" ({'; '.join(parts)}; see the warnings above)" if parts else ""
-        self.info(f"Replayed {replay.position} items from {replay.filename}{more}")
+        replay = self.replay
+        self.info(f"Replayed {replay.position} items from {replay.filename}{replay.summary()}")
 
     def _schedule_exit(self, replayed: bool) -> None:  # once: the loop stops after it
         if self.replay.exit_when_done:
@@ -358,15 +354,16 @@ class ReplayerLoop(ThreadLoop):
         getattr(self._items, "close", lambda: None)()
 
 
-TextReplayerLoop = ReplayerLoop
-"""Stores each line of a text file as data under one key, ``period_s`` apart.
+class TextReplayerLoop(ReplayerLoop):
+    """Stores each line of a text file as data under one key, ``period_s`` apart.
 
-The `ReplayerLoop` a `TextReplayerFactory` builds, its items text lines.
+    The `ReplayerLoop` a `TextReplayerFactory` builds, its items text lines;
+    a class of its own so that its log and error messages name it.
 
-Example::
+    Example::
 
-    TextReplayerFactory("gps_log.txt", "nmea", period_s=0.1)
-"""
+        TextReplayerFactory("gps_log.txt", "nmea", period_s=0.1)
+    """
 
 
 def in_created_order(
@@ -411,7 +408,26 @@ def _seconds(value: float) -> str:
     return f"{value:.3g}" if math.isfinite(value) else "an unbounded number of"
 
 
-class ReplayerLoopFactory(LoopFactory):
+class _ReplayFactory(LoopFactory):
+    """What both replayer factories share: the file, the loop's name, where the replay is."""
+
+    def __init__(self, filename: PathLike, exit_when_done: bool, name: str) -> None:
+        super().__init__(sys.modules[__name__])
+        self.filename = os.fspath(filename)
+        self.exit_when_done = exit_when_done
+        self.name = name
+        self.position = 0
+
+    def items(self) -> Iterator[Tuple[float, Any]]:
+        """``(seconds to wait, item)`` for each item after the first ``position``."""
+        raise NotImplementedError
+
+    def summary(self) -> str:
+        """What went wrong with the file, for the last log line ("" if nothing)."""
+        return ""
+
+
+class ReplayerLoopFactory(_ReplayFactory):
     """Builds a `ReplayerLoop` that replays a recording into the node.
 
     Args:
@@ -452,10 +468,7 @@ class ReplayerLoopFactory(LoopFactory):
         name: Optional[str] = None,
         max_gap_s: float = MAX_GAP_S,
     ) -> None:
-        super().__init__(sys.modules[__name__])
-        self.filename = os.fspath(filename)
-        self.exit_when_done = exit_when_done
-        self.name = name or "replayer"
+        super().__init__(filename, exit_when_done, name or "replayer")
         self.fast = fast
         self.keys: Optional[List[DataKey]] = None if keys is None else list(keys)
         # NaN fails the comparison, infinity is over TIMEOUT_MAX.
@@ -465,7 +478,6 @@ class ReplayerLoopFactory(LoopFactory):
                 "number of seconds, 0 or more (e.g. 10.0)."
             )
         self.max_gap_s = float(max_gap_s)
-        self.position = 0
         self.bad_lines = 0
         self.retimed = 0
 
@@ -481,50 +493,71 @@ class ReplayerLoopFactory(LoopFactory):
         return self._timed(PageReader(self.filename))
 
     def _timed(self, reader: PageReader) -> Iterator[Tuple[float, Page]]:
-        keys, max_gap, warn = self.keys, self.max_gap_s, RepeatFilter(_log, first=5).report
+        keys, warn = self.keys, RepeatFilter(_log, first=5).report
         due: Optional[float] = None  # when the previous page was due (monotonic)
         offsets: Dict[str, float] = {}  # origin -> replay time minus created_at_s
         with closing(reader.recorded_pages()) as recorded:
             wanted = (r for r in recorded if keys is None or r.page.key in keys)
-            ordered = in_created_order(wanted, max(max_gap, MAX_GAP_S))
-            for line, page, timed in islice(ordered, self.position, None):
-                if self.fast:
-                    yield 0.0, page
-                    continue
+            ordered = in_created_order(wanted, max(self.max_gap_s, MAX_GAP_S))
+            for item in islice(ordered, self.position, None):
                 now = time.monotonic()
-                previous, why = now if due is None else due, ""  # the first page is due now
-                if due is None and not timed:
+                if self.fast or (due is None and not item.timed):
                     due = now
-                elif not timed:
-                    due, why = previous, "no time"
-                    text = (
-                        f"page under {page.key!r} has no created_at_s: stored right after "
-                        "the previous page."
-                    )
-                else:  # an origin's first page starts its clock; later ones follow it
-                    offset = offsets.setdefault(page.origin, previous - page.created_at_s)
-                    gap = page.created_at_s + offset - previous
-                    due = previous + max(gap, 0.0)  # a little back (two nodes' clocks): no wait
-                    if gap > max_gap:
-                        due, why = previous + max_gap, "gap"
-                        text = (
-                            f"page under {page.key!r} was created {_seconds(gap)} s after "
-                            f"the one before it: waiting {max_gap:g} s instead (max_gap_s)."
+                else:  # the first page (also after a reload) is due now
+                    due, why = self._next_due(item, now if due is None else due, offsets)
+                    if why:  # counted, and logged (the first five of each kind in full)
+                        self.retimed += 1
+                        kind, text = why
+                        what = f"Replay timing of {self.filename} ({kind})"
+                        warn(
+                            kind, what, logging.WARNING, f"{self.filename}:{item.line}: the {text}"
                         )
-                    elif gap < -max_gap:
-                        due, why = previous, "back"
-                        text = (
-                            f"time of the page under {page.key!r} goes back by "
-                            f"{_seconds(-gap)} s: stored right after the previous page."
-                        )
-                    if why:  # follow the clock from here
-                        offsets[page.origin] = due - page.created_at_s
-                if why:
-                    self.retimed += 1
-                    text = f"{self.filename}:{line}: the {text}"
-                    warn(why, f"Replay timing of {self.filename} ({why})", logging.WARNING, text)
-                yield due - now, page
+                yield due - now, item.page
         self.bad_lines = reader.bad_lines
+
+    def _next_due(
+        self, item: RecordedPage, previous: float, offsets: Dict[str, float]
+    ) -> Tuple[float, Optional[Tuple[str, str]]]:
+        """When ``item`` is due, given when the page before it was due, and why.
+
+        Returns ``(due, why)``: ``why`` is ``(kind, warning)`` when the page
+        is not stored at its recorded time, else None.
+        """
+        page, max_gap = item.page, self.max_gap_s
+        if not item.timed:
+            text = f"page under {page.key!r} has no created_at_s: stored right after the"
+            return previous, ("no time", text + " previous page.")
+        # An origin's first page starts its clock; later ones follow it, within max_gap.
+        offset = offsets.setdefault(page.origin, previous - page.created_at_s)
+        gap = page.created_at_s + offset - previous
+        if gap > max_gap:
+            due, kind = previous + max_gap, "gap"
+            text = (
+                f"page under {page.key!r} was created {_seconds(gap)} s after the one "
+                f"before it: waiting {max_gap:g} s instead (max_gap_s)."
+            )
+        elif gap < -max_gap:
+            due, kind = previous, "back"
+            text = (
+                f"time of the page under {page.key!r} goes back by {_seconds(-gap)} s: "
+                "stored right after the previous page."
+            )
+        else:  # a little back (two nodes' clocks): no wait
+            return previous + max(gap, 0.0), None
+        offsets[page.origin] = due - page.created_at_s  # follow the clock from here
+        return due, (kind, text)
+
+    def summary(self) -> str:
+        """The bad lines skipped and the pages retimed, for the last log line.
+
+        Example::
+
+            ReplayerLoopFactory("dive.jsonl").summary()  # "" until a replay finds problems
+        """
+        parts = [f"{self.bad_lines} bad lines skipped"] if self.bad_lines else []
+        if self.retimed:
+            parts.append(f"{self.retimed} pages not stored at their recorded time")
+        return f" ({'; '.join(parts)}; see the warnings above)" if parts else ""
 
     def get(self, parent: AbstractNode) -> ReplayerLoop:
         return ReplayerLoop(self, parent)
@@ -533,7 +566,7 @@ class ReplayerLoopFactory(LoopFactory):
         return f"ReplayerLoopFactory({self.filename!r}, fast={self.fast})"
 
 
-class TextReplayerFactory(ReplayerLoopFactory):
+class TextReplayerFactory(_ReplayFactory):
     """Builds a `TextReplayerLoop`: one page per line of a text file.
 
     Args:
@@ -558,7 +591,7 @@ class TextReplayerFactory(ReplayerLoopFactory):
         encoding: str = "utf-8",
         name: Optional[str] = None,
     ) -> None:
-        super().__init__(filename, exit_when_done=exit_when_done, name=name or "text_replayer")
+        super().__init__(filename, exit_when_done, name or "text_replayer")
         if period_s < 0:
             raise ConfigError(f"TextReplayerFactory(period_s={period_s}): use 0 or more seconds.")
         self.key = key
@@ -568,6 +601,9 @@ class TextReplayerFactory(ReplayerLoopFactory):
     def items(self) -> Iterator[Tuple[float, Any]]:
         lines = islice(TextReader(self.filename, self.encoding), self.position, None)
         return ((self.period_s if n else 0.0, (self.key, line)) for n, line in enumerate(lines))
+
+    def get(self, parent: AbstractNode) -> TextReplayerLoop:
+        return TextReplayerLoop(self, parent)
 
     def __repr__(self) -> str:
         return f"TextReplayerFactory({self.filename!r}, {self.key!r})"
