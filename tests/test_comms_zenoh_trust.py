@@ -86,23 +86,25 @@ def only_the_friend_talks(test: unittest.TestCase, endpoint: str, commands: Coun
     test.assertEqual(stranger.heard, [], "a session without a secret hears nothing")
 
 
+def robot_with_the_secret(test: CommsFaultTest, **where: Any) -> Tuple[CounterFactory, LocalNodes]:
+    """Run a robot with SECRET that publishes ``tick`` and stores ``cmd``; where it meets others
+    is ``where`` (``listen=[...]``, or ``mode="client", connect=[...]``). What it stored, its nodes.
+    """
+    commands = CounterFactory("cmd")
+    comms = ZenohCommsFactory(
+        SYSTEM, publish="tick", subscribe="cmd", scouting=False, secret=SECRET, **where
+    )
+    config = Config({"robot": [TickerFactory(hz=50), comms, commands]}, mode=Mode.TEST)
+    nodes = test.run_nodes(config, ["robot"])
+    test.addCleanup(nodes.stop)
+    return commands, nodes
+
+
 @unittest.skipUnless(HAVE_ZENOH, reason("zenoh"))
 class TestZenohSecret(CommsFaultTest):
     def test_only_a_session_with_the_secret_hears_the_system_or_speaks_into_it(self) -> None:
         endpoint = f"tcp/127.0.0.1:{free_port()}"
-        commands = CounterFactory("cmd")
-        comms = ZenohCommsFactory(
-            SYSTEM,
-            publish="tick",
-            subscribe="cmd",
-            listen=[endpoint],
-            scouting=False,
-            secret=SECRET,
-        )
-        config = Config({"robot": [TickerFactory(hz=50), comms, commands]}, mode=Mode.TEST)
-        nodes = self.run_nodes(config, ["robot"])
-        self.addCleanup(nodes.stop)
-
+        commands, _ = robot_with_the_secret(self, listen=[endpoint])
         only_the_friend_talks(self, endpoint, commands)
 
     def test_the_password_file_is_private_and_holds_no_secret(self) -> None:
@@ -129,20 +131,7 @@ class TestZenohRouterSecret(CommsFaultTest):
 
     def client_node(self, endpoint: str) -> Tuple[CounterFactory, LocalNodes]:
         """A robot in client mode with SECRET behind the router: what it stored of ``cmd``."""
-        commands = CounterFactory("cmd")
-        comms = ZenohCommsFactory(
-            SYSTEM,
-            mode="client",
-            publish="tick",
-            subscribe="cmd",
-            connect=[endpoint],
-            scouting=False,
-            secret=SECRET,
-        )
-        config = Config({"robot": [TickerFactory(hz=50), comms, commands]}, mode=Mode.TEST)
-        nodes = self.run_nodes(config, ["robot"])
-        self.addCleanup(nodes.stop)
-        return commands, nodes
+        return robot_with_the_secret(self, mode="client", connect=[endpoint])
 
     def test_a_router_with_the_secret_forwards_only_between_sessions_with_it(self) -> None:
         endpoint = self.start_router(SECRET.encode())
