@@ -86,12 +86,19 @@ def _echo(p: CommandProcessorEndpoint, args: str) -> Answer:
     return watches_of(p).echo(words[0], wanted, _console(p))
 
 
+def _hz_window_s(words: List[str]) -> float:
+    """``hz``'s window from the words after its name; CommandFailed says what is wrong."""
+    if not 1 <= len(words) <= 2:
+        raise CommandFailed(f"Usage: {COMMANDS['hz'].usage}, e.g. `hz depth 2`.")
+    if len(words) == 1:
+        return HZ_DEFAULT_WINDOW_S
+    return number_argument(words[1], "hz", "WINDOW_S", 0.1, HZ_MAX_WINDOW_S, float)
+
+
 def _hz_reply_after_s(words: List[str]) -> float:
     """How long ``hz``'s reply takes: its window (0 if the node refuses the words at once)."""
-    if len(words) != 2:
-        return HZ_DEFAULT_WINDOW_S if len(words) == 1 else 0.0
     try:
-        return number_argument(words[1], "hz", "WINDOW_S", 0.1, HZ_MAX_WINDOW_S, float)
+        return _hz_window_s(words)
     except CommandFailed:
         return 0.0
 
@@ -107,11 +114,7 @@ def _hz_reply_after_s(words: List[str]) -> float:
 def _hz(p: CommandProcessorEndpoint, args: str) -> Answer:
     """``hz KEY [WINDOW_S]``: the rate and jitter of KEY (the reply comes after the window)."""
     words = args.split()
-    if not 1 <= len(words) <= 2:
-        raise CommandFailed(f"Usage: {COMMANDS['hz'].usage}, e.g. `hz depth 2`.")
-    window_s = HZ_DEFAULT_WINDOW_S
-    if len(words) == 2:
-        window_s = number_argument(words[1], "hz", "WINDOW_S", 0.1, HZ_MAX_WINDOW_S, float)
+    window_s = _hz_window_s(words)  # first: it says what is wrong with the words
     watches_of(p).hz(words[0], window_s, _console(p))
     return None
 
