@@ -72,6 +72,14 @@ class TestWhenFull(unittest.TestCase):
         self.assertEqual(box.put(b"0123456789", "big"), FIRST)
         self.assertEqual(box.take(0), b"0123456789")
 
+    def test_the_rest_of_a_big_frame_written_in_part_waits_whole_and_keyless(self) -> None:
+        box, peer = outbox(4), Peer(room=3)
+        self.assertEqual(box.put(b"0123456789", "big", peer.send), FIRST)
+        self.assertEqual((len(box), box.queued_bytes, box.dropped), (1, 7, 0))
+        box.put(b"new", "big")  # over the cap, but the started frame is never pushed out
+        self.assertEqual([box.take(0), box.take(0)], [b"3456789", b"new"])
+        self.assertEqual(box.dropped, 0)
+
     def test_a_long_flood_keeps_memory_bounded(self) -> None:
         box = outbox(100)
         peer = Peer(room=0)  # a peer that reads nothing

@@ -244,7 +244,12 @@ class CommsLoop(ThreadLoop):
         return None
 
     def forward_page(self, task: Task, key: TaskId) -> SomeTasks:
-        """Send the page just stored to every open link it did not come from."""
+        """Send the page just stored to every open link it did not come from, encoded once.
+
+        Example::
+
+            comms.forward_page(tasks.store_page(page), (TaskType.store_page, "depth"))
+        """
         page = task.page()
         if page is None:
             return None  # the node core has already reported the bad task
@@ -254,31 +259,29 @@ class CommsLoop(ThreadLoop):
             if arrived is not None and arrived[0] is page:
                 source = arrived[1]
         origin = page.origin
-        targets = [
-            link
-            for link in self.links
-            if link is not source and link.state is _OPEN and link.peer_role != origin
-        ]
-        if not targets:
-            if (
-                source is None
-                and not self._unsent_reported
-                and not any(link.state is _OPEN for link in self.links)
-            ):
-                self._unsent_reported = True
-                self.info(
-                    "No peer is connected, so the page under %r (and any others stored "
-                    "before a peer connects) is not sent. Pages are sent live, never late.",
-                    page.key,
-                )
-            return None
-        try:
-            frame = encode_page(page)
-        except NotSerializableError as error:
-            self._report_unsendable(page, error)
-            return None
-        for link in targets:
+        frame = None
+        for link in self.links:
+            if link is source or link.state is not _OPEN or link.peer_role == origin:
+                continue  # no echo: not to where it came from, nor to its origin
+            if frame is None:
+                try:
+                    frame = encode_page(page)
+                except NotSerializableError as error:
+                    self._report_unsendable(page, error)
+                    return None
             link.send(frame, page.key)  # a drop is counted and reported by the link
+        if (
+            frame is None
+            and source is None
+            and not self._unsent_reported
+            and not any(link.state is _OPEN for link in self.links)
+        ):
+            self._unsent_reported = True
+            self.info(
+                "No peer is connected, so the page under %r (and any others stored "
+                "before a peer connects) is not sent. Pages are sent live, never late.",
+                page.key,
+            )
         return None
 
     def _report_unsendable(self, page: Page, error: NotSerializableError) -> None:
@@ -658,8 +661,7 @@ class Outbox:
                     self.last_sent_at = time.monotonic()
                     if sent == len(frame):
                         return SENT
-                    self._append(None, frame[sent:])
-                    return FIRST
+                    frame, key = frame[sent:], None  # the rest, never pushed out
             return self._queue((frame,), key)
 
     def put_all(self, frames: List[bytes], key: DataKey) -> str:
@@ -677,7 +679,18 @@ class Outbox:
         for frame in frames:
             if self._bytes + len(frame) > self.max_bytes:
                 self._make_room(len(frame), key)
-            self._append(key, frame)
+            entry = _Entry(key, frame)
+            self._entries.append(entry)
+            if key is not None:
+                waiting = self._by_key.get(key)
+                if waiting is None:
+                    self._by_key[key] = collections.deque((entry,))
+                else:
+                    waiting.append(entry)
+            self._live += 1
+            self._bytes += len(frame)
+        if first:
+            self._ready.notify()  # for a writer thread waiting in take()
         return FIRST if first else QUEUED
 
     def put_first(self, frame: bytes) -> None:
@@ -693,20 +706,6 @@ class Outbox:
                 self._live += 1
                 self._bytes += len(frame)
                 self._ready.notify()
-
-    def _append(self, key: Optional[DataKey], frame: bytes) -> None:
-        entry = _Entry(key, frame)
-        self._entries.append(entry)
-        if key is not None:
-            waiting = self._by_key.get(key)
-            if waiting is None:
-                self._by_key[key] = collections.deque((entry,))
-            else:
-                waiting.append(entry)
-        self._live += 1
-        self._bytes += len(frame)
-        if self._live == 1:
-            self._ready.notify()
 
     def _make_room(self, size: int, key: Optional[DataKey]) -> None:
         """Push out frames, oldest first, of ``key`` or else of the key with the most waiting."""
