@@ -15,7 +15,7 @@ import subprocess
 import sys
 import tempfile
 import unittest
-from typing import Any, Callable, Iterator, List, Optional, Tuple
+from typing import Any, Callable, Dict, Iterator, List, Optional, Tuple
 from unittest import mock
 
 from snr import Page
@@ -296,6 +296,93 @@ flat_data = (
 )
 
 
+# Where orjson and json part ways, one case each: the backend must answer
+# as json does there, or leave the case to json. Raw JSON text to read:
+EDGE_TEXTS: List[bytes] = [
+    b"1000000000000000000",  # 19 digits, within 64 bits
+    b"9223372036854775807",
+    b"9223372036854775808",
+    b"18446744073709551615",  # the largest 64-bit integer
+    b"18446744073709551616",  # 20 digits, one beyond: orjson reads a float
+    b"99999999999999999999",
+    b"100000000000000000000",  # 21 digits
+    b"-9223372036854775808",
+    b"-9223372036854775809",
+    b"-18446744073709551616",
+    b'{"a":18446744073709551616,"a":1}',  # a duplicate key hides the big integer
+    b'{"a":1,"a":2}',
+    b"1e19",
+    b"1.8446744073709552e19",
+    b"1.8446744073709552e+19",
+    b"9.223372036854776e18",
+    b"-0.0",
+    b"-0",
+    b"1e-5",
+    b"0.00001",
+    b"0.1000000000000000055511151231257827021181583404541015625",  # a long mantissa
+    b"123456789.1234567890123456789",
+    b'"12345678901234567890"',  # 20 digits in text are text
+    b"NaN",
+    b"[Infinity]",
+    b"-Infinity",
+    b"1e999",
+    nested(codec.MAX_DEPTH),  # as deep as may be
+    nested(codec.MAX_DEPTH + 1),  # one beyond
+    b'{"k\x7f":"v\x7f"}',  # DEL, raw
+    b'{"\\u007f":"\\u00e9"}',
+    b'{"\xc3\xa9":"\xe2\x98\x83"}',  # non-ASCII, raw UTF-8
+    b'"\\ud800"',
+    b'{"\\udc00":1}',
+    b'"\xed\xa0\x80"',
+    b'{"true":1,"1":true}',
+]
+
+# Page data to write: big integers, awkward floats, odd keys and text, a dict
+# subclass, bools as keys, nesting at the limit and one beyond.
+_DEEPEST = json.loads(nested(codec.MAX_DEPTH - 1))  # as deep as a page's data may be
+
+
+class _Dict(Dict[Any, Any]):
+    """A dict subclass: both backends write it as a dict."""
+
+
+EDGE_DATA: List[Any] = [
+    *(n for i in (18, 19, 20) for n in (10**i, 10**i - 1, -(10**i), -(10**i) + 1)),
+    *(n for i in (63, 64) for n in (2**i - 1, 2**i, -(2**i), -(2**i) - 1)),
+    1e19,
+    1.8446744073709552e19,
+    -0.0,
+    1e-5,
+    -1e-5,
+    1e-4,
+    -1e-4,
+    9.99e-5,
+    5e-324,
+    1.7976931348623157e308,
+    math.nan,
+    math.inf,
+    -math.inf,
+    {"seq": 2**64, "value": 0.5},
+    {"seq": 2**63 - 1, "value": -0.0, "tiny": -1e-4},
+    {"k\x7f": 1},
+    {"k": "v\x7f"},
+    {"\u00e9": 1},
+    {"k": "\u00e9"},
+    {"\ud800": 1},
+    {"k": "\udfff"},
+    ["\ud800"],
+    {True: 1, False: 2},
+    {1: "a", "1": "b"},  # json writes two "1" keys
+    _Dict(seq=1, value=0.5),
+    _Dict(seq=1, value=math.nan),
+    _Dict({True: 1}),
+    {"axes": [0.5, 1e-5]},
+    [1, [2**64]],
+    _DEEPEST,
+    [_DEEPEST],
+]
+
+
 def written(backend: str, write: Callable[[Page], Any], page: Page) -> Any:
     codec.use_backend(backend)
     try:
@@ -381,6 +468,21 @@ class TestBackendsAgree(BackendCase):
     )
     def test_the_same_verdict_on_any_input(self, raw: bytes) -> None:
         self.assertEqual(read("json", raw), read("orjson", raw))
+
+    def test_the_same_verdicts_at_the_edges(self) -> None:
+        for raw in EDGE_TEXTS:
+            for text in (raw, GOOD_PAGE % raw, LINE % raw):
+                with self.subTest(text=text[:80]):
+                    self.assertEqual(read("json", text), read("orjson", text))
+
+    def test_the_same_bytes_at_the_edges(self) -> None:
+        for data in EDGE_DATA:
+            for created in (1.5, 1e-5, -0.0, 1.8446744073709552e19):
+                page = Page("key", data, "origin", created)
+                with self.subTest(data=repr(data)[:40], created=created):
+                    for write in (encode_page, codec.page_to_line, codec.PageEncoder({"v": 1})):
+                        expected = written("json", write, page)
+                        self.assertEqual(written("orjson", write, page), expected)
 
 
 class TestPageEncoder(BackendCase):

@@ -43,6 +43,8 @@ _JSON_SCALARS = frozenset((str, int, float, bool, type(None)))
 _STR = frozenset((str,))
 _SMALL = 16  # items in a list or dict `_alike` looks at; longer ones, searching is faster
 _DIGITS_TO_ZERO = bytes.maketrans(b"123456789", b"000000000")  # a run of 19 digits: one search
+_NINETEEN_DIGITS = b"0" * 19  # what that run is once `_DIGITS_TO_ZERO` has made each digit 0
+_LARGEST = 1.7976931348623157e308  # the largest finite float: a larger one is infinity
 
 
 def _names_and_scalars(value: Dict[Any, Any]) -> bool:
@@ -58,8 +60,8 @@ def _names_and_scalars(value: Dict[Any, Any]) -> bool:
             return False
         kind = type(item)
         if kind is float:
-            # item - item is NaN for NaN and infinity
-            if item - item != 0.0 or (-1e-4 < item < 1e-4 and item != 0.0):
+            # finite, and 0 or at least 1e-4 in size (NaN fails every comparison)
+            if not (1e-4 <= item <= _LARGEST or -_LARGEST <= item <= -1e-4 or item == 0.0):
                 return False
         elif kind is str:
             if not item.isascii() or "\x7f" in item:
@@ -81,8 +83,8 @@ def _alike(values: Iterable[Any], levels: int) -> bool:
     for value in values:
         kind = type(value)
         if kind is float:
-            # value - value is NaN for NaN and infinity
-            if value - value != 0.0 or (-1e-4 < value < 1e-4 and value != 0.0):
+            # finite, and 0 or at least 1e-4 in size (NaN fails every comparison)
+            if not (1e-4 <= value <= _LARGEST or -_LARGEST <= value <= -1e-4 or value == 0.0):
                 return False
         elif kind is str:
             if not value.isascii() or "\x7f" in value:
@@ -138,12 +140,13 @@ def _as_json_writes(out: bytes) -> bool:
     infinity, which json refuses; or None) and small floats (0.00001 and 1e-7,
     where json writes 1e-05 and 1e-07). Example: ``_as_json_writes(b'[0.5]')``.
     """
+    # find, not `in`: `in` first tries a bytes needle as a number, which costs more
     return (
         out.isascii()
-        and b"\x7f" not in out
-        and b"null" not in out
-        and b"0.0000" not in out
-        and b"e-" not in out
+        and out.find(b"\x7f") < 0
+        and out.find(b"null") < 0
+        and out.find(b"0.0000") < 0
+        and out.find(b"e-") < 0
     )
 
 
@@ -172,10 +175,17 @@ class OrjsonBackend:
         ``MAX_DEPTH - 1`` deep (`_plain`), is written and its bytes are
         searched (`_as_json_writes`). orjson refuses lone surrogates itself.
         """
-        if type(value) is float and value - value == 0.0 and not -1e-4 < value < 1e-4:
-            return _orjson.dumps(value)  # type: ignore[no-any-return]  # every page's time
+        kind = type(value)
+        if kind is float:  # every page's time: finite, and 0 or at least 1e-4 in size
+            if 1e-4 <= value <= _LARGEST or -_LARGEST <= value <= -1e-4 or value == 0.0:
+                return _orjson.dumps(value)  # type: ignore[no-any-return]
+            return None  # NaN, infinity (json refuses them), 1e-05 (orjson writes 0.00001)
         try:
-            if isinstance(value, dict) and len(value) <= _SMALL and _names_and_scalars(value):
+            if (
+                (kind is dict or isinstance(value, dict))
+                and len(value) <= _SMALL
+                and _names_and_scalars(value)
+            ):
                 return _orjson.dumps(value)  # type: ignore[no-any-return]  # most pages' data
             if _alike((value,), 2):
                 return _orjson.dumps(value)  # type: ignore[no-any-return]
@@ -195,9 +205,11 @@ class OrjsonBackend:
         (19 digits or more) as a float, and nests deeper than `MAX_DEPTH`.
         """
         value = _orjson.loads(raw)
-        data = raw.encode("utf-8") if isinstance(raw, str) else bytes(raw)
-        if b"0" * 19 in data.translate(_DIGITS_TO_ZERO) or (
-            len(data) > 2 * MAX_DEPTH and data.count(b"[") + data.count(b"{") > MAX_DEPTH
+        if type(raw) is not bytes:  # a link's body is bytes; a line may be text
+            raw = raw.encode("utf-8") if isinstance(raw, str) else bytes(raw)
+        # find, not `in`: `in` first tries a bytes needle as a number, which costs more
+        if raw.translate(_DIGITS_TO_ZERO).find(_NINETEEN_DIGITS) >= 0 or (
+            len(raw) > 2 * MAX_DEPTH and raw.count(b"[") + raw.count(b"{") > MAX_DEPTH
         ):
             raise ValueError("json reads it: an integer beyond 64 bits, or deep nesting")
         return value
