@@ -96,6 +96,20 @@ class TestOddHellos(CommsFaultTest):
         sock.sendall(page("tick", 3))  # the connection is still open
         self.assertTrue(wait_until(lambda: len(counter.seen) == 4, 5.0))
 
+    def test_the_pages_before_a_bad_length_header_are_stored_then_the_link_resets(self) -> None:
+        counter = CounterFactory("tick")
+        sock = self.serve(counter)
+        too_long = (2**31).to_bytes(4, "big") + b"{}"
+        # One chunk: the link cuts the two pages, then meets the length it cannot trust.
+        sock.sendall(
+            frame(v=1, kind="hello", role="tool") + page("tick", 0) + page("tick", 1) + too_long
+        )
+        self.assertTrue(wait_until(lambda: len(counter.seen) == 2, 5.0), self.log.lines)
+        self.assertEqual(counter.seen, [0, 1])
+        self.assertTrue(read_until_closed(sock, 5.0), "the node reset the connection")
+        [reset] = self.log.matching("Bad frame")
+        self.assertIn("over the 16,777,216-byte maximum frame size (reset the connection", reset)
+
     def test_a_second_hello_changes_nothing_and_is_logged_briefly(self) -> None:
         counter = CounterFactory("tick")
         sock = self.serve(counter)

@@ -173,6 +173,14 @@ class CommsLoop(ThreadLoop):
     secret: Optional[bytes] = None
     """The secret its links prove and ask peers to prove; None: no authentication."""
 
+    decode_message = staticmethod(decode_body)  # a function of the body alone, not a method
+    """How its links read a frame's body: `decode_body`; the pipe accepts 2021 pages too.
+
+    Example::
+
+        comms.decode_message(b'{"v":1,"kind":"beat"}')   # Beat()
+    """
+
     def __init__(
         self,
         factory: AbstractFactory,
@@ -501,15 +509,6 @@ class CommsLoop(ThreadLoop):
         places = sorted({other.transport.peer for other in peer_links} | {link.transport.peer})
         peer = f"node {link.peer_name} at {' and '.join(places)}"
         hints.check_link(repr(self.name), peer, self.keys, handled, node.datastore, received)
-
-    def decode_message(self, body: bytes) -> Message:
-        """The message in one frame's body (`decode_body`); the pipe accepts 2021 pages too.
-
-        Example::
-
-            comms.decode_message(b'{"v":1,"kind":"beat"}')   # Beat()
-        """
-        return decode_body(body)
 
     def stats(self) -> List[Dict[str, Any]]:
         """The counters of every open link (see `Link.stats`).
@@ -1237,7 +1236,7 @@ class Link:
 
     # -- reading (whoever holds the I/O loop's read role)
     def on_readable(self) -> None:
-        """Read what arrived and cut it into frames; `_decode_bodies` and `_deliver` do the rest.
+        """Read what arrived and cut it into frames; `_on_frames` does the rest.
 
         The I/O thread calls it, or the idle node's thread; ending and pausing
         are the I/O thread's. A bad length header loses the stream: the frames
@@ -1274,15 +1273,14 @@ class Link:
             try:
                 decoder.cut_frames(view.tobytes(), bodies)
             except WireFormatError as error:  # a bad length: the stream is lost...
-                pages = self._decode_bodies(bodies)  # ...but the frames before it count
+                self._on_frames(bodies)  # ...but the frames before it count
                 if self.state not in _ENDED:  # (else a frame got the peer refused: said so)
                     self._bad_frame(error, resetting=True)
-                    self._deliver(pages)
                     self._end(f"reset after a bad frame ({error})")
                 return
             if bodies:  # a sign of life is a whole frame (wire format 3.3)...
                 self._heard(time.monotonic())
-                self._deliver(self._decode_bodies(bodies))
+                self._on_frames(bodies)
                 return
             self._progress += count  # ...or 16 KiB more of one; a trickle adds up too slowly
             if self._progress >= _PROGRESS_BYTES:
@@ -1298,12 +1296,16 @@ class Link:
         self._sent_when_heard = self.pages_sent
         self._progress = 0
 
-    def _decode_bodies(self, bodies: List[bytes]) -> List[Page]:
-        """Decode each frame's body: return the pages; act on hellos, proofs and byes.
+    def _on_frames(self, bodies: List[bytes]) -> None:
+        """Decode each frame's body, act on hellos, proofs and byes, and store the pages.
 
         A body that cannot be decoded is dropped and counted (`_bad_frame`);
         before the handshake ends it refuses the peer instead. Once the peer is
-        refused, nothing more it sent is looked at, and no page is returned.
+        refused, nothing more it sent is looked at, and no page is stored.
+        The pages go to `CommsLoop.deliver`, or are held while the node is
+        behind: held pages pause the reading until the node's queue has room
+        again (`_stop_reading`, `_resume`), so the peer feels the back-pressure
+        through the socket and the node's queue does not grow without end.
         """
         pages: List[Page] = []
         decode = self.owner.decode_message
@@ -1313,7 +1315,7 @@ class Link:
             except WireFormatError as error:
                 if self.state is _HELLO:  # before the handshake ends, a bad frame ends it
                     self._refuse(Refused("order", f"a bad frame before its hello: {error}"))
-                    return []
+                    return
                 self._bad_frame(error)
                 continue
             except Exception as error:  # a bug in decoding: say so, and lose no other frame
@@ -1325,20 +1327,10 @@ class Link:
             else:
                 self._on_message(message)
                 if self.state in _ENDED:  # refused
-                    return []
-        if pages:
-            self._heard_frame = True  # a page is a well-formed frame too
-        return pages
-
-    def _deliver(self, pages: List[Page]) -> None:
-        """Count the pages and hand them to the `CommsLoop`, or hold them while the node is behind.
-
-        Held pages pause the reading until the node's queue has room again
-        (`_stop_reading`, `_resume`): the peer then feels the back-pressure
-        through the socket, and the node's queue does not grow without end.
-        """
+                    return
         if not pages:
             return
+        self._heard_frame = True  # a page is a well-formed frame too
         self.pages_received += len(pages)
         noted = self.keys_received
         if noted is not None and len(noted) < _MAX_KEYS_NOTED:
