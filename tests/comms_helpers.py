@@ -124,9 +124,13 @@ class NodeProcess:
         self.process.start()
         return self
 
-    def interrupt(self, timeout_s: float = 5.0) -> Optional[int]:
+    def ctrl_c(self) -> None:
+        """Send SIGINT, as Ctrl-C does, without waiting (`interrupt` waits)."""
         if self.process.is_alive() and self.process.pid is not None:
             os.kill(self.process.pid, signal.SIGINT)
+
+    def interrupt(self, timeout_s: float = 5.0) -> Optional[int]:
+        self.ctrl_c()
         self.process.join(timeout_s)
         self.kill()
         if self.printed is None:  # keep what it printed; its file goes

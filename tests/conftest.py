@@ -76,6 +76,28 @@ def pytest_sessionstart(session: pytest.Session) -> None:
         compileall.compile_dir(os.path.join(ROOT, folder), quiet=2, workers=1)
 
 
+SLOWEST_FILES = (
+    "tests/test_lesson_assignments.py",
+    "tests/test_lesson_command.py",
+    "tests/test_comms_zenoh_trust.py",
+    "tests/test_comms_zenoh.py",
+    "tests/test_errors_rules.py",
+    "tests/test_comms_interop.py",
+    "tests/test_console_zenoh.py",
+    "tests/test_bench_smoke.py",
+    "tests/test_examples_tutorial.py",
+    "tests/test_comms_sockets.py",
+    "tests/test_docs.py",
+    "tests/test_example_controller.py",
+    "tests/test_lesson_scan.py",
+    "tests/test_errors_silence.py",
+    "tests/test_codec.py",
+    "tests/test_errors.py",
+)
+"""The files that took longest in a whole-suite run, slowest first. Without pytest's cache
+(a fresh checkout, CI, ``-p no:cacheprovider``) they go first, so that none of them starts
+last and keeps one worker busy after the others are done; the order need not be exact."""
+
 SECONDS_KEY = "snr/seconds_per_file"
 """pytest's cache entry: each test file's seconds (setup, call, teardown) in the last run."""
 
@@ -87,7 +109,8 @@ def _file_of(nodeid: str) -> str:
 
 
 def pytest_collection_modifyitems(config: pytest.Config, items: List[pytest.Item]) -> None:
-    """In an xdist worker: the files slowest first (by the cache; else the most tests first).
+    """In an xdist worker: the files slowest first (by the cache; else `SLOWEST_FILES`, then
+    the most tests first).
 
     xdist hands out files in the order its workers collected them; every
     worker reads the same cache, so they all agree on it. A file the cache
@@ -101,7 +124,13 @@ def pytest_collection_modifyitems(config: pytest.Config, items: List[pytest.Item
     if known:
         items.sort(key=lambda item: -known.get(_file_of(item.nodeid), math.inf))
     else:
-        items.sort(key=lambda item: -tests[_file_of(item.nodeid)])
+        rank = {name: n for n, name in enumerate(SLOWEST_FILES)}
+        items.sort(
+            key=lambda item: (
+                rank.get(_file_of(item.nodeid), len(rank)),
+                -tests[_file_of(item.nodeid)],
+            )
+        )
 
 
 def pytest_runtest_logreport(report: pytest.TestReport) -> None:

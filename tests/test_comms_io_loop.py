@@ -15,6 +15,7 @@ import threading
 import time
 import unittest
 from typing import Any, Callable, Dict, List, Tuple, cast
+from unittest import mock
 
 from snr import (
     AbstractNode,
@@ -274,6 +275,34 @@ class TestWakingTheIOThread(unittest.TestCase):
         for thread in callers:
             thread.join(30.0)
         self.assertEqual(late, [], "calls that waited over 1 s for the I/O thread")
+
+
+class TestCtrlCWhileIdle(unittest.TestCase):
+    def test_ctrl_c_in_the_idle_wait_gives_the_read_role_back(self) -> None:
+        # Ctrl-C lands while the node's thread sleeps in wait(), holding the
+        # read role: woken() does not come, yet the I/O thread must still get
+        # the role to close the links, or the node's stop hangs.
+        loop = IOLoop(cast(AbstractNode, QuietNode()))
+        self.addCleanup(loop.stop)
+        if not loop.node_reads:
+            self.skipTest("the node's thread reads only where epoll is")
+        loop._thread.start()
+
+        def ctrl_c(epoll: Any, timeout_s: float) -> List[Tuple[int, int]]:
+            raise KeyboardInterrupt
+
+        with mock.patch("snr.std_mods.comms.io_loop._poll", ctrl_c):
+            with self.assertRaises(KeyboardInterrupt):
+                loop.wait(1.0)
+        loop.woken()  # as the queue's finally calls it
+        got = threading.Event()
+
+        def close_a_link() -> None:
+            with loop.read_role():
+                got.set()
+
+        threading.Thread(target=close_a_link, daemon=True).start()
+        self.assertTrue(got.wait(2.0), "another thread took the read role")
 
 
 class TestPipeTransport(unittest.TestCase):

@@ -40,6 +40,8 @@ class SocketsProcessTest(unittest.TestCase):
         return node
 
     def stop_all(self) -> None:
+        for node in self.nodes:  # all at once: each stops in its own time, not one after another
+            node.ctrl_c()
         for node in self.nodes:
             node.interrupt()
 

@@ -210,6 +210,7 @@ class TestMalice(TrustTest):
         for client_secret, flows in ((SECRET, True), ("another", False), (None, False)):
             with self.subTest(client_secret=client_secret):
                 self.port = free_port()  # a fresh port for each pair of nodes
+                refusals = len(self.log.matching("Refused"))
                 counter = CounterFactory("tick")
                 pair = SocketsPair(("127.0.0.1", self.port), system=SYSTEM, secret=SECRET)
                 other = SocketsPair(("127.0.0.1", self.port), system=SYSTEM, secret=client_secret)
@@ -226,7 +227,13 @@ class TestMalice(TrustTest):
                 if flows:
                     self.assertTrue(wait_until(more_than(counter, 5), 5.0))
                 else:
-                    time.sleep(1.0)
+
+                    def refused(before: int = refusals) -> bool:
+                        return len(self.log.matching("Refused")) > before
+
+                    # Once refused, 0.2 s more: a link that let ticks (100 Hz) through shows them.
+                    self.assertTrue(wait_until(refused, 5.0), self.log.lines)
+                    time.sleep(0.2)
                     self.assertEqual(counter.seen, [])
                 nodes.stop()
         self.assertTrue(self.log.matching("Refused sockets server"), "the client says so too")

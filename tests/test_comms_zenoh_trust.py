@@ -208,13 +208,13 @@ class TestZenohConsoleSecret(unittest.TestCase):
         )
         self.addCleanup(nodes.stop)
 
-        def console(secret: Optional[str]) -> ZenohConsole:
+        def console(secret: Optional[str], timeout_s: float = 1.0) -> ZenohConsole:
             with mock.patch.dict(os.environ, no_secret):
                 os.environ.pop("SNR_SECRET", None)
                 if secret is not None:
                     os.environ["SNR_SECRET"] = secret
                 made = ZenohConsole(
-                    SYSTEM, "urov", connect=[endpoint], scouting=False, timeout_s=1.0
+                    SYSTEM, "urov", connect=[endpoint], scouting=False, timeout_s=timeout_s
                 )
             self.addCleanup(made.close)
             return made
@@ -223,7 +223,9 @@ class TestZenohConsoleSecret(unittest.TestCase):
         self.assertTrue(wait_until(lambda: _greets(friend), 10.0), "the node is up")
         for secret in (None, "a guess"):
             with self.subTest(secret=secret):
-                stranger = console(secret)
+                # (Half the friend's timeout: a node that took its command would stop
+                # all the same, and the check below would say so.)
+                stranger = console(secret, timeout_s=0.5)
                 # Its session links to nothing: no node answers it, and `exit` goes nowhere.
                 with self.assertRaisesRegex(ConsoleConnectionError, "No node"):
                     stranger.connect()
@@ -256,7 +258,7 @@ class TestRouterCommand(unittest.TestCase):
         secret_set = mock.patch.dict(os.environ, {"SNR_SECRET": SECRET})
         secret_set.start()
         self.addCleanup(secret_set.stop)
-        args = argparse.Namespace(listen=[endpoint], seconds=4.0, zenohd=False)
+        args = argparse.Namespace(listen=[endpoint], seconds=2.5, zenohd=False)
         serving = threading.Thread(target=router_command.run, args=(args, out))
         serving.start()
         self.addCleanup(serving.join, 10.0)
@@ -274,6 +276,8 @@ class TestRouterCommand(unittest.TestCase):
                 zenoh.open(
                     zenoh_config("client", connect=[endpoint], scouting=False, secret=secret)
                 )
+        # Refused by the router, not by its absence (the body takes about 0.5 s).
+        self.assertTrue(serving.is_alive(), "the router still serves")
         serving.join(10.0)
         self.assertTrue(out.getvalue().endswith("Zenoh router stopped.\n"), out.getvalue())
 

@@ -90,7 +90,9 @@ class TestSnrsOwnPartsPassTheGraders(unittest.TestCase):
         self.assertIn("NodeCoreEndpoint", checks[0].happened)
 
     def test_snrs_task_queue_passes_lesson_7(self) -> None:
+        before = sys.getswitchinterval()
         checks = grade_queue(SnrTaskQueue, Path("snr"))
+        self.assertEqual(sys.getswitchinterval(), before, "the grade puts the switch interval back")
         self.assert_all_passed(checks, 11)
         self.assertIn("SnrTaskQueue", checks[0].happened)
 
@@ -317,11 +319,6 @@ class TestQueueMistakes(unittest.TestCase):
         self.assertIn("IndexError: pop from an empty deque", ran.happened)
         self.assertEqual(ran.line, self.line("task = self.normal.popleft()"))
         self.assertEqual(len(checks), 2, "the grade stops there")
-
-    def test_the_grade_puts_the_switch_interval_back(self) -> None:
-        before = sys.getswitchinterval()
-        grade_queue(queue_solution.MyTaskQueue, QUEUE.folder / "solution.py")
-        self.assertEqual(sys.getswitchinterval(), before)
 
     def test_the_queue_runs_between_loops_and_a_node(self) -> None:
         for module, said in (

@@ -376,7 +376,11 @@ class IOLoop:
                     return
                 self._gate_open = False
         self._role.acquire()
-        self._node_ready = _poll(self._node_poll, timeout)
+        try:
+            self._node_ready = _poll(self._node_poll, timeout)
+        except BaseException:  # Ctrl-C: `woken` will not come, and the loop's thread needs the role
+            self._role.release()
+            raise
 
     def woken(self) -> None:
         """Node thread, no longer marked sleeping: read what arrived, give the read role back."""
