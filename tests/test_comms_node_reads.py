@@ -161,6 +161,10 @@ class TestWhoReads(unittest.TestCase):
         ponger.release.set()  # the ping-pong goes on, the extra ping answered in its turn
         self.assertTrue(wait_until(lambda: len(pinger.pongs) >= ROUND_TRIPS, 8.0), pinger.pongs)
         self.assertEqual(pinger.pongs[:5], [0, 1, 2, 3, -1])
+        # Idle again, the ponger's own thread takes the reading back from the I/O thread.
+        if IOLoop.node_reads:
+            last = [name for name in readers.names if "ponger" in name][-5:]
+            self.assertEqual(last, ["test-ponger"] * 5, readers.names[started:])
         nodes.stop()
         self.assertEqual(nodes.errors, [])
         for line in lines:
