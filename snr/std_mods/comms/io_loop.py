@@ -370,24 +370,23 @@ class IOLoop:
     def woken(self) -> None:
         """Node thread, no longer marked sleeping: read what arrived, give the read role back."""
         ready, self._node_ready = self._node_ready, None
-        if ready is None:
-            return
-        try:
-            wake_fd = self._node_wake_r.fileno()
-            links = [event for event in ready if event[0] != wake_fd]
-            if len(links) < len(ready):
-                _drain(self._node_wake_r)
-            self._read_ready(links)
-        except (OSError, ValueError):  # closed: the loop has stopped
-            pass
-        finally:
-            self._role.release()
-            self._busy_since = now = time.monotonic()
-            if self._queue is not None and len(self._queue):  # work
-                self._work_at = now  # before _looking is read: see _check_busy
-                if not self._looking:  # a long idle spell stopped the looks
-                    self._looking = True
-                    self.call_soon(self._check_busy)
+        if ready is not None:  # wait() took the role
+            try:
+                wake_fd = self._node_wake_r.fileno()
+                links = [event for event in ready if event[0] != wake_fd]
+                if len(links) < len(ready):
+                    _drain(self._node_wake_r)
+                self._read_ready(links)
+            except (OSError, ValueError):  # closed: the loop has stopped
+                pass
+            finally:
+                self._role.release()
+        self._busy_since = now = time.monotonic()
+        if self._queue is not None and len(self._queue):  # work
+            self._work_at = now  # before _looking is read: see _check_busy
+            if not self._looking:  # a long idle spell stopped the looks
+                self._looking = True
+                self.call_soon(self._check_busy)
 
     def wake(self) -> None:
         """End the node thread's idle wait (any thread; the queue rings it once per sleep)."""
@@ -467,14 +466,12 @@ class IOLoop:
                         _drain(self._wake_r)
                         self._woken = False
                     elif handler is _READS:  # the read set, while the node's thread is busy
-                        ready: list[tuple[int, int]] = []
-                        if self._role.acquire(blocking=False):  # else the idle node holds it
+                        if self._role.acquire(blocking=False):
                             try:
-                                ready = self._reads.poll(0)
-                                self._read_ready(ready)
+                                self._read_ready(self._reads.poll(0))
                             finally:
                                 self._role.release()
-                        if not ready and self._waiter_installed:  # the idle node reads
+                        else:  # the node's thread holds it: idle, it reads its links
                             self._set_io_reads(False)
                     else:  # not through _safely: this is every read's path
                         try:
