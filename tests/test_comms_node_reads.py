@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import threading
+import time
 import unittest
 from typing import Any, List, Optional
 
@@ -20,6 +21,7 @@ from snr import (
     TaskType,
     TimeoutLoopFactory,
 )
+from snr.std_mods.comms import io_loop
 from snr.std_mods.comms.comms_loop import Link
 from snr.std_mods.comms.io_loop import IOLoop
 from tests.helpers import free_port, wait_until
@@ -35,6 +37,7 @@ class Pinger(Endpoint):
     def __init__(self, factory: PingerFactory, parent: AbstractNode) -> None:
         super().__init__(factory, parent, "pinger")
         self.pongs = factory.pongs
+        self.pause_s = factory.pause_s
         self.task_handlers = {
             (TaskType.event, COMMS_CONNECTED): self.ping,
             (TaskType.process_data, "pong"): self.on_pong,
@@ -45,13 +48,16 @@ class Pinger(Endpoint):
 
     def on_pong(self, task: Task, key: TaskId) -> SomeTasks:
         self.pongs.append(task.val_list[0].data)
+        if len(self.pongs) == 3:
+            time.sleep(self.pause_s)
         return self.ping(task, key) if len(self.pongs) < ROUND_TRIPS else None
 
 
 class PingerFactory(EndpointFactory):
-    def __init__(self) -> None:
+    def __init__(self, pause_s: float = 0.0) -> None:
         super().__init__()
         self.pongs: List[Any] = []
+        self.pause_s = pause_s  # before the fourth ping: the ponger sleeps meanwhile
 
     def get(self, parent: AbstractNode) -> Pinger:
         return Pinger(self, parent)
@@ -100,9 +106,11 @@ class ReadingThreads:
 
 
 class TestWhoReads(unittest.TestCase):
-    def run_ping_pong(self, ponger: PongerFactory) -> tuple[LocalNodes, PingerFactory]:
+    def run_ping_pong(
+        self, ponger: PongerFactory, pause_s: float = 0.0
+    ) -> tuple[LocalNodes, PingerFactory]:
         pair = SocketsPair(("127.0.0.1", free_port()))
-        pinger = PingerFactory()
+        pinger = PingerFactory(pause_s)
         safety = TimeoutLoopFactory(seconds=10)
         config = Config(
             {
@@ -140,12 +148,23 @@ class TestWhoReads(unittest.TestCase):
         self.assertEqual({name for name in readers.names if not name.endswith("-io")}, set())
 
     def test_while_a_handler_is_slow_the_io_thread_reads_on(self) -> None:
+        self.check_the_io_thread_reads_during_a_slow_handler()
+
+    def test_a_node_idle_long_enough_to_stop_the_looks_still_hands_over(self) -> None:
+        # With no idle spell needed, the I/O thread stops looking at the ponger
+        # while it sleeps through the pinger's pause: the looks at its slow
+        # handler are those woken() starts again.
+        self.addCleanup(setattr, io_loop, "IDLE_STOP_S", io_loop.IDLE_STOP_S)
+        io_loop.IDLE_STOP_S = 0.0
+        self.check_the_io_thread_reads_during_a_slow_handler(pause_s=0.3)
+
+    def check_the_io_thread_reads_during_a_slow_handler(self, pause_s: float = 0.0) -> None:
         # The held pong may be reported as slow (it depends on how long the test takes
         # to release it): kept, and checked to be that report and nothing else.
         lines = capture_test_logs(self, "snr.ponger")
         readers = ReadingThreads(self)
         ponger = PongerFactory(slow_at=3)
-        nodes, pinger = self.run_ping_pong(ponger)
+        nodes, pinger = self.run_ping_pong(ponger, pause_s)
         self.assertTrue(ponger.slow_started.wait(8.0), "the slow ping arrived")
         server: Any = next(c for c in nodes.nodes[0].components.values() if hasattr(c, "links"))
         [link] = server.links
@@ -161,6 +180,10 @@ class TestWhoReads(unittest.TestCase):
         ponger.release.set()  # the ping-pong goes on, the extra ping answered in its turn
         self.assertTrue(wait_until(lambda: len(pinger.pongs) >= ROUND_TRIPS, 8.0), pinger.pongs)
         self.assertEqual(pinger.pongs[:5], [0, 1, 2, 3, -1])
+        # Idle again, the ponger's own thread takes the reading back from the I/O thread.
+        if IOLoop.node_reads:
+            last = [name for name in readers.names if "ponger" in name][-5:]
+            self.assertEqual(last, ["test-ponger"] * 5, readers.names[started:])
         nodes.stop()
         self.assertEqual(nodes.errors, [])
         for line in lines:

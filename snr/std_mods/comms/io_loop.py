@@ -53,7 +53,7 @@ WRITE_DELAY_S = 0.001  # frames another thread queued wait this long for it, the
 
 _READ = selectors.EVENT_READ
 _WRITE = selectors.EVENT_WRITE
-_READS = "reads"  # the selector key of the gate (the wake-up socket's is None)
+_READS = "reads"  # the selector key of the read set (the wake-up socket's is None)
 
 
 class Served(Protocol):
@@ -146,26 +146,20 @@ class IOLoop:
         self._selector.register(self._wake_r, _READ, None)
         self._thread = threading.Thread(target=self._run, name=f"snr-{node.role}-io", daemon=True)
         self._queue = node.queue if isinstance(node, Node) else None  # a mock node has none
-        # With node reads, links watched for reading are in the read set `_reads`
-        # and `_node_poll`; the selector watches `_gate`, which holds `_reads`
-        # only while the I/O thread is to read.
+        # With node reads, links to read are in two epoll sets: `_reads`, which
+        # the selector watches while the I/O thread reads, and `_node_poll`.
         self._reads: Any = None
         self._readers: dict[int, Served] = {}  # fd -> link, for `_reads`
         self._role = threading.RLock()  # the read role: whoever holds it reads
         self._role_wanted = False  # the loop's thread waits for the role: leave it
         self._waiter_installed = False  # the node waits on this loop when idle
         self._node_ready: Optional[list[tuple[int, int]]] = None  # wait() took the role
-        self._gate_lock = threading.Lock()  # opening and shutting the gate, and _node_idle
-        self._gate_open = True  # `_reads` is in `_gate` (until the node's thread first waits)
-        self._node_idle = False  # the node's thread is in wait(): never open the gate
         self._busy_since = self._work_at = 0.0  # when the node last left wait() (with work)
-        self._looking = False  # _check_busy is due (else it waits for the node's work)
+        self._looking = False  # _check_busy is due (else woken() starts it)
+        self._looks_lock = threading.Lock()  # _looking and _work_at, between the two threads
         if self.node_reads:
-            self._reads, self._gate, self._node_poll, self._wake_only = [
-                select.epoll() for _ in range(4)
-            ]
-            self._gate.register(self._reads.fileno(), select.EPOLLIN)
-            self._selector.register(self._gate.fileno(), _READ, _READS)
+            self._reads, self._node_poll, self._wake_only = [select.epoll() for _ in range(3)]
+            self._set_io_reads(True)  # until the node's thread first waits
             self._node_wake_r, self._node_wake_w = _wake_pair()
             for poll in (self._node_poll, self._wake_only):  # the latter while the role is wanted
                 poll.register(self._node_wake_r.fileno(), select.EPOLLIN)
@@ -221,7 +215,7 @@ class IOLoop:
                     timeout_s,
                 )
         if self._reads is not None and not thread.is_alive():
-            for closable in (self._node_poll, self._wake_only, self._gate, self._reads):
+            for closable in (self._node_poll, self._wake_only, self._reads):
                 closable.close()
             self._node_wake_r.close()
             self._node_wake_w.close()
@@ -321,15 +315,18 @@ class IOLoop:
             with io.read_role():
                 transport.close()
         """
-        if not self._role.acquire(blocking=False):
+        wanted = not self._role.acquire(blocking=False)
+        if wanted:
             self._role_wanted = True  # the node's thread leaves it to us until we are done
             self.wake()
             self._role.acquire()
         try:
             yield
         finally:
-            self._role_wanted = False
             self._role.release()
+            if wanted:  # the node's thread waits without watching the links
+                self._role_wanted = False
+                self.wake()
 
     def call_later(self, delay_s: float, callback: Callable[[], None]) -> IOTimer:
         """Run ``callback`` on the loop's thread after ``delay_s`` seconds."""
@@ -359,7 +356,7 @@ class IOLoop:
 
     # -- the node's thread, while idle (the node's IdleWaiter) ---------------
     def wait(self, timeout_s: Optional[float]) -> None:
-        """Node thread, its queue empty: write what waits, shut the gate, wait for work or bytes."""
+        """Node thread, its queue empty: write what waits, take the read role, wait."""
         if self._to_write:  # what the handlers just queued goes before the node sleeps
             self.write_waiting()
         timeout = -1.0 if timeout_s is None else timeout_s
@@ -367,14 +364,6 @@ class IOLoop:
             _poll(self._wake_only, timeout)
             _drain(self._node_wake_r)
             return
-        with self._gate_lock:
-            self._node_idle = True
-            if self._gate_open:
-                try:
-                    self._gate.unregister(self._reads.fileno())
-                except (OSError, ValueError):  # closed: the loop has stopped
-                    return
-                self._gate_open = False
         self._role.acquire()
         try:
             self._node_ready = _poll(self._node_poll, timeout)
@@ -385,26 +374,23 @@ class IOLoop:
     def woken(self) -> None:
         """Node thread, no longer marked sleeping: read what arrived, give the read role back."""
         ready, self._node_ready = self._node_ready, None
-        if ready is None:
-            return
-        try:
-            wake_fd = self._node_wake_r.fileno()
-            links = [event for event in ready if event[0] != wake_fd]
-            if len(links) < len(ready):
-                _drain(self._node_wake_r)
-            self._read_ready(links)
-        except (OSError, ValueError):  # closed: the loop has stopped
-            pass
-        finally:
-            look = False
-            with self._gate_lock:
-                self._busy_since = now = time.monotonic()
-                self._node_idle = False
-                if self._queue is not None and len(self._queue):
-                    self._work_at = now
-                    look, self._looking = not self._looking, True
-            self._role.release()
-            if look:  # the I/O thread had stopped looking (a long idle spell)
+        if ready is not None:  # wait() took the role
+            try:
+                wake_fd = self._node_wake_r.fileno()
+                links = [event for event in ready if event[0] != wake_fd]
+                if len(links) < len(ready):
+                    _drain(self._node_wake_r)
+                self._read_ready(links)
+            except (OSError, ValueError):  # closed: the loop has stopped
+                pass
+            finally:
+                self._role.release()
+        self._busy_since = now = time.monotonic()
+        if self._queue is not None and len(self._queue):  # work
+            with self._looks_lock:  # _check_busy decides under it that the looks stop
+                self._work_at = now
+                start, self._looking = not self._looking, True
+            if start:  # a long idle spell had stopped the looks
                 self.call_soon(self._check_busy)
 
     def wake(self) -> None:
@@ -415,28 +401,33 @@ class IOLoop:
             pass
 
     def _check_busy(self) -> None:
-        """Loop thread: once the node's thread has worked `BUSY_READS_S`, open the gate and read.
+        """Loop thread: once the node's thread has worked `BUSY_READS_S`, read the links here.
 
         Runs every `BUSY_READS_S` while the node works, every `IDLE_CHECK_S`
         while it sleeps, and stops after `IDLE_STOP_S` without work (`woken`
-        restarts it; the lock keeps the two from missing each other).
+        starts it again).
         """
-        if not self._waiter_installed:  # the node waits on another's: the gate stays open
+        queue = self._queue
+        if queue is None or not self._waiter_installed:  # the I/O thread reads all along
             self._looking = False
             return
-        with self._gate_lock:
-            idle = self._node_idle
-            if idle and time.monotonic() - self._work_at >= IDLE_STOP_S:
-                self._looking = False
-                return
-            self._looking = True
-            if not (idle or self._gate_open or time.monotonic() - self._busy_since < BUSY_READS_S):
-                try:
-                    self._gate.register(self._reads.fileno(), select.EPOLLIN)
-                    self._gate_open = True
-                except (OSError, ValueError):  # closed: the loop is stopping
-                    pass
+        idle = queue.sleeping
+        if idle:
+            with self._looks_lock:  # (woken starts the looks again under it: none is lost)
+                if time.monotonic() - self._work_at >= IDLE_STOP_S:
+                    self._looking = False
+                    return
+        elif time.monotonic() - self._busy_since >= BUSY_READS_S:
+            self._set_io_reads(True)
         self.call_later(IDLE_CHECK_S if idle else BUSY_READS_S, self._check_busy)
+
+    def _set_io_reads(self, on: bool) -> None:
+        """Loop thread: the I/O thread reads the links (its selector watches `_reads`), or not."""
+        watched = self._reads in self._selector.get_map()
+        if on and not watched:
+            self._selector.register(self._reads, _READ, _READS)
+        elif watched and not on:
+            self._selector.unregister(self._reads)
 
     def _read_ready(self, ready: list[tuple[int, int]]) -> None:
         """Read every link with bytes (or an end) waiting; the caller holds the read role."""
@@ -475,11 +466,13 @@ class IOLoop:
                         _drain(self._wake_r)
                         self._woken = False
                     elif handler is _READS:  # the read set, while the node's thread is busy
-                        if self._role.acquire(blocking=False):  # else the node's thread reads
+                        if self._role.acquire(blocking=False):
                             try:
                                 self._read_ready(self._reads.poll(0))
                             finally:
                                 self._role.release()
+                        else:  # the node's thread holds it: idle, it reads its links
+                            self._set_io_reads(False)
                     else:  # not through _safely: this is every read's path
                         try:
                             if mask & _READ:
@@ -499,8 +492,6 @@ class IOLoop:
                         timer = heapq.heappop(timers)[2]
                         if not timer.cancelled:
                             self._safely(timer.callback)
-                    if not self._looking and self._waiter_installed:
-                        self._check_busy()  # the node's thread may have got work unseen
         except Exception:  # the selector itself failed: close every link, say so
             self.log.exception("The comms I/O loop of node %r failed", self.node.role)
         finally:
