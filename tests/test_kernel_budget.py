@@ -20,7 +20,7 @@ from typing import List, Set
 SNR = Path(__file__).resolve().parent.parent / "snr"
 READ_FIRST_CODE_LINES = 2_500
 KERNEL_BYTES_BUDGET = 500_000
-KERNEL_BYTES_CEILING = 772_000  # the figure reached; lower it as the kernel shrinks
+KERNEL_BYTES_CEILING = 771_500  # the figure reached; lower it as the kernel shrinks
 DOCSTRING_SHARE = 0.85
 
 
