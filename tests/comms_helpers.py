@@ -90,6 +90,9 @@ class Reports:
 
 def run_role(role: str, config: Config, output_path: str) -> None:
     """Child process entry point: what the node prints goes to ``output_path``."""
+    # A shell starts background jobs with SIGINT ignored, and a child inherits
+    # that: Ctrl-C (`NodeProcess.ctrl_c`) must reach the node as in a terminal.
+    signal.signal(signal.SIGINT, signal.default_int_handler)
     with open(output_path, "wb") as output:  # file descriptors: C-level writes too
         os.dup2(output.fileno(), 1)
         os.dup2(output.fileno(), 2)

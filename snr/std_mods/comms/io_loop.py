@@ -364,27 +364,22 @@ class IOLoop:
             _poll(self._wake_only, timeout)
             _drain(self._node_wake_r)
             return
-        self._role.acquire()
-        try:
+        with self._role:  # not held on to `woken`: a Ctrl-C between would keep it
             self._node_ready = _poll(self._node_poll, timeout)
-        except BaseException:  # Ctrl-C: `woken` will not come, and the loop's thread needs the role
-            self._role.release()
-            raise
 
     def woken(self) -> None:
-        """Node thread, no longer marked sleeping: read what arrived, give the read role back."""
+        """Node thread, no longer marked sleeping: read what arrived, holding the read role."""
         ready, self._node_ready = self._node_ready, None
-        if ready is not None:  # wait() took the role
-            try:
-                wake_fd = self._node_wake_r.fileno()
-                links = [event for event in ready if event[0] != wake_fd]
-                if len(links) < len(ready):
-                    _drain(self._node_wake_r)
-                self._read_ready(links)
-            except (OSError, ValueError):  # closed: the loop has stopped
-                pass
-            finally:
-                self._role.release()
+        if ready:
+            with self._role:
+                try:
+                    wake_fd = self._node_wake_r.fileno()
+                    links = [event for event in ready if event[0] != wake_fd]
+                    if len(links) < len(ready):
+                        _drain(self._node_wake_r)
+                    self._read_ready(links)
+                except (OSError, ValueError):  # closed: the loop has stopped
+                    pass
         self._busy_since = now = time.monotonic()
         if self._queue is not None and len(self._queue):  # work
             with self._looks_lock:  # _check_busy decides under it that the looks stop
