@@ -546,6 +546,66 @@ class TestZenohCounting(unittest.TestCase):
         comms._watchers[0].join(5)
         self.assertFalse(comms._watchers[0].is_alive(), "the watcher ends with the component")
 
+    def test_a_ctrl_c_in_the_idle_wait_never_leaves_the_take_lock_held(self) -> None:
+        from snr.extras.zenoh import comms as zc
+
+        node = MockNode()
+        comms = ZenohCommsFactory("lab", subscribe="n").get(node)
+        fifo = FakeFifo()
+        channel = zc.SampleChannel(fifo)
+        reader = zc.IdleReader(
+            channel, "snr/lab/n", take=comms._take_now, put_wake=fifo.put, has_room=lambda: True
+        )
+        comms._reader = reader
+        # Its watcher runs all along, but takes over only at the end: by then
+        # it needs the lock the node's thread may have kept.
+        busy_reads = mock.patch.object(zc, "_BUSY_READS_S", 3600.0)
+        busy_reads.start()
+        self.addCleanup(busy_reads.stop)
+        comms._watch_channel(channel)
+        self.addCleanup(comms._closed.set)
+
+        # Ctrl-C inside the wait in the FIFO: the lock is given back as it unwinds.
+        with mock.patch.object(fifo, "recv", side_effect=KeyboardInterrupt):
+            with self.assertRaises(KeyboardInterrupt):
+                reader.wait(5.0)
+        self.assertFalse(channel.take_lock.locked(), "Ctrl-C in recv() kept the take lock")
+        self.assertFalse(reader.reading)
+
+        # Ctrl-C after the wait took a sample, before woken() (in the queue's
+        # `finally`): woken() never runs, and the lock is free all the same.
+        fifo.put(sample_of(0))
+        reader.wait(5.0)
+        self.assertFalse(channel.take_lock.locked(), "held from wait() on to woken()")
+        # ... and the order holds: what came after is stored after it.
+        fifo.put(sample_of(1))
+        reader.wait(5.0)
+        reader.woken()
+        self.assertEqual(data_of(node.scheduled[0]), [0, 1])
+        comms.take_batch(node.scheduled[-1], node.scheduled[-1].id())
+        self.assertTrue(channel.emptied.is_set(), "the FIFO is empty: nothing owed")
+
+        # Ctrl-C while woken() queues the pages: the lock stays free.
+        fifo.put(sample_of(2))
+        reader.wait(5.0)
+        with mock.patch.object(comms, "_take_waiting", side_effect=KeyboardInterrupt):
+            with self.assertRaises(KeyboardInterrupt):
+                reader.woken()
+        self.assertFalse(channel.take_lock.locked(), "Ctrl-C in woken() kept the take lock")
+
+        # The watcher, which needs the lock, still hands a burst over.
+        reader.wait(5.0)  # what waits is taken on, as the node takes it after a Ctrl-C
+        reader.woken()
+        comms.take_batch(node.scheduled[-1], node.scheduled[-1].id())
+        self.assertTrue(channel.emptied.is_set())
+        scheduled = len(node.scheduled)
+        reader.busy_since = time.monotonic() - 7200.0  # the node's thread has worked a while
+        fifo.put(sample_of(3))
+        self.assertTrue(wait_until(lambda: len(node.scheduled) > scheduled), "the watcher took it")
+        comms._closed.set()
+        comms._watchers[0].join(5)
+        self.assertFalse(comms._watchers[0].is_alive(), "the watcher ends with the component")
+
     def test_a_wake_key_is_one_the_subscription_matches(self) -> None:
         from snr.extras.zenoh.comms import wake_key
 

@@ -1076,26 +1076,17 @@ class ZenohComms(Endpoint):
             return [self._next_batch]  # asked again once the node worked its queue down
         return self._take_waiting()
 
-    def _take_now(self, channel: SampleChannel, sample: Any) -> None:
-        """Node's thread, after its idle wait (`IdleReader`): queue what waits now.
+    def _take_now(self) -> None:
+        """Node's thread, after its idle wait (`IdleReader`): queue what waits now, if it has room.
 
-        ``sample``, if not None, came from ``channel``'s FIFO in that wait.
+        A sample the wait took was handed over in its channel (``first``);
+        with no room, it waits there for the node.
         """
         if self._node_has_room():
-            self.parent.schedule(self._take_waiting(channel, sample))
-        elif sample is not None:  # no room: the node's thread owns it, taken later
-            channel.first = sample
-            channel.emptied.clear()
+            self.parent.schedule(self._take_waiting())
 
-    def _take_waiting(
-        self, idle: Optional[SampleChannel] = None, idle_sample: Any = None
-    ) -> List[Task]:
-        """`take_batch`'s work: the tasks that store what waits, up to a batch.
-
-        ``idle_sample``, if not None, came from the FIFO of ``idle`` in the
-        node thread's idle wait: it comes first, and the channel stays the
-        watcher's unless more than a batch waits.
-        """
+    def _take_waiting(self) -> List[Task]:
+        """`take_batch`'s work: the tasks that store what waits, up to a batch."""
         # Cleared first: a hand-over after this asks for a new batch, and one
         # before it is taken below.
         self._batch_queued = False
@@ -1103,10 +1094,7 @@ class ZenohComms(Endpoint):
         budget = _BATCH
         for channel in self._channels:
             samples: List[Any] = []
-            owned = not channel.emptied.is_set()
-            if idle_sample is not None and channel is idle:
-                samples.append(idle_sample)
-            elif not owned:
+            if channel.emptied.is_set():
                 continue  # its watcher waits for a sample: nothing here
             if channel.first is not None:
                 samples.append(channel.first)
@@ -1119,10 +1107,8 @@ class ZenohComms(Endpoint):
                     fifo_empty = True
                 else:
                     samples.append(sample)
-            if fifo_empty and owned:
+            if fifo_empty:  # else more than a batch waits: the node's thread takes it on
                 channel.emptied.set()  # the watcher waits for the next burst
-            elif not fifo_empty and not owned:
-                channel.emptied.clear()  # more than a batch waits: the node's thread takes it on
             channel.taken += len(samples)
             budget -= len(samples)
             pages = self._pages_of(samples)

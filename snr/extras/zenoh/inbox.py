@@ -159,11 +159,11 @@ class IdleReader:
     thread has worked `_BUSY_READS_S` without waiting, the watcher hands a
     waiting burst over as other watchers do (`ZenohComms._watch_for_node`).
 
-    Its owner (`ZenohComms`) gives it three things to call: ``take(channel,
-    sample)`` on the node's thread after a wait that took ``sample`` (or
-    None: samples wait in the channel for the node), ``put_wake(key)`` to
-    put a wake-up sample, and ``has_room()``: whether the node's queue has
-    room for what waits.
+    Its owner (`ZenohComms`) gives it three things to call: ``take()`` on
+    the node's thread after a wait that left samples in the channel for the
+    node (one it took is handed over there, as a watcher hands one over),
+    ``put_wake(key)`` to put a wake-up sample, and ``has_room()``: whether
+    the node's queue has room for what waits.
 
     Example (what `ZenohComms.begin` does for one subscription)::
 
@@ -181,7 +181,7 @@ class IdleReader:
         self,
         channel: SampleChannel,
         wake_key: str,
-        take: Callable[[SampleChannel, Any], None],
+        take: Callable[[], None],
         put_wake: Callable[[str], None],
         has_room: Callable[[], bool],
     ) -> None:
@@ -193,7 +193,6 @@ class IdleReader:
         self.reading = False
         self.deadline: Optional[float] = None
         self.busy_since = time.monotonic()
-        self._sample: Any = None  # what the wait took from the FIFO, for woken()
         self._take = False  # woken() takes what the node's thread owns in the channel
         self._nudge = threading.Event()  # wakes a wait that is not in the FIFO
 
@@ -209,41 +208,40 @@ class IdleReader:
                 self._nudge.wait(timeout_s)
                 self._nudge.clear()
             return
-        # The lock is held from the wait until woken() has taken the rest of the
-        # burst: the watcher cannot take a later sample first (it would be
-        # stored out of order).
-        channel.take_lock.acquire()
-        self.deadline = None if timeout_s is None else time.monotonic() + timeout_s
-        self.reading = True
-        # `wake` sets the nudge, then puts a wake-up only if it sees `reading`:
-        # checked after `reading` is set, one of the two always sees the other.
-        if self._nudge.is_set():
-            sample = None
-        else:
+        # The lock is held only inside this block, never on to woken(): a Ctrl-C
+        # (a KeyboardInterrupt on this thread) between the two would keep it,
+        # and the watcher, which needs it, would block. A sample taken here is
+        # handed to the node's thread as a watcher hands one over (`first`,
+        # `emptied` cleared) before the lock is let go: the watcher takes
+        # nothing until the rest of the burst is taken, so no later sample is
+        # stored first.
+        with channel.take_lock:
+            self.deadline = None if timeout_s is None else time.monotonic() + timeout_s
+            self.reading = True
             try:
-                sample = channel.handler.recv()  # waits without the GIL
-            except Exception:  # undeclared: the component is closing
-                sample = None
-        self.reading = False
-        self._nudge.clear()
-        self.busy_since = time.monotonic()
-        if sample is None or is_wake(sample):
-            channel.take_lock.release()
-        else:
-            self._sample = sample
+                # `wake` sets the nudge, then puts a wake-up only if it sees `reading`:
+                # checked after `reading` is set, one of the two always sees the other.
+                if self._nudge.is_set():
+                    sample = None
+                else:
+                    try:
+                        sample = channel.handler.recv()  # waits without the GIL
+                    except Exception:  # undeclared: the component is closing
+                        sample = None
+            finally:
+                self.reading = False
+                self._nudge.clear()
+                self.busy_since = time.monotonic()
+            if sample is not None and not is_wake(sample):
+                channel.first = sample  # set before emptied is cleared: the node takes it
+                channel.emptied.clear()
+                self._take = True
 
     def woken(self) -> None:
         """Node's thread, after its wait: queue the pages of what it took."""
-        sample = self._sample
-        if sample is not None:
-            self._sample = None
-            try:
-                self._take_from(self.channel, sample)
-            finally:
-                self.channel.take_lock.release()
-        elif self._take:
+        if self._take:
             self._take = False
-            self._take_from(self.channel, None)
+            self._take_from()
 
     def wake(self) -> None:
         """End the node thread's wait, in the FIFO or not (any thread).
