@@ -799,12 +799,10 @@ def decode_body(body: bytes) -> Message:
 
         decode_body(b'{"v":1,"kind":"hello","role":"urov"}')   # Hello(role='urov', ...)
     """
-    try:  # load_object's work, with "the body: " before what is wrong
-        obj = load_json(body)
+    try:
+        obj = load_object(body)
     except WireFormatError as error:
         raise WireFormatError(f"the body: {error}") from None
-    if type(obj) is not dict:
-        raise WireFormatError(f"the body: it is a JSON {type(obj).__name__}, not an object {{...}}")
     version, kind = obj.get("v"), obj.get("kind")
     if type(version) is not int or not (
         version == WIRE_VERSION or (version == HELLO_VERSION and kind in ("hello", "proof"))
